@@ -1,0 +1,325 @@
+"""Configuration of the planners (IK, trajectories, pick-and-place cycle).
+
+Every number is a field of a frozen dataclass with its unit; bundled defaults live in
+``configs/planner.yaml``. Load with `load_planner_config`; validation happens in
+``__post_init__`` and raises `LimitError` naming the field and what is allowed.
+
+Facts and assumptions:
+    * Axis speed limits and joint ranges are the ABB IRB 140 datasheet values (SPEC section 4).
+    * ABB publishes no per-axis acceleration or jerk limits. The defaults assume each axis reaches
+      its top speed in about 1/8 s (acceleration = 8 x speed per second) with jerk 10 x
+      acceleration. At the 0.5-0.6 m radius of the work areas this is a tool acceleration of
+      about 15-20 m/s^2, the order quoted for arms of this class. These are assumptions: change
+      them in the YAML.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from configs import load_config
+from planners.errors import LimitError
+
+N_JOINTS = 6
+"""Number of arm joints."""
+
+_DEG = math.pi / 180.0
+
+
+def _check_tuple(obj: object, name: str, *, positive: bool = True) -> None:
+    value = getattr(obj, name)
+    if len(value) != N_JOINTS:
+        raise LimitError(
+            f"{type(obj).__name__}.{name} needs {N_JOINTS} values (one per joint), got {value!r}"
+        )
+    for i, v in enumerate(value):
+        if not math.isfinite(v) or (positive and v <= 0.0):
+            raise LimitError(
+                f"{type(obj).__name__}.{name}[{i}] (joint {i + 1}) must be "
+                f"{'positive and ' if positive else ''}finite, got {v!r}"
+            )
+
+
+def _check_positive(obj: object, *names: str) -> None:
+    for name in names:
+        v = getattr(obj, name)
+        if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+            raise LimitError(f"{type(obj).__name__}.{name} must be positive and finite, got {v!r}")
+
+
+def _check_non_negative(obj: object, *names: str) -> None:
+    for name in names:
+        v = getattr(obj, name)
+        if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
+            raise LimitError(f"{type(obj).__name__}.{name} must be >= 0 and finite, got {v!r}")
+
+
+@dataclass(frozen=True)
+class JointLimits:
+    """Kinematic limits of the six axes.
+
+    Attributes:
+        lower: Lower joint limits, shape (6,) [rad] (SPEC 4).
+        upper: Upper joint limits, shape (6,) [rad] (SPEC 4).
+        max_velocity: Axis speed limits, shape (6,) [rad/s] (SPEC 4: 200, 200, 260, 360, 360,
+            450 deg/s).
+        max_acceleration: Axis acceleration limits, shape (6,) [rad/s^2] (assumption: 8 x speed).
+        max_jerk: Axis jerk limits, shape (6,) [rad/s^3] (assumption: 10 x acceleration).
+    """
+
+    lower: tuple[float, ...] = tuple(
+        d * _DEG for d in (-180.0, -90.0, -230.0, -200.0, -115.0, -400.0)
+    )
+    upper: tuple[float, ...] = tuple(d * _DEG for d in (180.0, 110.0, 50.0, 200.0, 115.0, 400.0))
+    max_velocity: tuple[float, ...] = tuple(
+        d * _DEG for d in (200.0, 200.0, 260.0, 360.0, 360.0, 450.0)
+    )
+    max_acceleration: tuple[float, ...] = tuple(
+        8.0 * d * _DEG for d in (200.0, 200.0, 260.0, 360.0, 360.0, 450.0)
+    )
+    max_jerk: tuple[float, ...] = tuple(
+        80.0 * d * _DEG for d in (200.0, 200.0, 260.0, 360.0, 360.0, 450.0)
+    )
+
+    def __post_init__(self) -> None:
+        _check_tuple(self, "lower", positive=False)
+        _check_tuple(self, "upper", positive=False)
+        for name in ("max_velocity", "max_acceleration", "max_jerk"):
+            _check_tuple(self, name)
+        for i, (lo, hi) in enumerate(zip(self.lower, self.upper, strict=True)):
+            if lo >= hi:
+                raise LimitError(
+                    f"JointLimits: joint {i + 1} lower {lo} rad must be below upper {hi} rad"
+                )
+
+    def scaled(self, speed: float = 1.0, accel: float = 1.0) -> JointLimits:
+        """These limits with velocity scaled by ``speed`` and acceleration/jerk by ``accel``.
+
+        Raises:
+            LimitError: A scale is zero, negative or not finite.
+        """
+        for name, s in (("speed", speed), ("accel", accel)):
+            if not (math.isfinite(s) and s > 0):
+                raise LimitError(f"JointLimits.scaled: {name} scale must be > 0, got {s!r}")
+        return JointLimits(
+            lower=self.lower,
+            upper=self.upper,
+            max_velocity=tuple(v * speed for v in self.max_velocity),
+            max_acceleration=tuple(a * accel for a in self.max_acceleration),
+            max_jerk=tuple(j * accel for j in self.max_jerk),
+        )
+
+
+@dataclass(frozen=True)
+class IKConfig:
+    """Differential IK with mink.
+
+    Attributes:
+        site: Name of the tool-centre-point site in the robot model.
+        joint_names: Names of the six arm joints, base to flange.
+        position_tolerance: Converged when the TCP is within this distance [m].
+        orientation_tolerance_deg: ... and within this rotation angle [deg].
+        max_iterations: Iterations per attempt.
+        step_dt: Integration step of one iteration [s]; with `VelocityLimit` it bounds the joint
+            step to ``max_velocity * step_dt`` per iteration.
+        damping: Levenberg-Marquardt damping of the frame task (mink ``lm_damping``).
+        regularisation: Tikhonov damping of the QP (mink ``damping``).
+        position_cost: Frame-task position weight [1/m].
+        orientation_cost: Frame-task orientation weight [1/rad].
+        solver: QP solver name for qpsolvers.
+        restarts: Extra attempts from other seeds when the first one fails.
+        restart_seed: Random generator seed of the restart perturbations (determinism).
+        restart_spread: Standard deviation of the random perturbation of restart seeds [rad].
+        collision_min_distance: Minimum distance kept from the caller's obstacle geoms [m].
+        collision_detection_distance: Distance at which collision constraints activate [m].
+        limit_margin: Solutions must lie this far inside each joint range [rad].
+    """
+
+    site: str = "tcp"
+    joint_names: tuple[str, ...] = ("joint1", "joint2", "joint3", "joint4", "joint5", "joint6")
+    position_tolerance: float = 1e-4
+    orientation_tolerance_deg: float = 0.1
+    max_iterations: int = 40
+    step_dt: float = 0.1
+    damping: float = 1e-4
+    regularisation: float = 1e-9
+    position_cost: float = 1.0
+    orientation_cost: float = 1.0
+    solver: str = "daqp"
+    restarts: int = 6
+    restart_seed: int = 0
+    restart_spread: float = 0.6
+    collision_min_distance: float = 0.005
+    collision_detection_distance: float = 0.05
+    limit_margin: float = 1e-3
+
+    def __post_init__(self) -> None:
+        _check_positive(
+            self,
+            "position_tolerance",
+            "orientation_tolerance_deg",
+            "max_iterations",
+            "step_dt",
+            "position_cost",
+            "orientation_cost",
+            "collision_detection_distance",
+        )
+        _check_non_negative(
+            self,
+            "damping",
+            "regularisation",
+            "restarts",
+            "restart_spread",
+            "collision_min_distance",
+            "limit_margin",
+        )
+        if len(self.joint_names) != N_JOINTS:
+            raise LimitError(f"IKConfig.joint_names needs {N_JOINTS} names, got {self.joint_names}")
+
+
+@dataclass(frozen=True)
+class TrajectoryConfig:
+    """Sampling and blending of ruckig trajectories.
+
+    Attributes:
+        sample_dt: Period of the sampled `JointTrajectory` [s] (the control period).
+        blend: Pass the approach points with non-zero velocity instead of stopping.
+        wrap_joints: Indices (0-based) of the joints whose targets are unwrapped to the
+            nearest equivalent angle (multiples of 2 pi) inside their range: joints 4 and 6.
+        limit_tolerance: Relative slack when validating sampled trajectories against limits
+            (ruckig's own numerical error plus finite-difference error).
+    """
+
+    sample_dt: float = 0.002
+    blend: bool = True
+    wrap_joints: tuple[int, ...] = (3, 5)
+    limit_tolerance: float = 1e-3
+
+    def __post_init__(self) -> None:
+        _check_positive(self, "sample_dt")
+        _check_non_negative(self, "limit_tolerance")
+        for j in self.wrap_joints:
+            if not 0 <= j < N_JOINTS:
+                raise LimitError(
+                    f"TrajectoryConfig.wrap_joints: {j} is not a joint index; allowed 0..5"
+                )
+
+
+@dataclass(frozen=True)
+class CycleConfig:
+    """One pick-and-place cycle.
+
+    Attributes:
+        approach_height: Height of the approach points above the pick and place contact
+            poses [m]; motion below them is vertical.
+        approach_speed: Vertical tool speed when passing an approach point with blending [m/s].
+        lead_fraction: Fraction of the transfer's base-axis motion started during the lift
+            (and finished during the descent) when blending, in [0, 1); the tool's lateral
+            drift below `lateral_clearance_height` is checked and the lead reduced if needed.
+        lateral_clearance_height: Below this height above a contact pose the tool may drift
+            at most `max_lateral_drift` sideways (tile clear of its neighbours) [m].
+        max_lateral_drift: Allowed sideways drift below the clearance height [m].
+        transfer_clearance: Minimum tool height above the higher contact pose during the
+            transfer [m].
+        pick_press: The pad goes this far below the given pick height to seal [m].
+        place_gap: The pad releases this far above the given place height [m].
+        pick_dwell: Time at the pick with vacuum on before lifting (vacuum build-up) [s].
+        place_dwell: Time at the place with vacuum off before retreating (release) [s].
+        belt_match_time: On a moving belt, the tool travels with the belt for this long around
+            contact (covers the pick dwell) [s]; it is at least `pick_dwell`.
+        predict_iterations: Fixed-point iterations predicting where a moving tile is at contact.
+        max_tilt_deg: Largest tool tilt from straight down accepted at a contact pose [deg].
+    """
+
+    approach_height: float = 0.03
+    approach_speed: float = 0.35
+    lead_fraction: float = 0.06
+    lateral_clearance_height: float = 0.008
+    max_lateral_drift: float = 0.001
+    transfer_clearance: float = 0.02
+    pick_press: float = 0.0005
+    place_gap: float = 0.0005
+    pick_dwell: float = 0.05
+    place_dwell: float = 0.05
+    belt_match_time: float = 0.05
+    predict_iterations: int = 3
+    max_tilt_deg: float = 0.5
+
+    def __post_init__(self) -> None:
+        _check_positive(
+            self,
+            "approach_height",
+            "approach_speed",
+            "lateral_clearance_height",
+            "max_lateral_drift",
+            "predict_iterations",
+            "max_tilt_deg",
+        )
+        _check_non_negative(
+            self,
+            "lead_fraction",
+            "transfer_clearance",
+            "pick_press",
+            "place_gap",
+            "pick_dwell",
+            "place_dwell",
+            "belt_match_time",
+        )
+        if self.lead_fraction >= 1.0:
+            raise LimitError(
+                f"CycleConfig.lead_fraction must be in [0, 1), got {self.lead_fraction}"
+            )
+        if self.lateral_clearance_height > self.approach_height:
+            raise LimitError(
+                "CycleConfig.lateral_clearance_height "
+                f"{self.lateral_clearance_height} m must not exceed approach_height "
+                f"{self.approach_height} m"
+            )
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """All planner settings.
+
+    Attributes:
+        limits: Joint kinematic limits.
+        ik: Differential IK settings.
+        trajectory: Ruckig sampling and blending.
+        cycle: Pick-and-place cycle geometry and timing.
+    """
+
+    limits: JointLimits = field(default_factory=JointLimits)
+    ik: IKConfig = field(default_factory=IKConfig)
+    trajectory: TrajectoryConfig = field(default_factory=TrajectoryConfig)
+    cycle: CycleConfig = field(default_factory=CycleConfig)
+
+
+def load_planner_config(
+    name_or_path: str | Path | None = "planner", **overrides: Any
+) -> PlannerConfig:
+    """Load the planner configuration (bundled ``configs/planner.yaml`` by default).
+
+    Args:
+        name_or_path: Bundled name or YAML path; None uses the dataclass defaults.
+        **overrides: Top-level sections (``limits``, ``ik``, ``trajectory``, ``cycle``) as
+            mappings or dataclass instances.
+
+    Raises:
+        configs.ConfigError: Unknown key or wrong type.
+        LimitError: A value out of its allowed range.
+    """
+    return load_config(PlannerConfig, name_or_path, **overrides)
+
+
+__all__ = [
+    "N_JOINTS",
+    "CycleConfig",
+    "IKConfig",
+    "JointLimits",
+    "PlannerConfig",
+    "TrajectoryConfig",
+    "load_planner_config",
+]

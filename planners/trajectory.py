@@ -1,0 +1,447 @@
+"""Jerk-limited, time-optimal joint trajectories with ruckig, chained point to point.
+
+Ruckig's community version sends intermediate waypoints to a remote service, so a path through
+several configurations is a chain of point-to-point segments. Each segment starts at the state
+(position, velocity, acceleration) where the previous one ended and reaches its target position
+with a target velocity: zero for a stop, non-zero to pass a via point without stopping
+(blending), or a belt's velocity to travel with a moving tile. A `Piecewise` trajectory holds the
+exact segments; `Piecewise.sample` turns it into a `JointTrajectory` value sampled at the control
+period.
+
+Joints 4 and 6 turn more than a full turn: targets are unwrapped to the equivalent angle
+(``q + 2 pi k``) nearest to the start inside the joint range (`unwrap_target`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+from ruckig import InputParameter, Result, Ruckig, Trajectory
+
+from planners.config import N_JOINTS, JointLimits
+from planners.errors import InvalidTargetError, LimitError, TrajectoryError
+
+Array = npt.NDArray[np.float64]
+
+_TWO_PI = 2.0 * math.pi
+_OK_RESULTS = (Result.Working, Result.Finished)
+
+
+def as_joint_vector(value: npt.ArrayLike, name: str) -> Array:
+    """A finite joint vector of shape (6,) as float64.
+
+    Raises:
+        InvalidTargetError: Wrong shape or a non-finite entry (the message names ``name``).
+    """
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.shape != (N_JOINTS,):
+        raise InvalidTargetError(f"{name} must have shape ({N_JOINTS},), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InvalidTargetError(f"{name} must be finite, got {arr.tolist()}")
+    return arr
+
+
+def check_in_range(q: Array, limits: JointLimits, name: str, margin: float = 0.0) -> None:
+    """Raise `LimitError` if configuration ``q`` [rad] leaves the joint ranges (plus ``margin``).
+
+    Raises:
+        LimitError: Names the joint, its value and its range in degrees.
+    """
+    lo = np.asarray(limits.lower) - margin
+    hi = np.asarray(limits.upper) + margin
+    bad = np.flatnonzero((q < lo) | (q > hi))
+    if bad.size:
+        i = int(bad[0])
+        raise LimitError(
+            f"{name}: joint {i + 1} at {math.degrees(q[i]):.3f} deg is outside its range "
+            f"[{math.degrees(limits.lower[i]):.1f}, {math.degrees(limits.upper[i]):.1f}] deg"
+        )
+
+
+def unwrap_target(
+    q_from: npt.ArrayLike,
+    q_to: npt.ArrayLike,
+    limits: JointLimits,
+    joints: Sequence[int] = (3, 5),
+) -> Array:
+    """Replace each wrapping joint's target by its equivalent angle nearest to ``q_from``.
+
+    Args:
+        q_from: Start configuration, shape (6,) [rad].
+        q_to: Target configuration, shape (6,) [rad].
+        limits: Joint ranges.
+        joints: Indices of joints whose angle may change by multiples of 2 pi.
+
+    Returns:
+        The target with ``q_to[j] + 2 pi k`` nearest to ``q_from[j]`` inside the range, shape (6,).
+
+    Raises:
+        InvalidTargetError: Non-finite input.
+        LimitError: No equivalent angle of a wrapping joint lies inside its range.
+    """
+    a = as_joint_vector(q_from, "q_from")
+    b = as_joint_vector(q_to, "q_to").copy()
+    for j in joints:
+        lo, hi = limits.lower[j], limits.upper[j]
+        k_lo = math.ceil((lo - b[j]) / _TWO_PI)
+        k_hi = math.floor((hi - b[j]) / _TWO_PI)
+        if k_lo > k_hi:
+            raise LimitError(
+                f"joint {j + 1}: no angle equivalent to {math.degrees(b[j]):.2f} deg inside "
+                f"[{math.degrees(lo):.1f}, {math.degrees(hi):.1f}] deg"
+            )
+        k_near = round((a[j] - b[j]) / _TWO_PI)
+        b[j] += _TWO_PI * min(max(k_near, k_lo), k_hi)
+    return b
+
+
+@dataclass(frozen=True)
+class JointState:
+    """Position, velocity and acceleration of the arm.
+
+    Attributes:
+        q: Joint angles, shape (6,) [rad].
+        qd: Joint velocities, shape (6,) [rad/s].
+        qdd: Joint accelerations, shape (6,) [rad/s^2].
+    """
+
+    q: Array
+    qd: Array = field(default_factory=lambda: np.zeros(N_JOINTS))
+    qdd: Array = field(default_factory=lambda: np.zeros(N_JOINTS))
+
+    @staticmethod
+    def at_rest(q: npt.ArrayLike) -> JointState:
+        """The arm standing still at ``q`` [rad], shape (6,)."""
+        return JointState(as_joint_vector(q, "q"))
+
+
+@dataclass(frozen=True)
+class JointTrajectory:
+    """A joint trajectory sampled at a fixed period.
+
+    Attributes:
+        times: Sample times, shape (n,) [s], starting at 0.
+        q: Joint angles, shape (n, 6) [rad].
+        qd: Joint velocities, shape (n, 6) [rad/s].
+        qdd: Joint accelerations, shape (n, 6) [rad/s^2].
+    """
+
+    times: Array
+    q: Array
+    qd: Array
+    qdd: Array
+
+    @property
+    def duration(self) -> float:
+        """Time of the last sample [s]."""
+        return float(self.times[-1])
+
+    def at(self, t: float) -> tuple[Array, Array, Array]:
+        """State at time ``t`` [s] (clamped to the trajectory), each shape (6,).
+
+        Positions use cubic Hermite interpolation with the sampled velocities; velocities and
+        accelerations are linear between samples.
+        """
+        t = min(max(float(t), 0.0), self.duration)
+        i = int(np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2))
+        t0, t1 = self.times[i], self.times[i + 1]
+        h = t1 - t0
+        s = (t - t0) / h
+        h00 = 2 * s**3 - 3 * s**2 + 1
+        h10 = s**3 - 2 * s**2 + s
+        h01 = -2 * s**3 + 3 * s**2
+        h11 = s**3 - s**2
+        q = h00 * self.q[i] + h10 * h * self.qd[i] + h01 * self.q[i + 1] + h11 * h * self.qd[i + 1]
+        qd = (1 - s) * self.qd[i] + s * self.qd[i + 1]
+        qdd = (1 - s) * self.qdd[i] + s * self.qdd[i + 1]
+        return q, qd, qdd
+
+
+@dataclass(frozen=True, eq=False)
+class Segment:
+    """One piece of a chained trajectory.
+
+    A ruckig segment (``ruckig`` set) or a constant-velocity segment from ``start.q`` with
+    velocity ``start.qd`` (a hold at rest when that velocity is zero).
+
+    Attributes:
+        start: State at the segment's start.
+        end: State at the segment's end.
+        duration: Length [s].
+        label: Name of the phase (``"descend_pick"``, ``"dwell_pick"``, ...).
+        ruckig: Ruckig's trajectory, or None for a constant-velocity segment.
+    """
+
+    start: JointState
+    end: JointState
+    duration: float
+    label: str = ""
+    ruckig: Trajectory | None = None
+
+    def state(self, tau: float) -> tuple[Array, Array, Array]:
+        """State at ``tau`` [s] after the segment's start, each shape (6,)."""
+        tau = min(max(tau, 0.0), self.duration)
+        if self.ruckig is None:
+            return self.start.q + self.start.qd * tau, self.start.qd, np.zeros(N_JOINTS)
+        p, v, a = self.ruckig.at_time(tau)
+        return np.asarray(p), np.asarray(v), np.asarray(a)
+
+
+def _ruckig_input(
+    start: JointState, target_q: Array, target_qd: Array, limits: JointLimits
+) -> InputParameter:
+    inp = InputParameter(N_JOINTS)
+    inp.current_position = start.q.tolist()
+    inp.current_velocity = start.qd.tolist()
+    inp.current_acceleration = start.qdd.tolist()
+    inp.target_position = target_q.tolist()
+    inp.target_velocity = target_qd.tolist()
+    inp.target_acceleration = [0.0] * N_JOINTS
+    inp.max_velocity = list(limits.max_velocity)
+    inp.max_acceleration = list(limits.max_acceleration)
+    inp.max_jerk = list(limits.max_jerk)
+    return inp
+
+
+def plan_segment(
+    start: JointState,
+    target_q: npt.ArrayLike,
+    limits: JointLimits,
+    target_qd: npt.ArrayLike | None = None,
+    *,
+    label: str = "",
+    min_duration: float = 0.0,
+) -> Segment:
+    """Time-optimal jerk-limited segment from ``start`` to a target position and velocity.
+
+    Args:
+        start: Start state (any velocity and acceleration inside the limits).
+        target_q: Target configuration, shape (6,) [rad] (already unwrapped).
+        limits: Kinematic limits.
+        target_qd: Target velocity, shape (6,) [rad/s]; None stops at the target.
+        label: Phase name stored on the segment.
+        min_duration: Stretch the segment to at least this long [s].
+
+    Raises:
+        InvalidTargetError: Non-finite or wrongly shaped targets.
+        LimitError: Target outside the joint range or target speed above the axis limit.
+        TrajectoryError: Ruckig found no trajectory.
+    """
+    q1 = as_joint_vector(target_q, "target_q")
+    qd1 = np.zeros(N_JOINTS) if target_qd is None else as_joint_vector(target_qd, "target_qd")
+    check_in_range(q1, limits, f"segment {label!r} target")
+    over = np.flatnonzero(np.abs(qd1) > np.asarray(limits.max_velocity))
+    if over.size:
+        i = int(over[0])
+        raise LimitError(
+            f"segment {label!r}: target velocity of joint {i + 1} {qd1[i]:.4f} rad/s exceeds "
+            f"the axis limit {limits.max_velocity[i]:.4f} rad/s"
+        )
+    inp = _ruckig_input(start, q1, qd1, limits)
+    if min_duration > 0.0:
+        inp.minimum_duration = min_duration
+    traj = Trajectory(N_JOINTS)
+    try:
+        result = Ruckig(N_JOINTS).calculate(inp, traj)
+    except RuntimeError as exc:
+        raise TrajectoryError(f"segment {label!r}: ruckig rejected the input: {exc}") from exc
+    if result not in _OK_RESULTS:
+        raise TrajectoryError(
+            f"segment {label!r}: ruckig returned {result} from q={start.q.tolist()} "
+            f"qd={start.qd.tolist()} to q={q1.tolist()} qd={qd1.tolist()}"
+        )
+    end = JointState(q1, qd1, np.zeros(N_JOINTS))
+    return Segment(start, end, float(traj.duration), label, traj)
+
+
+def hold_segment(state: JointState, duration: float, label: str = "") -> Segment:
+    """Constant-velocity segment (a hold when ``state.qd`` is zero) of ``duration`` [s].
+
+    Raises:
+        LimitError: Negative or non-finite duration.
+    """
+    if not (math.isfinite(duration) and duration >= 0.0):
+        raise LimitError(f"segment {label!r}: duration must be >= 0 s, got {duration!r}")
+    q_end = state.q + state.qd * duration
+    start = JointState(state.q, state.qd, np.zeros(N_JOINTS))
+    return Segment(start, JointState(q_end, state.qd, np.zeros(N_JOINTS)), duration, label)
+
+
+@dataclass(frozen=True)
+class Piecewise:
+    """A chain of segments, each starting where the previous one ends.
+
+    Attributes:
+        segments: The segments in order.
+    """
+
+    segments: tuple[Segment, ...]
+
+    @property
+    def duration(self) -> float:
+        """Total duration [s]."""
+        return float(sum(s.duration for s in self.segments))
+
+    @property
+    def end(self) -> JointState:
+        """State at the end."""
+        return self.segments[-1].end
+
+    def start_time(self, label: str) -> float:
+        """Start time [s] of the first segment with ``label``.
+
+        Raises:
+            KeyError: No segment has that label.
+        """
+        t = 0.0
+        for s in self.segments:
+            if s.label == label:
+                return t
+            t += s.duration
+        raise KeyError(f"no segment labelled {label!r}; labels: {[s.label for s in self.segments]}")
+
+    def end_time(self, label: str) -> float:
+        """End time [s] of the last segment with ``label``.
+
+        Raises:
+            KeyError: No segment has that label.
+        """
+        t, found = 0.0, None
+        for s in self.segments:
+            t += s.duration
+            if s.label == label:
+                found = t
+        if found is None:
+            raise KeyError(f"no segment labelled {label!r}")
+        return found
+
+    def sample(self, dt: float) -> JointTrajectory:
+        """Sample every ``dt`` [s] from 0 to the end (the end state is always the last sample).
+
+        Raises:
+            LimitError: ``dt`` not positive.
+        """
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise LimitError(f"sample period must be positive, got {dt!r}")
+        total = self.duration
+        n = int(math.floor(total / dt + 1e-9)) + 1
+        times = np.arange(n, dtype=np.float64) * dt
+        if total - times[-1] > 1e-9:
+            times = np.append(times, total)
+        q = np.empty((times.size, N_JOINTS))
+        qd = np.empty_like(q)
+        qdd = np.empty_like(q)
+        bounds = np.cumsum([0.0] + [s.duration for s in self.segments])
+        seg_of = np.clip(
+            np.searchsorted(bounds, times, side="right") - 1, 0, len(self.segments) - 1
+        )
+        for k, (t, i) in enumerate(zip(times, seg_of, strict=True)):
+            q[k], qd[k], qdd[k] = self.segments[i].state(float(t - bounds[i]))
+        return JointTrajectory(times, q, qd, qdd)
+
+
+def chain(
+    start: JointState,
+    targets: Sequence[tuple[npt.ArrayLike, npt.ArrayLike | None, str]],
+    limits: JointLimits,
+    wrap_joints: Sequence[int] = (3, 5),
+) -> Piecewise:
+    """Chain time-optimal segments through targets ``(q, qd or None, label)``.
+
+    Wrapping joints of each target are unwrapped relative to the previous target.
+
+    Raises:
+        PlannerError: See `plan_segment` and `unwrap_target`.
+    """
+    segments: list[Segment] = []
+    state = start
+    for q, qd, label in targets:
+        q_t = unwrap_target(state.q, q, limits, wrap_joints)
+        seg = plan_segment(state, q_t, limits, qd, label=label)
+        segments.append(seg)
+        state = seg.end
+    return Piecewise(tuple(segments))
+
+
+@dataclass(frozen=True)
+class LimitReport:
+    """Peak usage of each limit by a sampled trajectory, as fractions of the limit.
+
+    Attributes:
+        velocity: max |qd| / max_velocity per joint, shape (6,).
+        acceleration: max |qdd| / max_acceleration per joint, shape (6,).
+        jerk: max |finite-difference jerk| / max_jerk per joint, shape (6,).
+        in_range: All positions inside the joint ranges.
+    """
+
+    velocity: Array
+    acceleration: Array
+    jerk: Array
+    in_range: bool
+
+
+def limit_report(traj: JointTrajectory, limits: JointLimits) -> LimitReport:
+    """Measure how much of each limit a sampled trajectory uses."""
+    vel = np.max(np.abs(traj.qd), axis=0) / np.asarray(limits.max_velocity)
+    acc = np.max(np.abs(traj.qdd), axis=0) / np.asarray(limits.max_acceleration)
+    if traj.times.size > 2:
+        jerk_fd = np.diff(traj.qdd, axis=0) / np.diff(traj.times)[:, None]
+        jerk = np.max(np.abs(jerk_fd), axis=0) / np.asarray(limits.max_jerk)
+    else:
+        jerk = np.zeros(N_JOINTS)
+    lo, hi = np.asarray(limits.lower), np.asarray(limits.upper)
+    in_range = bool(np.all((traj.q >= lo - 1e-9) & (traj.q <= hi + 1e-9)))
+    return LimitReport(vel, acc, jerk, in_range)
+
+
+def validate(traj: JointTrajectory, limits: JointLimits, tolerance: float = 1e-3) -> None:
+    """Raise `LimitError` if a sampled trajectory breaks a limit by more than ``tolerance``.
+
+    Args:
+        traj: The trajectory.
+        limits: Kinematic limits.
+        tolerance: Relative slack (finite-difference jerk at segment joins is excluded by
+            ruckig's construction; this covers rounding).
+
+    Raises:
+        LimitError: Names the joint, the quantity, the peak and the limit.
+    """
+    if not (np.all(np.isfinite(traj.q)) and np.all(np.isfinite(traj.qd))):
+        raise LimitError("trajectory contains non-finite values")
+    rep = limit_report(traj, limits)
+    if not rep.in_range:
+        outside = (traj.q < np.asarray(limits.lower)) | (traj.q > np.asarray(limits.upper))
+        check_in_range(traj.q[int(np.argmax(np.any(outside, axis=1)))], limits, "trajectory")
+    for name, use, lim in (
+        ("velocity", rep.velocity, limits.max_velocity),
+        ("acceleration", rep.acceleration, limits.max_acceleration),
+        ("jerk", rep.jerk, limits.max_jerk),
+    ):
+        over = np.flatnonzero(use > 1.0 + tolerance)
+        if over.size:
+            i = int(over[0])
+            raise LimitError(
+                f"trajectory: joint {i + 1} {name} peaks at {use[i] * lim[i]:.4f}, "
+                f"limit {lim[i]:.4f} (SI units, rad-based)"
+            )
+
+
+__all__ = [
+    "JointState",
+    "JointTrajectory",
+    "LimitReport",
+    "Piecewise",
+    "Segment",
+    "as_joint_vector",
+    "chain",
+    "check_in_range",
+    "hold_segment",
+    "limit_report",
+    "plan_segment",
+    "unwrap_target",
+    "validate",
+]
