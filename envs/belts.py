@@ -1,0 +1,76 @@
+"""Conveyor belts: input speed through ``geom_surfacevel`` and lost-tile accounting."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from envs.cell_config import CellConfig
+from envs.errors import CellError
+from envs.scene import SceneIds, cell_geometry
+
+
+def set_input_speed(model: mujoco.MjModel, ids: SceneIds, speed: float) -> None:
+    """Set the input belt's surface speed along +x [m/s] at run time.
+
+    Raises:
+        CellError: Negative or non-finite speed.
+    """
+    if not (math.isfinite(speed) and speed >= 0):
+        raise CellError(f"belt speed must be finite and >= 0 m/s, got {speed!r}")
+    model.geom_surfacevel[ids.input_belt_geom, 0] = speed
+
+
+def input_speed(model: mujoco.MjModel, ids: SceneIds) -> float:
+    """The input belt's surface speed [m/s]."""
+    return float(model.geom_surfacevel[ids.input_belt_geom, 0])
+
+
+class LostTracker:
+    """Counts tiles lost: past the input belt's end (into the bin) or fallen below belt level.
+
+    Args:
+        cfg: Cell configuration.
+        n_tiles: Number of tiles.
+    """
+
+    def __init__(self, cfg: CellConfig, n_tiles: int) -> None:
+        geo = cell_geometry(cfg)
+        self._x_end = geo.input_belt_end
+        self._y = geo.input_y
+        self._half_w = cfg.input_belt.width / 2 + 0.05
+        self._z_min = geo.belt_top - cfg.input_belt.lost_margin
+        self.lost = np.zeros(n_tiles, bool)
+
+    def reset(self) -> None:
+        """No tile lost."""
+        self.lost[:] = False
+
+    @property
+    def count(self) -> int:
+        """Number of tiles lost so far."""
+        return int(self.lost.sum())
+
+    def update(self, pos: np.ndarray, on_stage: np.ndarray, held: int) -> np.ndarray:
+        """Mark newly lost tiles.
+
+        Args:
+            pos: Tile positions, shape (n, 3) [m].
+            on_stage: Tiles that have been fed into the cell, shape (n,).
+            held: Index of the tile on the pad (never lost), or -1.
+
+        Returns:
+            Indices of tiles lost in this update.
+        """
+        in_bin = (pos[:, 0] > self._x_end) & (np.abs(pos[:, 1] - self._y) < self._half_w)
+        fell = pos[:, 2] < self._z_min
+        now = on_stage & (in_bin | fell) & ~self.lost
+        if held >= 0:
+            now[held] = False
+        self.lost |= now
+        return np.flatnonzero(now)
+
+
+__all__ = ["LostTracker", "input_speed", "set_input_speed"]

@@ -1,0 +1,159 @@
+"""Pinhole models of the cell's cameras and reusable renderers.
+
+Pixel convention (OpenCV): u to the right, v down, pixel centres at integer coordinates, so
+pixel ``image[row, col]`` is centred at ``(u, v) = (col, row)``. Camera frame (OpenCV): x right,
+y down, z forward (along the view).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from envs.cell_config import RenderConfig
+from envs.errors import CellError
+
+# MuJoCo cameras look along their -z with +y up; OpenCV's look along +z with +y down.
+_MJ_TO_CV = np.diag([1.0, -1.0, -1.0])
+
+
+@dataclass(frozen=True, eq=False)
+class CameraModel:
+    """Intrinsics and extrinsics of one camera.
+
+    Attributes:
+        name: Camera name in the model.
+        width: Image width [px].
+        height: Image height [px].
+        K: Intrinsic matrix, shape (3, 3) [px].
+        world_to_camera: Extrinsic transform, shape (4, 4): camera = T @ world (OpenCV frame).
+    """
+
+    name: str
+    width: int
+    height: int
+    K: np.ndarray
+    world_to_camera: np.ndarray
+
+    def project(self, points_world: np.ndarray) -> np.ndarray:
+        """Project world points to pixels.
+
+        Args:
+            points_world: Shape (n, 3) or (3,) [m].
+
+        Returns:
+            Pixel coordinates (u, v), shape (n, 2) or (2,) [px].
+        """
+        pts = np.asarray(points_world, dtype=float)
+        single = pts.ndim == 1
+        pts = np.atleast_2d(pts)
+        cam = pts @ self.world_to_camera[:3, :3].T + self.world_to_camera[:3, 3]
+        uvw = cam @ self.K.T
+        uv = uvw[:, :2] / uvw[:, 2:3]
+        return uv[0] if single else uv
+
+    def unproject_to_plane(self, uv: np.ndarray, z: float) -> np.ndarray:
+        """World points on the horizontal plane at height z seen at pixels uv.
+
+        Args:
+            uv: Pixel coordinates, shape (n, 2) [px].
+            z: Plane height [m].
+
+        Returns:
+            World points, shape (n, 3) [m].
+        """
+        uv = np.atleast_2d(np.asarray(uv, dtype=float))
+        rays_cam = np.column_stack([uv, np.ones(len(uv))]) @ np.linalg.inv(self.K).T
+        r = self.world_to_camera[:3, :3]
+        origin = -r.T @ self.world_to_camera[:3, 3]
+        rays = rays_cam @ r  # camera -> world directions
+        s = (z - origin[2]) / rays[:, 2]
+        return origin + s[:, None] * rays
+
+
+def camera_model(
+    model: mujoco.MjModel, data: mujoco.MjData, camera: int, width: int, height: int
+) -> CameraModel:
+    """Pinhole model of a MuJoCo camera at an image size (square pixels, centred)."""
+    fy = (height / 2) / math.tan(math.radians(model.cam_fovy[camera]) / 2)
+    k = np.array([[fy, 0.0, width / 2 - 0.5], [0.0, fy, height / 2 - 0.5], [0.0, 0.0, 1.0]])
+    r_wc = data.cam_xmat[camera].reshape(3, 3)  # camera axes in world (MuJoCo convention)
+    r = _MJ_TO_CV @ r_wc.T
+    t = np.eye(4)
+    t[:3, :3] = r
+    t[:3, 3] = -r @ data.cam_xpos[camera]
+    name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_CAMERA, camera) or str(camera)
+    return CameraModel(name, width, height, k, t)
+
+
+class CameraRig:
+    """Renders named cameras with one `mujoco.Renderer` per image size (reused).
+
+    Args:
+        model: The compiled cell.
+        cfg: Render options (shadows, reflections).
+    """
+
+    def __init__(self, model: mujoco.MjModel, cfg: RenderConfig) -> None:
+        self._model = model
+        self._cfg = cfg
+        self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._depth: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._closed = False
+
+    def _renderer(self, height: int, width: int, depth: bool) -> mujoco.Renderer:
+        if self._closed:
+            raise CellError("the camera rig is closed")
+        pool = self._depth if depth else self._renderers
+        key = (height, width)
+        r = pool.get(key)
+        if r is None:
+            r = mujoco.Renderer(self._model, height, width)
+            r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self._cfg.shadows
+            r.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = self._cfg.reflections
+            if depth:
+                r.enable_depth_rendering()
+            pool[key] = r
+        return r
+
+    def render(
+        self,
+        data: mujoco.MjData,
+        camera: int | str | mujoco.MjvCamera,
+        height: int,
+        width: int,
+        *,
+        depth: bool = False,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Render one view.
+
+        Args:
+            data: State to render.
+            camera: Camera id, name, or a free `MjvCamera`.
+            height: Image height [px].
+            width: Image width [px].
+            depth: Depth image [m] instead of RGB.
+            out: Optional preallocated output, shape (height, width, 3) uint8 or
+                (height, width) float32 for depth.
+
+        Returns:
+            RGB uint8 (height, width, 3) or depth float32 (height, width) [m].
+        """
+        r = self._renderer(height, width, depth)
+        r.update_scene(data, camera=camera)
+        return r.render(out=out)
+
+    def close(self) -> None:
+        """Free every renderer (safe to call twice)."""
+        for pool in (self._renderers, self._depth):
+            for r in pool.values():
+                r.close()
+            pool.clear()
+        self._closed = True
+
+
+__all__ = ["CameraModel", "CameraRig", "camera_model"]

@@ -1,0 +1,443 @@
+"""The simulated cell: robot, vacuum pad, belts, mesh, cameras and tiles behind one small object.
+
+Typical use::
+
+    from envs.cell import Cell
+    from envs.tiles import basic_shapes
+
+    cell = Cell(load_cell_config(), basic_shapes(), seed=0)
+    cell.set_servo(q_target, qd_target)   # joint targets [rad], feed-forward [rad/s]
+    cell.step(10)                         # 10 physics steps (mj_step nstep)
+    cell.vacuum(True)
+    rgb = cell.render("input_camera")
+    cell.close()
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from envs.belts import LostTracker, input_speed, set_input_speed
+from envs.cameras import CameraModel, CameraRig, camera_model
+from envs.cell_config import CellConfig, load_cell_config
+from envs.errors import CellError
+from envs.scene import build_scene, cell_geometry, park_positions, yaw_quat
+from envs.suction import Suction, SuctionEvent
+from envs.tiles import PhysicalTile, SlotSpec, TileShape, basic_shapes, make_tiles, sample_layout
+
+CAMERAS = ("input_camera", "output_camera")
+"""Names of the observation cameras."""
+
+
+@dataclass(frozen=True, eq=False)
+class TilePoses:
+    """Tile poses at one instant (copies).
+
+    Attributes:
+        pos: Positions of the tiles' area centroids at mid-thickness, shape (n, 3) [m].
+        quat: Orientations (w, x, y, z), shape (n, 4).
+        yaw: Rotation about world z, shape (n,) [rad] (meaningful for tiles lying flat).
+    """
+
+    pos: np.ndarray
+    quat: np.ndarray
+    yaw: np.ndarray
+
+
+class Cell:
+    """Robot + pad + belts + mesh + cameras + tiles, stepped through MuJoCo.
+
+    Args:
+        config: Cell configuration (bundled ``configs/cell.yaml`` when None).
+        shapes: Tile shapes to feed (the built-in test shapes when None).
+        slots: Slots of the mesh (visual marks on the output belt).
+        seed: Seed or generator for noise, distractors and layout.
+
+    Raises:
+        CellError: Bad configuration, slots outside the mesh, or tiles that do not fit the
+            input belt (checked before anything is simulated).
+    """
+
+    def __init__(
+        self,
+        config: CellConfig | None = None,
+        shapes: Sequence[TileShape] | None = None,
+        slots: Sequence[SlotSpec] = (),
+        seed: int | np.random.Generator | None = 0,
+    ) -> None:
+        self.cfg = config if config is not None else load_cell_config()
+        self._rng = np.random.default_rng(seed)
+        self.shapes = tuple(shapes) if shapes is not None else basic_shapes()
+        self.slots = tuple(slots)
+        self.tiles: tuple[PhysicalTile, ...] = make_tiles(self.shapes, self.cfg.tiles, self._rng)
+        self._radii = np.array([t.radius for t in self.tiles])
+        self.is_distractor = np.array([t.distractor != "" for t in self.tiles])
+        self.geometry = cell_geometry(self.cfg)
+        # Fail before compiling anything if the initial layout cannot fit.
+        if self._initial_count():
+            sample_layout(
+                self._radii[: self._initial_count()],
+                tuple(self.cfg.input_belt.tile_area),
+                self.cfg.tiles.min_gap,
+                self.cfg.tiles.placement_attempts,
+                np.random.default_rng(0),
+            )
+        self.model, self.ids = build_scene(self.cfg, self.tiles, self.slots)
+        self.data = mujoco.MjData(self.model)
+        self.suction = Suction(
+            self.model, self.ids, self.cfg.suction, self.tiles, self.cfg.tiles.thickness
+        )
+        self.lost_tracker = LostTracker(self.cfg, len(self.tiles))
+        self.cameras = CameraRig(self.model, self.cfg.render)
+        self._park = park_positions(len(self.tiles), self.cfg.tiles.thickness)
+        self.on_stage = np.zeros(len(self.tiles), bool)
+        self._next_feed_time = 0.0
+        self._speed_lo = -np.asarray(self.cfg.robot.max_joint_speed)
+        self._speed_hi = np.asarray(self.cfg.robot.max_joint_speed)
+        self._q_lo = self.model.jnt_range[self._arm_joints(), 0].copy()
+        self._q_hi = self.model.jnt_range[self._arm_joints(), 1].copy()
+        self._closed = False
+        self.reset()
+
+    # ----------------------------------------------------------------- set-up
+    def _arm_joints(self) -> np.ndarray:
+        return np.searchsorted(self.model.jnt_qposadr, self.ids.arm_qpos)
+
+    def _initial_count(self) -> int:
+        if self.cfg.tiles.feed == "all":
+            return len(self.tiles)
+        return min(self.cfg.tiles.stream_initial, len(self.tiles))
+
+    def reset(self, seed: int | np.random.Generator | None = None) -> None:
+        """Arm at home, vacuum off, tiles laid out afresh on the input belt, counters cleared.
+
+        The tiles' geometry and noise are fixed when the cell is built; reset only re-draws
+        their layout (a new `Cell` draws new noise).
+
+        Args:
+            seed: New seed or generator for the layout; None continues the cell's generator.
+        """
+        self._check_open()
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
+        m, d, ids = self.model, self.data, self.ids
+        mujoco.mj_resetData(m, d)
+        self.suction.reset(d)
+        self.lost_tracker.reset()
+        home = np.asarray(self.cfg.robot.home)
+        d.qpos[ids.arm_qpos] = home
+        d.ctrl[ids.pos_actuators] = home
+        d.ctrl[ids.vel_actuators] = 0.0
+        n = len(self.tiles)
+        if n:
+            qadr = ids.tile_qpos_index
+            d.qpos[qadr[:, :3]] = self._park
+            d.qpos[qadr[:, 3:]] = [1.0, 0.0, 0.0, 0.0]
+            self.on_stage[:] = False
+            k = self._initial_count()
+            if k:
+                order = self._rng.permutation(n)[:k] if k < n else np.arange(n)
+                poses = sample_layout(
+                    self._radii[order],
+                    tuple(self.cfg.input_belt.tile_area),
+                    self.cfg.tiles.min_gap,
+                    self.cfg.tiles.placement_attempts,
+                    self._rng,
+                )
+                self._place(order, poses)
+        self._next_feed_time = (
+            self.cfg.tiles.stream_period if self.cfg.tiles.feed == "stream" else np.inf
+        )
+        mujoco.mj_forward(m, d)
+
+    def _place(self, idx: np.ndarray, poses: np.ndarray) -> None:
+        """Put tiles at (x, y, yaw) poses relative to the tile area's centre, at rest."""
+        c = self.geometry.input_centre
+        qadr = self.ids.tile_qpos_index[idx]
+        z = c[2] + self.cfg.tiles.thickness / 2 + 1e-4
+        self.data.qpos[qadr[:, 0]] = c[0] + poses[:, 0]
+        self.data.qpos[qadr[:, 1]] = c[1] + poses[:, 1]
+        self.data.qpos[qadr[:, 2]] = z
+        self.data.qpos[qadr[:, 3:]] = yaw_quat(poses[:, 2])
+        self.data.qvel[self.ids.tile_dof_index[idx]] = 0.0
+        self.on_stage[idx] = True
+
+    def _feed_stream(self) -> None:
+        """Spawn the next waiting tile at the upstream edge of the tile area, if there is room."""
+        waiting = np.flatnonzero(~self.on_stage)
+        if len(waiting) == 0:
+            self._next_feed_time = np.inf
+            return
+        i = int(waiting[0])
+        ta = self.cfg.input_belt.tile_area
+        r = self._radii[i]
+        c = self.geometry.input_centre
+        pos = self.data.xpos[self.ids.tile_body]
+        near = self.on_stage & (pos[:, 0] < c[0] - ta[0] / 2 + 3 * r + 0.05)
+        strip = (2 * r + 2 * self.cfg.tiles.min_gap, ta[1])
+        try:
+            pose = sample_layout(
+                self._radii[[i]],
+                strip,
+                self.cfg.tiles.min_gap,
+                self.cfg.tiles.placement_attempts,
+                self._rng,
+                occupied=pos[near, :2] - [c[0] - ta[0] / 2 + strip[0] / 2, c[1]],
+                occupied_radii=self._radii[near],
+            )
+        except CellError:
+            return  # no room yet; try again next step
+        pose[:, 0] += -ta[0] / 2 + strip[0] / 2
+        self._place(np.array([i]), pose)
+        self._next_feed_time += self.cfg.tiles.stream_period
+
+    # ------------------------------------------------------------- stepping
+    def step(self, n: int = 1) -> list[SuctionEvent]:
+        """Advance ``n`` physics steps (one `mj_step` call), then update suction and counters.
+
+        The holding force is checked, and a seal attempted, once per call: call with ``n``
+        equal to the control period.
+
+        Returns:
+            Suction events (grasp, drop) of this call.
+        """
+        self._check_open()
+        if n < 1:
+            raise CellError(f"step needs n >= 1 physics steps, got {n}")
+        mujoco.mj_step(self.model, self.data, nstep=n)
+        events = []
+        ev = self.suction.update(self.data)
+        if ev is not None:
+            events.append(ev)
+        if self.data.time >= self._next_feed_time:
+            self._feed_stream()
+            mujoco.mj_forward(self.model, self.data)
+        self.lost_tracker.update(
+            self.data.xpos[self.ids.tile_body], self.on_stage, self.suction.held
+        )
+        return events
+
+    def set_servo(self, q: np.ndarray, qd: np.ndarray | None = None) -> None:
+        """Servo targets: joint angles [rad] and feed-forward velocities [rad/s], shape (6,).
+
+        Targets are clipped to the joint ranges and axis speed limits.
+
+        Raises:
+            CellError: Wrong shape or non-finite values.
+        """
+        q = self._vec6(q, "q")
+        qd = np.zeros(6) if qd is None else self._vec6(qd, "qd")
+        self.data.ctrl[self.ids.pos_actuators] = np.clip(q, self._q_lo, self._q_hi)
+        self.data.ctrl[self.ids.vel_actuators] = np.clip(qd, self._speed_lo, self._speed_hi)
+
+    def set_qpos(self, q: np.ndarray) -> None:
+        """Kinematic mode: put the arm at ``q`` [rad] at rest (no dynamics), carrying a held tile.
+
+        Servo targets are set to ``q`` too, so a following `step` holds the pose.
+
+        Raises:
+            CellError: Wrong shape, non-finite, or outside the joint ranges.
+        """
+        q = self._vec6(q, "q")
+        if np.any(q < self._q_lo - 1e-9) or np.any(q > self._q_hi + 1e-9):
+            raise CellError(
+                f"q {np.round(q, 4).tolist()} is outside the joint ranges "
+                f"{np.round(np.column_stack([self._q_lo, self._q_hi]), 4).tolist()} [rad]"
+            )
+        m, d, ids = self.model, self.data, self.ids
+        d.qpos[ids.arm_qpos] = q
+        d.qvel[ids.arm_dof] = 0.0
+        d.ctrl[ids.pos_actuators] = q
+        d.ctrl[ids.vel_actuators] = 0.0
+        held = self.suction.held
+        if held >= 0:
+            mujoco.mj_kinematics(m, d)
+            b1 = ids.pad_body
+            r1 = d.xmat[b1].reshape(3, 3)
+            qa = ids.tile_qpos[held]
+            d.qpos[qa : qa + 3] = d.xpos[b1] + r1 @ m.eq_data[ids.weld, 3:6]
+            quat = np.zeros(4)
+            mujoco.mju_mulQuat(quat, d.xquat[b1], m.eq_data[ids.weld, 6:10])
+            d.qpos[qa + 3 : qa + 7] = quat
+            d.qvel[ids.tile_dof_index[held]] = 0.0
+        mujoco.mj_forward(m, d)
+
+    def vacuum(self, on: bool) -> SuctionEvent | None:
+        """Switch the vacuum on (seals at once if the pad is on a tile) or off (releases).
+
+        Returns:
+            The grasp or release event, if one happened.
+        """
+        self._check_open()
+        before = len(self.suction.events)
+        mujoco.mj_kinematics(self.model, self.data)
+        self.suction.set_vacuum(self.data, on)
+        return self.suction.events[-1] if len(self.suction.events) > before else None
+
+    @staticmethod
+    def _vec6(v: np.ndarray, name: str) -> np.ndarray:
+        a = np.asarray(v, dtype=float)
+        if a.shape != (6,) or not np.all(np.isfinite(a)):
+            raise CellError(f"{name} must be 6 finite joint values, got {np.asarray(v)!r}")
+        return a
+
+    # -------------------------------------------------------------- reading
+    @property
+    def time(self) -> float:
+        """Simulation time [s]."""
+        return float(self.data.time)
+
+    @property
+    def qpos(self) -> np.ndarray:
+        """Arm joint angles, shape (6,) [rad] (copy)."""
+        return self.data.qpos[self.ids.arm_qpos].copy()
+
+    @property
+    def qvel(self) -> np.ndarray:
+        """Arm joint velocities, shape (6,) [rad/s] (copy)."""
+        return self.data.qvel[self.ids.arm_dof].copy()
+
+    def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Pad-face position (3,) [m] and rotation matrix (3, 3) (z out of the pad)."""
+        s = self.ids.tcp_site
+        return self.data.site_xpos[s].copy(), self.data.site_xmat[s].reshape(3, 3).copy()
+
+    def tile_poses(self) -> TilePoses:
+        """Poses of all tiles (parked ones included; see `on_stage`)."""
+        q = self.data.qpos[self.ids.tile_qpos_index]
+        quat = q[:, 3:].copy()
+        yaw = np.arctan2(
+            2 * (quat[:, 0] * quat[:, 3] + quat[:, 1] * quat[:, 2]),
+            1 - 2 * (quat[:, 2] ** 2 + quat[:, 3] ** 2),
+        )
+        return TilePoses(q[:, :3].copy(), quat, yaw)
+
+    @property
+    def vacuum_on(self) -> bool:
+        """Vacuum sensor: the valve is open."""
+        return self.suction.vacuum_on
+
+    @property
+    def tile_held(self) -> bool:
+        """Pressure switch: a tile is sealed on the pad."""
+        return self.suction.tile_held
+
+    @property
+    def held_tile(self) -> int:
+        """Index of the held tile, or -1."""
+        return self.suction.held
+
+    @property
+    def lost(self) -> np.ndarray:
+        """Tiles lost off the input belt or onto the floor, shape (n,) bool (copy)."""
+        return self.lost_tracker.lost.copy()
+
+    @property
+    def n_lost(self) -> int:
+        """Number of tiles lost."""
+        return self.lost_tracker.count
+
+    @property
+    def n_dropped(self) -> int:
+        """Tiles dropped because the holding force was exceeded."""
+        return self.suction.dropped
+
+    @property
+    def events(self) -> list[SuctionEvent]:
+        """Every suction event since reset."""
+        return list(self.suction.events)
+
+    @property
+    def belt_speed(self) -> float:
+        """Input belt speed [m/s]."""
+        return input_speed(self.model, self.ids)
+
+    @belt_speed.setter
+    def belt_speed(self, speed: float) -> None:
+        set_input_speed(self.model, self.ids, speed)
+
+    def warnings(self) -> int:
+        """Total count of MuJoCo warnings raised so far (should stay 0)."""
+        return int(np.sum(self.data.warning.number))
+
+    def slot_poses_world(self) -> np.ndarray:
+        """Slot poses in the world, shape (k, 3): x, y [m] and yaw [rad] of each slot's centroid."""
+        c = self.geometry.output_centre
+        poses = np.array([s.pose for s in self.slots]).reshape(-1, 3)
+        return poses + [c[0], c[1], 0.0]
+
+    # ------------------------------------------------------------ rendering
+    def camera_model(
+        self, name: str, height: int | None = None, width: int | None = None
+    ) -> CameraModel:
+        """Intrinsics/extrinsics of ``input_camera`` or ``output_camera`` at an image size.
+
+        Raises:
+            CellError: Unknown camera.
+        """
+        cam_cfg = self._camera_cfg(name)
+        cid = self.ids.input_camera if name == CAMERAS[0] else self.ids.output_camera
+        return camera_model(
+            self.model, self.data, cid, width or cam_cfg.width, height or cam_cfg.height
+        )
+
+    def _camera_cfg(self, name: str):  # noqa: ANN202 - internal
+        if name == CAMERAS[0]:
+            return self.cfg.input_camera
+        if name == CAMERAS[1]:
+            return self.cfg.output_camera
+        raise CellError(f"unknown camera {name!r}; allowed: {list(CAMERAS)}")
+
+    def render(
+        self,
+        name: str = "input_camera",
+        height: int | None = None,
+        width: int | None = None,
+        depth: bool = False,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Render a camera: ``input_camera``, ``output_camera`` or ``overview``.
+
+        Args:
+            name: Camera name.
+            height: Image height [px] (the camera's configured size when None).
+            width: Image width [px].
+            depth: Depth [m] instead of RGB.
+            out: Optional preallocated output buffer.
+
+        Returns:
+            RGB uint8 (height, width, 3) or depth float32 (height, width).
+        """
+        self._check_open()
+        if name == "overview":
+            h, w = self.cfg.render.overview_size
+            return self.cameras.render(
+                self.data, "overview", height or h, width or w, depth=depth, out=out
+            )
+        cam_cfg = self._camera_cfg(name)
+        return self.cameras.render(
+            self.data, name, height or cam_cfg.height, width or cam_cfg.width, depth=depth, out=out
+        )
+
+    def close(self) -> None:
+        """Free renderers; the cell cannot be stepped afterwards (safe to call twice)."""
+        if not self._closed:
+            self.cameras.close()
+            self._closed = True
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise CellError("the cell is closed")
+
+    def __enter__(self) -> Cell:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+__all__ = ["CAMERAS", "Cell", "TilePoses"]

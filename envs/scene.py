@@ -1,0 +1,536 @@
+"""Programmatic composition of the cell with MjSpec: robot + belts + bin + mesh + cameras + tiles.
+
+The robot comes from ``assets/irb140/irb140.xml``; everything else is added in code. Names are
+resolved to ids once, into a frozen `SceneIds`.
+
+World layout (see `LayoutConfig`): robot base at the origin; the input belt's centre line at
+y = +belt_separation/2 and the output belt's at y = -belt_separation/2, both running along +x;
+the working areas are centred at x = work_x.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+import shapely
+from shapely.geometry import Polygon
+
+from envs.cell_config import CellConfig
+from envs.errors import CellError
+from envs.tiles import PhysicalTile, SlotSpec
+
+# Contact bit masks: world/belts 1, tiles 2, arm 4 (the arm's classes set contype 4,
+# conaffinity 1 in irb140.xml). Tiles touch everything; the arm touches world and tiles.
+WORLD_CONTYPE, WORLD_CONAFFINITY = 1, 1
+TILE_CONTYPE, TILE_CONAFFINITY = 2, 7
+PARK_SPACING = 0.08
+"""Grid spacing of parked (not yet fed) tiles on the floor far from the cell [m]."""
+PARK_ORIGIN = np.array([-6.0, -1.0])
+"""Corner of the parking grid, outside the rendered floor [m]."""
+WELD_SOLREF = (0.004, 1.0)
+"""Time constant [s] and damping ratio of the suction weld (stiff: 2x the default timestep)."""
+
+BELT_RGBA = (0.12, 0.12, 0.13, 1.0)
+FRAME_RGBA = (0.55, 0.57, 0.6, 1.0)
+SHEET_RGBA = (0.22, 0.22, 0.24, 1.0)
+SLOT_WHITE = 0.6
+"""Slot marks are this much white mixed with the expected tile colour."""
+
+
+@dataclass(frozen=True, eq=False)
+class SceneIds:
+    """Ids resolved once after compiling; index arrays for vectorised reads.
+
+    Attributes:
+        arm_qpos: qpos addresses of joints 1-6, shape (6,).
+        arm_dof: dof addresses of joints 1-6, shape (6,).
+        pos_actuators: Position servo actuator ids, shape (6,).
+        vel_actuators: Velocity feed-forward actuator ids, shape (6,).
+        tcp_site: Site at the pad face (z out of the pad).
+        flange_site: Site at the flange (DH frame 6).
+        pad_body: Body of the vacuum pad.
+        weld: Equality id of the suction weld (inactive when nothing is held).
+        tile_body: Body ids of the tiles, shape (n,).
+        tile_qpos: First qpos address of each tile's free joint, shape (n,).
+        tile_dof: First dof address of each tile's free joint, shape (n,).
+        tile_geom_start: First geom id of each tile, shape (n,).
+        tile_geom_count: Number of geoms of each tile, shape (n,).
+        input_belt_geom: Geom carrying tiles on the input belt (surfacevel).
+        mesh_geom: The mesh sheet on the output belt.
+        input_camera: Camera id above the input belt.
+        output_camera: Camera id above the output belt.
+    """
+
+    arm_qpos: np.ndarray
+    arm_dof: np.ndarray
+    pos_actuators: np.ndarray
+    vel_actuators: np.ndarray
+    tcp_site: int
+    flange_site: int
+    pad_body: int
+    weld: int
+    tile_body: np.ndarray
+    tile_qpos: np.ndarray
+    tile_dof: np.ndarray
+    tile_geom_start: np.ndarray
+    tile_geom_count: np.ndarray
+    input_belt_geom: int
+    mesh_geom: int
+    input_camera: int
+    output_camera: int
+
+    @property
+    def tile_qpos_index(self) -> np.ndarray:
+        """Qpos indices of all tiles' free joints, shape (n, 7)."""
+        return self.tile_qpos[:, None] + np.arange(7)[None, :]
+
+    @property
+    def tile_dof_index(self) -> np.ndarray:
+        """Dof indices of all tiles' free joints, shape (n, 6)."""
+        return self.tile_dof[:, None] + np.arange(6)[None, :]
+
+
+@dataclass(frozen=True)
+class CellGeometry:
+    """Derived positions of the cell's parts [m] (all in the world frame).
+
+    Attributes:
+        input_centre: Centre of the input tile area on the belt top, shape (3,).
+        output_centre: Centre of the mesh sheet's top, shape (3,).
+        input_belt_end: x of the input belt's downstream end.
+        input_belt_start: x of the input belt's upstream end.
+        input_y: y of the input belt's centre line.
+        belt_top: z of both belts' top faces.
+        mesh_top: z of the mesh sheet's top face.
+    """
+
+    input_centre: np.ndarray
+    output_centre: np.ndarray
+    input_belt_end: float
+    input_belt_start: float
+    input_y: float
+    belt_top: float
+    mesh_top: float
+
+
+def cell_geometry(cfg: CellConfig) -> CellGeometry:
+    """Positions of the belts and working areas from the configuration."""
+    lay = cfg.layout
+    top = lay.belt_top_z
+    y_in, y_out = lay.belt_separation / 2, -lay.belt_separation / 2
+    end = lay.work_x + cfg.input_belt.end_offset
+    mesh_top = top + cfg.output_belt.mesh_thickness
+    return CellGeometry(
+        input_centre=np.array([lay.work_x, y_in, top]),
+        output_centre=np.array([lay.work_x, y_out, mesh_top]),
+        input_belt_end=end,
+        input_belt_start=end - cfg.input_belt.length,
+        input_y=y_in,
+        belt_top=top,
+        mesh_top=mesh_top,
+    )
+
+
+def yaw_quat(yaw: np.ndarray | float) -> np.ndarray:
+    """Quaternions (w, x, y, z) of rotations about z, shape (..., 4)."""
+    yaw = np.asarray(yaw, dtype=float)
+    q = np.zeros((*yaw.shape, 4))
+    q[..., 0] = np.cos(yaw / 2)
+    q[..., 3] = np.sin(yaw / 2)
+    return q
+
+
+def park_positions(n: int, thickness: float) -> np.ndarray:
+    """Parking positions (on the floor, far away) of tiles not yet fed, shape (n, 3) [m]."""
+    cols = max(1, int(np.ceil(np.sqrt(n))))
+    k = np.arange(n)
+    xy = PARK_ORIGIN + PARK_SPACING * np.stack([k % cols, k // cols], axis=1)
+    return np.column_stack([xy, np.full(n, thickness / 2 + 1e-4)])
+
+
+def extrusion(
+    outline: np.ndarray, holes: Sequence[np.ndarray], z0: float, z1: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Closed triangle mesh of a polygon (with holes) extruded from z0 to z1.
+
+    Returns:
+        ``(vertices, faces)``: shapes (v, 3) [m] and (f, 3) vertex indices, outward normals.
+    """
+    rings = [np.asarray(outline, float), *[np.asarray(h, float) for h in holes]]
+    pts2 = np.vstack(rings)
+    n = len(pts2)
+    verts = np.vstack(
+        [np.column_stack([pts2, np.full(n, z0)]), np.column_stack([pts2, np.full(n, z1)])]
+    )
+    index = {(round(float(x), 12), round(float(y), 12)): i for i, (x, y) in enumerate(pts2)}
+    faces = []
+    for tri in shapely.constrained_delaunay_triangles(Polygon(rings[0], rings[1:])).geoms:
+        ids = [
+            index[(round(float(x), 12), round(float(y), 12))] for x, y in tri.exterior.coords[:3]
+        ]
+        a, b, c = pts2[ids]
+        if (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) < 0:
+            ids = ids[::-1]
+        faces.append([ids[0] + n, ids[1] + n, ids[2] + n])  # top, counter-clockwise
+        faces.append([ids[0], ids[2], ids[1]])  # bottom
+    start = 0
+    for ring in rings:
+        m = len(ring)
+        for k in range(m):
+            i, j = start + k, start + (k + 1) % m
+            faces.append([i, j, j + n])
+            faces.append([i, j + n, i + n])
+        start += m
+    return verts, np.asarray(faces, dtype=int)
+
+
+def _box(
+    body: mujoco.MjsBody,
+    name: str,
+    pos: Sequence[float],
+    size: Sequence[float],
+    rgba: Sequence[float],
+    *,
+    collide: bool = True,
+) -> mujoco.MjsGeom:
+    g = body.add_geom()
+    g.name = name
+    g.type = mujoco.mjtGeom.mjGEOM_BOX
+    g.pos = pos
+    g.size = size
+    g.rgba = rgba
+    if collide:
+        g.contype, g.conaffinity = WORLD_CONTYPE, WORLD_CONAFFINITY
+    else:
+        g.contype, g.conaffinity = 0, 0
+    return g
+
+
+def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotSpec]) -> None:
+    """Floor, light, belts, bin, mesh sheet with slot marks, cameras."""
+    geo = cell_geometry(cfg)
+    wb = spec.worldbody
+    ib, ob = cfg.input_belt, cfg.output_belt
+    top = geo.belt_top
+    friction = [cfg.tiles.friction, 0.005, 0.0001]
+
+    spec.add_texture(
+        name="floor_tex",
+        type=mujoco.mjtTexture.mjTEXTURE_2D,
+        builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+        rgb1=[0.33, 0.35, 0.38],
+        rgb2=[0.28, 0.3, 0.33],
+        width=256,
+        height=256,
+    )
+    spec.add_material(
+        name="floor_mat", textures=["", "floor_tex"], texrepeat=[8, 8], texuniform=True
+    )
+    floor = wb.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[4, 4, 0.05])
+    floor.material = "floor_mat"
+    floor.contype, floor.conaffinity = WORLD_CONTYPE, WORLD_CONAFFINITY
+    wb.add_light(
+        name="top_light",
+        pos=[0.3, 0, 2.5],
+        dir=[0, 0, -1],
+        type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
+        castshadow=False,
+        diffuse=[0.6, 0.6, 0.6],
+        specular=[0.1, 0.1, 0.1],
+    )
+
+    # Input belt (carries tiles through surfacevel) with its frame and the bin at the end.
+    cx = geo.input_belt_end - ib.length / 2
+    belt = _box(
+        wb,
+        "input_belt",
+        [cx, geo.input_y, top - ib.thickness / 2],
+        [ib.length / 2, ib.width / 2, ib.thickness / 2],
+        BELT_RGBA,
+    )
+    belt.friction = friction
+    belt.surfacevel = [ib.speed, 0.0, 0.0, 0.0, 0.0, 0.0]
+    rail_h = 0.01
+    for side, sign in (("left", 1), ("right", -1)):
+        _box(
+            wb,
+            f"input_rail_{side}",
+            [cx, geo.input_y + sign * (ib.width / 2 + 0.01), top],
+            [ib.length / 2, 0.01, rail_h],
+            FRAME_RGBA,
+        )
+    leg = top - ib.thickness
+    _box(
+        wb,
+        "input_stand",
+        [cx, geo.input_y, leg / 2],
+        [ib.length / 2 - 0.05, ib.width / 2 - 0.03, leg / 2],
+        FRAME_RGBA,
+        collide=False,
+    )
+    bx0 = geo.input_belt_end + 0.005
+    bin_floor = top - ib.bin_depth
+    bw = ib.width / 2 + 0.05
+    wall = 0.005
+    _box(
+        wb,
+        "bin_floor",
+        [bx0 + ib.bin_length / 2, geo.input_y, bin_floor - wall],
+        [ib.bin_length / 2, bw, wall],
+        (0.35, 0.25, 0.15, 1),
+    )
+    _box(
+        wb,
+        "bin_far",
+        [bx0 + ib.bin_length + wall, geo.input_y, bin_floor + ib.bin_depth / 2],
+        [wall, bw, ib.bin_depth / 2],
+        (0.45, 0.33, 0.2, 1),
+    )
+    for side, sign in (("left", 1), ("right", -1)):
+        _box(
+            wb,
+            f"bin_{side}",
+            [bx0 + ib.bin_length / 2, geo.input_y + sign * bw, bin_floor + ib.bin_depth / 2],
+            [ib.bin_length / 2, wall, ib.bin_depth / 2],
+            (0.45, 0.33, 0.2, 1),
+        )
+    _box(
+        wb,
+        "bin_stand",
+        [bx0 + ib.bin_length / 2, geo.input_y, (bin_floor - 2 * wall) / 2],
+        [ib.bin_length / 2 - 0.02, bw - 0.02, (bin_floor - 2 * wall) / 2],
+        FRAME_RGBA,
+        collide=False,
+    )
+
+    # Output belt with the mesh sheet and slot marks.
+    oc = geo.output_centre
+    obelt = _box(
+        wb,
+        "output_belt",
+        [oc[0], oc[1], top - ob.thickness / 2],
+        [ob.length / 2, ob.width / 2, ob.thickness / 2],
+        BELT_RGBA,
+    )
+    obelt.friction = friction
+    _box(
+        wb,
+        "output_stand",
+        [oc[0], oc[1], leg / 2],
+        [ob.length / 2 - 0.05, ob.width / 2 - 0.03, leg / 2],
+        FRAME_RGBA,
+        collide=False,
+    )
+    sheet = _box(
+        wb,
+        "mesh_sheet",
+        [oc[0], oc[1], top + ob.mesh_thickness / 2],
+        [ob.mesh_size[0] / 2, ob.mesh_size[1] / 2, ob.mesh_thickness / 2],
+        SHEET_RGBA,
+    )
+    sheet.friction = friction
+    half = np.asarray(ob.mesh_size) / 2
+    for k, slot in enumerate(slots):
+        x, y, yaw = slot.pose
+        c = slot.shape.polygon.centroid
+        off = np.array([c.x, c.y])
+        outline = slot.shape.outline - off
+        holes = [h - off for h in slot.shape.holes]
+        rot = np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
+        world = outline @ rot.T + [x, y]
+        if np.any(np.abs(world) > half + 1e-9):
+            raise CellError(
+                f"slot {k} ({slot.shape.name}) at pose {slot.pose} extends beyond the mesh "
+                f"({ob.mesh_size[0] * 1000:.0f} x {ob.mesh_size[1] * 1000:.0f} mm, centred at 0)"
+            )
+        verts, faces = extrusion(outline, holes, 0.0, ob.slot_mark_height)
+        mesh = spec.add_mesh(name=f"slot{k}_mark")
+        mesh.uservert = verts.ravel().tolist()
+        mesh.userface = faces.ravel().tolist()
+        mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
+        g = wb.add_geom(name=f"slot{k}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"slot{k}_mark")
+        g.pos = [oc[0] + x, oc[1] + y, geo.mesh_top]
+        g.quat = yaw_quat(yaw)
+        g.contype, g.conaffinity, g.group = 0, 0, 1
+        col = SLOT_WHITE + (1 - SLOT_WHITE) * np.asarray(slot.shape.color)
+        g.rgba = [*col, 1.0]
+
+    # Cameras looking straight down; image right = +x, image up = +y.
+    for name, centre, cam in (
+        ("input_camera", geo.input_centre, cfg.input_camera),
+        ("output_camera", geo.output_centre, cfg.output_camera),
+    ):
+        c = wb.add_camera(name=name)
+        c.pos = [
+            centre[0] + cam.offset[0],
+            centre[1] + cam.offset[1],
+            centre[2] + cam.height_above_belt,
+        ]
+        c.quat = [1, 0, 0, 0]
+        c.fovy = cam.fovy_deg
+    wb.add_camera(name="overview", pos=[1.45, 0.0, 1.35], xyaxes=[0, 1, 0, -0.62, 0, 0.78])
+
+
+def _configure(spec: mujoco.MjSpec, cfg: CellConfig) -> None:
+    ph = cfg.physics
+    spec.option.timestep = ph.timestep
+    spec.option.iterations = ph.iterations
+    spec.option.ls_iterations = ph.ls_iterations
+    spec.option.impratio = ph.impratio
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    if ph.sleep:
+        spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+        spec.option.sleep_tolerance = ph.sleep_tolerance
+    spec.visual.quality.shadowsize = 0 if not cfg.render.shadows else 4096
+    spec.visual.headlight.ambient = [0.35, 0.35, 0.35]
+    spec.visual.headlight.diffuse = [0.45, 0.45, 0.45]
+    spec.visual.headlight.specular = [0.0, 0.0, 0.0]
+    spec.visual.global_.offwidth = max(cfg.input_camera.width, cfg.output_camera.width, 1280)
+    spec.visual.global_.offheight = max(cfg.input_camera.height, cfg.output_camera.height, 960)
+    spec.stat.center = [0.3, 0.0, 0.3]
+    spec.stat.extent = 1.5
+
+
+def _robot_spec(cfg: CellConfig) -> mujoco.MjSpec:
+    spec = mujoco.MjSpec.from_file(str(cfg.robot.model_path))
+    for key in list(spec.keys):
+        spec.delete(key)  # re-added with the full state in build_spec
+    return spec
+
+
+def _add_tiles(spec: mujoco.MjSpec, cfg: CellConfig, tiles: Sequence[PhysicalTile]) -> None:
+    t = cfg.tiles.thickness
+    park = park_positions(len(tiles), t)
+    for i, tile in enumerate(tiles):
+        body = spec.worldbody.add_body(name=f"tile{i}", pos=park[i])
+        body.add_freejoint(name=f"tile{i}_joint")
+        for k, piece in enumerate(tile.pieces):
+            n = len(piece)
+            verts = np.vstack(
+                [
+                    np.column_stack([piece, np.full(n, -t / 2)]),
+                    np.column_stack([piece, np.full(n, t / 2)]),
+                ]
+            )
+            mesh = spec.add_mesh(name=f"tile{i}_piece{k}")
+            mesh.uservert = verts.ravel().tolist()
+            g = body.add_geom(
+                name=f"tile{i}_geom{k}",
+                type=mujoco.mjtGeom.mjGEOM_MESH,
+                meshname=f"tile{i}_piece{k}",
+            )
+            g.density = cfg.tiles.density
+            g.rgba = [*tile.color, 1.0]
+            g.friction = [cfg.tiles.friction, 0.005, 0.0001]
+            g.contype, g.conaffinity = TILE_CONTYPE, TILE_CONAFFINITY
+            g.condim = 4
+
+
+def build_spec(
+    cfg: CellConfig, tiles: Sequence[PhysicalTile] = (), slots: Sequence[SlotSpec] = ()
+) -> mujoco.MjSpec:
+    """The whole cell as an editable MjSpec (tiles parked on the floor far away).
+
+    Args:
+        cfg: Cell configuration.
+        tiles: Physical tiles (one free body each); empty for an arm + cell model.
+        slots: Slots of the mesh (visual marks).
+
+    Raises:
+        CellError: A slot outside the mesh.
+    """
+    spec = _robot_spec(cfg)
+    _configure(spec, cfg)
+    _add_environment(spec, cfg, slots)
+    if tiles:
+        _add_tiles(spec, cfg, tiles)
+        eq = spec.add_equality(name="suction_weld", type=mujoco.mjtEq.mjEQ_WELD)
+        eq.objtype = mujoco.mjtObj.mjOBJ_BODY
+        eq.name1, eq.name2 = "vacuum_pad", "tile0"
+        eq.active = False
+        eq.solref = list(WELD_SOLREF)
+    return spec
+
+
+def resolve_ids(model: mujoco.MjModel, n_tiles: int) -> SceneIds:
+    """Resolve every name the cell uses to ids, once."""
+
+    def nid(kind: mujoco.mjtObj, name: str) -> int:
+        i = mujoco.mj_name2id(model, kind, name)
+        if i < 0:
+            raise CellError(f"model has no {kind.name} named {name!r}")
+        return int(i)
+
+    joints = [nid(mujoco.mjtObj.mjOBJ_JOINT, f"joint{k}") for k in range(1, 7)]
+    bodies = np.array([nid(mujoco.mjtObj.mjOBJ_BODY, f"tile{i}") for i in range(n_tiles)], int)
+    tjoints = [nid(mujoco.mjtObj.mjOBJ_JOINT, f"tile{i}_joint") for i in range(n_tiles)]
+    return SceneIds(
+        arm_qpos=model.jnt_qposadr[joints].copy(),
+        arm_dof=model.jnt_dofadr[joints].copy(),
+        pos_actuators=np.array([nid(mujoco.mjtObj.mjOBJ_ACTUATOR, f"pos{k}") for k in range(1, 7)]),
+        vel_actuators=np.array([nid(mujoco.mjtObj.mjOBJ_ACTUATOR, f"vel{k}") for k in range(1, 7)]),
+        tcp_site=nid(mujoco.mjtObj.mjOBJ_SITE, "tcp"),
+        flange_site=nid(mujoco.mjtObj.mjOBJ_SITE, "flange"),
+        pad_body=nid(mujoco.mjtObj.mjOBJ_BODY, "vacuum_pad"),
+        weld=nid(mujoco.mjtObj.mjOBJ_EQUALITY, "suction_weld") if n_tiles else -1,
+        tile_body=bodies,
+        tile_qpos=model.jnt_qposadr[tjoints].copy() if n_tiles else np.zeros(0, int),
+        tile_dof=model.jnt_dofadr[tjoints].copy() if n_tiles else np.zeros(0, int),
+        tile_geom_start=model.body_geomadr[bodies].copy(),
+        tile_geom_count=model.body_geomnum[bodies].copy(),
+        input_belt_geom=nid(mujoco.mjtObj.mjOBJ_GEOM, "input_belt"),
+        mesh_geom=nid(mujoco.mjtObj.mjOBJ_GEOM, "mesh_sheet"),
+        input_camera=nid(mujoco.mjtObj.mjOBJ_CAMERA, "input_camera"),
+        output_camera=nid(mujoco.mjtObj.mjOBJ_CAMERA, "output_camera"),
+    )
+
+
+def build_scene(
+    cfg: CellConfig, tiles: Sequence[PhysicalTile] = (), slots: Sequence[SlotSpec] = ()
+) -> tuple[mujoco.MjModel, SceneIds]:
+    """Compile the cell and resolve its ids.
+
+    Raises:
+        CellError: Bad slots, or MuJoCo refused the composed model (message included).
+    """
+    spec = build_spec(cfg, tiles, slots)
+    try:
+        model = spec.compile()
+    except ValueError as exc:
+        raise CellError(f"MuJoCo could not compile the cell: {exc}") from exc
+    return model, resolve_ids(model, len(tiles))
+
+
+def build_arm_model(cfg: CellConfig | None = None, with_cell: bool = True) -> mujoco.MjModel:
+    """Arm + pad model without tiles, for IK and collision queries.
+
+    Args:
+        cfg: Cell configuration (defaults when None).
+        with_cell: Include belts, bin and mesh sheet (static geoms) as obstacles.
+
+    Returns:
+        A model whose qpos is exactly the six arm joints.
+    """
+    cfg = cfg or CellConfig()
+    if not with_cell:
+        spec = _robot_spec(cfg)
+        _configure(spec, cfg)
+        return spec.compile()
+    return build_scene(cfg)[0]
+
+
+__all__ = [
+    "CellGeometry",
+    "SceneIds",
+    "build_arm_model",
+    "build_scene",
+    "build_spec",
+    "cell_geometry",
+    "extrusion",
+    "park_positions",
+    "resolve_ids",
+    "yaw_quat",
+]
