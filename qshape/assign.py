@@ -1,0 +1,264 @@
+"""Assigning tiles to slots: the paper's greedy loop and an optimal assignment.
+
+Both methods look candidates up through canonical keys (`qshape.matching.canonical_keys`):
+tiles and slots are grouped by the key of their measured labels, and a tile group is compared
+only with the slot groups sharing one of its admissible keys (or its coarse key, for figures
+with too many ambiguous labels to expand). Each pair of groups is then matched in one vectorised
+block (`qshape.matching.evaluate_block`), so N tiles x M slots never loop over pairs in Python.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import linear_sum_assignment
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from qshape.description import Description, default_tolerances
+from qshape.errors import MatchError
+from qshape.figure import Figure
+from qshape.geometry import FloatArray
+from qshape.matching import (
+    Pack,
+    as_description,
+    canonical_key,
+    canonical_keys,
+    coarse_key,
+    evaluate_block,
+    pack,
+)
+from qshape.tolerances import Tolerances
+
+IntArray = NDArray[np.int64]
+
+METHODS = ("optimal", "greedy")
+
+_BLOCK_ELEMENTS = 4_000_000
+"""Largest tiles x slots x nodes^2 evaluated at once (memory bound of one block, ~100 MB)."""
+
+
+@dataclass(frozen=True)
+class Assignment:
+    """One tile placed in one slot.
+
+    Attributes:
+        tile: Index into the tiles list.
+        slot: Index into the slots list.
+        rotation: Rotation [rad], CCW in the y-up frame, turning the tile onto the slot (the
+            equivalent rotation of smallest magnitude for symmetric shapes).
+        score: Alignment residual of the pair (see `qshape.Match.score`); lower is better.
+    """
+
+    tile: int
+    slot: int
+    rotation: float
+    score: float
+
+
+@dataclass
+class _Edges:
+    """Feasible pairs collected block by block."""
+
+    tile: list[IntArray]
+    slot: list[IntArray]
+    score: list[FloatArray]
+    theta: list[FloatArray]
+
+
+def _groups(descs: Sequence[Description]) -> dict[str, list[int]]:
+    out: dict[str, list[int]] = defaultdict(list)
+    for i, d in enumerate(descs):
+        out[canonical_key(d)].append(i)
+    return out
+
+
+def feasible_pairs(
+    tiles: Sequence[Description],
+    slots: Sequence[Description],
+    tol: Tolerances,
+    use_color: bool,
+) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
+    """Every matching (tile, slot) pair, found through canonical-key buckets.
+
+    Returns:
+        (tile, slot, score, rotation) arrays of equal length, sorted by tile then slot.
+    """
+    tile_groups = _groups(tiles)
+    slot_groups = _groups(slots)
+    slot_keys = list(slot_groups)
+    by_key: dict[str, set[int]] = defaultdict(set)
+    by_coarse: dict[str, set[int]] = defaultdict(set)
+    for gi, key in enumerate(slot_keys):
+        members = slot_groups[key]
+        by_coarse[coarse_key(slots[members[0]])].add(gi)
+        for m in members:
+            for k in canonical_keys(slots[m], tol):
+                by_key[k].add(gi)
+    edges = _Edges([], [], [], [])
+    for members in tile_groups.values():
+        coarse = coarse_key(tiles[members[0]])
+        keys: set[str] = set()
+        for m in members:
+            keys |= canonical_keys(tiles[m], tol)
+        found: set[int] = set(by_key.get(coarse, ()))
+        if coarse in keys:  # too ambiguous to expand: every slot with the same coarse key
+            found |= by_coarse.get(coarse, set())
+        for k in keys:
+            found |= by_key.get(k, set())
+        t_idx = np.array(members)
+        tpack = pack([tiles[m] for m in members])
+        for gi in sorted(found):
+            s_idx = np.array(slot_groups[slot_keys[gi]])
+            spack = pack([slots[m] for m in s_idx])
+            _block_edges(tpack, t_idx, spack, s_idx, tol=tol, use_color=use_color, edges=edges)
+    if not edges.tile:
+        empty = np.zeros(0)
+        return empty.astype(np.int64), empty.astype(np.int64), empty, empty
+    t = np.concatenate(edges.tile)
+    s = np.concatenate(edges.slot)
+    order = np.lexsort((s, t))
+    return t[order], s[order], np.concatenate(edges.score)[order], np.concatenate(
+        edges.theta)[order]
+
+
+def _block_edges(
+    tpack: Pack,
+    t_idx: IntArray,
+    spack: Pack,
+    s_idx: IntArray,
+    *,
+    tol: Tolerances,
+    use_color: bool,
+    edges: _Edges,
+) -> None:
+    """Evaluate one tile group against one slot group (chunked) and append feasible edges."""
+    n = tpack.codes.shape[1]
+    chunk = max(1, _BLOCK_ELEMENTS // max(1, len(s_idx) * n * n))
+    for a in range(0, len(t_idx), chunk):
+        sub = _slice_pack(tpack, a, a + chunk)
+        res = evaluate_block(spack, sub, tol, use_color)
+        if res.feasible.shape[2] == 0:
+            continue
+        best = res.score.min(axis=2)
+        ok = np.isfinite(best)
+        if not ok.any():
+            continue
+        theta = np.remainder(res.theta + np.pi, 2.0 * np.pi) - np.pi
+        equiv = res.feasible & (res.score <= best[..., None] + tol.symmetry_residual)
+        pick = np.argmin(np.where(equiv, np.abs(theta), np.inf), axis=2)
+        ti, si = np.nonzero(ok)
+        edges.tile.append(t_idx[a + ti])
+        edges.slot.append(s_idx[si])
+        edges.score.append(best[ti, si])
+        edges.theta.append(theta[ti, si, pick[ti, si]])
+
+
+def _slice_pack(p: Pack, a: int, b: int) -> Pack:
+    if a == 0 and b >= p.codes.shape[0]:
+        return p
+    return Pack(
+        codes=p.codes[a:b], pts=p.pts[a:b], sumsq=p.sumsq[a:b], area=p.area[a:b],
+        perimeter=p.perimeter[a:b], color=p.color[a:b], north=p.north[a:b],
+        hole_codes=tuple(h[a:b] for h in p.hole_codes), hole_centroid=p.hole_centroid[a:b],
+        hole_interval=p.hole_interval[a:b],
+    )
+
+
+def assign(
+    tiles: Sequence[Description | Figure],
+    slots: Sequence[Description | Figure],
+    tolerances: Tolerances | None = None,
+    method: str = "optimal",
+    use_color: bool = True,
+) -> list[Assignment]:
+    """Assign tiles to slots; unmatched tiles are left out.
+
+    Args:
+        tiles: Tile descriptions (or figures).
+        slots: Slot descriptions (or figures).
+        tolerances: Bands and thresholds; None: bundled defaults.
+        method: "greedy": the paper's loop (each tile in order takes the first unmatched slot
+            that matches it). "optimal": as many matched tiles as possible, then the least total
+            residual score (scipy's linear_sum_assignment per connected group of candidates).
+        use_color: Compare colours.
+
+    Returns:
+        Assignments sorted by tile index.
+
+    Raises:
+        MatchError: Unknown method, or arguments that are not descriptions or figures.
+    """
+    if method not in METHODS:
+        raise MatchError(f"unknown assign method {method!r}; allowed: {', '.join(METHODS)}")
+    tol = default_tolerances() if tolerances is None else tolerances
+    td = [as_description(x, tol) for x in tiles]
+    sd = [as_description(x, tol) for x in slots]
+    if not td or not sd:
+        return []
+    t, s, score, theta = feasible_pairs(td, sd, tol, use_color)
+    if len(t) == 0:
+        return []
+    if method == "greedy":
+        return _greedy(t, s, score, theta, len(sd))
+    return _optimal(t, s, score, theta, n_tiles=len(td), n_slots=len(sd))
+
+
+def _greedy(
+    t: IntArray, s: IntArray, score: FloatArray, theta: FloatArray, n_slots: int
+) -> list[Assignment]:
+    """The paper's loop: each tile in order takes the first free matching slot."""
+    taken = np.zeros(n_slots, dtype=bool)
+    starts = np.flatnonzero(np.r_[True, t[1:] != t[:-1]])
+    ends = np.r_[starts[1:], len(t)]
+    out = []
+    for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
+        free = np.flatnonzero(~taken[s[a:b]])
+        if len(free):
+            e = a + int(free[0])
+            taken[s[e]] = True
+            out.append(Assignment(int(t[e]), int(s[e]), float(theta[e]), float(score[e])))
+    return out
+
+
+def _optimal(
+    t: IntArray,
+    s: IntArray,
+    score: FloatArray,
+    theta: FloatArray,
+    *,
+    n_tiles: int,
+    n_slots: int,
+) -> list[Assignment]:
+    """Most matches, then least total score, by linear_sum_assignment per component."""
+    graph = coo_matrix(
+        (np.ones(len(t)), (t, n_tiles + s)), shape=(n_tiles + n_slots, n_tiles + n_slots)
+    )
+    _, comp = connected_components(graph, directed=False)
+    edge_comp = comp[t]
+    order = np.argsort(edge_comp, kind="stable")
+    bounds = np.flatnonzero(np.r_[True, edge_comp[order][1:] != edge_comp[order][:-1], True])
+    out = []
+    for a, b in zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True):
+        e = order[a:b]
+        tu, ti = np.unique(t[e], return_inverse=True)
+        su, si = np.unique(s[e], return_inverse=True)
+        big = (min(len(tu), len(su)) + 1.0) * (float(score[e].max()) + 1.0)
+        cost = np.full((len(tu), len(su)), big)
+        cost[ti, si] = score[e]
+        rows, cols = linear_sum_assignment(cost)
+        keep = cost[rows, cols] < big
+        lookup = np.full((len(tu), len(su)), -1, dtype=np.int64)
+        lookup[ti, si] = e
+        for r, c in zip(rows[keep].tolist(), cols[keep].tolist(), strict=True):
+            k = lookup[r, c]
+            out.append(Assignment(int(t[k]), int(s[k]), float(theta[k]), float(score[k])))
+    out.sort(key=lambda x: x.tile)
+    return out
+
+
+__all__ = ["METHODS", "Assignment", "assign", "feasible_pairs"]

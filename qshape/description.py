@@ -1,0 +1,522 @@
+"""Qualitative descriptions: `describe`, the `Description` value, its text form and `parse`.
+
+A description is the paper's tuple ``[type_hole, type_curve, colour, [nodes...],
+(CIi, position, [hole nodes...])*]``. It also keeps, for matching, each node's admissible
+neighbouring labels (near band edges) and the relevant points relative to the outer centroid in
+the y-up frame (so the rotation that places a tile can be computed). The text form holds all of
+it, floats written exactly, so ``parse(str(d)) == d`` and matching parsed descriptions works.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from qshape import geometry as geo
+from qshape import labels as lb
+from qshape.errors import ParseError
+from qshape.figure import Color, Figure, densify
+from qshape.geometry import BoolArray, FloatArray
+from qshape.labels import CodeArray
+from qshape.tolerances import Tolerances
+
+WITHOUT_HOLES, WITH_HOLES = "without holes", "with holes"
+WITHOUT_CURVES, WITH_CURVES, ONLY_CURVES = "without curves", "with curves", "only curves"
+CONES = ("N", "NE", "E", "SE", "S", "SW", "W", "NW")
+CENTRE = "C"
+CIi = "CIi"
+HEADER = "qshape-description v1"
+_CONE_DEG = 45.0
+
+_DEFAULT_TOL: Tolerances | None = None
+
+
+def default_tolerances() -> Tolerances:
+    """The bundled tolerances (``configs/qshape.yaml``), loaded once."""
+    global _DEFAULT_TOL  # noqa: PLW0603
+    if _DEFAULT_TOL is None:
+        _DEFAULT_TOL = Tolerances.load()
+    return _DEFAULT_TOL
+
+
+@dataclass(frozen=True)
+class Node:
+    """One node of a description, readable form.
+
+    Attributes:
+        kind: "vertex" or "curve".
+        labels: (A, C, L) for a vertex, ("Curve", C, TC) for a curve: the measured labels.
+        admissible: For each of the three components, every admissible label (the measured one
+            first; a neighbouring label too when the measurement is within the margin of an edge).
+    """
+
+    kind: str
+    labels: tuple[str, str, str]
+    admissible: tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]
+
+    @property
+    def ambiguous(self) -> bool:
+        """True when some component admits a neighbouring label."""
+        return any(len(a) > 1 for a in self.admissible)
+
+
+def _names(primary: int, mask: int, names: tuple[str, ...]) -> tuple[str, ...]:
+    rest = tuple(names[k] for k in range(len(names)) if mask >> k & 1 and k != primary)
+    return (names[primary], *rest)
+
+
+def node_of(code: int) -> Node:
+    """Readable `Node` of a node code."""
+    is_curve, (a, am), (c, cm), (t, tm) = lb.decode(int(code))
+    conv = _names(c, cm, lb.CONVEXITY_LABELS)
+    if is_curve:
+        tc = _names(t, tm, lb.CURVATURE_LABELS)
+        return Node("curve", (lb.CURVE, conv[0], tc[0]), ((lb.CURVE,), conv, tc))
+    ang = _names(a, am, lb.ANGLE_LABELS)
+    ln = _names(t, tm, lb.LENGTH_LABELS)
+    return Node("vertex", (ang[0], conv[0], ln[0]), (ang, conv, ln))
+
+
+def type_curve_of(codes: CodeArray) -> str:
+    """type_curve of a boundary from its node codes."""
+    curve = (codes & lb.KIND_BIT) == 1
+    if not curve.any():
+        return WITHOUT_CURVES
+    if np.all(curve | (np.roll(curve, 1) & np.roll(curve, -1))):
+        return ONLY_CURVES
+    return WITH_CURVES
+
+
+@dataclass(frozen=True, eq=False)
+class BoundaryDescription:
+    """Nodes and relevant points of one boundary.
+
+    Attributes:
+        codes: Node codes, shape (n,) int64 (see `qshape.labels`). Read-only.
+        points: Relevant points relative to the parent's outer centroid, right-handed y-up
+            frame, clockwise as seen, in the figure's unit, shape (n, 2). Read-only.
+    """
+
+    codes: CodeArray
+    points: FloatArray
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, BoundaryDescription):
+            return NotImplemented
+        return np.array_equal(self.codes, other.codes) and np.array_equal(
+            self.points, other.points
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    @property
+    def nodes(self) -> tuple[Node, ...]:
+        """Readable nodes."""
+        return tuple(node_of(int(c)) for c in self.codes)
+
+    @property
+    def curve_mask(self) -> BoolArray:
+        """Shape (n,) bool, True at curve nodes."""
+        return np.asarray((self.codes & lb.KIND_BIT) == 1)
+
+    @property
+    def type_curve(self) -> str:
+        """"without curves", "with curves" or "only curves"."""
+        return type_curve_of(self.codes)
+
+
+@dataclass(frozen=True, eq=False)
+class HoleDescription:
+    """One hole: the CIi relation, its position in the 8-cone frame, and its boundary.
+
+    Attributes:
+        position: Cones of the cardinal frame (at the parent's outer centroid, north towards the
+            parent's first vertex) the hole covers, in compass order, or ("C",) when the hole
+            surrounds the centroid.
+        boundary: The hole's nodes and points, starting at its vertex nearest the parent's first
+            vertex.
+        relation: Always "CIi" (the parent is completely-inside-inverse of the hole).
+    """
+
+    position: tuple[str, ...]
+    boundary: BoundaryDescription
+    relation: str = CIi
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, HoleDescription):
+            return NotImplemented
+        return (
+            self.position == other.position
+            and self.relation == other.relation
+            and self.boundary == other.boundary
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+
+@dataclass(frozen=True, eq=False)
+class Description:
+    """Qualitative description of a figure (the paper's tuple plus matching data).
+
+    Attributes:
+        type_hole: "without holes" or "with holes".
+        type_curve: "without curves", "with curves" or "only curves" (outer boundary).
+        color: RGB in [0, 1] or None.
+        area: Figure area (holes subtracted) in the figure's unit squared.
+        perimeter: Outer perimeter in the figure's unit.
+        outer: Outer boundary nodes and points, starting at its uppermost (then leftmost)
+            vertex in the y-up frame, as in the paper.
+        holes: One `HoleDescription` per hole.
+    """
+
+    type_hole: str
+    type_curve: str
+    color: Color | None
+    area: float
+    perimeter: float
+    outer: BoundaryDescription
+    holes: tuple[HoleDescription, ...] = ()
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Description):
+            return NotImplemented
+        return (
+            self.type_hole == other.type_hole
+            and self.type_curve == other.type_curve
+            and self.color == other.color
+            and self.area == other.area
+            and self.perimeter == other.perimeter
+            and self.outer == other.outer
+            and self.holes == other.holes
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    @property
+    def nodes(self) -> tuple[Node, ...]:
+        """Readable nodes of the outer boundary."""
+        return self.outer.nodes
+
+    def __str__(self) -> str:
+        return format_description(self)
+
+    def __repr__(self) -> str:
+        return f"Description({_node_string(self.outer.codes)!r}, holes={len(self.holes)})"
+
+
+def _node_string(codes: CodeArray) -> str:
+    return " ".join(_node_text(int(c)) for c in codes)
+
+
+def _node_text(code: int) -> str:
+    node = node_of(code)
+    return "<" + ", ".join("/".join(a) for a in node.admissible) + ">"
+
+
+def _start_index(points: FloatArray, tie: float) -> int:
+    """Uppermost vertex (y-up), leftmost among those equally high within ``tie``."""
+    y = points[:, 1]
+    top = y >= y.max() - tie
+    return int(np.argmin(np.where(top, points[:, 0], np.inf)))
+
+
+def hole_interval(points: FloatArray, curve_mask: BoolArray, north: FloatArray) -> (
+    tuple[float, float] | None
+):
+    """Bearing interval (deg, clockwise from north) a hole covers, or None if around origin.
+
+    Args:
+        points: Hole relevant points relative to the parent's centroid, y-up, shape (m, 2).
+        curve_mask: Shape (m,) bool.
+        north: Direction of north (the parent's first vertex), shape (2,).
+    """
+    dense = densify(points, curve_mask)
+    if geo.points_in_polygon(np.zeros((1, 2)), dense)[0]:
+        return None
+    nrm = north / max(float(np.hypot(*north)), np.finfo(float).tiny)
+    east = np.array([nrm[1], -nrm[0]])
+    bearing = np.degrees(np.arctan2(dense @ east, dense @ nrm))
+    ref = float(np.degrees(np.arctan2(dense.mean(axis=0) @ east, dense.mean(axis=0) @ nrm)))
+    rel = (bearing - ref + 180.0) % 360.0 - 180.0
+    return ref + float(rel.min()), ref + float(rel.max())
+
+
+def cones_of(interval: tuple[float, float] | None, shrink: float = 0.0) -> frozenset[int]:
+    """Cone indices (0 = N, clockwise) covered by a bearing interval shrunk by ``shrink`` deg.
+
+    An interval narrower than twice ``shrink`` covers no cone (no constraint); None (a hole
+    around the centroid) gives the set {-1} meaning centre.
+    """
+    if interval is None:
+        return frozenset({-1})
+    lo, hi = interval[0] + shrink, interval[1] - shrink
+    if lo > hi:
+        return frozenset()
+    first = math.floor((lo + _CONE_DEG / 2) / _CONE_DEG)
+    last = math.floor((hi + _CONE_DEG / 2) / _CONE_DEG)
+    return frozenset(k % len(CONES) for k in range(first, last + 1))
+
+
+def position_names(cones: frozenset[int]) -> tuple[str, ...]:
+    """Cone names in compass order (("C",) for centre)."""
+    if -1 in cones:
+        return (CENTRE,)
+    return tuple(CONES[k] for k in sorted(cones))
+
+
+def describe(figure: Figure, tolerances: Tolerances | None = None) -> Description:
+    """Qualitative description of a figure.
+
+    Args:
+        figure: The figure (any unit; y_down figures are described in the y-up frame).
+        tolerances: Bands and margins; None uses the bundled defaults.
+
+    Returns:
+        The `Description`; the outer boundary starts at its uppermost-left vertex (y-up).
+    """
+    tol = default_tolerances() if tolerances is None else tolerances
+    flip = np.array([1.0, -1.0]) if figure.y_down else np.array([1.0, 1.0])
+    centre = figure.outer_centroid * flip
+    rel = figure.points * flip - centre
+    mask = figure.curve_mask
+    size = float(np.ptp(rel, axis=0).max())
+    start = _start_index(rel, tol.tie_tolerance * size)
+    if start:
+        rel = np.roll(rel, -start, axis=0)
+        mask = np.roll(mask, -start)
+    codes = lb.node_codes(rel, mask, tol)
+    rel.setflags(write=False)
+    codes.setflags(write=False)
+    outer = BoundaryDescription(codes, rel)
+    holes = tuple(_describe_hole(h.points * flip - centre, h.curve_mask, rel[0], tol)
+                  for h in figure.holes)
+    return Description(
+        WITH_HOLES if holes else WITHOUT_HOLES,
+        type_curve_of(codes),
+        figure.color,
+        figure.area,
+        figure.perimeter,
+        outer,
+        holes,
+    )
+
+
+def _describe_hole(
+    points: FloatArray, mask: BoolArray, first: FloatArray, tol: Tolerances
+) -> HoleDescription:
+    d = np.hypot(*(points - first).T)
+    start = int(np.argmin(d))
+    pts = np.roll(points, -start, axis=0)
+    msk = np.roll(mask, -start)
+    codes = lb.node_codes(pts, msk, tol)
+    pts.setflags(write=False)
+    codes.setflags(write=False)
+    position = position_names(cones_of(hole_interval(pts, msk, first)))
+    return HoleDescription(position, BoundaryDescription(codes, pts))
+
+
+# ------------------------------------------------------------------------------- text form
+def _f(v: float) -> str:
+    return repr(float(v))
+
+
+def _boundary_lines(b: BoundaryDescription, indent: str) -> list[str]:
+    return [
+        f"{indent}{_node_text(int(c))} @ ({_f(p[0])}, {_f(p[1])})"
+        for c, p in zip(b.codes, b.points, strict=True)
+    ]
+
+
+def format_description(d: Description) -> str:
+    """Stable, readable text form (exact floats); `parse` reads it back."""
+    color = "none" if d.color is None else " ".join(_f(v) for v in d.color)
+    lines = [
+        HEADER,
+        f"type: {d.type_hole}, {d.type_curve}",
+        f"color: {color}",
+        f"area: {_f(d.area)}",
+        f"perimeter: {_f(d.perimeter)}",
+        f"nodes: {len(d.outer.codes)}",
+        *_boundary_lines(d.outer, "  "),
+    ]
+    for h in d.holes:
+        lines.append(
+            f"hole: {h.relation} [{', '.join(h.position)}] {h.boundary.type_curve}, "
+            f"nodes: {len(h.boundary.codes)}"
+        )
+        lines.extend(_boundary_lines(h.boundary, "  "))
+    return "\n".join(lines) + "\n"
+
+
+_FLOAT = r"[-+]?(?:\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?|inf|nan)"
+_NODE_RE = re.compile(
+    r"^\s+<([^,<>]+),\s*([^,<>]+),\s*([^,<>]+)>\s*@\s*\((" + _FLOAT + r"),\s*(" + _FLOAT
+    + r")\)\s*$"
+)
+_HOLE_RE = re.compile(r"^hole:\s*(\w+)\s*\[([^\]]*)\]\s*(without curves|with curves|only curves)"
+                      r",\s*nodes:\s*(\d+)\s*$")
+
+
+def _component(text: str, names: tuple[str, ...], where: str) -> tuple[int, int]:
+    parts = [p.strip() for p in text.split("/")]
+    idx = []
+    for p in parts:
+        if p not in names:
+            raise ParseError(f"{where}: unknown label {p!r}; allowed: {', '.join(names)}")
+        idx.append(names.index(p))
+    if len(set(idx)) != len(idx):
+        raise ParseError(f"{where}: repeated label in {text!r}")
+    mask = 0
+    for k in idx:
+        mask |= 1 << k
+    return idx[0], mask
+
+
+def _parse_node(line: str, where: str) -> tuple[int, tuple[float, float]]:
+    m = _NODE_RE.match(line)
+    if not m:
+        raise ParseError(
+            f"{where}: expected a node '  <A, C, L> @ (x, y)' or '  <Curve, C, TC> @ (x, y)', "
+            f"got {line!r}"
+        )
+    first, conv, third, xs, ys = (g.strip() for g in m.groups())
+    c = _component(conv, lb.CONVEXITY_LABELS, where)
+    if first == lb.CURVE:
+        code = lb.encode(True, (0, 1), c, _component(third, lb.CURVATURE_LABELS, where))
+    else:
+        a = _component(first, lb.ANGLE_LABELS, where)
+        code = lb.encode(False, a, c, _component(third, lb.LENGTH_LABELS, where))
+    x, y = float(xs), float(ys)
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ParseError(f"{where}: point coordinates must be finite, got ({xs}, {ys})")
+    return code, (x, y)
+
+
+def _parse_boundary(lines: list[str], at: int, count: int, what: str) -> BoundaryDescription:
+    if count < 3:
+        raise ParseError(f"line {at}: {what} needs at least 3 nodes, got {count}")
+    if at + count > len(lines):
+        raise ParseError(
+            f"line {at}: {what} announces {count} nodes but the text ends after "
+            f"{len(lines) - at}"
+        )
+    codes, pts = [], []
+    for k in range(count):
+        code, p = _parse_node(lines[at + k], f"line {at + k + 1}")
+        codes.append(code)
+        pts.append(p)
+    c = np.array(codes, dtype=np.int64)
+    p_arr = np.array(pts, dtype=np.float64)
+    curve = (c & lb.KIND_BIT) == 1
+    if np.any(curve & np.roll(curve, 1)):
+        raise ParseError(f"line {at}: {what} has two adjacent Curve nodes; a curve node needs "
+                         "its start and end vertices as neighbours")
+    c.setflags(write=False)
+    p_arr.setflags(write=False)
+    return BoundaryDescription(c, p_arr)
+
+
+def _value(line: str, key: str, where: str) -> str:
+    prefix = f"{key}:"
+    if not line.startswith(prefix):
+        raise ParseError(f"{where}: expected '{key}: ...', got {line!r}")
+    return line[len(prefix):].strip()
+
+
+def _float(text: str, what: str, where: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise ParseError(f"{where}: {what} must be a number, got {text!r}") from None
+    if not math.isfinite(v):
+        raise ParseError(f"{where}: {what} must be finite, got {text!r}")
+    return v
+
+
+def parse(text: str) -> Description:
+    """Read the text form of a description back (exact inverse of ``str(description)``).
+
+    Raises:
+        ParseError: Naming the line and what was expected.
+    """
+    if not isinstance(text, str):
+        raise ParseError(f"parse expects a string, got {type(text).__name__}")
+    lines = [ln for ln in text.splitlines() if ln.strip()]
+    if len(lines) < 6 or lines[0].strip() != HEADER:
+        raise ParseError(f"line 1: expected the header {HEADER!r} followed by type, color, area, "
+                         "perimeter and nodes lines")
+    types = [t.strip() for t in _value(lines[1], "type", "line 2").split(",")]
+    if len(types) != 2 or types[0] not in (WITHOUT_HOLES, WITH_HOLES) or types[1] not in (
+        WITHOUT_CURVES, WITH_CURVES, ONLY_CURVES
+    ):
+        raise ParseError(
+            f"line 2: type must be '<without holes|with holes>, <without curves|with curves|"
+            f"only curves>', got {lines[1]!r}"
+        )
+    ctext = _value(lines[2], "color", "line 3")
+    color: Color | None = None
+    if ctext != "none":
+        parts = ctext.split()
+        if len(parts) != 3:
+            raise ParseError(f"line 3: color must be 'none' or three numbers, got {ctext!r}")
+        rgb = [_float(p, "color", "line 3") for p in parts]
+        if not all(0.0 <= v <= 1.0 for v in rgb):
+            raise ParseError(f"line 3: color components must be in [0, 1], got {ctext!r}")
+        color = (rgb[0], rgb[1], rgb[2])
+    area = _float(_value(lines[3], "area", "line 4"), "area", "line 4")
+    perimeter = _float(_value(lines[4], "perimeter", "line 5"), "perimeter", "line 5")
+    if area <= 0.0 or perimeter <= 0.0:
+        raise ParseError("lines 4-5: area and perimeter must be > 0")
+    count = _int(_value(lines[5], "nodes", "line 6"), "line 6")
+    outer = _parse_boundary(lines, 6, count, "the outer boundary")
+    if type_curve_of(outer.codes) != types[1]:
+        raise ParseError(f"line 2: type says {types[1]!r} but the nodes are "
+                         f"{type_curve_of(outer.codes)!r}")
+    at = 6 + count
+    holes: list[HoleDescription] = []
+    while at < len(lines):
+        m = _HOLE_RE.match(lines[at])
+        if not m:
+            raise ParseError(f"line {at + 1}: expected 'hole: CIi [cones] <type_curve>, nodes: n'"
+                             f", got {lines[at]!r}")
+        rel, pos, hcurve, hcount = m.groups()
+        if rel != CIi:
+            raise ParseError(f"line {at + 1}: hole relation must be {CIi!r}, got {rel!r}")
+        position = tuple(p.strip() for p in pos.split(",") if p.strip())
+        allowed = (*CONES, CENTRE)
+        if not position or any(p not in allowed for p in position) or (
+            CENTRE in position and len(position) > 1
+        ):
+            raise ParseError(f"line {at + 1}: position must be 'C' or cones from "
+                             f"{', '.join(CONES)}, got [{pos}]")
+        boundary = _parse_boundary(lines, at + 1, int(hcount), f"hole {len(holes)}")
+        if boundary.type_curve != hcurve:
+            raise ParseError(f"line {at + 1}: hole type says {hcurve!r} but its nodes are "
+                             f"{boundary.type_curve!r}")
+        holes.append(HoleDescription(position, boundary, rel))
+        at += 1 + int(hcount)
+    if (types[0] == WITH_HOLES) != bool(holes):
+        raise ParseError(f"line 2: type says {types[0]!r} but {len(holes)} holes follow")
+    return Description(types[0], types[1], color, area, perimeter, outer, tuple(holes))
+
+
+def _int(text: str, where: str) -> int:
+    if not text.isdigit():
+        raise ParseError(f"{where}: expected a node count, got {text!r}")
+    return int(text)
+
+
+__all__ = [
+    "BoundaryDescription",
+    "Description",
+    "HoleDescription",
+    "Node",
+    "cones_of",
+    "describe",
+    "format_description",
+    "hole_interval",
+    "parse",
+]

@@ -1,0 +1,37 @@
+"""Exceptions of the `qshape` package: one base class, one subclass per kind of problem."""
+
+from __future__ import annotations
+
+
+class QShapeError(ValueError):
+    """Base class of every error raised by `qshape`."""
+
+
+class InvalidFigureError(QShapeError):
+    """A boundary or figure is malformed (too few points, NaN, zero area, self-crossing, ...)."""
+
+
+class InvalidHoleError(InvalidFigureError):
+    """A hole lies outside its parent, crosses the parent boundary, or overlaps another hole."""
+
+
+class ToleranceError(QShapeError):
+    """A tolerance or outline parameter is out of range (unordered band, negative margin, ...)."""
+
+
+class ParseError(QShapeError):
+    """The text given to `qshape.parse` is not a valid description; the message says where."""
+
+
+class MatchError(QShapeError):
+    """Arguments to `match` or `assign` are of the wrong kind (e.g. an unknown method name)."""
+
+
+__all__ = [
+    "InvalidFigureError",
+    "InvalidHoleError",
+    "MatchError",
+    "ParseError",
+    "QShapeError",
+    "ToleranceError",
+]

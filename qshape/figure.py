@@ -1,0 +1,517 @@
+"""`Figure`: one closed shape given by its relevant points, curve segments, holes and colour.
+
+Coordinates are in any length unit (mm for designs, pixels for images). A figure with
+``y_down=True`` has image coordinates (y pointing down); every label, orientation and rotation
+is computed in the right-handed y-up frame ``(x, -y)``, so a figure taken from an image and the
+same figure given in y-up millimetres describe identically.
+
+Boundaries are normalised to one orientation: walked clockwise as seen by a viewer (clockwise in
+the y-up frame), the paper's convention, under which a convex vertex lies left of the oriented
+line from its previous to its next neighbour.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from qshape import geometry as geo
+from qshape.errors import InvalidFigureError, InvalidHoleError
+from qshape.geometry import BoolArray, FloatArray
+from qshape.simplify import OutlineParams, simplify_outline
+
+_REL_EPS = 1e-12
+"""Numerical precision: lengths below this fraction of the figure size count as zero."""
+
+_ARC_SAMPLES = 16
+"""Samples per arc when curved boundaries are densified for containment checks."""
+
+Color = tuple[float, float, float]
+
+
+def _as_points(points: ArrayLike, what: str) -> FloatArray:
+    """Convert to a finite float64 (n, 2) array with n >= 3 distinct points, or raise."""
+    try:
+        arr = np.array(points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidFigureError(f"{what}: points must be numbers of shape (n, 2): {exc}") from exc
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise InvalidFigureError(f"{what}: points must have shape (n, 2), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1)).tolist()
+        raise InvalidFigureError(f"{what}: points must be finite; NaN or inf at rows {bad}")
+    if len(arr) >= 2 and np.array_equal(arr[0], arr[-1]):
+        arr = arr[:-1]  # an explicitly closed ring: the closing copy of the first point
+    if len(arr) < 3:
+        raise InvalidFigureError(
+            f"{what}: a closed boundary needs at least 3 distinct points, got {len(arr)}"
+        )
+    return arr
+
+
+def _validate_boundary(pts: FloatArray, mask: BoolArray, what: str) -> float:
+    """Check distinct points, non-zero area, simple polygon, curve mask; return signed area."""
+    size = float(np.ptp(pts, axis=0).max())
+    if size <= 0.0:
+        raise InvalidFigureError(f"{what}: all points coincide; a figure needs a non-zero area")
+    rounded = pts / size
+    uniq = np.unique(rounded, axis=0)
+    if len(uniq) < len(pts):
+        d = np.hypot(*(rounded[:, None, :] - rounded[None, :, :]).transpose(2, 0, 1))
+        i, j = np.argwhere(np.triu(d == 0.0, k=1))[0]
+        raise InvalidFigureError(
+            f"{what}: repeated point {pts[i].tolist()} at indices {int(i)} and {int(j)}; "
+            "every relevant point must be distinct"
+        )
+    area = geo.signed_area(pts)
+    if abs(area) <= _REL_EPS * size * size:
+        raise InvalidFigureError(f"{what}: zero area (all points collinear); a figure needs area")
+    if geo.self_intersects(pts):
+        raise InvalidFigureError(
+            f"{what}: the boundary crosses or touches itself; only simple closed boundaries are "
+            "allowed"
+        )
+    if mask.shape != (len(pts),):
+        raise InvalidFigureError(
+            f"{what}: curve_mask must have shape ({len(pts)},), got {mask.shape}"
+        )
+    if np.any(mask & np.roll(mask, 1)):
+        raise InvalidFigureError(
+            f"{what}: two adjacent curve points; each curve point needs its curve's start and "
+            "end (non-curve points) as neighbours"
+        )
+    return area
+
+
+def _as_mask(curve_mask: ArrayLike | None, n: int, what: str) -> BoolArray:
+    if curve_mask is None:
+        return np.zeros(n, dtype=bool)
+    mask = np.asarray(curve_mask)
+    if mask.dtype != np.bool_:
+        raise InvalidFigureError(f"{what}: curve_mask must be booleans, got dtype {mask.dtype}")
+    return mask.copy()
+
+
+def _frozen(arr: np.ndarray) -> Any:
+    arr.setflags(write=False)
+    return arr
+
+
+def densify(points: FloatArray, curve_mask: BoolArray, per_arc: int = _ARC_SAMPLES) -> FloatArray:
+    """Polygon following the boundary, with each arc sampled at ``per_arc`` points.
+
+    Args:
+        points: Relevant points (n, 2), any orientation, in a right-handed frame.
+        curve_mask: (n,) bool; each curve point is the middle of the arc through its neighbours.
+        per_arc: Samples per arc (the arc's end points excluded, its middle point included).
+
+    Returns:
+        Shape (m, 2) polygon.
+    """
+    if not curve_mask.any():
+        return points
+    n = len(points)
+    out: list[FloatArray] = []
+    for j in range(n):
+        if curve_mask[j]:
+            continue
+        out.append(points[j : j + 1])
+        nj = (j + 1) % n
+        if curve_mask[nj]:
+            vi, vj, vk = points[j], points[nj], points[(nj + 1) % n]
+            out.append(_arc_points(vi, vj, vk, per_arc))
+    return np.concatenate(out, axis=0)
+
+
+def _arc_points(vi: FloatArray, vj: FloatArray, vk: FloatArray, count: int) -> FloatArray:
+    """Points strictly between vi and vk on the circle through vi, vj, vk (vj included)."""
+    d = 2.0 * float(geo.cross2(vj - vi, vk - vi))
+    if d == 0.0:
+        return vj[None, :]
+    bi, bj, bk = float(vi @ vi), float(vj @ vj), float(vk @ vk)
+    ux = (bi * (vj[1] - vk[1]) + bj * (vk[1] - vi[1]) + bk * (vi[1] - vj[1])) / d
+    uy = (bi * (vk[0] - vj[0]) + bj * (vi[0] - vk[0]) + bk * (vj[0] - vi[0])) / d
+    centre = np.array([ux, uy])
+    r = float(np.hypot(*(vi - centre)))
+    ai = math.atan2(vi[1] - uy, vi[0] - ux)
+    ak = math.atan2(vk[1] - uy, vk[0] - ux)
+    ccw = d > 0.0
+    sweep = (ak - ai) % (2 * math.pi) if ccw else -((ai - ak) % (2 * math.pi))
+    t = np.arange(1, count + 1) / (count + 1)
+    ang = ai + t * sweep
+    return centre + r * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+
+
+@dataclass(frozen=True, eq=False)
+class Boundary:
+    """One closed boundary (outer or hole) by its relevant points.
+
+    Attributes:
+        points: Relevant points, shape (n, 2), in the figure's coordinates, walked clockwise as
+            seen (clockwise in the y-up frame). Read-only.
+        curve_mask: Shape (n,) bool: True at the maximum-curvature point of a curve segment,
+            whose neighbours are the curve's start and end. Read-only.
+        y_down: True when the coordinates are image pixels with y pointing down.
+    """
+
+    points: FloatArray
+    curve_mask: BoolArray
+    y_down: bool = False
+
+    @classmethod
+    def make(
+        cls,
+        points: ArrayLike,
+        curve_mask: ArrayLike | None = None,
+        *,
+        y_down: bool = False,
+        what: str = "boundary",
+    ) -> Boundary:
+        """Validate and normalise a boundary given in either orientation, any start point.
+
+        Raises:
+            InvalidFigureError: Fewer than 3 points, NaN/inf, repeated points, zero area,
+                self-intersection or a malformed curve mask.
+        """
+        pts = _as_points(points, what)
+        mask = _as_mask(curve_mask, len(pts), what)
+        if len(mask) == len(pts) + 1:
+            mask = mask[:-1]  # the closing point was dropped
+        area = _validate_boundary(pts, mask, what)
+        # Clockwise as seen: signed area < 0 in the y-up frame, i.e. > 0 in y-down coordinates.
+        if (area > 0.0) != y_down:
+            pts = pts[::-1].copy()
+            mask = mask[::-1].copy()
+        return cls(_frozen(pts), _frozen(mask), y_down)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Boundary):
+            return NotImplemented
+        return (
+            self.y_down == other.y_down
+            and np.array_equal(self.points, other.points)
+            and np.array_equal(self.curve_mask, other.curve_mask)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def points_yup(self) -> FloatArray:
+        """Relevant points in the right-handed y-up frame, shape (n, 2)."""
+        if self.y_down:
+            return self.points * np.array([1.0, -1.0])
+        return self.points
+
+    def measures(self) -> tuple[float, FloatArray, float]:
+        """(area, centroid (2,) in the figure's coordinates, perimeter), arcs included."""
+        up = self.points_yup()[::-1]
+        area, c, perim = geo.area_centroid_perimeter(up, self.curve_mask[::-1])
+        if self.y_down:
+            c = c * np.array([1.0, -1.0])
+        return area, c, perim
+
+    def dense(self) -> FloatArray:
+        """Polygon following the boundary (arcs sampled), figure coordinates, shape (m, 2)."""
+        return densify(self.points, self.curve_mask)
+
+
+def _pose(local: FloatArray, center: Sequence[float], angle: float, y_down: bool) -> FloatArray:
+    """Rotate y-up local points by ``angle`` (rad, CCW in y-up), flip if y_down, translate."""
+    c, s = math.cos(angle), math.sin(angle)
+    pts = local @ np.array([[c, s], [-s, c]])
+    if y_down:
+        pts = pts * np.array([1.0, -1.0])
+    return pts + np.asarray(center, dtype=np.float64)
+
+
+def _as_color(color: Iterable[float] | None) -> Color | None:
+    if color is None:
+        return None
+    try:
+        rgb = tuple(float(v) for v in color)
+    except (TypeError, ValueError) as exc:
+        raise InvalidFigureError(f"color must be three numbers in [0, 1]: {exc}") from exc
+    if len(rgb) != 3 or not all(math.isfinite(v) and 0.0 <= v <= 1.0 for v in rgb):
+        raise InvalidFigureError(f"color must be three RGB numbers in [0, 1], got {color!r}")
+    return (rgb[0], rgb[1], rgb[2])
+
+
+HoleLike = Boundary | ArrayLike
+
+
+@dataclass(frozen=True, eq=False)
+class Figure:
+    """One closed shape: relevant points of the outer boundary, curves, holes and colour.
+
+    Build it with the constructors (`from_polygon`, `from_outline`, primitives), which accept
+    either orientation and any start point.
+
+    Attributes:
+        points: Outer relevant points, shape (n, 2), figure coordinates, clockwise as seen.
+        curve_mask: Shape (n,) bool, maximum-curvature points of curve segments.
+        holes: The holes, each a `Boundary` in the same coordinates and orientation.
+        color: RGB in [0, 1], or None when unknown.
+        y_down: True when coordinates are image pixels with y pointing down.
+        centroid: Area centroid, holes subtracted, figure coordinates, shape (2,). Derived.
+        area: Area with arcs included and holes subtracted, in the unit squared. Derived.
+        perimeter: Outer perimeter with arcs as circular arcs, in the unit. Derived.
+        outer_centroid: Area centroid of the outer boundary alone (the origin of the cardinal
+            frame), figure coordinates, shape (2,). Derived.
+    """
+
+    points: FloatArray
+    curve_mask: BoolArray
+    holes: tuple[Boundary, ...] = ()
+    color: Color | None = None
+    y_down: bool = False
+    centroid: FloatArray = field(init=False)
+    area: float = field(init=False)
+    perimeter: float = field(init=False)
+    outer_centroid: FloatArray = field(init=False)
+
+    def __post_init__(self) -> None:
+        """Validate, normalise orientation, check the holes and derive area and centroid.
+
+        Raises:
+            InvalidFigureError: Bad outer boundary or colour.
+            InvalidHoleError: A hole outside the parent, crossing it, or overlapping a hole.
+        """
+        outer = Boundary.make(self.points, self.curve_mask, y_down=self.y_down, what="figure")
+        holes = tuple(
+            Boundary.make(
+                h.points if isinstance(h, Boundary) else h,
+                h.curve_mask if isinstance(h, Boundary) else None,
+                y_down=self.y_down,
+                what=f"hole {k}",
+            )
+            for k, h in enumerate(self.holes)
+        )
+        object.__setattr__(self, "points", outer.points)
+        object.__setattr__(self, "curve_mask", outer.curve_mask)
+        object.__setattr__(self, "holes", holes)
+        object.__setattr__(self, "color", _as_color(self.color))
+        area, centroid, perim = outer.measures()
+        object.__setattr__(self, "outer_centroid", _frozen(centroid))
+        object.__setattr__(self, "perimeter", perim)
+        if holes:
+            _check_holes(outer, holes)
+            moments = centroid * area
+            for h in holes:
+                ha, hc, _ = h.measures()
+                area -= ha
+                moments = moments - hc * ha
+            centroid = moments / area
+        object.__setattr__(self, "area", float(area))
+        object.__setattr__(self, "centroid", _frozen(np.asarray(centroid, dtype=np.float64)))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Figure):
+            return NotImplemented
+        return (
+            self.outer == other.outer
+            and self.holes == other.holes
+            and self.color == other.color
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    @property
+    def outer(self) -> Boundary:
+        """The outer boundary as a `Boundary`."""
+        return Boundary(self.points, self.curve_mask, self.y_down)
+
+    # ---------------------------------------------------------------- constructors
+    @classmethod
+    def from_polygon(
+        cls,
+        points: ArrayLike,
+        holes: Sequence[HoleLike] = (),
+        color: Iterable[float] | None = None,
+        *,
+        curve_mask: ArrayLike | None = None,
+        y_down: bool = False,
+    ) -> Figure:
+        """Figure from its relevant points (either orientation, any start point).
+
+        Args:
+            points: Relevant points, shape (n, 2), n >= 3. A closing copy of the first point is
+                dropped.
+            holes: Each hole as an (m, 2) array of relevant points or a `Boundary`.
+            color: RGB in [0, 1], or None.
+            curve_mask: Optional (n,) bool of maximum-curvature points (see `Figure`).
+            y_down: Coordinates are image pixels with y pointing down.
+
+        Raises:
+            InvalidFigureError: See `Boundary.make`; InvalidHoleError for bad holes.
+        """
+        return cls(
+            points,  # type: ignore[arg-type]
+            curve_mask,  # type: ignore[arg-type]
+            tuple(holes),  # type: ignore[arg-type]
+            color,  # type: ignore[arg-type]
+            y_down,
+        )
+
+    @classmethod
+    def from_outline(
+        cls,
+        dense_points: ArrayLike,
+        holes: Sequence[ArrayLike] = (),
+        color: Iterable[float] | None = None,
+        *,
+        params: OutlineParams | None = None,
+        y_down: bool = False,
+    ) -> Figure:
+        """Figure from dense closed outline(s) (a traced contour), simplified to relevant points.
+
+        Args:
+            dense_points: Closed outline, shape (k, 2), k >= 3, either orientation.
+            holes: Dense outlines of the holes.
+            color: RGB in [0, 1], or None.
+            params: Simplification parameters; None loads ``configs/qshape.yaml``.
+            y_down: Coordinates are image pixels with y pointing down.
+
+        Raises:
+            InvalidFigureError: Too few points, NaN/inf, zero area, or a simplified boundary
+                that is not a simple polygon.
+        """
+        pts, mask = simplify_outline(dense_points, params, what="outline")
+        hole_bounds = []
+        for k, h in enumerate(holes):
+            hp, hm = simplify_outline(h, params, what=f"hole {k} outline")
+            hole_bounds.append(Boundary.make(hp, hm, y_down=y_down, what=f"hole {k}"))
+        return cls(pts, mask, tuple(hole_bounds), color, y_down)  # type: ignore[arg-type]
+
+    @classmethod
+    def rectangle(
+        cls,
+        width: float,
+        height: float,
+        color: Iterable[float] | None = None,
+        *,
+        center: Sequence[float] = (0.0, 0.0),
+        angle: float = 0.0,
+        y_down: bool = False,
+    ) -> Figure:
+        """Axis-aligned rectangle centred on ``center``, rotated by ``angle`` rad (CCW, y-up)."""
+        w, h = _positive(width, "width") / 2.0, _positive(height, "height") / 2.0
+        local = np.array([[-w, h], [w, h], [w, -h], [-w, -h]])
+        return cls(_pose(local, center, angle, y_down), None, (), color, y_down)  # type: ignore[arg-type]
+
+    @classmethod
+    def regular_polygon(
+        cls,
+        n: int,
+        radius: float,
+        color: Iterable[float] | None = None,
+        *,
+        center: Sequence[float] = (0.0, 0.0),
+        angle: float = 0.0,
+        y_down: bool = False,
+    ) -> Figure:
+        """Regular n-gon of circumradius ``radius`` with a vertex straight up at angle 0."""
+        if int(n) != n or n < 3:
+            raise InvalidFigureError(f"regular_polygon needs an integer n >= 3, got {n!r}")
+        r = _positive(radius, "radius")
+        t = math.pi / 2 - 2 * math.pi * np.arange(int(n)) / int(n)
+        local = r * np.stack([np.cos(t), np.sin(t)], axis=1)
+        return cls(_pose(local, center, angle, y_down), None, (), color, y_down)  # type: ignore[arg-type]
+
+    @classmethod
+    def circle(
+        cls,
+        radius: float,
+        color: Iterable[float] | None = None,
+        *,
+        center: Sequence[float] = (0.0, 0.0),
+        angle: float = 0.0,
+        y_down: bool = False,
+    ) -> Figure:
+        """Circle as two semicircular arcs (4 relevant points: 2 ends, 2 curve points)."""
+        local, mask = _circle_local(_positive(radius, "radius"))
+        return cls(_pose(local, center, angle, y_down), mask, (), _as_color(color), y_down)
+
+    @classmethod
+    def semicircle(
+        cls,
+        radius: float,
+        color: Iterable[float] | None = None,
+        *,
+        center: Sequence[float] = (0.0, 0.0),
+        angle: float = 0.0,
+        y_down: bool = False,
+    ) -> Figure:
+        """Half disc; ``center`` is the midpoint of its diameter, the arc bulges up at angle 0."""
+        r = _positive(radius, "radius")
+        local = np.array([[-r, 0.0], [0.0, r], [r, 0.0]])
+        mask = np.array([False, True, False])
+        return cls(_pose(local, center, angle, y_down), mask, (), _as_color(color), y_down)
+
+    @classmethod
+    def ring(
+        cls,
+        r_out: float,
+        r_in: float,
+        color: Iterable[float] | None = None,
+        *,
+        center: Sequence[float] = (0.0, 0.0),
+        angle: float = 0.0,
+        y_down: bool = False,
+    ) -> Figure:
+        """Disc of radius ``r_out`` with a concentric circular hole of radius ``r_in``."""
+        ro, ri = _positive(r_out, "r_out"), _positive(r_in, "r_in")
+        if ri >= ro:
+            raise InvalidHoleError(f"ring needs r_in < r_out, got r_in={ri}, r_out={ro}")
+        out, mask = _circle_local(ro)
+        hole, hmask = _circle_local(ri)
+        hb = Boundary.make(_pose(hole, center, angle, y_down), hmask, y_down=y_down, what="hole 0")
+        return cls(_pose(out, center, angle, y_down), mask, (hb,), _as_color(color), y_down)
+
+
+def _circle_local(r: float) -> tuple[FloatArray, BoolArray]:
+    pts = np.array([[-r, 0.0], [0.0, r], [r, 0.0], [0.0, -r]])
+    return pts, np.array([False, True, False, True])
+
+
+def _positive(value: float, name: str) -> float:
+    v = float(value)
+    if not (math.isfinite(v) and v > 0.0):
+        raise InvalidFigureError(f"{name} must be a finite number > 0, got {value!r}")
+    return v
+
+
+def _check_holes(outer: Boundary, holes: tuple[Boundary, ...]) -> None:
+    """Raise `InvalidHoleError` unless every hole is strictly inside the parent, holes disjoint."""
+    parent = outer.dense()
+    dense = [h.dense() for h in holes]
+    for k, hd in enumerate(dense):
+        inside = geo.points_in_polygon(hd, parent)
+        if not inside.all():
+            if not inside.any() and not geo.points_in_polygon(parent[:1], hd).any():
+                raise InvalidHoleError(
+                    f"hole {k} lies outside its parent figure; holes must be strictly inside"
+                )
+            raise InvalidHoleError(
+                f"hole {k} crosses its parent's boundary; holes must be strictly inside"
+            )
+        if geo.boundaries_cross(hd, parent):
+            raise InvalidHoleError(
+                f"hole {k} touches or crosses its parent's boundary; holes must be strictly inside"
+            )
+    for a in range(len(dense)):
+        for b in range(a + 1, len(dense)):
+            if (
+                geo.boundaries_cross(dense[a], dense[b])
+                or geo.points_in_polygon(dense[a][:1], dense[b]).any()
+                or geo.points_in_polygon(dense[b][:1], dense[a]).any()
+            ):
+                raise InvalidHoleError(
+                    f"holes {a} and {b} overlap; holes must be disjoint"
+                )
+
+
+__all__ = ["Boundary", "Color", "Figure", "densify"]
