@@ -55,9 +55,7 @@ def _site_pose(model: mujoco.MjModel, q: np.ndarray, site: str) -> np.ndarray:
 def _configs() -> np.ndarray:
     rng = np.random.default_rng(0)
     lo, hi = np.deg2rad(RANGES_DEG[:, 0]), np.deg2rad(RANGES_DEG[:, 1])
-    fixed = np.array(
-        [np.zeros(6), [0, 0, 0, 0, np.pi / 2, 0], [0.5, 0.3, -0.4, 1.0, -0.8, 2.0]]
-    )
+    fixed = np.array([np.zeros(6), [0, 0, 0, 0, np.pi / 2, 0], [0.5, 0.3, -0.4, 1.0, -0.8, 2.0]])
     return np.vstack([fixed, rng.uniform(lo, hi, size=(12, 6))])
 
 
