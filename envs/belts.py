@@ -15,12 +15,16 @@ from envs.scene import SceneIds, cell_geometry
 def set_input_speed(model: mujoco.MjModel, ids: SceneIds, speed: float) -> None:
     """Set the input belt's surface speed along +x [m/s] at run time.
 
+    Sleeping tiles do not notice the change: wake them (`Cell` does this on its next step).
+
     Raises:
         CellError: Negative or non-finite speed.
     """
     if not (math.isfinite(speed) and speed >= 0):
         raise CellError(f"belt speed must be finite and >= 0 m/s, got {speed!r}")
     model.geom_surfacevel[ids.input_belt_geom, 0] = speed
+    # MuJoCo only applies surface velocities when this compile-time flag is set.
+    model.flg_surfacevel = int(np.any(model.geom_surfacevel != 0))
 
 
 def input_speed(model: mujoco.MjModel, ids: SceneIds) -> float:

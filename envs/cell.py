@@ -25,7 +25,7 @@ from envs.belts import LostTracker, input_speed, set_input_speed
 from envs.cameras import CameraModel, CameraRig, camera_model
 from envs.cell_config import CellConfig, load_cell_config
 from envs.errors import CellError
-from envs.scene import build_scene, cell_geometry, park_positions, yaw_quat
+from envs.scene import WAKE_FORCE, build_scene, cell_geometry, park_positions, yaw_quat
 from envs.suction import Suction, SuctionEvent
 from envs.tiles import PhysicalTile, SlotSpec, TileShape, basic_shapes, make_tiles, sample_layout
 
@@ -95,6 +95,7 @@ class Cell:
         self.cameras = CameraRig(self.model, self.cfg.render)
         self._park = park_positions(len(self.tiles), self.cfg.tiles.thickness)
         self.on_stage = np.zeros(len(self.tiles), bool)
+        self._wake = np.zeros(len(self.tiles), bool)
         self._next_feed_time = 0.0
         self._speed_lo = -np.asarray(self.cfg.robot.max_joint_speed)
         self._speed_hi = np.asarray(self.cfg.robot.max_joint_speed)
@@ -126,6 +127,7 @@ class Cell:
             self._rng = np.random.default_rng(seed)
         m, d, ids = self.model, self.data, self.ids
         mujoco.mj_resetData(m, d)
+        self._wake[:] = False
         self.suction.reset(d)
         self.lost_tracker.reset()
         home = np.asarray(self.cfg.robot.home)
@@ -165,6 +167,7 @@ class Cell:
         self.data.qpos[qadr[:, 3:]] = yaw_quat(poses[:, 2])
         self.data.qvel[self.ids.tile_dof_index[idx]] = 0.0
         self.on_stage[idx] = True
+        self._wake[idx] = True
 
     def _feed_stream(self) -> None:
         """Spawn the next waiting tile at the upstream edge of the tile area, if there is room."""
@@ -208,7 +211,13 @@ class Cell:
         self._check_open()
         if n < 1:
             raise CellError(f"step needs n >= 1 physics steps, got {n}")
+        waking = self._wake.any()
+        if waking:
+            self.data.xfrc_applied[self.ids.tile_body[self._wake], 2] = WAKE_FORCE
         mujoco.mj_step(self.model, self.data, nstep=n)
+        if waking:
+            self.data.xfrc_applied[self.ids.tile_body[self._wake], 2] = 0.0
+            self._wake[:] = False
         events = []
         ev = self.suction.update(self.data)
         if ev is not None:
@@ -359,6 +368,7 @@ class Cell:
     @belt_speed.setter
     def belt_speed(self, speed: float) -> None:
         set_input_speed(self.model, self.ids, speed)
+        self._wake |= self.on_stage  # sleeping tiles would not notice the new speed
 
     def warnings(self) -> int:
         """Total count of MuJoCo warnings raised so far (should stay 0)."""

@@ -30,6 +30,9 @@ PARK_SPACING = 0.08
 """Grid spacing of parked (not yet fed) tiles on the floor far from the cell [m]."""
 PARK_ORIGIN = np.array([-6.0, -1.0])
 """Corner of the parking grid, outside the rendered floor [m]."""
+WAKE_FORCE = 1e-12
+"""Negligible force [N] applied for one `Cell.step` to wake sleeping tiles (any applied force
+wakes a sleeping tree in MuJoCo; changing qpos or surfacevel does not)."""
 WELD_SOLREF = (0.004, 1.0)
 """Time constant [s] and damping ratio of the suction weld (stiff: 2x the default timestep)."""
 

@@ -6,7 +6,9 @@ during fast moves. Here, when the vacuum is on and the pad face is close to and 
 current relative pose and activated. Each update measures the force the weld exerts on the tile
 (from the constraint forces): if the pull along the pad axis exceeds the vacuum force
 (pressure x pad area) or the shear exceeds friction x (vacuum force - pull), the tile is dropped
-and the drop is reported. Torques are not limited (a simplification).
+and the drop is reported. After a drop the pad does not re-seal until the vacuum is switched
+off and on again (the controller sees the pressure switch open). Torques are not limited (a
+simplification).
 """
 
 from __future__ import annotations
@@ -78,6 +80,7 @@ class Suction:
         self._cos_tilt = math.cos(math.radians(cfg.seal_max_tilt_deg))
         self.holding_force = cfg.holding_force
         self.vacuum_on = False
+        self._armed = False
         self.held = -1
         self.pull = 0.0
         self.shear = 0.0
@@ -96,6 +99,7 @@ class Suction:
         if self._ids.weld >= 0:
             data.eq_active[self._ids.weld] = 0
         self.vacuum_on = False
+        self._armed = False
         self.held = -1
         self.pull = self.shear = 0.0
         self.events.clear()
@@ -103,6 +107,8 @@ class Suction:
 
     def set_vacuum(self, data: mujoco.MjData, on: bool) -> None:
         """Switch the vacuum; on tries to seal at once, off releases any held tile."""
+        if on and not self.vacuum_on:
+            self._armed = True
         self.vacuum_on = bool(on)
         if not self.vacuum_on and self.held >= 0:
             self._release(data, "release")
@@ -135,7 +141,7 @@ class Suction:
 
     def try_seal(self, data: mujoco.MjData) -> int:
         """Seal on the candidate tile if the vacuum is on; returns the held tile or -1."""
-        if not self.vacuum_on or self.held >= 0:
+        if not (self.vacuum_on and self._armed) or self.held >= 0:
             return self.held
         i = self.seal_candidate(data)
         if i < 0:
@@ -162,6 +168,7 @@ class Suction:
         self.events.append(SuctionEvent(float(data.time), kind, self.held, self.pull, self.shear))
         if kind == "drop":
             self.dropped += 1
+            self._armed = False
         self.held = -1
 
     def measure(self, data: mujoco.MjData) -> tuple[float, float]:

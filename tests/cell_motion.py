@@ -42,7 +42,9 @@ class ArmIK:
     ) -> np.ndarray:
         """Joint angles putting the tcp at pos with rotation rot; seeds q0, then a heuristic."""
         heuristic = np.array([np.arctan2(pos[1], pos[0]), 0.2, 0.2, 0.0, 1.2, q0[5]])
-        for seed in (q0, heuristic):
+        rng = np.random.default_rng(0)
+        restarts = [heuristic + rng.normal(0, 0.3, 6) * [0, 1, 1, 1, 1, 1] for _ in range(5)]
+        for seed in (q0, heuristic, *restarts):
             q = self._solve(pos, rot, seed, iters)
             if q is not None:
                 # Keep joint 6 near the seed (the tool's yaw wraps every 2 pi).
@@ -55,17 +57,23 @@ class ArmIK:
     ) -> np.ndarray | None:
         q = np.array(q0, float)
         jp, jr = np.zeros((3, 6)), np.zeros((3, 6))
+        qt, qc, er = np.zeros(4), np.zeros(4), np.zeros(3)
+        mujoco.mju_mat2Quat(qt, rot.ravel())
         for _ in range(iters):
             p, r = self.fk(q)
             ep = pos - p
-            er = 0.5 * sum(np.cross(r[:, k], rot[:, k]) for k in range(3))
-            e = np.concatenate([ep, er])
+            mujoco.mju_mat2Quat(qc, r.ravel())
+            mujoco.mju_subQuat(er, qt, qc)  # rotation from current to target, current frame
+            e = np.concatenate([ep, r @ er])
             if np.linalg.norm(ep) < 1e-6 and np.linalg.norm(er) < 1e-5:
                 return q
             mujoco.mj_comPos(self.model, self.data)
             mujoco.mj_jacSite(self.model, self.data, jp, jr, self.site)
             j = np.vstack([jp, jr])
             dq = j.T @ np.linalg.solve(j @ j.T + 1e-6 * np.eye(6), e)
+            step = np.max(np.abs(dq))
+            if step > 0.3:
+                dq *= 0.3 / step
             q = np.clip(q + dq, self.lo, self.hi)
         return None
 
@@ -126,8 +134,12 @@ def place(
     *,
     approach: float = 0.05,
     speed_scale: float = 0.9,
-) -> None:
-    """Carry held tile i so its centroid lands at target (x, y, yaw) on a surface; release."""
+) -> float:
+    """Carry held tile i so its centroid lands at target (x, y, yaw) on a surface; release.
+
+    Returns:
+        Peak tcp speed of the transfer move [m/s].
+    """
     target_xy, target_yaw = target[:2], target[2]
     g = cell.tiles[i].grasp
     c, s = np.cos(target_yaw), np.sin(target_yaw)
@@ -142,8 +154,9 @@ def place(
     rot = tool_down(target_yaw)
     q_above = ik.solve(p + [0, 0, approach], rot, cell.qpos)
     q_down = ik.solve(p, rot, q_above)
-    move(cell, q_above, speed_scale=speed_scale)
+    peak = move(cell, q_above, speed_scale=speed_scale)
     move(cell, q_down, speed_scale=0.3)
     cell.vacuum(False)
     cell.step(CONTROL_STEPS)
     move(cell, q_above, speed_scale=0.3)
+    return peak

@@ -1,0 +1,101 @@
+"""Cameras: intrinsics/extrinsics, projection against rendered pixels, renderer life cycle."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from envs.cameras import CameraRig, camera_model
+from envs.cell import Cell
+from envs.cell_config import CellConfig, RenderConfig
+from envs.errors import CellError
+from envs.scene import build_spec, cell_geometry
+from envs.tiles import basic_shapes
+
+MARKER_RADIUS = 0.003
+
+
+@pytest.fixture(scope="module")
+def marker_scene() -> tuple[mujoco.MjModel, mujoco.MjData, int]:
+    cfg = CellConfig()
+    spec = build_spec(cfg)
+    body = spec.worldbody.add_body(name="marker", mocap=True)
+    g = body.add_geom(name="marker", type=mujoco.mjtGeom.mjGEOM_SPHERE)
+    g.size = [MARKER_RADIUS, 0, 0]
+    g.rgba = [1, 0, 0, 1]
+    g.contype = g.conaffinity = 0
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    return model, data, model.body("marker").mocapid[0]
+
+
+def _red_centroid(img: np.ndarray) -> np.ndarray:
+    r, g, b = (img[..., k].astype(int) for k in range(3))
+    mask = (r > 120) & (g < 60) & (b < 60)
+    assert mask.sum() > 10, "marker not visible"
+    rows, cols = np.nonzero(mask)
+    return np.array([cols.mean(), rows.mean()])
+
+
+@pytest.mark.parametrize("camera", ["input_camera", "output_camera"])
+@pytest.mark.parametrize("offset", [(0.0, 0.0), (0.1, 0.07), (-0.13, -0.09), (0.05, -0.1)])
+def test_projection_matches_rendered_marker(marker_scene, camera, offset) -> None:
+    model, data, mocap = marker_scene
+    geo = cell_geometry(CellConfig())
+    centre = geo.input_centre if camera == "input_camera" else geo.output_centre
+    point = centre + [offset[0], offset[1], 0.004]
+    data.mocap_pos[mocap] = point
+    mujoco.mj_forward(model, data)
+    cid = model.camera(camera).id
+    h, w = 492, 656
+    cam = camera_model(model, data, cid, w, h)
+    rig = CameraRig(model, RenderConfig())
+    try:
+        img = rig.render(data, camera, h, w)
+    finally:
+        rig.close()
+    got = _red_centroid(img)
+    want = cam.project(point)
+    assert np.linalg.norm(got - want) < 1.0
+
+
+def test_matrices_and_inverse_projection() -> None:
+    cell = Cell(None, basic_shapes()[:1], seed=0)
+    try:
+        for name in ("input_camera", "output_camera"):
+            cam = cell.camera_model(name)
+            assert cam.K.shape == (3, 3) and cam.world_to_camera.shape == (4, 4)
+            r = cam.world_to_camera[:3, :3]
+            assert np.allclose(r @ r.T, np.eye(3), atol=1e-9)
+            assert np.allclose(cam.world_to_camera[3], [0, 0, 0, 1])
+            uv = np.array([[10.0, 20.0], [328.0, 246.0], [600.0, 480.0]])
+            pts = cam.unproject_to_plane(uv, z=cell.geometry.belt_top)
+            assert np.allclose(cam.project(pts), uv, atol=1e-6)
+            # A 20 mm tile on the belt spans >= 40 px.
+            c = cell.geometry.input_centre
+            span = np.diff(cam.project(np.array([c, c + [0.02, 0, 0]])), axis=0)
+            assert np.linalg.norm(span) >= 40
+    finally:
+        cell.close()
+
+
+def test_renderers_reused_and_closed() -> None:
+    cell = Cell(None, basic_shapes()[:2], seed=0)
+    a = cell.render("input_camera", 128, 128)
+    b = cell.render("output_camera", 128, 128)
+    assert a.shape == b.shape == (128, 128, 3) and a.dtype == np.uint8
+    assert len(cell.cameras._renderers) == 1
+    full = cell.render("input_camera")
+    assert full.shape == (492, 656, 3)
+    depth = cell.render("input_camera", 64, 64, depth=True)
+    assert depth.shape == (64, 64)
+    assert depth[32, 32] == pytest.approx(CellConfig().input_camera.height_above_belt, abs=0.01)
+    out = np.zeros((128, 128, 3), np.uint8)
+    assert cell.render("input_camera", 128, 128, out=out) is out
+    with pytest.raises(CellError, match="allowed"):
+        cell.render("side_camera")
+    cell.close()
+    cell.close()
+    with pytest.raises(CellError, match="closed"):
+        cell.render("input_camera")

@@ -1,0 +1,97 @@
+"""Tiles: convex decomposition, noise, mass, distractors, layout."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+from shapely.geometry import Polygon
+
+from envs.cell import Cell
+from envs.cell_config import TileConfig
+from envs.tiles import basic_shapes, convex_decomposition, make_tile, make_tiles, sample_layout
+
+SHAPES = basic_shapes()
+
+
+def _convex(poly: np.ndarray, tol: float) -> bool:
+    d1 = np.roll(poly, -1, axis=0) - poly
+    d2 = np.roll(d1, -1, axis=0)
+    return bool(np.all(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0] >= -tol))
+
+
+@pytest.mark.parametrize("shape", SHAPES, ids=[s.name for s in SHAPES])
+def test_decomposition_is_convex_and_covers_the_shape(shape) -> None:
+    points, pieces = convex_decomposition(shape.outline, shape.holes)
+    polys = [Polygon(points[p]) for p in pieces]
+    assert all(_convex(points[p], 1e-12) for p in pieces)
+    assert sum(p.area for p in polys) == pytest.approx(shape.area, rel=1e-9)
+    union = shapely.union_all(polys)
+    assert union.symmetric_difference(shape.polygon).area < 1e-12
+    expect_one = shape.name in ("square", "rectangle", "triangle", "circle", "semicircle")
+    assert (len(pieces) == 1) == expect_one
+
+
+def test_noise_mass_and_colour() -> None:
+    cfg = TileConfig(vertex_jitter=0.0003, color_jitter=0.03)
+    rng = np.random.default_rng(0)
+    sq = SHAPES[0]
+    tiles = [make_tile(sq, cfg, rng) for _ in range(20)]
+    areas = np.array([t.area for t in tiles])
+    assert np.all(np.abs(areas - sq.area) < 0.1 * sq.area) and areas.std() > 0
+    colours = np.array([t.color for t in tiles])
+    assert np.all(np.abs(colours - sq.color) < 0.15) and colours.std(axis=0).max() > 0.01
+    for t in tiles:  # centred on the area centroid
+        c = Polygon(t.outline, t.holes).centroid
+        assert abs(c.x) < 1e-9 and abs(c.y) < 1e-9
+    cell = Cell(None, SHAPES, seed=0)
+    try:
+        mass = cell.model.body_mass[cell.ids.tile_body]
+        expected = np.array([t.area for t in cell.tiles]) * 0.005 * 2400.0
+        assert np.allclose(mass, expected, rtol=0.02)
+    finally:
+        cell.close()
+
+
+def test_distractors_rate_and_kinds() -> None:
+    cfg = TileConfig(distractor_rate=0.5)
+    tiles = make_tiles(SHAPES * 20, cfg, np.random.default_rng(1))
+    kinds = [t.distractor for t in tiles[len(SHAPES) * 20 :]]
+    assert all(t.distractor == "" for t in tiles[: len(SHAPES) * 20])
+    assert 50 <= len(kinds) <= 90 and set(kinds) == {"color", "broken", "shape"}
+    for t in tiles[len(SHAPES) * 20 :]:
+        if t.distractor == "broken":
+            assert t.area < 0.95 * t.shape.area
+        if t.distractor == "shape":
+            assert abs(t.area / t.shape.area - 1) > 0.3
+        if t.distractor == "color":
+            assert np.linalg.norm(np.subtract(t.color, t.shape.color)) > 0.2
+    assert make_tiles(SHAPES, TileConfig(), np.random.default_rng(1))[-1].distractor == ""
+
+
+def test_layout_is_seeded_and_non_overlapping() -> None:
+    radii = np.random.default_rng(0).uniform(0.01, 0.02, 25)
+    a = sample_layout(radii, (0.3, 0.26), 0.006, 400, np.random.default_rng(7))
+    b = sample_layout(radii, (0.3, 0.26), 0.006, 400, np.random.default_rng(7))
+    assert np.array_equal(a, b)
+    d = np.linalg.norm(a[:, None, :2] - a[None, :, :2], axis=2)
+    need = radii[:, None] + radii[None, :] + 0.006
+    np.fill_diagonal(d, np.inf)
+    assert np.all(d >= need)
+    assert np.all(np.abs(a[:, 0]) + radii <= 0.15 + 1e-12)
+    assert np.all(np.abs(a[:, 1]) + radii <= 0.13 + 1e-12)
+
+
+def test_cell_reset_is_deterministic() -> None:
+    c1, c2 = Cell(None, SHAPES, seed=4), Cell(None, SHAPES, seed=4)
+    try:
+        assert np.array_equal(c1.tile_poses().pos, c2.tile_poses().pos)
+        c1.reset(seed=9)
+        c2.reset(seed=9)
+        assert np.array_equal(c1.tile_poses().pos, c2.tile_poses().pos)
+        c1.step(50)
+        c2.step(50)
+        assert np.array_equal(c1.data.qpos, c2.data.qpos)
+    finally:
+        c1.close()
+        c2.close()
