@@ -1,0 +1,410 @@
+"""Relevant points of tiles from a camera (or design) image: the paper's hybrid method.
+
+Pipeline, all O(height x width) image operations in OpenCV plus linear work per outline:
+
+1. Validate the RGB uint8 image; light Gaussian blur.
+2. Background: the most frequent colour (coarse histogram), then a smooth illumination model
+   (a low-order polynomial per channel fitted to background cells of a downsampled image).
+3. Segmentation: per-pixel colour distance to the modelled background, thresholded (Otsu,
+   clamped), cleaned by a morphological opening. Canny edges inside the foreground split tiles
+   of different colours that touch.
+4. Contour tracing with hierarchy (``cv2.findContours``), so holes are the children of outer
+   contours. Outlines touching the image border are partial tiles, reported apart.
+5. Slope-comparison simplification of each outline to relevant points, with curve detection
+   (`qshape.Figure.from_outline` with pixel-tuned `qshape.OutlineParams`).
+6. Colour: per-tile median inside the eroded region (one histogram pass for all tiles),
+   corrected for the modelled illumination.
+
+Figures are in pixel coordinates with ``y_down=True``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from qshape.design import load_section
+from qshape.errors import InvalidFigureError, QShapeError
+from qshape.figure import Figure
+from qshape.geometry import FloatArray
+from qshape.simplify import OutlineParams
+
+
+class ImageError(QShapeError):
+    """The image cannot be processed (wrong type, shape, size, or no contrast at all)."""
+
+
+@dataclass(frozen=True)
+class ExtractParams:
+    """Parameters of `extract`. Pixel values are on the 0-255 scale.
+
+    Attributes:
+        min_size_px: Smallest accepted image height and width, in [px].
+        max_size_px: Largest accepted image height and width, in [px].
+        uniform_range: An image whose every channel spans at most this many levels is "one
+            colour" and rejected (camera covered, not exposed, ...), in [levels].
+        blur_sigma_px: Gaussian blur before everything, in [px] (0: none).
+        background_bins: Histogram bins per channel used to find the dominant colour.
+        background_sample_step: Every n-th pixel (each axis) enters the colour histogram.
+        illumination_cell_px: Cell size of the downsampled image the illumination model is
+            fitted on, in [px].
+        illumination_degree: Degree of the per-channel polynomial illumination model (0: flat).
+        background_tolerance: A cell is background for the model fit when its colour is within
+            this distance (max over channels) of the dominant colour, in [levels].
+        threshold_min: Lowest foreground threshold on the colour distance, in [levels].
+        threshold_max: Highest foreground threshold (Otsu's value is clamped to the range).
+        open_px: Size of the square opening that removes specks from the mask, in [px] (0: none).
+        split_touching: Remove Canny edges found inside the foreground (splits touching tiles).
+        canny_low: Canny hysteresis low threshold, on the blurred RGB image.
+        canny_high: Canny hysteresis high threshold.
+        canny_guard_px: Canny edges within this distance of the mask border are the tile
+            outline itself and are kept, in [px].
+        min_area_px: Regions smaller than this are ignored, in [px^2].
+        min_hole_area_px: Holes smaller than this are ignored, in [px^2].
+        border_margin_px: Regions reaching this close to the image border are partial tiles,
+            in [px].
+        boundary_offset_px: Outlines are moved outwards by this much (traced contours run
+            through the centres of the outermost region pixels), in [px].
+        color_erode_px: Erosion before taking the median colour, in [px].
+        correct_illumination: Divide tile colours by the modelled relative illumination.
+        outline: Slope-comparison simplification parameters for pixel outlines.
+    """
+
+    min_size_px: int = 16
+    max_size_px: int = 8192
+    uniform_range: int = 2
+    blur_sigma_px: float = 1.0
+    background_bins: int = 16
+    background_sample_step: int = 4
+    illumination_cell_px: int = 16
+    illumination_degree: int = 2
+    background_tolerance: float = 40.0
+    threshold_min: float = 20.0
+    threshold_max: float = 60.0
+    open_px: int = 3
+    split_touching: bool = True
+    canny_low: float = 60.0
+    canny_high: float = 150.0
+    canny_guard_px: int = 2
+    min_area_px: float = 150.0
+    min_hole_area_px: float = 40.0
+    border_margin_px: int = 1
+    boundary_offset_px: float = 0.5
+    color_erode_px: int = 3
+    correct_illumination: bool = True
+    outline: OutlineParams = field(default_factory=OutlineParams)
+
+    def __post_init__(self) -> None:
+        """Raise `ImageError` on out-of-range values."""
+        if not 1 <= self.min_size_px <= self.max_size_px:
+            raise ImageError("need 1 <= min_size_px <= max_size_px")
+        if not 2 <= self.background_bins <= 256 or self.background_sample_step < 1:
+            raise ImageError("background_bins must be in 2..256, background_sample_step >= 1")
+        if self.illumination_cell_px < 1 or not 0 <= self.illumination_degree <= 3:
+            raise ImageError("illumination_cell_px must be >= 1, illumination_degree in 0..3")
+        if not 0.0 < self.threshold_min <= self.threshold_max:
+            raise ImageError("need 0 < threshold_min <= threshold_max")
+        if min(self.open_px, self.canny_guard_px, self.color_erode_px, self.border_margin_px) < 0:
+            raise ImageError("pixel sizes must be >= 0")
+        if self.blur_sigma_px < 0.0 or self.min_area_px < 0.0 or self.min_hole_area_px < 0.0:
+            raise ImageError("blur_sigma_px, min_area_px and min_hole_area_px must be >= 0")
+
+    @classmethod
+    def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> ExtractParams:
+        """Load the ``extract`` section of ``configs/vision.yaml`` (or another file).
+
+        Raises:
+            configs.ConfigError: Unknown key or wrong type.
+        """
+        return load_section(cls, "extract", name_or_path, overrides)
+
+
+@dataclass(frozen=True, eq=False)
+class PartialTile:
+    """A region touching the image border: part of a tile, not described as a whole one.
+
+    Attributes:
+        outline: Traced outline, shape (k, 2), [px], y down.
+        area: Visible area, in [px^2].
+        centroid: Centroid of the visible part, shape (2,), [px].
+        color: Median colour, RGB in [0, 1].
+    """
+
+    outline: FloatArray
+    area: float
+    centroid: FloatArray
+    color: tuple[float, float, float]
+
+
+@dataclass(frozen=True, eq=False)
+class ExtractResult:
+    """Everything `extract_detailed` found.
+
+    Attributes:
+        figures: Whole tiles, pixel coordinates, ``y_down=True``.
+        outlines: Dense traced outline of each figure (same order), shape (k, 2), [px].
+        partial: Regions touching the image border.
+        rejected: Messages for regions whose outline could not be made into a figure.
+        background: Dominant (background) colour, RGB in [0, 1].
+        threshold: Colour-distance threshold used for the foreground, in [levels].
+    """
+
+    figures: list[Figure]
+    outlines: list[FloatArray]
+    partial: list[PartialTile]
+    rejected: list[str]
+    background: tuple[float, float, float]
+    threshold: float
+
+
+_DEFAULT: ExtractParams | None = None
+
+
+def default_params() -> ExtractParams:
+    """Bundled parameters (``configs/vision.yaml``), loaded once."""
+    global _DEFAULT  # noqa: PLW0603
+    if _DEFAULT is None:
+        _DEFAULT = ExtractParams.load()
+    return _DEFAULT
+
+
+def read_image(path: str | Path) -> np.ndarray:
+    """Read an image file as RGB uint8 (H, W, 3) (alpha dropped, grey expanded).
+
+    Raises:
+        ImageError: Missing or unreadable file.
+    """
+    data = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if data is None:
+        raise ImageError(f"cannot read image file {str(path)!r} (missing or not an image)")
+    return np.ascontiguousarray(cv2.cvtColor(data, cv2.COLOR_BGR2RGB))
+
+
+def check_image(image: Any, params: ExtractParams) -> np.ndarray:
+    """Validate an RGB uint8 image, returning it as a contiguous array.
+
+    Raises:
+        ImageError: Not an array, wrong dtype, wrong shape or channel count, size out of
+            range, or a single colour.
+    """
+    if not isinstance(image, np.ndarray):
+        raise ImageError(f"image must be a numpy array (H, W, 3) uint8, got {type(image).__name__}")
+    if image.dtype != np.uint8:
+        raise ImageError(f"image must have dtype uint8 (0-255), got {image.dtype}")
+    if image.ndim != 3 or image.shape[2] != 3:
+        raise ImageError(f"image must have shape (H, W, 3) RGB, got {image.shape}")
+    h, w = image.shape[:2]
+    lo, hi = params.min_size_px, params.max_size_px
+    if not (lo <= h <= hi and lo <= w <= hi):
+        raise ImageError(f"image size {w} x {h} px is outside the accepted {lo}..{hi} px per side")
+    span = [int(hi_ - lo_) for lo_, hi_, *_ in (cv2.minMaxLoc(c) for c in cv2.split(image))]
+    if max(span) <= params.uniform_range:
+        raise ImageError(
+            f"image is a single colour (channel spans {span} levels): nothing can be "
+            "seen; check the camera"
+        )
+    return np.ascontiguousarray(image)
+
+
+def _dominant_color(img: np.ndarray, p: ExtractParams) -> np.ndarray:
+    """Median colour of the most populated coarse colour bin, shape (3,), float levels."""
+    sample = img[:: p.background_sample_step, :: p.background_sample_step].reshape(-1, 3)
+    q = (sample.astype(np.int32) * p.background_bins) >> 8
+    code = (q[:, 0] * p.background_bins + q[:, 1]) * p.background_bins + q[:, 2]
+    top = int(np.argmax(np.bincount(code, minlength=p.background_bins**3)))
+    return np.asarray(np.median(sample[code == top], axis=0), dtype=np.float64)
+
+
+def _illumination(img: np.ndarray, dominant: np.ndarray, p: ExtractParams) -> np.ndarray:
+    """Background model image (H, W, 3) uint8: dominant colour times smooth illumination."""
+    h, w = img.shape[:2]
+    gh, gw = max(2, h // p.illumination_cell_px), max(2, w // p.illumination_cell_px)
+    small = cv2.resize(img, (gw, gh), interpolation=cv2.INTER_AREA).astype(np.float64)
+    dist = np.abs(small - dominant).max(axis=2)
+    is_bg = dist <= p.background_tolerance
+    terms = (p.illumination_degree + 1) * (p.illumination_degree + 2) // 2
+    model = np.broadcast_to(dominant, small.shape).copy()
+    if p.illumination_degree > 0 and int(is_bg.sum()) >= 2 * terms:
+        yy, xx = np.mgrid[0:gh, 0:gw]
+        u, v = (xx.ravel() + 0.5) / gw - 0.5, (yy.ravel() + 0.5) / gh - 0.5
+        cols = [u**i * v**j for i in range(p.illumination_degree + 1)
+                for j in range(p.illumination_degree + 1 - i)]
+        basis = np.stack(cols, axis=1)
+        keep = is_bg.ravel()
+        coef, *_ = np.linalg.lstsq(basis[keep], small.reshape(-1, 3)[keep], rcond=None)
+        model = (basis @ coef).reshape(gh, gw, 3)
+    model8 = np.clip(model + 0.5, 0, 255).astype(np.uint8)
+    return cv2.resize(model8, (w, h), interpolation=cv2.INTER_LINEAR)
+
+
+def _median_colors(
+    img: np.ndarray, labels: np.ndarray, region: np.ndarray, count: int
+) -> np.ndarray:
+    """Median RGB per label 1..count-1 over pixels where ``region`` is set -> (count, 3) levels.
+
+    One bincount per channel over (label, value) pairs: linear in the number of pixels.
+    """
+    idx = np.flatnonzero(region.ravel())
+    lab = labels.ravel()[idx].astype(np.int64)
+    out = np.zeros((count, 3))
+    for ch in range(3):
+        val = img[..., ch].ravel()[idx].astype(np.int64)
+        hist = np.bincount(lab * 256 + val, minlength=count * 256).reshape(count, 256)
+        cum = np.cumsum(hist, axis=1)
+        half = (cum[:, -1:] + 1) // 2
+        out[:, ch] = np.argmax(cum >= np.maximum(half, 1), axis=1)
+    return out
+
+
+def _offset_outline(contour: FloatArray, offset: float, outward_sign: float) -> FloatArray:
+    """Move a closed outline along its normals by ``offset`` (outwards for the given sign)."""
+    if offset == 0.0 or len(contour) < 3:
+        return contour
+    tangent = np.roll(contour, -1, axis=0) - np.roll(contour, 1, axis=0)
+    norm = np.hypot(tangent[:, 0], tangent[:, 1])
+    norm[norm == 0.0] = 1.0
+    normal = np.stack([tangent[:, 1], -tangent[:, 0]], axis=1) / norm[:, None]
+    return contour + outward_sign * offset * normal
+
+
+def _signed_area(c: FloatArray) -> float:
+    x, y = c[:, 0], c[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> ExtractResult:
+    """Tiles in an image: whole tiles as figures, border-touching ones as partial tiles.
+
+    Args:
+        image: RGB uint8, shape (H, W, 3): tiles on a roughly uniform background (belt or
+            grout), possibly shaded.
+        params: Parameters; None loads ``configs/vision.yaml``.
+
+    Returns:
+        An `ExtractResult`; an image with no tiles gives empty lists.
+
+    Raises:
+        ImageError: Invalid image (see `check_image`).
+    """
+    p = default_params() if params is None else params
+    img = check_image(image, p)
+    h, w = img.shape[:2]
+    if p.blur_sigma_px > 0.0:
+        img = cv2.GaussianBlur(img, (0, 0), p.blur_sigma_px)
+    dominant = _dominant_color(img, p)
+    model = _illumination(img, dominant, p)
+    diff = cv2.absdiff(img, model)
+    r, g, b = cv2.split(diff)
+    dist = cv2.max(cv2.max(r, g), b)
+    otsu, _ = cv2.threshold(dist, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    thr = float(np.clip(otsu, p.threshold_min, p.threshold_max))
+    _, mask = cv2.threshold(dist, thr, 255, cv2.THRESH_BINARY)
+    if p.open_px > 1:
+        kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (p.open_px, p.open_px))
+        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel)
+    if p.split_touching:
+        edges = cv2.Canny(img, p.canny_low, p.canny_high)
+        if p.canny_guard_px > 0:
+            guard = cv2.getStructuringElement(
+                cv2.MORPH_RECT, (2 * p.canny_guard_px + 1, 2 * p.canny_guard_px + 1)
+            )
+            inner = cv2.erode(mask, guard)
+        else:
+            inner = mask
+        mask = cv2.subtract(mask, cv2.bitwise_and(edges, inner))
+    count, labels = cv2.connectedComponents(mask, connectivity=4)
+    contours, hierarchy = cv2.findContours(mask, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    background = tuple(float(v) / 255.0 for v in dominant)
+    if hierarchy is None or count <= 1:
+        return ExtractResult([], [], [], [], (background[0], background[1], background[2]), thr)
+    hier = hierarchy[0]
+    if p.color_erode_px > 0:
+        ek = cv2.getStructuringElement(
+            cv2.MORPH_RECT, (2 * p.color_erode_px + 1, 2 * p.color_erode_px + 1)
+        )
+        region = cv2.erode(mask, ek)
+    else:
+        region = mask
+    colors = _median_colors(img, labels, region, count)
+    # Tiles eroded away entirely fall back to their whole region.
+    empty = ~np.any(colors > 0, axis=1)
+    if np.any(empty[1:]):
+        colors[empty] = _median_colors(img, labels, mask, count)[empty]
+    if p.correct_illumination:
+        gain_img = model.astype(np.float64)
+    figures: list[Figure] = []
+    outlines: list[FloatArray] = []
+    partial: list[PartialTile] = []
+    rejected: list[str] = []
+    for i, cnt in enumerate(contours):
+        if hier[i][3] != -1:
+            continue  # a hole; handled with its parent
+        area = cv2.contourArea(cnt)
+        if area < p.min_area_px:
+            continue
+        pts = cnt[:, 0, :].astype(np.float64)
+        x0, y0 = int(cnt[0, 0, 0]), int(cnt[0, 0, 1])
+        lab = int(labels[y0, x0])
+        rgb = colors[lab]
+        if p.correct_illumination:
+            cy = int(np.clip(round(float(pts[:, 1].mean())), 0, h - 1))
+            cx = int(np.clip(round(float(pts[:, 0].mean())), 0, w - 1))
+            rgb = rgb * dominant / np.maximum(gain_img[cy, cx], 1.0)
+        color = tuple(float(v) for v in np.clip(rgb / 255.0, 0.0, 1.0))
+        color3 = (color[0], color[1], color[2])
+        m = p.border_margin_px
+        bx, by, bw, bh = cv2.boundingRect(cnt)
+        if bx <= m or by <= m or bx + bw >= w - m or by + bh >= h - m:
+            mom = cv2.moments(cnt)
+            cen = np.array([mom["m10"], mom["m01"]]) / max(mom["m00"], 1e-9)
+            partial.append(PartialTile(pts, float(area), cen, color3))
+            continue
+        holes = []
+        child = hier[i][2]
+        while child != -1:
+            if cv2.contourArea(contours[child]) >= p.min_hole_area_px:
+                hp = contours[child][:, 0, :].astype(np.float64)
+                # A hole's outward (away from the tile material) is into the hole.
+                sign = 1.0 if _signed_area(hp) > 0 else -1.0
+                holes.append(_offset_outline(hp, p.boundary_offset_px, -sign))
+            child = hier[child][0]
+        sign = 1.0 if _signed_area(pts) > 0 else -1.0
+        outline = _offset_outline(pts, p.boundary_offset_px, sign)
+        try:
+            fig = Figure.from_outline(outline, holes, color3, params=p.outline, y_down=True)
+        except InvalidFigureError as exc:
+            rejected.append(f"region at ({x0}, {y0}) px, area {area:.0f} px^2: {exc}")
+            continue
+        figures.append(fig)
+        outlines.append(outline)
+    return ExtractResult(
+        figures, outlines, partial, rejected, (background[0], background[1], background[2]), thr
+    )
+
+
+def extract(image: np.ndarray, params: ExtractParams | None = None) -> list[Figure]:
+    """Whole tiles in an RGB uint8 image as figures (pixel coordinates, ``y_down=True``).
+
+    Tiles touching the image border are left out (see `extract_detailed`).
+
+    Raises:
+        ImageError: Invalid image.
+    """
+    return extract_detailed(image, params).figures
+
+
+__all__ = [
+    "ExtractParams",
+    "ExtractResult",
+    "ImageError",
+    "PartialTile",
+    "check_image",
+    "default_params",
+    "extract",
+    "extract_detailed",
+    "read_image",
+]
