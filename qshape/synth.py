@@ -1,0 +1,258 @@
+"""Synthetic camera images of tiles with ground truth, for tests and the recognition benchmark.
+
+Tiles are taken from design slots, given manufacturing noise (vertex jitter, arc jitter, colour
+jitter), laid at random non-overlapping poses on a belt-coloured background, then photographed:
+an illumination gradient, blur and sensor noise. The default image is the paper camera's
+656 x 492 px.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from qshape.design import Design, Slot, TilePath, load_section
+from qshape.errors import QShapeError
+from qshape.geometry import BoolArray, FloatArray
+from qshape.render import RenderParams, fill_tiles
+
+
+@dataclass(frozen=True)
+class SynthParams:
+    """How synthetic tile images are made.
+
+    Attributes:
+        width_px: Image width, in [px] (AVT Guppy F-033C: 656).
+        height_px: Image height, in [px] (492).
+        px_per_mm: Scale on the belt, in [px/mm].
+        belt_color: Belt RGB in [0, 1].
+        gap_mm: Smallest distance between two tiles, in [mm].
+        margin_px: Smallest distance between a whole tile and the image border, in [px].
+        placement_attempts: Random poses tried per tile before it is left out.
+        vertex_jitter_mm: Largest vertex displacement (uniform in a disc), in [mm].
+        bulge_jitter: Relative arc bulge change (uniform in +-), dimensionless.
+        color_jitter: Standard deviation of the per-tile colour change per channel, RGB [0, 1].
+        noise_std: Standard deviation of the per-pixel sensor noise, in [levels] (0-255).
+        blur_sigma_px: Optical blur (Gaussian), in [px].
+        illumination: Relative brightness change across the image (linear gradient in a random
+            direction, from 1 - illumination to 1 + illumination), dimensionless.
+        outline_step_px: Sampling step of the drawn outlines, in [px].
+    """
+
+    width_px: int = 656
+    height_px: int = 492
+    px_per_mm: float = 2.5
+    belt_color: tuple[float, float, float] = (0.24, 0.26, 0.28)
+    gap_mm: float = 3.0
+    margin_px: int = 4
+    placement_attempts: int = 300
+    vertex_jitter_mm: float = 0.5
+    bulge_jitter: float = 0.05
+    color_jitter: float = 0.02
+    noise_std: float = 3.0
+    blur_sigma_px: float = 0.7
+    illumination: float = 0.1
+    outline_step_px: float = 0.5
+
+    def __post_init__(self) -> None:
+        """Raise `QShapeError` on out-of-range values."""
+        if self.width_px < 16 or self.height_px < 16 or not self.px_per_mm > 0.0:
+            raise QShapeError("image must be at least 16 x 16 px and px_per_mm > 0")
+        for name in ("gap_mm", "vertex_jitter_mm", "bulge_jitter", "color_jitter", "noise_std",
+                     "blur_sigma_px", "illumination"):
+            if getattr(self, name) < 0.0:
+                raise QShapeError(f"{name} must be >= 0, got {getattr(self, name)}")
+        if self.illumination >= 1.0:
+            raise QShapeError("illumination must be < 1")
+
+    @classmethod
+    def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> SynthParams:
+        """Load the ``synth`` section of ``configs/vision.yaml`` (or another file)."""
+        return load_section(cls, "synth", name_or_path, overrides)
+
+    def noise_level(self, level: float) -> SynthParams:
+        """These parameters with every noise source scaled by ``level`` (0: clean)."""
+        return replace(
+            self,
+            vertex_jitter_mm=self.vertex_jitter_mm * level,
+            bulge_jitter=self.bulge_jitter * level,
+            color_jitter=self.color_jitter * level,
+            noise_std=self.noise_std * level,
+            blur_sigma_px=self.blur_sigma_px * level,
+            illumination=min(self.illumination * level, 0.9),
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class TileTruth:
+    """Ground truth of one tile in a synthetic image.
+
+    Attributes:
+        slot: The design slot the tile was made from.
+        slot_index: Index of that slot in its design.
+        angle: Orientation of the tile's shape, [rad], CCW in the y-up frame, relative to the
+            shape's local frame (the slot itself sits at ``radians(slot.angle)``).
+        rotation: Rotation that turns the tile onto its slot, [rad], CCW y-up, wrapped to
+            (-pi, pi] (the convention of ``qshape.Match.rotation``).
+        center_px: Area centroid, shape (2,), [px], y down.
+        points_px: True relevant points (after manufacturing noise), shape (n, 2), [px].
+        curve_mask: Shape (n,), True at arc middles.
+        hole_points_px: True relevant points of each hole, [px].
+        color: Tile colour after colour jitter, RGB in [0, 1].
+        partial: True when the tile is cut by the image border.
+    """
+
+    slot: Slot
+    slot_index: int
+    angle: float
+    rotation: float
+    center_px: FloatArray
+    points_px: FloatArray
+    curve_mask: BoolArray
+    hole_points_px: tuple[FloatArray, ...]
+    color: tuple[float, float, float]
+    partial: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class SynthImage:
+    """A synthetic image and its tiles.
+
+    Attributes:
+        image: RGB uint8, shape (height_px, width_px, 3).
+        tiles: Ground truth of every tile drawn.
+        px_per_mm: Scale, in [px/mm].
+    """
+
+    image: np.ndarray
+    tiles: list[TileTruth]
+    px_per_mm: float
+
+
+def wrap_angle(a: float) -> float:
+    """Angle wrapped to (-pi, pi]."""
+    w = math.remainder(a, 2.0 * math.pi)
+    return math.pi if w == -math.pi else w
+
+
+def place_path(path: TilePath, angle: float, center_px: Any, px_per_mm: float) -> TilePath:
+    """Tile-local path (mm, y up) placed in an image (px, y down).
+
+    Rotated by ``angle`` rad CCW (y up), scaled by ``px_per_mm``, flipped to y down and moved
+    so that the local origin lands on ``center_px`` (2,).
+    """
+    placed = path.transformed(angle, (0.0, 0.0), px_per_mm)
+
+    def flip(loop: Any) -> Any:
+        v = loop.vertices * np.array([1.0, -1.0]) + np.asarray(center_px, dtype=np.float64)
+        return type(loop)(v, -loop.bulges)  # mirroring reverses the arcs' sense
+
+    return TilePath(flip(placed.outer), tuple(flip(h) for h in placed.holes))
+
+
+def generate(
+    slots: Design | Sequence[Slot],
+    n_tiles: int,
+    rng: np.random.Generator | int,
+    params: SynthParams | None = None,
+) -> SynthImage:
+    """Draw ``n_tiles`` tiles (slots picked at random, with repeats) on a belt image.
+
+    Tiles that cannot be placed without overlap after ``placement_attempts`` tries are left
+    out (the truth lists only the tiles drawn).
+
+    Args:
+        slots: A design (its slots) or a list of slots.
+        n_tiles: Number of tiles wanted.
+        rng: Generator or seed.
+        params: Image parameters (None: ``configs/vision.yaml`` section ``synth``).
+
+    Raises:
+        QShapeError: No slots, or a negative tile count.
+    """
+    p = params or SynthParams.load()
+    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    pool = list(slots.slots if isinstance(slots, Design) else slots)
+    if not pool or n_tiles < 0:
+        raise QShapeError("generate needs at least one slot and n_tiles >= 0")
+    s = p.px_per_mm
+    w, h = p.width_px, p.height_px
+    occupied = np.zeros((h, w), np.uint8)
+    gap_px = max(1, int(math.ceil(p.gap_mm * s)))
+    step = p.outline_step_px
+    truths: list[TileTruth] = []
+    drawn: list[tuple[FloatArray, list[FloatArray]]] = []
+    colors: list[tuple[float, float, float]] = []
+    rp = RenderParams()
+    for _ in range(n_tiles):
+        idx = int(gen.integers(len(pool)))
+        slot = pool[idx]
+        local = slot.local_path.jittered(gen, p.vertex_jitter_mm, p.bulge_jitter)
+        _, c = local.area_centroid(slot.rules.outline_step_mm)
+        local = local.transformed(0.0, -c)
+        radius = float(np.max(np.hypot(*local.outer.dense(1.0).T))) * s
+        for _attempt in range(p.placement_attempts):
+            angle = float(gen.uniform(-math.pi, math.pi))
+            lo = radius + p.margin_px
+            if w - 2 * lo <= 0 or h - 2 * lo <= 0:
+                break
+            center = np.array([gen.uniform(lo, w - lo), gen.uniform(lo, h - lo)])
+            placed = place_path(local, angle, center, s)
+            outline = placed.outer.dense(step)
+            x0, y0 = np.floor(outline.min(axis=0)).astype(int) - gap_px
+            x1, y1 = np.ceil(outline.max(axis=0)).astype(int) + gap_px + 1
+            x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, w), min(y1, h)
+            local_mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
+            ring = np.round(outline - [x0, y0]).astype(np.int32)
+            cv2.fillPoly(local_mask, [ring], 255)
+            cv2.polylines(local_mask, [ring], True, 255, 2 * gap_px + 1)
+            if np.any(occupied[y0:y1, x0:x1] & local_mask):
+                continue
+            occupied[y0:y1, x0:x1] |= local_mask
+            color = np.clip(np.array(slot.color) + gen.normal(0.0, p.color_jitter, 3), 0, 1)
+            rgb = (float(color[0]), float(color[1]), float(color[2]))
+            pts, mask = placed.outer.relevant(slot.rules.max_arc_deg)
+            holes = tuple(hl.relevant(slot.rules.max_arc_deg)[0] for hl in placed.holes)
+            truths.append(TileTruth(
+                slot=slot,
+                slot_index=idx,
+                angle=angle,
+                rotation=wrap_angle(math.radians(slot.angle) - angle),
+                center_px=center,
+                points_px=pts,
+                curve_mask=mask,
+                hole_points_px=holes,
+                color=rgb,
+            ))
+            drawn.append((outline, [hl.dense(step) for hl in placed.holes]))
+            colors.append(rgb)
+            break
+    image = np.empty((h, w, 3), np.uint8)
+    image[:] = [round(255 * v) for v in p.belt_color]
+    fill_tiles(image, drawn, colors, rp)
+    return SynthImage(_camera(image, gen, p), truths, s)
+
+
+def _camera(image: np.ndarray, gen: np.random.Generator, p: SynthParams) -> np.ndarray:
+    """Illumination gradient, blur and sensor noise on a clean rendering."""
+    h, w = image.shape[:2]
+    out = image.astype(np.float32)
+    if p.illumination > 0.0:
+        theta = gen.uniform(0.0, 2.0 * math.pi)
+        yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+        u = ((xx / w - 0.5) * math.cos(theta) + (yy / h - 0.5) * math.sin(theta)) * 2.0
+        out = out * (1.0 + p.illumination * np.clip(u, -1.0, 1.0))[..., None].astype(np.float32)
+    if p.blur_sigma_px > 0.0:
+        out = cv2.GaussianBlur(out, (0, 0), p.blur_sigma_px)
+    if p.noise_std > 0.0:
+        out += gen.normal(0.0, p.noise_std, out.shape).astype(np.float32)
+    return np.clip(out + 0.5, 0, 255).astype(np.uint8)
+
+
+__all__ = ["SynthImage", "SynthParams", "TileTruth", "generate", "place_path", "wrap_angle"]
