@@ -19,7 +19,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from qshape.description import Description, default_tolerances
+from qshape.description import Description, default_tolerances, describe_many
 from qshape.errors import MatchError
 from qshape.figure import Figure
 from qshape.geometry import FloatArray
@@ -31,6 +31,8 @@ from qshape.matching import (
     coarse_key,
     evaluate_block,
     pack,
+    prefilter,
+    take,
 )
 from qshape.tolerances import Tolerances
 
@@ -86,7 +88,7 @@ def feasible_pairs(
     """Every matching (tile, slot) pair, found through canonical-key buckets.
 
     Returns:
-        (tile, slot, score, rotation) arrays of equal length, sorted by tile then slot.
+        (tile, slot, score, rotation) arrays of equal length, in no particular order.
     """
     tile_groups = _groups(tiles)
     slot_groups = _groups(slots)
@@ -100,6 +102,7 @@ def feasible_pairs(
             for k in canonical_keys(slots[m], tol):
                 by_key[k].add(gi)
     edges = _Edges([], [], [], [])
+    slot_packs: dict[int, Pack] = {}
     for members in tile_groups.values():
         coarse = coarse_key(tiles[members[0]])
         keys: set[str] = set()
@@ -114,16 +117,15 @@ def feasible_pairs(
         tpack = pack([tiles[m] for m in members])
         for gi in sorted(found):
             s_idx = np.array(slot_groups[slot_keys[gi]])
-            spack = pack([slots[m] for m in s_idx])
+            if gi not in slot_packs:
+                slot_packs[gi] = pack([slots[m] for m in s_idx])
+            spack = slot_packs[gi]
             _block_edges(tpack, t_idx, spack, s_idx, tol=tol, use_color=use_color, edges=edges)
     if not edges.tile:
         empty = np.zeros(0)
         return empty.astype(np.int64), empty.astype(np.int64), empty, empty
-    t = np.concatenate(edges.tile)
-    s = np.concatenate(edges.slot)
-    order = np.lexsort((s, t))
-    return t[order], s[order], np.concatenate(edges.score)[order], np.concatenate(
-        edges.theta)[order]
+    return (np.concatenate(edges.tile), np.concatenate(edges.slot),
+            np.concatenate(edges.score), np.concatenate(edges.theta))
 
 
 def _block_edges(
@@ -136,37 +138,53 @@ def _block_edges(
     use_color: bool,
     edges: _Edges,
 ) -> None:
-    """Evaluate one tile group against one slot group (chunked) and append feasible edges."""
+    """Evaluate one tile group against one slot group and append the feasible edges.
+
+    The pairs first pass the cheap size/colour filter; the matrix of surviving pairs splits
+    into connected components (in practice one per tile class), each evaluated densely.
+    """
+    base = prefilter(spack, tpack, tol, use_color)
+    bt, bs = np.nonzero(base)
+    if len(bt) == 0:
+        return
+    t_count, s_count = base.shape
+    graph = coo_matrix((np.ones(len(bt)), (bt, t_count + bs)),
+                       shape=(t_count + s_count, t_count + s_count))
+    _, comp = connected_components(graph, directed=False)
     n = tpack.codes.shape[1]
-    chunk = max(1, _BLOCK_ELEMENTS // max(1, len(s_idx) * n * n))
-    for a in range(0, len(t_idx), chunk):
-        sub = _slice_pack(tpack, a, a + chunk)
-        res = evaluate_block(spack, sub, tol, use_color)
-        if res.feasible.shape[2] == 0:
-            continue
-        best = res.score.min(axis=2)
-        ok = np.isfinite(best)
-        if not ok.any():
-            continue
-        theta = np.remainder(res.theta + np.pi, 2.0 * np.pi) - np.pi
-        equiv = res.feasible & (res.score <= best[..., None] + tol.symmetry_residual)
-        pick = np.argmin(np.where(equiv, np.abs(theta), np.inf), axis=2)
-        ti, si = np.nonzero(ok)
-        edges.tile.append(t_idx[a + ti])
-        edges.slot.append(s_idx[si])
-        edges.score.append(best[ti, si])
-        edges.theta.append(theta[ti, si, pick[ti, si]])
+    for c in np.unique(comp[bt]).tolist():
+        ct = np.flatnonzero(comp[:t_count] == c)
+        cs = np.flatnonzero(comp[t_count:] == c)
+        sub_s = take(spack, cs)
+        chunk = max(1, _BLOCK_ELEMENTS // max(1, len(cs) * n * n))
+        for a in range(0, len(ct), chunk):
+            rows = ct[a : a + chunk]
+            res = evaluate_block(sub_s, take(tpack, rows), tol, use_color,
+                                 base[np.ix_(rows, cs)])
+            if len(res.k) == 0:
+                continue
+            pair = res.ti * len(cs) + res.si  # entries come ordered by pair
+            starts = np.flatnonzero(np.r_[True, pair[1:] != pair[:-1]])
+            counts = np.diff(np.r_[starts, len(pair)])
+            best = np.minimum.reduceat(res.score, starts)
+            equiv = res.score <= np.repeat(best + tol.symmetry_residual, counts)
+            key = np.full(len(pair), np.inf)
+            key[equiv] = np.abs(np.arctan2(res.cross[equiv], res.dot[equiv]))
+            low = np.minimum.reduceat(key, starts)
+            hit = np.flatnonzero(key == np.repeat(low, counts))
+            first = hit[np.r_[True, pair[hit][1:] != pair[hit][:-1]]]
+            edges.tile.append(t_idx[rows[res.ti[first]]])
+            edges.slot.append(s_idx[cs[res.si[first]]])
+            edges.score.append(res.score[first])
+            edges.theta.append(np.arctan2(res.cross[first], res.dot[first]))
 
 
-def _slice_pack(p: Pack, a: int, b: int) -> Pack:
-    if a == 0 and b >= p.codes.shape[0]:
-        return p
-    return Pack(
-        codes=p.codes[a:b], pts=p.pts[a:b], sumsq=p.sumsq[a:b], area=p.area[a:b],
-        perimeter=p.perimeter[a:b], color=p.color[a:b], north=p.north[a:b],
-        hole_codes=tuple(h[a:b] for h in p.hole_codes), hole_centroid=p.hole_centroid[a:b],
-        hole_interval=p.hole_interval[a:b],
-    )
+def _descriptions(items: Sequence[Description | Figure], tol: Tolerances) -> list[Description]:
+    figs = [x for x in items if isinstance(x, Figure)]
+    if not figs:
+        return [as_description(x, tol) for x in items]
+    described = iter(describe_many(figs, tol))
+    return [next(described) if isinstance(x, Figure) else as_description(x, tol) for x in items]
 
 
 def assign(
@@ -196,8 +214,8 @@ def assign(
     if method not in METHODS:
         raise MatchError(f"unknown assign method {method!r}; allowed: {', '.join(METHODS)}")
     tol = default_tolerances() if tolerances is None else tolerances
-    td = [as_description(x, tol) for x in tiles]
-    sd = [as_description(x, tol) for x in slots]
+    td = _descriptions(tiles, tol)
+    sd = _descriptions(slots, tol)
     if not td or not sd:
         return []
     t, s, score, theta = feasible_pairs(td, sd, tol, use_color)
@@ -212,6 +230,8 @@ def _greedy(
     t: IntArray, s: IntArray, score: FloatArray, theta: FloatArray, n_slots: int
 ) -> list[Assignment]:
     """The paper's loop: each tile in order takes the first free matching slot."""
+    order = np.argsort(t * n_slots + s)
+    t, s, score, theta = t[order], s[order], score[order], theta[order]
     taken = np.zeros(n_slots, dtype=bool)
     starts = np.flatnonzero(np.r_[True, t[1:] != t[:-1]])
     ends = np.r_[starts[1:], len(t)]

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,6 +86,8 @@ def type_curve_of(codes: CodeArray) -> str:
     curve = (codes & lb.KIND_BIT) == 1
     if not curve.any():
         return WITHOUT_CURVES
+    if len(codes) % 2 or curve.sum() * 2 != len(codes):
+        return WITH_CURVES
     if np.all(curve | (np.roll(curve, 1) & np.roll(curve, -1))):
         return ONLY_CURVES
     return WITH_CURVES
@@ -304,6 +307,67 @@ def describe(figure: Figure, tolerances: Tolerances | None = None) -> Descriptio
     )
 
 
+def describe_many(
+    figures: Sequence[Figure], tolerances: Tolerances | None = None
+) -> list[Description]:
+    """Describe many figures at once; equal to ``[describe(f) for f in figures]``, faster.
+
+    The labels of all outer boundaries are computed in one vectorised pass over every relevant
+    point; holes are described figure by figure.
+
+    Args:
+        figures: The figures.
+        tolerances: Bands and margins; None uses the bundled defaults.
+    """
+    tol = default_tolerances() if tolerances is None else tolerances
+    if not figures:
+        return []
+    counts = np.array([len(f.points) for f in figures])
+    offsets = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    seg = np.repeat(np.arange(len(figures)), counts)
+    local = np.arange(len(seg)) - offsets[seg]
+    flip = np.array([-1.0 if f.y_down else 1.0 for f in figures])
+    pts = np.concatenate([f.points for f in figures])
+    cen = np.stack([f.outer_centroid for f in figures])
+    cen[:, 1] *= flip
+    pts[:, 1] *= flip[seg]
+    rel = pts - cen[seg]
+    mask = np.concatenate([f.curve_mask for f in figures])
+    size = np.maximum(
+        np.maximum.reduceat(rel[:, 0], offsets) - np.minimum.reduceat(rel[:, 0], offsets),
+        np.maximum.reduceat(rel[:, 1], offsets) - np.minimum.reduceat(rel[:, 1], offsets),
+    )
+    top = rel[:, 1] >= (np.maximum.reduceat(rel[:, 1], offsets) - tol.tie_tolerance * size)[seg]
+    key = np.where(top, rel[:, 0], np.inf)
+    is_min = key == np.minimum.reduceat(key, offsets)[seg]
+    first = np.flatnonzero(is_min)
+    start = np.full(len(figures), -1)
+    start[seg[first[::-1]]] = local[first[::-1]]  # earliest index wins
+    order = offsets[seg] + (local + start[seg]) % counts[seg]
+    rel = rel[order]
+    mask = mask[order]
+    prev = offsets[seg] + (local - 1) % counts[seg]
+    nxt = offsets[seg] + (local + 1) % counts[seg]
+    codes = lb.codes_from(rel, rel[prev], rel[nxt], mask, tol)
+    rel.setflags(write=False)
+    codes.setflags(write=False)
+    out = []
+    for k, f in enumerate(figures):
+        a, b = int(offsets[k]), int(offsets[k] + counts[k])
+        c = codes[a:b]
+        r = rel[a:b]
+        holes: tuple[HoleDescription, ...] = ()
+        if f.holes:
+            fl = np.array([1.0, flip[k]])
+            holes = tuple(_describe_hole(h.points * fl - cen[k], h.curve_mask, r[0], tol)
+                          for h in f.holes)
+        out.append(Description(
+            WITH_HOLES if holes else WITHOUT_HOLES, type_curve_of(c), f.color, f.area,
+            f.perimeter, BoundaryDescription(c, r), holes,
+        ))
+    return out
+
+
 def _describe_hole(
     points: FloatArray, mask: BoolArray, first: FloatArray, tol: Tolerances
 ) -> HoleDescription:
@@ -516,6 +580,7 @@ __all__ = [
     "Node",
     "cones_of",
     "describe",
+    "describe_many",
     "format_description",
     "hole_interval",
     "parse",

@@ -18,10 +18,12 @@ common admissible label.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numpy.typing import NDArray
 
-from qshape.geometry import BoolArray, FloatArray, cross2
+from qshape.geometry import BoolArray, FloatArray
 from qshape.tolerances import Tolerances
 
 CodeArray = NDArray[np.int64]
@@ -48,35 +50,58 @@ T_MASK = 0b111 << T_MASK_SHIFT
 
 def _band3(
     value: FloatArray,
-    band: tuple[float, float],
-    ambiguous: tuple[tuple[float, float], tuple[float, float]],
-    labels: tuple[int, int, int],
+    band: FloatArray,
+    margin: FloatArray,
+    labels: NDArray[np.int64],
+    relative: NDArray[np.bool_],
 ) -> tuple[CodeArray, CodeArray]:
-    """Primary label and admissible bit mask for a three-way band.
+    """Primary labels and admissible bit masks for three-way bands, several at once.
 
     Args:
-        value: Measurements, shape (n,).
-        band: (low, high) band edges (inclusive: a value on an edge is inside).
-        ambiguous: (from, to) intervals around the low and the high edge that are ambiguous.
-        labels: Label indices (below, inside, above).
+        value: Measurements, shape (b, n): one row per band.
+        band: (b, 2) band edges (low, high), inclusive: a value on an edge is inside.
+        margin: (b,) ambiguity margins, absolute or relative (factor 1 + margin).
+        labels: (b, 3) label indices (below, inside, above).
+        relative: (b,) True where the margin is relative.
     """
-    lo, hi = band
-    lo_amb, hi_amb = ambiguous
-    below, inside, above = labels
+    lo, hi = band[:, 0:1], band[:, 1:2]
+    m = margin[:, None]
+    rel = relative[:, None]
+    f = 1.0 + m
+    lo_a = np.where(rel, lo / f, lo - m)
+    lo_b = np.where(rel, lo * f, lo + m)
+    hi_a = np.where(rel, hi / f, hi - m)
+    hi_b = np.where(rel, hi * f, hi + m)
+    below, inside, above = labels[:, 0:1], labels[:, 1:2], labels[:, 2:3]
     primary = np.where(value < lo, below, np.where(value > hi, above, inside))
-    mask = np.left_shift(1, primary)
-    near_lo = (value >= lo_amb[0]) & (value <= lo_amb[1])
-    near_hi = (value >= hi_amb[0]) & (value <= hi_amb[1])
-    mask = mask | np.where(near_lo, (1 << below) | (1 << inside), 0)
-    mask = mask | np.where(near_hi, (1 << inside) | (1 << above), 0)
-    return primary.astype(np.int64), mask.astype(np.int64)
+    bit_below, bit_inside, bit_above = 1 << below, 1 << inside, 1 << above
+    mask = (
+        (1 << primary)
+        | np.where((value >= lo_a) & (value <= lo_b), bit_below | bit_inside, 0)
+        | np.where((value >= hi_a) & (value <= hi_b), bit_inside | bit_above, 0)
+    )
+    return primary, mask
 
 
-def measure(points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Raw measurements at every relevant point of a clockwise (y-up) boundary.
+@lru_cache(maxsize=256)
+def ring_index(n: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Index arrays of the previous and next point around a closed boundary of n points."""
+    i = np.arange(n)
+    prev, nxt = (i - 1) % n, (i + 1) % n
+    prev.setflags(write=False)
+    nxt.setflags(write=False)
+    return prev, nxt
+
+
+def measure(
+    points: FloatArray, prev: FloatArray, nxt: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Raw measurements at relevant points of clockwise (y-up) boundaries.
 
     Args:
         points: Shape (n, 2), right-handed y-up frame, clockwise as seen.
+        prev: The previous point of each point, shape (n, 2).
+        nxt: The next point of each point, shape (n, 2).
 
     Returns:
         (angle_deg, bend_deg, length_ratio, chord_ratio), each shape (n,): the unsigned angle
@@ -84,28 +109,23 @@ def measure(points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, Flo
         the point lies left of the line from its previous to its next neighbour), the ratio
         |V(i-1) V(i)| / |V(i) V(i+1)|, and half-chord / distance to the chord midpoint (da / db).
     """
-    prev = np.roll(points, 1, axis=0)
-    nxt = np.roll(points, -1, axis=0)
     e1 = points - prev
     e2 = nxt - points
-    cr = cross2(e1, e2)
-    dt = np.einsum("ij,ij->i", e1, e2)
+    cr = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    dt = e1[:, 0] * e2[:, 0] + e1[:, 1] * e2[:, 1]
     turn = np.degrees(np.arctan2(cr, dt))  # CCW turn of the walk direction
-    bend = -turn
-    angle = 180.0 - np.abs(turn)
     l1 = np.hypot(e1[:, 0], e1[:, 1])
     l2 = np.hypot(e2[:, 0], e2[:, 1])
-    ratio = l1 / l2
-    mid = 0.5 * (prev + nxt)
-    da = 0.5 * np.hypot(*(nxt - prev).T)
-    db = np.hypot(*(points - mid).T)
-    chord_ratio = da / np.where(db > 0.0, db, np.inf)
-    chord_ratio = np.where(db > 0.0, chord_ratio, np.inf)
-    return angle, bend, ratio, chord_ratio
+    chord = nxt - prev
+    da = 0.5 * np.hypot(chord[:, 0], chord[:, 1])
+    off = points - 0.5 * (prev + nxt)
+    db = np.hypot(off[:, 0], off[:, 1])
+    chord_ratio = np.divide(da, db, out=np.full_like(da, np.inf), where=db > 0.0)
+    return 180.0 - np.abs(turn), -turn, l1 / l2, chord_ratio
 
 
 def node_codes(points: FloatArray, curve_mask: BoolArray, tol: Tolerances) -> CodeArray:
-    """Node codes (see module doc) of every relevant point of a boundary.
+    """Node codes (see module doc) of every relevant point of one boundary.
 
     Args:
         points: Shape (n, 2), right-handed y-up frame, clockwise as seen, distinct points.
@@ -115,32 +135,49 @@ def node_codes(points: FloatArray, curve_mask: BoolArray, tol: Tolerances) -> Co
     Returns:
         Shape (n,) int64 node codes.
     """
-    angle, bend, ratio, chord_ratio = measure(points)
-    alo, ahi = tol.right_angle_deg[0], tol.right_angle_deg[1]
-    am = tol.angle_margin_deg
-    a_p, a_m = _band3(
-        angle, (alo, ahi), ((alo - am, alo + am), (ahi - am, ahi + am)), (ACUTE, RIGHT, OBTUSE)
-    )
-    c_p = np.where(bend >= 0.0, CONVEX, CONCAVE)
-    c_m = np.left_shift(1, c_p) | np.where(np.abs(bend) <= tol.convexity_margin_deg, 0b11, 0)
-    llo, lhi = tol.equal_length_ratio[0], tol.equal_length_ratio[1]
-    f = 1.0 + tol.length_margin
-    l_p, l_m = _band3(
-        ratio, (llo, lhi), ((llo / f, llo * f), (lhi / f, lhi * f)), (SMALLER, EQUAL, BIGGER)
-    )
-    slo, shi = tol.semicircle_ratio[0], tol.semicircle_ratio[1]
-    g = 1.0 + tol.semicircle_margin
-    t_p, t_m = _band3(
-        chord_ratio,
-        (slo, shi),
-        ((slo / g, slo * g), (shi / g, shi * g)),
-        (ACUTE_CURVE, SEMICIRCLE, PLANE),
-    )
+    prev, nxt = ring_index(len(points))
+    return codes_from(points, points[prev], points[nxt], curve_mask, tol)
+
+
+@lru_cache(maxsize=16)
+def _band_table(tol: Tolerances) -> tuple[FloatArray, FloatArray, NDArray[np.int64], BoolArray]:
+    band = np.array([tol.right_angle_deg, tol.equal_length_ratio, tol.semicircle_ratio])
+    margin = np.array([tol.angle_margin_deg, tol.length_margin, tol.semicircle_margin])
+    labels = np.array([[ACUTE, RIGHT, OBTUSE], [SMALLER, EQUAL, BIGGER],
+                       [ACUTE_CURVE, SEMICIRCLE, PLANE]], dtype=np.int64)
+    relative = np.array([False, True, True])
+    return band, margin, labels, relative
+
+
+def codes_from(
+    points: FloatArray,
+    prev: FloatArray,
+    nxt: FloatArray,
+    curve_mask: BoolArray,
+    tol: Tolerances,
+) -> CodeArray:
+    """Node codes of points given with their neighbours (any number of boundaries at once).
+
+    Args:
+        points: Shape (n, 2), y-up frame, each boundary clockwise as seen.
+        prev: Previous neighbour of each point, shape (n, 2).
+        nxt: Next neighbour of each point, shape (n, 2).
+        curve_mask: Shape (n,) bool.
+        tol: Bands and margins.
+
+    Returns:
+        Shape (n,) int64 node codes.
+    """
+    angle, bend, ratio, chord_ratio = measure(points, prev, nxt)
+    band, margin, labels, relative = _band_table(tol)
+    primary, mask = _band3(np.stack([angle, ratio, chord_ratio]), band, margin, labels, relative)
+    c_p = (bend < 0.0).astype(np.int64)
+    c_m = (1 << c_p) | np.where(np.abs(bend) <= tol.convexity_margin_deg, 0b11, 0)
     curve = curve_mask.astype(np.int64)
-    a_p = np.where(curve_mask, 0, a_p)
-    a_m = np.where(curve_mask, 1, a_m)
-    t_p = np.where(curve_mask, t_p, l_p)
-    t_m = np.where(curve_mask, t_m, l_m)
+    a_p = np.where(curve_mask, 0, primary[0])
+    a_m = np.where(curve_mask, 1, mask[0])
+    t_p = np.where(curve_mask, primary[2], primary[1])
+    t_m = np.where(curve_mask, mask[2], mask[1])
     return np.asarray(
         curve
         | (a_p << A_SHIFT)
@@ -215,7 +252,9 @@ __all__ = [
     "compatible",
     "decode",
     "encode",
+    "codes_from",
     "measure",
+    "ring_index",
     "node_codes",
     "primary_code",
 ]

@@ -40,6 +40,8 @@ from qshape.tolerances import Tolerances
 _CONE_DEG = 45.0
 _N_CONES = 8
 _CENTRE_BIT = 1 << _N_CONES
+_MAX_PERMUTED_HOLES = 4
+"""Holes up to this count are paired by trying every permutation (4! = 24)."""
 
 
 @dataclass(frozen=True)
@@ -104,26 +106,22 @@ def _token(code: int) -> str:
     return _TOKENS_A[a] + _TOKENS_C[c] + _TOKENS_L[t]
 
 
+@lru_cache(maxsize=65536)
+def _kinds_key(kinds: bytes) -> str:
+    seq = tuple(np.frombuffer(kinds, dtype=np.int64).tolist())
+    return "".join("c" if k else "v" for k in _least_rotation(seq))
+
+
 def _hole_signature(d: Description) -> str:
-    parts = sorted(
-        "".join("c" if k else "v" for k in _least_rotation(tuple(
-            int(x) for x in (h.boundary.codes & lb.KIND_BIT)
-        )))
-        for h in d.holes
-    )
-    return "H" + str(len(d.holes)) + ("[" + "|".join(parts) + "]" if parts else "")
+    if not d.holes:
+        return "H0"
+    parts = sorted(_kinds_key((h.boundary.codes & lb.KIND_BIT).tobytes()) for h in d.holes)
+    return "H" + str(len(d.holes)) + "[" + "|".join(parts) + "]"
 
 
 def coarse_key(d: Description) -> str:
     """Key on the never-ambiguous parts: node kinds (least rotation) and hole signature."""
-    kinds = tuple(int(x) for x in (d.outer.codes & lb.KIND_BIT))
-    return "K:" + "".join("c" if k else "v" for k in _least_rotation(kinds)) + ":" + (
-        _hole_signature(d)
-    )
-
-
-def _key_of(codes: tuple[int, ...], d: Description) -> str:
-    return "".join(_token(c) for c in _least_rotation(codes)) + ":" + _hole_signature(d)
+    return "K:" + _kinds_key((d.outer.codes & lb.KIND_BIT).tobytes()) + ":" + _hole_signature(d)
 
 
 def canonical_key(description: Description) -> str:
@@ -133,8 +131,13 @@ def canonical_key(description: Description) -> str:
     (count and node kinds of each hole). Two descriptions with equal keys are label-compatible
     at some cyclic offset; near band edges use `canonical_keys`, which expands admissible labels.
     """
-    prim = tuple(int(c) for c in lb.primary_code(np.asarray(description.outer.codes)))
-    return _key_of(prim, description)
+    return _primary_key(description.outer.codes.tobytes()) + ":" + _hole_signature(description)
+
+
+@lru_cache(maxsize=65536)
+def _primary_key(codes: bytes) -> str:
+    prim = lb.primary_code(np.frombuffer(codes, dtype=np.int64))
+    return "".join(_token(c) for c in _least_rotation(tuple(prim.tolist())))
 
 
 def _alternatives(code: int) -> list[int]:
@@ -148,9 +151,9 @@ def _alternatives(code: int) -> list[int]:
     return out
 
 
-def canonical_keys(description: Description, tolerances: Tolerances | None = None) -> frozenset[
-    str
-]:
+def canonical_keys(
+    description: Description, tolerances: Tolerances | None = None
+) -> frozenset[str]:
     """Every canonical key over the admissible labels (see `canonical_key`).
 
     Two descriptions whose outer boundaries are compatible at some offset share at least one
@@ -158,19 +161,21 @@ def canonical_keys(description: Description, tolerances: Tolerances | None = Non
     its `coarse_key` alone (prefixed ``K:``), which lookups must also consult.
     """
     tol = default_tolerances() if tolerances is None else tolerances
-    return _keys_cached(tuple(int(c) for c in description.outer.codes),
-                        _hole_signature(description), tol.max_key_variants,
-                        coarse_key(description))
+    holes = _hole_signature(description)
+    outer = _outer_keys(description.outer.codes.tobytes(), tol.max_key_variants)
+    if outer is None:
+        return frozenset({coarse_key(description)})
+    return frozenset(k + ":" + holes for k in outer)
 
 
 @lru_cache(maxsize=65536)
-def _keys_cached(codes: tuple[int, ...], holes: str, cap: int, coarse: str) -> frozenset[str]:
-    options = [_alternatives(c) for c in codes]
+def _outer_keys(codes: bytes, cap: int) -> frozenset[str] | None:
+    options = [_alternatives(c) for c in np.frombuffer(codes, dtype=np.int64).tolist()]
     total = math.prod(len(o) for o in options)
     if total > cap:
-        return frozenset({coarse})
+        return None
     return frozenset(
-        "".join(_token(c) for c in _least_rotation(combo)) + ":" + holes
+        "".join(_token(c) for c in _least_rotation(combo))
         for combo in itertools.product(*options)
     )
 
@@ -190,6 +195,30 @@ class Pack:
     hole_codes: tuple[NDArray[np.int64], ...]  # per hole (G, m_h)
     hole_centroid: FloatArray  # (G, H, 2)
     hole_interval: FloatArray  # (G, H, 2) CCW angle interval [deg]; NaN when around centroid
+
+
+def take(p: Pack, idx: NDArray[np.int64]) -> Pack:
+    """Sub-pack of the members ``idx``."""
+    return Pack(
+        codes=p.codes[idx], pts=p.pts[idx], sumsq=p.sumsq[idx], area=p.area[idx],
+        perimeter=p.perimeter[idx], color=p.color[idx], north=p.north[idx],
+        hole_codes=tuple(h[idx] for h in p.hole_codes), hole_centroid=p.hole_centroid[idx],
+        hole_interval=p.hole_interval[idx],
+    )
+
+
+def prefilter(ref: Pack, cand: Pack, tol: Tolerances, use_color: bool) -> NDArray[np.bool_]:
+    """(T, S) bool: qualitative size and colour agree (the paper's first checks)."""
+    base = np.ones((cand.codes.shape[0], ref.codes.shape[0]), dtype=bool)
+    if tol.check_size:
+        thr = (tol.size_area_threshold if tol.size_area_threshold is not None
+               else tol.joint_width * 0.5 * (cand.perimeter[:, None] + ref.perimeter[None, :]))
+        base &= np.abs(cand.area[:, None] - ref.area[None, :]) <= thr
+    if use_color:
+        diff = cand.color[:, None, :] - ref.color[None, :, :]
+        dist2 = np.einsum("tsd,tsd->ts", diff, diff)
+        base &= ~(dist2 > tol.color_distance**2)  # unknown colour (NaN) matches any
+    return base
 
 
 def _hole_order(d: Description) -> list[int]:
@@ -254,19 +283,22 @@ def _cyclic_compat(ref: NDArray[np.int64], cand: NDArray[np.int64]) -> NDArray[n
 def _cone_bits(lo: FloatArray, hi: FloatArray, widen: float) -> NDArray[np.int64]:
     """Bit k set when the bearing interval [lo, hi] (deg, widened by ``widen``) meets cone k.
 
-    NaN intervals (hole around the centroid) give the centre bit. A negative ``widen`` that
-    empties the interval gives 0 (no constraint).
+    Cone k covers bearings (45 k - 22.5, 45 k + 22.5), k = 0 (N) ... 7 (NW). NaN intervals
+    (a hole around the centroid) give the centre bit. A negative ``widen`` that empties the
+    interval gives 0 (no constraint).
     """
-    mid = 0.5 * (lo + hi)
-    half = 0.5 * (hi - lo) + widen
-    bits = np.zeros(np.shape(mid), dtype=np.int64)
-    centre = np.isnan(mid)
-    safe_mid = np.where(centre, 0.0, mid)
-    safe_half = np.where(centre, -1.0, half)
-    for k in range(_N_CONES):
-        d = np.abs((k * _CONE_DEG - safe_mid + 180.0) % 360.0 - 180.0)
-        bits |= np.where((safe_half >= 0.0) & (d < safe_half + _CONE_DEG / 2), 1 << k, 0)
-    return np.asarray(bits | np.where(centre, _CENTRE_BIT, 0))
+    centre = np.isnan(lo)
+    a = np.where(centre, 0.0, lo - widen)
+    b = np.where(centre, 0.0, hi + widen)
+    empty = a > b
+    first = np.floor((a + _CONE_DEG / 2) / _CONE_DEG).astype(np.int64)
+    last = np.floor((b + _CONE_DEG / 2) / _CONE_DEG).astype(np.int64)
+    span = np.clip(last - first + 1, 0, _N_CONES)
+    run = (np.left_shift(1, span) - 1) << (first % _N_CONES)
+    full = (1 << _N_CONES) - 1
+    bits = (run | (run >> _N_CONES)) & full
+    bits = np.where(empty, 0, bits)
+    return np.asarray(np.where(centre, _CENTRE_BIT, bits))
 
 
 def _positions_agree(
@@ -282,73 +314,90 @@ def _positions_agree(
 
 @dataclass(frozen=True)
 class BlockResult:
-    """Pairwise results for T candidates x S references, per cyclic offset.
+    """Matching (candidate, reference, offset) entries of a block, ordered by (t, s, k).
 
     Attributes:
-        feasible: (T, S, K) bool: the pair matches at offset ``offsets[k]``.
-        theta: (T, S, K) rotation [rad] turning the candidate onto the reference.
-        score: (T, S, K) residual score (inf where infeasible).
-        offsets: (K,) offsets evaluated (others are label-incompatible for every pair).
+        ti: (P,) candidate index in the candidate pack.
+        si: (P,) reference index in the reference pack.
+        k: (P,) cyclic offset: reference node i corresponds to candidate node (i + k) % n.
+        score: (P,) residual score (see `Match.score`).
+        dot: (P,) sum of dot products of corresponding centred points.
+        cross: (P,) sum of cross products; the rotation is atan2(cross, dot).
     """
 
-    feasible: NDArray[np.bool_]
-    theta: FloatArray
+    ti: NDArray[np.int64]
+    si: NDArray[np.int64]
+    k: NDArray[np.int64]
     score: FloatArray
-    offsets: NDArray[np.int64]
+    dot: FloatArray
+    cross: FloatArray
+
+    @property
+    def theta(self) -> FloatArray:
+        """(P,) rotation [rad] turning the candidate onto the reference, in (-pi, pi]."""
+        return np.asarray(np.arctan2(self.cross, self.dot))
 
 
-def evaluate_block(ref: Pack, cand: Pack, tol: Tolerances, use_color: bool) -> BlockResult:
+def evaluate_block(
+    ref: Pack,
+    cand: Pack,
+    tol: Tolerances,
+    use_color: bool,
+    base: NDArray[np.bool_] | None = None,
+) -> BlockResult:
     """Match every candidate against every reference of two packs, vectorised.
 
-    Both packs must have the same node count, hole count and hole node counts.
+    Both packs must have the same node count, hole count and hole node counts; ``base`` is
+    `prefilter`'s result when already known. The alignment of all pairs and offsets is one
+    matrix product; scores and holes are computed only for label-compatible entries.
     """
     n = ref.codes.shape[1]
+    s_count = ref.codes.shape[0]
     compat = _cyclic_compat(ref.codes, cand.codes)  # (T, S, n)
-    t_count, s_count = cand.codes.shape[0], ref.codes.shape[0]
-    base = np.ones((t_count, s_count), dtype=bool)
-    if tol.check_size:
-        thr = (tol.size_area_threshold if tol.size_area_threshold is not None
-               else tol.joint_width * 0.5 * (cand.perimeter[:, None] + ref.perimeter[None, :]))
-        base &= np.abs(cand.area[:, None] - ref.area[None, :]) <= thr
-    if use_color:
-        diff = cand.color[:, None, :] - ref.color[None, :, :]
-        dist = np.sqrt(np.einsum("tsd,tsd->ts", diff, diff))
-        base &= ~(dist > tol.color_distance)  # unknown colour (NaN) matches any
+    if base is None:
+        base = prefilter(ref, cand, tol, use_color)
     compat &= base[:, :, None]
     offsets = np.flatnonzero(compat.any(axis=(0, 1)))
-    if len(offsets) == 0:
-        empty = np.zeros((t_count, s_count, 0))
-        return BlockResult(np.zeros(empty.shape, bool), empty, empty, offsets)
+    k_count = len(offsets)
+    ti, si, kk = np.nonzero(compat[:, :, offsets])
     idx = (np.arange(n)[None, :] + offsets[:, None]) % n  # (K, n)
-    cp = cand.pts[:, idx, :]  # (T, K, n, 2)
-    dot = np.einsum("tknd,snd->tsk", cp, ref.pts)
-    crs = np.einsum("tkn,sn->tsk", cp[..., 0], ref.pts[..., 1]) - np.einsum(
-        "tkn,sn->tsk", cp[..., 1], ref.pts[..., 0])
-    theta = np.arctan2(crs, dot)
-    rss = cand.sumsq[:, None, None] + ref.sumsq[None, :, None] - 2.0 * np.hypot(dot, crs)
-    scale = np.sqrt(ref.area)[None, :, None]
-    score = np.sqrt(np.maximum(rss, 0.0) / n) / scale
-    feasible = compat[:, :, offsets]
+    cp = cand.pts[:, idx, :].reshape(-1, 2 * n)  # (T*K, 2n)
+    r = ref.pts.reshape(s_count, 2 * n)
+    r_perp = np.stack([ref.pts[..., 1], -ref.pts[..., 0]], axis=-1).reshape(s_count, 2 * n)
+    prod = cp @ np.concatenate([r, r_perp]).T  # (T*K, 2S): dot and cross products
+    row = ti * k_count + kk
+    dot = prod[row, si]
+    crs = prod[row, s_count + si]
+    rss = cand.sumsq[ti] + ref.sumsq[si] - 2.0 * np.sqrt(dot * dot + crs * crs)
+    sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[si]))
+    k = offsets[kk]
     if ref.hole_codes:
-        hole_ok, hole_score = _holes(ref, cand, theta, tol)
-        feasible = feasible & hole_ok
-        score = score + hole_score
-    score = np.where(feasible, score, np.inf)
-    return BlockResult(feasible, theta, score, offsets)
+        ok, hole_score = _holes(ref, cand, (ti, si, np.arctan2(crs, dot)), tol)
+        sc = sc + hole_score
+        ti, si, k, sc, dot, crs = ti[ok], si[ok], k[ok], sc[ok], dot[ok], crs[ok]
+    return BlockResult(ti, si, k, sc, dot, crs)
 
 
 def _holes(
-    ref: Pack, cand: Pack, theta: FloatArray, tol: Tolerances
+    ref: Pack,
+    cand: Pack,
+    entries: tuple[NDArray[np.int64], NDArray[np.int64], FloatArray],
+    tol: Tolerances,
 ) -> tuple[NDArray[np.bool_], FloatArray]:
-    """Hole agreement and residual for every pair and offset: -> (T, S, K) bool and score."""
+    """Hole agreement and residual for (candidate ti, reference si, rotation theta) entries.
+
+    Tries every pairing of holes (up to 4 holes; beyond, the holes' canonical order), and
+    keeps the agreeing pairing of least residual. Returns (ok, score), each of shape (P,).
+    """
+    ti, si, theta = entries
     nholes = len(ref.hole_codes)
     best_ok = np.zeros(theta.shape, dtype=bool)
     best_score = np.full(theta.shape, np.inf)
-    perms = (list(itertools.permutations(range(nholes))) if nholes <= 4
+    perms = (list(itertools.permutations(range(nholes))) if nholes <= _MAX_PERMUTED_HOLES
              else [tuple(range(nholes))])
-    scale = np.sqrt(ref.area)[None, :, None]
+    scale = np.sqrt(ref.area[si])
     c, s = np.cos(theta), np.sin(theta)
-    ref_north_deg = np.degrees(ref.north)[None, :, None]
+    north = np.degrees(ref.north[si])
     theta_deg = np.degrees(theta)
     for perm in perms:
         ok = np.ones(theta.shape, dtype=bool)
@@ -359,21 +408,19 @@ def _holes(
                 break
             labels_ok = np.asarray(
                 _cyclic_compat(ref.hole_codes[h], cand.hole_codes[g]).any(axis=-1))
-            ok &= labels_ok[:, :, None]
-            # Rotate the candidate's hole angle interval, express both as bearings (cw from the
-            # reference's north = its first vertex).
-            civ = cand.hole_interval[:, g, :][:, None, None, :] + theta_deg[..., None]
-            riv = np.broadcast_to(ref.hole_interval[None, :, h, None, :], civ.shape)
-            rb = np.stack([ref_north_deg - riv[..., 1], ref_north_deg - riv[..., 0]], axis=-1)
-            cb = np.stack([ref_north_deg - civ[..., 1], ref_north_deg - civ[..., 0]], axis=-1)
-            rb = np.where(np.isnan(riv), np.nan, rb)
-            cb = np.where(np.isnan(civ), np.nan, cb)
+            ok &= labels_ok[ti, si]
+            # Candidate hole's CCW angle interval turned by theta; both as bearings (clockwise
+            # from the reference's north, its first vertex).
+            civ = cand.hole_interval[ti, g, :] + theta_deg[:, None]
+            riv = ref.hole_interval[si, h, :]
+            rb = np.stack([north - riv[:, 1], north - riv[:, 0]], axis=-1)
+            cb = np.stack([north - civ[:, 1], north - civ[:, 0]], axis=-1)
             ok &= _positions_agree(rb, cb, tol.cone_margin_deg)
-            hc = cand.hole_centroid[:, g, :]
-            rx = c * hc[:, None, None, 0] - s * hc[:, None, None, 1]
-            ry = s * hc[:, None, None, 0] + c * hc[:, None, None, 1]
-            rc = ref.hole_centroid[:, h, :]
-            sq = sq + (rx - rc[None, :, None, 0]) ** 2 + (ry - rc[None, :, None, 1]) ** 2
+            hc = cand.hole_centroid[ti, g, :]
+            rc = ref.hole_centroid[si, h, :]
+            rx = c * hc[:, 0] - s * hc[:, 1]
+            ry = s * hc[:, 0] + c * hc[:, 1]
+            sq = sq + (rx - rc[:, 0]) ** 2 + (ry - rc[:, 1]) ** 2
         perm_score = np.sqrt(sq / nholes) / scale
         better = ok & (perm_score < best_score)
         best_ok |= ok
@@ -437,22 +484,20 @@ def match(
     if ref.type_hole != cand.type_hole or ref.type_curve != cand.type_curve:
         return None
     res = evaluate_block(pack([ref]), pack([cand]), tol, use_color)
-    if not res.feasible.any():
+    if len(res.k) == 0:
         return None
-    scores = res.score[0, 0]
-    order = np.argsort(scores, kind="stable")
-    best = int(order[0])
+    scores = res.score
+    thetas = [_wrap(float(t)) for t in res.theta]
+    equivalent = [j for j in range(len(scores))
+                  if scores[j] <= scores.min() + tol.symmetry_residual]
+    equivalent.sort(key=lambda j: abs(thetas[j]))
+    chosen = equivalent[0]
     n = len(ref.outer.codes)
-    k = int(res.offsets[best])
-    rotations = sorted(
-        (_wrap(float(res.theta[0, 0, j])) for j in order
-         if res.feasible[0, 0, j] and scores[j] <= scores[best] + tol.symmetry_residual),
-        key=abs,
-    )
+    k = int(res.k[chosen])
     return Match(
-        rotation=rotations[0],
-        rotations=tuple(rotations),
-        score=float(scores[best]),
+        rotation=thetas[chosen],
+        rotations=tuple(thetas[j] for j in equivalent),
+        score=float(scores[chosen]),
         correspondence=tuple((i + k) % n for i in range(n)),
         offset=k,
         continuous=is_continuous(ref) and is_continuous(cand),
@@ -469,4 +514,6 @@ __all__ = [
     "is_continuous",
     "match",
     "pack",
+    "prefilter",
+    "take",
 ]

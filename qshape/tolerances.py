@@ -95,6 +95,11 @@ class Tolerances:
         Raises:
             ToleranceError: Naming the field and the allowed range.
         """
+        for name in ("right_angle_deg", "equal_length_ratio", "semicircle_ratio"):
+            try:
+                object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
+            except (TypeError, ValueError) as exc:
+                raise ToleranceError(f"{name} must be two numbers (low, high): {exc}") from exc
         _check_band("right_angle_deg", self.right_angle_deg)
         if self.right_angle_deg[1] >= 180.0:
             raise ToleranceError(f"right_angle_deg high must be < 180, got {self.right_angle_deg}")

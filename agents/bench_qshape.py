@@ -1,0 +1,314 @@
+"""Benchmark of the qshape library: describing and assigning 10,000 tiles.
+
+Run ``python -m agents.bench_qshape [--tiles N] [--classes K] [--seed S] [--paper-sample P]``.
+
+Tiles are noisy, rotated, translated copies of slots drawn from ~50 shape/colour classes
+(squares, rectangles, triangles, regular polygons, an L tile, rhombi, random convex polygons,
+circles, semicircles, rings, a square with an off-centre hole, in several colours). It times:
+
+* describing every tile (``qshape.describe`` one by one, and ``describe_many`` in one pass);
+* ``qshape.assign`` (optimal and greedy) of all tiles to all slots, through canonical keys;
+* the paper's method on the same input: for each tile in order, every unmatched slot in order
+  is compared (size, colour, type flags, then the cyclic ``ComparingVertices`` on the labels)
+  until one matches, which is then marked. It runs on the first ``--paper-sample`` tiles and
+  is extrapolated linearly to all tiles (labelled as such).
+
+Prints a table and writes ``out/bench_qshape.json``. Single-threaded BLAS is forced so the
+figures are for one core.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import math  # noqa: E402
+import time  # noqa: E402
+from dataclasses import dataclass  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import qshape  # noqa: E402
+from qshape import Description, Figure, Tolerances  # noqa: E402
+from qshape.description import describe_many  # noqa: E402
+from qshape.figure import Boundary  # noqa: E402
+from qshape.labels import primary_code  # noqa: E402
+
+PALETTE = (
+    (0.85, 0.15, 0.15),
+    (0.15, 0.55, 0.85),
+    (0.95, 0.85, 0.20),
+    (0.20, 0.70, 0.30),
+    (0.95, 0.95, 0.92),
+    (0.10, 0.10, 0.12),
+    (0.60, 0.30, 0.70),
+    (0.95, 0.55, 0.15),
+)
+
+
+@dataclass(frozen=True)
+class ShapeClass:
+    """A tile class: local relevant points (y-up, mm), curve mask, holes, colour, symmetry."""
+
+    points: np.ndarray
+    mask: np.ndarray
+    holes: tuple[tuple[np.ndarray, np.ndarray], ...]
+    color: tuple[float, float, float]
+    symmetry: int  # rotational symmetry order; 0 = continuous
+
+
+def _regular(n: int, r: float) -> np.ndarray:
+    t = math.pi / 2 - 2 * math.pi * np.arange(n) / n
+    return r * np.stack([np.cos(t), np.sin(t)], axis=1)
+
+
+def _random_convex(rng: np.random.Generator, n: int, r: float) -> np.ndarray:
+    while True:
+        t = np.sort(rng.uniform(0.0, 2 * math.pi, n))
+        gaps = np.diff(np.r_[t, t[0] + 2 * math.pi])
+        if gaps.min() > math.radians(15) and gaps.max() < math.radians(150):
+            return r * np.stack([np.cos(t), np.sin(t)], axis=1)
+
+
+def _shapes(rng: np.random.Generator) -> list[tuple[np.ndarray, np.ndarray, tuple, int]]:
+    no = np.zeros
+    circle = (np.array([[-10.0, 0], [0, 10], [10, 0], [0, -10]]),
+              np.array([False, True, False, True]))
+    ring_hole = (np.array([[-4.0, 0], [0, 4], [4, 0], [0, -4]]),
+                 np.array([False, True, False, True]))
+    sq_hole = (np.array([[4.0, -9], [9, -9], [9, -4], [4, -4]]), no(4, bool))
+    shapes = [
+        (np.array([[-10.0, -10], [10, -10], [10, 10], [-10, 10]]), no(4, bool), (), 4),
+        (np.array([[-15.0, -15], [15, -15], [15, 15], [-15, 15]]), no(4, bool), (), 4),
+        (np.array([[-10.0, -5], [10, -5], [10, 5], [-10, 5]]), no(4, bool), (), 2),
+        (np.array([[-15.0, -7.5], [15, -7.5], [15, 7.5], [-15, 7.5]]), no(4, bool), (), 2),
+        (np.array([[-20.0, -10], [20, -10], [20, 10], [-20, 10]]), no(4, bool), (), 2),
+        (np.array([[0.0, 0], [20, 0], [0, 20]]), no(3, bool), (), 1),
+        (np.array([[0.0, 0], [30, 0], [0, 15]]), no(3, bool), (), 1),
+        (np.array([[-10.0, 0], [10, 0], [0, 30]]), no(3, bool), (), 1),
+        (_regular(3, 14.0), no(3, bool), (), 3),
+        (_regular(5, 12.0), no(5, bool), (), 5),
+        (_regular(6, 12.0), no(6, bool), (), 6),
+        (_regular(8, 12.0), no(8, bool), (), 8),
+        (np.array([[0.0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]]), no(6, bool), (), 1),
+        (np.array([[0.0, 0], [20, 0], [28, 14], [8, 14]]), no(4, bool), (), 2),
+        (np.array([[-10.0, 0], [0, 10], [10, 0]]), np.array([False, True, False]), (), 1),
+        (circle[0], circle[1], (), 0),
+        (np.array([[-12.0, 0], [0, 12], [12, 0], [0, -12]]), circle[1], (ring_hole,), 0),
+        (np.array([[-12.0, -12], [12, -12], [12, 12], [-12, 12]]), no(4, bool), (sq_hole,), 1),
+    ]
+    for n in (5, 6, 7, 8, 9, 10, 12):
+        shapes.append((_random_convex(rng, n, 14.0), no(n, bool), (), 1))
+    return shapes
+
+
+def make_classes(rng: np.random.Generator, count: int) -> list[ShapeClass]:
+    """``count`` classes: every shape in two colours, then more colours as needed."""
+    shapes = _shapes(rng)
+    out = []
+    k = 0
+    while len(out) < count:
+        pts, mask, holes, sym = shapes[k % len(shapes)]
+        color = PALETTE[(k * 3 + k // len(shapes)) % len(PALETTE)]
+        out.append(ShapeClass(pts, mask, holes, color, sym))
+        k += 1
+    return out
+
+
+def _place(pts: np.ndarray, angle: float, shift: np.ndarray) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return pts @ np.array([[c, s], [-s, c]]) + shift
+
+
+def make_figure(
+    cls: ShapeClass, rng: np.random.Generator, angle: float, jitter: float, color_jitter: float
+) -> Figure:
+    """One posed copy of a class with vertex jitter [mm] and colour jitter."""
+    shift = rng.uniform(-200.0, 200.0, 2)
+
+    def noisy(p: np.ndarray) -> np.ndarray:
+        return _place(p, angle, shift) + rng.uniform(-jitter, jitter, p.shape)
+
+    color = np.clip(np.array(cls.color) + rng.uniform(-color_jitter, color_jitter, 3), 0, 1)
+    holes = tuple(Boundary.make(noisy(hp), hm) for hp, hm in cls.holes)
+    return Figure(noisy(cls.points), cls.mask, holes, tuple(color.tolist()))  # type: ignore[arg-type]
+
+
+def paper_pairwise(
+    tiles: list[Description], slots: list[Description], tol: Tolerances, count: int
+) -> tuple[float, int]:
+    """The paper's greedy loop with ComparingVertices on exact labels, first ``count`` tiles.
+
+    Returns:
+        (seconds, tiles matched).
+    """
+
+    def prep(d: Description) -> tuple:
+        return (
+            tuple(primary_code(np.asarray(d.outer.codes)).tolist()),
+            d.area,
+            d.perimeter,
+            d.color,
+            d.type_hole,
+            d.type_curve,
+            tuple(tuple(primary_code(np.asarray(h.boundary.codes)).tolist()) for h in d.holes),
+        )
+
+    def comparing_vertices(v1: tuple, v2: tuple) -> int:
+        n = len(v1)
+        if n != len(v2):
+            return -1
+        for j in range(n):
+            if v1[0] == v2[j]:
+                num = 1
+                for k in range(1, n):
+                    if v1[k] == v2[(j + k) % n]:
+                        num += 1
+                    else:
+                        break
+                if num == n:
+                    return j
+        return -1
+
+    tp = [prep(d) for d in tiles[:count]]
+    sp = [prep(d) for d in slots]
+    marked = [False] * len(sp)
+    found = 0
+    start = time.perf_counter()
+    for t in tp:
+        for j, s in enumerate(sp):
+            if marked[j]:
+                continue
+            thr = tol.joint_width * 0.5 * (t[2] + s[2])
+            if abs(t[1] - s[1]) > thr:
+                continue
+            if math.dist(t[3], s[3]) > tol.color_distance:
+                continue
+            if t[4] != s[4] or t[5] != s[5] or len(t[6]) != len(s[6]):
+                continue
+            if comparing_vertices(s[0], t[0]) < 0:
+                continue
+            if any(comparing_vertices(a, b) < 0 for a, b in zip(s[6], t[6], strict=True)):
+                continue
+            marked[j] = True
+            found += 1
+            break
+    return time.perf_counter() - start, found
+
+
+def _rotation_error(rot: float, truth: float, symmetry: int) -> float:
+    if symmetry == 0:
+        return 0.0
+    period = 2 * math.pi / symmetry
+    d = (rot - truth) % period
+    return min(d, period - d)
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """Run the benchmark; return the results written to ``out/bench_qshape.json``."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--tiles", type=int, default=10_000)
+    ap.add_argument("--classes", type=int, default=50)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--jitter", type=float, default=0.1, help="vertex jitter [mm], uniform")
+    ap.add_argument("--paper-sample", type=int, default=200)
+    ap.add_argument("--out", type=Path, default=Path("out/bench_qshape.json"))
+    args = ap.parse_args(argv)
+    rng = np.random.default_rng(args.seed)
+    tol = Tolerances.load()
+    classes = make_classes(rng, args.classes)
+    slot_class = rng.integers(0, len(classes), args.tiles)
+    slot_angle = rng.uniform(-math.pi, math.pi, args.tiles)
+    tile_order = rng.permutation(args.tiles)
+    tile_class = slot_class[tile_order]
+    tile_angle = rng.uniform(-math.pi, math.pi, args.tiles)
+
+    t0 = time.perf_counter()
+    slot_figs = [make_figure(classes[c], rng, a, 0.0, 0.0) for c, a in
+                 zip(slot_class, slot_angle, strict=True)]
+    tile_figs = [make_figure(classes[c], rng, a, args.jitter, 0.03) for c, a in
+                 zip(tile_class, tile_angle, strict=True)]
+    t_build = (time.perf_counter() - t0) / 2
+
+    t0 = time.perf_counter()
+    tile_desc = [qshape.describe(f, tol) for f in tile_figs]
+    t_describe = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    tile_many = describe_many(tile_figs, tol)
+    t_describe_many = time.perf_counter() - t0
+    assert all(a == b for a, b in zip(tile_desc, tile_many, strict=True))
+    slot_desc = describe_many(slot_figs, tol)
+
+    results: dict = {}
+    for method in ("optimal", "greedy"):
+        t0 = time.perf_counter()
+        assignment = qshape.assign(tile_desc, slot_desc, tol, method=method)
+        dt = time.perf_counter() - t0
+        correct = sum(tile_class[a.tile] == slot_class[a.slot] for a in assignment)
+        rot_err = [
+            math.degrees(_rotation_error(a.rotation, slot_angle[a.slot] - tile_angle[a.tile],
+                                         classes[tile_class[a.tile]].symmetry))
+            for a in assignment if tile_class[a.tile] == slot_class[a.slot]
+        ]
+        results[method] = {
+            "seconds": dt,
+            "assigned": len(assignment),
+            "correct_class": int(correct),
+            "rotation_error_deg_max": max(rot_err, default=0.0),
+            "rotation_error_deg_mean": float(np.mean(rot_err)) if rot_err else 0.0,
+        }
+    sample = min(args.paper_sample, args.tiles)
+    t_paper_sample, paper_found = paper_pairwise(tile_desc, slot_desc, tol, sample)
+    t_paper = t_paper_sample * args.tiles / sample
+    out = {
+        "tiles": args.tiles,
+        "slots": args.tiles,
+        "classes": len(classes),
+        "jitter_mm": args.jitter,
+        "mean_relevant_points": float(np.mean([len(f.points) for f in tile_figs])),
+        "figure_construction_s": t_build,
+        "describe_s": t_describe,
+        "describe_many_s": t_describe_many,
+        "assign_optimal": results["optimal"],
+        "assign_greedy": results["greedy"],
+        "paper_pairwise_sample_tiles": sample,
+        "paper_pairwise_sample_s": t_paper_sample,
+        "paper_pairwise_sample_matched": paper_found,
+        "paper_pairwise_extrapolated_s": t_paper,
+        "speedup_vs_paper_greedy": t_paper / results["greedy"]["seconds"],
+        "speedup_vs_paper_optimal": t_paper / results["optimal"]["seconds"],
+    }
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
+    rows = [
+        ("build figures (not timed target)", f"{t_build:.3f} s"),
+        (f"describe {args.tiles} tiles, one by one", f"{t_describe:.3f} s"),
+        (f"describe {args.tiles} tiles, describe_many", f"{t_describe_many:.3f} s"),
+        ("assign optimal", f"{results['optimal']['seconds']:.3f} s  "
+         f"({results['optimal']['assigned']} assigned, "
+         f"{results['optimal']['correct_class']} right class, "
+         f"max rot err {results['optimal']['rotation_error_deg_max']:.2f} deg)"),
+        ("assign greedy", f"{results['greedy']['seconds']:.3f} s  "
+         f"({results['greedy']['assigned']} assigned, "
+         f"{results['greedy']['correct_class']} right class)"),
+        (f"paper pairwise, first {sample} tiles (measured)",
+         f"{t_paper_sample:.3f} s  ({paper_found}/{sample} matched)"),
+        (f"paper pairwise, {args.tiles} tiles (EXTRAPOLATED x{args.tiles / sample:g})",
+         f"{t_paper:.1f} s"),
+        ("speed-up, greedy vs paper", f"{out['speedup_vs_paper_greedy']:.0f}x"),
+        ("speed-up, optimal vs paper", f"{out['speedup_vs_paper_optimal']:.0f}x"),
+    ]
+    width = max(len(r[0]) for r in rows)
+    for name, value in rows:
+        print(f"{name:<{width}}  {value}")
+    print(f"written {args.out}")
+    return out
+
+
+if __name__ == "__main__":
+    main()
