@@ -77,22 +77,13 @@ class Cell:
         self._radii = np.array([t.radius for t in self.tiles])
         self.is_distractor = np.array([t.distractor != "" for t in self.tiles])
         self.geometry = cell_geometry(self.cfg)
-        # Fail before compiling anything if the initial layout cannot fit.
-        if self._initial_count():
-            sample_layout(
-                self._radii[: self._initial_count()],
-                tuple(self.cfg.input_belt.tile_area),
-                self.cfg.tiles.min_gap,
-                self.cfg.tiles.placement_attempts,
-                np.random.default_rng(0),
-            )
         self.model, self.ids = build_scene(self.cfg, self.tiles, self.slots)
         self.data = mujoco.MjData(self.model)
         self.suction = Suction(
             self.model, self.ids, self.cfg.suction, self.tiles, self.cfg.tiles.thickness
         )
         self.lost_tracker = LostTracker(self.cfg, len(self.tiles))
-        self.cameras = CameraRig(self.model, self.cfg.render)
+        self.cameras = CameraRig(self.model, self.cfg.render)  # renderers open lazily
         self._park = park_positions(len(self.tiles), self.cfg.tiles.thickness)
         self.on_stage = np.zeros(len(self.tiles), bool)
         self._wake = np.zeros(len(self.tiles), bool)
@@ -149,6 +140,7 @@ class Cell:
                     self.cfg.tiles.min_gap,
                     self.cfg.tiles.placement_attempts,
                     self._rng,
+                    outlines=[self.tiles[k].outline for k in order],
                 )
                 self._place(order, poses)
         self._next_feed_time = (

@@ -144,7 +144,8 @@ class InputBeltConfig:
         thickness: Belt slab thickness [m].
         speed: Belt surface speed along +x [m/s]; 0 is a static belt (the paper's set-up).
         end_offset: Downstream end of the belt, measured from the working-area centre [m].
-        tile_area: Length (x) and width (y) of the area where tiles are laid out [m].
+        tile_area: Length (x) and width (y) of the area where tiles are laid out [m]; keep it
+            inside the input camera's view (default 0.32 x 0.24 m).
         bin_length: Length of the bin catching tiles past the belt end [m].
         bin_depth: How far the bin floor is below the belt top [m].
         lost_margin: A tile whose centre is this far below the belt top, or past the belt end,
@@ -156,7 +157,7 @@ class InputBeltConfig:
     thickness: float = 0.04
     speed: float = 0.0
     end_offset: float = 0.3
-    tile_area: tuple[float, ...] = (0.30, 0.26)
+    tile_area: tuple[float, ...] = (0.30, 0.22)
     bin_length: float = 0.3
     bin_depth: float = 0.15
     lost_margin: float = 0.02

@@ -33,13 +33,16 @@ PARK_ORIGIN = np.array([-6.0, -1.0])
 WAKE_FORCE = 1e-12
 """Negligible force [N] applied for one `Cell.step` to wake sleeping tiles (any applied force
 wakes a sleeping tree in MuJoCo; changing qpos or surfacevel does not)."""
+CONTACT_SOLREF = (0.004, 1.0)
+"""Contact time constant [s] and damping ratio of tiles and belts: stiff (2x the default
+timestep) so a tile crushed by the arm sinks at most a few mm into a belt (0.02 s: ~19 mm)."""
 WELD_SOLREF = (0.004, 1.0)
 """Time constant [s] and damping ratio of the suction weld (stiff: 2x the default timestep)."""
 
 BELT_RGBA = (0.12, 0.12, 0.13, 1.0)
 FRAME_RGBA = (0.55, 0.57, 0.6, 1.0)
 SHEET_RGBA = (0.22, 0.22, 0.24, 1.0)
-SLOT_WHITE = 0.6
+SLOT_WHITE = 0.45
 """Slot marks are this much white mixed with the expected tile colour."""
 
 
@@ -207,6 +210,7 @@ def _box(
     g.rgba = rgba
     if collide:
         g.contype, g.conaffinity = WORLD_CONTYPE, WORLD_CONAFFINITY
+        g.solref = list(CONTACT_SOLREF)
     else:
         g.contype, g.conaffinity = 0, 0
     return g
@@ -235,13 +239,14 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
     floor = wb.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[4, 4, 0.05])
     floor.material = "floor_mat"
     floor.contype, floor.conaffinity = WORLD_CONTYPE, WORLD_CONAFFINITY
+    floor.solref = list(CONTACT_SOLREF)
     wb.add_light(
         name="top_light",
         pos=[0.3, 0, 2.5],
         dir=[0, 0, -1],
         type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
         castshadow=False,
-        diffuse=[0.6, 0.6, 0.6],
+        diffuse=[0.45, 0.45, 0.45],
         specular=[0.1, 0.1, 0.1],
     )
 
@@ -388,8 +393,8 @@ def _configure(spec: mujoco.MjSpec, cfg: CellConfig) -> None:
         spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
         spec.option.sleep_tolerance = ph.sleep_tolerance
     spec.visual.quality.shadowsize = 0 if not cfg.render.shadows else 4096
-    spec.visual.headlight.ambient = [0.35, 0.35, 0.35]
-    spec.visual.headlight.diffuse = [0.45, 0.45, 0.45]
+    spec.visual.headlight.ambient = [0.3, 0.3, 0.3]
+    spec.visual.headlight.diffuse = [0.35, 0.35, 0.35]
     spec.visual.headlight.specular = [0.0, 0.0, 0.0]
     spec.visual.global_.offwidth = max(cfg.input_camera.width, cfg.output_camera.width, 1280)
     spec.visual.global_.offheight = max(cfg.input_camera.height, cfg.output_camera.height, 960)
@@ -430,6 +435,7 @@ def _add_tiles(spec: mujoco.MjSpec, cfg: CellConfig, tiles: Sequence[PhysicalTil
             g.friction = [cfg.tiles.friction, 0.005, 0.0001]
             g.contype, g.conaffinity = TILE_CONTYPE, TILE_CONAFFINITY
             g.condim = 4
+            g.solref = list(CONTACT_SOLREF)
 
 
 def build_spec(

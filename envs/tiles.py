@@ -12,6 +12,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 import shapely
@@ -110,10 +111,12 @@ class SlotSpec:
             used; the shape's own origin is ignored).
         pose: (x, y, yaw) of the tile's area centroid and rotation on the mesh, relative to
             the mesh centre [m, m, rad].
+        name: Optional slot name (e.g. the design's).
     """
 
     shape: TileShape
     pose: tuple[float, float, float]
+    name: str = ""
 
     def __post_init__(self) -> None:
         pose = tuple(float(v) for v in self.pose)
@@ -368,17 +371,24 @@ def sample_layout(
     attempts: int,
     rng: np.random.Generator,
     *,
+    outlines: Sequence[np.ndarray] | None = None,
     occupied: np.ndarray | None = None,
     occupied_radii: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Random non-overlapping poses for tiles in a rectangle (bounding-circle test).
+    """Random non-overlapping poses for tiles in a rectangle.
+
+    Tiles are placed largest first at uniform random positions and yaws. Two tiles whose
+    bounding circles (plus ``gap``) do not overlap are accepted at once; with ``outlines``
+    given, closer pairs are accepted when the actual outlines keep ``gap`` apart.
 
     Args:
-        radii: Bounding radii, shape (n,) [m].
+        radii: Bounding radii about each tile's origin, shape (n,) [m].
         area_size: (length, width) of the rectangle centred at the origin [m].
-        gap: Clearance between bounding circles [m].
+        gap: Clearance between tiles [m].
         attempts: Tries per tile before giving up.
         rng: Random generator.
+        outlines: Optional outline per tile in its own frame, each shape (k, 2) [m] (exact
+            test, denser packing).
         occupied: Centres of circles already there, shape (k, 2) [m], optional.
         occupied_radii: Their radii, shape (k,) [m].
 
@@ -390,42 +400,93 @@ def sample_layout(
     """
     radii = np.asarray(radii, dtype=float)
     half = np.asarray(area_size, dtype=float) / 2
-    if np.any(radii + gap / 2 > half.min()):
-        k = int(np.argmax(radii))
+    if outlines is not None:
+        extent = np.array([_min_half_extent(o) for o in outlines])
+    else:
+        extent = radii
+    if np.any(extent + gap / 2 > half.min()):
+        k = int(np.argmax(extent))
         raise CellError(
-            f"tile {k} (bounding radius {radii[k] * 1000:.1f} mm) does not fit the tile area "
+            f"tile {k} (size {2 * extent[k] * 1000:.1f} mm) does not fit the tile area "
             f"{area_size[0] * 1000:.0f} x {area_size[1] * 1000:.0f} mm"
         )
-    need = float(np.sum(np.pi * (radii + gap / 2) ** 2))
+    if outlines is not None:
+        need = float(sum(Polygon(o).buffer(gap / 2).area for o in outlines))
+        fill = 0.5
+    else:
+        need = float(np.sum(np.pi * (radii + gap / 2) ** 2))
+        fill = 0.8
     have = float(area_size[0] * area_size[1])
-    if need > 0.8 * have:
+    if need > fill * have:
         raise CellError(
             f"{len(radii)} tiles need about {need * 1e4:.0f} cm^2 of belt but the tile area is "
-            f"{have * 1e4:.0f} cm^2 (bounding circles fill at most ~80%); use fewer tiles, "
-            "a larger input_belt.tile_area, or feed='stream'"
+            f"{have * 1e4:.0f} cm^2 (random placement fills at most ~{fill:.0%}); use fewer "
+            "tiles, a larger input_belt.tile_area, or feed='stream'"
         )
     centres = np.zeros((0, 2)) if occupied is None else np.asarray(occupied, float)
     rads = np.zeros(0) if occupied_radii is None else np.asarray(occupied_radii, float)
+    n_fixed = len(centres)
+    placed: list[Polygon] = []
     out = np.zeros((len(radii), 3))
     for i in np.argsort(-radii):
         lim = half - radii[i]
+        lim = np.where(lim > 0, lim, 0.0)
         cand = rng.uniform(-lim, lim, size=(attempts, 2))
+        yaws = rng.uniform(-np.pi, np.pi, attempts)
         if len(centres):
             d = np.linalg.norm(cand[:, None, :] - centres[None, :, :], axis=2)
-            ok = np.all(d >= rads[None, :] + radii[i] + gap, axis=1)
+            clear = d >= rads[None, :] + radii[i] + gap
         else:
-            ok = np.ones(attempts, bool)
-        if not ok.any():
+            clear = np.ones((attempts, 0), bool)
+        chosen = -1
+        for c in range(attempts):
+            poly = None
+            if outlines is not None:
+                poly = _posed(outlines[i], cand[c], yaws[c])
+                if not _inside(poly, half):
+                    continue
+            if clear[c].all():
+                chosen = c
+            elif outlines is not None and not clear[c, :n_fixed].all():
+                continue
+            elif outlines is not None:
+                near = [placed[k - n_fixed] for k in np.flatnonzero(~clear[c])]
+                if np.all(shapely.distance(poly, near) >= gap):
+                    chosen = c
+            if chosen >= 0:
+                if poly is not None:
+                    placed.append(poly)
+                break
+        if chosen < 0:
             raise CellError(
                 f"could not place {len(radii)} tiles without overlap in the tile area "
                 f"{area_size[0] * 1000:.0f} x {area_size[1] * 1000:.0f} mm after {attempts} "
                 "tries per tile; use fewer tiles, a larger area or feed='stream'"
             )
-        xy = cand[int(np.argmax(ok))]
-        out[i] = (xy[0], xy[1], rng.uniform(-np.pi, np.pi))
-        centres = np.vstack([centres, xy])
+        out[i] = (cand[chosen, 0], cand[chosen, 1], yaws[chosen])
+        centres = np.vstack([centres, cand[chosen]])
         rads = np.append(rads, radii[i])
     return out
+
+
+def _posed(outline: np.ndarray, xy: np.ndarray, yaw: float) -> Polygon:
+    c, s = np.cos(yaw), np.sin(yaw)
+    return Polygon(outline @ np.array([[c, s], [-s, c]]) + xy)
+
+
+def _inside(poly: Polygon, half: np.ndarray) -> bool:
+    x0, y0, x1, y1 = poly.bounds
+    return bool(x0 >= -half[0] and x1 <= half[0] and y0 >= -half[1] and y1 <= half[1])
+
+
+def _min_half_extent(outline: np.ndarray) -> float:
+    """Half the smallest width of an outline over rotations (it must fit some way) [m]."""
+    hull = np.asarray(Polygon(outline).convex_hull.exterior.coords)[:-1]
+    edges = np.roll(hull, -1, axis=0) - hull
+    normals = np.stack([-edges[:, 1], edges[:, 0]], axis=1)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    proj = hull @ normals.T
+    return float(np.min(proj.max(axis=0) - proj.min(axis=0)) / 2)
 
 
 def grasp_point(outline: np.ndarray, holes: Sequence[np.ndarray] = ()) -> np.ndarray:
@@ -441,6 +502,55 @@ def grasp_point(outline: np.ndarray, holes: Sequence[np.ndarray] = ()) -> np.nda
     if poly.contains(origin) and poly.boundary.distance(origin) >= d_best - 1e-3:
         return np.zeros(2)
     return np.array([best.x, best.y])
+
+
+def _loop_points(loop: Any, arc_step_mm: float) -> np.ndarray:
+    """Vertices of a `qshape.design.Loop`: straight edges kept, arcs sampled [mm]."""
+    n = len(loop.vertices)
+    lengths = loop.edge_lengths()
+    counts = np.where(loop.bulges == 0.0, 1, np.maximum(2, np.ceil(lengths / arc_step_mm)))
+    counts = counts.astype(int)
+    edge = np.repeat(np.arange(n), counts)
+    starts = np.cumsum(counts) - counts
+    t = (np.arange(counts.sum()) - np.repeat(starts, counts)) / np.repeat(counts, counts)
+    return np.asarray(loop.edge_points(t.astype(float), edge))
+
+
+def tile_shapes_from_design(
+    design: Any, arc_step_mm: float = 2.0
+) -> tuple[tuple[TileShape, ...], tuple[SlotSpec, ...]]:
+    """Tile shapes and slots of a `qshape.design.Design` (mm, mesh origin at a corner).
+
+    One tile per slot. Shapes are named by the slot's shape-and-colour class
+    (``Slot.class_key``), so tiles and slots of a class share a name. Slot poses are moved to
+    the mesh centre and converted to metres and radians.
+
+    Args:
+        design: A loaded design (``Design.load("paper_mixed")``).
+        arc_step_mm: Largest distance between samples along arcs [mm] (straight edges keep
+            only their vertices).
+
+    Returns:
+        ``(shapes, slots)``, in the design's slot order.
+    """
+    if not arc_step_mm > 0:
+        raise CellError(f"arc_step_mm must be positive, got {arc_step_mm}")
+    mm = 1e-3
+    width, height = design.mesh_size
+    shapes, slots = [], []
+    for slot in design.slots:
+        path = slot.local_path
+        shape = TileShape(
+            _loop_points(path.outer, arc_step_mm) * mm,
+            holes=tuple(_loop_points(h, arc_step_mm) * mm for h in path.holes),
+            color=tuple(slot.color),
+            name=slot.class_key,
+            symmetry=int(slot.symmetry),
+        )
+        pose = ((slot.x - width / 2) * mm, (slot.y - height / 2) * mm, math.radians(slot.angle))
+        shapes.append(shape)
+        slots.append(SlotSpec(shape, pose, slot.name))
+    return tuple(shapes), tuple(slots)
 
 
 def _circle(r: float, n: int, start: float = 0.0, stop: float = 2 * np.pi) -> np.ndarray:
@@ -516,4 +626,5 @@ __all__ = [
     "make_tiles",
     "sample_layout",
     "signed_area",
+    "tile_shapes_from_design",
 ]

@@ -95,3 +95,21 @@ def test_cell_reset_is_deterministic() -> None:
     finally:
         c1.close()
         c2.close()
+
+
+def test_exact_layout_packs_40_tiles_without_overlap() -> None:
+    tiles = make_tiles((SHAPES * 6)[:40], TileConfig(), np.random.default_rng(0))
+    outlines = [t.outline for t in tiles]
+    radii = np.array([t.radius for t in tiles])
+    poses = sample_layout(
+        radii, (0.3, 0.26), 0.004, 400, np.random.default_rng(2), outlines=outlines
+    )
+    polys = []
+    for o, (x, y, yaw) in zip(outlines, poses, strict=True):
+        c, s = np.cos(yaw), np.sin(yaw)
+        polys.append(Polygon(o @ np.array([[c, s], [-s, c]]) + [x, y]))
+    for a in range(len(polys)):
+        x0, y0, x1, y1 = polys[a].bounds
+        assert -0.15 <= x0 and x1 <= 0.15 and -0.13 <= y0 and y1 <= 0.13
+        for b in range(a):
+            assert polys[a].distance(polys[b]) >= 0.004 - 1e-12
