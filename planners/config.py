@@ -136,6 +136,7 @@ class IKConfig:
         collision_min_distance: Minimum distance kept from the caller's obstacle geoms [m].
         collision_detection_distance: Distance at which collision constraints activate [m].
         limit_margin: Solutions must lie this far inside each joint range [rad].
+        memory: Known-good solutions kept as restart seeds (nearest-first).
     """
 
     site: str = "tcp"
@@ -155,10 +156,12 @@ class IKConfig:
     collision_min_distance: float = 0.005
     collision_detection_distance: float = 0.05
     limit_margin: float = 1e-3
+    memory: int = 256
 
     def __post_init__(self) -> None:
         _check_positive(
             self,
+            "memory",
             "position_tolerance",
             "orientation_tolerance_deg",
             "max_iterations",
@@ -216,13 +219,18 @@ class CycleConfig:
         approach_height: Height of the approach points above the pick and place contact
             poses [m]; motion below them is vertical.
         approach_speed: Vertical tool speed when passing an approach point with blending [m/s].
-        lead_fraction: Fraction of the transfer's base-axis motion started during the lift
-            (and finished during the descent) when blending, in [0, 1); the tool's lateral
-            drift below `lateral_clearance_height` is checked and the lead reduced if needed.
+        lead_fractions: Lead times tried at each approach point, as fractions of the vertical
+            move's duration, largest first: the transfer's motion started during the lift (and
+            finished during the descent); the first whose lateral drift below
+            `lateral_clearance_height` is within `max_lateral_drift` is used.
+        lead_joints: Joints (0-based) whose transfer motion is started early (the lead): the
+            base and the wrist rotations, which the vertical moves barely use.
+        lead_share: Fraction of the lead joints' acceleration and jerk given to the lead; the
+            vertical moves keep the rest (the sum respects every limit), in (0, 1).
         lateral_clearance_height: Below this height above a contact pose the tool may drift
             at most `max_lateral_drift` sideways (tile clear of its neighbours) [m].
         max_lateral_drift: Allowed sideways drift below the clearance height [m].
-        transfer_clearance: Minimum tool height above the higher contact pose during the
+        transfer_clearance: Minimum tool height above the lower contact pose during the
             transfer [m].
         pick_press: The pad goes this far below the given pick height to seal [m].
         place_gap: The pad releases this far above the given place height [m].
@@ -234,12 +242,14 @@ class CycleConfig:
         max_tilt_deg: Largest tool tilt from straight down accepted at a contact pose [deg].
     """
 
-    approach_height: float = 0.03
-    approach_speed: float = 0.35
-    lead_fraction: float = 0.06
+    approach_height: float = 0.01
+    approach_speed: float = 0.2
+    lead_fractions: tuple[float, ...] = (1.0, 0.8, 0.6, 0.4, 0.2, 0.0)
+    lead_joints: tuple[int, ...] = (0, 3, 5)
+    lead_share: float = 0.95
     lateral_clearance_height: float = 0.008
     max_lateral_drift: float = 0.001
-    transfer_clearance: float = 0.02
+    transfer_clearance: float = 0.008
     pick_press: float = 0.0005
     place_gap: float = 0.0005
     pick_dwell: float = 0.05
@@ -260,7 +270,6 @@ class CycleConfig:
         )
         _check_non_negative(
             self,
-            "lead_fraction",
             "transfer_clearance",
             "pick_press",
             "place_gap",
@@ -268,9 +277,15 @@ class CycleConfig:
             "place_dwell",
             "belt_match_time",
         )
-        if self.lead_fraction >= 1.0:
+        if not 0.0 < self.lead_share < 1.0:
+            raise LimitError(f"CycleConfig.lead_share must be in (0, 1), got {self.lead_share}")
+        if not all(0 <= j < N_JOINTS for j in self.lead_joints):
             raise LimitError(
-                f"CycleConfig.lead_fraction must be in [0, 1), got {self.lead_fraction}"
+                f"CycleConfig.lead_joints: {self.lead_joints} are not joint indices 0..5"
+            )
+        if not all(math.isfinite(f) and f >= 0.0 for f in self.lead_fractions):
+            raise LimitError(
+                f"CycleConfig.lead_fractions must be finite and >= 0, got {self.lead_fractions}"
             )
         if self.lateral_clearance_height > self.approach_height:
             raise LimitError(

@@ -23,7 +23,7 @@ import numpy.typing as npt
 from ruckig import InputParameter, Result, Ruckig, Trajectory
 
 from planners.config import N_JOINTS, JointLimits
-from planners.errors import InvalidTargetError, LimitError, TrajectoryError
+from planners.errors import InvalidTargetError, LimitError, PlannerError, TrajectoryError
 
 Array = npt.NDArray[np.float64]
 
@@ -165,7 +165,8 @@ class JointTrajectory:
 class Segment:
     """One piece of a chained trajectory.
 
-    A ruckig segment (``ruckig`` set) or a constant-velocity segment from ``start.q`` with
+    A ruckig segment (``ruckig`` set), a superposition of time windows of other segments
+    (``parts`` set, see `superpose`), or a constant-velocity segment from ``start.q`` with
     velocity ``start.qd`` (a hold at rest when that velocity is zero).
 
     Attributes:
@@ -173,7 +174,9 @@ class Segment:
         end: State at the segment's end.
         duration: Length [s].
         label: Name of the phase (``"descend_pick"``, ``"dwell_pick"``, ...).
-        ruckig: Ruckig's trajectory, or None for a constant-velocity segment.
+        ruckig: Ruckig's trajectory, or None.
+        parts: (segment, time offset [s]) pairs summed by a superposed segment.
+        offset: Subtracted from the parts' summed positions, shape (6,) [rad].
     """
 
     start: JointState
@@ -181,10 +184,19 @@ class Segment:
     duration: float
     label: str = ""
     ruckig: Trajectory | None = None
+    parts: tuple[tuple[Segment, float], ...] = ()
+    offset: Array | None = None
 
     def state(self, tau: float) -> tuple[Array, Array, Array]:
         """State at ``tau`` [s] after the segment's start, each shape (6,)."""
         tau = min(max(tau, 0.0), self.duration)
+        if self.parts:
+            q, qd, qdd = np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros(N_JOINTS)
+            for seg, t0 in self.parts:
+                pq, pqd, pqdd = seg.state(t0 + tau)
+                q, qd, qdd = q + pq, qd + pqd, qdd + pqdd
+            assert self.offset is not None
+            return q - self.offset, qd, qdd
         if self.ruckig is None:
             return self.start.q + self.start.qd * tau, self.start.qd, np.zeros(N_JOINTS)
         p, v, a = self.ruckig.at_time(tau)
@@ -192,7 +204,7 @@ class Segment:
 
 
 def _ruckig_input(
-    start: JointState, target_q: Array, target_qd: Array, limits: JointLimits
+    start: JointState, target_q: Array, target_qd: Array, target_qdd: Array, limits: JointLimits
 ) -> InputParameter:
     inp = InputParameter(N_JOINTS)
     inp.current_position = start.q.tolist()
@@ -200,7 +212,7 @@ def _ruckig_input(
     inp.current_acceleration = start.qdd.tolist()
     inp.target_position = target_q.tolist()
     inp.target_velocity = target_qd.tolist()
-    inp.target_acceleration = [0.0] * N_JOINTS
+    inp.target_acceleration = target_qdd.tolist()
     inp.max_velocity = list(limits.max_velocity)
     inp.max_acceleration = list(limits.max_acceleration)
     inp.max_jerk = list(limits.max_jerk)
@@ -213,6 +225,7 @@ def plan_segment(
     limits: JointLimits,
     target_qd: npt.ArrayLike | None = None,
     *,
+    target_qdd: npt.ArrayLike | None = None,
     label: str = "",
     min_duration: float = 0.0,
 ) -> Segment:
@@ -223,6 +236,7 @@ def plan_segment(
         target_q: Target configuration, shape (6,) [rad] (already unwrapped).
         limits: Kinematic limits.
         target_qd: Target velocity, shape (6,) [rad/s]; None stops at the target.
+        target_qdd: Target acceleration, shape (6,) [rad/s^2]; None is zero.
         label: Phase name stored on the segment.
         min_duration: Stretch the segment to at least this long [s].
 
@@ -233,6 +247,7 @@ def plan_segment(
     """
     q1 = as_joint_vector(target_q, "target_q")
     qd1 = np.zeros(N_JOINTS) if target_qd is None else as_joint_vector(target_qd, "target_qd")
+    qdd1 = np.zeros(N_JOINTS) if target_qdd is None else as_joint_vector(target_qdd, "target_qdd")
     check_in_range(q1, limits, f"segment {label!r} target")
     over = np.flatnonzero(np.abs(qd1) > np.asarray(limits.max_velocity))
     if over.size:
@@ -241,7 +256,7 @@ def plan_segment(
             f"segment {label!r}: target velocity of joint {i + 1} {qd1[i]:.4f} rad/s exceeds "
             f"the axis limit {limits.max_velocity[i]:.4f} rad/s"
         )
-    inp = _ruckig_input(start, q1, qd1, limits)
+    inp = _ruckig_input(start, q1, qd1, qdd1, limits)
     if min_duration > 0.0:
         inp.minimum_duration = min_duration
     traj = Trajectory(N_JOINTS)
@@ -254,7 +269,7 @@ def plan_segment(
             f"segment {label!r}: ruckig returned {result} from q={start.q.tolist()} "
             f"qd={start.qd.tolist()} to q={q1.tolist()} qd={qd1.tolist()}"
         )
-    end = JointState(q1, qd1, np.zeros(N_JOINTS))
+    end = JointState(q1, qd1, qdd1)
     return Segment(start, end, float(traj.duration), label, traj)
 
 
@@ -269,6 +284,85 @@ def hold_segment(state: JointState, duration: float, label: str = "") -> Segment
     q_end = state.q + state.qd * duration
     start = JointState(state.q, state.qd, np.zeros(N_JOINTS))
     return Segment(start, JointState(q_end, state.qd, np.zeros(N_JOINTS)), duration, label)
+
+
+def window(seg: Segment, t0: float, t1: float, label: str | None = None) -> Segment:
+    """The part of ``seg`` between ``t0`` and ``t1`` [s] as a segment of its own."""
+    return superpose(
+        [(seg, t0)], t1 - t0, np.zeros(N_JOINTS), seg.label if label is None else label
+    )
+
+
+def superpose(
+    parts: Sequence[tuple[Segment, float]], duration: float, offset: Array, label: str
+) -> Segment:
+    """Sum of time windows of segments: ``sum(seg.state(t0 + tau)) - offset``.
+
+    Used to overlap two motions (a vertical lift and the start of a transfer). Limits are not
+    checked here: sample the result and `validate` it.
+
+    Args:
+        parts: (segment, start time inside it [s]) pairs.
+        duration: Length of the superposed segment [s].
+        offset: Position subtracted from the sum, shape (6,) [rad].
+        label: Phase name.
+    """
+    proto = Segment(
+        JointState(np.zeros(N_JOINTS)),
+        JointState(np.zeros(N_JOINTS)),
+        duration,
+        label,
+        parts=tuple(parts),
+        offset=offset,
+    )
+    q0, qd0, qdd0 = proto.state(0.0)
+    q1, qd1, qdd1 = proto.state(duration)
+    return Segment(
+        JointState(q0, qd0, qdd0),
+        JointState(q1, qd1, qdd1),
+        duration,
+        label,
+        parts=tuple(parts),
+        offset=offset,
+    )
+
+
+def peak_usage(seg: Segment, limits: JointLimits) -> tuple[Array, Array]:
+    """Exact peak |acceleration| and |jerk| of a ruckig segment per joint, as limit fractions.
+
+    Read from ruckig's phase profiles (sampling misses jerk phases shorter than the period).
+
+    Returns:
+        Acceleration and jerk usage, each shape (6,).
+
+    Raises:
+        PlannerError: ``seg`` is not a ruckig segment.
+    """
+    if seg.ruckig is None:
+        raise PlannerError(f"segment {seg.label!r} is not a ruckig segment")
+    acc, jerk = np.zeros(N_JOINTS), np.zeros(N_JOINTS)
+    for dof, prof in enumerate(seg.ruckig.profiles[0]):
+        active = np.asarray(prof.t) > 0.0
+        j = np.abs(np.asarray(prof.j))[active]
+        jerk[dof] = j.max() if j.size else 0.0
+        acc[dof] = np.abs(np.asarray(prof.a)).max()
+    return acc / np.asarray(limits.max_acceleration), jerk / np.asarray(limits.max_jerk)
+
+
+def segment_within_limits(seg: Segment, limits: JointLimits, dt: float, tolerance: float) -> bool:
+    """Whether a segment sampled every ``dt`` [s] stays within every limit (relative slack)."""
+    n = max(2, int(math.ceil(seg.duration / dt)) + 1)
+    times = np.linspace(0.0, seg.duration, n)
+    states = [seg.state(float(t)) for t in times]
+    traj = JointTrajectory(
+        times,
+        np.array([s[0] for s in states]),
+        np.array([s[1] for s in states]),
+        np.array([s[2] for s in states]),
+    )
+    rep = limit_report(traj, limits)
+    worst = max(rep.velocity.max(), rep.acceleration.max(), rep.jerk.max())
+    return bool(rep.in_range and worst <= 1.0 + tolerance)
 
 
 @dataclass(frozen=True)
@@ -440,7 +534,11 @@ __all__ = [
     "chain",
     "check_in_range",
     "hold_segment",
+    "segment_within_limits",
+    "superpose",
+    "window",
     "limit_report",
+    "peak_usage",
     "plan_segment",
     "unwrap_target",
     "validate",

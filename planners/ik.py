@@ -1,0 +1,435 @@
+"""Inverse kinematics of the IRB 140 to tool-down poses with mink.
+
+A target is a TCP position and a yaw with the tool pointing straight down (the TCP site's z
+axis along world -z; yaw is the angle of the site's x axis in the world xy plane). The solver
+runs mink's differential IK (a `FrameTask` on the TCP site with `ConfigurationLimit`,
+`VelocityLimit` and optionally `CollisionAvoidanceLimit` against static obstacle geoms) on an
+arm-only model: a model that also carries free tiles makes every iteration about 10x slower.
+
+When an attempt does not converge (typically stuck at a wrist limit), the solver restarts from
+the nearest known-good configuration it has solved before, then from perturbed seeds drawn from
+its own seeded generator (deterministic). A target that no attempt reaches raises
+`UnreachableError`; a wrong pose is never returned.
+
+Because the tool axis is joint 6's axis, a tool-down solution for one yaw gives the solution for
+any other yaw by turning joint 6 alone; `IKSolver.solve_yaws` uses this to choose, among a
+tile's equivalent yaws (its rotational symmetry) and joint 6's turns, the one nearest the seed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import mink
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from planners.config import N_JOINTS, IKConfig, JointLimits
+from planners.errors import InvalidTargetError, PlannerError, UnreachableError
+from planners.trajectory import as_joint_vector
+
+Array = npt.NDArray[np.float64]
+
+ROBOT_XML = Path(__file__).resolve().parents[1] / "assets" / "irb140" / "irb140.xml"
+"""The robot-only MJCF (the default IK model)."""
+
+_TWO_PI = 2.0 * math.pi
+_DOWN = np.diag([1.0, -1.0, -1.0])
+"""Tool-down orientation at yaw 0: site x along world x, site z along world -z."""
+_REACH_SLACK = 1e-3
+"""Geometric reach pre-check slack [m] (the iterative solve decides near the boundary)."""
+
+
+def tool_down_rotation(yaw: float) -> Array:
+    """Rotation matrix (3, 3) of the tool pointing down with its x axis at ``yaw`` [rad]."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return rz @ _DOWN
+
+
+def symmetric_yaws(yaw: float, order: int) -> Array:
+    """The ``order`` yaws equivalent to ``yaw`` under an ``order``-fold rotational symmetry.
+
+    Args:
+        yaw: One yaw [rad].
+        order: Rotational symmetry order (1: no symmetry, 4: a square).
+
+    Returns:
+        Shape (order,) [rad], ``yaw + 2 pi k / order``.
+
+    Raises:
+        InvalidTargetError: Non-finite yaw or order below 1.
+    """
+    if not math.isfinite(yaw):
+        raise InvalidTargetError(f"yaw must be finite, got {yaw!r}")
+    if order < 1:
+        raise InvalidTargetError(f"symmetry order must be >= 1, got {order!r}")
+    return yaw + _TWO_PI * np.arange(order) / order
+
+
+def wrap_angle(a: float | Array) -> float | Array:
+    """Angle(s) wrapped to [-pi, pi) [rad]."""
+    return (np.asarray(a) + math.pi) % _TWO_PI - math.pi
+
+
+@dataclass(frozen=True)
+class IKSolution:
+    """A converged IK solution.
+
+    Attributes:
+        q: Joint angles, shape (6,) [rad].
+        yaw: Tool yaw reached [rad] (one of the requested yaws).
+        position_error: Distance of the TCP from the target [m].
+        orientation_error: Rotation angle from the target orientation [rad].
+        iterations: IK iterations over all attempts.
+        attempts: Attempts used (1 = converged from the first seed).
+    """
+
+    q: Array
+    yaw: float
+    position_error: float
+    orientation_error: float
+    iterations: int
+    attempts: int
+
+
+class IKSolver:
+    """Tool-down IK for the IRB 140 with mink (see the module docstring).
+
+    Args:
+        model: Arm-only MuJoCo model (may hold static cell geoms; no free bodies). None loads
+            ``assets/irb140/irb140.xml``.
+        config: IK settings; None uses the defaults.
+        limits: Joint limits; velocity limits bound each iteration's step; None uses defaults.
+        obstacles: Names of static geoms (belts, mesh) the arm's collision geoms keep
+            ``config.collision_min_distance`` from; empty disables collision avoidance.
+
+    Raises:
+        PlannerError: The model lacks the configured site or joints, or has other joints.
+    """
+
+    def __init__(
+        self,
+        model: mujoco.MjModel | None = None,
+        config: IKConfig | None = None,
+        limits: JointLimits | None = None,
+        obstacles: Sequence[str] = (),
+    ) -> None:
+        self.model = model if model is not None else mujoco.MjModel.from_xml_path(str(ROBOT_XML))
+        self.config = config if config is not None else IKConfig()
+        self.limits = limits if limits is not None else JointLimits()
+        cfg, m = self.config, self.model
+        if m.nq != N_JOINTS or m.nv != N_JOINTS:
+            raise PlannerError(
+                f"IK needs an arm-only model with {N_JOINTS} joints (static geoms allowed, no "
+                f"free tiles); this model has nq={m.nq}, nv={m.nv}"
+            )
+        names = [m.joint(i).name for i in range(m.njnt)]
+        if tuple(names) != tuple(cfg.joint_names):
+            raise PlannerError(f"model joints {names} differ from IKConfig.joint_names")
+        try:
+            self.site_id = m.site(cfg.site).id
+        except KeyError as exc:
+            sites = [m.site(i).name for i in range(m.nsite)]
+            raise PlannerError(f"no site {cfg.site!r} in the model; sites: {sites}") from exc
+        self.lower = np.maximum(m.jnt_range[:, 0], self.limits.lower) + cfg.limit_margin
+        self.upper = np.minimum(m.jnt_range[:, 1], self.limits.upper) - cfg.limit_margin
+        self.configuration = mink.Configuration(m)
+        self._data = mujoco.MjData(m)
+        self.task = mink.FrameTask(
+            cfg.site,
+            "site",
+            position_cost=cfg.position_cost,
+            orientation_cost=cfg.orientation_cost,
+            lm_damping=cfg.damping,
+        )
+        self.mink_limits: list[mink.Limit] = [
+            mink.ConfigurationLimit(m, min_distance_from_limits=cfg.limit_margin),
+            mink.VelocityLimit(
+                m, dict(zip(cfg.joint_names, self.limits.max_velocity, strict=True))
+            ),
+        ]
+        if obstacles:
+            robot_geoms = [
+                i
+                for i in range(m.ngeom)
+                if m.geom_bodyid[i] != 0 and (m.geom_contype[i] or m.geom_conaffinity[i])
+            ]
+            self.mink_limits.append(
+                mink.CollisionAvoidanceLimit(
+                    m,
+                    [(robot_geoms, list(obstacles))],
+                    minimum_distance_from_collisions=cfg.collision_min_distance,
+                    collision_detection_distance=cfg.collision_detection_distance,
+                )
+            )
+        self._rng = np.random.default_rng(cfg.restart_seed)
+        self._known: list[tuple[Array, Array]] = []  # (target xyz+yaw feature, q)
+        self._home = 0.5 * (self.lower + self.upper)
+        self._reach = self._reach_geometry()
+        self._yaw_sign = self._joint6_yaw_sign()
+
+    # ------------------------------------------------------------------ kinematics helpers
+
+    def fk(self, q: npt.ArrayLike) -> tuple[Array, Array]:
+        """TCP position (3,) [m] and rotation (3, 3) at configuration ``q`` (6,) [rad]."""
+        d = self._data
+        d.qpos[:] = q
+        mujoco.mj_kinematics(self.model, d)
+        return d.site_xpos[self.site_id].copy(), d.site_xmat[self.site_id].reshape(3, 3).copy()
+
+    def jacobian(self, q: npt.ArrayLike) -> Array:
+        """TCP Jacobian (6, 6) at ``q``: rows linear [m/rad] then angular [rad/rad], world."""
+        d = self._data
+        d.qpos[:] = q
+        mujoco.mj_kinematics(self.model, d)
+        mujoco.mj_comPos(self.model, d)
+        jac = np.zeros((6, self.model.nv))
+        mujoco.mj_jacSite(self.model, d, jac[:3], jac[3:], self.site_id)
+        return jac
+
+    @staticmethod
+    def yaw_of(rotation: Array) -> float:
+        """Yaw [rad] of a rotation's x axis in the world xy plane."""
+        return math.atan2(rotation[1, 0], rotation[0, 0])
+
+    def pose_error(self, q: Array, position: Array, yaw: float) -> tuple[float, float]:
+        """Position error [m] and orientation error [rad] of ``q`` against a tool-down target."""
+        p, r = self.fk(q)
+        r_err = tool_down_rotation(yaw).T @ r
+        cos_angle = np.clip(0.5 * (np.trace(r_err) - 1.0), -1.0, 1.0)
+        return float(np.linalg.norm(p - position)), float(math.acos(cos_angle))
+
+    def _reach_geometry(self) -> tuple[Array, float, float, float]:
+        """Shoulder anchor at q=0, upper-arm and forearm lengths, tool offset below the wrist."""
+        d = self._data
+        d.qpos[:] = 0.0
+        mujoco.mj_kinematics(self.model, d)
+        anchors = d.xanchor[:N_JOINTS].copy()
+        upper = float(np.linalg.norm(anchors[2] - anchors[1]))
+        fore = float(np.linalg.norm(anchors[4] - anchors[2]))
+        tool = float(np.linalg.norm(d.site_xpos[self.site_id] - anchors[4]))
+        return anchors[1], upper, fore, tool
+
+    def _joint6_yaw_sign(self) -> float:
+        """d(yaw)/d(q6) for a tool-down configuration (+1 or -1)."""
+        q = 0.5 * (self.lower + self.upper)
+        q[1] = q[2] = q[3] = 0.0
+        q[4] = 0.5 * math.pi
+        y0 = self.yaw_of(self.fk(q)[1])
+        q[5] += 0.1
+        y1 = self.yaw_of(self.fk(q)[1])
+        return float(np.sign(wrap_angle(y1 - y0)))
+
+    def check_reach(self, position: Array) -> None:
+        """Raise `UnreachableError` if no arm posture puts the wrist over ``position``.
+
+        The wrist centre of a tool-down pose is ``tool`` above the TCP; it must lie within the
+        annulus the upper arm and forearm span around the shoulder axis.
+        """
+        shoulder, upper, fore, tool = self._reach
+        wrist = position + np.array([0.0, 0.0, tool])
+        radial = math.hypot(wrist[0], wrist[1]) - math.hypot(shoulder[0], shoulder[1])
+        dist = math.hypot(radial, wrist[2] - shoulder[2])
+        if dist > upper + fore + _REACH_SLACK or dist < abs(upper - fore) - _REACH_SLACK:
+            raise UnreachableError(
+                f"tool-down pose at {np.round(position, 4).tolist()} m is out of reach: wrist "
+                f"centre {dist:.3f} m from the shoulder, reachable "
+                f"[{abs(upper - fore):.3f}, {upper + fore:.3f}] m"
+            )
+
+    # ------------------------------------------------------------------ solving
+
+    def _attempt(self, seed: Array, position: Array, yaw: float) -> tuple[Array, float, float, int]:
+        cfg = self.config
+        conf = self.configuration
+        conf.update(np.clip(seed, self.lower, self.upper))
+        self.task.set_target(
+            mink.SE3.from_rotation_and_translation(
+                mink.SO3.from_matrix(tool_down_rotation(yaw)), position
+            )
+        )
+        pos_err, ori_err = math.inf, math.inf
+        tol_ori = math.radians(cfg.orientation_tolerance_deg)
+        for it in range(cfg.max_iterations + 1):
+            pos_err, ori_err = self._error_from_data(conf.data, position, yaw)
+            if pos_err <= cfg.position_tolerance and ori_err <= tol_ori:
+                return conf.q.copy(), pos_err, ori_err, it
+            if it == cfg.max_iterations:
+                break
+            try:
+                vel = mink.solve_ik(
+                    conf,
+                    [self.task],
+                    cfg.step_dt,
+                    cfg.solver,
+                    damping=cfg.regularisation,
+                    limits=self.mink_limits,
+                )
+            except mink.NoSolutionFound:
+                break
+            conf.integrate_inplace(vel, cfg.step_dt)
+        return conf.q.copy(), pos_err, ori_err, cfg.max_iterations
+
+    def _error_from_data(
+        self, data: mujoco.MjData, position: Array, yaw: float
+    ) -> tuple[float, float]:
+        p = data.site_xpos[self.site_id]
+        r = data.site_xmat[self.site_id].reshape(3, 3)
+        r_err = tool_down_rotation(yaw).T @ r
+        cos_angle = min(max(0.5 * (float(np.trace(r_err)) - 1.0), -1.0), 1.0)
+        return float(np.linalg.norm(p - position)), math.acos(cos_angle)
+
+    def _seeds(self, seed: Array | None, feature: Array) -> list[Array]:
+        """Seeds to try: given, nearest known and default (nearest pose first), then random."""
+        candidates: list[Array] = [] if seed is None else [seed]
+        if self._known:
+            feats = np.array([f for f, _ in self._known])
+            order = np.argsort(self._feature_distance(feats, feature))
+            candidates.extend(self._known[int(i)][1] for i in order[:2])
+        candidates.append(self._default_seed(feature))
+        dist = []
+        for c in candidates:
+            p, r = self.fk(np.clip(c, self.lower, self.upper))
+            f = np.array([p[0], p[1], p[2], self.yaw_of(r)])
+            dist.append(float(self._feature_distance(f[None, :], feature)[0]))
+        seeds = [candidates[int(i)] for i in np.argsort(dist, kind="stable")]
+        cfg = self.config
+        base = seeds[0]
+        for _ in range(cfg.restarts):
+            seeds.append(base + self._rng.normal(0.0, cfg.restart_spread, N_JOINTS))
+        return seeds
+
+    def _feature_distance(self, feats: Array, feature: Array) -> Array:
+        """Distance [m] of (x, y, z, yaw) features, yaw weighted by the tool length."""
+        diff = feats - feature
+        diff[:, 3] = np.asarray(wrap_angle(diff[:, 3])) * self._reach[3]
+        return np.asarray(np.linalg.norm(diff, axis=1))
+
+    def _default_seed(self, feature: Array) -> Array:
+        """Elbow-up, wrist-flat tool-down posture facing the target."""
+        q = np.zeros(N_JOINTS)
+        q[0] = math.atan2(feature[1], feature[0])
+        q[4] = 0.5 * math.pi
+        return np.clip(q, self.lower, self.upper)
+
+    def solve(
+        self, position: npt.ArrayLike, yaw: float, seed: npt.ArrayLike | None = None
+    ) -> IKSolution:
+        """Joint angles putting the TCP at ``position`` with the tool down at ``yaw``.
+
+        Args:
+            position: TCP target, shape (3,) [m], world frame.
+            yaw: Tool yaw [rad].
+            seed: Start configuration, shape (6,) [rad]; None uses the nearest known solution
+                or a default posture.
+
+        Raises:
+            InvalidTargetError: Non-finite or wrongly shaped target or seed.
+            UnreachableError: Out of reach, or no attempt converged within tolerance (the
+                message gives the pose and the best residual).
+        """
+        pos = np.asarray(position, dtype=np.float64)
+        if pos.shape != (3,) or not np.all(np.isfinite(pos)):
+            raise InvalidTargetError(f"position must be 3 finite numbers [m], got {position!r}")
+        if not math.isfinite(yaw):
+            raise InvalidTargetError(f"yaw must be finite, got {yaw!r}")
+        seed_q = None if seed is None else as_joint_vector(seed, "seed")
+        self.check_reach(pos)
+        feature = np.array([pos[0], pos[1], pos[2], yaw])
+        cfg = self.config
+        total_it = 0
+        best = (math.inf, math.inf)
+        seeds = self._seeds(seed_q, feature)
+        for k, s in enumerate(seeds, start=1):
+            q, pe, oe, it = self._attempt(s, pos, yaw)
+            total_it += it
+            if pe <= cfg.position_tolerance and oe <= math.radians(cfg.orientation_tolerance_deg):
+                self._remember(feature, q)
+                return IKSolution(q, float(yaw), pe, oe, total_it, k)
+            if pe + oe * self._reach[3] < best[0] + best[1] * self._reach[3]:
+                best = (pe, oe)
+        raise UnreachableError(
+            f"no tool-down solution at position {np.round(pos, 4).tolist()} m, yaw "
+            f"{math.degrees(yaw):.2f} deg after {len(seeds)} attempts: best residual "
+            f"{best[0] * 1e3:.2f} mm / {math.degrees(best[1]):.2f} deg, tolerance "
+            f"{cfg.position_tolerance * 1e3:.2f} mm / {cfg.orientation_tolerance_deg:.2f} deg "
+            "(joint limits or a flipped tool)"
+        )
+
+    def _remember(self, feature: Array, q: Array) -> None:
+        self._known.append((feature, q.copy()))
+        if len(self._known) > self.config.memory:
+            self._known.pop(0)
+
+    def solve_yaws(
+        self,
+        position: npt.ArrayLike,
+        yaws: npt.ArrayLike,
+        seed: npt.ArrayLike | None = None,
+        reference: npt.ArrayLike | None = None,
+    ) -> IKSolution:
+        """Solve for the equivalent yaw that needs the least wrist travel.
+
+        One solve for the first yaw; the others (and joint 6's extra turns) follow by turning
+        joint 6 alone. The candidate inside joint 6's range nearest ``reference`` (default: the
+        seed, else the first solution) in joint 6 wins.
+
+        Args:
+            position: TCP target, shape (3,) [m].
+            yaws: Equivalent tool yaws, shape (k,) [rad] (e.g. `symmetric_yaws`).
+            seed: IK seed, shape (6,) [rad].
+            reference: Configuration whose joint 6 angle should change least, shape (6,).
+
+        Raises:
+            InvalidTargetError: Empty or non-finite yaws.
+            UnreachableError: See `solve`; or no candidate fits joint 6's range.
+        """
+        yaw_arr = np.atleast_1d(np.asarray(yaws, dtype=np.float64))
+        if yaw_arr.size == 0 or not np.all(np.isfinite(yaw_arr)):
+            raise InvalidTargetError(f"yaws must be a non-empty set of finite angles, got {yaws!r}")
+        sol = self.solve(position, float(yaw_arr[0]), seed)
+        ref_q = (
+            as_joint_vector(reference, "reference")
+            if reference is not None
+            else (as_joint_vector(seed, "seed") if seed is not None else sol.q)
+        )
+        j6_lo, j6_hi = self.lower[5], self.upper[5]
+        best_q, best_yaw, best_cost = None, 0.0, math.inf
+        for y in yaw_arr:
+            base = sol.q[5] + self._yaw_sign * float(wrap_angle(y - yaw_arr[0]))
+            k_lo = math.ceil((j6_lo - base) / _TWO_PI)
+            k_hi = math.floor((j6_hi - base) / _TWO_PI)
+            for k in range(k_lo, k_hi + 1):
+                q6 = base + _TWO_PI * k
+                cost = abs(q6 - ref_q[5])
+                if cost < best_cost:
+                    q = sol.q.copy()
+                    q[5] = q6
+                    best_q, best_yaw, best_cost = q, float(y), cost
+        if best_q is None:
+            raise UnreachableError(
+                f"no yaw of {np.round(np.degrees(yaw_arr), 2).tolist()} deg fits joint 6's range "
+                f"[{math.degrees(j6_lo):.1f}, {math.degrees(j6_hi):.1f}] deg at "
+                f"{np.round(np.asarray(position), 4).tolist()} m"
+            )
+        pe, oe = self.pose_error(best_q, np.asarray(position, dtype=np.float64), best_yaw)
+        tol_ori = math.radians(self.config.orientation_tolerance_deg)
+        if pe > self.config.position_tolerance or oe > tol_ori:
+            # Joint 6 is not exactly the tool axis in this model: solve the chosen yaw properly.
+            return self.solve(position, best_yaw, best_q)
+        return IKSolution(best_q, best_yaw, pe, oe, sol.iterations, sol.attempts)
+
+
+__all__ = [
+    "ROBOT_XML",
+    "IKSolution",
+    "IKSolver",
+    "symmetric_yaws",
+    "tool_down_rotation",
+    "wrap_angle",
+]

@@ -1,0 +1,549 @@
+"""One pick-and-place cycle as a timed joint trajectory with vacuum events.
+
+Phases (segment labels), in order:
+
+* ``retreat`` (only when the cycle starts at a contact, e.g. the previous place): vertical lift
+  from the start;
+* ``to_pick``: to the approach point above the pick;
+* ``descend_pick``: vertical descent to the tile (on a moving belt: arriving with its velocity);
+* ``dwell_pick``: vacuum on, build-up (on a moving belt: travelling with it);
+* ``lift``: vertical lift to the approach point;
+* ``transfer``: to the approach point above the place, turning the tool to the place yaw;
+* ``descend_place``: vertical descent to the place;
+* ``dwell_place``: vacuum off, release;
+* ``retreat_end`` (optional): back up to the approach point, at rest.
+
+Every segment is a time-optimal ruckig move at the axis limits. Blending: approach points are
+passed with a vertical tool velocity (``approach_speed``) plus a *lead*: the state, at time tau,
+of the time-optimal rest-to-rest move between the two approach points is superposed, so the
+base axis already turns while the tool rises (and still turns while it descends). tau is the
+largest fraction (of ``lead_fractions``) of the vertical move's duration for which the tool stays
+within ``max_lateral_drift`` of vertical (in the belt's frame) below
+``lateral_clearance_height``; the transfer must stay ``transfer_clearance`` above the lower
+contact. Otherwise the planner falls back to stopping at the approach point.
+
+Moving belt: the tile at ``pick_position`` (at the cycle's start) moves with ``belt_velocity``.
+The planner predicts where it is at contact (fixed-point iteration on the contact time), arrives
+with the belt's velocity, travels with the belt during the vacuum dwell and lifts still moving
+with it.
+
+Lower bound of a cycle: time-optimal moves at the same limits from the bound's start
+configuration to the pick contact (matching the belt) and from there to the place contact, with
+no dwell and no approach points. Any cycle that stops at (or matches the belt at) both contacts
+takes at least this long.
+
+The module knows poses, yaw sets and belt velocities only: no tiles, shapes or tasks.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from planners.config import JointLimits, PlannerConfig
+from planners.errors import InvalidTargetError, PlannerError
+from planners.ik import IKSolver, symmetric_yaws, wrap_angle
+from planners.trajectory import (
+    JointState,
+    JointTrajectory,
+    Piecewise,
+    Segment,
+    as_joint_vector,
+    hold_segment,
+    plan_segment,
+    segment_within_limits,
+    superpose,
+    unwrap_target,
+    window,
+)
+
+Array = npt.NDArray[np.float64]
+
+_CHECK_SAMPLES = 40
+"""FK samples per segment when checking drift and clearance (resolution, not a tunable)."""
+_MIN_SHARE = 0.05
+"""Smallest fraction of a limit left to the lead's bridge (keeps ruckig's input valid)."""
+
+
+def _share(limits: JointLimits, share: Array) -> JointLimits:
+    """``limits`` with acceleration and jerk scaled per joint by ``share`` (6,)."""
+    return JointLimits(
+        lower=limits.lower,
+        upper=limits.upper,
+        max_velocity=limits.max_velocity,
+        max_acceleration=tuple(np.asarray(limits.max_acceleration) * share),
+        max_jerk=tuple(np.asarray(limits.max_jerk) * share),
+    )
+
+
+@dataclass(frozen=True)
+class CyclePlan:
+    """A planned pick-and-place cycle.
+
+    Attributes:
+        trajectory: The sampled joint trajectory (times from 0 at the cycle's start).
+        piecewise: The exact segments (labels as in the module docstring).
+        vacuum_on: Time the vacuum switches on (pad at the pick contact) [s].
+        vacuum_off: Time the vacuum switches off (tile at the place contact) [s].
+        lift_off: Time the tool starts lifting the tile [s].
+        duration: Total duration [s].
+        bound: Lower bound of the cycle [s] (see the module docstring).
+        pick_q: Configuration at the pick contact, shape (6,) [rad].
+        place_q: Configuration at the place contact, shape (6,) [rad].
+        pick_position: Predicted tile top centre at contact, shape (3,) [m].
+        place_position: Target tile top centre at the place, shape (3,) [m].
+        pick_yaw: Tool yaw at the pick [rad].
+        place_yaw: Tool yaw at the place [rad] (the chosen equivalent rotation).
+        leads: Lead time used at each approach point (start out, pick in, pick out, place in)
+            [s]; 0 for a vertical pass, NaN for a stop.
+        plan_ms: Wall-clock planning time [ms] (IK + trajectories + checks).
+    """
+
+    trajectory: JointTrajectory
+    piecewise: Piecewise
+    vacuum_on: float
+    vacuum_off: float
+    lift_off: float
+    duration: float
+    bound: float
+    pick_q: Array
+    place_q: Array
+    pick_position: Array
+    place_position: Array
+    pick_yaw: float
+    place_yaw: float
+    leads: tuple[float, float, float, float]
+    plan_ms: float
+
+    @property
+    def end(self) -> JointState:
+        """State at the end of the cycle."""
+        return self.piecewise.end
+
+    @property
+    def ratio(self) -> float:
+        """Cycle duration over its lower bound."""
+        return self.duration / self.bound
+
+
+def _vec3(value: npt.ArrayLike, name: str) -> Array:
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise InvalidTargetError(f"{name} must be 3 finite numbers [m or m/s], got {value!r}")
+    return arr
+
+
+@dataclass(frozen=True)
+class _Contact:
+    """A contact point the tool leaves or reaches vertically (in the belt's frame)."""
+
+    point: Array  # contact position at the segment's start (leaving) or end (reaching) [m]
+    belt: Array  # velocity of the frame the motion is vertical in [m/s]
+    q: Array  # configuration at the contact [rad]
+    qd: Array  # joint velocity at the contact [rad/s]
+    approach_q: Array  # configuration at the approach point [rad]
+
+
+class PickPlacePlanner:
+    """Plans pick-and-place cycles (see the module docstring).
+
+    Args:
+        ik: The IK solver (its model defines the robot).
+        config: Planner settings; None uses the dataclass defaults.
+    """
+
+    def __init__(self, ik: IKSolver, config: PlannerConfig | None = None) -> None:
+        self.ik = ik
+        self.config = config if config is not None else PlannerConfig()
+        self.limits = self.config.limits
+        self._wrap = self.config.trajectory.wrap_joints
+        share = np.ones(6)
+        share[list(self.config.cycle.lead_joints)] = self.config.cycle.lead_share
+        self._bridge_limits = _share(self.limits, share)
+        self._vertical_limits = _share(self.limits, np.where(share < 1.0, 1.0 - share, 1.0))
+
+    # ------------------------------------------------------------------ helpers
+
+    def joint_velocity(self, q: Array, linear: Array) -> Array:
+        """Joint velocity (6,) [rad/s] moving the TCP at ``linear`` (3,) [m/s] without turning."""
+        if not np.any(linear):
+            return np.zeros(q.shape)
+        jac = self.ik.jacobian(q)
+        twist = np.concatenate([linear, np.zeros(3)])
+        qd, *_ = np.linalg.lstsq(jac, twist, rcond=None)
+        return np.asarray(qd)
+
+    def _segment(
+        self,
+        start: JointState,
+        q: Array,
+        qd: Array | None,
+        label: str,
+        qdd: Array | None = None,
+    ) -> Segment:
+        q_t = unwrap_target(start.q, q, self.limits, self._wrap)
+        return plan_segment(start, q_t, self.limits, qd, target_qdd=qdd, label=label)
+
+    def _positions(self, segs: list[Segment]) -> tuple[Array, Array]:
+        """Sample times (from the first segment's start) [s] and TCP positions (n, 3) [m]."""
+        times, pos, t0 = [], [], 0.0
+        for seg in segs:
+            for t in np.linspace(0.0, seg.duration, _CHECK_SAMPLES):
+                times.append(t0 + t)
+                pos.append(self.ik.fk(seg.state(float(t))[0])[0])
+            t0 += seg.duration
+        return np.asarray(times), np.asarray(pos)
+
+    def _drift_ok(self, segs: list[Segment], contact: _Contact, leaving: bool) -> bool:
+        """Below the clearance height the tool stays over the (belt-moving) contact point."""
+        c = self.config.cycle
+        taus, pos = self._positions(segs)
+        t_rel = taus if leaving else taus - taus[-1]
+        rel = pos - (contact.point[None, :] + contact.belt[None, :] * t_rel[:, None])
+        low = rel[:, 2] < c.lateral_clearance_height
+        lateral = np.linalg.norm(rel[low, :2], axis=1)
+        return bool(lateral.size == 0 or lateral.max() <= c.max_lateral_drift)
+
+    def _clearance_ok(self, seg: Segment, floor_z: float) -> bool:
+        _, pos = self._positions([seg])
+        return bool(pos[:, 2].min() >= floor_z + self.config.cycle.transfer_clearance)
+
+    def _solve(self, position: Array, yaw: float, seed: Array) -> Array:
+        q = self.ik.solve_yaws(position, np.array([yaw]), seed=seed, reference=seed).q
+        return unwrap_target(seed, q, self.limits, self._wrap)
+
+    # ------------------------------------------------------------------ via points
+
+    def _vertical(
+        self, contact: _Contact, leaving: bool, start: JointState | None = None
+    ) -> Segment:
+        """The pure vertical (belt-frame) move off or onto a contact via its approach point."""
+        c = self.config.cycle
+        sign = 1.0 if leaving else -1.0
+        v = np.array([0.0, 0.0, sign * c.approach_speed]) + contact.belt
+        qd_v = self.joint_velocity(contact.approach_q, v)
+        lim = self._vertical_limits
+        if leaving:
+            s0 = start if start is not None else JointState(contact.q, contact.qd)
+            q1 = unwrap_target(s0.q, contact.approach_q, lim, self._wrap)
+            return plan_segment(s0, q1, lim, qd_v, label="vertical")
+        s0 = JointState(contact.approach_q, qd_v)
+        q1 = unwrap_target(s0.q, contact.q, lim, self._wrap)
+        return plan_segment(s0, q1, lim, contact.qd, label="vertical")
+
+    def _ok(self, segs: list[Segment], contact: _Contact, leaving: bool) -> bool:
+        tr = self.config.trajectory
+        return all(
+            segment_within_limits(s, self.limits, tr.sample_dt, tr.limit_tolerance)
+            for s in segs
+            if s.parts
+        ) and self._drift_ok(segs, contact, leaving)
+
+    def _leave(
+        self, start: JointState, contact: _Contact, bridge: Segment | None, label: str
+    ) -> tuple[list[Segment], float]:
+        """Vertical move off a contact to its approach point, with the largest valid lead.
+
+        With lead tau, the move follows the pure vertical move, and during its last tau seconds
+        the first tau seconds of the bridge (the transfer starting) are superposed.
+
+        Returns the segments and the lead time used (NaN when it had to stop).
+        """
+        c = self.config.cycle
+        if self.config.trajectory.blend:
+            base = self._vertical(contact, True, start)
+            for f in c.lead_fractions if bridge is not None else (0.0,):
+                tau = min(f, 1.0) * base.duration
+                if bridge is None or tau == 0.0:
+                    segs = [window(base, 0.0, base.duration, label)]
+                else:
+                    t_split = base.duration - tau
+                    segs = [] if t_split <= 0.0 else [window(base, 0.0, t_split, label)]
+                    segs.append(
+                        superpose([(base, t_split), (bridge, 0.0)], tau, bridge.start.q, label)
+                    )
+                if self._ok(segs, contact, leaving=True):
+                    return segs, tau
+        q_stop = contact.approach_q
+        seg = self._segment(start, q_stop, self.joint_velocity(q_stop, contact.belt), label)
+        return [seg], math.nan
+
+    def _reach_state(
+        self, contact: _Contact, bridge: Segment | None, label: str
+    ) -> tuple[JointState, list[Segment], float]:
+        """Approach-point state (with the largest valid lead) and the vertical move to contact.
+
+        With lead tau, the last tau seconds of the bridge (the transfer ending) are superposed
+        on the first tau seconds of the pure vertical descent.
+
+        Returns the approach-point state, the descent segments and the lead time (NaN when it
+        has to stop at the approach point).
+        """
+        c = self.config.cycle
+        if self.config.trajectory.blend:
+            base = self._vertical(contact, False)
+            for f in c.lead_fractions if bridge is not None else (0.0,):
+                tau = min(f, 1.0) * base.duration
+                if bridge is None or tau == 0.0:
+                    segs = [window(base, 0.0, base.duration, label)]
+                else:
+                    first = superpose(
+                        [(base, 0.0), (bridge, bridge.duration - tau)], tau, bridge.end.q, label
+                    )
+                    segs = [first]
+                    if tau < base.duration:
+                        segs.append(window(base, tau, base.duration, label))
+                if self._ok(segs, contact, leaving=False):
+                    return segs[0].start, segs, tau
+        stop = JointState(contact.approach_q, self.joint_velocity(contact.approach_q, contact.belt))
+        return stop, [self._segment(stop, contact.q, contact.qd, label)], math.nan
+
+    def _try(
+        self, start: JointState, q: Array, qd: Array, qdd: Array, label: str
+    ) -> Segment | None:
+        try:
+            return self._segment(start, q, qd, label, qdd)
+        except PlannerError:
+            return None
+
+    def _bridge(self, a: Array, b: Array) -> Segment:
+        """Rest-to-rest time-optimal move of the lead joints between approach points.
+
+        The lead's source: only ``lead_joints`` (base and wrist rotations) move, with
+        ``lead_share`` of their acceleration and jerk; the vertical moves get the rest, so the
+        superposition keeps every limit.
+        """
+        target = a.copy()
+        idx = list(self.config.cycle.lead_joints)
+        target[idx] = unwrap_target(a, b, self.limits, self._wrap)[idx]
+        return plan_segment(JointState.at_rest(a), target, self._bridge_limits, label="bridge")
+
+    def _link(
+        self, leave: Segment, reach: JointState, floor_z: float, label: str
+    ) -> Segment | None:
+        """The move from a leave segment's end to a reach state, if it keeps its clearance."""
+        try:
+            seg = self._segment(leave.end, reach.q, reach.qd, label, reach.qdd)
+        except PlannerError:
+            return None
+        return seg if self._clearance_ok(seg, floor_z) else None
+
+    # ------------------------------------------------------------------ planning
+
+    def plan_cycle(
+        self,
+        start: JointState,
+        pick_position: npt.ArrayLike,
+        place_position: npt.ArrayLike,
+        rotation: float,
+        *,
+        symmetry_order: int = 1,
+        belt_velocity: npt.ArrayLike = (0.0, 0.0, 0.0),
+        start_at_contact: bool = False,
+        end_retreat: bool = True,
+        bound_from: npt.ArrayLike | None = None,
+    ) -> CyclePlan:
+        """Plan one cycle.
+
+        Args:
+            start: Arm state at the cycle's start (at rest).
+            pick_position: Top centre of the tile at the cycle's start, shape (3,) [m].
+            place_position: Where the tile's top centre must end, shape (3,) [m].
+            rotation: Yaw to turn the tile by between pick and place [rad] (slot yaw minus tile
+                yaw); any of its ``symmetry_order`` equivalents is accepted.
+            symmetry_order: Rotational symmetry order of the tile (1: none).
+            belt_velocity: Input belt velocity, shape (3,) [m/s]; zero for a static belt.
+            start_at_contact: The start is a contact (the previous place): leave it vertically.
+            end_retreat: End with a vertical retreat to the approach point, at rest; False ends
+                at rest at the place contact (chain the next cycle with ``start_at_contact``).
+            bound_from: Configuration the lower bound starts from, shape (6,) [rad]; default
+                ``start.q``.
+
+        Raises:
+            InvalidTargetError: Non-finite or wrongly shaped inputs.
+            UnreachableError: A contact or approach pose has no tool-down IK solution.
+            LimitError: No equivalent rotation fits joint 6's range, or a limit is exceeded.
+            TrajectoryError: Ruckig failed.
+        """
+        t_start = time.perf_counter()
+        pick0 = _vec3(pick_position, "pick_position")
+        place = _vec3(place_position, "place_position")
+        belt = _vec3(belt_velocity, "belt_velocity")
+        if not math.isfinite(rotation):
+            raise InvalidTargetError(f"rotation must be finite, got {rotation!r}")
+        if start.qd.any():
+            raise InvalidTargetError("plan_cycle starts at rest: start.qd must be zero")
+        as_joint_vector(start.q, "start.q")
+        c = self.config.cycle
+        moving = bool(np.any(belt != 0.0))
+        # Tool yaw at the pick: keep the current one (the round pad may pick at any yaw).
+        pick_yaw = IKSolver.yaw_of(self.ik.fk(start.q)[1])
+        t_contact = 0.0
+        pw = None
+        for _ in range(c.predict_iterations if moving else 1):
+            pick_c = pick0 + belt * t_contact - np.array([0.0, 0.0, c.pick_press])
+            pw, pick_q, place_q, place_yaw, leads = self._plan(
+                start,
+                start_at_contact,
+                end_retreat,
+                pick_c,
+                place,
+                pick_yaw,
+                rotation,
+                symmetry_order,
+                belt,
+            )
+            t_contact = pw.end_time("descend_pick")
+        assert pw is not None
+        traj = pw.sample(self.config.trajectory.sample_dt)
+        bound_q = start.q if bound_from is None else as_joint_vector(bound_from, "bound_from")
+        bound = self.lower_bound(bound_q, pick_q, place_q, self.joint_velocity(pick_q, belt))
+        return CyclePlan(
+            trajectory=traj,
+            piecewise=pw,
+            vacuum_on=pw.start_time("dwell_pick"),
+            vacuum_off=pw.start_time("dwell_place"),
+            lift_off=pw.start_time("lift"),
+            duration=pw.duration,
+            bound=bound,
+            pick_q=pick_q,
+            place_q=place_q,
+            pick_position=pick0 + belt * t_contact,
+            place_position=place,
+            pick_yaw=pick_yaw,
+            place_yaw=place_yaw,
+            leads=leads,
+            plan_ms=(time.perf_counter() - t_start) * 1e3,
+        )
+
+    def _plan(  # noqa: PLR0917
+        self,
+        start: JointState,
+        start_at_contact: bool,
+        end_retreat: bool,
+        pick_c: Array,
+        place: Array,
+        pick_yaw: float,
+        rotation: float,
+        symmetry_order: int,
+        belt: Array,
+    ) -> tuple[Piecewise, Array, Array, float, tuple[float, float, float, float]]:
+        c = self.config.cycle
+        up = np.array([0.0, 0.0, c.approach_height])
+        zero = np.zeros(3)
+        moving = bool(np.any(belt))
+        dwell_pick = max(c.pick_dwell, c.belt_match_time) if moving else c.pick_dwell
+        place_c = place + np.array([0.0, 0.0, c.place_gap])
+
+        # IK: pick contact, then the place yaw (equivalent rotations) nearest in joint 6.
+        pick_q = self._solve(pick_c, pick_yaw, start.q)
+        place_yaws = symmetric_yaws(pick_yaw + rotation, symmetry_order)
+        sol = self.ik.solve_yaws(place_c, place_yaws, seed=pick_q, reference=pick_q)
+        place_q = unwrap_target(pick_q, sol.q, self.limits, self._wrap)
+        place_yaw = sol.yaw
+        pick_end = pick_c + belt * dwell_pick
+        pick_end_q = self._solve(pick_end, pick_yaw, pick_q)
+        place_in_q = self._solve(place_c + up, place_yaw, place_q)
+        belt_qd = self.joint_velocity(pick_q, belt)
+        # Approach points on a moving belt sit upstream/downstream by the belt's travel during
+        # the vertical move (vertical in the belt's frame): estimate with one pass.
+        t_in = t_out = c.approach_height / c.approach_speed
+        for _ in range(2 if moving else 1):
+            pick_in_q = self._solve(pick_c + up - belt * t_in, pick_yaw, pick_q)
+            lift_q = self._solve(pick_end + up + belt * t_out, pick_yaw, pick_end_q)
+            pick_in = _Contact(pick_c, belt, pick_q, belt_qd, pick_in_q)
+            pick_out = _Contact(pick_end, belt, pick_end_q, belt_qd, lift_q)
+            if moving:
+                t_in = self._vertical(pick_in, False).duration
+                t_out = self._vertical(pick_out, True).duration
+        place_in = _Contact(place_c, zero, place_q, np.zeros(6), place_in_q)
+        segs: list[Segment] = []
+        lead_start = math.nan
+
+        # Leaving the start (previous place) and reaching the pick.
+        if start_at_contact:
+            p_start = self.ik.fk(start.q)[0]
+            start_up_q = self._solve(p_start + up, pick_yaw, start.q)
+            start_out = _Contact(p_start, zero, start.q, np.zeros(6), start_up_q)
+            bridge = self._bridge(start_up_q, pick_in_q)
+            s_ret, lead_start = self._leave(start, start_out, bridge, "retreat")
+            floor_z = min(p_start[2], pick_c[2])
+        else:
+            bridge = self._bridge(start.q, pick_in_q)
+            s_ret = []
+            floor_z = -math.inf
+        via_in, s_desc, lead_pick_in = self._reach_state(pick_in, bridge, "descend_pick")
+        from_state = s_ret[-1].end if s_ret else start
+        s_to = self._segment(from_state, via_in.q, via_in.qd, "to_pick", via_in.qdd)
+        if s_ret and not self._clearance_ok(s_to, floor_z):
+            s_ret, lead_start = self._leave(start, start_out, None, "retreat")
+            via_in, s_desc, lead_pick_in = self._reach_state(pick_in, None, "descend_pick")
+            s_to = self._segment(s_ret[-1].end, via_in.q, via_in.qd, "to_pick", via_in.qdd)
+        segs += [*s_ret, s_to, *s_desc]
+        segs.append(
+            hold_segment(
+                JointState(pick_q, (pick_end_q - pick_q) / dwell_pick if moving else np.zeros(6)),
+                dwell_pick,
+                "dwell_pick",
+            )
+        )
+
+        # Lift, transfer, descend to the place.
+        bridge = self._bridge(lift_q, place_in_q)
+        floor_z = min(pick_c[2], place_c[2])
+        s_lift, lead_out = self._leave(segs[-1].end, pick_out, bridge, "lift")
+        via_pl, s_down, lead_in = self._reach_state(place_in, bridge, "descend_place")
+        s_tr = self._link(s_lift[-1], via_pl, floor_z, "transfer")
+        if s_tr is None:
+            s_lift, lead_out = self._leave(segs[-1].end, pick_out, None, "lift")
+            via_pl, s_down, lead_in = self._reach_state(place_in, None, "descend_place")
+            s_tr = self._segment(s_lift[-1].end, via_pl.q, via_pl.qd, "transfer", via_pl.qdd)
+        segs += [*s_lift, s_tr, *s_down]
+        segs.append(hold_segment(JointState(place_q), c.place_dwell, "dwell_place"))
+        if end_retreat:
+            segs.append(self._segment(segs[-1].end, place_in_q, None, "retreat_end"))
+        leads = (lead_start, lead_pick_in, lead_out, lead_in)
+        return Piecewise(tuple(segs)), pick_q, place_q, place_yaw, leads
+
+    def lower_bound(
+        self, start_q: npt.ArrayLike, pick_q: Array, place_q: Array, pick_qd: Array | None = None
+    ) -> float:
+        """Lower bound [s]: time-optimal start -> pick contact -> place contact, no dwell.
+
+        Args:
+            start_q: Start configuration (at rest), shape (6,) [rad].
+            pick_q: Pick contact configuration, shape (6,) [rad].
+            place_q: Place contact configuration, shape (6,) [rad].
+            pick_qd: Joint velocity at the pick contact (belt matching), shape (6,) [rad/s].
+        """
+        s0 = JointState.at_rest(as_joint_vector(start_q, "start_q"))
+        a = self._segment(s0, pick_q, pick_qd, "bound_pick")
+        b = self._segment(a.end, place_q, None, "bound_place")
+        return a.duration + b.duration
+
+    def plan_move(self, start: JointState, q: npt.ArrayLike, label: str = "move") -> Piecewise:
+        """Time-optimal move from ``start`` to rest at ``q`` (6,) [rad] (e.g. back home).
+
+        Raises:
+            PlannerError: See `plan_segment`.
+        """
+        target = as_joint_vector(q, "q")
+        return Piecewise((self._segment(start, target, None, label),))
+
+
+def relative_rotation(tile_yaw: float, slot_yaw: float) -> float:
+    """Rotation [rad] turning a tile at ``tile_yaw`` to ``slot_yaw``, wrapped to [-pi, pi).
+
+    Raises:
+        InvalidTargetError: A yaw is not finite.
+    """
+    if not (math.isfinite(tile_yaw) and math.isfinite(slot_yaw)):
+        raise InvalidTargetError(f"yaws must be finite, got {tile_yaw!r}, {slot_yaw!r}")
+    return float(wrap_angle(slot_yaw - tile_yaw))
+
+
+__all__ = ["CyclePlan", "PickPlacePlanner", "relative_rotation"]
