@@ -68,14 +68,14 @@ def _validate_boundary(pts: FloatArray, mask: BoolArray, what: str) -> float:
             f"{what}: repeated point {pts[i].tolist()} at indices {int(i)} and {int(j)}; "
             "every relevant point must be distinct"
         )
-    area = geo.signed_area(pts)
-    if abs(area) <= _REL_EPS * size * size:
-        raise InvalidFigureError(f"{what}: zero area (all points collinear); a figure needs area")
     if geo.self_intersects(pts):
         raise InvalidFigureError(
             f"{what}: the boundary crosses or touches itself; only simple closed boundaries are "
             "allowed"
         )
+    area = geo.signed_area(pts)
+    if abs(area) <= _REL_EPS * size * size:
+        raise InvalidFigureError(f"{what}: zero area (all points collinear); a figure needs area")
     if mask.shape != (len(pts),):
         raise InvalidFigureError(
             f"{what}: curve_mask must have shape ({len(pts)},), got {mask.shape}"

@@ -1,0 +1,146 @@
+import math
+
+import numpy as np
+import pytest
+
+from qshape import Boundary, Figure, InvalidFigureError, InvalidHoleError, QShapeError
+from qshape.geometry import signed_area
+
+SQ = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]
+
+
+def test_square_measures_and_orientation():
+    f = Figure.from_polygon(SQ, color=(1, 0, 0))
+    assert f.area == pytest.approx(100.0)
+    assert f.perimeter == pytest.approx(40.0)
+    np.testing.assert_allclose(f.centroid, [5.0, 5.0])
+    assert signed_area(f.points) < 0  # clockwise (y-up), the paper's walk
+    assert f.color == (1.0, 0.0, 0.0)
+    g = Figure.from_polygon(SQ[::-1])
+    assert signed_area(g.points) < 0
+
+
+def test_y_down_orientation_is_clockwise_as_seen():
+    f = Figure.from_polygon(SQ, y_down=True)
+    assert signed_area(f.points) > 0  # clockwise on screen = CCW in y-down math coordinates
+    assert f.area == pytest.approx(100.0)
+
+
+def test_closing_point_is_dropped():
+    f = Figure.from_polygon([*SQ, SQ[0]])
+    assert len(f.points) == 4
+
+
+def test_primitives_area_centroid():
+    assert Figure.circle(3.0).area == pytest.approx(math.pi * 9)
+    ring = Figure.ring(5.0, 2.0, center=(7.0, -3.0))
+    assert ring.area == pytest.approx(math.pi * 21)
+    np.testing.assert_allclose(ring.centroid, [7.0, -3.0], atol=1e-12)
+    semi = Figure.semicircle(6.0, angle=math.pi / 2, center=(1.0, 1.0))
+    assert semi.area == pytest.approx(math.pi * 18)
+    np.testing.assert_allclose(semi.centroid, [1.0 - 8.0 / math.pi, 1.0], atol=1e-12)
+    hexagon = Figure.regular_polygon(6, 2.0)
+    assert hexagon.area == pytest.approx(3 * math.sqrt(3) / 2 * 4)
+    rect = Figure.rectangle(4.0, 2.0, center=(1.0, 2.0), angle=0.3)
+    assert rect.area == pytest.approx(8.0)
+    np.testing.assert_allclose(rect.centroid, [1.0, 2.0])
+
+
+def test_holed_area_and_centroid():
+    hole = [[1.0, 1.0], [3.0, 1.0], [3.0, 3.0], [1.0, 3.0]]
+    f = Figure.from_polygon(SQ, holes=[hole])
+    assert f.area == pytest.approx(96.0)
+    np.testing.assert_allclose(f.centroid, [(500 - 8) / 96, (500 - 8) / 96])
+    assert f.holes[0].points.shape == (4, 2)
+
+
+def test_figures_are_immutable_values():
+    f = Figure.rectangle(2, 1)
+    with pytest.raises(ValueError):
+        f.points[0, 0] = 5.0
+    assert f == Figure.rectangle(2, 1)
+    assert f != Figure.rectangle(2, 1.5)
+
+
+@pytest.mark.parametrize(
+    ("points", "message"),
+    [
+        ([[0, 0], [1, 1]], "at least 3"),
+        ([], "shape|at least 3"),
+        ([[0, 0], [1, 0], [float("nan"), 1]], "finite"),
+        ([[0, 0], [1, 0], [float("inf"), 1]], "finite"),
+        ([[0, 0], [1, 0], [1, 1], [1, 0], [0, 1]], "repeated"),
+        ([[0, 0], [1, 1], [2, 2]], "zero area"),
+        ([[0, 0], [2, 2], [2, 0], [0, 2]], "crosses"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], "shape"),
+        ([["a", 0], [1, 0], [0, 1]], "numbers"),
+        ([[0, 0], [0, 0], [0, 0]], "at least 3|coincide"),
+    ],
+)
+def test_bad_polygons_raise(points, message):
+    with pytest.raises(InvalidFigureError, match=message):
+        Figure.from_polygon(points)
+
+
+def test_bad_curve_masks_raise():
+    with pytest.raises(InvalidFigureError, match="adjacent curve"):
+        Figure.from_polygon(SQ, curve_mask=[True, True, False, False])
+    with pytest.raises(InvalidFigureError, match="shape"):
+        Figure.from_polygon(SQ, curve_mask=[True, False])
+    with pytest.raises(InvalidFigureError, match="booleans"):
+        Figure.from_polygon(SQ, curve_mask=[1, 0, 0, 0])
+
+
+@pytest.mark.parametrize(
+    ("hole", "message"),
+    [
+        ([[20, 20], [22, 20], [22, 22], [20, 22]], "outside"),
+        ([[8, 4], [12, 4], [12, 6], [8, 6]], "crosses"),
+        ([[0, 4], [4, 4], [4, 6], [0, 6]], "touches|crosses"),
+    ],
+)
+def test_bad_holes_raise(hole, message):
+    with pytest.raises(InvalidHoleError, match=message):
+        Figure.from_polygon(SQ, holes=[hole])
+
+
+def test_overlapping_and_nested_holes_raise():
+    a = [[1, 1], [5, 1], [5, 5], [1, 5]]
+    b = [[3, 3], [7, 3], [7, 7], [3, 7]]
+    inner = [[2, 2], [3, 2], [3, 3], [2, 3]]
+    with pytest.raises(InvalidHoleError, match="overlap"):
+        Figure.from_polygon(SQ, holes=[a, b])
+    with pytest.raises(InvalidHoleError, match="overlap"):
+        Figure.from_polygon(SQ, holes=[a, inner])
+
+
+def test_ring_needs_smaller_inner_radius_and_hole_inside_arc():
+    with pytest.raises(InvalidHoleError):
+        Figure.ring(2.0, 3.0)
+    # a hole inside the disc but outside the inscribed square of the relevant points is fine
+    ring = Figure.ring(10.0, 8.5)
+    assert len(ring.holes) == 1
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda: Figure.rectangle(0, 1),
+        lambda: Figure.rectangle(-1, 1),
+        lambda: Figure.circle(float("nan")),
+        lambda: Figure.regular_polygon(2, 1.0),
+        lambda: Figure.regular_polygon(3.5, 1.0),
+        lambda: Figure.rectangle(1, 1, color=(2, 0, 0)),
+        lambda: Figure.rectangle(1, 1, color=(0.5, 0.5)),
+        lambda: Figure.rectangle(1, 1, color="red"),
+    ],
+)
+def test_bad_primitive_arguments_raise(call):
+    with pytest.raises(QShapeError):
+        call()
+
+
+def test_boundary_make_normalises():
+    b = Boundary.make(SQ)
+    assert signed_area(b.points) < 0
+    assert not b.curve_mask.any()
