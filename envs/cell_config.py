@@ -221,6 +221,9 @@ class TileConfig:
         thickness: Tile thickness [m].
         density: Ceramic density [kg/m^3].
         friction: Sliding friction coefficient of tiles (belts and sheet use it too) [-].
+        body_color: RGB in [0, 1] of the unglazed ceramic (sides and bottom).
+        glaze_thickness: Thickness of the coloured glaze layer drawn on the top face [m]
+            (visual only).
         vertex_jitter: Std of the manufacturing noise added to outline vertices [m].
         color_jitter: Std of the noise added to each RGB channel [0..1 units].
         min_gap: Minimum clearance between bounding circles of placed tiles [m].
@@ -237,6 +240,8 @@ class TileConfig:
     thickness: float = 0.005
     density: float = 2400.0
     friction: float = 0.8
+    body_color: tuple[float, ...] = (0.80, 0.74, 0.64)
+    glaze_thickness: float = 0.0008
     vertex_jitter: float = 0.0002
     color_jitter: float = 0.02
     min_gap: float = 0.006
@@ -249,6 +254,15 @@ class TileConfig:
 
     def __post_init__(self) -> None:
         _positive(self, "thickness", "density", "friction", "placement_attempts")
+        _positive(self, "glaze_thickness")
+        _length(self, "body_color", 3)
+        if not all(0.0 <= c <= 1.0 for c in self.body_color):
+            raise CellError(f"TileConfig.body_color must be RGB in [0, 1], got {self.body_color}")
+        if self.glaze_thickness >= self.thickness:
+            raise CellError(
+                f"TileConfig.glaze_thickness {self.glaze_thickness} m must be < thickness "
+                f"{self.thickness} m"
+            )
         _positive(self, "stream_period")
         _non_negative(self, "vertex_jitter", "color_jitter", "min_gap", "distractor_rate")
         _non_negative(self, "stream_initial")

@@ -431,11 +431,29 @@ def _add_tiles(spec: mujoco.MjSpec, cfg: CellConfig, tiles: Sequence[PhysicalTil
                 meshname=f"tile{i}_piece{k}",
             )
             g.density = cfg.tiles.density
-            g.rgba = [*tile.color, 1.0]
+            g.rgba = [*cfg.tiles.body_color, 1.0]
             g.friction = [cfg.tiles.friction, 0.005, 0.0001]
             g.contype, g.conaffinity = TILE_CONTYPE, TILE_CONAFFINITY
             g.condim = 4
             g.solref = list(CONTACT_SOLREF)
+            g.group = 3  # collision, hidden; the visuals below show the true (concave) shape
+        # Visuals: the ceramic body and the coloured glaze on the top face (massless).
+        glaze = cfg.tiles.glaze_thickness
+        for part, z0, z1, rgba in (
+            ("body", -t / 2, t / 2 - glaze, [*cfg.tiles.body_color, 1.0]),
+            ("glaze", t / 2 - glaze, t / 2 + 1e-5, [*tile.color, 1.0]),
+        ):
+            verts, faces = extrusion(tile.outline, tile.holes, z0, z1)
+            mesh = spec.add_mesh(name=f"tile{i}_{part}")
+            mesh.uservert = verts.ravel().tolist()
+            mesh.userface = faces.ravel().tolist()
+            g = body.add_geom(
+                name=f"tile{i}_{part}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"tile{i}_{part}"
+            )
+            g.contype = g.conaffinity = 0
+            g.density = 0.0
+            g.group = 2
+            g.rgba = rgba
 
 
 def build_spec(
