@@ -1,0 +1,101 @@
+import math
+
+import numpy as np
+import pytest
+
+import qshape
+from qshape import Figure, InvalidFigureError, OutlineParams, canonical_key, describe
+from qshape.figure import densify
+from qshape.simplify import simplify_outline
+
+SEED = 5
+L_TILE = [[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]]
+
+
+def dense_outline(fig_points, curve_mask, spacing: float, rng, noise: float) -> np.ndarray:
+    """Sample a boundary (arcs included) every ``spacing`` units, with uniform noise."""
+    poly = densify(np.asarray(fig_points, float), np.asarray(curve_mask), per_arc=200)
+    closed = np.vstack([poly, poly[:1]])
+    seg = np.hypot(*np.diff(closed, axis=0).T)
+    cum = np.r_[0.0, np.cumsum(seg)]
+    s = np.arange(0.0, cum[-1], spacing)
+    pts = np.stack([np.interp(s, cum, closed[:, 0]), np.interp(s, cum, closed[:, 1])], 1)
+    start = int(rng.integers(0, len(pts)))
+    return np.roll(pts, start, axis=0) + rng.uniform(-noise, noise, pts.shape)
+
+
+PRIMITIVES = {
+    "square": Figure.rectangle(20, 20),
+    "rectangle": Figure.rectangle(30, 15),
+    "right_triangle": Figure.from_polygon([[0, 0], [20, 0], [0, 20]]),
+    "equilateral": Figure.regular_polygon(3, 12.0),
+    "hexagon": Figure.regular_polygon(6, 12.0),
+    "octagon": Figure.regular_polygon(8, 12.0),
+    "l_tile": Figure.from_polygon(L_TILE),
+    "circle": Figure.circle(10.0),
+    "semicircle": Figure.semicircle(12.0),
+    "ring": Figure.ring(12.0, 5.0),
+}
+
+
+@pytest.mark.parametrize("name", sorted(PRIMITIVES))
+@pytest.mark.parametrize("trial", range(3))
+def test_from_outline_gives_the_primitives_description(name, trial):
+    rng = np.random.default_rng(SEED * 100 + trial)
+    exact = PRIMITIVES[name]
+    angle = rng.uniform(-math.pi, math.pi)
+    c, s = math.cos(angle), math.sin(angle)
+    rot = np.array([[c, s], [-s, c]])
+    dense = dense_outline(exact.points @ rot, exact.curve_mask, 0.25, rng, 0.03)
+    holes = [dense_outline(h.points @ rot, h.curve_mask, 0.25, rng, 0.03) for h in exact.holes]
+    fig = Figure.from_outline(dense, holes, y_down=bool(trial % 2))
+    if trial % 2:  # the same outline read as image coordinates: mirror it back to compare
+        fig = Figure.from_outline(dense * [1, -1], [h * [1, -1] for h in holes], y_down=True)
+    d_exact, d_fig = describe(exact), describe(fig)
+    assert len(fig.points) == len(exact.points)
+    assert d_fig.type_curve == d_exact.type_curve
+    assert canonical_key(d_fig) == canonical_key(d_exact)
+    m = qshape.match(d_exact, d_fig)
+    assert m is not None
+    if not m.continuous:
+        assert min(abs(math.remainder(r + angle, 2 * math.pi)) for r in m.rotations) < 0.05
+    assert fig.area == pytest.approx(exact.area, rel=0.02)
+
+
+def test_pixel_scale_outline_with_default_params():
+    # A 40 px tile traced at one-pixel spacing, half-pixel noise (camera-like).
+    rng = np.random.default_rng(SEED)
+    exact = Figure.rectangle(40, 24)
+    dense = np.round(dense_outline(exact.points + 100, exact.curve_mask, 1.0, rng, 0.3))
+    dense = dense[np.r_[True, np.any(np.diff(dense, axis=0) != 0, axis=1)]]
+    fig = Figure.from_outline(dense, y_down=True)
+    assert canonical_key(describe(fig)) == canonical_key(describe(exact))
+
+
+def test_simplify_returns_points_and_mask():
+    t = np.linspace(0, 2 * math.pi, 300, endpoint=False)
+    pts, mask = simplify_outline(np.stack([np.cos(t), np.sin(t)], 1))
+    assert pts.shape == (4, 2)
+    assert mask.tolist() in ([False, True, False, True], [True, False, True, False])
+
+
+@pytest.mark.parametrize(
+    ("dense", "message"),
+    [
+        ([[0, 0], [1, 1]], "at least 3"),
+        ([[0, 0], [1, 0], [float("nan"), 1]], "finite"),
+        (np.zeros((10, 2)), "at least 3"),
+        ([[0, 0], [1, 1], [2, 2], [3, 3]], "zero area"),
+        (np.zeros((5, 3)), "shape"),
+    ],
+)
+def test_bad_outlines_raise(dense, message):
+    with pytest.raises(InvalidFigureError, match=message):
+        Figure.from_outline(dense)
+
+
+def test_params_are_used():
+    t = np.linspace(0, 2 * math.pi, 400, endpoint=False)
+    circle = np.stack([10 * np.cos(t), 10 * np.sin(t)], 1)
+    three = Figure.from_outline(circle, params=OutlineParams(max_curve_turn_deg=130.0))
+    assert int(three.curve_mask.sum()) == 3
