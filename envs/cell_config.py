@@ -81,6 +81,8 @@ class RobotConfig:
         home: Joint angles of the start configuration, shape (6,) [rad].
         max_joint_speed: Axis speed limits, shape (6,) [rad/s] (SPEC 4: 200, 200, 260, 360,
             360, 450 deg/s); servo velocity targets are clipped to them.
+        base_keepout: Radius about the base axis that no belt may enter [m] (the rotating
+            base, 0.11 m, plus margin).
     """
 
     model: str = "assets/irb140/irb140.xml"
@@ -93,11 +95,12 @@ class RobotConfig:
         6.2831853,
         7.8539816,
     )
+    base_keepout: float = 0.15
 
     def __post_init__(self) -> None:
         _length(self, "home", 6)
         _length(self, "max_joint_speed", 6)
-        _positive(self, "max_joint_speed")
+        _positive(self, "max_joint_speed", "base_keepout")
         if not self.model_path.is_file():
             raise CellError(f"RobotConfig.model: no file {self.model_path}")
 
@@ -119,7 +122,7 @@ class LayoutConfig:
 
     Attributes:
         belt_separation: Distance between the two belts' centre lines [m] (paper: 1.0; compact
-            0.5 with work_x about 0.5).
+            0.5 with work_x 0.5 and input_belt.length 0.6, clear of the base).
         work_x: Forward position of both working areas' centres [m].
         belt_top_z: Height of both belts' top surfaces [m].
     """
@@ -380,11 +383,31 @@ class CellConfig:
     render: RenderConfig = field(default_factory=RenderConfig)
 
     def __post_init__(self) -> None:
-        if self.layout.belt_separation < self.input_belt.width / 2 + self.output_belt.width / 2:
+        lay = self.layout
+        if lay.belt_separation < self.input_belt.width / 2 + self.output_belt.width / 2:
             raise CellError(
-                f"LayoutConfig.belt_separation {self.layout.belt_separation} m: the belts "
+                f"LayoutConfig.belt_separation {lay.belt_separation} m: the belts "
                 f"(widths {self.input_belt.width}, {self.output_belt.width} m) would overlap"
             )
+        end = lay.work_x + self.input_belt.end_offset
+        belts = {
+            "input_belt": (end - self.input_belt.length, end, self.input_belt.width),
+            "output_belt": (
+                lay.work_x - self.output_belt.length / 2,
+                lay.work_x + self.output_belt.length / 2,
+                self.output_belt.width,
+            ),
+        }
+        for name, (x0, x1, width) in belts.items():
+            dx = max(x0, 0.0, -x1)
+            dy = max(lay.belt_separation / 2 - width / 2, 0.0)
+            if math.hypot(dx, dy) < self.robot.base_keepout:
+                raise CellError(
+                    f"{name} (x {x0:.2f}..{x1:.2f} m, {width} m wide, centre line "
+                    f"{lay.belt_separation / 2:.2f} m from the base) comes within "
+                    f"{self.robot.base_keepout} m of the robot base axis; shorten it, move "
+                    "work_x forward or widen belt_separation"
+                )
 
 
 def load_cell_config(name_or_path: str | Path | None = "cell", **overrides: Any) -> CellConfig:

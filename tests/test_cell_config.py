@@ -29,8 +29,14 @@ def test_bundled_yaml_equals_defaults() -> None:
 
 
 def test_overrides_and_compact_layout() -> None:
-    cfg = load_cell_config(layout={"belt_separation": 0.5, "work_x": 0.5})
-    assert cfg.layout.belt_separation == 0.5 and cfg.input_belt == CellConfig().input_belt
+    cfg = load_cell_config(
+        layout={"belt_separation": 0.5, "work_x": 0.5}, input_belt={"length": 0.6}
+    )
+    assert (
+        cfg.layout.belt_separation == 0.5 and cfg.input_belt.width == CellConfig().input_belt.width
+    )
+    with pytest.raises(CellError, match="input_belt .* robot base axis"):
+        load_cell_config(layout={"belt_separation": 0.5, "work_x": 0.5})
 
 
 def test_unknown_key_names_allowed_keys() -> None:

@@ -7,6 +7,7 @@ import pytest
 from cell_motion import ArmIK, pick, place
 
 from envs.cell import Cell
+from envs.cell_config import load_cell_config
 from envs.tiles import basic_shapes
 
 SHAPES = basic_shapes()
@@ -47,3 +48,23 @@ def test_pick_hold_fast_move_and_place(cell: Cell, ik: ArmIK, i: int) -> None:
     )
     assert [e.kind for e in cell.events[-2:]] == ["grasp", "release"]
     assert cell.warnings() == 0
+
+
+@pytest.mark.parametrize("name", ["square", "ring"])
+def test_compact_layout_pick_and_place(name: str) -> None:
+    cfg = load_cell_config(
+        layout={"belt_separation": 0.5, "work_x": 0.5}, input_belt={"length": 0.6}
+    )
+    shapes = [s for s in SHAPES if s.name == name]
+    cell = Cell(cfg, shapes, seed=2)
+    ik = ArmIK(cell)
+    try:
+        assert pick(cell, ik, 0)
+        target = (cell.geometry.output_centre[0] + 0.1, cell.geometry.output_centre[1] - 0.1, 2.0)
+        assert place(cell, ik, 0, target, cell.geometry.mesh_top) > 1.0
+        cell.step(250)
+        pose = cell.tile_poses()
+        assert np.hypot(pose.pos[0, 0] - target[0], pose.pos[0, 1] - target[1]) < 1e-3
+        assert cell.n_dropped == 0 and cell.warnings() == 0
+    finally:
+        cell.close()

@@ -10,18 +10,20 @@ import pytest
 from cell_motion import ArmIK, tool_down
 
 from envs.cell import Cell
-from envs.cell_config import CellConfig, LayoutConfig
+from envs.cell_config import CellConfig, InputBeltConfig, LayoutConfig
 from envs.tiles import basic_shapes
 
 LAYOUTS = {
-    "paper_1m": LayoutConfig(belt_separation=1.0, work_x=0.0),
-    "compact_0.5m": LayoutConfig(belt_separation=0.5, work_x=0.5),
+    "paper_1m": CellConfig(layout=LayoutConfig(belt_separation=1.0, work_x=0.0)),
+    "compact_0.5m": CellConfig(
+        layout=LayoutConfig(belt_separation=0.5, work_x=0.5),
+        input_belt=InputBeltConfig(length=0.6),
+    ),
 }
 
 
-@pytest.mark.parametrize("layout", LAYOUTS.values(), ids=LAYOUTS.keys())
-def test_tile_area_and_mesh_reachable_pointing_down(layout: LayoutConfig) -> None:
-    cfg = CellConfig(layout=layout)
+@pytest.mark.parametrize("cfg", LAYOUTS.values(), ids=LAYOUTS.keys())
+def test_tile_area_and_mesh_reachable_pointing_down(cfg: CellConfig) -> None:
     cell = Cell(cfg, basic_shapes()[:1], seed=0)
     ik = ArmIK(cell)
     geo = cell.geometry
