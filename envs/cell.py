@@ -23,7 +23,7 @@ import numpy as np
 
 from envs.belts import LostTracker, input_speed, set_input_speed
 from envs.cameras import CameraModel, CameraRig, camera_model
-from envs.cell_config import CellConfig, load_cell_config
+from envs.cell_config import CameraConfig, CellConfig, load_cell_config
 from envs.errors import CellError
 from envs.scene import WAKE_FORCE, build_scene, cell_geometry, park_positions, yaw_quat
 from envs.suction import Suction, SuctionEvent
@@ -387,7 +387,7 @@ class Cell:
             self.model, self.data, cid, width or cam_cfg.width, height or cam_cfg.height
         )
 
-    def _camera_cfg(self, name: str):  # noqa: ANN202 - internal
+    def _camera_cfg(self, name: str) -> CameraConfig:
         if name == CAMERAS[0]:
             return self.cfg.input_camera
         if name == CAMERAS[1]:
