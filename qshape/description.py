@@ -13,6 +13,7 @@ import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -147,6 +148,16 @@ class HoleDescription:
     position: tuple[str, ...]
     boundary: BoundaryDescription
     relation: str = CIi
+
+    @cached_property
+    def angles(self) -> tuple[float, float] | None:
+        """Polar angle interval [deg] the hole spans (None: it surrounds the centroid).
+
+        Angles are counter-clockwise from +x about the parent's centroid in the y-up frame.
+        Computed once, for matching.
+        """
+        iv = hole_interval(self.boundary.points, self.boundary.curve_mask, np.array([1.0, 0.0]))
+        return None if iv is None else (-iv[1], -iv[0])
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, HoleDescription):

@@ -18,6 +18,7 @@ common admissible label.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
@@ -48,37 +49,54 @@ C_MASK = 0b11 << C_MASK_SHIFT
 T_MASK = 0b111 << T_MASK_SHIFT
 
 
-def _band3(
-    value: FloatArray,
-    band: FloatArray,
-    margin: FloatArray,
-    labels: NDArray[np.int64],
-    relative: NDArray[np.bool_],
-) -> tuple[CodeArray, CodeArray]:
-    """Primary labels and admissible bit masks for three-way bands, several at once.
+@dataclass(frozen=True)
+class _Bands:
+    """Precomputed band edges, ambiguity intervals and label bits (rows: A, L, TC)."""
+
+    lo: FloatArray  # (3, 1) band low edges
+    hi: FloatArray  # (3, 1) band high edges
+    lo_amb: tuple[FloatArray, FloatArray]  # (3, 1) ambiguous interval around low edges
+    hi_amb: tuple[FloatArray, FloatArray]  # (3, 1) ambiguous interval around high edges
+    below: NDArray[np.int64]  # (3, 1) label indices
+    inside: NDArray[np.int64]
+    above: NDArray[np.int64]
+
+
+@lru_cache(maxsize=16)
+def _bands(tol: Tolerances) -> _Bands:
+    """Bands of the angle (absolute margin), length and curvature (relative margin) labels."""
+    band = np.array([tol.right_angle_deg, tol.equal_length_ratio, tol.semicircle_ratio])
+    lo, hi = band[:, 0:1], band[:, 1:2]
+    m = np.array([[tol.angle_margin_deg], [tol.length_margin], [tol.semicircle_margin]])
+    rel = np.array([[False], [True], [True]])
+    f = 1.0 + m
+    labels = np.array([[ACUTE, RIGHT, OBTUSE], [SMALLER, EQUAL, BIGGER],
+                       [ACUTE_CURVE, SEMICIRCLE, PLANE]], dtype=np.int64)
+    return _Bands(
+        lo=lo,
+        hi=hi,
+        lo_amb=(np.where(rel, lo / f, lo - m), np.where(rel, lo * f, lo + m)),
+        hi_amb=(np.where(rel, hi / f, hi - m), np.where(rel, hi * f, hi + m)),
+        below=labels[:, 0:1],
+        inside=labels[:, 1:2],
+        above=labels[:, 2:3],
+    )
+
+
+def _band3(value: FloatArray, b: _Bands) -> tuple[CodeArray, CodeArray]:
+    """Primary labels and admissible bit masks for the three-way bands.
 
     Args:
-        value: Measurements, shape (b, n): one row per band.
-        band: (b, 2) band edges (low, high), inclusive: a value on an edge is inside.
-        margin: (b,) ambiguity margins, absolute or relative (factor 1 + margin).
-        labels: (b, 3) label indices (below, inside, above).
-        relative: (b,) True where the margin is relative.
+        value: Measurements, shape (3, n): angle [deg], length ratio, half-chord / sagitta.
+        b: The bands (edges inclusive: a value on an edge is inside the band).
     """
-    lo, hi = band[:, 0:1], band[:, 1:2]
-    m = margin[:, None]
-    rel = relative[:, None]
-    f = 1.0 + m
-    lo_a = np.where(rel, lo / f, lo - m)
-    lo_b = np.where(rel, lo * f, lo + m)
-    hi_a = np.where(rel, hi / f, hi - m)
-    hi_b = np.where(rel, hi * f, hi + m)
-    below, inside, above = labels[:, 0:1], labels[:, 1:2], labels[:, 2:3]
-    primary = np.where(value < lo, below, np.where(value > hi, above, inside))
-    bit_below, bit_inside, bit_above = 1 << below, 1 << inside, 1 << above
+    primary = np.where(value < b.lo, b.below, np.where(value > b.hi, b.above, b.inside))
+    near_lo = (value >= b.lo_amb[0]) & (value <= b.lo_amb[1])
+    near_hi = (value >= b.hi_amb[0]) & (value <= b.hi_amb[1])
     mask = (
         (1 << primary)
-        | np.where((value >= lo_a) & (value <= lo_b), bit_below | bit_inside, 0)
-        | np.where((value >= hi_a) & (value <= hi_b), bit_inside | bit_above, 0)
+        | (near_lo * ((1 << b.below) | (1 << b.inside)))
+        | (near_hi * ((1 << b.inside) | (1 << b.above)))
     )
     return primary, mask
 
@@ -139,16 +157,6 @@ def node_codes(points: FloatArray, curve_mask: BoolArray, tol: Tolerances) -> Co
     return codes_from(points, points[prev], points[nxt], curve_mask, tol)
 
 
-@lru_cache(maxsize=16)
-def _band_table(tol: Tolerances) -> tuple[FloatArray, FloatArray, NDArray[np.int64], BoolArray]:
-    band = np.array([tol.right_angle_deg, tol.equal_length_ratio, tol.semicircle_ratio])
-    margin = np.array([tol.angle_margin_deg, tol.length_margin, tol.semicircle_margin])
-    labels = np.array([[ACUTE, RIGHT, OBTUSE], [SMALLER, EQUAL, BIGGER],
-                       [ACUTE_CURVE, SEMICIRCLE, PLANE]], dtype=np.int64)
-    relative = np.array([False, True, True])
-    return band, margin, labels, relative
-
-
 def codes_from(
     points: FloatArray,
     prev: FloatArray,
@@ -169,8 +177,7 @@ def codes_from(
         Shape (n,) int64 node codes.
     """
     angle, bend, ratio, chord_ratio = measure(points, prev, nxt)
-    band, margin, labels, relative = _band_table(tol)
-    primary, mask = _band3(np.stack([angle, ratio, chord_ratio]), band, margin, labels, relative)
+    primary, mask = _band3(np.stack([angle, ratio, chord_ratio]), _bands(tol))
     c_p = (bend < 0.0).astype(np.int64)
     c_m = (1 << c_p) | np.where(np.abs(bend) <= tol.convexity_margin_deg, 0b11, 0)
     curve = curve_mask.astype(np.int64)

@@ -29,7 +29,6 @@ from qshape.description import (
     Description,
     default_tolerances,
     describe,
-    hole_interval,
 )
 from qshape.errors import MatchError
 from qshape.figure import Figure
@@ -229,29 +228,27 @@ def _hole_order(d: Description) -> list[int]:
 
 def pack(descs: Sequence[Description]) -> Pack:
     """Stack descriptions that share node count and hole node counts into arrays."""
-    orders = [_hole_order(d) for d in descs]
-    descs = [
-        d if order == sorted(order) else Description(
-            d.type_hole, d.type_curve, d.color, d.area, d.perimeter, d.outer,
-            tuple(d.holes[h] for h in order))
-        for d, order in zip(descs, orders, strict=True)
-    ]
+    nholes = len(descs[0].holes)
+    if nholes > 1:
+        descs = [
+            d if (order := _hole_order(d)) == sorted(order) else Description(
+                d.type_hole, d.type_curve, d.color, d.area, d.perimeter, d.outer,
+                tuple(d.holes[h] for h in order))
+            for d in descs
+        ]
     codes = np.stack([d.outer.codes for d in descs])
     pts = np.stack([d.outer.points for d in descs])
-    nholes = len(descs[0].holes)
     hole_codes = tuple(np.stack([d.holes[h].boundary.codes for d in descs])
                        for h in range(nholes))
     hc = np.zeros((len(descs), nholes, 2))
     hi = np.full((len(descs), nholes, 2), np.nan)
     for g, d in enumerate(descs):
         for h, hole in enumerate(d.holes):
-            hp = hole.boundary.points
-            hc[g, h] = hp.mean(axis=0)
-            iv = hole_interval(hp, hole.boundary.curve_mask, np.array([1.0, 0.0]))
-            if iv is not None:
-                # hole_interval gives clockwise bearings from +x; store CCW angles.
-                hi[g, h] = (-iv[1], -iv[0])
-    colors = np.array([d.color if d.color is not None else (np.nan,) * 3 for d in descs])
+            hc[g, h] = hole.boundary.points.mean(axis=0)
+            if hole.angles is not None:
+                hi[g, h] = hole.angles
+    nan3 = (np.nan, np.nan, np.nan)
+    colors = np.array([nan3 if d.color is None else d.color for d in descs])
     return Pack(
         codes=codes,
         pts=pts,

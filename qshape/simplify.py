@@ -41,7 +41,8 @@ class OutlineParams:
         noise_fraction: Distance from a chord always treated as noise, fraction of the outline's
             diameter (largest extent).
         max_curve_turn_deg: A curve turning more than this is split into equal-turn pieces, in
-            [deg]. A full circle (360) becomes two semicircles.
+            [deg]. A full circle (360) becomes two semicircles; 240 keeps a noisy semicircle
+            (whose measured turning can exceed 180) whole.
         merge_fraction: Corners closer than this fraction of the perimeter are merged.
     """
 
@@ -51,7 +52,7 @@ class OutlineParams:
     corner_angle_deg: float = 25.0
     straight_sagitta_ratio: float = 0.03
     noise_fraction: float = 0.006
-    max_curve_turn_deg: float = 200.0
+    max_curve_turn_deg: float = 240.0
     merge_fraction: float = 0.02
 
     def __post_init__(self) -> None:
