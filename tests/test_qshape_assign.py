@@ -142,3 +142,12 @@ def test_public_api_names():
     for name in ("Figure", "Tolerances", "describe", "parse", "match", "assign", "Match",
                  "canonical_key", "Assignment", "QShapeError", "OutlineParams"):
         assert hasattr(qshape, name)
+
+
+def test_qshape_imports_no_simulator():
+    import subprocess
+    import sys
+
+    code = ("import sys, qshape; bad = [m for m in ('mujoco', 'gymnasium', 'torch') "
+            "if m in sys.modules]; assert not bad, bad")
+    subprocess.run([sys.executable, "-c", code], check=True)

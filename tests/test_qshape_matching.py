@@ -214,3 +214,28 @@ def test_too_many_ambiguous_labels_fall_back_to_coarse_key():
 def test_bad_arguments():
     with pytest.raises(MatchError):
         match("square", Figure.rectangle(1, 1))  # type: ignore[arg-type]
+
+
+def test_rotation_sign_for_image_coordinates():
+    # Pixel coordinates, y down. The tile is the slot turned by phi counter-clockwise as seen on
+    # screen; the rotation that places it is -phi (clockwise as seen), as in the y-up frame.
+    phi = 0.6
+    slot_px = L_TILE + 100.0
+    c, s = math.cos(phi), math.sin(phi)
+    screen_ccw = np.array([[c, -s], [s, c]])  # row-vector form of (x c + y s, -x s + y c)
+    tile_px = (L_TILE - 10.0) @ screen_ccw + [300.0, 50.0]
+    m = match(Figure.from_polygon(slot_px, y_down=True), Figure.from_polygon(tile_px, y_down=True))
+    assert m is not None
+    assert angle_diff(m.rotation, -phi) < 1e-9
+    up = match(Figure.from_polygon(slot_px * [1, -1]), Figure.from_polygon(tile_px * [1, -1]))
+    assert up is not None and angle_diff(up.rotation, m.rotation) < 1e-12
+
+
+def test_fig3_in_image_coordinates():
+    ref = Figure.from_polygon(holed(0.0).points, [holed(0.0).holes[0].points], y_down=True)
+    turned = holed(1.1)
+    cand = Figure.from_polygon(turned.points, [turned.holes[0].points], y_down=True)
+    m = match(ref, cand)
+    assert m is not None and len(m.rotations) == 1
+    # the y-up construction turned it by +1.1; read as pixels that is -1.1 as seen
+    assert angle_diff(m.rotation, 1.1) < 1e-9
