@@ -1,4 +1,6 @@
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -145,9 +147,6 @@ def test_public_api_names():
 
 
 def test_qshape_imports_no_simulator():
-    import subprocess
-    import sys
-
     code = ("import sys, qshape; bad = [m for m in ('mujoco', 'gymnasium', 'torch') "
             "if m in sys.modules]; assert not bad, bad")
     subprocess.run([sys.executable, "-c", code], check=True)
