@@ -1,0 +1,1 @@
+"""Agents driving the cell: scripted baseline, perception, training, evaluation, benchmarks."""
