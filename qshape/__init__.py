@@ -1,7 +1,16 @@
 """Qualitative 2D shape description and matching (Museros et al.), as a pure library.
 
 Describe closed figures (polygons, curve segments, holes, colour) qualitatively, print and parse
-the descriptions, match them (with the rotation that places a tile), and assign tiles to slots.
+the descriptions, match them (with the rotation that places a tile), and assign tiles to slots::
+
+    import qshape
+    slot = qshape.describe(qshape.Figure.rectangle(20, 10, (0.8, 0.1, 0.1)))
+    tile = qshape.describe(qshape.Figure.from_outline(contour, color=rgb, y_down=True))
+    m = qshape.match(slot, tile)            # Match(rotation=..., rotations=..., score=...)
+    text = str(slot); assert qshape.parse(text) == slot
+    placed = qshape.assign(tiles, slots)     # [Assignment(tile, slot, rotation, score)]
+
+Tolerances (bands, margins, thresholds) live in `Tolerances`, defaults in configs/qshape.yaml.
 """
 
 from qshape.assign import Assignment, assign
@@ -11,6 +20,7 @@ from qshape.description import (
     HoleDescription,
     Node,
     describe,
+    describe_many,
     parse,
 )
 from qshape.errors import (
@@ -28,11 +38,6 @@ from qshape.tolerances import Tolerances
 
 __all__ = [
     "Assignment",
-    "Match",
-    "assign",
-    "canonical_key",
-    "canonical_keys",
-    "match",
     "Boundary",
     "BoundaryDescription",
     "Description",
@@ -40,6 +45,7 @@ __all__ = [
     "HoleDescription",
     "InvalidFigureError",
     "InvalidHoleError",
+    "Match",
     "MatchError",
     "Node",
     "OutlineParams",
@@ -47,6 +53,11 @@ __all__ = [
     "QShapeError",
     "ToleranceError",
     "Tolerances",
+    "assign",
+    "canonical_key",
+    "canonical_keys",
     "describe",
+    "describe_many",
+    "match",
     "parse",
 ]
