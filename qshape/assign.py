@@ -70,6 +70,9 @@ class _Edges:
     slot: list[IntArray]
     score: list[FloatArray]
     theta: list[FloatArray]
+    block_tiles: list[IntArray]  # per evaluated component: its tiles (ascending global ids)
+    block_slots: list[IntArray]  # ... and its slots
+    block_of_chunk: list[int]  # for each appended chunk of edges, its component
 
 
 def _groups(descs: Sequence[Description]) -> dict[str, list[int]]:
@@ -79,17 +82,13 @@ def _groups(descs: Sequence[Description]) -> dict[str, list[int]]:
     return out
 
 
-def feasible_pairs(
+def _collect(
     tiles: Sequence[Description],
     slots: Sequence[Description],
     tol: Tolerances,
     use_color: bool,
-) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
-    """Every matching (tile, slot) pair, found through canonical-key buckets.
-
-    Returns:
-        (tile, slot, score, rotation) arrays of equal length, in no particular order.
-    """
+) -> _Edges:
+    """Feasible pairs block by block, looked up through canonical-key buckets."""
     tile_groups = _groups(tiles)
     slot_groups = _groups(slots)
     slot_keys = list(slot_groups)
@@ -101,7 +100,7 @@ def feasible_pairs(
         for m in members:
             for k in canonical_keys(slots[m], tol):
                 by_key[k].add(gi)
-    edges = _Edges([], [], [], [])
+    edges = _Edges([], [], [], [], [], [], [])
     slot_packs: dict[int, Pack] = {}
     for members in tile_groups.values():
         coarse = coarse_key(tiles[members[0]])
@@ -121,6 +120,25 @@ def feasible_pairs(
                 slot_packs[gi] = pack([slots[m] for m in s_idx])
             spack = slot_packs[gi]
             _block_edges(tpack, t_idx, spack, s_idx, tol=tol, use_color=use_color, edges=edges)
+    return edges
+
+
+def feasible_pairs(
+    tiles: Sequence[Description],
+    slots: Sequence[Description],
+    tol: Tolerances,
+    use_color: bool,
+) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
+    """Every matching (tile, slot) pair, found through canonical-key buckets.
+
+    Returns:
+        (tile, slot, score, rotation) arrays of equal length, in no particular order.
+    """
+    edges = _collect(tiles, slots, tol, use_color)
+    return _flat(edges)
+
+
+def _flat(edges: _Edges) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
     if not edges.tile:
         empty = np.zeros(0)
         return empty.astype(np.int64), empty.astype(np.int64), empty, empty
@@ -156,6 +174,9 @@ def _block_edges(
         ct = np.flatnonzero(comp[:t_count] == c)
         cs = np.flatnonzero(comp[t_count:] == c)
         sub_s = take(spack, cs)
+        edges.block_tiles.append(t_idx[ct])
+        edges.block_slots.append(s_idx[cs])
+        block = len(edges.block_tiles) - 1
         chunk = max(1, _BLOCK_ELEMENTS // max(1, len(cs) * n * n))
         for a in range(0, len(ct), chunk):
             rows = ct[a : a + chunk]
@@ -177,6 +198,7 @@ def _block_edges(
             edges.slot.append(s_idx[cs[res.si[first]]])
             edges.score.append(res.score[first])
             edges.theta.append(np.arctan2(res.cross[first], res.dot[first]))
+            edges.block_of_chunk.append(block)
 
 
 def _descriptions(items: Sequence[Description | Figure], tol: Tolerances) -> list[Description]:
@@ -218,16 +240,88 @@ def assign(
     sd = _descriptions(slots, tol)
     if not td or not sd:
         return []
-    t, s, score, theta = feasible_pairs(td, sd, tol, use_color)
-    if len(t) == 0:
+    edges = _collect(td, sd, tol, use_color)
+    if not edges.tile:
         return []
     if method == "greedy":
-        return _greedy(t, s, score, theta, len(sd))
-    return _optimal(t, s, score, theta, n_tiles=len(td), n_slots=len(sd))
+        return _greedy(*_flat(edges), n_slots=len(sd))
+    return _optimal(edges, n_tiles=len(td), n_slots=len(sd))
+
+
+def _optimal(edges: _Edges, *, n_tiles: int, n_slots: int) -> list[Assignment]:
+    """Most matches, then least total score, by linear_sum_assignment per component.
+
+    The evaluated blocks that share a tile or a slot (through ambiguous keys) are merged first,
+    so each assignment problem is one connected group of candidates.
+    """
+    n_blocks = len(edges.block_tiles)
+    sizes_t = [len(b) for b in edges.block_tiles]
+    sizes_s = [len(b) for b in edges.block_slots]
+    rows = np.r_[np.repeat(np.arange(n_blocks), sizes_t), np.repeat(np.arange(n_blocks), sizes_s)]
+    cols = np.r_[n_blocks + np.concatenate(edges.block_tiles),
+                 n_blocks + n_tiles + np.concatenate(edges.block_slots)]
+    size = n_blocks + n_tiles + n_slots
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(size, size))
+    _, label = connected_components(graph, directed=False)
+    groups: dict[int, list[int]] = defaultdict(list)
+    for block in range(n_blocks):
+        groups[int(label[block])].append(block)
+    chunks_of: dict[int, list[int]] = defaultdict(list)
+    for chunk, block in enumerate(edges.block_of_chunk):
+        chunks_of[block].append(chunk)
+    out: list[Assignment] = []
+    for blocks in groups.values():
+        chunks = [c for b in blocks for c in chunks_of[b]]
+        if not chunks:
+            continue
+        tiles = edges.block_tiles[blocks[0]]
+        slots = edges.block_slots[blocks[0]]
+        if len(blocks) > 1:
+            tiles = np.unique(np.concatenate([edges.block_tiles[b] for b in blocks]))
+            slots = np.unique(np.concatenate([edges.block_slots[b] for b in blocks]))
+        out.extend(_solve(
+            np.concatenate([edges.tile[c] for c in chunks]),
+            np.concatenate([edges.slot[c] for c in chunks]),
+            np.concatenate([edges.score[c] for c in chunks]),
+            np.concatenate([edges.theta[c] for c in chunks]),
+            tiles=tiles,
+            slots=slots,
+        ))
+    out.sort(key=lambda x: x.tile)
+    return out
+
+
+def _solve(
+    t: IntArray,
+    s: IntArray,
+    score: FloatArray,
+    theta: FloatArray,
+    *,
+    tiles: IntArray,
+    slots: IntArray,
+) -> list[Assignment]:
+    """linear_sum_assignment on one component: most matches, then least total score.
+
+    ``tiles`` and ``slots`` are the component's members, ascending; infeasible pairs cost more
+    than any set of feasible ones, so the count of matches is maximised first.
+    """
+    ti = np.searchsorted(tiles, t)
+    si = np.searchsorted(slots, s)
+    big = (min(len(tiles), len(slots)) + 1.0) * (float(score.max()) + 1.0)
+    cost = np.full((len(tiles), len(slots)), big)
+    cost[ti, si] = score
+    edge = np.full((len(tiles), len(slots)), -1, dtype=np.int64)
+    edge[ti, si] = np.arange(len(t))
+    rows, cols = linear_sum_assignment(cost)
+    keep = cost[rows, cols] < big
+    return [
+        Assignment(int(t[k]), int(s[k]), float(theta[k]), float(score[k]))
+        for k in edge[rows[keep], cols[keep]].tolist()
+    ]
 
 
 def _greedy(
-    t: IntArray, s: IntArray, score: FloatArray, theta: FloatArray, n_slots: int
+    t: IntArray, s: IntArray, score: FloatArray, theta: FloatArray, *, n_slots: int
 ) -> list[Assignment]:
     """The paper's loop: each tile in order takes the first free matching slot."""
     order = np.argsort(t * n_slots + s)
@@ -242,42 +336,6 @@ def _greedy(
             e = a + int(free[0])
             taken[s[e]] = True
             out.append(Assignment(int(t[e]), int(s[e]), float(theta[e]), float(score[e])))
-    return out
-
-
-def _optimal(
-    t: IntArray,
-    s: IntArray,
-    score: FloatArray,
-    theta: FloatArray,
-    *,
-    n_tiles: int,
-    n_slots: int,
-) -> list[Assignment]:
-    """Most matches, then least total score, by linear_sum_assignment per component."""
-    graph = coo_matrix(
-        (np.ones(len(t)), (t, n_tiles + s)), shape=(n_tiles + n_slots, n_tiles + n_slots)
-    )
-    _, comp = connected_components(graph, directed=False)
-    edge_comp = comp[t]
-    order = np.argsort(edge_comp, kind="stable")
-    bounds = np.flatnonzero(np.r_[True, edge_comp[order][1:] != edge_comp[order][:-1], True])
-    out = []
-    for a, b in zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True):
-        e = order[a:b]
-        tu, ti = np.unique(t[e], return_inverse=True)
-        su, si = np.unique(s[e], return_inverse=True)
-        big = (min(len(tu), len(su)) + 1.0) * (float(score[e].max()) + 1.0)
-        cost = np.full((len(tu), len(su)), big)
-        cost[ti, si] = score[e]
-        rows, cols = linear_sum_assignment(cost)
-        keep = cost[rows, cols] < big
-        lookup = np.full((len(tu), len(su)), -1, dtype=np.int64)
-        lookup[ti, si] = e
-        for r, c in zip(rows[keep].tolist(), cols[keep].tolist(), strict=True):
-            k = lookup[r, c]
-            out.append(Assignment(int(t[k]), int(s[k]), float(theta[k]), float(score[k])))
-    out.sort(key=lambda x: x.tile)
     return out
 
 
