@@ -105,10 +105,13 @@ def _frozen(arr: np.ndarray) -> Any:
 def densify(points: FloatArray, curve_mask: BoolArray, per_arc: int = _ARC_SAMPLES) -> FloatArray:
     """Polygon following the boundary, with each arc sampled at ``per_arc`` points.
 
+    Each curve point j is replaced by ``per_arc`` points on the circle through its neighbours
+    and itself, strictly between the neighbours (vectorised over all arcs).
+
     Args:
         points: Relevant points (n, 2), any orientation, in a right-handed frame.
         curve_mask: (n,) bool; each curve point is the middle of the arc through its neighbours.
-        per_arc: Samples per arc (the arc's end points excluded, its middle point included).
+        per_arc: Samples per arc.
 
     Returns:
         Shape (m, 2) polygon.
@@ -116,35 +119,32 @@ def densify(points: FloatArray, curve_mask: BoolArray, per_arc: int = _ARC_SAMPL
     if not curve_mask.any():
         return points
     n = len(points)
-    out: list[FloatArray] = []
-    for j in range(n):
-        if curve_mask[j]:
-            continue
-        out.append(points[j : j + 1])
-        nj = (j + 1) % n
-        if curve_mask[nj]:
-            vi, vj, vk = points[j], points[nj], points[(nj + 1) % n]
-            out.append(_arc_points(vi, vj, vk, per_arc))
-    return np.concatenate(out, axis=0)
-
-
-def _arc_points(vi: FloatArray, vj: FloatArray, vk: FloatArray, count: int) -> FloatArray:
-    """Points strictly between vi and vk on the circle through vi, vj, vk (vj included)."""
-    d = 2.0 * float(geo.cross2(vj - vi, vk - vi))
-    if d == 0.0:
-        return vj[None, :]
-    bi, bj, bk = float(vi @ vi), float(vj @ vj), float(vk @ vk)
-    ux = (bi * (vj[1] - vk[1]) + bj * (vk[1] - vi[1]) + bk * (vi[1] - vj[1])) / d
-    uy = (bi * (vk[0] - vj[0]) + bj * (vi[0] - vk[0]) + bk * (vj[0] - vi[0])) / d
-    centre = np.array([ux, uy])
-    r = float(np.hypot(*(vi - centre)))
-    ai = math.atan2(vi[1] - uy, vi[0] - ux)
-    ak = math.atan2(vk[1] - uy, vk[0] - ux)
-    ccw = d > 0.0
-    sweep = (ak - ai) % (2 * math.pi) if ccw else -((ai - ak) % (2 * math.pi))
-    t = np.arange(1, count + 1) / (count + 1)
-    ang = ai + t * sweep
-    return centre + r * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    j = np.flatnonzero(curve_mask)
+    vi, vj, vk = points[(j - 1) % n], points[j], points[(j + 1) % n]
+    d = 2.0 * geo.cross2(vj - vi, vk - vi)
+    flat = d == 0.0
+    safe_d = np.where(flat, 1.0, d)
+    bi, bj, bk = (vi * vi).sum(1), (vj * vj).sum(1), (vk * vk).sum(1)
+    ux = (bi * (vj[:, 1] - vk[:, 1]) + bj * (vk[:, 1] - vi[:, 1]) + bk * (vi[:, 1] - vj[:, 1]))
+    uy = (bi * (vk[:, 0] - vj[:, 0]) + bj * (vi[:, 0] - vk[:, 0]) + bk * (vj[:, 0] - vi[:, 0]))
+    centre = np.stack([ux, uy], axis=1) / safe_d[:, None]
+    radius = np.hypot(*(vi - centre).T)
+    ai = np.arctan2(vi[:, 1] - centre[:, 1], vi[:, 0] - centre[:, 0])
+    ak = np.arctan2(vk[:, 1] - centre[:, 1], vk[:, 0] - centre[:, 0])
+    two_pi = 2.0 * math.pi
+    sweep = np.where(d > 0.0, (ak - ai) % two_pi, -((ai - ak) % two_pi))
+    t = np.arange(1, per_arc + 1) / (per_arc + 1)
+    ang = ai[:, None] + t[None, :] * sweep[:, None]
+    arcs = centre[:, None, :] + radius[:, None, None] * np.stack([np.cos(ang), np.sin(ang)], -1)
+    line = vi[:, None, :] + t[None, :, None] * (vk - vi)[:, None, :]
+    arcs = np.where(flat[:, None, None], line, arcs)
+    size = np.where(curve_mask, per_arc, 1)
+    start = np.concatenate([[0], np.cumsum(size)[:-1]])
+    out = np.empty((int(size.sum()), 2))
+    keep = ~curve_mask
+    out[start[keep]] = points[keep]
+    out[(start[j][:, None] + np.arange(per_arc)).ravel()] = arcs.reshape(-1, 2)
+    return out
 
 
 @dataclass(frozen=True, eq=False)

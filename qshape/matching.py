@@ -160,21 +160,19 @@ def canonical_keys(
     its `coarse_key` alone (prefixed ``K:``), which lookups must also consult.
     """
     tol = default_tolerances() if tolerances is None else tolerances
-    holes = _hole_signature(description)
-    outer = _outer_keys(description.outer.codes.tobytes(), tol.max_key_variants)
-    if outer is None:
-        return frozenset({coarse_key(description)})
-    return frozenset(k + ":" + holes for k in outer)
+    return _keys(description.outer.codes.tobytes(), _hole_signature(description),
+                 tol.max_key_variants)
 
 
 @lru_cache(maxsize=65536)
-def _outer_keys(codes: bytes, cap: int) -> frozenset[str] | None:
-    options = [_alternatives(c) for c in np.frombuffer(codes, dtype=np.int64).tolist()]
-    total = math.prod(len(o) for o in options)
-    if total > cap:
-        return None
+def _keys(codes: bytes, holes: str, cap: int) -> frozenset[str]:
+    code_list = np.frombuffer(codes, dtype=np.int64).tolist()
+    options = [_alternatives(c) for c in code_list]
+    if math.prod(len(o) for o in options) > cap:
+        kinds = np.asarray(code_list, dtype=np.int64) & lb.KIND_BIT
+        return frozenset({"K:" + _kinds_key(kinds.tobytes()) + ":" + holes})
     return frozenset(
-        "".join(_token(c) for c in _least_rotation(combo))
+        "".join(_token(c) for c in _least_rotation(combo)) + ":" + holes
         for combo in itertools.product(*options)
     )
 
