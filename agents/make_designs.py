@@ -60,11 +60,11 @@ class TrencadisParams:
     grid: tuple[int, int] = (7, 6)
     margin_mm: float = 6.0
     site_jitter: float = 0.35
-    min_edge_mm: float = 5.0
+    min_edge_mm: float = 8.0
     concave_fraction: float = 0.4
-    notch_depth: float = 0.45
+    notch_depth: float = 0.6
     min_area_mm2: float = 250.0
-    min_turn_deg: float = 35.0
+    min_turn_deg: float = 40.0
 
 
 def _slot(  # noqa: PLR0917
@@ -125,7 +125,7 @@ def paper_mixed() -> dict[str, Any]:
     holed = {
         "kind": "square",
         "size": 44.0,
-        "holes": [{"kind": "square", "size": 12.0, "x": 9.0, "y": 9.0}],
+        "holes": [{"kind": "square", "size": 14.0, "x": 10.0, "y": 10.0}],
     }
     slots = [
         _slot("square_red_1", square, "red", at[0], at[3]),
@@ -152,7 +152,7 @@ def paper_mixed() -> dict[str, Any]:
         _slot("square_red_2", square, "red", at[0], at[0], 90.0),
         _slot(
             "ring_orange",
-            {"kind": "ring", "radius": 22.0, "inner_radius": 8.0},
+            {"kind": "ring", "radius": 22.0, "inner_radius": 11.0},
             "orange",
             at[1],
             at[0],

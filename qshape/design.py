@@ -49,8 +49,8 @@ class DesignRules:
         outline_step_mm: Largest distance between consecutive samples of a dense outline, in
             [mm] (straight edges and arcs alike).
         max_arc_deg: Arcs turning more than this are split into equal arcs, each with its own
-            maximum-curvature point, in [deg]. 200 keeps semicircles whole and splits circles
-            given as one arc (the same rule as ``OutlineParams.max_curve_turn_deg``).
+            maximum-curvature point, in [deg]. 240 keeps (noisy) semicircles whole and splits
+            circles given as one arc (the rule of ``OutlineParams.max_curve_turn_deg``).
         min_gap_fraction: Two slots closer than this fraction of the joint width overlap
             (dimensionless; 0.5 accepts joints narrowed by rounding in a design image).
         mesh_margin_mm: Slots must stay at least this far inside the mesh outline, in [mm]
@@ -62,7 +62,7 @@ class DesignRules:
     """
 
     outline_step_mm: float = 0.25
-    max_arc_deg: float = 200.0
+    max_arc_deg: float = 240.0
     min_gap_fraction: float = 0.5
     mesh_margin_mm: float = 0.0
     symmetry_tolerance: float = 0.01
@@ -291,11 +291,7 @@ class TilePath:
         holes = []
         for k, h in enumerate(self.holes):
             hp, hm = h.relevant(max_arc_deg)
-            if y_down:
-                hp = hp * np.array([1.0, -1.0])
             holes.append(Boundary.make(hp, hm, y_down=y_down, what=f"hole {k}"))
-        if y_down:
-            pts = pts * np.array([1.0, -1.0])
         return Figure.from_polygon(pts, holes, color, curve_mask=mask, y_down=y_down)
 
 

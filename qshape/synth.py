@@ -242,7 +242,7 @@ def generate(
 def _camera(image: np.ndarray, gen: np.random.Generator, p: SynthParams) -> np.ndarray:
     """Illumination gradient, blur and sensor noise on a clean rendering."""
     h, w = image.shape[:2]
-    out = image.astype(np.float32)
+    out: np.ndarray = image.astype(np.float32)
     if p.illumination > 0.0:
         theta = gen.uniform(0.0, 2.0 * math.pi)
         yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
