@@ -219,10 +219,10 @@ class CycleConfig:
         approach_height: Height of the approach points above the pick and place contact
             poses [m]; motion below them is vertical.
         approach_speed: Vertical tool speed when passing an approach point with blending [m/s].
-        lead_fractions: Lead times tried at each approach point, as fractions of the vertical
-            move's duration, largest first: the transfer's motion started during the lift (and
-            finished during the descent); the first whose lateral drift below
-            `lateral_clearance_height` is within `max_lateral_drift` is used.
+        lead_bisections: Bisection steps searching the largest lead at each approach point (the
+            transfer's motion started during the lift and finished during the descent, up to
+            the vertical move's duration) whose lateral drift below `lateral_clearance_height`
+            stays within `max_lateral_drift`.
         lead_joints: Joints (0-based) whose transfer motion is started early (the lead): the
             base and the wrist rotations, which the vertical moves barely use.
         lead_share: Fraction of the lead joints' acceleration and jerk given to the lead; the
@@ -238,13 +238,16 @@ class CycleConfig:
         place_dwell: Time at the place with vacuum off before retreating (release) [s].
         belt_match_time: On a moving belt, the tool travels with the belt for this long around
             contact (covers the pick dwell) [s]; it is at least `pick_dwell`.
-        predict_iterations: Fixed-point iterations predicting where a moving tile is at contact.
+        predict_iterations: Most fixed-point iterations predicting where a moving tile is at
+            contact (each one a full plan).
+        predict_tolerance: Stop iterating when the pad would meet the tile this close to its
+            grip point [m].
         max_tilt_deg: Largest tool tilt from straight down accepted at a contact pose [deg].
     """
 
-    approach_height: float = 0.01
-    approach_speed: float = 0.2
-    lead_fractions: tuple[float, ...] = (1.0, 0.8, 0.6, 0.4, 0.2, 0.0)
+    approach_height: float = 0.015
+    approach_speed: float = 0.25
+    lead_bisections: int = 6
     lead_joints: tuple[int, ...] = (0, 3, 5)
     lead_share: float = 0.95
     lateral_clearance_height: float = 0.008
@@ -255,7 +258,8 @@ class CycleConfig:
     pick_dwell: float = 0.05
     place_dwell: float = 0.05
     belt_match_time: float = 0.05
-    predict_iterations: int = 3
+    predict_iterations: int = 6
+    predict_tolerance: float = 2e-4
     max_tilt_deg: float = 0.5
 
     def __post_init__(self) -> None:
@@ -266,10 +270,12 @@ class CycleConfig:
             "lateral_clearance_height",
             "max_lateral_drift",
             "predict_iterations",
+            "predict_tolerance",
             "max_tilt_deg",
         )
         _check_non_negative(
             self,
+            "lead_bisections",
             "transfer_clearance",
             "pick_press",
             "place_gap",
@@ -282,10 +288,6 @@ class CycleConfig:
         if not all(0 <= j < N_JOINTS for j in self.lead_joints):
             raise LimitError(
                 f"CycleConfig.lead_joints: {self.lead_joints} are not joint indices 0..5"
-            )
-        if not all(math.isfinite(f) and f >= 0.0 for f in self.lead_fractions):
-            raise LimitError(
-                f"CycleConfig.lead_fractions must be finite and >= 0, got {self.lead_fractions}"
             )
         if self.lateral_clearance_height > self.approach_height:
             raise LimitError(

@@ -17,7 +17,8 @@ Every segment is a time-optimal ruckig move at the axis limits. Blending: approa
 passed with a vertical tool velocity (``approach_speed``) plus a *lead*: the state, at time tau,
 of the time-optimal rest-to-rest move between the two approach points is superposed, so the
 base axis already turns while the tool rises (and still turns while it descends). tau is the
-largest fraction (of ``lead_fractions``) of the vertical move's duration for which the tool stays
+largest lead (bisection, ``lead_bisections`` steps) up to the vertical move's duration for which
+the tool stays
 within ``max_lateral_drift`` of vertical (in the belt's frame) below
 ``lateral_clearance_height``; the transfer must stay ``transfer_clearance`` above the lower
 contact. Otherwise the planner falls back to stopping at the approach point.
@@ -39,13 +40,15 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from planners.config import JointLimits, PlannerConfig
-from planners.errors import InvalidTargetError, PlannerError
+from planners.errors import InvalidTargetError, PlannerError, UnreachableError
 from planners.ik import IKSolver, symmetric_yaws, wrap_angle
 from planners.trajectory import (
     JointState,
@@ -100,6 +103,8 @@ class CyclePlan:
         place_yaw: Tool yaw at the place [rad] (the chosen equivalent rotation).
         leads: Lead time used at each approach point (start out, pick in, pick out, place in)
             [s]; 0 for a vertical pass, NaN for a stop.
+        contact_error: Predicted distance between the pad and the moving tile's grip point at
+            contact [m] (residual of the contact-time prediction; 0 on a static belt).
         plan_ms: Wall-clock planning time [ms] (IK + trajectories + checks).
     """
 
@@ -117,6 +122,7 @@ class CyclePlan:
     pick_yaw: float
     place_yaw: float
     leads: tuple[float, float, float, float]
+    contact_error: float
     plan_ms: float
 
     @property
@@ -128,6 +134,12 @@ class CyclePlan:
     def ratio(self) -> float:
         """Cycle duration over its lower bound."""
         return self.duration / self.bound
+
+
+def _rotate(xy: Array, yaw: float) -> Array:
+    """Planar vector ``xy`` (2,) turned by ``yaw`` [rad], as a 3-vector with z = 0."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([c * xy[0] - s * xy[1], s * xy[0] + c * xy[1], 0.0])
 
 
 def _vec3(value: npt.ArrayLike, name: str) -> Array:
@@ -216,24 +228,72 @@ class PickPlacePlanner:
         q = self.ik.solve_yaws(position, np.array([yaw]), seed=seed, reference=seed).q
         return unwrap_target(seed, q, self.limits, self._wrap)
 
+    def _choose_place(
+        self,
+        place: Array,
+        pick_q: Array,
+        pick_yaw: float,
+        rotations: list[tuple[float, Array, float]],
+    ) -> tuple[Array, Array, float]:
+        """Place contact point, configuration and tool yaw for the cheapest equivalent rotation.
+
+        Raises:
+            UnreachableError: No equivalent rotation is reachable.
+        """
+        gap = np.array([0.0, 0.0, self.config.cycle.place_gap])
+        best: tuple[float, Array, Array, float] | None = None
+        errors = []
+        for rot, grasp, obj_yaw in rotations:
+            point = place + gap + _rotate(grasp, obj_yaw + rot)
+            try:
+                sol = self.ik.solve_yaws(
+                    point, symmetric_yaws(pick_yaw + rot, 1), seed=pick_q, reference=pick_q
+                )
+                q = unwrap_target(pick_q, sol.q, self.limits, self._wrap)
+            except PlannerError as exc:
+                errors.append(str(exc))
+                continue
+            cost = float(np.sum(np.abs(q - pick_q)[list(self._wrap)]))  # wrist travel [rad]
+            if best is None or cost < best[0]:
+                best = (cost, point, q, sol.yaw)
+        if best is None:
+            raise UnreachableError(
+                f"place at {np.round(place, 4).tolist()} m unreachable with every equivalent "
+                f"rotation: {'; '.join(errors)}"
+            )
+        return best[1], best[2], best[3]
+
     # ------------------------------------------------------------------ via points
 
     def _vertical(
         self, contact: _Contact, leaving: bool, start: JointState | None = None
     ) -> Segment:
-        """The pure vertical (belt-frame) move off or onto a contact via its approach point."""
+        """The pure vertical move (in the belt's frame) off or onto a contact.
+
+        A time-optimal move between the contact and the approach point above it (passed at the
+        approach speed, at rest at the contact); on a moving belt the belt's joint velocity is
+        superposed (exact at the contact, linearised around it), so the contact is left or
+        reached travelling with the belt. ``start`` (leaving only) must be the contact state.
+        """
         c = self.config.cycle
         sign = 1.0 if leaving else -1.0
-        v = np.array([0.0, 0.0, sign * c.approach_speed]) + contact.belt
-        qd_v = self.joint_velocity(contact.approach_q, v)
+        qd_v = self.joint_velocity(
+            contact.approach_q, np.array([0.0, 0.0, sign * c.approach_speed])
+        )
         lim = self._vertical_limits
+        q_contact = contact.q if start is None else start.q
         if leaving:
-            s0 = start if start is not None else JointState(contact.q, contact.qd)
-            q1 = unwrap_target(s0.q, contact.approach_q, lim, self._wrap)
-            return plan_segment(s0, q1, lim, qd_v, label="vertical")
-        s0 = JointState(contact.approach_q, qd_v)
-        q1 = unwrap_target(s0.q, contact.q, lim, self._wrap)
-        return plan_segment(s0, q1, lim, contact.qd, label="vertical")
+            q1 = unwrap_target(q_contact, contact.approach_q, lim, self._wrap)
+            static = plan_segment(JointState.at_rest(q_contact), q1, lim, qd_v, label="vertical")
+        else:
+            s0 = JointState(contact.approach_q, qd_v)
+            q1 = unwrap_target(s0.q, q_contact, lim, self._wrap)
+            static = plan_segment(s0, q1, lim, None, label="vertical")
+        if not np.any(contact.belt):
+            return static
+        ramp = hold_segment(JointState(np.zeros(6), contact.qd), static.duration)
+        offset = np.zeros(6) if leaving else contact.qd * static.duration
+        return superpose([(static, 0.0), (ramp, 0.0)], static.duration, offset, "vertical")
 
     def _ok(self, segs: list[Segment], contact: _Contact, leaving: bool) -> bool:
         tr = self.config.trajectory
@@ -242,6 +302,36 @@ class PickPlacePlanner:
             for s in segs
             if s.parts
         ) and self._drift_ok(segs, contact, leaving)
+
+    def _largest_lead(
+        self,
+        build: Callable[[float], list[Segment]],
+        duration: float,
+        contact: _Contact,
+        leaving: bool,
+        has_bridge: bool,
+    ) -> tuple[list[Segment], float] | None:
+        """Largest lead tau in [0, duration] whose segments pass the checks (bisection).
+
+        Returns None when even the pure vertical move (tau = 0) fails.
+        """
+        zero = build(0.0)
+        if not self._ok(zero, contact, leaving):
+            return None
+        if not has_bridge:
+            return zero, 0.0
+        full = build(duration)
+        if self._ok(full, contact, leaving):
+            return full, duration
+        best, lo, hi = (zero, 0.0), 0.0, duration
+        for _ in range(self.config.cycle.lead_bisections):
+            mid = 0.5 * (lo + hi)
+            segs = build(mid)
+            if self._ok(segs, contact, leaving):
+                best, lo = (segs, mid), mid
+            else:
+                hi = mid
+        return best
 
     def _leave(
         self, start: JointState, contact: _Contact, bridge: Segment | None, label: str
@@ -253,21 +343,22 @@ class PickPlacePlanner:
 
         Returns the segments and the lead time used (NaN when it had to stop).
         """
-        c = self.config.cycle
         if self.config.trajectory.blend:
             base = self._vertical(contact, True, start)
-            for f in c.lead_fractions if bridge is not None else (0.0,):
-                tau = min(f, 1.0) * base.duration
-                if bridge is None or tau == 0.0:
-                    segs = [window(base, 0.0, base.duration, label)]
-                else:
-                    t_split = base.duration - tau
-                    segs = [] if t_split <= 0.0 else [window(base, 0.0, t_split, label)]
-                    segs.append(
-                        superpose([(base, t_split), (bridge, 0.0)], tau, bridge.start.q, label)
-                    )
-                if self._ok(segs, contact, leaving=True):
-                    return segs, tau
+
+            def build(tau: float) -> list[Segment]:
+                if bridge is None or tau <= 0.0:
+                    return [window(base, 0.0, base.duration, label)]
+                t_split = base.duration - tau
+                segs = [] if t_split <= 0.0 else [window(base, 0.0, t_split, label)]
+                return [
+                    *segs,
+                    superpose([(base, t_split), (bridge, 0.0)], tau, bridge.start.q, label),
+                ]
+
+            found = self._largest_lead(build, base.duration, contact, True, bridge is not None)
+            if found is not None:
+                return found
         q_stop = contact.approach_q
         seg = self._segment(start, q_stop, self.joint_velocity(q_stop, contact.belt), label)
         return [seg], math.nan
@@ -283,22 +374,21 @@ class PickPlacePlanner:
         Returns the approach-point state, the descent segments and the lead time (NaN when it
         has to stop at the approach point).
         """
-        c = self.config.cycle
         if self.config.trajectory.blend:
             base = self._vertical(contact, False)
-            for f in c.lead_fractions if bridge is not None else (0.0,):
-                tau = min(f, 1.0) * base.duration
-                if bridge is None or tau == 0.0:
-                    segs = [window(base, 0.0, base.duration, label)]
-                else:
-                    first = superpose(
-                        [(base, 0.0), (bridge, bridge.duration - tau)], tau, bridge.end.q, label
-                    )
-                    segs = [first]
-                    if tau < base.duration:
-                        segs.append(window(base, tau, base.duration, label))
-                if self._ok(segs, contact, leaving=False):
-                    return segs[0].start, segs, tau
+
+            def build(tau: float) -> list[Segment]:
+                if bridge is None or tau <= 0.0:
+                    return [window(base, 0.0, base.duration, label)]
+                first = superpose(
+                    [(base, 0.0), (bridge, bridge.duration - tau)], tau, bridge.end.q, label
+                )
+                rest = [window(base, tau, base.duration, label)] if tau < base.duration else []
+                return [first, *rest]
+
+            found = self._largest_lead(build, base.duration, contact, False, bridge is not None)
+            if found is not None:
+                return found[0][0].start, found[0], found[1]
         stop = JointState(contact.approach_q, self.joint_velocity(contact.approach_q, contact.belt))
         return stop, [self._segment(stop, contact.q, contact.qd, label)], math.nan
 
@@ -342,6 +432,8 @@ class PickPlacePlanner:
         rotation: float,
         *,
         symmetry_order: int = 1,
+        grasp_offset: npt.ArrayLike = (0.0, 0.0),
+        object_yaw: float = 0.0,
         belt_velocity: npt.ArrayLike = (0.0, 0.0, 0.0),
         start_at_contact: bool = False,
         end_retreat: bool = True,
@@ -351,11 +443,16 @@ class PickPlacePlanner:
 
         Args:
             start: Arm state at the cycle's start (at rest).
-            pick_position: Top centre of the tile at the cycle's start, shape (3,) [m].
-            place_position: Where the tile's top centre must end, shape (3,) [m].
-            rotation: Yaw to turn the tile by between pick and place [rad] (slot yaw minus tile
-                yaw); any of its ``symmetry_order`` equivalents is accepted.
-            symmetry_order: Rotational symmetry order of the tile (1: none).
+            pick_position: The object's reference point (top face) at the cycle's start,
+                shape (3,) [m].
+            place_position: Where that reference point must end, shape (3,) [m].
+            rotation: Yaw to turn the object by between pick and place [rad] (target yaw minus
+                object yaw); any of its ``symmetry_order`` equivalents is accepted.
+            symmetry_order: Rotational symmetry order of the object (1: none); the equivalent
+                rotation needing the least joint-6 travel is used.
+            grasp_offset: Where the pad grips, in the object's frame relative to its reference
+                point, shape (2,) [m].
+            object_yaw: The object's yaw at the pick [rad] (orients ``grasp_offset``).
             belt_velocity: Input belt velocity, shape (3,) [m/s]; zero for a static belt.
             start_at_contact: The start is a contact (the previous place): leave it vertically.
             end_retreat: End with a vertical retreat to the approach point, at rest; False ends
@@ -370,7 +467,15 @@ class PickPlacePlanner:
             TrajectoryError: Ruckig failed.
         """
         t_start = time.perf_counter()
-        pick0 = _vec3(pick_position, "pick_position")
+        grasp = np.asarray(grasp_offset, dtype=np.float64)
+        if grasp.shape != (2,) or not np.all(np.isfinite(grasp)) or not math.isfinite(object_yaw):
+            raise InvalidTargetError(
+                f"grasp_offset must be 2 finite numbers [m] and object_yaw finite, got "
+                f"{grasp_offset!r}, {object_yaw!r}"
+            )
+        if symmetry_order < 1:
+            raise InvalidTargetError(f"symmetry_order must be >= 1, got {symmetry_order!r}")
+        pick0 = _vec3(pick_position, "pick_position") + _rotate(grasp, object_yaw)
         place = _vec3(place_position, "place_position")
         belt = _vec3(belt_velocity, "belt_velocity")
         if not math.isfinite(rotation):
@@ -383,22 +488,32 @@ class PickPlacePlanner:
         # Tool yaw at the pick: keep the current one (the round pad may pick at any yaw).
         pick_yaw = IKSolver.yaw_of(self.ik.fk(start.q)[1])
         t_contact = 0.0
-        pw = None
+        best: tuple[float, Any] | None = None
+        speed = float(np.linalg.norm(belt))
         for _ in range(c.predict_iterations if moving else 1):
             pick_c = pick0 + belt * t_contact - np.array([0.0, 0.0, c.pick_press])
-            pw, pick_q, place_q, place_yaw, leads = self._plan(
+            result = self._plan(
                 start,
                 start_at_contact,
                 end_retreat,
                 pick_c,
                 place,
                 pick_yaw,
-                rotation,
-                symmetry_order,
+                [
+                    (rotation + k * 2.0 * math.pi / symmetry_order, grasp, object_yaw)
+                    for k in range(symmetry_order)
+                ],
                 belt,
             )
-            t_contact = pw.end_time("descend_pick")
-        assert pw is not None
+            t_new = result[0].end_time("descend_pick")
+            miss = speed * abs(t_new - t_contact)  # where the tile will be vs where we go
+            if best is None or miss < best[0]:
+                best = (miss, (result, t_contact))
+            if miss <= c.predict_tolerance:
+                break
+            t_contact = t_new
+        assert best is not None
+        contact_error, ((pw, pick_q, place_q, place_yaw, leads), t_contact) = best
         traj = pw.sample(self.config.trajectory.sample_dt)
         bound_q = start.q if bound_from is None else as_joint_vector(bound_from, "bound_from")
         bound = self.lower_bound(bound_q, pick_q, place_q, self.joint_velocity(pick_q, belt))
@@ -412,11 +527,12 @@ class PickPlacePlanner:
             bound=bound,
             pick_q=pick_q,
             place_q=place_q,
-            pick_position=pick0 + belt * t_contact,
+            pick_position=pick0 + belt * t_contact - _rotate(grasp, object_yaw),
             place_position=place,
             pick_yaw=pick_yaw,
             place_yaw=place_yaw,
             leads=leads,
+            contact_error=contact_error,
             plan_ms=(time.perf_counter() - t_start) * 1e3,
         )
 
@@ -428,8 +544,7 @@ class PickPlacePlanner:
         pick_c: Array,
         place: Array,
         pick_yaw: float,
-        rotation: float,
-        symmetry_order: int,
+        rotations: list[tuple[float, Array, float]],
         belt: Array,
     ) -> tuple[Piecewise, Array, Array, float, tuple[float, float, float, float]]:
         c = self.config.cycle
@@ -437,29 +552,19 @@ class PickPlacePlanner:
         zero = np.zeros(3)
         moving = bool(np.any(belt))
         dwell_pick = max(c.pick_dwell, c.belt_match_time) if moving else c.pick_dwell
-        place_c = place + np.array([0.0, 0.0, c.place_gap])
-
-        # IK: pick contact, then the place yaw (equivalent rotations) nearest in joint 6.
+        # IK: pick contact, then the equivalent rotation needing least joint-6 travel.
         pick_q = self._solve(pick_c, pick_yaw, start.q)
-        place_yaws = symmetric_yaws(pick_yaw + rotation, symmetry_order)
-        sol = self.ik.solve_yaws(place_c, place_yaws, seed=pick_q, reference=pick_q)
-        place_q = unwrap_target(pick_q, sol.q, self.limits, self._wrap)
-        place_yaw = sol.yaw
-        pick_end = pick_c + belt * dwell_pick
-        pick_end_q = self._solve(pick_end, pick_yaw, pick_q)
+        place_c, place_q, place_yaw = self._choose_place(place, pick_q, pick_yaw, rotations)
         place_in_q = self._solve(place_c + up, place_yaw, place_q)
+        # Travelling with the belt during the dwell: constant joint velocity (linearised).
         belt_qd = self.joint_velocity(pick_q, belt)
-        # Approach points on a moving belt sit upstream/downstream by the belt's travel during
-        # the vertical move (vertical in the belt's frame): estimate with one pass.
-        t_in = t_out = c.approach_height / c.approach_speed
-        for _ in range(2 if moving else 1):
-            pick_in_q = self._solve(pick_c + up - belt * t_in, pick_yaw, pick_q)
-            lift_q = self._solve(pick_end + up + belt * t_out, pick_yaw, pick_end_q)
-            pick_in = _Contact(pick_c, belt, pick_q, belt_qd, pick_in_q)
-            pick_out = _Contact(pick_end, belt, pick_end_q, belt_qd, lift_q)
-            if moving:
-                t_in = self._vertical(pick_in, False).duration
-                t_out = self._vertical(pick_out, True).duration
+        pick_end_q = pick_q + belt_qd * dwell_pick
+        pick_end = self.ik.fk(pick_end_q)[0]
+        # Approach points straight above the contacts (the belt's motion is superposed).
+        pick_in_q = self._solve(pick_c + up, pick_yaw, pick_q)
+        lift_q = self._solve(pick_end + up, pick_yaw, pick_end_q)
+        pick_in = _Contact(pick_c, belt, pick_q, belt_qd, pick_in_q)
+        pick_out = _Contact(pick_end, belt, pick_end_q, belt_qd, lift_q)
         place_in = _Contact(place_c, zero, place_q, np.zeros(6), place_in_q)
         segs: list[Segment] = []
         lead_start = math.nan
@@ -486,7 +591,7 @@ class PickPlacePlanner:
         segs += [*s_ret, s_to, *s_desc]
         segs.append(
             hold_segment(
-                JointState(pick_q, (pick_end_q - pick_q) / dwell_pick if moving else np.zeros(6)),
+                JointState(pick_q, belt_qd),
                 dwell_pick,
                 "dwell_pick",
             )
