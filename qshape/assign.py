@@ -30,6 +30,7 @@ from qshape.matching import (
     canonical_keys,
     coarse_key,
     evaluate_block,
+    evaluate_pairs,
     pack,
     prefilter,
     take,
@@ -62,17 +63,23 @@ class Assignment:
     score: float
 
 
-@dataclass
-class _Edges:
-    """Feasible pairs collected block by block."""
+@dataclass(frozen=True)
+class _Block:
+    """Tiles and slots of one tile-group x slot-group pair linked by size and colour.
 
-    tile: list[IntArray]
-    slot: list[IntArray]
-    score: list[FloatArray]
-    theta: list[FloatArray]
-    block_tiles: list[IntArray]  # per evaluated component: its tiles (ascending global ids)
-    block_slots: list[IntArray]  # ... and its slots
-    block_of_chunk: list[int]  # for each appended chunk of edges, its component
+    Attributes:
+        tiles: Global tile indices, ascending, shape (T,).
+        slots: Global slot indices, ascending, shape (S,).
+        tpack: The tiles' arrays.
+        spack: The slots' arrays.
+        base: (T, S) bool, size and colour agree.
+    """
+
+    tiles: IntArray
+    slots: IntArray
+    tpack: Pack
+    spack: Pack
+    base: NDArray[np.bool_]
 
 
 def _groups(descs: Sequence[Description]) -> dict[str, list[int]]:
@@ -82,13 +89,19 @@ def _groups(descs: Sequence[Description]) -> dict[str, list[int]]:
     return out
 
 
-def _collect(
+def _blocks(
     tiles: Sequence[Description],
     slots: Sequence[Description],
     tol: Tolerances,
     use_color: bool,
-) -> _Edges:
-    """Feasible pairs block by block, looked up through canonical-key buckets."""
+) -> list[_Block]:
+    """Blocks of candidate pairs, looked up through canonical-key buckets.
+
+    Tiles and slots are grouped by the key of their measured labels; a tile group meets only the
+    slot groups sharing one of its admissible keys (or its coarse key when too ambiguous to
+    expand). Each such pair of groups splits into the connected components of its size/colour
+    agreement (in practice one per tile class).
+    """
     tile_groups = _groups(tiles)
     slot_groups = _groups(slots)
     slot_keys = list(slot_groups)
@@ -100,7 +113,7 @@ def _collect(
         for m in members:
             for k in canonical_keys(slots[m], tol):
                 by_key[k].add(gi)
-    edges = _Edges([], [], [], [], [], [], [])
+    blocks: list[_Block] = []
     slot_packs: dict[int, Pack] = {}
     for members in tile_groups.values():
         coarse = coarse_key(tiles[members[0]])
@@ -119,8 +132,89 @@ def _collect(
             if gi not in slot_packs:
                 slot_packs[gi] = pack([slots[m] for m in s_idx])
             spack = slot_packs[gi]
-            _block_edges(tpack, t_idx, spack, s_idx, tol=tol, use_color=use_color, edges=edges)
-    return edges
+            base = prefilter(spack, tpack, tol, use_color)
+            bt, bs = np.nonzero(base)
+            if len(bt) == 0:
+                continue
+            t_count, s_count = base.shape
+            graph = coo_matrix((np.ones(len(bt)), (bt, t_count + bs)),
+                               shape=(t_count + s_count, t_count + s_count))
+            _, comp = connected_components(graph, directed=False)
+            for c in np.unique(comp[bt]).tolist():
+                ct = np.flatnonzero(comp[:t_count] == c)
+                cs = np.flatnonzero(comp[t_count:] == c)
+                blocks.append(_Block(t_idx[ct], s_idx[cs], take(tpack, ct), take(spack, cs),
+                                     base[np.ix_(ct, cs)]))
+    return blocks
+
+
+def _evaluate(
+    block: _Block, tol: Tolerances, use_color: bool
+) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
+    """Every matching pair of a block: (tile, slot, score, rotation), global indices."""
+    n = block.tpack.codes.shape[1]
+    chunk = max(1, _BLOCK_ELEMENTS // max(1, len(block.slots) * n * n))
+    parts: list[tuple[IntArray, IntArray, FloatArray, FloatArray]] = []
+    for a in range(0, len(block.tiles), chunk):
+        rows = np.arange(a, min(a + chunk, len(block.tiles)))
+        res = evaluate_block(block.spack, take(block.tpack, rows), tol, use_color,
+                             block.base[rows])
+        if len(res.k) == 0:
+            continue
+        pair = res.ti * len(block.slots) + res.si  # entries come ordered by pair
+        starts = np.flatnonzero(np.r_[True, pair[1:] != pair[:-1]])
+        counts = np.diff(np.r_[starts, len(pair)])
+        best = np.minimum.reduceat(res.score, starts)
+        equiv = res.score <= np.repeat(best + tol.symmetry_residual, counts)
+        key = np.full(len(pair), np.inf)
+        key[equiv] = np.abs(np.arctan2(res.cross[equiv], res.dot[equiv]))
+        low = np.minimum.reduceat(key, starts)
+        hit = np.flatnonzero(key == np.repeat(low, counts))
+        first = hit[np.r_[True, pair[hit][1:] != pair[hit][:-1]]]
+        parts.append((block.tiles[rows[res.ti[first]]], block.slots[res.si[first]],
+                      res.score[first], np.arctan2(res.cross[first], res.dot[first])))
+    if not parts:
+        empty = np.zeros(0)
+        return empty.astype(np.int64), empty.astype(np.int64), empty, empty
+    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+            np.concatenate([p[2] for p in parts]), np.concatenate([p[3] for p in parts]))
+
+
+def _diagonal(block: _Block, tol: Tolerances, use_color: bool) -> list[Assignment] | None:
+    """The greedy loop's result when the k-th tile matches the k-th slot for every k.
+
+    Then each tile in order finds its first free matching slot at once, as in the paper's loop,
+    so only these pairs are evaluated. None when some diagonal pair does not match.
+    """
+    m = min(len(block.tiles), len(block.slots))
+    rows = np.arange(m)
+    if not block.base[rows, rows].all():
+        return None
+    ok, score, rotation = evaluate_pairs(take(block.spack, rows), take(block.tpack, rows), tol,
+                                         use_color)
+    if not ok.all():
+        return None
+    return [Assignment(int(t), int(s), float(r), float(c)) for t, s, r, c in
+            zip(block.tiles[:m].tolist(), block.slots[:m].tolist(), rotation.tolist(),
+                score.tolist(), strict=True)]
+
+
+def _merged(blocks: list[_Block], n_tiles: int, n_slots: int) -> list[list[int]]:
+    """Blocks grouped so that no tile or slot lies in two groups (ambiguous keys link them)."""
+    if not blocks:
+        return []
+    n_blocks = len(blocks)
+    rows = np.r_[np.repeat(np.arange(n_blocks), [len(b.tiles) for b in blocks]),
+                 np.repeat(np.arange(n_blocks), [len(b.slots) for b in blocks])]
+    cols = np.r_[n_blocks + np.concatenate([b.tiles for b in blocks]),
+                 n_blocks + n_tiles + np.concatenate([b.slots for b in blocks])]
+    size = n_blocks + n_tiles + n_slots
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(size, size))
+    _, label = connected_components(graph, directed=False)
+    groups: dict[int, list[int]] = defaultdict(list)
+    for b in range(n_blocks):
+        groups[int(label[b])].append(b)
+    return list(groups.values())
 
 
 def feasible_pairs(
@@ -134,71 +228,12 @@ def feasible_pairs(
     Returns:
         (tile, slot, score, rotation) arrays of equal length, in no particular order.
     """
-    edges = _collect(tiles, slots, tol, use_color)
-    return _flat(edges)
-
-
-def _flat(edges: _Edges) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
-    if not edges.tile:
+    parts = [_evaluate(b, tol, use_color) for b in _blocks(tiles, slots, tol, use_color)]
+    if not parts:
         empty = np.zeros(0)
         return empty.astype(np.int64), empty.astype(np.int64), empty, empty
-    return (np.concatenate(edges.tile), np.concatenate(edges.slot),
-            np.concatenate(edges.score), np.concatenate(edges.theta))
-
-
-def _block_edges(
-    tpack: Pack,
-    t_idx: IntArray,
-    spack: Pack,
-    s_idx: IntArray,
-    *,
-    tol: Tolerances,
-    use_color: bool,
-    edges: _Edges,
-) -> None:
-    """Evaluate one tile group against one slot group and append the feasible edges.
-
-    The pairs first pass the cheap size/colour filter; the matrix of surviving pairs splits
-    into connected components (in practice one per tile class), each evaluated densely.
-    """
-    base = prefilter(spack, tpack, tol, use_color)
-    bt, bs = np.nonzero(base)
-    if len(bt) == 0:
-        return
-    t_count, s_count = base.shape
-    graph = coo_matrix((np.ones(len(bt)), (bt, t_count + bs)),
-                       shape=(t_count + s_count, t_count + s_count))
-    _, comp = connected_components(graph, directed=False)
-    n = tpack.codes.shape[1]
-    for c in np.unique(comp[bt]).tolist():
-        ct = np.flatnonzero(comp[:t_count] == c)
-        cs = np.flatnonzero(comp[t_count:] == c)
-        sub_s = take(spack, cs)
-        edges.block_tiles.append(t_idx[ct])
-        edges.block_slots.append(s_idx[cs])
-        block = len(edges.block_tiles) - 1
-        chunk = max(1, _BLOCK_ELEMENTS // max(1, len(cs) * n * n))
-        for a in range(0, len(ct), chunk):
-            rows = ct[a : a + chunk]
-            res = evaluate_block(sub_s, take(tpack, rows), tol, use_color,
-                                 base[np.ix_(rows, cs)])
-            if len(res.k) == 0:
-                continue
-            pair = res.ti * len(cs) + res.si  # entries come ordered by pair
-            starts = np.flatnonzero(np.r_[True, pair[1:] != pair[:-1]])
-            counts = np.diff(np.r_[starts, len(pair)])
-            best = np.minimum.reduceat(res.score, starts)
-            equiv = res.score <= np.repeat(best + tol.symmetry_residual, counts)
-            key = np.full(len(pair), np.inf)
-            key[equiv] = np.abs(np.arctan2(res.cross[equiv], res.dot[equiv]))
-            low = np.minimum.reduceat(key, starts)
-            hit = np.flatnonzero(key == np.repeat(low, counts))
-            first = hit[np.r_[True, pair[hit][1:] != pair[hit][:-1]]]
-            edges.tile.append(t_idx[rows[res.ti[first]]])
-            edges.slot.append(s_idx[cs[res.si[first]]])
-            edges.score.append(res.score[first])
-            edges.theta.append(np.arctan2(res.cross[first], res.dot[first]))
-            edges.block_of_chunk.append(block)
+    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+            np.concatenate([p[2] for p in parts]), np.concatenate([p[3] for p in parts]))
 
 
 def _descriptions(items: Sequence[Description | Figure], tol: Tolerances) -> list[Description]:
@@ -240,53 +275,25 @@ def assign(
     sd = _descriptions(slots, tol)
     if not td or not sd:
         return []
-    edges = _collect(td, sd, tol, use_color)
-    if not edges.tile:
-        return []
-    if method == "greedy":
-        return _greedy(*_flat(edges), n_slots=len(sd))
-    return _optimal(edges, n_tiles=len(td), n_slots=len(sd))
-
-
-def _optimal(edges: _Edges, *, n_tiles: int, n_slots: int) -> list[Assignment]:
-    """Most matches, then least total score, by linear_sum_assignment per component.
-
-    The evaluated blocks that share a tile or a slot (through ambiguous keys) are merged first,
-    so each assignment problem is one connected group of candidates.
-    """
-    n_blocks = len(edges.block_tiles)
-    sizes_t = [len(b) for b in edges.block_tiles]
-    sizes_s = [len(b) for b in edges.block_slots]
-    rows = np.r_[np.repeat(np.arange(n_blocks), sizes_t), np.repeat(np.arange(n_blocks), sizes_s)]
-    cols = np.r_[n_blocks + np.concatenate(edges.block_tiles),
-                 n_blocks + n_tiles + np.concatenate(edges.block_slots)]
-    size = n_blocks + n_tiles + n_slots
-    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(size, size))
-    _, label = connected_components(graph, directed=False)
-    groups: dict[int, list[int]] = defaultdict(list)
-    for block in range(n_blocks):
-        groups[int(label[block])].append(block)
-    chunks_of: dict[int, list[int]] = defaultdict(list)
-    for chunk, block in enumerate(edges.block_of_chunk):
-        chunks_of[block].append(chunk)
+    blocks = _blocks(td, sd, tol, use_color)
     out: list[Assignment] = []
-    for blocks in groups.values():
-        chunks = [c for b in blocks for c in chunks_of[b]]
-        if not chunks:
+    for group in _merged(blocks, len(td), len(sd)):
+        if method == "greedy" and len(group) == 1:
+            fast = _diagonal(blocks[group[0]], tol, use_color)
+            if fast is not None:
+                out.extend(fast)
+                continue
+        parts = [_evaluate(blocks[b], tol, use_color) for b in group]
+        t = np.concatenate([p[0] for p in parts])
+        if len(t) == 0:
             continue
-        tiles = edges.block_tiles[blocks[0]]
-        slots = edges.block_slots[blocks[0]]
-        if len(blocks) > 1:
-            tiles = np.unique(np.concatenate([edges.block_tiles[b] for b in blocks]))
-            slots = np.unique(np.concatenate([edges.block_slots[b] for b in blocks]))
-        out.extend(_solve(
-            np.concatenate([edges.tile[c] for c in chunks]),
-            np.concatenate([edges.slot[c] for c in chunks]),
-            np.concatenate([edges.score[c] for c in chunks]),
-            np.concatenate([edges.theta[c] for c in chunks]),
-            tiles=tiles,
-            slots=slots,
-        ))
+        s = np.concatenate([p[1] for p in parts])
+        score = np.concatenate([p[2] for p in parts])
+        theta = np.concatenate([p[3] for p in parts])
+        if method == "greedy":
+            out.extend(_greedy(t, s, score, theta, n_slots=len(sd)))
+        else:
+            out.extend(_solve(t, s, score, theta, tiles=np.unique(t), slots=np.unique(s)))
     out.sort(key=lambda x: x.tile)
     return out
 

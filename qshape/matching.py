@@ -373,6 +373,55 @@ def evaluate_block(
     return BlockResult(ti, si, k, sc, dot, crs)
 
 
+def evaluate_pairs(
+    ref: Pack, cand: Pack, tol: Tolerances, use_color: bool
+) -> tuple[NDArray[np.bool_], FloatArray, FloatArray]:
+    """Match candidate p against reference p for aligned packs of equal length P.
+
+    Returns:
+        (ok, score, rotation), each shape (P,). For symmetric shapes the rotation is the
+        equivalent one (score within ``tol.symmetry_residual`` of the best) of least magnitude.
+    """
+    count, n = ref.codes.shape
+    base = np.ones(count, dtype=bool)
+    if tol.check_size:
+        thr = (tol.size_area_threshold if tol.size_area_threshold is not None
+               else tol.joint_width * 0.5 * (cand.perimeter + ref.perimeter))
+        base &= np.abs(cand.area - ref.area) <= thr
+    if use_color:
+        diff = cand.color - ref.color
+        base &= ~(np.einsum("pd,pd->p", diff, diff) > tol.color_distance**2)
+    idx = (np.arange(n)[None, :] + np.arange(n)[:, None]) % n  # (k, i)
+    compat = lb.compatible(cand.codes[:, idx], ref.codes[:, None, :]).all(axis=-1)  # (P, k)
+    compat &= base[:, None]
+    pi, k = np.nonzero(compat)
+    cp = cand.pts[pi[:, None], idx[k]]  # (E, n, 2)
+    rp = ref.pts[pi]
+    dot = np.einsum("end,end->e", cp, rp)
+    crs = np.einsum("en,en->e", cp[..., 0], rp[..., 1]) - np.einsum(
+        "en,en->e", cp[..., 1], rp[..., 0])
+    rss = cand.sumsq[pi] + ref.sumsq[pi] - 2.0 * np.sqrt(dot * dot + crs * crs)
+    sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[pi]))
+    theta = np.arctan2(crs, dot)
+    if ref.hole_codes:
+        hok, hole_score = _holes(ref, cand, (pi, pi, theta), tol)
+        pi, sc, theta = pi[hok], (sc + hole_score)[hok], theta[hok]
+    ok = np.zeros(count, dtype=bool)
+    ok[pi] = True
+    best = np.full(count, np.inf)
+    np.minimum.at(best, pi, sc)
+    equiv = sc <= best[pi] + tol.symmetry_residual
+    mag = np.where(equiv, np.abs(theta), np.inf)
+    low = np.full(count, np.inf)
+    np.minimum.at(low, pi, mag)
+    rotation = np.zeros(count)
+    score = np.full(count, np.inf)
+    hit = mag == low[pi]
+    rotation[pi[hit]] = theta[hit]
+    score[pi[hit]] = sc[hit]
+    return ok, score, rotation
+
+
 def _holes(
     ref: Pack,
     cand: Pack,
@@ -506,6 +555,7 @@ __all__ = [
     "canonical_keys",
     "coarse_key",
     "evaluate_block",
+    "evaluate_pairs",
     "is_continuous",
     "match",
     "pack",
