@@ -293,7 +293,13 @@ def assign(
         if method == "greedy":
             out.extend(_greedy(t, s, score, theta, n_slots=len(sd)))
         else:
-            out.extend(_solve(t, s, score, theta, tiles=np.unique(t), slots=np.unique(s)))
+            members_t = [blocks[b].tiles for b in group]
+            members_s = [blocks[b].slots for b in group]
+            out.extend(_solve(
+                t, s, score, theta,
+                tiles=members_t[0] if len(group) == 1 else np.unique(np.concatenate(members_t)),
+                slots=members_s[0] if len(group) == 1 else np.unique(np.concatenate(members_s)),
+            ))
     out.sort(key=lambda x: x.tile)
     return out
 

@@ -212,8 +212,11 @@ def prefilter(ref: Pack, cand: Pack, tol: Tolerances, use_color: bool) -> NDArra
                else tol.joint_width * 0.5 * (cand.perimeter[:, None] + ref.perimeter[None, :]))
         base &= np.abs(cand.area[:, None] - ref.area[None, :]) <= thr
     if use_color:
-        diff = cand.color[:, None, :] - ref.color[None, :, :]
-        dist2 = np.einsum("tsd,tsd->ts", diff, diff)
+        diff = cand.color[:, None, 0] - ref.color[None, :, 0]
+        dist2 = diff * diff
+        for ch in (1, 2):
+            diff = cand.color[:, None, ch] - ref.color[None, :, ch]
+            dist2 += diff * diff
         base &= ~(dist2 > tol.color_distance**2)  # unknown colour (NaN) matches any
     return base
 
