@@ -292,6 +292,7 @@ class IKSolver:
             order = np.argsort(self._feature_distance(feats, feature))
             candidates.extend(self._known[int(i)][1] for i in order[:2])
         candidates.append(self._default_seed(feature))
+        candidates.append(self._default_seed(feature, elbow_up=False))
         dist = []
         for c in candidates:
             p, r = self.fk(np.clip(c, self.lower, self.upper))
@@ -310,11 +311,29 @@ class IKSolver:
         diff[:, 3] = np.asarray(wrap_angle(diff[:, 3])) * self._reach[3]
         return np.asarray(np.linalg.norm(diff, axis=1))
 
-    def _default_seed(self, feature: Array) -> Array:
-        """Elbow-up, wrist-flat tool-down posture facing the target."""
+    def _default_seed(self, feature: Array, elbow_up: bool = True) -> Array:
+        """Geometric guess: elbow up (or down), wrist flat, tool down, facing the target.
+
+        Planar two-link solution for the wrist centre (``tool`` above the target) in the arm's
+        vertical plane, from the model's own link lengths; joint 5 then points the tool down
+        and joint 6 sets the yaw. Only a seed: mink refines it.
+        """
+        shoulder, upper, fore, tool = self._reach
         q = np.zeros(N_JOINTS)
         q[0] = math.atan2(feature[1], feature[0])
-        q[4] = 0.5 * math.pi
+        dr = math.hypot(feature[0], feature[1]) - math.hypot(shoulder[0], shoulder[1])
+        dz = feature[2] + tool - shoulder[2]
+        d = max(math.hypot(dr, dz), 1e-9)
+        cos_b = (upper**2 + d**2 - fore**2) / (2.0 * upper * d)
+        beta = math.acos(min(max(cos_b, -1.0), 1.0))
+        q[1] = math.atan2(dr, dz) + (-beta if elbow_up else beta)
+        er, ez = upper * math.sin(q[1]), upper * math.cos(q[1])
+        phi = math.atan2(-(dz - ez), dr - er)  # forearm angle below horizontal
+        q[2] = phi - q[1]
+        q[4] = 0.5 * math.pi - phi
+        q = np.clip(q, self.lower, self.upper)
+        yaw0 = self.yaw_of(self.fk(q)[1])
+        q[5] = self._yaw_sign * float(wrap_angle(feature[3] - yaw0))
         return np.clip(q, self.lower, self.upper)
 
     def solve(

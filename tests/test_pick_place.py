@@ -1,0 +1,149 @@
+"""Pick-and-place cycles: geometry, timing, limits, moving belt, execution in the cell."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from agents.bench_planner import LAYOUTS, CellRunner, _build_cell, _cell_config
+from envs.tiles import basic_shapes
+from planners.config import load_planner_config
+from planners.errors import InvalidTargetError, UnreachableError
+from planners.ik import IKSolver
+from planners.pick_place import PickPlacePlanner, relative_rotation
+from planners.trajectory import JointState, validate
+
+CFG = load_planner_config()
+PICK = np.array([0.03, 0.52, 0.205])
+PLACE = np.array([-0.02, -0.48, 0.207])
+
+
+@pytest.fixture(scope="module")
+def planner() -> PickPlacePlanner:
+    return PickPlacePlanner(IKSolver(config=CFG.ik, limits=CFG.limits), CFG)
+
+
+@pytest.fixture(scope="module")
+def start(planner: PickPlacePlanner) -> JointState:
+    return JointState.at_rest(planner.ik.solve(PLACE + [0.05, 0.0, 0.0005], 0.0).q)
+
+
+def _tcp(planner: PickPlacePlanner, q: np.ndarray) -> np.ndarray:
+    return planner.ik.fk(q)[0]
+
+
+def test_cycle_phases_limits_and_bound(planner: PickPlacePlanner, start: JointState) -> None:
+    plan = planner.plan_cycle(
+        start, PICK, PLACE, 0.6, symmetry_order=4, start_at_contact=True, end_retreat=True
+    )
+    validate(plan.trajectory, CFG.limits, CFG.trajectory.limit_tolerance)
+    labels = [s.label for s in plan.piecewise.segments]
+    order = ["retreat", "to_pick", "descend_pick", "dwell_pick", "lift", "transfer"]
+    order += ["descend_place", "dwell_place", "retreat_end"]
+    assert [lab for i, lab in enumerate(labels) if i == 0 or labels[i - 1] != lab] == order
+    assert 0 < plan.vacuum_on < plan.lift_off < plan.vacuum_off < plan.duration
+    assert plan.lift_off - plan.vacuum_on == pytest.approx(CFG.cycle.pick_dwell)
+    # The pad is at the tile (pressed) when the vacuum switches on, at the slot when off.
+    q_on, _, _ = plan.trajectory.at(plan.vacuum_on)
+    q_off, _, _ = plan.trajectory.at(plan.vacuum_off)
+    np.testing.assert_allclose(_tcp(planner, q_on), PICK - [0, 0, CFG.cycle.pick_press], atol=2e-4)
+    np.testing.assert_allclose(_tcp(planner, q_off), PLACE + [0, 0, CFG.cycle.place_gap], atol=2e-4)
+    # Tool yaw at the place: the requested rotation modulo the square's symmetry.
+    turned = relative_rotation(plan.pick_yaw, plan.place_yaw) - 0.6
+    assert math.remainder(turned, math.pi / 2) == pytest.approx(0.0, abs=1e-3)
+    # A true lower bound, and the cycle close to it.
+    assert plan.bound < plan.duration < 1.3 * plan.bound
+    assert plan.plan_ms > 0
+
+
+def test_tool_moves_vertically_near_the_contacts(
+    planner: PickPlacePlanner, start: JointState
+) -> None:
+    plan = planner.plan_cycle(start, PICK, PLACE, 0.0, start_at_contact=True)
+    c = CFG.cycle
+    tr = plan.trajectory
+    pos = np.array([_tcp(planner, q) for q in tr.q])
+    for contact in (PICK - [0, 0, c.pick_press], PLACE + [0, 0, c.place_gap]):
+        rel = pos - contact
+        near = np.hypot(rel[:, 0], rel[:, 1]) < 0.03
+        low = near & (rel[:, 2] < c.lateral_clearance_height)
+        assert low.any()
+        assert np.hypot(rel[low, 0], rel[low, 1]).max() <= c.max_lateral_drift + 1e-4
+    # Blending: no stop at the approach points (the lead overlaps the transfer).
+    assert all(lead > 0 for lead in plan.leads)
+
+
+def test_moving_belt_pick_matches_the_belt(planner: PickPlacePlanner, start: JointState) -> None:
+    belt = np.array([0.2, 0.0, 0.0])
+    pick0 = PICK - [0.15, 0.0, 0.0]
+    plan = planner.plan_cycle(start, pick0, PLACE, 0.3, belt_velocity=belt, start_at_contact=True)
+    validate(plan.trajectory, CFG.limits, CFG.trajectory.limit_tolerance)
+    t_on = plan.vacuum_on
+    # Where the tile is at contact, and the pad there, travelling with the belt.
+    tile_at_contact = pick0 + belt * t_on
+    np.testing.assert_allclose(plan.pick_position, tile_at_contact, atol=5e-4)
+    q_on, qd_on, _ = plan.trajectory.at(t_on)
+    jac = planner.ik.jacobian(q_on)
+    np.testing.assert_allclose(jac[:3] @ qd_on, belt, atol=5e-3)
+    np.testing.assert_allclose(
+        _tcp(planner, q_on), tile_at_contact - [0, 0, CFG.cycle.pick_press], atol=5e-4
+    )
+    assert plan.contact_error <= CFG.cycle.predict_tolerance
+    # Still moving with the belt at the end of the vacuum dwell.
+    _, qd_lift, _ = plan.trajectory.at(plan.lift_off)
+    np.testing.assert_allclose(jac[:3] @ qd_lift, belt, atol=1e-2)
+
+
+def test_bad_inputs_raise_typed_errors(planner: PickPlacePlanner, start: JointState) -> None:
+    with pytest.raises(InvalidTargetError):
+        planner.plan_cycle(start, [np.nan, 0.5, 0.2], PLACE, 0.0)
+    with pytest.raises(InvalidTargetError):
+        planner.plan_cycle(start, PICK, PLACE, float("nan"))
+    with pytest.raises(InvalidTargetError):
+        planner.plan_cycle(start, PICK, PLACE, 0.0, symmetry_order=0)
+    with pytest.raises(InvalidTargetError):
+        planner.plan_cycle(start, PICK, PLACE, 0.0, belt_velocity=[0.1, 0.0])
+    moving = JointState(start.q, np.full(6, 0.1))
+    with pytest.raises(InvalidTargetError, match="rest"):
+        planner.plan_cycle(moving, PICK, PLACE, 0.0)
+    with pytest.raises(UnreachableError):
+        planner.plan_cycle(start, PICK, [1.5, 0.0, 0.2], 0.0)
+    with pytest.raises(UnreachableError):
+        planner.plan_cycle(start, [0.1, 0.05, 0.2], PLACE, 0.0)  # inside the base's dead zone
+
+
+def _sim_cycle(belt_speed: float) -> tuple[CellRunner, int]:
+    overrides: dict = {"layout": LAYOUTS["paper"]}
+    if belt_speed:
+        overrides["tiles"] = {"feed": "stream", "stream_initial": 1, "stream_period": 30.0}
+    shapes = basic_shapes()[:2]
+    cell = _build_cell(_cell_config(overrides), shapes, (), seed=1)
+    cell.belt_speed = belt_speed
+    return CellRunner(cell, CFG), int(np.flatnonzero(cell.on_stage)[0])
+
+
+@pytest.mark.parametrize("belt_speed", [0.0, 0.2], ids=["static", "belt_0.2"])
+def test_full_cycle_in_simulation_places_within_tolerance(belt_speed: float) -> None:
+    runner, i = _sim_cycle(belt_speed)
+    cell = runner.cell
+    try:
+        top, yaw = runner.pick_pose(i)
+        if belt_speed:  # move the tile upstream; it gets up to belt speed before the pick
+            cell.data.qpos[cell.ids.tile_qpos_index[i, 0]] -= top[0] + 0.15
+            cell.step(125)
+            assert cell.data.qvel[cell.ids.tile_dof_index[i, 0]] == pytest.approx(belt_speed, 0.01)
+        slot = np.array([0.04, -0.52, 0.7])  # x, y [m], yaw [rad] on the mesh
+        runner.slots = slot[None, :]
+        plan = runner.plan(i, 0, JointState.at_rest(cell.qpos), False, True)
+        run = runner.execute(plan, i)
+        cell.step(150)
+        assert run.grasped and cell.n_dropped == 0
+        assert run.tracking_max <= 1e-3
+        d, yaw_err = runner.placement_errors(i, 0)
+        assert d <= 1e-3
+        assert yaw_err <= 1.0
+        assert cell.warnings() == 0
+    finally:
+        cell.close()
