@@ -3,10 +3,19 @@
 Both methods look candidates up through canonical keys (`qshape.matching.canonical_keys`):
 tiles and slots are grouped by the key of their measured labels, and a tile group is compared
 only with the slot groups sharing one of its admissible keys (or its coarse key, for figures
-with too many ambiguous labels to expand). Each pair of groups is then matched in one vectorised
-block (`qshape.matching.evaluate_block`), so N tiles x M slots never loop over pairs in Python.
-"""
+with too many ambiguous labels to expand). Within such a pair of groups, the size/colour filter
+splits the candidates into blocks (in practice one per tile class); blocks sharing a tile or a
+slot are merged. Then, per group:
 
+* "greedy" (the paper's loop): if the k-th tile matches the k-th slot for every k, that is the
+  loop's result and nothing else is evaluated; otherwise every pair of the group is matched in
+  one vectorised block and the loop runs over the matching pairs.
+* "optimal": every pair of the group is matched in one vectorised block
+  (`qshape.matching.evaluate_block`) and scipy's linear_sum_assignment picks the most matches,
+  then the least total residual.
+
+No Python loop ever runs over tile x slot pairs.
+"""
 from __future__ import annotations
 
 from collections import defaultdict
