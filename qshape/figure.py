@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 
 from qshape import geometry as geo
 from qshape.errors import InvalidFigureError, InvalidHoleError
-from qshape.geometry import BoolArray, FloatArray
+from qshape.geometry import MAX_COORDINATE, BoolArray, FloatArray
 from qshape.simplify import OutlineParams, simplify_outline
 
 _REL_EPS = 1e-12
@@ -45,6 +45,11 @@ def _as_points(points: ArrayLike, what: str) -> FloatArray:
     if not np.all(np.isfinite(arr)):
         bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1)).tolist()
         raise InvalidFigureError(f"{what}: points must be finite; NaN or inf at rows {bad}")
+    if np.abs(arr).max(initial=0.0) > MAX_COORDINATE:
+        raise InvalidFigureError(
+            f"{what}: coordinates must be at most {MAX_COORDINATE:g} in magnitude (so that areas "
+            "stay finite)"
+        )
     if len(arr) >= 2 and np.array_equal(arr[0], arr[-1]):
         arr = arr[:-1]  # an explicitly closed ring: the closing copy of the first point
     if len(arr) < 3:

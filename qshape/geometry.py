@@ -11,6 +11,9 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
+MAX_COORDINATE = 1e100
+"""Largest accepted coordinate magnitude: products of coordinates must not overflow."""
+
 
 def cross2(a: FloatArray, b: FloatArray) -> FloatArray:
     """Z component of the cross product of 2D vectors (broadcasting over leading axes)."""
@@ -185,6 +188,7 @@ def area_centroid_perimeter(
 
 
 __all__ = [
+    "MAX_COORDINATE",
     "area_centroid_perimeter",
     "arc_segments",
     "boundaries_cross",

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from qshape.errors import InvalidFigureError, ToleranceError
-from qshape.geometry import BoolArray, FloatArray, cross2
+from qshape.geometry import MAX_COORDINATE, BoolArray, FloatArray, cross2
 from qshape.tolerances import _load_section
 
 
@@ -110,6 +110,10 @@ def _clean(dense: ArrayLike, what: str) -> FloatArray:
         raise InvalidFigureError(f"{what}: points must be finite (no NaN or inf)")
     if len(pts) == 0:
         raise InvalidFigureError(f"{what}: a closed outline needs at least 3 points, got 0")
+    if np.abs(pts).max() > MAX_COORDINATE:
+        raise InvalidFigureError(
+            f"{what}: coordinates must be at most {MAX_COORDINATE:g} in magnitude"
+        )
     step = np.hypot(*(np.roll(pts, -1, axis=0) - pts).T)
     pts = pts[step > 0.0]  # drop consecutive repeats (and the closing copy)
     if len(pts) < 3:

@@ -144,3 +144,10 @@ def test_boundary_make_normalises():
     b = Boundary.make(SQ)
     assert signed_area(b.points) < 0
     assert not b.curve_mask.any()
+
+
+def test_huge_coordinates_are_rejected_not_overflowed():
+    with pytest.raises(InvalidFigureError, match="magnitude"):
+        Figure.from_polygon([[1e308, 1e308], [-1e308, 1e308], [0, -1e308]])
+    with pytest.raises(InvalidFigureError, match="magnitude"):
+        Figure.from_outline([[1e308, 1e308], [-1e308, 1e308], [0, -1e308]])
