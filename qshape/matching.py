@@ -129,6 +129,8 @@ def canonical_key(description: Description) -> str:
     The least rotation of the cyclic string of primary node labels, plus the hole signature
     (count and node kinds of each hole). Two descriptions with equal keys are label-compatible
     at some cyclic offset; near band edges use `canonical_keys`, which expands admissible labels.
+    Colour and size are not in the key (they are continuous); `assign` checks them, and the
+    holes' positions and labels, after the lookup.
     """
     return _primary_key(description.outer.codes.tobytes()) + ":" + _hole_signature(description)
 
