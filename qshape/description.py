@@ -17,7 +17,6 @@ from functools import cached_property
 
 import numpy as np
 
-from qshape import geometry as geo
 from qshape import labels as lb
 from qshape.errors import ParseError
 from qshape.figure import Color, Figure, densify
@@ -32,6 +31,8 @@ CENTRE = "C"
 CIi = "CIi"
 HEADER = "qshape-description v1"
 _CONE_DEG = 45.0
+_HOLE_ARC_SAMPLES = 8
+"""Samples per arc when measuring the angles a hole spans (numerical resolution only)."""
 
 _DEFAULT_TOL: Tolerances | None = None
 
@@ -156,8 +157,7 @@ class HoleDescription:
         Angles are counter-clockwise from +x about the parent's centroid in the y-up frame.
         Computed once, for matching.
         """
-        iv = hole_interval(self.boundary.points, self.boundary.curve_mask, np.array([1.0, 0.0]))
-        return None if iv is None else (-iv[1], -iv[0])
+        return hole_angles(self.boundary.points, self.boundary.curve_mask)
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, HoleDescription):
@@ -237,9 +237,28 @@ def _start_index(points: FloatArray, tie: float) -> int:
     return int(np.argmin(np.where(top, points[:, 0], np.inf)))
 
 
-def hole_interval(points: FloatArray, curve_mask: BoolArray, north: FloatArray) -> (
-    tuple[float, float] | None
-):
+def hole_angles(points: FloatArray, curve_mask: BoolArray) -> tuple[float, float] | None:
+    """Polar-angle interval [deg] (CCW from +x) a hole spans about the origin.
+
+    Args:
+        points: Hole relevant points relative to the parent's centroid, y-up, shape (m, 2).
+        curve_mask: Shape (m,) bool; arcs are sampled.
+
+    Returns:
+        (low, high) with high - low < 360, or None when the hole winds around the origin.
+    """
+    dense = densify(points, curve_mask, _HOLE_ARC_SAMPLES)
+    ang = np.degrees(np.arctan2(dense[:, 1], dense[:, 0]))
+    step = (np.diff(ang, append=ang[0]) + 180.0) % 360.0 - 180.0
+    if abs(float(step.sum())) > 180.0:  # winding number 1: the hole surrounds the centroid
+        return None
+    walk = ang[0] + np.concatenate([[0.0], np.cumsum(step[:-1])])
+    return float(walk.min()), float(walk.max())
+
+
+def hole_interval(
+    points: FloatArray, curve_mask: BoolArray, north: FloatArray
+) -> tuple[float, float] | None:
     """Bearing interval (deg, clockwise from north) a hole covers, or None if around origin.
 
     Args:
@@ -247,15 +266,11 @@ def hole_interval(points: FloatArray, curve_mask: BoolArray, north: FloatArray) 
         curve_mask: Shape (m,) bool.
         north: Direction of north (the parent's first vertex), shape (2,).
     """
-    dense = densify(points, curve_mask)
-    if geo.points_in_polygon(np.zeros((1, 2)), dense)[0]:
+    iv = hole_angles(points, curve_mask)
+    if iv is None:
         return None
-    nrm = north / max(float(np.hypot(*north)), np.finfo(float).tiny)
-    east = np.array([nrm[1], -nrm[0]])
-    bearing = np.degrees(np.arctan2(dense @ east, dense @ nrm))
-    ref = float(np.degrees(np.arctan2(dense.mean(axis=0) @ east, dense.mean(axis=0) @ nrm)))
-    rel = (bearing - ref + 180.0) % 360.0 - 180.0
-    return ref + float(rel.min()), ref + float(rel.max())
+    nu = math.degrees(math.atan2(float(north[1]), float(north[0])))
+    return nu - iv[1], nu - iv[0]
 
 
 def cones_of(interval: tuple[float, float] | None, shrink: float = 0.0) -> frozenset[int]:
@@ -593,6 +608,7 @@ __all__ = [
     "describe",
     "describe_many",
     "format_description",
+    "hole_angles",
     "hole_interval",
     "parse",
 ]
