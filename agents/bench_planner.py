@@ -25,7 +25,7 @@ import json
 import math
 import platform
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -37,11 +37,11 @@ from envs.errors import CellError
 from envs.scene import build_arm_model
 from envs.tiles import tile_shapes_from_design
 from planners.config import PlannerConfig, load_planner_config
-from planners.errors import PlannerError
+from planners.errors import LimitError, PlannerError
 from planners.ik import IKSolver, wrap_angle
 from planners.pick_place import CyclePlan, PickPlacePlanner
 from planners.servo import ServoFeedForward
-from planners.trajectory import JointState
+from planners.trajectory import JointState, validate
 from qshape.design import Design
 
 OUT = Path(__file__).resolve().parents[1] / "out" / "planner_bench.json"
@@ -61,6 +61,8 @@ MAX_WAIT_S = 10.0
 """Give up waiting for a reachable tile after this long [s]."""
 BELT_END_MARGIN = 0.01
 """A moving tile is only picked if its predicted contact leaves this margin to the belt end [m]."""
+BELT_SPEED_MATCH = 0.01
+"""A moving-belt tile is picked once its speed is within this fraction of the belt's."""
 LAYOUT_SEED_TRIES = 20
 """Layout seeds tried until the design's tiles fit the input belt's tile area."""
 TARGET_TILES_PER_MIN = 24.0
@@ -69,7 +71,8 @@ LAYOUTS = {
     "paper": {"belt_separation": 1.0, "work_x": 0.0},
     # Tool-down poses at belt height are out of reach closer than ~0.33 m to the base axis:
     # work_x 0.47 keeps the whole tile area and mesh reachable with the belts 0.5 m apart.
-    "compact": {"belt_separation": 0.5, "work_x": 0.47},
+    # A 0.6 m input belt keeps its upstream end clear of the robot base.
+    "compact": {"belt_separation": 0.5, "work_x": 0.47, "input_belt_length": 0.6},
 }
 
 
@@ -86,6 +89,8 @@ class CycleRun:
         tracking_rms: RMS tool position error [m].
         grasped: The pad sealed on the intended tile.
         placed_at: Simulation time the tile was placed (end of the release dwell) [s].
+        tcp_speed_max: Peak planned tool speed [m/s] (datasheet limit 2.5 m/s).
+        limits_ok: The sampled trajectory respects every joint limit (`validate`).
     """
 
     tile: int
@@ -96,6 +101,8 @@ class CycleRun:
     tracking_rms: float
     grasped: bool
     placed_at: float
+    tcp_speed_max: float
+    limits_ok: bool
 
 
 class CellRunner:
@@ -115,6 +122,8 @@ class CellRunner:
         self.ik = IKSolver(arm, planner_config.ik, planner_config.limits)
         self.planner = PickPlacePlanner(self.ik, planner_config)
         self.servo = ServoFeedForward(arm)
+        self.limits = planner_config.limits
+        self.limit_tolerance = planner_config.trajectory.limit_tolerance
         self.dt = float(cell.model.opt.timestep)
         self.thickness = cell.cfg.tiles.thickness
         self.mesh_top = cell.geometry.mesh_top
@@ -158,6 +167,12 @@ class CellRunner:
         )
         placed_at = math.nan
         ref = np.array([self.ik.fk(cmds.q_ref[k])[0] for k in range(n)])
+        speed = np.linalg.norm(np.diff(ref, axis=0), axis=1) / self.dt
+        try:
+            validate(plan.trajectory, self.limits, self.limit_tolerance)
+            limits_ok = True
+        except LimitError:
+            limits_ok = False
         err = np.zeros(n)
         grasped = False
         for k in range(n):
@@ -184,6 +199,8 @@ class CellRunner:
             float(np.sqrt(np.mean(err**2))),
             grasped,
             placed_at,
+            float(speed.max()) if speed.size else 0.0,
+            limits_ok,
         )
 
     def placement_errors(self, tile: int, slot: int) -> tuple[float, float]:
@@ -205,7 +222,10 @@ def _next_tile(runner: CellRunner, todo: list[int], belt_speed: float) -> int | 
     if belt_speed == 0.0:
         return todo[0]
     pos = cell.tile_poses().pos
-    on = [i for i in todo if cell.on_stage[i] and not cell.lost[i]]
+    vx = cell.data.qvel[cell.ids.tile_dof_index[:, 0]]
+    settled = np.abs(vx - belt_speed) <= BELT_SPEED_MATCH * belt_speed
+    # Only tiles already carried at the belt's speed (a fresh one is still speeding up).
+    on = [i for i in todo if cell.on_stage[i] and not cell.lost[i] and settled[i]]
     # Downstream first; the planner raises for tiles that will be out of reach at contact.
     return max(on, key=lambda i: pos[i, 0]) if on else None
 
@@ -225,10 +245,7 @@ def run_design(
     shapes, slots = tile_shapes_from_design(Design.load(design))
     if max_tiles is not None:
         shapes, slots = shapes[:max_tiles], slots[:max_tiles]
-    overrides: dict[str, Any] = {"layout": LAYOUTS[layout]}
-    if belt_speed > 0.0:
-        overrides["tiles"] = {"feed": "stream", "stream_initial": 1, "stream_period": stream_period}
-    cfg = _cell_config(overrides)
+    cfg = cell_config(layout, belt_speed, stream_period)
     cell = _build_cell(cfg, shapes, slots, seed)
     try:
         cell.belt_speed = belt_speed
@@ -243,9 +260,12 @@ def run_design(
         t0 = cell.time
         waited = 0.0
         while todo:
+            todo = [k for k in todo if not cell.lost[k]]
+            if not todo:
+                break
             i = _next_tile(runner, todo, belt_speed)
             if i is None:
-                if waited > MAX_WAIT_S or not (~cell.on_stage[todo]).any():
+                if waited > MAX_WAIT_S:
                     break
                 cell.step(int(round(WAIT_STEP_S / runner.dt)))
                 waited += WAIT_STEP_S
@@ -277,12 +297,16 @@ def run_design(
         ]
         n_ok = int(sum(ok))
         busy = sum(r.duration for r in runs)
+        # Steady state: cycles between the first (from home) and the last (final retreat).
+        middle = [r.duration for r in runs[1:-1]]
+        steady = float(np.median(middle)) if middle else math.nan
         bound = sum(r.bound for r in runs)
         tiles = len(slots)
         return {
             "design": design,
             "layout": layout,
             "belt_separation_m": LAYOUTS[layout]["belt_separation"],
+            "work_x_m": LAYOUTS[layout]["work_x"],
             "belt_speed_m_s": belt_speed,
             "execution": "dynamic" if dynamic else "kinematic",
             "tiles": tiles,
@@ -297,6 +321,10 @@ def run_design(
             "ratio": busy / bound if bound > 0 else math.nan,
             "plan_ms": float(np.median([r.plan_ms for r in runs])) if runs else math.nan,
             "plan_ms_max": float(np.max([r.plan_ms for r in runs])) if runs else math.nan,
+            "steady_cycle_s": steady,
+            "steady_tiles_per_min": 60.0 / steady if steady > 0 else math.nan,
+            "tcp_speed_max_m_s": max((r.tcp_speed_max for r in runs), default=math.nan),
+            "all_trajectories_within_limits": all(r.limits_ok for r in runs),
             "tracking_max_mm": 1e3 * max((r.tracking_max for r in runs), default=math.nan),
             "tracking_rms_mm": 1e3 * float(np.sqrt(np.mean([r.tracking_rms**2 for r in runs])))
             if runs
@@ -326,8 +354,20 @@ def _build_cell(cfg: CellConfig, shapes: Any, slots: Any, seed: int) -> Cell:
     raise CellError(f"no layout seed in [{seed}, {seed + LAYOUT_SEED_TRIES}) fits the design")
 
 
-def _cell_config(overrides: dict[str, Any]) -> CellConfig:
-    return load_cell_config(**overrides)
+def cell_config(layout: str, belt_speed: float, stream_period: float) -> CellConfig:
+    """The bundled cell configuration with a layout and, on a moving belt, stream feeding."""
+    base = load_cell_config()
+    lay = LAYOUTS[layout]
+    sections: dict[str, Any] = {
+        "layout": replace(base.layout, belt_separation=lay["belt_separation"], work_x=lay["work_x"])
+    }
+    if "input_belt_length" in lay:
+        sections["input_belt"] = replace(base.input_belt, length=lay["input_belt_length"])
+    if belt_speed > 0.0:
+        sections["tiles"] = replace(
+            base.tiles, feed="stream", stream_initial=1, stream_period=stream_period
+        )
+    return replace(base, **sections)
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:

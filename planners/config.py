@@ -153,7 +153,7 @@ class IKConfig:
     restarts: int = 6
     restart_seed: int = 0
     restart_spread: float = 0.6
-    collision_min_distance: float = 0.005
+    collision_min_distance: float = 0.002
     collision_detection_distance: float = 0.05
     limit_margin: float = 1e-3
     memory: int = 256

@@ -153,6 +153,7 @@ class IKSolver:
                 m, dict(zip(cfg.joint_names, self.limits.max_velocity, strict=True))
             ),
         ]
+        self._pairs = np.zeros((0, 2), dtype=int)
         if obstacles:
             robot_geoms = [
                 i
@@ -167,6 +168,11 @@ class IKSolver:
                     collision_detection_distance=cfg.collision_detection_distance,
                 )
             )
+            try:
+                obstacle_ids = [m.geom(name).id for name in obstacles]
+            except KeyError as exc:
+                raise PlannerError(f"obstacle geom not in the model: {exc}") from exc
+            self._pairs = np.array([(a, b) for a in robot_geoms for b in obstacle_ids], dtype=int)
         self._rng = np.random.default_rng(cfg.restart_seed)
         self._known: list[tuple[Array, Array]] = []  # (target xyz+yaw feature, q)
         self._home = 0.5 * (self.lower + self.upper)
@@ -191,6 +197,22 @@ class IKSolver:
         jac = np.zeros((6, self.model.nv))
         mujoco.mj_jacSite(self.model, d, jac[:3], jac[3:], self.site_id)
         return jac
+
+    def clearance(self, q: npt.ArrayLike) -> float:
+        """Smallest distance [m] between the arm and the obstacle geoms at ``q`` (inf if none).
+
+        Distances beyond ``collision_detection_distance`` count as that distance.
+        """
+        if self._pairs.size == 0:
+            return math.inf
+        d = self._data
+        d.qpos[:] = q
+        mujoco.mj_kinematics(self.model, d)
+        dmax = self.config.collision_detection_distance
+        return min(
+            mujoco.mj_geomDistance(self.model, d, int(a), int(b), dmax, None)
+            for a, b in self._pairs
+        )
 
     @staticmethod
     def yaw_of(rotation: Array) -> float:
@@ -367,7 +389,11 @@ class IKSolver:
         for k, s in enumerate(seeds, start=1):
             q, pe, oe, it = self._attempt(s, pos, yaw)
             total_it += it
-            if pe <= cfg.position_tolerance and oe <= math.radians(cfg.orientation_tolerance_deg):
+            if (
+                pe <= cfg.position_tolerance
+                and oe <= math.radians(cfg.orientation_tolerance_deg)
+                and self.clearance(q) >= cfg.collision_min_distance
+            ):
                 self._remember(feature, q)
                 return IKSolution(q, float(yaw), pe, oe, total_it, k)
             if pe + oe * self._reach[3] < best[0] + best[1] * self._reach[3]:
@@ -377,7 +403,7 @@ class IKSolver:
             f"{math.degrees(yaw):.2f} deg after {len(seeds)} attempts: best residual "
             f"{best[0] * 1e3:.2f} mm / {math.degrees(best[1]):.2f} deg, tolerance "
             f"{cfg.position_tolerance * 1e3:.2f} mm / {cfg.orientation_tolerance_deg:.2f} deg "
-            "(joint limits or a flipped tool)"
+            "(joint limits, obstacles or a flipped tool)"
         )
 
     def _remember(self, feature: Array, q: Array) -> None:

@@ -487,7 +487,11 @@ class PickPlacePlanner:
         moving = bool(np.any(belt != 0.0))
         # Tool yaw at the pick: keep the current one (the round pad may pick at any yaw).
         pick_yaw = IKSolver.yaw_of(self.ik.fk(start.q)[1])
+        # First guess of the contact time: a direct time-optimal move onto the tile.
         t_contact = 0.0
+        if moving:
+            q_guess = self._solve(pick0 - np.array([0.0, 0.0, c.pick_press]), pick_yaw, start.q)
+            t_contact = self._segment(start, q_guess, None, "guess").duration
         best: tuple[float, Any] | None = None
         speed = float(np.linalg.norm(belt))
         for _ in range(c.predict_iterations if moving else 1):

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from agents.bench_planner import LAYOUTS, CellRunner, _build_cell, _cell_config
+from agents.bench_planner import CellRunner, _build_cell, cell_config
 from envs.tiles import basic_shapes
 from planners.config import load_planner_config
 from planners.errors import InvalidTargetError, UnreachableError
@@ -115,11 +115,8 @@ def test_bad_inputs_raise_typed_errors(planner: PickPlacePlanner, start: JointSt
 
 
 def _sim_cycle(belt_speed: float) -> tuple[CellRunner, int]:
-    overrides: dict = {"layout": LAYOUTS["paper"]}
-    if belt_speed:
-        overrides["tiles"] = {"feed": "stream", "stream_initial": 1, "stream_period": 30.0}
     shapes = basic_shapes()[:2]
-    cell = _build_cell(_cell_config(overrides), shapes, (), seed=1)
+    cell = _build_cell(cell_config("paper", belt_speed, 30.0), shapes, (), seed=1)
     cell.belt_speed = belt_speed
     return CellRunner(cell, CFG), int(np.flatnonzero(cell.on_stage)[0])
 
