@@ -44,6 +44,9 @@ class OutlineParams:
             [deg]. A full circle (360) becomes two semicircles; 240 keeps a noisy semicircle
             (whose measured turning can exceed 180) whole.
         merge_fraction: Corners closer than this fraction of the perimeter are merged.
+        refine_corners: Move each corner between two straight edges to the intersection of
+            lines fitted to those edges (sub-sample accuracy on clean polygons; at very acute
+            corners small line errors can push the corner outwards).
     """
 
     resample_points: int = 256
@@ -54,6 +57,7 @@ class OutlineParams:
     noise_fraction: float = 0.006
     max_curve_turn_deg: float = 240.0
     merge_fraction: float = 0.02
+    refine_corners: bool = False
 
     def __post_init__(self) -> None:
         """Validate ranges.
@@ -176,10 +180,16 @@ def simplify_outline(
         _emit_run(res, turn, np.arange(n), p=p, noise=noise, out_pts=out_pts, out_curve=out_curve,
                   closed_loop=True, guard=half)
     else:
+        runs: list[tuple[int, bool, FloatArray]] = []
         for a, b in zip(corners, np.roll(corners, -1), strict=True):
             idx = np.arange(a, b + (n if b <= a else 0) + 1) % n
-            _emit_run(res, turn, idx, p=p, noise=noise, out_pts=out_pts, out_curve=out_curve,
-                      closed_loop=False, guard=half)
+            start = len(out_pts)
+            straight = _emit_run(res, turn, idx, p=p, noise=noise, out_pts=out_pts,
+                                 out_curve=out_curve, closed_loop=False, guard=half)
+            runs.append((start, straight, res[idx]))
+        if p.refine_corners:
+            _refine_corners(runs, out_pts, trim=w, reach=p.corner_window * perimeter,
+                            min_sin=math.sin(math.radians(p.corner_angle_deg)))
     points = np.array(out_pts, dtype=np.float64)
     mask = np.array(out_curve, dtype=bool)
     if len(points) < 3:
@@ -215,8 +225,12 @@ def _emit_run(
     out_curve: list[bool],
     closed_loop: bool,
     guard: int,
-) -> None:
-    """Append the relevant points of one run (from corner idx[0] up to, not incl., idx[-1])."""
+) -> bool:
+    """Append the relevant points of one run (from corner idx[0] up to, not incl., idx[-1]).
+
+    Returns:
+        True when the run is one straight edge.
+    """
     if closed_loop:
         idx = np.concatenate([idx, idx[:1]])
         inner = turn[idx[:-1]]
@@ -233,7 +247,7 @@ def _emit_run(
     if straight:
         out_pts.append(run[0])
         out_curve.append(False)
-        return
+        return True
     pieces = max(1, math.ceil(total / p.max_curve_turn_deg))
     if closed_loop:
         pieces = max(pieces, 2)
@@ -254,6 +268,45 @@ def _emit_run(
             if d[j] > noise and 0 < j < len(sub) - 1:
                 out_pts.append(sub[j])
                 out_curve.append(True)
+    return False
+
+
+def _fit_line(run: FloatArray, trim: int) -> tuple[FloatArray, FloatArray]:
+    """Total-least-squares line (point, unit direction) through a run, its ends trimmed."""
+    inner = run[trim : len(run) - trim] if len(run) > 2 * trim + 2 else run
+    centre = inner.mean(axis=0)
+    _, vecs = np.linalg.eigh(np.cov((inner - centre).T))
+    return centre, vecs[:, -1]
+
+
+def _refine_corners(
+    runs: list[tuple[int, bool, FloatArray]],
+    out_pts: list[FloatArray],
+    *,
+    trim: int,
+    reach: float,
+    min_sin: float,
+) -> None:
+    """Move each corner between two straight runs to the intersection of their fitted lines.
+
+    Smoothing and the sample spacing round a corner off; the lines through the middles of the
+    adjacent edges meet at the true corner. Kept only when the lines cross at a corner angle
+    (sine of the angle between them >= ``min_sin``) within ``reach`` of the detected corner.
+    """
+    for r, (start, straight, run) in enumerate(runs):
+        _, prev_straight, prev_run = runs[r - 1]
+        if not (straight and prev_straight) or len(runs) < 2:
+            continue
+        m1, d1 = _fit_line(prev_run, trim)
+        m2, d2 = _fit_line(run, trim)
+        den = float(d1[0] * d2[1] - d1[1] * d2[0])
+        if abs(den) < min_sin:
+            continue
+        diff = m2 - m1
+        t = float(diff[0] * d2[1] - diff[1] * d2[0]) / den
+        corner = m1 + t * d1
+        if float(np.hypot(*(corner - out_pts[start]))) <= reach:
+            out_pts[start] = corner
 
 
 def _chord_distance(run: FloatArray) -> FloatArray:

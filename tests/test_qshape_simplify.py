@@ -99,3 +99,16 @@ def test_params_are_used():
     circle = np.stack([10 * np.cos(t), 10 * np.sin(t)], 1)
     three = Figure.from_outline(circle, params=OutlineParams(max_curve_turn_deg=130.0))
     assert int(three.curve_mask.sum()) == 3
+
+
+def test_refine_corners_is_sub_sample_accurate_on_a_clean_polygon():
+    rng = np.random.default_rng(SEED)
+    tri = np.array([[0.0, 0.0], [100.0, 10.0], [30.0, 60.0]])
+    dense = dense_outline(tri[::-1], np.zeros(3, bool), 0.5, rng, 0.0)
+    plain, _ = simplify_outline(dense)
+    refined, _ = simplify_outline(dense, OutlineParams(refine_corners=True))
+
+    def worst(points: np.ndarray) -> float:
+        return float(np.hypot(*(tri[:, None, :] - points[None]).transpose(2, 0, 1)).min(1).max())
+
+    assert worst(refined) < 1e-6 < worst(plain)
