@@ -242,6 +242,8 @@ class CycleConfig:
             contact (each one a full plan).
         predict_tolerance: Stop iterating when the pad would meet the tile this close to its
             grip point [m].
+        predict_margin: Without a fixed point, aim this much later than the latest contact time
+            found and wait at the start for the difference [s].
         max_tilt_deg: Largest tool tilt from straight down accepted at a contact pose [deg].
     """
 
@@ -260,6 +262,7 @@ class CycleConfig:
     belt_match_time: float = 0.05
     predict_iterations: int = 6
     predict_tolerance: float = 2e-4
+    predict_margin: float = 0.02
     max_tilt_deg: float = 0.5
 
     def __post_init__(self) -> None:
@@ -271,6 +274,7 @@ class CycleConfig:
             "max_lateral_drift",
             "predict_iterations",
             "predict_tolerance",
+            "predict_margin",
             "max_tilt_deg",
         )
         _check_non_negative(

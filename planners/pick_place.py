@@ -48,7 +48,7 @@ import numpy as np
 import numpy.typing as npt
 
 from planners.config import JointLimits, PlannerConfig
-from planners.errors import InvalidTargetError, PlannerError, UnreachableError
+from planners.errors import InvalidTargetError, PlannerError, TrajectoryError, UnreachableError
 from planners.ik import IKSolver, symmetric_yaws, wrap_angle
 from planners.trajectory import (
     JointState,
@@ -492,32 +492,46 @@ class PickPlacePlanner:
         if moving:
             q_guess = self._solve(pick0 - np.array([0.0, 0.0, c.pick_press]), pick_yaw, start.q)
             t_contact = self._segment(start, q_guess, None, "guess").duration
-        best: tuple[float, Any] | None = None
+        rotations = [
+            (rotation + k * 2.0 * math.pi / symmetry_order, grasp, object_yaw)
+            for k in range(symmetry_order)
+        ]
+
+        def plan_for(t: float) -> tuple[Any, float]:
+            """The cycle meeting the tile where it is at time t, and its own contact time."""
+            pick_c = pick0 + belt * t - np.array([0.0, 0.0, c.pick_press])
+            res = self._plan(
+                start, start_at_contact, end_retreat, pick_c, place, pick_yaw, rotations, belt
+            )
+            return res, res[0].end_time("descend_pick")
+
+        # Fixed point t = T(t): the contact time of the plan aimed at the tile's position then.
+        tried: list[tuple[float, Any, float]] = []
         speed = float(np.linalg.norm(belt))
         for _ in range(c.predict_iterations if moving else 1):
-            pick_c = pick0 + belt * t_contact - np.array([0.0, 0.0, c.pick_press])
-            result = self._plan(
-                start,
-                start_at_contact,
-                end_retreat,
-                pick_c,
-                place,
-                pick_yaw,
-                [
-                    (rotation + k * 2.0 * math.pi / symmetry_order, grasp, object_yaw)
-                    for k in range(symmetry_order)
-                ],
-                belt,
-            )
-            t_new = result[0].end_time("descend_pick")
-            miss = speed * abs(t_new - t_contact)  # where the tile will be vs where we go
-            if best is None or miss < best[0]:
-                best = (miss, (result, t_contact))
-            if miss <= c.predict_tolerance:
+            res, t_new = plan_for(t_contact)
+            tried.append((t_contact, res, t_new))
+            if speed * abs(t_new - t_contact) <= c.predict_tolerance:
                 break
             t_contact = t_new
-        assert best is not None
-        contact_error, ((pw, pick_q, place_q, place_yaw, leads), t_contact) = best
+        t_aim, result, t_plan = min(tried, key=lambda x: abs(x[2] - x[0]))
+        wait = 0.0
+        if speed * abs(t_plan - t_aim) > c.predict_tolerance:
+            # No fixed point (e.g. the wrist's turn changed between iterations): aim later than
+            # the plan arrives and wait at the start for the difference.
+            t_aim = max(t for _, _, t in tried) + c.predict_margin
+            result, t_plan = plan_for(t_aim)
+            if t_plan > t_aim:
+                raise TrajectoryError(
+                    f"cannot time the pick of the moving object at {np.round(pick0, 4).tolist()}"
+                    f" m: contact at {t_plan:.3f} s, aimed at {t_aim:.3f} s"
+                )
+            wait = t_aim - t_plan
+        pw, pick_q, place_q, place_yaw, leads = result
+        if wait > 0.0:
+            pw = Piecewise((hold_segment(start, wait, "wait"), *pw.segments))
+        t_contact = t_aim
+        contact_error = speed * abs(pw.end_time("descend_pick") - t_aim)
         traj = pw.sample(self.config.trajectory.sample_dt)
         bound_q = start.q if bound_from is None else as_joint_vector(bound_from, "bound_from")
         bound = self.lower_bound(bound_q, pick_q, place_q, self.joint_velocity(pick_q, belt))
