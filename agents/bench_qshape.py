@@ -84,10 +84,14 @@ def _random_convex(rng: np.random.Generator, n: int, r: float) -> np.ndarray:
 
 def _shapes(rng: np.random.Generator) -> list[tuple[np.ndarray, np.ndarray, tuple, int]]:
     no = np.zeros
-    circle = (np.array([[-10.0, 0], [0, 10], [10, 0], [0, -10]]),
-              np.array([False, True, False, True]))
-    ring_hole = (np.array([[-4.0, 0], [0, 4], [4, 0], [0, -4]]),
-                 np.array([False, True, False, True]))
+    circle = (
+        np.array([[-10.0, 0], [0, 10], [10, 0], [0, -10]]),
+        np.array([False, True, False, True]),
+    )
+    ring_hole = (
+        np.array([[-4.0, 0], [0, 4], [4, 0], [0, -4]]),
+        np.array([False, True, False, True]),
+    )
     sq_hole = (np.array([[4.0, -9], [9, -9], [9, -4], [4, -4]]), no(4, bool))
     shapes = [
         (np.array([[-10.0, -10], [10, -10], [10, 10], [-10, 10]]), no(4, bool), (), 4),
@@ -235,8 +239,11 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--jitter", type=float, default=0.1, help="vertex jitter [mm], uniform")
     ap.add_argument("--repeat", type=int, default=3, help="timed runs; the fastest is kept")
-    ap.add_argument("--paper-full", action="store_true",
-                    help="run the paper's loop on all tiles instead of extrapolating")
+    ap.add_argument(
+        "--paper-full",
+        action="store_true",
+        help="run the paper's loop on all tiles instead of extrapolating",
+    )
     ap.add_argument("--out", type=Path, default=Path("out/bench_qshape.json"))
     args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
@@ -249,10 +256,14 @@ def main(argv: list[str] | None = None) -> dict:
     tile_angle = rng.uniform(-math.pi, math.pi, args.tiles)
 
     t0 = time.perf_counter()
-    slot_figs = [make_figure(classes[c], rng, a, 0.0, 0.0) for c, a in
-                 zip(slot_class, slot_angle, strict=True)]
-    tile_figs = [make_figure(classes[c], rng, a, args.jitter, 0.03) for c, a in
-                 zip(tile_class, tile_angle, strict=True)]
+    slot_figs = [
+        make_figure(classes[c], rng, a, 0.0, 0.0)
+        for c, a in zip(slot_class, slot_angle, strict=True)
+    ]
+    tile_figs = [
+        make_figure(classes[c], rng, a, args.jitter, 0.03)
+        for c, a in zip(tile_class, tile_angle, strict=True)
+    ]
     t_build = (time.perf_counter() - t0) / 2
 
     t_describe, tile_desc = _best(args.repeat, lambda: [qshape.describe(f, tol) for f in tile_figs])
@@ -263,12 +274,19 @@ def main(argv: list[str] | None = None) -> dict:
     results: dict = {}
     for method in ("optimal", "greedy"):
         dt, assignment = _best(
-            args.repeat, lambda m=method: qshape.assign(tile_desc, slot_desc, tol, method=m))
+            args.repeat, lambda m=method: qshape.assign(tile_desc, slot_desc, tol, method=m)
+        )
         correct = sum(tile_class[a.tile] == slot_class[a.slot] for a in assignment)
         rot_err = [
-            math.degrees(_rotation_error(a.rotation, slot_angle[a.slot] - tile_angle[a.tile],
-                                         classes[tile_class[a.tile]].symmetry))
-            for a in assignment if tile_class[a.tile] == slot_class[a.slot]
+            math.degrees(
+                _rotation_error(
+                    a.rotation,
+                    slot_angle[a.slot] - tile_angle[a.tile],
+                    classes[tile_class[a.tile]].symmetry,
+                )
+            )
+            for a in assignment
+            if tile_class[a.tile] == slot_class[a.slot]
         ]
         results[method] = {
             "seconds": dt,
@@ -285,8 +303,10 @@ def main(argv: list[str] | None = None) -> dict:
     paper_runs = []
     for m in sizes:
         keep = [i for i in range(args.tiles) if tile_order[i] < m]
-        t_m, found_m = min(paper_pairwise([tile_desc[i] for i in keep], slot_desc[:m], tol,
-                                          len(keep)) for _ in range(args.repeat))
+        t_m, found_m = min(
+            paper_pairwise([tile_desc[i] for i in keep], slot_desc[:m], tol, len(keep))
+            for _ in range(args.repeat)
+        )
         paper_runs.append({"size": m, "seconds": t_m, "matched": found_m, "tiles": len(keep)})
     if sizes[-1] == args.tiles:
         exponent = float("nan")
@@ -297,8 +317,10 @@ def main(argv: list[str] | None = None) -> dict:
         y = np.log([max(r["seconds"], 1e-9) for r in paper_runs])
         exponent, log_a = np.polyfit(x, y, 1)
         t_paper = float(math.exp(log_a) * args.tiles**exponent)
-        paper_label = (f"paper pairwise, {args.tiles} tiles (EXTRAPOLATED from "
-                       f"{'/'.join(str(m) for m in sizes)}, t ~ n^{exponent:.2f})")
+        paper_label = (
+            f"paper pairwise, {args.tiles} tiles (EXTRAPOLATED from "
+            f"{'/'.join(str(m) for m in sizes)}, t ~ n^{exponent:.2f})"
+        )
     out = {
         "repeat": args.repeat,
         "tiles": args.tiles,
@@ -324,15 +346,26 @@ def main(argv: list[str] | None = None) -> dict:
         ("build figures (not timed target)", f"{t_build:.3f} s"),
         (f"describe {args.tiles} tiles, one by one", f"{t_describe:.3f} s"),
         (f"describe {args.tiles} tiles, describe_many", f"{t_describe_many:.3f} s"),
-        ("assign optimal", f"{results['optimal']['seconds']:.3f} s  "
-         f"({results['optimal']['assigned']} assigned, "
-         f"{results['optimal']['correct_class']} right class, "
-         f"max rot err {results['optimal']['rotation_error_deg_max']:.2f} deg)"),
-        ("assign greedy", f"{results['greedy']['seconds']:.3f} s  "
-         f"({results['greedy']['assigned']} assigned, "
-         f"{results['greedy']['correct_class']} right class)"),
-        *((f"paper pairwise, {r['size']} x {r['size']} (measured)",
-           f"{r['seconds']:.3f} s  ({r['matched']}/{r['tiles']} matched)") for r in paper_runs),
+        (
+            "assign optimal",
+            f"{results['optimal']['seconds']:.3f} s  "
+            f"({results['optimal']['assigned']} assigned, "
+            f"{results['optimal']['correct_class']} right class, "
+            f"max rot err {results['optimal']['rotation_error_deg_max']:.2f} deg)",
+        ),
+        (
+            "assign greedy",
+            f"{results['greedy']['seconds']:.3f} s  "
+            f"({results['greedy']['assigned']} assigned, "
+            f"{results['greedy']['correct_class']} right class)",
+        ),
+        *(
+            (
+                f"paper pairwise, {r['size']} x {r['size']} (measured)",
+                f"{r['seconds']:.3f} s  ({r['matched']}/{r['tiles']} matched)",
+            )
+            for r in paper_runs
+        ),
         (paper_label, f"{t_paper:.2f} s"),
         ("speed-up, greedy vs paper", f"{out['speedup_vs_paper_greedy']:.0f}x"),
         ("speed-up, optimal vs paper", f"{out['speedup_vs_paper_optimal']:.0f}x"),

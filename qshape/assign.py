@@ -16,6 +16,7 @@ slot are merged. Then, per group:
 
 No Python loop ever runs over tile x slot pairs.
 """
+
 from __future__ import annotations
 
 from collections import defaultdict
@@ -146,14 +147,18 @@ def _blocks(
             if len(bt) == 0:
                 continue
             t_count, s_count = base.shape
-            graph = coo_matrix((np.ones(len(bt)), (bt, t_count + bs)),
-                               shape=(t_count + s_count, t_count + s_count))
+            graph = coo_matrix(
+                (np.ones(len(bt)), (bt, t_count + bs)), shape=(t_count + s_count, t_count + s_count)
+            )
             _, comp = connected_components(graph, directed=False)
             for c in np.unique(comp[bt]).tolist():
                 ct = np.flatnonzero(comp[:t_count] == c)
                 cs = np.flatnonzero(comp[t_count:] == c)
-                blocks.append(_Block(t_idx[ct], s_idx[cs], take(tpack, ct), take(spack, cs),
-                                     base[np.ix_(ct, cs)]))
+                blocks.append(
+                    _Block(
+                        t_idx[ct], s_idx[cs], take(tpack, ct), take(spack, cs), base[np.ix_(ct, cs)]
+                    )
+                )
     return blocks
 
 
@@ -166,8 +171,7 @@ def _evaluate(
     parts: list[tuple[IntArray, IntArray, FloatArray, FloatArray]] = []
     for a in range(0, len(block.tiles), chunk):
         rows = np.arange(a, min(a + chunk, len(block.tiles)))
-        res = evaluate_block(block.spack, take(block.tpack, rows), tol, use_color,
-                             block.base[rows])
+        res = evaluate_block(block.spack, take(block.tpack, rows), tol, use_color, block.base[rows])
         if len(res.k) == 0:
             continue
         pair = res.ti * len(block.slots) + res.si  # entries come ordered by pair
@@ -180,13 +184,23 @@ def _evaluate(
         low = np.minimum.reduceat(key, starts)
         hit = np.flatnonzero(key == np.repeat(low, counts))
         first = hit[np.r_[True, pair[hit][1:] != pair[hit][:-1]]]
-        parts.append((block.tiles[rows[res.ti[first]]], block.slots[res.si[first]],
-                      res.score[first], np.arctan2(res.cross[first], res.dot[first])))
+        parts.append(
+            (
+                block.tiles[rows[res.ti[first]]],
+                block.slots[res.si[first]],
+                res.score[first],
+                np.arctan2(res.cross[first], res.dot[first]),
+            )
+        )
     if not parts:
         empty = np.zeros(0)
         return empty.astype(np.int64), empty.astype(np.int64), empty, empty
-    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
-            np.concatenate([p[2] for p in parts]), np.concatenate([p[3] for p in parts]))
+    return (
+        np.concatenate([p[0] for p in parts]),
+        np.concatenate([p[1] for p in parts]),
+        np.concatenate([p[2] for p in parts]),
+        np.concatenate([p[3] for p in parts]),
+    )
 
 
 def _diagonal(block: _Block, tol: Tolerances, use_color: bool) -> list[Assignment] | None:
@@ -199,13 +213,21 @@ def _diagonal(block: _Block, tol: Tolerances, use_color: bool) -> list[Assignmen
     rows = np.arange(m)
     if not block.base[rows, rows].all():
         return None
-    ok, score, rotation = evaluate_pairs(take(block.spack, rows), take(block.tpack, rows), tol,
-                                         use_color)
+    ok, score, rotation = evaluate_pairs(
+        take(block.spack, rows), take(block.tpack, rows), tol, use_color
+    )
     if not ok.all():
         return None
-    return [Assignment(int(t), int(s), float(r), float(c)) for t, s, r, c in
-            zip(block.tiles[:m].tolist(), block.slots[:m].tolist(), rotation.tolist(),
-                score.tolist(), strict=True)]
+    return [
+        Assignment(int(t), int(s), float(r), float(c))
+        for t, s, r, c in zip(
+            block.tiles[:m].tolist(),
+            block.slots[:m].tolist(),
+            rotation.tolist(),
+            score.tolist(),
+            strict=True,
+        )
+    ]
 
 
 def _merged(blocks: list[_Block], n_tiles: int, n_slots: int) -> list[list[int]]:
@@ -213,10 +235,14 @@ def _merged(blocks: list[_Block], n_tiles: int, n_slots: int) -> list[list[int]]
     if not blocks:
         return []
     n_blocks = len(blocks)
-    rows = np.r_[np.repeat(np.arange(n_blocks), [len(b.tiles) for b in blocks]),
-                 np.repeat(np.arange(n_blocks), [len(b.slots) for b in blocks])]
-    cols = np.r_[n_blocks + np.concatenate([b.tiles for b in blocks]),
-                 n_blocks + n_tiles + np.concatenate([b.slots for b in blocks])]
+    rows = np.r_[
+        np.repeat(np.arange(n_blocks), [len(b.tiles) for b in blocks]),
+        np.repeat(np.arange(n_blocks), [len(b.slots) for b in blocks]),
+    ]
+    cols = np.r_[
+        n_blocks + np.concatenate([b.tiles for b in blocks]),
+        n_blocks + n_tiles + np.concatenate([b.slots for b in blocks]),
+    ]
     size = n_blocks + n_tiles + n_slots
     graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(size, size))
     _, label = connected_components(graph, directed=False)
@@ -241,8 +267,12 @@ def feasible_pairs(
     if not parts:
         empty = np.zeros(0)
         return empty.astype(np.int64), empty.astype(np.int64), empty, empty
-    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
-            np.concatenate([p[2] for p in parts]), np.concatenate([p[3] for p in parts]))
+    return (
+        np.concatenate([p[0] for p in parts]),
+        np.concatenate([p[1] for p in parts]),
+        np.concatenate([p[2] for p in parts]),
+        np.concatenate([p[3] for p in parts]),
+    )
 
 
 def _descriptions(items: Sequence[Description | Figure], tol: Tolerances) -> list[Description]:
@@ -304,11 +334,16 @@ def assign(
         else:
             members_t = [blocks[b].tiles for b in group]
             members_s = [blocks[b].slots for b in group]
-            out.extend(_solve(
-                t, s, score, theta,
-                tiles=members_t[0] if len(group) == 1 else np.unique(np.concatenate(members_t)),
-                slots=members_s[0] if len(group) == 1 else np.unique(np.concatenate(members_s)),
-            ))
+            out.extend(
+                _solve(
+                    t,
+                    s,
+                    score,
+                    theta,
+                    tiles=members_t[0] if len(group) == 1 else np.unique(np.concatenate(members_t)),
+                    slots=members_s[0] if len(group) == 1 else np.unique(np.concatenate(members_s)),
+                )
+            )
     out.sort(key=lambda x: x.tile)
     return out
 

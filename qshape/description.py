@@ -111,9 +111,7 @@ class BoundaryDescription:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, BoundaryDescription):
             return NotImplemented
-        return np.array_equal(self.codes, other.codes) and np.array_equal(
-            self.points, other.points
-        )
+        return np.array_equal(self.codes, other.codes) and np.array_equal(self.points, other.points)
 
     __hash__ = None  # type: ignore[assignment]
 
@@ -129,7 +127,7 @@ class BoundaryDescription:
 
     @property
     def type_curve(self) -> str:
-        """"without curves", "with curves" or "only curves"."""
+        """One of "without curves", "with curves" or "only curves"."""
         return type_curve_of(self.codes)
 
 
@@ -320,8 +318,9 @@ def describe(figure: Figure, tolerances: Tolerances | None = None) -> Descriptio
     rel.setflags(write=False)
     codes.setflags(write=False)
     outer = BoundaryDescription(codes, rel)
-    holes = tuple(_describe_hole(h.points * flip - centre, h.curve_mask, rel[0], tol)
-                  for h in figure.holes)
+    holes = tuple(
+        _describe_hole(h.points * flip - centre, h.curve_mask, rel[0], tol) for h in figure.holes
+    )
     return Description(
         WITH_HOLES if holes else WITHOUT_HOLES,
         type_curve_of(codes),
@@ -385,12 +384,20 @@ def describe_many(
         holes: tuple[HoleDescription, ...] = ()
         if f.holes:
             fl = np.array([1.0, flip[k]])
-            holes = tuple(_describe_hole(h.points * fl - cen[k], h.curve_mask, r[0], tol)
-                          for h in f.holes)
-        out.append(Description(
-            WITH_HOLES if holes else WITHOUT_HOLES, type_curve_of(c), f.color, f.area,
-            f.perimeter, BoundaryDescription(c, r), holes,
-        ))
+            holes = tuple(
+                _describe_hole(h.points * fl - cen[k], h.curve_mask, r[0], tol) for h in f.holes
+            )
+        out.append(
+            Description(
+                WITH_HOLES if holes else WITHOUT_HOLES,
+                type_curve_of(c),
+                f.color,
+                f.area,
+                f.perimeter,
+                BoundaryDescription(c, r),
+                holes,
+            )
+        )
     return out
 
 
@@ -443,11 +450,16 @@ def format_description(d: Description) -> str:
 
 _FLOAT = r"[-+]?(?:\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?|inf|nan)"
 _NODE_RE = re.compile(
-    r"^\s+<([^,<>]+),\s*([^,<>]+),\s*([^,<>]+)>\s*@\s*\((" + _FLOAT + r"),\s*(" + _FLOAT
+    r"^\s+<([^,<>]+),\s*([^,<>]+),\s*([^,<>]+)>\s*@\s*\(("
+    + _FLOAT
+    + r"),\s*("
+    + _FLOAT
     + r")\)\s*$"
 )
-_HOLE_RE = re.compile(r"^hole:\s*(\w+)\s*\[([^\]]*)\]\s*(without curves|with curves|only curves)"
-                      r",\s*nodes:\s*(\d+)\s*$")
+_HOLE_RE = re.compile(
+    r"^hole:\s*(\w+)\s*\[([^\]]*)\]\s*(without curves|with curves|only curves)"
+    r",\s*nodes:\s*(\d+)\s*$"
+)
 
 
 def _component(text: str, names: tuple[str, ...], where: str) -> tuple[int, int]:
@@ -490,8 +502,7 @@ def _parse_boundary(lines: list[str], at: int, count: int, what: str) -> Boundar
         raise ParseError(f"line {at}: {what} needs at least 3 nodes, got {count}")
     if at + count > len(lines):
         raise ParseError(
-            f"line {at}: {what} announces {count} nodes but the text ends after "
-            f"{len(lines) - at}"
+            f"line {at}: {what} announces {count} nodes but the text ends after {len(lines) - at}"
         )
     codes, pts = [], []
     for k in range(count):
@@ -502,8 +513,10 @@ def _parse_boundary(lines: list[str], at: int, count: int, what: str) -> Boundar
     p_arr = np.array(pts, dtype=np.float64)
     curve = (c & lb.KIND_BIT) == 1
     if np.any(curve & np.roll(curve, 1)):
-        raise ParseError(f"line {at}: {what} has two adjacent Curve nodes; a curve node needs "
-                         "its start and end vertices as neighbours")
+        raise ParseError(
+            f"line {at}: {what} has two adjacent Curve nodes; a curve node needs "
+            "its start and end vertices as neighbours"
+        )
     c.setflags(write=False)
     p_arr.setflags(write=False)
     return BoundaryDescription(c, p_arr)
@@ -513,7 +526,7 @@ def _value(line: str, key: str, where: str) -> str:
     prefix = f"{key}:"
     if not line.startswith(prefix):
         raise ParseError(f"{where}: expected '{key}: ...', got {line!r}")
-    return line[len(prefix):].strip()
+    return line[len(prefix) :].strip()
 
 
 def _float(text: str, what: str, where: str) -> float:
@@ -536,11 +549,15 @@ def parse(text: str) -> Description:
         raise ParseError(f"parse expects a string, got {type(text).__name__}")
     lines = [ln for ln in text.splitlines() if ln.strip()]
     if len(lines) < 6 or lines[0].strip() != HEADER:
-        raise ParseError(f"line 1: expected the header {HEADER!r} followed by type, color, area, "
-                         "perimeter and nodes lines")
+        raise ParseError(
+            f"line 1: expected the header {HEADER!r} followed by type, color, area, "
+            "perimeter and nodes lines"
+        )
     types = [t.strip() for t in _value(lines[1], "type", "line 2").split(",")]
-    if len(types) != 2 or types[0] not in (WITHOUT_HOLES, WITH_HOLES) or types[1] not in (
-        WITHOUT_CURVES, WITH_CURVES, ONLY_CURVES
+    if (
+        len(types) != 2
+        or types[0] not in (WITHOUT_HOLES, WITH_HOLES)
+        or types[1] not in (WITHOUT_CURVES, WITH_CURVES, ONLY_CURVES)
     ):
         raise ParseError(
             f"line 2: type must be '<without holes|with holes>, <without curves|with curves|"
@@ -563,29 +580,37 @@ def parse(text: str) -> Description:
     count = _int(_value(lines[5], "nodes", "line 6"), "line 6")
     outer = _parse_boundary(lines, 6, count, "the outer boundary")
     if type_curve_of(outer.codes) != types[1]:
-        raise ParseError(f"line 2: type says {types[1]!r} but the nodes are "
-                         f"{type_curve_of(outer.codes)!r}")
+        raise ParseError(
+            f"line 2: type says {types[1]!r} but the nodes are {type_curve_of(outer.codes)!r}"
+        )
     at = 6 + count
     holes: list[HoleDescription] = []
     while at < len(lines):
         m = _HOLE_RE.match(lines[at])
         if not m:
-            raise ParseError(f"line {at + 1}: expected 'hole: CIi [cones] <type_curve>, nodes: n'"
-                             f", got {lines[at]!r}")
+            raise ParseError(
+                f"line {at + 1}: expected 'hole: CIi [cones] <type_curve>, nodes: n'"
+                f", got {lines[at]!r}"
+            )
         rel, pos, hcurve, hcount = m.groups()
         if rel != CIi:
             raise ParseError(f"line {at + 1}: hole relation must be {CIi!r}, got {rel!r}")
         position = tuple(p.strip() for p in pos.split(",") if p.strip())
         allowed = (*CONES, CENTRE)
-        if not position or any(p not in allowed for p in position) or (
-            CENTRE in position and len(position) > 1
+        if (
+            not position
+            or any(p not in allowed for p in position)
+            or (CENTRE in position and len(position) > 1)
         ):
-            raise ParseError(f"line {at + 1}: position must be 'C' or cones from "
-                             f"{', '.join(CONES)}, got [{pos}]")
+            raise ParseError(
+                f"line {at + 1}: position must be 'C' or cones from {', '.join(CONES)}, got [{pos}]"
+            )
         boundary = _parse_boundary(lines, at + 1, int(hcount), f"hole {len(holes)}")
         if boundary.type_curve != hcurve:
-            raise ParseError(f"line {at + 1}: hole type says {hcurve!r} but its nodes are "
-                             f"{boundary.type_curve!r}")
+            raise ParseError(
+                f"line {at + 1}: hole type says {hcurve!r} but its nodes are "
+                f"{boundary.type_curve!r}"
+            )
         holes.append(HoleDescription(position, boundary, rel))
         at += 1 + int(hcount)
     if (types[0] == WITH_HOLES) != bool(holes):

@@ -130,8 +130,8 @@ def densify(points: FloatArray, curve_mask: BoolArray, per_arc: int = _ARC_SAMPL
     flat = d == 0.0
     safe_d = np.where(flat, 1.0, d)
     bi, bj, bk = (vi * vi).sum(1), (vj * vj).sum(1), (vk * vk).sum(1)
-    ux = (bi * (vj[:, 1] - vk[:, 1]) + bj * (vk[:, 1] - vi[:, 1]) + bk * (vi[:, 1] - vj[:, 1]))
-    uy = (bi * (vk[:, 0] - vj[:, 0]) + bj * (vi[:, 0] - vk[:, 0]) + bk * (vj[:, 0] - vi[:, 0]))
+    ux = bi * (vj[:, 1] - vk[:, 1]) + bj * (vk[:, 1] - vi[:, 1]) + bk * (vi[:, 1] - vj[:, 1])
+    uy = bi * (vk[:, 0] - vj[:, 0]) + bj * (vi[:, 0] - vk[:, 0]) + bk * (vj[:, 0] - vi[:, 0])
     centre = np.stack([ux, uy], axis=1) / safe_d[:, None]
     radius = np.hypot(*(vi - centre).T)
     ai = np.arctan2(vi[:, 1] - centre[:, 1], vi[:, 0] - centre[:, 0])
@@ -316,11 +316,7 @@ class Figure:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Figure):
             return NotImplemented
-        return (
-            self.outer == other.outer
-            and self.holes == other.holes
-            and self.color == other.color
-        )
+        return self.outer == other.outer and self.holes == other.holes and self.color == other.color
 
     __hash__ = None  # type: ignore[assignment]
 
@@ -514,9 +510,7 @@ def _check_holes(outer: Boundary, holes: tuple[Boundary, ...]) -> None:
                 or geo.points_in_polygon(dense[a][:1], dense[b]).any()
                 or geo.points_in_polygon(dense[b][:1], dense[a]).any()
             ):
-                raise InvalidHoleError(
-                    f"holes {a} and {b} overlap; holes must be disjoint"
-                )
+                raise InvalidHoleError(f"holes {a} and {b} overlap; holes must be disjoint")
 
 
 __all__ = ["Boundary", "Color", "Figure", "densify"]

@@ -56,6 +56,7 @@ def _segment_pairs_cross(
     o3 = cross2(db, a0[:, None, :] - b0[None, :, :])
     o4 = cross2(db, a1[:, None, :] - b0[None, :, :])
     proper = (o1 * o2 < 0.0) & (o3 * o4 < 0.0)
+
     # Touching / collinear overlap: an endpoint lies on the other segment.
     def on_seg(p: FloatArray, q0: FloatArray, q1: FloatArray, o: FloatArray) -> BoolArray:
         lo = np.minimum(q0, q1)

@@ -70,8 +70,10 @@ def _bands(tol: Tolerances) -> _Bands:
     m = np.array([[tol.angle_margin_deg], [tol.length_margin], [tol.semicircle_margin]])
     rel = np.array([[False], [True], [True]])
     f = 1.0 + m
-    labels = np.array([[ACUTE, RIGHT, OBTUSE], [SMALLER, EQUAL, BIGGER],
-                       [ACUTE_CURVE, SEMICIRCLE, PLANE]], dtype=np.int64)
+    labels = np.array(
+        [[ACUTE, RIGHT, OBTUSE], [SMALLER, EQUAL, BIGGER], [ACUTE_CURVE, SEMICIRCLE, PLANE]],
+        dtype=np.int64,
+    )
     return _Bands(
         lo=lo,
         hi=hi,
@@ -235,9 +237,7 @@ def decode(code: int) -> tuple[bool, tuple[int, int], tuple[int, int], tuple[int
     )
 
 
-def encode(
-    is_curve: bool, a: tuple[int, int], c: tuple[int, int], t: tuple[int, int]
-) -> int:
+def encode(is_curve: bool, a: tuple[int, int], c: tuple[int, int], t: tuple[int, int]) -> int:
     """Pack one code from (primary, mask) pairs; inverse of `decode`."""
     return (
         int(is_curve)

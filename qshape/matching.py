@@ -162,8 +162,9 @@ def canonical_keys(
     its `coarse_key` alone (prefixed ``K:``), which lookups must also consult.
     """
     tol = default_tolerances() if tolerances is None else tolerances
-    return _keys(description.outer.codes.tobytes(), _hole_signature(description),
-                 tol.max_key_variants)
+    return _keys(
+        description.outer.codes.tobytes(), _hole_signature(description), tol.max_key_variants
+    )
 
 
 @lru_cache(maxsize=65536)
@@ -199,9 +200,15 @@ class Pack:
 def take(p: Pack, idx: NDArray[np.int64]) -> Pack:
     """Sub-pack of the members ``idx``."""
     return Pack(
-        codes=p.codes[idx], pts=p.pts[idx], sumsq=p.sumsq[idx], area=p.area[idx],
-        perimeter=p.perimeter[idx], color=p.color[idx], north=p.north[idx],
-        hole_codes=tuple(h[idx] for h in p.hole_codes), hole_centroid=p.hole_centroid[idx],
+        codes=p.codes[idx],
+        pts=p.pts[idx],
+        sumsq=p.sumsq[idx],
+        area=p.area[idx],
+        perimeter=p.perimeter[idx],
+        color=p.color[idx],
+        north=p.north[idx],
+        hole_codes=tuple(h[idx] for h in p.hole_codes),
+        hole_centroid=p.hole_centroid[idx],
         hole_interval=p.hole_interval[idx],
     )
 
@@ -210,8 +217,11 @@ def prefilter(ref: Pack, cand: Pack, tol: Tolerances, use_color: bool) -> NDArra
     """(T, S) bool: qualitative size and colour agree (the paper's first checks)."""
     base = np.ones((cand.codes.shape[0], ref.codes.shape[0]), dtype=bool)
     if tol.check_size:
-        thr = (tol.size_area_threshold if tol.size_area_threshold is not None
-               else tol.joint_width * 0.5 * (cand.perimeter[:, None] + ref.perimeter[None, :]))
+        thr = (
+            tol.size_area_threshold
+            if tol.size_area_threshold is not None
+            else tol.joint_width * 0.5 * (cand.perimeter[:, None] + ref.perimeter[None, :])
+        )
         base &= np.abs(cand.area[:, None] - ref.area[None, :]) <= thr
     if use_color:
         diff = cand.color[:, None, 0] - ref.color[None, :, 0]
@@ -225,8 +235,13 @@ def prefilter(ref: Pack, cand: Pack, tol: Tolerances, use_color: bool) -> NDArra
 
 def _hole_order(d: Description) -> list[int]:
     """Holes in a canonical order (node count, then kinds), so packs stack consistently."""
-    return sorted(range(len(d.holes)), key=lambda h: (
-        len(d.holes[h].boundary.codes), int((d.holes[h].boundary.codes & lb.KIND_BIT).sum())))
+    return sorted(
+        range(len(d.holes)),
+        key=lambda h: (
+            len(d.holes[h].boundary.codes),
+            int((d.holes[h].boundary.codes & lb.KIND_BIT).sum()),
+        ),
+    )
 
 
 def pack(descs: Sequence[Description]) -> Pack:
@@ -234,15 +249,22 @@ def pack(descs: Sequence[Description]) -> Pack:
     nholes = len(descs[0].holes)
     if nholes > 1:
         descs = [
-            d if (order := _hole_order(d)) == sorted(order) else Description(
-                d.type_hole, d.type_curve, d.color, d.area, d.perimeter, d.outer,
-                tuple(d.holes[h] for h in order))
+            d
+            if (order := _hole_order(d)) == sorted(order)
+            else Description(
+                d.type_hole,
+                d.type_curve,
+                d.color,
+                d.area,
+                d.perimeter,
+                d.outer,
+                tuple(d.holes[h] for h in order),
+            )
             for d in descs
         ]
     codes = np.stack([d.outer.codes for d in descs])
     pts = np.stack([d.outer.points for d in descs])
-    hole_codes = tuple(np.stack([d.holes[h].boundary.codes for d in descs])
-                       for h in range(nholes))
+    hole_codes = tuple(np.stack([d.holes[h].boundary.codes for d in descs]) for h in range(nholes))
     hc = np.zeros((len(descs), nholes, 2))
     hi = np.full((len(descs), nholes, 2), np.nan)
     for g, d in enumerate(descs):
@@ -301,14 +323,16 @@ def _cone_bits(lo: FloatArray, hi: FloatArray, widen: float) -> NDArray[np.int64
     return np.asarray(np.where(centre, _CENTRE_BIT, bits))
 
 
-def _positions_agree(
-    ref_iv: FloatArray, cand_iv: FloatArray, margin: float
-) -> NDArray[np.bool_]:
+def _positions_agree(ref_iv: FloatArray, cand_iv: FloatArray, margin: float) -> NDArray[np.bool_]:
     """Cone positions agree within the margin: strict of each within loose of the other."""
-    rs, rl = _cone_bits(ref_iv[..., 0], ref_iv[..., 1], -margin), _cone_bits(
-        ref_iv[..., 0], ref_iv[..., 1], margin)
-    cs, cl = _cone_bits(cand_iv[..., 0], cand_iv[..., 1], -margin), _cone_bits(
-        cand_iv[..., 0], cand_iv[..., 1], margin)
+    rs, rl = (
+        _cone_bits(ref_iv[..., 0], ref_iv[..., 1], -margin),
+        _cone_bits(ref_iv[..., 0], ref_iv[..., 1], margin),
+    )
+    cs, cl = (
+        _cone_bits(cand_iv[..., 0], cand_iv[..., 1], -margin),
+        _cone_bits(cand_iv[..., 0], cand_iv[..., 1], margin),
+    )
     return np.asarray(((rs & ~cl) == 0) & ((cs & ~rl) == 0))
 
 
@@ -390,8 +414,11 @@ def evaluate_pairs(
     count, n = ref.codes.shape
     base = np.ones(count, dtype=bool)
     if tol.check_size:
-        thr = (tol.size_area_threshold if tol.size_area_threshold is not None
-               else tol.joint_width * 0.5 * (cand.perimeter + ref.perimeter))
+        thr = (
+            tol.size_area_threshold
+            if tol.size_area_threshold is not None
+            else tol.joint_width * 0.5 * (cand.perimeter + ref.perimeter)
+        )
         base &= np.abs(cand.area - ref.area) <= thr
     if use_color:
         diff = cand.color - ref.color
@@ -404,7 +431,8 @@ def evaluate_pairs(
     rp = ref.pts[pi]
     dot = np.einsum("end,end->e", cp, rp)
     crs = np.einsum("en,en->e", cp[..., 0], rp[..., 1]) - np.einsum(
-        "en,en->e", cp[..., 1], rp[..., 0])
+        "en,en->e", cp[..., 1], rp[..., 0]
+    )
     rss = cand.sumsq[pi] + ref.sumsq[pi] - 2.0 * np.sqrt(dot * dot + crs * crs)
     sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[pi]))
     theta = np.arctan2(crs, dot)
@@ -442,8 +470,11 @@ def _holes(
     nholes = len(ref.hole_codes)
     best_ok = np.zeros(theta.shape, dtype=bool)
     best_score = np.full(theta.shape, np.inf)
-    perms = (list(itertools.permutations(range(nholes))) if nholes <= _MAX_PERMUTED_HOLES
-             else [tuple(range(nholes))])
+    perms = (
+        list(itertools.permutations(range(nholes)))
+        if nholes <= _MAX_PERMUTED_HOLES
+        else [tuple(range(nholes))]
+    )
     scale = np.sqrt(ref.area[si])
     c, s = np.cos(theta), np.sin(theta)
     north = np.degrees(ref.north[si])
@@ -456,7 +487,8 @@ def _holes(
                 ok[:] = False
                 break
             labels_ok = np.asarray(
-                _cyclic_compat(ref.hole_codes[h], cand.hole_codes[g]).any(axis=-1))
+                _cyclic_compat(ref.hole_codes[h], cand.hole_codes[g]).any(axis=-1)
+            )
             ok &= labels_ok[ti, si]
             # Candidate hole's CCW angle interval turned by theta; both as bearings (clockwise
             # from the reference's north, its first vertex).
@@ -484,6 +516,7 @@ def _signature(d: Description) -> tuple[int, ...]:
 
 def is_continuous(d: Description) -> bool:
     """True for rotationally continuous figures: circles, with only concentric circular holes."""
+
     def circle(codes: CodeArray) -> bool:
         if len(codes) != 4:
             return False
@@ -537,8 +570,9 @@ def match(
         return None
     scores = res.score
     thetas = [_wrap(float(t)) for t in res.theta]
-    equivalent = [j for j in range(len(scores))
-                  if scores[j] <= scores.min() + tol.symmetry_residual]
+    equivalent = [
+        j for j in range(len(scores)) if scores[j] <= scores.min() + tol.symmetry_residual
+    ]
     equivalent.sort(key=lambda j: abs(thetas[j]))
     chosen = equivalent[0]
     n = len(ref.outer.codes)

@@ -67,19 +67,26 @@ class OutlineParams:
         """
         if self.resample_points < 16:
             raise ToleranceError(f"resample_points must be >= 16, got {self.resample_points}")
-        for name in ("smooth_fraction", "corner_window", "straight_sagitta_ratio",
-                     "noise_fraction", "merge_fraction"):
+        for name in (
+            "smooth_fraction",
+            "corner_window",
+            "straight_sagitta_ratio",
+            "noise_fraction",
+            "merge_fraction",
+        ):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0.0 <= v < 0.5):
                 raise ToleranceError(f"{name} must be in [0, 0.5), got {v!r}")
         if self.corner_window <= 0.0:
             raise ToleranceError("corner_window must be > 0")
         if not 0.0 < self.corner_angle_deg < 180.0:
-            raise ToleranceError(f"corner_angle_deg must be in (0, 180), got "
-                                 f"{self.corner_angle_deg}")
+            raise ToleranceError(
+                f"corner_angle_deg must be in (0, 180), got {self.corner_angle_deg}"
+            )
         if not 90.0 <= self.max_curve_turn_deg <= 360.0:
-            raise ToleranceError(f"max_curve_turn_deg must be in [90, 360], got "
-                                 f"{self.max_curve_turn_deg}")
+            raise ToleranceError(
+                f"max_curve_turn_deg must be in [90, 360], got {self.max_curve_turn_deg}"
+            )
 
     @classmethod
     def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> OutlineParams:
@@ -177,19 +184,42 @@ def simplify_outline(
     out_pts: list[FloatArray] = []
     out_curve: list[bool] = []
     if len(corners) == 0:
-        _emit_run(res, turn, np.arange(n), p=p, noise=noise, out_pts=out_pts, out_curve=out_curve,
-                  closed_loop=True, guard=half)
+        _emit_run(
+            res,
+            turn,
+            np.arange(n),
+            p=p,
+            noise=noise,
+            out_pts=out_pts,
+            out_curve=out_curve,
+            closed_loop=True,
+            guard=half,
+        )
     else:
         runs: list[tuple[int, bool, FloatArray]] = []
         for a, b in zip(corners, np.roll(corners, -1), strict=True):
             idx = np.arange(a, b + (n if b <= a else 0) + 1) % n
             start = len(out_pts)
-            straight = _emit_run(res, turn, idx, p=p, noise=noise, out_pts=out_pts,
-                                 out_curve=out_curve, closed_loop=False, guard=half)
+            straight = _emit_run(
+                res,
+                turn,
+                idx,
+                p=p,
+                noise=noise,
+                out_pts=out_pts,
+                out_curve=out_curve,
+                closed_loop=False,
+                guard=half,
+            )
             runs.append((start, straight, res[idx]))
         if p.refine_corners:
-            _refine_corners(runs, out_pts, trim=w, reach=p.corner_window * perimeter,
-                            min_sin=math.sin(math.radians(p.corner_angle_deg)))
+            _refine_corners(
+                runs,
+                out_pts,
+                trim=w,
+                reach=p.corner_window * perimeter,
+                min_sin=math.sin(math.radians(p.corner_angle_deg)),
+            )
     points = np.array(out_pts, dtype=np.float64)
     mask = np.array(out_curve, dtype=bool)
     if len(points) < 3:

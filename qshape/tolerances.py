@@ -22,9 +22,7 @@ def _check_band(name: str, band: tuple[float, ...], low_min: float = 0.0) -> Non
     if len(band) != 2 or not all(math.isfinite(v) for v in band):
         raise ToleranceError(f"{name} must be two finite numbers (low, high), got {band!r}")
     if not low_min < band[0] < band[1]:
-        raise ToleranceError(
-            f"{name} must satisfy {low_min} < low < high, got {band!r}"
-        )
+        raise ToleranceError(f"{name} must satisfy {low_min} < low < high, got {band!r}")
 
 
 @dataclass(frozen=True)

@@ -38,11 +38,19 @@ def test_optimal_minimises_residual_among_equal_counts():
 
 
 def test_assign_descriptions_and_figures_and_rotation():
-    slots = [Figure.from_polygon([[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]]),
-             Figure.semicircle(8.0, (1, 0, 0)), Figure.ring(9.0, 3.0)]
-    tiles = [Figure.ring(9.0, 3.0, angle=1.0), Figure.semicircle(8.0, (1, 0, 0), angle=2.0),
-             Figure.from_polygon(np.array([[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]])
-                                 @ np.array([[0.0, 1.0], [-1.0, 0.0]]))]
+    slots = [
+        Figure.from_polygon([[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]]),
+        Figure.semicircle(8.0, (1, 0, 0)),
+        Figure.ring(9.0, 3.0),
+    ]
+    tiles = [
+        Figure.ring(9.0, 3.0, angle=1.0),
+        Figure.semicircle(8.0, (1, 0, 0), angle=2.0),
+        Figure.from_polygon(
+            np.array([[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]])
+            @ np.array([[0.0, 1.0], [-1.0, 0.0]])
+        ),
+    ]
     for method in ("optimal", "greedy"):
         out = assign([describe(t) for t in tiles], slots, method=method)
         assert [(a.tile, a.slot) for a in out] == [(0, 2), (1, 1), (2, 0)]
@@ -126,8 +134,11 @@ def test_optimal_count_equals_brute_force_maximum_matching():
 
 def test_assign_rotations_match_pairwise_match():
     rng = np.random.default_rng(SEED + 1)
-    shapes = [Figure.rectangle(20, 10), Figure.regular_polygon(5, 9.0),
-              Figure.from_polygon([[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]])]
+    shapes = [
+        Figure.rectangle(20, 10),
+        Figure.regular_polygon(5, 9.0),
+        Figure.from_polygon([[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]]),
+    ]
     slots = [describe(s) for s in shapes]
     tiles = []
     for s in shapes:
@@ -141,12 +152,25 @@ def test_assign_rotations_match_pairwise_match():
 
 
 def test_public_api_names():
-    for name in ("Figure", "Tolerances", "describe", "parse", "match", "assign", "Match",
-                 "canonical_key", "Assignment", "QShapeError", "OutlineParams"):
+    for name in (
+        "Figure",
+        "Tolerances",
+        "describe",
+        "parse",
+        "match",
+        "assign",
+        "Match",
+        "canonical_key",
+        "Assignment",
+        "QShapeError",
+        "OutlineParams",
+    ):
         assert hasattr(qshape, name)
 
 
 def test_qshape_imports_no_simulator():
-    code = ("import sys, qshape; bad = [m for m in ('mujoco', 'gymnasium', 'torch') "
-            "if m in sys.modules]; assert not bad, bad")
+    code = (
+        "import sys, qshape; bad = [m for m in ('mujoco', 'gymnasium', 'torch') "
+        "if m in sys.modules]; assert not bad, bad"
+    )
     subprocess.run([sys.executable, "-c", code], check=True)

@@ -51,14 +51,24 @@ def test_curves():
     assert ("Curve", "convex", "semicircle") in kinds
     circle = describe(Figure.circle(5.0))
     assert circle.type_curve == "only curves"
-    flat = describe(Figure.from_polygon([[-10, 0], [0, 2], [10, 0], [0, -10]],
-                                        curve_mask=[False, True, False, False]))
+    flat = describe(
+        Figure.from_polygon(
+            [[-10, 0], [0, 2], [10, 0], [0, -10]], curve_mask=[False, True, False, False]
+        )
+    )
     assert ("Curve", "convex", "plane") in [n.labels for n in flat.nodes]
-    pointed = describe(Figure.from_polygon([[-3, 0], [0, 10], [3, 0], [0, -3]],
-                                           curve_mask=[False, True, False, False]))
+    pointed = describe(
+        Figure.from_polygon(
+            [[-3, 0], [0, 10], [3, 0], [0, -3]], curve_mask=[False, True, False, False]
+        )
+    )
     assert ("Curve", "convex", "acute") in [n.labels for n in pointed.nodes]
-    dent = describe(Figure.from_polygon([[-10, 0], [0, 3], [10, 0], [10, 10], [-10, 10]],
-                                        curve_mask=[False, True, False, False, False]))
+    dent = describe(
+        Figure.from_polygon(
+            [[-10, 0], [0, 3], [10, 0], [10, 10], [-10, 10]],
+            curve_mask=[False, True, False, False, False],
+        )
+    )
     assert ("Curve", "concave", "plane") in [n.labels for n in dent.nodes]
 
 
@@ -130,9 +140,14 @@ def test_translation_and_scale_keep_labels():
 
 
 def test_describe_many_equals_describe():
-    figs = [Figure.rectangle(20, 10, angle=0.2), Figure.ring(10, 4, (1, 1, 0)),
-            Figure.semicircle(5, y_down=True), holed_square(0.4),
-            Figure.from_polygon(L_TILE, y_down=True), Figure.regular_polygon(7, 3.0)]
+    figs = [
+        Figure.rectangle(20, 10, angle=0.2),
+        Figure.ring(10, 4, (1, 1, 0)),
+        Figure.semicircle(5, y_down=True),
+        holed_square(0.4),
+        Figure.from_polygon(L_TILE, y_down=True),
+        Figure.regular_polygon(7, 3.0),
+    ]
     assert describe_many(figs) == [describe(f) for f in figs]
     assert describe_many([]) == []
 

@@ -144,8 +144,14 @@ def test_curve_convexity():
 
 def rhombus(angle_deg: float, side: float = 20.0, rot: float = 0.0) -> Figure:
     a = math.radians(angle_deg)
-    pts = np.array([[0.0, 0.0], [side, 0.0], [side + side * math.cos(a), side * math.sin(a)],
-                    [side * math.cos(a), side * math.sin(a)]])
+    pts = np.array(
+        [
+            [0.0, 0.0],
+            [side, 0.0],
+            [side + side * math.cos(a), side * math.sin(a)],
+            [side * math.cos(a), side * math.sin(a)],
+        ]
+    )
     c, s = math.cos(rot), math.sin(rot)
     return Figure.from_polygon(pts @ np.array([[c, s], [-s, c]]))
 
@@ -174,8 +180,9 @@ def test_copies_across_a_length_edge_still_match(a, b):
 @pytest.mark.parametrize(("a", "b"), [(1.09, 1.11), (0.89, 0.91)])
 def test_copies_across_a_semicircle_edge_still_match(a, b):
     def arc(ratio: float) -> Figure:
-        return Figure.from_polygon([[-10 * ratio, 0], [0, 10], [10 * ratio, 0]],
-                                   curve_mask=[False, True, False])
+        return Figure.from_polygon(
+            [[-10 * ratio, 0], [0, 10], [10 * ratio, 0]], curve_mask=[False, True, False]
+        )
 
     loose = Tolerances(check_size=False)
     assert qshape.match(arc(a), arc(b), loose) is not None

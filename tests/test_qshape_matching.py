@@ -190,12 +190,20 @@ def test_canonical_key_is_rotation_invariant_and_keys_cover_ambiguity():
         b = describe(Figure.from_polygon(rotate(pts, rng.uniform(-3, 3))))
         assert canonical_key(a) == canonical_key(b)
         assert canonical_key(a) in canonical_keys(a)
+
     # Two copies across a band edge: different primary keys, but shared admissible keys.
     def rhombus(angle_deg: float) -> qshape.Description:
         t = math.radians(angle_deg)
-        return describe(Figure.from_polygon(
-            [[0, 0], [20, 0], [20 + 20 * math.cos(t), 20 * math.sin(t)],
-             [20 * math.cos(t), 20 * math.sin(t)]]))
+        return describe(
+            Figure.from_polygon(
+                [
+                    [0, 0],
+                    [20, 0],
+                    [20 + 20 * math.cos(t), 20 * math.sin(t)],
+                    [20 * math.cos(t), 20 * math.sin(t)],
+                ]
+            )
+        )
 
     a, b = rhombus(94.0), rhombus(96.0)
     assert canonical_key(a) != canonical_key(b)
@@ -205,8 +213,11 @@ def test_canonical_key_is_rotation_invariant_and_keys_cover_ambiguity():
 def test_too_many_ambiguous_labels_fall_back_to_coarse_key():
     d = describe(Figure.regular_polygon(8, 10.0))  # not ambiguous
     assert len(canonical_keys(d, Tolerances(max_key_variants=1))) == 1
-    wobbly = describe(Figure.from_polygon(
-        [[0, 0], [10, 0.1], [20, 0], [20.1, 10], [20, 20], [10, 19.9], [0, 20], [-0.1, 10]]))
+    wobbly = describe(
+        Figure.from_polygon(
+            [[0, 0], [10, 0.1], [20, 0], [20.1, 10], [20, 20], [10, 19.9], [0, 20], [-0.1, 10]]
+        )
+    )
     keys = canonical_keys(wobbly, Tolerances(max_key_variants=2))
     assert len(keys) == 1 and next(iter(keys)).startswith("K:")
 

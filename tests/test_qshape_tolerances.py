@@ -52,8 +52,13 @@ def test_invalid_tolerances_raise(kwargs):
 
 @pytest.mark.parametrize(
     "kwargs",
-    [{"resample_points": 4}, {"corner_angle_deg": 0.0}, {"max_curve_turn_deg": 45.0},
-     {"corner_window": 0.0}, {"merge_fraction": 0.7}],
+    [
+        {"resample_points": 4},
+        {"corner_angle_deg": 0.0},
+        {"max_curve_turn_deg": 45.0},
+        {"corner_window": 0.0},
+        {"merge_fraction": 0.7},
+    ],
 )
 def test_invalid_outline_params_raise(kwargs):
     with pytest.raises(ToleranceError):
