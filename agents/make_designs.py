@@ -124,8 +124,8 @@ def paper_mixed() -> dict[str, Any]:
     ell = {"kind": "polygon", "vertices": [[0, 0], [44, 0], [44, 20], [20, 20], [20, 44], [0, 44]]}
     holed = {
         "kind": "square",
-        "size": 44.0,
-        "holes": [{"kind": "square", "size": 14.0, "x": 10.0, "y": 10.0}],
+        "size": 50.0,
+        "holes": [{"kind": "square", "size": 18.0, "x": 11.0, "y": 11.0}],
     }
     slots = [
         _slot("square_red_1", square, "red", at[0], at[3]),
@@ -152,7 +152,7 @@ def paper_mixed() -> dict[str, Any]:
         _slot("square_red_2", square, "red", at[0], at[0], 90.0),
         _slot(
             "ring_orange",
-            {"kind": "ring", "radius": 22.0, "inner_radius": 11.0},
+            {"kind": "ring", "radius": 24.0, "inner_radius": 13.0},
             "orange",
             at[1],
             at[0],

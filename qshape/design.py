@@ -51,6 +51,8 @@ class DesignRules:
         max_arc_deg: Arcs turning more than this are split into equal arcs, each with its own
             maximum-curvature point, in [deg]. 240 keeps (noisy) semicircles whole and splits
             circles given as one arc (the rule of ``OutlineParams.max_curve_turn_deg``).
+        check_step_mm: Outline sampling used for the self-crossing, gap and mesh checks, in
+            [mm] (vertices are always samples, so straight edges are exact).
         min_gap_fraction: Two slots closer than this fraction of the joint width overlap
             (dimensionless; 0.5 accepts joints narrowed by rounding in a design image).
         mesh_margin_mm: Slots must stay at least this far inside the mesh outline, in [mm]
@@ -63,6 +65,7 @@ class DesignRules:
 
     outline_step_mm: float = 0.25
     max_arc_deg: float = 240.0
+    check_step_mm: float = 1.0
     min_gap_fraction: float = 0.5
     mesh_margin_mm: float = 0.0
     symmetry_tolerance: float = 0.01
@@ -71,8 +74,8 @@ class DesignRules:
 
     def __post_init__(self) -> None:
         """Raise `DesignError` on out-of-range values."""
-        if not self.outline_step_mm > 0.0:
-            raise DesignError(f"outline_step_mm must be > 0, got {self.outline_step_mm}")
+        if not (self.outline_step_mm > 0.0 and self.check_step_mm > 0.0):
+            raise DesignError("outline_step_mm and check_step_mm must be > 0")
         if not 90.0 <= self.max_arc_deg < 360.0:
             raise DesignError(f"max_arc_deg must be in [90, 360), got {self.max_arc_deg}")
         if not 0.0 <= self.min_gap_fraction <= 1.0:
@@ -260,6 +263,8 @@ class TilePath:
             a = abs(geo.signed_area(d))
             total += sign * a
             moment += sign * a * geo.polygon_centroid(d)
+        if not total > 0.0:
+            return total, np.zeros(2)
         return total, moment / total
 
     def jittered(self, rng: np.random.Generator, amount: float, bulge_rel: float) -> TilePath:
@@ -718,12 +723,14 @@ class Design:
         outlines = []
         for s in self.slots:
             try:
-                dense = s.outline_mm()
+                dense = s.path.outer.dense(self.rules.check_step_mm)
                 if geo.self_intersects(dense):
                     raise DesignError("its outline crosses itself")
                 s.figure()
             except (DesignError, InvalidFigureError) as exc:
-                raise DesignError(f"{pre}slot {s.name!r}: {exc}") from exc
+                text = str(exc)
+                named = text if text.startswith(f"slot {s.name!r}") else f"slot {s.name!r}: {text}"
+                raise DesignError(f"{pre}{named}") from exc
             lo, hi = dense.min(axis=0), dense.max(axis=0)
             if lo[0] < margin or lo[1] < margin or hi[0] > w - margin or hi[1] > h - margin:
                 raise DesignError(

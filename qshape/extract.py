@@ -49,6 +49,9 @@ class ExtractParams:
             colour" and rejected (camera covered, not exposed, ...), in [levels].
         blur_sigma_px: Gaussian blur before everything, in [px] (0: none).
         background_bins: Histogram bins per channel used to find the dominant colour.
+        background_border_px: The dominant colour is taken from a band of this width along
+            the image border (belt or grout shows there even when tiles cover most of the
+            image), in [px]; 0 uses the whole image.
         background_sample_step: Every n-th pixel (each axis) enters the colour histogram.
         illumination_cell_px: Cell size of the downsampled image the illumination model is
             fitted on, in [px].
@@ -61,10 +64,12 @@ class ExtractParams:
         split_touching: Remove Canny edges found inside the foreground (splits touching tiles).
         canny_low: Canny hysteresis low threshold, on the blurred RGB image.
         canny_high: Canny hysteresis high threshold.
-        canny_guard_px: Canny edges within this distance of the mask border are the tile
-            outline itself and are kept, in [px].
+        restore_iterations: After the Canny cut, pixels on the cut are given back to a
+            neighbouring piece by this many label dilations.
         min_area_px: Regions smaller than this are ignored, in [px^2].
         min_hole_area_px: Holes smaller than this are ignored, in [px^2].
+        min_hole_width_px: Holes thinner than this (2 x area / perimeter) are ignored (slits
+            left by noise), in [px].
         border_margin_px: Regions reaching this close to the image border are partial tiles,
             in [px].
         boundary_offset_px: Outlines are moved outwards by this much (traced contours run
@@ -79,6 +84,7 @@ class ExtractParams:
     uniform_range: int = 2
     blur_sigma_px: float = 1.0
     background_bins: int = 16
+    background_border_px: int = 4
     background_sample_step: int = 4
     illumination_cell_px: int = 16
     illumination_degree: int = 2
@@ -89,9 +95,10 @@ class ExtractParams:
     split_touching: bool = True
     canny_low: float = 60.0
     canny_high: float = 150.0
-    canny_guard_px: int = 2
+    restore_iterations: int = 3
     min_area_px: float = 150.0
     min_hole_area_px: float = 40.0
+    min_hole_width_px: float = 3.0
     border_margin_px: int = 1
     boundary_offset_px: float = 0.5
     color_erode_px: int = 3
@@ -108,7 +115,8 @@ class ExtractParams:
             raise ImageError("illumination_cell_px must be >= 1, illumination_degree in 0..3")
         if not 0.0 < self.threshold_min <= self.threshold_max:
             raise ImageError("need 0 < threshold_min <= threshold_max")
-        if min(self.open_px, self.canny_guard_px, self.color_erode_px, self.border_margin_px) < 0:
+        sizes = (self.open_px, self.restore_iterations, self.color_erode_px, self.border_margin_px)
+        if min(sizes) < 0:
             raise ImageError("pixel sizes must be >= 0")
         if self.blur_sigma_px < 0.0 or self.min_area_px < 0.0 or self.min_hole_area_px < 0.0:
             raise ImageError("blur_sigma_px, min_area_px and min_hole_area_px must be >= 0")
@@ -211,8 +219,17 @@ def check_image(image: Any, params: ExtractParams) -> np.ndarray:
 
 
 def _dominant_color(img: np.ndarray, p: ExtractParams) -> np.ndarray:
-    """Median colour of the most populated coarse colour bin, shape (3,), float levels."""
-    sample = img[:: p.background_sample_step, :: p.background_sample_step].reshape(-1, 3)
+    """Median colour of the most populated coarse colour bin (border band), (3,) levels."""
+    b, step = p.background_border_px, p.background_sample_step
+    if b > 0 and 2 * b < min(img.shape[:2]):
+        sample = np.concatenate([
+            img[:b, ::step].reshape(-1, 3),
+            img[-b:, ::step].reshape(-1, 3),
+            img[b:-b:step, :b].reshape(-1, 3),
+            img[b:-b:step, -b:].reshape(-1, 3),
+        ])
+    else:
+        sample = img[::step, ::step].reshape(-1, 3)
     q = (sample.astype(np.int32) * p.background_bins) >> 8
     code = (q[:, 0] * p.background_bins + q[:, 1]) * p.background_bins + q[:, 2]
     top = int(np.argmax(np.bincount(code, minlength=p.background_bins**3)))
@@ -307,21 +324,39 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (p.open_px, p.open_px))
         mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel)
     if p.split_touching:
+        # Cut the foreground along Canny edges, label the pieces, then give the cut pixels
+        # back to a neighbouring piece: touching tiles of different colours come apart while
+        # the outer outlines stay where the segmentation put them.
         edges = cv2.Canny(img, p.canny_low, p.canny_high)
-        if p.canny_guard_px > 0:
-            guard = cv2.getStructuringElement(
-                cv2.MORPH_RECT, (2 * p.canny_guard_px + 1, 2 * p.canny_guard_px + 1)
-            )
-            inner = cv2.erode(mask, guard)
-        else:
-            inner = mask
-        mask = cv2.subtract(mask, cv2.bitwise_and(edges, inner))
-    count, labels = cv2.connectedComponents(mask, connectivity=4)
-    contours, hierarchy = cv2.findContours(mask, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
-    background = tuple(float(v) / 255.0 for v in dominant)
-    if hierarchy is None or count <= 1:
-        return ExtractResult([], [], [], [], (background[0], background[1], background[2]), thr)
-    hier = hierarchy[0]
+        cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(cut, connectivity=4)
+        grow = p.restore_iterations
+        # Crumbs cut off by edges (tile tips, noise) go back to their neighbour too.
+        lut = np.where(stats[:, 4] >= p.min_area_px, np.arange(count), 0).astype(np.float32)
+        lut[0] = 0.0
+        labf = lut[labels]
+        kernel3 = np.ones((3, 3), np.uint8)
+        lost = (mask > 0) & (labf == 0)
+        for _ in range(p.restore_iterations):
+            if not lost.any():
+                break
+            grown = cv2.dilate(labf, kernel3)
+            labf[lost] = grown[lost]
+            lost = (mask > 0) & (labf == 0)
+        labels = labf.astype(np.int32)
+        # Boxes grown by the restored rim; areas recounted.
+        x1 = np.minimum(stats[:, 0] + stats[:, 2] + grow, w)
+        y1 = np.minimum(stats[:, 1] + stats[:, 3] + grow, h)
+        stats[:, 0] = np.maximum(stats[:, 0] - grow, 0)
+        stats[:, 1] = np.maximum(stats[:, 1] - grow, 0)
+        stats[:, 2], stats[:, 3] = x1 - stats[:, 0], y1 - stats[:, 1]
+        stats[:, 4] = np.bincount(labels.ravel(), minlength=count)[:count]
+    else:
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=4)
+    background = (float(dominant[0]) / 255.0, float(dominant[1]) / 255.0,
+                  float(dominant[2]) / 255.0)
+    if count <= 1:
+        return ExtractResult([], [], [], [], background, thr)
     if p.color_erode_px > 0:
         ek = cv2.getStructuringElement(
             cv2.MORPH_RECT, (2 * p.color_erode_px + 1, 2 * p.color_erode_px + 1)
@@ -331,43 +366,53 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         region = mask
     colors = _median_colors(img, labels, region, count)
     # Tiles eroded away entirely fall back to their whole region.
-    empty = ~np.any(colors > 0, axis=1)
-    if np.any(empty[1:]):
-        colors[empty] = _median_colors(img, labels, mask, count)[empty]
-    if p.correct_illumination:
-        gain_img = model.astype(np.float64)
+    seen = np.bincount(labels.ravel()[np.flatnonzero(region.ravel())], minlength=count) > 0
+    if not seen[1:].all():
+        colors[~seen] = _median_colors(img, labels, mask, count)[~seen]
+    reference = model.reshape(-1, 3).mean(axis=0) if p.correct_illumination else None
     figures: list[Figure] = []
     outlines: list[FloatArray] = []
     partial: list[PartialTile] = []
     rejected: list[str] = []
-    for i, cnt in enumerate(contours):
-        if hier[i][3] != -1:
-            continue  # a hole; handled with its parent
-        area = cv2.contourArea(cnt)
+    m = p.border_margin_px
+    for lab in range(1, count):
+        x0, y0, bw, bh, area = (int(v) for v in stats[lab])
         if area < p.min_area_px:
             continue
-        pts = cnt[:, 0, :].astype(np.float64)
-        x0, y0 = int(cnt[0, 0, 0]), int(cnt[0, 0, 1])
-        lab = int(labels[y0, x0])
+        roi = np.zeros((bh + 2, bw + 2), np.uint8)
+        roi[1:-1, 1:-1] = labels[y0 : y0 + bh, x0 : x0 + bw] == lab
+        contours, hierarchy = cv2.findContours(roi, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+        if hierarchy is None:
+            continue
+        hier = hierarchy[0]
+        outer_idx = max(
+            (i for i in range(len(contours)) if hier[i][3] == -1),
+            key=lambda i: cv2.contourArea(contours[i]),
+        )
+        shift = np.array([x0 - 1, y0 - 1], dtype=np.float64)
+        pts = contours[outer_idx][:, 0, :].astype(np.float64) + shift
         rgb = colors[lab]
-        if p.correct_illumination:
-            cy = int(np.clip(round(float(pts[:, 1].mean())), 0, h - 1))
-            cx = int(np.clip(round(float(pts[:, 0].mean())), 0, w - 1))
-            rgb = rgb * dominant / np.maximum(gain_img[cy, cx], 1.0)
-        color = tuple(float(v) for v in np.clip(rgb / 255.0, 0.0, 1.0))
-        color3 = (color[0], color[1], color[2])
-        m = p.border_margin_px
-        bx, by, bw, bh = cv2.boundingRect(cnt)
+        if reference is not None:
+            cy = int(np.clip(round(y0 + bh / 2), 0, h - 1))
+            cx = int(np.clip(round(x0 + bw / 2), 0, w - 1))
+            rgb = rgb * reference / np.maximum(model[cy, cx].astype(np.float64), 1.0)
+        c = np.clip(rgb / 255.0, 0.0, 1.0)
+        color3 = (float(c[0]), float(c[1]), float(c[2]))
+        bx, by, bw, bh = cv2.boundingRect(contours[outer_idx])
+        bx, by = bx + x0 - 1, by + y0 - 1
         if bx <= m or by <= m or bx + bw >= w - m or by + bh >= h - m:
-            mom = cv2.moments(cnt)
-            cen = np.array([mom["m10"], mom["m01"]]) / max(mom["m00"], 1e-9)
+            mom = cv2.moments(contours[outer_idx])
+            cen = np.array([mom["m10"], mom["m01"]]) / max(mom["m00"], 1e-9) + shift
             partial.append(PartialTile(pts, float(area), cen, color3))
             continue
         holes = []
-        child = hier[i][2]
+        child = hier[outer_idx][2]
         while child != -1:
-            if cv2.contourArea(contours[child]) >= p.min_hole_area_px:
-                hp = contours[child][:, 0, :].astype(np.float64)
+            hole = contours[child]
+            h_area = cv2.contourArea(hole)
+            h_len = cv2.arcLength(hole, True)
+            if h_area >= p.min_hole_area_px and 2.0 * h_area >= p.min_hole_width_px * h_len:
+                hp = hole[:, 0, :].astype(np.float64) + shift
                 # A hole's outward (away from the tile material) is into the hole.
                 sign = 1.0 if _signed_area(hp) > 0 else -1.0
                 holes.append(_offset_outline(hp, p.boundary_offset_px, -sign))
@@ -377,13 +422,11 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         try:
             fig = Figure.from_outline(outline, holes, color3, params=p.outline, y_down=True)
         except InvalidFigureError as exc:
-            rejected.append(f"region at ({x0}, {y0}) px, area {area:.0f} px^2: {exc}")
+            rejected.append(f"region at ({x0}, {y0}) px, area {area} px^2: {exc}")
             continue
         figures.append(fig)
         outlines.append(outline)
-    return ExtractResult(
-        figures, outlines, partial, rejected, (background[0], background[1], background[2]), thr
-    )
+    return ExtractResult(figures, outlines, partial, rejected, background, thr)
 
 
 def extract(image: np.ndarray, params: ExtractParams | None = None) -> list[Figure]:

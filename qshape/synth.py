@@ -104,6 +104,7 @@ class TileTruth:
         points_px: True relevant points (after manufacturing noise), shape (n, 2), [px].
         curve_mask: Shape (n,), True at arc middles.
         hole_points_px: True relevant points of each hole, [px].
+        hole_curve_masks: Curve mask of each hole.
         color: Tile colour after colour jitter, RGB in [0, 1].
         partial: True when the tile is cut by the image border.
     """
@@ -116,6 +117,7 @@ class TileTruth:
     points_px: FloatArray
     curve_mask: BoolArray
     hole_points_px: tuple[FloatArray, ...]
+    hole_curve_masks: tuple[BoolArray, ...]
     color: tuple[float, float, float]
     partial: bool = False
 
@@ -218,7 +220,7 @@ def generate(
             color = np.clip(np.array(slot.color) + gen.normal(0.0, p.color_jitter, 3), 0, 1)
             rgb = (float(color[0]), float(color[1]), float(color[2]))
             pts, mask = placed.outer.relevant(slot.rules.max_arc_deg)
-            holes = tuple(hl.relevant(slot.rules.max_arc_deg)[0] for hl in placed.holes)
+            hole_rel = [hl.relevant(slot.rules.max_arc_deg) for hl in placed.holes]
             truths.append(TileTruth(
                 slot=slot,
                 slot_index=idx,
@@ -227,7 +229,8 @@ def generate(
                 center_px=center,
                 points_px=pts,
                 curve_mask=mask,
-                hole_points_px=holes,
+                hole_points_px=tuple(hp for hp, _ in hole_rel),
+                hole_curve_masks=tuple(hm for _, hm in hole_rel),
                 color=rgb,
             ))
             drawn.append((outline, [hl.dense(step) for hl in placed.holes]))

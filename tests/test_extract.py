@@ -1,0 +1,277 @@
+"""Extraction from images: known renderings, partial tiles, bad input, synthetic views."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from qshape import Boundary, Figure, Tolerances, describe, match
+from qshape.design import Design
+from qshape.errors import QShapeError
+from qshape.extract import ExtractParams, ImageError, extract, extract_detailed, read_image
+from qshape.render import render_design, save_png
+from qshape.synth import SynthParams, generate
+
+S = 3.0  # px/mm of the test renderings
+
+KNOWN = {
+    "name": "known",
+    "mesh": {"width": 200, "height": 140},
+    "joint": 2.0,
+    "grout_color": "#d9d4c7",
+    "slots": [
+        {
+            "name": "square",
+            "shape": {"kind": "square", "size": 36},
+            "color": "#c0392b",
+            "pose": {"x": 30, "y": 110, "angle": 20},
+        },
+        {
+            "name": "ell",
+            "shape": {
+                "kind": "polygon",
+                "vertices": [[0, 0], [40, 0], [40, 18], [18, 18], [18, 40], [0, 40]],
+            },
+            "color": "#3f9e4d",
+            "pose": {"x": 90, "y": 105},
+        },
+        {
+            "name": "triangle",
+            "shape": {"kind": "triangle_right", "width": 44, "height": 30},
+            "color": "#2e6fd1",
+            "pose": {"x": 160, "y": 110, "angle": -35},
+        },
+        {
+            "name": "semicircle",
+            "shape": {"kind": "semicircle", "radius": 22},
+            "color": "#e8c33a",
+            "pose": {"x": 35, "y": 40, "angle": 60},
+        },
+        {
+            "name": "circle",
+            "shape": {"kind": "circle", "radius": 20},
+            "color": "#8e4fb5",
+            "pose": {"x": 100, "y": 38},
+        },
+        {
+            "name": "holed",
+            "shape": {
+                "kind": "square",
+                "size": 44,
+                "holes": [{"kind": "square", "size": 14, "x": 10, "y": 10}],
+            },
+            "color": "#e07b2a",
+            "pose": {"x": 160, "y": 40, "angle": 10},
+        },
+    ],
+}
+
+EXPECTED = {  # points, curve points, holes
+    "square": (4, 0, 0),
+    "ell": (6, 0, 0),
+    "triangle": (3, 0, 0),
+    "semicircle": (3, 1, 0),
+    "circle": (4, 2, 0),
+    "holed": (4, 0, 1),
+}
+
+
+def _px_figure(fig: Figure, s: float) -> Figure:
+    holes = [Boundary.make(h.points * s, h.curve_mask) for h in fig.holes]
+    return Figure.from_polygon(fig.points * s, holes, fig.color, curve_mask=fig.curve_mask)
+
+
+@pytest.fixture(scope="module")
+def known() -> tuple[Design, np.ndarray, list[Figure]]:
+    design = Design.from_dict(KNOWN)
+    image = render_design(design, S)
+    return design, image, extract(image)
+
+
+def _nearest(figs: list[Figure], design: Design, name: str) -> Figure:
+    slot = design.slot(name)
+    target = np.array([slot.x * S, (design.mesh_size[1] - slot.y) * S])
+    return min(figs, key=lambda f: float(np.hypot(*(f.centroid - target))))
+
+
+def test_known_figures_found(known: tuple[Design, np.ndarray, list[Figure]]) -> None:
+    design, _, figs = known
+    assert len(figs) == len(design.slots)
+    for f in figs:
+        assert f.y_down
+
+
+@pytest.mark.parametrize("name", list(EXPECTED))
+def test_known_figure_details(name: str, known: tuple[Design, np.ndarray, list[Figure]]) -> None:
+    design, _, figs = known
+    slot = design.slot(name)
+    fig = _nearest(figs, design, name)
+    n_points, n_curves, n_holes = EXPECTED[name]
+    assert len(fig.points) == n_points
+    assert int(fig.curve_mask.sum()) == n_curves
+    assert len(fig.holes) == n_holes
+    assert fig.color is not None
+    np.testing.assert_allclose(fig.color, slot.color, atol=0.03)
+    ref = _px_figure(slot.figure(), S)
+    assert fig.area == pytest.approx(ref.area, rel=0.03)
+    tol = Tolerances(joint_width=design.joint * S)
+    assert describe(fig, tol).type_curve == describe(ref, tol).type_curve
+    m = match(ref, fig, tol, use_color=True)
+    assert m is not None
+    if slot.symmetry != 0:
+        period = 2 * math.pi / slot.symmetry
+        assert min(abs(math.remainder(r, period)) for r in m.rotations) < math.radians(1.5)
+
+
+def test_known_labels(known: tuple[Design, np.ndarray, list[Figure]]) -> None:
+    design, _, figs = known
+    tol = Tolerances(joint_width=design.joint * S)
+    ell = describe(_nearest(figs, design, "ell"), tol)
+    assert [n.labels[1] for n in ell.outer.nodes].count("concave") == 1
+    assert all(n.labels[0] == "right" for n in ell.outer.nodes)
+    semi = describe(_nearest(figs, design, "semicircle"), tol)
+    curve = [n for n in semi.outer.nodes if n.kind == "curve"]
+    assert len(curve) == 1 and "semicircle" in curve[0].admissible[2]
+    holed = describe(_nearest(figs, design, "holed"), tol)
+    assert holed.type_hole == "with holes" and len(holed.holes) == 1
+
+
+def test_relevant_points_on_corners(known: tuple[Design, np.ndarray, list[Figure]]) -> None:
+    design, _, figs = known
+    for name in ("square", "ell", "triangle"):
+        slot = design.slot(name)
+        truth = slot.figure().points * np.array([S, -S]) + [0, design.mesh_size[1] * S]
+        fig = _nearest(figs, design, name)
+        d = np.hypot(*(truth[:, None, :] - fig.points[None, :, :]).transpose(2, 0, 1))
+        # Acute tips and concave corners are rounded by blur and smoothing: 2.5 px at most.
+        assert d.min(axis=1).max() < 2.5, name
+        assert np.median(d.min(axis=1)) < 1.5, name
+
+
+def test_border_tiles_are_partial(known: tuple[Design, np.ndarray, list[Figure]]) -> None:
+    design, image, _ = known
+    cut_px = 60
+    crop = image[:, cut_px:]
+    cut = sum(s.outline_mm()[:, 0].min() * S < cut_px + 1 for s in design.slots)
+    gone = sum(s.outline_mm()[:, 0].max() * S < cut_px for s in design.slots)
+    assert cut - gone >= 1
+    res = extract_detailed(crop)
+    assert len(res.figures) == len(design.slots) - cut
+    assert len(res.partial) == cut - gone
+    for p in res.partial:
+        assert p.area > 0 and p.outline.shape[1] == 2
+
+
+def test_colour_robust_to_shading(known: tuple[Design, np.ndarray, list[Figure]]) -> None:
+    design, image, _ = known
+    h, w = image.shape[:2]
+    ramp = np.linspace(0.85, 1.15, w)[None, :, None]
+    shaded = np.clip(image * ramp, 0, 255).astype(np.uint8)
+    figs = extract(shaded)
+    assert len(figs) == len(design.slots)
+    for slot in design.slots:
+        fig = _nearest(figs, design, slot.name)
+        assert fig.color is not None
+        assert math.dist(fig.color, slot.color) < 0.06, slot.name
+
+
+def test_touching_tiles_split_by_canny() -> None:
+    data = {
+        "name": "touch",
+        "mesh": {"width": 100, "height": 60},
+        "joint": 0.5,
+        "slots": [
+            {
+                "name": "a",
+                "shape": {"kind": "square", "size": 30},
+                "color": "#c0392b",
+                "pose": {"x": 34.75, "y": 30},
+            },
+            {
+                "name": "b",
+                "shape": {"kind": "square", "size": 30},
+                "color": "#2e6fd1",
+                "pose": {"x": 65.25, "y": 30},
+            },
+        ],
+    }
+    design = Design.from_dict(data)
+    image = render_design(design, S)
+    # Close the 0.5 mm joint: the two tiles touch.
+    lo, hi = round(49.5 * S), round(50.5 * S) + 1
+    image[:, lo:hi] = image[:, lo - 1 : lo]
+    assert len(extract(image)) == 2
+    off = replace(ExtractParams.load(), split_touching=False)
+    assert len(extract(image, off)) == 1
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        np.zeros((0, 0, 3), np.uint8),
+        np.zeros((100, 100, 3), np.float32),
+        np.zeros((100, 100), np.uint8),
+        np.zeros((100, 100, 4), np.uint8),
+        np.zeros((100, 100, 3), np.uint8),
+        np.full((100, 100, 3), 137, np.uint8),
+        np.zeros((8, 8, 3), np.uint8),
+        np.zeros((9000, 20, 3), np.uint8),
+        [[1, 2, 3]],
+    ],
+)
+def test_bad_input(bad: object) -> None:
+    with pytest.raises(ImageError):
+        extract(bad)  # type: ignore[arg-type]
+    assert issubclass(ImageError, QShapeError)
+
+
+def test_no_tiles_is_empty() -> None:
+    rng = np.random.default_rng(0)
+    belt = np.clip(rng.normal(70, 3, (492, 656, 3)), 0, 255).astype(np.uint8)
+    res = extract_detailed(belt)
+    assert res.figures == [] and res.partial == []
+
+
+def test_read_image(tmp_path: Path, known: tuple[Design, np.ndarray, list[Figure]]) -> None:
+    _, image, _ = known
+    path = save_png(image, tmp_path / "k.png")
+    np.testing.assert_array_equal(read_image(path), image)
+    with pytest.raises(ImageError, match="cannot read"):
+        read_image(tmp_path / "none.png")
+    (tmp_path / "junk.png").write_bytes(b"not a png")
+    with pytest.raises(ImageError):
+        read_image(tmp_path / "junk.png")
+
+
+def test_params_load_and_validate() -> None:
+    p = ExtractParams.load()
+    assert p.outline.max_curve_turn_deg >= 200.0
+    with pytest.raises(ImageError):
+        ExtractParams(threshold_min=50.0, threshold_max=10.0)
+
+
+def test_synthetic_view_matches_slots() -> None:
+    design = Design.load("paper_mixed")
+    sp = SynthParams.load()
+    img = generate(design, 10, 11, sp)
+    res = extract_detailed(img.image)
+    assert len(res.figures) == len(img.tiles)
+    tol = Tolerances(joint_width=design.joint * sp.px_per_mm)
+    ok = 0
+    for t in img.tiles:
+        fig = min(res.figures, key=lambda f: float(np.hypot(*(f.centroid - t.center_px))))
+        assert np.hypot(*(fig.centroid - t.center_px)) < 2.0
+        ref = _px_figure(t.slot.figure(), sp.px_per_mm)
+        m = match(ref, fig, tol, use_color=True)
+        if m is None:
+            continue
+        ok += 1
+        if t.slot.symmetry:
+            period = 2 * math.pi / t.slot.symmetry
+            err = min(abs(math.remainder(r - t.rotation, period)) for r in m.rotations)
+            assert math.degrees(err) < 2.0
+    assert ok >= len(img.tiles) - 1
