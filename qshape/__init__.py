@@ -61,3 +61,27 @@ __all__ = [
     "match",
     "parse",
 ]
+
+# Vision: mosaic designs, rendering, extraction from images (issue 3).
+from qshape.design import Design, DesignError, Slot  # noqa: E402
+from qshape.extract import (  # noqa: E402
+    ExtractParams,
+    ExtractResult,
+    ImageError,
+    extract,
+    extract_detailed,
+)
+from qshape.render import render_design, save_png  # noqa: E402
+
+__all__ += [
+    "Design",
+    "DesignError",
+    "ExtractParams",
+    "ExtractResult",
+    "ImageError",
+    "Slot",
+    "extract",
+    "extract_detailed",
+    "render_design",
+    "save_png",
+]
