@@ -75,6 +75,7 @@ class ExtractParams:
         boundary_offset_px: Outlines are moved outwards by this much (traced contours run
             through the centres of the outermost region pixels), in [px].
         color_erode_px: Erosion before taking the median colour, in [px].
+        color_sample_step: Every n-th pixel (each axis) of a tile enters its median colour.
         correct_illumination: Divide tile colours by the modelled relative illumination.
         outline: Slope-comparison simplification parameters for pixel outlines.
     """
@@ -102,6 +103,7 @@ class ExtractParams:
     border_margin_px: int = 1
     boundary_offset_px: float = 0.5
     color_erode_px: int = 3
+    color_sample_step: int = 2
     correct_illumination: bool = True
     outline: OutlineParams = field(default_factory=OutlineParams)
 
@@ -236,8 +238,10 @@ def _dominant_color(img: np.ndarray, p: ExtractParams) -> np.ndarray:
     return np.asarray(np.median(sample[code == top], axis=0), dtype=np.float64)
 
 
-def _illumination(img: np.ndarray, dominant: np.ndarray, p: ExtractParams) -> np.ndarray:
-    """Background model image (H, W, 3) uint8: dominant colour times smooth illumination."""
+def _illumination(
+    img: np.ndarray, dominant: np.ndarray, p: ExtractParams
+) -> tuple[np.ndarray, np.ndarray]:
+    """Background model: image (H, W, 3) uint8 and its mean colour (3,) in levels."""
     h, w = img.shape[:2]
     gh, gw = max(2, h // p.illumination_cell_px), max(2, w // p.illumination_cell_px)
     small = cv2.resize(img, (gw, gh), interpolation=cv2.INTER_AREA).astype(np.float64)
@@ -255,7 +259,8 @@ def _illumination(img: np.ndarray, dominant: np.ndarray, p: ExtractParams) -> np
         coef, *_ = np.linalg.lstsq(basis[keep], small.reshape(-1, 3)[keep], rcond=None)
         model = (basis @ coef).reshape(gh, gw, 3)
     model8 = np.clip(model + 0.5, 0, 255).astype(np.uint8)
-    return cv2.resize(model8, (w, h), interpolation=cv2.INTER_LINEAR)
+    mean = model.reshape(-1, 3).mean(axis=0)
+    return cv2.resize(model8, (w, h), interpolation=cv2.INTER_LINEAR), mean
 
 
 def _median_colors(
@@ -313,7 +318,7 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     if p.blur_sigma_px > 0.0:
         img = cv2.GaussianBlur(img, (0, 0), p.blur_sigma_px)
     dominant = _dominant_color(img, p)
-    model = _illumination(img, dominant, p)
+    model, mean_light = _illumination(img, dominant, p)
     diff = cv2.absdiff(img, model)
     r, g, b = cv2.split(diff)
     dist = cv2.max(cv2.max(r, g), b)
@@ -334,15 +339,15 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         # Crumbs cut off by edges (tile tips, noise) go back to their neighbour too.
         lut = np.where(stats[:, 4] >= p.min_area_px, np.arange(count), 0).astype(np.float32)
         lut[0] = 0.0
-        labf = lut[labels]
+        labf = np.take(lut, np.asarray(labels, dtype=np.intp))
         kernel3 = np.ones((3, 3), np.uint8)
-        lost = (mask > 0) & (labf == 0)
+        zero = np.zeros(1, np.float32)
+        lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
         for _ in range(p.restore_iterations):
-            if not lost.any():
+            if cv2.countNonZero(lost) == 0:
                 break
-            grown = cv2.dilate(labf, kernel3)
-            labf[lost] = grown[lost]
-            lost = (mask > 0) & (labf == 0)
+            np.copyto(labf, cv2.dilate(labf, kernel3), where=lost.view(bool))
+            lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
         labels = labf.astype(np.int32)
         # Boxes grown by the restored rim; areas recounted.
         x1 = np.minimum(stats[:, 0] + stats[:, 2] + grow, w)
@@ -364,12 +369,14 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         region = cv2.erode(mask, ek)
     else:
         region = mask
-    colors = _median_colors(img, labels, region, count)
+    st = max(1, p.color_sample_step)
+    colors = _median_colors(img[::st, ::st], labels[::st, ::st], region[::st, ::st], count)
     # Tiles eroded away entirely fall back to their whole region.
-    seen = np.bincount(labels.ravel()[np.flatnonzero(region.ravel())], minlength=count) > 0
+    sub = labels[::st, ::st].ravel()[np.flatnonzero(region[::st, ::st].ravel())]
+    seen = np.bincount(sub, minlength=count)[:count] > 0
     if not seen[1:].all():
         colors[~seen] = _median_colors(img, labels, mask, count)[~seen]
-    reference = model.reshape(-1, 3).mean(axis=0) if p.correct_illumination else None
+    reference = mean_light if p.correct_illumination else None
     figures: list[Figure] = []
     outlines: list[FloatArray] = []
     partial: list[PartialTile] = []
