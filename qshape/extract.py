@@ -329,15 +329,14 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (p.open_px, p.open_px))
         mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel)
     if p.split_touching:
-        # Cut the foreground along Canny edges, label the pieces, then give the cut pixels
-        # back to a neighbouring piece: touching tiles of different colours come apart while
-        # the outer outlines stay where the segmentation put them.
+        # Cut the foreground along Canny edges, label the pieces, give the cut pixels (and
+        # crumbs smaller than a tile) back to a neighbouring piece, then separate touching
+        # pieces by dropping the pixels that border a piece with a higher label.
         edges = cv2.Canny(img, p.canny_low, p.canny_high)
         cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
-        count, labels, stats, _ = cv2.connectedComponentsWithStats(cut, connectivity=4)
-        grow = p.restore_iterations
-        # Crumbs cut off by edges (tile tips, noise) go back to their neighbour too.
-        lut = np.where(stats[:, 4] >= p.min_area_px, np.arange(count), 0).astype(np.float32)
+        count, labels = cv2.connectedComponents(cut, connectivity=4)
+        areas = np.bincount(labels.ravel(), minlength=count)
+        lut = np.where(areas >= p.min_area_px, np.arange(count), 0).astype(np.float32)
         lut[0] = 0.0
         labf = np.take(lut, np.asarray(labels, dtype=np.intp))
         kernel3 = np.ones((3, 3), np.uint8)
@@ -348,78 +347,67 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
                 break
             np.copyto(labf, cv2.dilate(labf, kernel3), where=lost.view(bool))
             lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
+        border = cv2.compare(cv2.dilate(labf, kernel3), labf, cv2.CMP_GT)
+        pieces = cv2.bitwise_and(cv2.compare(labf, zero, cv2.CMP_GT), cv2.bitwise_not(border))
         labels = labf.astype(np.int32)
-        # Boxes grown by the restored rim; areas recounted.
-        x1 = np.minimum(stats[:, 0] + stats[:, 2] + grow, w)
-        y1 = np.minimum(stats[:, 1] + stats[:, 3] + grow, h)
-        stats[:, 0] = np.maximum(stats[:, 0] - grow, 0)
-        stats[:, 1] = np.maximum(stats[:, 1] - grow, 0)
-        stats[:, 2], stats[:, 3] = x1 - stats[:, 0], y1 - stats[:, 1]
-        stats[:, 4] = np.bincount(labels.ravel(), minlength=count)[:count]
     else:
-        count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=4)
+        count, labels = cv2.connectedComponents(mask, connectivity=8)
+        pieces = mask
     background = (float(dominant[0]) / 255.0, float(dominant[1]) / 255.0,
                   float(dominant[2]) / 255.0)
-    if count <= 1:
+    contours, hierarchy = cv2.findContours(pieces, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    if count <= 1 or hierarchy is None:
         return ExtractResult([], [], [], [], background, thr)
+    hier = hierarchy[0]
     if p.color_erode_px > 0:
         ek = cv2.getStructuringElement(
             cv2.MORPH_RECT, (2 * p.color_erode_px + 1, 2 * p.color_erode_px + 1)
         )
-        region = cv2.erode(mask, ek)
+        region = cv2.erode(pieces, ek)
     else:
-        region = mask
+        region = pieces
     st = max(1, p.color_sample_step)
     colors = _median_colors(img[::st, ::st], labels[::st, ::st], region[::st, ::st], count)
     # Tiles eroded away entirely fall back to their whole region.
     sub = labels[::st, ::st].ravel()[np.flatnonzero(region[::st, ::st].ravel())]
     seen = np.bincount(sub, minlength=count)[:count] > 0
     if not seen[1:].all():
-        colors[~seen] = _median_colors(img, labels, mask, count)[~seen]
+        colors[~seen] = _median_colors(img, labels, pieces, count)[~seen]
     reference = mean_light if p.correct_illumination else None
     figures: list[Figure] = []
     outlines: list[FloatArray] = []
     partial: list[PartialTile] = []
     rejected: list[str] = []
     m = p.border_margin_px
-    for lab in range(1, count):
-        x0, y0, bw, bh, area = (int(v) for v in stats[lab])
+    for i, cnt in enumerate(contours):
+        if hier[i][3] != -1:
+            continue  # a hole; handled with its parent
+        area = cv2.contourArea(cnt)
         if area < p.min_area_px:
             continue
-        roi = np.zeros((bh + 2, bw + 2), np.uint8)
-        roi[1:-1, 1:-1] = labels[y0 : y0 + bh, x0 : x0 + bw] == lab
-        contours, hierarchy = cv2.findContours(roi, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
-        if hierarchy is None:
-            continue
-        hier = hierarchy[0]
-        outer_idx = max(
-            (i for i in range(len(contours)) if hier[i][3] == -1),
-            key=lambda i: cv2.contourArea(contours[i]),
-        )
-        shift = np.array([x0 - 1, y0 - 1], dtype=np.float64)
-        pts = contours[outer_idx][:, 0, :].astype(np.float64) + shift
-        rgb = colors[lab]
+        pts = cnt[:, 0, :].astype(np.float64)
+        x0, y0 = int(cnt[0, 0, 0]), int(cnt[0, 0, 1])
+        rgb = colors[int(labels[y0, x0])]
+        bx, by, bw, bh = cv2.boundingRect(cnt)
         if reference is not None:
-            cy = int(np.clip(round(y0 + bh / 2), 0, h - 1))
-            cx = int(np.clip(round(x0 + bw / 2), 0, w - 1))
+            cy = int(np.clip(by + bh // 2, 0, h - 1))
+            cx = int(np.clip(bx + bw // 2, 0, w - 1))
             rgb = rgb * reference / np.maximum(model[cy, cx].astype(np.float64), 1.0)
         c = np.clip(rgb / 255.0, 0.0, 1.0)
         color3 = (float(c[0]), float(c[1]), float(c[2]))
-        bx, by, bw, bh = cv2.boundingRect(contours[outer_idx])
-        bx, by = bx + x0 - 1, by + y0 - 1
         if bx <= m or by <= m or bx + bw >= w - m or by + bh >= h - m:
-            mom = cv2.moments(contours[outer_idx])
-            cen = np.array([mom["m10"], mom["m01"]]) / max(mom["m00"], 1e-9) + shift
+            mom = cv2.moments(cnt)
+            cen = np.array([mom["m10"], mom["m01"]]) / max(mom["m00"], 1e-9)
             partial.append(PartialTile(pts, float(area), cen, color3))
             continue
         holes = []
-        child = hier[outer_idx][2]
+        child = hier[i][2]
         while child != -1:
             hole = contours[child]
             h_area = cv2.contourArea(hole)
             h_len = cv2.arcLength(hole, True)
             if h_area >= p.min_hole_area_px and 2.0 * h_area >= p.min_hole_width_px * h_len:
-                hp = hole[:, 0, :].astype(np.float64) + shift
+                hp = hole[:, 0, :].astype(np.float64)
                 # A hole's outward (away from the tile material) is into the hole.
                 sign = 1.0 if _signed_area(hp) > 0 else -1.0
                 holes.append(_offset_outline(hp, p.boundary_offset_px, -sign))
@@ -429,7 +417,7 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         try:
             fig = Figure.from_outline(outline, holes, color3, params=p.outline, y_down=True)
         except InvalidFigureError as exc:
-            rejected.append(f"region at ({x0}, {y0}) px, area {area} px^2: {exc}")
+            rejected.append(f"region at ({x0}, {y0}) px, area {area:.0f} px^2: {exc}")
             continue
         figures.append(fig)
         outlines.append(outline)
