@@ -141,6 +141,7 @@ class Cell:
                     self.cfg.tiles.placement_attempts,
                     self._rng,
                     outlines=[self.tiles[k].outline for k in order],
+                    restarts=self.cfg.tiles.placement_restarts,
                 )
                 self._place(order, poses)
         self._next_feed_time = (

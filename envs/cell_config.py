@@ -230,7 +230,8 @@ class TileConfig:
         vertex_jitter: Std of the manufacturing noise added to outline vertices [m].
         color_jitter: Std of the noise added to each RGB channel [0..1 units].
         min_gap: Minimum clearance between bounding circles of placed tiles [m].
-        placement_attempts: Random tries per tile before the layout is declared impossible.
+        placement_attempts: Random tries per tile before a layout attempt is abandoned.
+        placement_restarts: Whole layouts drawn before the layout is declared impossible.
         distractor_rate: Expected distractors per real tile (0: none) [-].
         distractor_kinds: Kinds drawn uniformly: "color" (wrong colour), "broken" (a corner
             cut off), "shape" (scaled to a wrong size).
@@ -249,6 +250,7 @@ class TileConfig:
     color_jitter: float = 0.02
     min_gap: float = 0.006
     placement_attempts: int = 400
+    placement_restarts: int = 40
     distractor_rate: float = 0.0
     distractor_kinds: tuple[str, ...] = ("color", "broken", "shape")
     feed: Literal["all", "stream"] = "all"
@@ -256,7 +258,9 @@ class TileConfig:
     stream_initial: int = 0
 
     def __post_init__(self) -> None:
-        _positive(self, "thickness", "density", "friction", "placement_attempts")
+        _positive(
+            self, "thickness", "density", "friction", "placement_attempts", "placement_restarts"
+        )
         _positive(self, "glaze_thickness")
         _length(self, "body_color", 3)
         if not all(0.0 <= c <= 1.0 for c in self.body_color):

@@ -374,6 +374,7 @@ def sample_layout(
     outlines: Sequence[np.ndarray] | None = None,
     occupied: np.ndarray | None = None,
     occupied_radii: np.ndarray | None = None,
+    restarts: int = 1,
 ) -> np.ndarray:
     """Random non-overlapping poses for tiles in a rectangle.
 
@@ -391,6 +392,8 @@ def sample_layout(
             test, denser packing).
         occupied: Centres of circles already there, shape (k, 2) [m], optional.
         occupied_radii: Their radii, shape (k,) [m].
+        restarts: Whole layouts tried before giving up (random sequential placement can jam
+            near 50 % fill even when a layout exists; a fresh draw usually succeeds).
 
     Returns:
         Poses (x, y, yaw), shape (n, 3), in the rectangle's frame [m, m, rad].
@@ -423,6 +426,28 @@ def sample_layout(
             f"{have * 1e4:.0f} cm^2 (random placement fills at most ~{fill:.0%}); use fewer "
             "tiles, a larger input_belt.tile_area, or feed='stream'"
         )
+    rest = {"outlines": outlines, "occupied": occupied, "occupied_radii": occupied_radii}
+    for _ in range(max(restarts, 1) - 1):
+        try:
+            return _layout_once(radii, half, gap, attempts, rng, **rest)
+        except CellError:
+            continue
+    return _layout_once(radii, half, gap, attempts, rng, **rest)
+
+
+def _layout_once(
+    radii: np.ndarray,
+    half: np.ndarray,
+    gap: float,
+    attempts: int,
+    rng: np.random.Generator,
+    *,
+    outlines: Sequence[np.ndarray] | None,
+    occupied: np.ndarray | None,
+    occupied_radii: np.ndarray | None,
+) -> np.ndarray:
+    """One try of `sample_layout` (same arguments); raises CellError when it jams."""
+    area_size = 2 * half
     centres = np.zeros((0, 2)) if occupied is None else np.asarray(occupied, float)
     rads = np.zeros(0) if occupied_radii is None else np.asarray(occupied_radii, float)
     n_fixed = len(centres)
