@@ -147,8 +147,8 @@ def test_relevant_points_on_corners(known: tuple[Design, np.ndarray, list[Figure
         truth = slot.figure().points * np.array([S, -S]) + [0, design.mesh_size[1] * S]
         fig = _nearest(figs, design, name)
         d = np.hypot(*(truth[:, None, :] - fig.points[None, :, :]).transpose(2, 0, 1))
-        # Acute tips and concave corners are rounded by blur and smoothing: 2.5 px at most.
-        assert d.min(axis=1).max() < 2.5, name
+        # Corners (acute tips and the concave one included) refined by fitted edge lines.
+        assert d.min(axis=1).max() < 1.5, name
         assert np.median(d.min(axis=1)) < 1.5, name
 
 
