@@ -1,0 +1,190 @@
+"""Settings of the scripted agent's layers, as frozen dataclasses with units.
+
+Bundled defaults live in ``configs/agents.yaml``; `load_agents_config` loads them strictly
+(unknown keys are a `configs.ConfigError`) and applies top-level keyword overrides::
+
+    cfg = load_agents_config(placement={"method": "greedy", "use_color": False})
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from configs import load_config
+from agents.errors import AgentError
+
+AGENTS_CONFIG = "agents"
+"""Bundled config name (``configs/agents.yaml``)."""
+
+
+@dataclass(frozen=True)
+class PerceptionConfig:
+    """How camera images become perceived tiles.
+
+    Attributes:
+        mm_per_m: Unit of the world figures handed to qshape, [mm/m] (designs are in mm).
+        tile_thickness: Tile thickness: the seen top face lies this far above the belt, [m].
+        pad_clearance: A tile is picked at its centroid when the centroid lies at least this
+            far inside the tile material; otherwise at its pole of inaccessibility, [m] (half
+            the 23 mm pad of the paper: the pad seals on material all round).
+        polylabel_tolerance: Precision of the pole-of-inaccessibility search, [m].
+    """
+
+    mm_per_m: float = 1000.0
+    tile_thickness: float = 0.005
+    pad_clearance: float = 0.0115
+    polylabel_tolerance: float = 1e-4
+
+    def __post_init__(self) -> None:
+        """Raise `AgentError` on non-positive values."""
+        if not (self.mm_per_m > 0 and self.pad_clearance >= 0 and self.polylabel_tolerance > 0):
+            raise AgentError("perception: mm_per_m, polylabel_tolerance > 0, pad_clearance >= 0")
+        if self.tile_thickness < 0:
+            raise AgentError("perception: tile_thickness must be >= 0 [m]")
+
+
+@dataclass(frozen=True)
+class PlacementConfig:
+    """How assignments become pick-and-place commands.
+
+    Attributes:
+        method: "optimal" (most matches, least residual) or "greedy" (the paper's loop).
+        use_color: Match shape and colour (True) or shape alone.
+        continuous_yaw_steps: Equivalent yaws listed for a rotationally continuous tile
+            (circle, ring): any yaw fits, this many evenly spaced ones are offered.
+    """
+
+    method: Literal["optimal", "greedy"] = "optimal"
+    use_color: bool = True
+    continuous_yaw_steps: int = 12
+
+    def __post_init__(self) -> None:
+        """Raise `AgentError` on bad values."""
+        if self.method not in ("optimal", "greedy"):
+            raise AgentError(f"placement.method {self.method!r}; allowed: optimal, greedy")
+        if self.continuous_yaw_steps < 1:
+            raise AgentError("placement.continuous_yaw_steps must be >= 1")
+
+
+@dataclass(frozen=True)
+class CalibrationConfig:
+    """The rendered checkerboard calibration.
+
+    Attributes:
+        squares: Squares of the board along its x and y, (nx, ny); inner corners are one less.
+        square_size: Side of one square, [m].
+        border: White margin around the squares, [m].
+        plate_thickness: Thickness of the white plate, [m].
+        square_height: Height of the black squares above the plate, [m].
+        tilts_deg: Board tilts for the intrinsic views, [deg] (about x then y per view pair).
+        lift: Heights of the board's centre above the belt for the intrinsic views, [m].
+        shifts: In-plane offsets of the board centre for the intrinsic views, [m].
+        subpix_window_px: Half size of the cornerSubPix search window, [px].
+        subpix_iterations: cornerSubPix iteration limit.
+        subpix_epsilon_px: cornerSubPix convergence, [px].
+        max_reprojection_px: Calibration is rejected above this RMS reprojection error, [px].
+        min_views: Fewest views with the board found.
+        fix_aspect_ratio: Estimate one focal length (square pixels).
+        zero_tangential: Assume no tangential distortion.
+        fix_k3: Do not estimate the third radial coefficient.
+    """
+
+    squares: tuple[int, int] = (9, 7)
+    square_size: float = 0.018
+    border: float = 0.012
+    plate_thickness: float = 0.003
+    square_height: float = 0.0002
+    tilts_deg: tuple[float, ...] = (0.0, 20.0, -20.0, 30.0, -30.0, 15.0, -15.0, 25.0)
+    lift: tuple[float, ...] = (0.02, 0.05, 0.08)
+    shifts: tuple[tuple[float, float], ...] = ((0.0, 0.0), (0.02, -0.015), (-0.02, 0.015))
+    subpix_window_px: int = 5
+    subpix_iterations: int = 50
+    subpix_epsilon_px: float = 1e-3
+    max_reprojection_px: float = 1.0
+    min_views: int = 5
+    fix_aspect_ratio: bool = True
+    zero_tangential: bool = True
+    fix_k3: bool = True
+
+    def __post_init__(self) -> None:
+        """Raise `AgentError` on bad values."""
+        if min(self.squares) < 3 or self.square_size <= 0 or self.border < 0:
+            raise AgentError("calibration: squares >= 3 each, square_size > 0, border >= 0")
+        if self.min_views < 3 or self.subpix_window_px < 1:
+            raise AgentError("calibration: min_views >= 3, subpix_window_px >= 1")
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """The main job (``python -m agents.main``).
+
+    Attributes:
+        design: Bundled design name or path.
+        seed: Layout seed of the cell (the first seed from it whose layout fits is used).
+        layout_seed_tries: Seeds tried until the design's tiles fit the input belt.
+        settle_s: Simulated time let pass before the first picture, [s].
+        position_tolerance: A placed tile is correct within this distance of its slot, [m].
+        yaw_tolerance_deg: ... and this yaw error modulo its symmetry, [deg].
+        execute: Run the pick-and-place cycles through the planners (when they work).
+        calibrate: Use the calibrated camera instead of the simulator's true one.
+        video_fps: Frames per second of the cell video (simulated time), [1/s].
+        video_size: Overview video frame (height, width), [px].
+        marker_radius_px: Radius of drawn relevant points, [px].
+        out_dir: Output folder (relative to the repository root unless absolute).
+    """
+
+    design: str = "paper_mixed"
+    seed: int = 0
+    layout_seed_tries: int = 20
+    settle_s: float = 0.3
+    position_tolerance: float = 0.002
+    yaw_tolerance_deg: float = 2.0
+    execute: bool = True
+    calibrate: bool = True
+    video_fps: float = 10.0
+    video_size: tuple[int, int] = (360, 480)
+    marker_radius_px: int = 3
+    out_dir: str = "out"
+
+    def __post_init__(self) -> None:
+        """Raise `AgentError` on bad values."""
+        if self.position_tolerance <= 0 or self.yaw_tolerance_deg <= 0 or self.video_fps <= 0:
+            raise AgentError("run: tolerances and video_fps must be > 0")
+
+
+@dataclass(frozen=True)
+class AgentsConfig:
+    """All agent settings (``configs/agents.yaml``)."""
+
+    perception: PerceptionConfig = field(default_factory=PerceptionConfig)
+    placement: PlacementConfig = field(default_factory=PlacementConfig)
+    calibration: CalibrationConfig = field(default_factory=CalibrationConfig)
+    run: RunConfig = field(default_factory=RunConfig)
+
+
+def load_agents_config(
+    name_or_path: str | Path | None = AGENTS_CONFIG, **overrides: Any
+) -> AgentsConfig:
+    """Load the agent settings.
+
+    Args:
+        name_or_path: Bundled name or YAML path; None: dataclass defaults.
+        **overrides: Top-level sections (dicts of fields or dataclass values).
+
+    Raises:
+        configs.ConfigError: Unknown key or wrong type.
+        AgentError: Out-of-range value.
+    """
+    return load_config(AgentsConfig, name_or_path, **overrides)
+
+
+__all__ = [
+    "AgentsConfig",
+    "CalibrationConfig",
+    "PerceptionConfig",
+    "PlacementConfig",
+    "RunConfig",
+    "load_agents_config",
+]
