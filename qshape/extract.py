@@ -16,6 +16,9 @@ Pipeline, all O(height x width) image operations in OpenCV plus linear work per 
    corrected for the modelled illumination.
 
 Figures are in pixel coordinates with ``y_down=True``.
+
+Note: ``qshape.extract`` (the package attribute) is the function; import this module's other
+names with ``from qshape.extract import ExtractParams, extract_detailed, ...``.
 """
 
 from __future__ import annotations
