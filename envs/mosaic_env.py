@@ -1,0 +1,375 @@
+"""`MosaicAssembly-v0`: the Gymnasium environment of the mosaic cell.
+
+Composition only: the `Cell` simulates, `MosaicTask` evaluates and rewards, `Observer` senses,
+an `ActionAdapter` (one per action mode) acts. See `MosaicAssemblyEnv` for the spaces.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+
+from envs.actions import (
+    ActionAdapter,
+    ActionError,
+    CartesianActions,
+    DiscretePickPlaceActions,
+    JointActions,
+    PickPlaceActions,
+    PickPlaceBounds,
+    PickPlaceExecutor,
+)
+from envs.cameras import CameraModel
+from envs.cell import CAMERAS, Cell
+from envs.cell_config import CellConfig, load_cell_config
+from envs.env_config import EnvConfig, load_env_config
+from envs.errors import CellError
+from envs.observations import Observer
+from envs.scene import build_arm_model
+from envs.task import REWARD_TERMS, MosaicTask
+from envs.tiles import SlotSpec, TileShape, tile_shapes_from_design
+from planners.config import load_planner_config
+from planners.ik import IKSolver
+
+DEFAULT_CONTROL_DT = 0.04
+"""Default control period [s] (``configs/env.yaml``); the class's ``render_fps`` is 1 / it."""
+VISUAL_GROUP = 2
+"""Geom group of the tiles' visual geoms (colour randomisation)."""
+CAMERA_PANEL_DIVISOR = 2
+"""Each camera panel of the ``rgb_array`` frame is the overview's height / this."""
+
+
+class MosaicEnvError(RuntimeError):
+    """The environment is used in a wrong state (step before reset, after close, no display)."""
+
+
+class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
+    """Assemble a ceramic mosaic with an ABB IRB 140 and a vacuum pad.
+
+    ## Description
+    Tiles of a design lie on an input belt seen by ``input_camera``; the mesh with the design's
+    slots lies on an output belt seen by ``output_camera``. The agent moves tiles into the
+    slots of their class (shape and colour), turned to the slot's yaw modulo the tile's
+    rotational symmetry, within tight tolerances (default 1.5 mm and 2 deg; a mosaic joint is
+    2-3 mm). Physics: MuJoCo (timestep 2 ms), servo actuators, a weld-based suction seal.
+
+    ## Action Space
+    Chosen by ``action_mode`` (continuous ones are Box in [-1, 1] float32):
+    - ``joint``: Box(7): joint target deltas scaled by each axis' speed limit times
+      ``control_dt``, then vacuum (> 0: on). One step = ``control_dt`` of simulated time.
+    - ``cartesian``: Box(5): tool dx, dy, dz (x ``tool_speed * control_dt``) and dyaw
+      (x ``tool_yaw_rate * control_dt``), tool kept pointing down (planners' IK), then vacuum.
+    - ``pick_place``: Box(6): pick x, y, yaw and place x, y, yaw. x, y map linearly onto the
+      input tile area (pick) and the mesh (place), see ``env.unwrapped.bounds``; yaw onto
+      [-pi, pi]. The pad goes to the pick point and then to the place point; the tile turns by
+      place yaw - pick yaw. One step = one full time-optimal cycle planned by the planners.
+      ``env.unwrapped.pick_place_action(pick_xy, pick_yaw, place_xy, place_yaw)`` normalises
+      world poses [m, rad].
+    - ``pick_place_discrete``: MultiDiscrete([tiles, slots, rotation_bins]): move tile i
+      (ground-truth grasp point) into slot j turned by r * 2 pi / rotation_bins.
+
+    ``execution`` (pick_place modes): ``dynamic`` tracks the planned trajectory with the
+    servo actuators at every physics step (full physics, suction weld). ``kinematic`` puts the
+    arm at the pick, place and retreat poses (qpos, no arm dynamics), the held tile moving
+    with the pad, then settles the released tile briefly. Kinematic mode gives up: arm
+    dynamics and tracking errors, inertial drops, collisions along the path, tile motion on a
+    moving belt during the cycle, and the real cycle time (it charges the planners' lower
+    bound plus dwells). Outcomes of clean picks agree with dynamic mode (tested).
+
+    ## Observation Space
+    Dict (see `envs.observations`): ``input_camera``, ``output_camera`` RGB uint8
+    (H, W, 3) at ``image_size`` (``rgb``/``rgb+state``; depth (H, W, 1) float32 [m] with
+    ``depth``), ``robot`` float32 (19,) (joint pos/vel, tool pose, vacuum, held), and with
+    ``state``/``rgb+state`` the privileged ``tiles`` (n, 7) and ``slots`` (k, 6). Camera
+    intrinsics/extrinsics: ``env.unwrapped.camera_model("input", height, width)``.
+
+    ## Rewards
+    ``sparse``: +reward_correct per newly filled slot, +reward_success when complete,
+    -penalty per newly misplaced tile, dropped tile, lost tile, placed distractor and failed
+    action. ``dense`` adds: -dense_reach x distance tool-to-nearest wanted tile (not holding),
+    +dense_grasp while holding a wanted tile, -dense_carry x distance of the held tile to its
+    nearest free slot. Every term is in ``info`` as ``reward_<term>``.
+
+    ## Starting State
+    Arm at home, vacuum off, tiles laid out at random (non-overlapping) on the input belt
+    (``feed="all"``) or the first ``stream_initial`` of them (``feed="stream"``), settled for
+    ``reset_settle``. Tile geometry/colour noise is drawn when the env is built; per-reset
+    colour and light changes with ``color_randomization``/``light_randomization``.
+
+    ## Episode End
+    ``terminated`` when every slot is filled correctly or no remaining real tile can fill an
+    open slot; truncation by ``TimeLimit`` (``max_episode_steps`` at registration: 1000).
+
+    ## Arguments
+    ``gym.make("MosaicAssembly-v0", config=None, render_mode=None, **overrides)``; ``config``
+    is an `EnvConfig`, a bundled name or a YAML path (``configs/env.yaml``); overrides are
+    the flat `EnvConfig` fields: design, max_slots, action_mode, obs_mode, image_size, depth,
+    belt_speed, reward_mode, execution, feed, distractor_rate, noise and randomisation levels,
+    tolerances, reward weights. Unknown keys raise `EnvConfigError` listing the allowed ones.
+
+    ## Info
+    ``sim_time`` [s since reset], ``tiles_placed`` (slots filled correctly), ``tiles_per_min``
+    (per simulated minute), ``evaluation`` (the `evaluate()` dict), ``reward_<term>``,
+    ``action_failed`` and ``action_error`` (why), ``is_success``.
+
+    ## Version History
+    - v0: initial version.
+    """
+
+    metadata = {  # noqa: RUF012 - Gymnasium convention
+        "render_modes": ["rgb_array", "human"],
+        "render_fps": round(1.0 / DEFAULT_CONTROL_DT),
+    }
+
+    def __init__(
+        self,
+        config: EnvConfig | str | Path | None = None,
+        render_mode: str | None = None,
+        **overrides: Any,
+    ) -> None:
+        if render_mode is not None:
+            overrides["render_mode"] = render_mode
+        self.config = load_env_config("env" if config is None else config, **overrides)
+        cfg = self.config
+        self.render_mode = cfg.render_mode
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt)}
+        shapes, slots = _design(cfg)
+        self.cell = _build_cell(_cell_config(cfg), shapes, slots, cfg.layout_tries)
+        self.task = MosaicTask(self.cell, cfg)
+        self.observer = Observer(self.cell, self.task, cfg)
+        pcfg = load_planner_config(cfg.planner)
+        self.ik = IKSolver(build_arm_model(self.cell.cfg, with_cell=False), pcfg.ik, pcfg.limits)
+        self.bounds = PickPlaceBounds.of(self.cell, cfg)
+        self.actions = self._adapter(pcfg)
+        self.action_space = self.actions.space
+        self.observation_space = self.observer.space
+        self._visual = _visual_geoms(self.cell)
+        self._base_rgba = self.cell.model.geom_rgba[self._visual].copy()
+        self._base_light = self.cell.model.light_diffuse.copy()
+        self._settle_steps = round(cfg.reset_settle / float(self.cell.model.opt.timestep))
+        self._t0 = 0.0
+        self._needs_reset = True
+        self._closed = False
+        self._viewer: Any = None
+
+    def _adapter(self, pcfg: Any) -> ActionAdapter:
+        cfg, cell = self.config, self.cell
+        if cfg.action_mode == "joint":
+            return JointActions(cell, cfg)
+        if cfg.action_mode == "cartesian":
+            return CartesianActions(cell, cfg, self.ik)
+        executor = PickPlaceExecutor(cell, cfg, pcfg, self.ik)
+        if cfg.action_mode == "pick_place":
+            return PickPlaceActions(cell, cfg, executor)
+        return DiscretePickPlaceActions(cell, cfg, executor)
+
+    # ------------------------------------------------------------------ Gymnasium API
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, Any], dict[str, Any]]:
+        """Start an episode: new tile layout (and colours/lights if enabled), arm at home."""
+        self._check_open()
+        super().reset(seed=seed)
+        cell, rng = self.cell, self.np_random
+        for attempt in range(self.config.layout_tries):
+            try:
+                cell.reset(seed=np.random.default_rng(rng.integers(2**63)))
+                break
+            except CellError:
+                if attempt == self.config.layout_tries - 1:
+                    raise
+        self._randomize(rng)
+        cell.belt_speed = self.config.belt_speed
+        if self._settle_steps:
+            cell.step(self._settle_steps)
+        self._t0 = cell.time
+        self.task.reset()
+        self.actions.reset()
+        self._needs_reset = False
+        evaluation = self.task.evaluate()
+        obs = self.observer.observe(rng, evaluation)
+        return obs, self._info(evaluation, dict.fromkeys(REWARD_TERMS, 0.0), False, "")
+
+    def step(
+        self, action: np.ndarray
+    ) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
+        """Apply one action (see the class docstring), evaluate, observe.
+
+        Raises:
+            MosaicEnvError: Called before `reset` or after `close`.
+            ActionError: Wrong shape, NaN/inf or out-of-range action.
+        """
+        self._check_open()
+        if self._needs_reset:
+            raise MosaicEnvError("step() called before reset(): call env.reset() first")
+        a = self.actions.validate(action)
+        a = self.actions.noisy(a, self.np_random)
+        result = self.actions.apply(a)
+        evaluation = self.task.evaluate()
+        terms = self.task.rewards(evaluation, result.failed)
+        reward = float(sum(terms.values()))
+        terminated = bool(evaluation["success"] or evaluation["placeable"] == 0)
+        obs = self.observer.observe(self.np_random, evaluation)
+        info = self._info(evaluation, terms, result.failed, result.reason)
+        if self.render_mode == "human":
+            self.render()
+        return obs, reward, terminated, False, info
+
+    def render(self) -> np.ndarray | None:
+        """``rgb_array``: overview (left) + input and output camera (right), uint8 (H, W, 3).
+
+        Raises:
+            MosaicEnvError: ``human`` without a display, or the env is closed.
+        """
+        self._check_open()
+        if self.render_mode == "human":
+            self._human()
+            return None
+        if self.render_mode != "rgb_array":
+            return None
+        h, w = self.cell.cfg.render.overview_size
+        overview = self.cell.render("overview", h, w)
+        ph = h // CAMERA_PANEL_DIVISOR
+        cam = self.cell.cfg.input_camera
+        pw = round(ph * cam.width / cam.height)
+        panels = [self.cell.render(name, ph, pw) for name in CAMERAS]
+        return np.concatenate([overview, np.concatenate(panels, axis=0)], axis=1)
+
+    def _human(self) -> None:
+        if self._viewer is None:
+            if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+                raise MosaicEnvError(
+                    "render_mode='human' needs a display (DISPLAY is not set); use "
+                    "render_mode='rgb_array' on a headless machine"
+                )
+            import mujoco.viewer  # noqa: PLC0415 - only with a display
+
+            self._viewer = mujoco.viewer.launch_passive(self.cell.model, self.cell.data)
+        self._viewer.sync()
+
+    def close(self) -> None:
+        """Free renderers and the viewer (safe to call twice)."""
+        if self._closed:
+            return
+        if self._viewer is not None:
+            self._viewer.close()
+            self._viewer = None
+        self.cell.close()
+        self._closed = True
+
+    # ------------------------------------------------------------------ extras
+    def evaluate(self) -> dict[str, Any]:
+        """The task's evaluation dict now (see `MosaicTask.evaluate`)."""
+        return self.task.evaluate()
+
+    def camera_model(
+        self, name: str, height: int | None = None, width: int | None = None
+    ) -> CameraModel:
+        """Intrinsics/extrinsics of ``"input"`` or ``"output"`` (or ``*_camera``) at a size.
+
+        Args:
+            name: Camera.
+            height: Image height [px]; default the observation's ``image_size``.
+            width: Image width [px].
+
+        Raises:
+            CellError: Unknown camera (the message lists the allowed names).
+        """
+        full = name if name.endswith("_camera") else f"{name}_camera"
+        h, w = self.config.image_size
+        return self.cell.camera_model(full, height or h, width or w)
+
+    def pick_place_action(
+        self, pick_xy: np.ndarray, pick_yaw: float, place_xy: np.ndarray, place_yaw: float
+    ) -> np.ndarray:
+        """Normalised ``pick_place`` action from world poses [m, rad] (see `PickPlaceBounds`).
+
+        Raises:
+            ActionError: A position outside its area.
+        """
+        return self.bounds.normalize(pick_xy, pick_yaw, place_xy, place_yaw)
+
+    # ------------------------------------------------------------------ helpers
+    def _info(
+        self, evaluation: dict[str, Any], terms: dict[str, float], failed: bool, reason: str
+    ) -> dict[str, Any]:
+        t = self.cell.time - self._t0
+        placed = evaluation["correct"]
+        info: dict[str, Any] = {
+            "sim_time": t,
+            "tiles_placed": placed,
+            "tiles_per_min": 60.0 * placed / t if t > 0 else 0.0,
+            "evaluation": evaluation,
+            "is_success": evaluation["success"],
+            "action_failed": failed,
+            "action_error": reason,
+        }
+        info.update({f"reward_{k}": float(v) for k, v in terms.items()})
+        return info
+
+    def _randomize(self, rng: np.random.Generator) -> None:
+        m, cfg = self.cell.model, self.config
+        if cfg.color_randomization > 0 and len(self._visual):
+            f = 1 + rng.normal(0.0, cfg.color_randomization, (len(self._visual), 3))
+            m.geom_rgba[self._visual, :3] = np.clip(self._base_rgba[:, :3] * f, 0.0, 1.0)
+        if cfg.light_randomization > 0 and m.nlight:
+            f = 1 + rng.normal(0.0, cfg.light_randomization, (m.nlight, 1))
+            m.light_diffuse[:] = np.clip(self._base_light * f, 0.0, 1.0)
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise MosaicEnvError("the environment is closed; make a new one")
+
+
+def _design(cfg: EnvConfig) -> tuple[tuple[TileShape, ...], tuple[SlotSpec, ...]]:
+    from qshape.design import Design  # noqa: PLC0415 - keep `import envs` light
+
+    shapes, slots = tile_shapes_from_design(Design.load(cfg.design))
+    if cfg.max_slots:
+        shapes, slots = shapes[: cfg.max_slots], slots[: cfg.max_slots]
+    return shapes, slots
+
+
+def _cell_config(cfg: EnvConfig) -> CellConfig:
+    base = load_cell_config(cfg.cell)
+    tiles = replace(
+        base.tiles,
+        feed=cfg.feed,
+        stream_period=cfg.stream_period,
+        stream_initial=cfg.stream_initial,
+        distractor_rate=cfg.distractor_rate,
+        vertex_jitter=cfg.vertex_jitter,
+        color_jitter=cfg.tile_color_jitter,
+    )
+    return replace(base, tiles=tiles, input_belt=replace(base.input_belt, speed=cfg.belt_speed))
+
+
+def _build_cell(
+    cfg: CellConfig, shapes: tuple[TileShape, ...], slots: tuple[SlotSpec, ...], tries: int
+) -> Cell:
+    """A cell whose first layout fits (layout draws can fail on crowded belts)."""
+    for seed in range(tries):
+        try:
+            return Cell(cfg, shapes, slots, seed=seed)
+        except CellError as exc:
+            if "could not place" not in str(exc) or seed == tries - 1:
+                raise
+    raise AssertionError("unreachable")
+
+
+def _visual_geoms(cell: Cell) -> np.ndarray:
+    ids = cell.ids
+    geoms = np.concatenate(
+        [np.arange(s, s + c) for s, c in zip(ids.tile_geom_start, ids.tile_geom_count, strict=True)]
+        or [np.zeros(0, int)]
+    ).astype(int)
+    return geoms[cell.model.geom_group[geoms] == VISUAL_GROUP]
+
+
+__all__ = ["ActionError", "MosaicAssemblyEnv", "MosaicEnvError"]

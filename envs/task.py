@@ -1,0 +1,243 @@
+"""The mosaic task: which tile belongs where, placement evaluation and rewards.
+
+`MosaicTask.evaluate` returns one dict the reward, the episode end and ``info`` all read.
+Tiles and slots are matched by class name (the design's shape-and-colour class); distractors are
+never correct. A tile counts as placed when it lies flat on the mesh (not held); it fills the
+nearest slot when class, position and yaw (modulo the tile's symmetry) are within tolerance.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from envs.cell import Cell
+from envs.env_config import EnvConfig
+
+REWARD_TERMS = (
+    "correct",
+    "success",
+    "misplaced",
+    "dropped",
+    "lost",
+    "distractor",
+    "failed_action",
+    "reach",
+    "grasp",
+    "carry",
+)
+"""Names of the reward terms (each is reported in ``info`` as ``reward_<name>``)."""
+
+
+@dataclass(frozen=True)
+class Placement:
+    """Placement of every tile at one instant.
+
+    Attributes:
+        on_mesh: Tiles lying on the mesh and not held, shape (n,) bool.
+        slot: Nearest slot of each tile on the mesh (-1 otherwise), shape (n,).
+        position_error: Distance of each tile's centroid to that slot's [m], NaN off the mesh.
+        yaw_error: Yaw error modulo the tile's symmetry [rad], NaN off the mesh.
+        correct: Tiles filling their nearest slot correctly, shape (n,) bool.
+        slot_filled: Slots filled correctly, shape (k,) bool.
+    """
+
+    on_mesh: np.ndarray
+    slot: np.ndarray
+    position_error: np.ndarray
+    yaw_error: np.ndarray
+    correct: np.ndarray
+    slot_filled: np.ndarray
+
+
+class MosaicTask:
+    """Placement evaluation and rewards of one cell and design.
+
+    Args:
+        cell: The cell (its ``slots`` are the mesh; its tiles the feed).
+        config: Environment configuration (tolerances and reward weights).
+    """
+
+    def __init__(self, cell: Cell, config: EnvConfig) -> None:
+        self.cell = cell
+        self.cfg = config
+        slot_names = [s.shape.name for s in cell.slots]
+        classes = sorted(set(slot_names) | {t.shape.name for t in cell.tiles})
+        self.class_names = tuple(classes)
+        index = {c: i for i, c in enumerate(classes)}
+        self.slot_class = np.array([index[n] for n in slot_names], dtype=int)
+        self.tile_class = np.array([index[t.shape.name] for t in cell.tiles], dtype=int)
+        self.distractor = cell.is_distractor.copy()
+        sym = np.array([t.shape.symmetry for t in cell.tiles], dtype=float)
+        self.period = np.where(sym > 0, 2 * np.pi / np.maximum(sym, 1), 0.0)
+        self.slot_xyyaw = cell.slot_poses_world()
+        mesh = np.asarray(cell.cfg.output_belt.mesh_size) / 2
+        self._mesh_lo = cell.geometry.output_centre[:2] - mesh
+        self._mesh_hi = cell.geometry.output_centre[:2] + mesh
+        self._rest_z = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2
+        self._yaw_tol = math.radians(config.yaw_tolerance_deg)
+        self._prev: dict[str, Any] = {}
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the counts of the previous step (call after the cell's reset)."""
+        self._prev = self.evaluate()
+
+    def placement(self) -> Placement:
+        """Where every tile lies relative to the slots now."""
+        cell = self.cell
+        poses = cell.tile_poses()
+        n, k = len(cell.tiles), len(self.slot_class)
+        xy = poses.pos[:, :2]
+        up = 1 - 2 * (poses.quat[:, 1] ** 2 + poses.quat[:, 2] ** 2)  # z-axis z component
+        held = np.zeros(n, bool)
+        if cell.held_tile >= 0:
+            held[cell.held_tile] = True
+        on_mesh = (
+            np.all((xy >= self._mesh_lo) & (xy <= self._mesh_hi), axis=1)
+            & (np.abs(poses.pos[:, 2] - self._rest_z) <= self.cfg.mesh_height_tolerance)
+            & (up > math.cos(self._yaw_tol * 4))
+            & ~held
+            & cell.on_stage
+        )
+        slot = np.full(n, -1)
+        perr = np.full(n, np.nan)
+        yerr = np.full(n, np.nan)
+        correct = np.zeros(n, bool)
+        filled = np.zeros(k, bool)
+        idx = np.flatnonzero(on_mesh)
+        if k and len(idx):
+            d = np.linalg.norm(xy[idx, None, :] - self.slot_xyyaw[None, :, :2], axis=2)
+            nearest = np.argmin(d, axis=1)
+            slot[idx] = nearest
+            perr[idx] = d[np.arange(len(idx)), nearest]
+            dyaw = poses.yaw[idx] - self.slot_xyyaw[nearest, 2]
+            per = self.period[idx]
+            wrapped = np.where(
+                per > 0, (dyaw + per / 2) % np.where(per > 0, per, 1.0) - per / 2, 0.0
+            )
+            yerr[idx] = np.abs(wrapped)
+            ok = (
+                (self.tile_class[idx] == self.slot_class[nearest])
+                & ~self.distractor[idx]
+                & (perr[idx] <= self.cfg.position_tolerance)
+                & (yerr[idx] <= self._yaw_tol)
+            )
+            # One tile per slot: the closest correct tile fills it, others are misplaced.
+            order = np.argsort(perr[idx])
+            for j in order[ok[order]]:
+                s = nearest[j]
+                if not filled[s]:
+                    filled[s] = True
+                    correct[idx[j]] = True
+        return Placement(on_mesh, slot, perr, yerr, correct, filled)
+
+    def evaluate(self) -> dict[str, Any]:
+        """The task's state as one dict (also ``info["evaluation"]``).
+
+        Keys: ``success`` (every slot filled correctly), ``correct`` (slots filled correctly),
+        ``misplaced`` (real tiles on the mesh not filling a slot: wrong class or pose beyond
+        tolerance), ``dropped`` (tiles the pad lost in transit), ``lost`` (tiles lost off the
+        input belt), ``distractors_placed``, ``slots`` (number of slots), ``slot_filled`` (bool
+        list), ``position_error_mm`` and ``yaw_error_deg`` (mean and max over tiles on the mesh,
+        NaN when none), ``placeable`` (open slots a remaining real tile of the right class could
+        still fill).
+        """
+        p = self.placement()
+        cell = self.cell
+        real = ~self.distractor
+        misplaced = int(np.sum(p.on_mesh & real & ~p.correct))
+        distractors = int(np.sum(p.on_mesh & self.distractor))
+        # Tiles still available: real, not lost, not filling a slot (waiting ones included).
+        avail = real & ~cell.lost & ~p.correct
+        open_classes = self.slot_class[~p.slot_filled]
+        counts = np.bincount(self.tile_class[avail], minlength=len(self.class_names))
+        need = np.bincount(open_classes, minlength=len(self.class_names))
+        placeable = int(np.minimum(counts, need).sum())
+        on = p.on_mesh
+        pe = p.position_error[on] * 1e3
+        ye = np.degrees(p.yaw_error[on])
+        return {
+            "success": bool(p.slot_filled.all()) and len(p.slot_filled) > 0,
+            "correct": int(p.slot_filled.sum()),
+            "misplaced": misplaced,
+            "dropped": int(cell.n_dropped),
+            "lost": int(cell.n_lost),
+            "distractors_placed": distractors,
+            "slots": len(p.slot_filled),
+            "slot_filled": p.slot_filled.tolist(),
+            "placeable": placeable,
+            "position_error_mm": float(pe.mean()) if pe.size else math.nan,
+            "position_error_mm_max": float(pe.max()) if pe.size else math.nan,
+            "yaw_error_deg": float(ye.mean()) if ye.size else math.nan,
+            "yaw_error_deg_max": float(ye.max()) if ye.size else math.nan,
+        }
+
+    def wanted_tiles(self, evaluation: dict[str, Any]) -> np.ndarray:
+        """Real tiles on the input side whose class fills an open slot, shape (n,) bool."""
+        filled = np.asarray(evaluation["slot_filled"], bool)
+        open_classes = np.unique(self.slot_class[~filled])
+        p_on = self.placement().on_mesh
+        return (
+            ~self.distractor
+            & self.cell.on_stage
+            & ~self.cell.lost
+            & ~p_on
+            & np.isin(self.tile_class, open_classes)
+        )
+
+    def rewards(self, evaluation: dict[str, Any], failed_action: bool) -> dict[str, float]:
+        """Reward terms of a step, from the change since the previous call.
+
+        Args:
+            evaluation: `evaluate()` after the step.
+            failed_action: The action could not execute (unreachable pose, no tile, ...).
+
+        Returns:
+            Every term of `REWARD_TERMS` (dense terms are 0 in sparse mode); their sum is the
+            reward.
+        """
+        c, prev = self.cfg, self._prev
+        terms = dict.fromkeys(REWARD_TERMS, 0.0)
+        terms["correct"] = c.reward_correct * (evaluation["correct"] - prev["correct"])
+        terms["success"] = c.reward_success * float(evaluation["success"] and not prev["success"])
+        terms["misplaced"] = -c.penalty_misplaced * max(
+            evaluation["misplaced"] - prev["misplaced"], 0
+        )
+        terms["dropped"] = -c.penalty_dropped * (evaluation["dropped"] - prev["dropped"])
+        terms["lost"] = -c.penalty_lost * (evaluation["lost"] - prev["lost"])
+        terms["distractor"] = -c.penalty_distractor * max(
+            evaluation["distractors_placed"] - prev["distractors_placed"], 0
+        )
+        terms["failed_action"] = -c.penalty_failed_action * float(failed_action)
+        if c.reward_mode == "dense":
+            terms.update(self._dense(evaluation))
+        self._prev = evaluation
+        return terms
+
+    def _dense(self, evaluation: dict[str, Any]) -> dict[str, float]:
+        """Shaping toward picking a wanted tile and carrying it to a free slot of its class."""
+        cell, c = self.cell, self.cfg
+        tool = cell.tcp_pose()[0]
+        held = cell.held_tile
+        out = {"reach": 0.0, "grasp": 0.0, "carry": 0.0}
+        filled = np.asarray(evaluation["slot_filled"], bool)
+        if held >= 0 and not self.distractor[held]:
+            free = np.flatnonzero(~filled & (self.slot_class == self.tile_class[held]))
+            if len(free):
+                out["grasp"] = c.dense_grasp
+                pos = cell.tile_poses().pos[held, :2]
+                d = np.linalg.norm(self.slot_xyyaw[free, :2] - pos, axis=1).min()
+                out["carry"] = -c.dense_carry * float(d)
+            return out
+        wanted = np.flatnonzero(self.wanted_tiles(evaluation))
+        if len(wanted):
+            pos = cell.tile_poses().pos[wanted]
+            out["reach"] = -c.dense_reach * float(np.linalg.norm(pos - tool, axis=1).min())
+        return out
+
+
+__all__ = ["REWARD_TERMS", "MosaicTask", "Placement"]
