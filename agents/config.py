@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from configs import load_config
 from agents.errors import AgentError
+from configs import load_config
 
 AGENTS_CONFIG = "agents"
 """Bundled config name (``configs/agents.yaml``)."""
@@ -30,12 +30,23 @@ class PerceptionConfig:
             far inside the tile material; otherwise at its pole of inaccessibility, [m] (half
             the 23 mm pad of the paper: the pad seals on material all round).
         polylabel_tolerance: Precision of the pole-of-inaccessibility search, [m].
+        corner_angle_deg: Override of qshape's outline ``corner_angle_deg`` for camera images
+            of the cell, [deg] (the bundled 25 deg splits rendered arcs of 20-24 mm radius
+            into a straight piece and a curve; 35 keeps them whole); 0 keeps the bundled value.
+        color_balance: Estimate a per-channel gain mapping measured tile colours onto the
+            design's palette (white balance against known colours) before matching.
+        color_balance_iterations: Nearest-palette / median-gain rounds of that estimate.
+        max_color_gain: The gain per channel is clipped to [1 / max, max] (dimensionless).
     """
 
     mm_per_m: float = 1000.0
     tile_thickness: float = 0.005
     pad_clearance: float = 0.0115
     polylabel_tolerance: float = 1e-4
+    corner_angle_deg: float = 35.0
+    color_balance: bool = True
+    color_balance_iterations: int = 3
+    max_color_gain: float = 2.0
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""

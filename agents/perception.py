@@ -1,0 +1,410 @@
+"""Perception of the scripted cell: camera image -> tiles in the world; design -> slots in the world.
+
+Tiles: `qshape.extract_detailed` finds the tiles' relevant points in pixels (y down); every
+relevant point is cast as a ray through the calibrated camera and intersected with the plane of
+the tiles' top faces, giving the figure on the belt in world millimetres (x, y of the world,
+y up). Designs are in millimetres too, so the qualitative sizes compare, and a matched rotation is
+directly a world yaw (counter-clockwise seen from above). A figure's world centre is its area
+centroid on the plane (equal to the ray-plane intersection of the pixel centroid for a camera
+looking straight down; both are reported).
+
+Slots: each design slot's `qshape.Figure` (mesh millimetres, y up, origin at the mesh's lower-left
+corner) and its world pose, given the mesh centre's world position (the mesh's axes are the
+world's, as in `envs.scene`).
+
+Only the camera model (what a calibrated cell knows) and the image are used: no simulator state.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+import shapely
+from shapely.geometry import Point, Polygon
+
+import qshape
+from agents.config import PerceptionConfig
+from agents.errors import PerceptionError
+from qshape import Description, Figure
+from qshape.figure import Boundary
+
+
+class CameraLike(Protocol):
+    """What perception needs of a camera: pinhole intrinsics and world-to-camera extrinsics.
+
+    Attributes:
+        K: Intrinsic matrix, shape (3, 3) [px] (OpenCV convention: u right, v down).
+        world_to_camera: Rigid transform, shape (4, 4): camera point = T @ world point (OpenCV
+            camera frame: x right, y down, z forward).
+    """
+
+    K: np.ndarray
+    world_to_camera: np.ndarray
+
+
+def unproject(camera: CameraLike, uv: np.ndarray, z: float) -> np.ndarray:
+    """World points on the horizontal plane at height ``z`` seen at pixels ``uv``.
+
+    Args:
+        camera: Camera model.
+        uv: Pixel coordinates, shape (n, 2) [px].
+        z: Plane height [m].
+
+    Returns:
+        World points, shape (n, 3) [m].
+
+    Raises:
+        PerceptionError: A ray parallel to the plane or the plane behind the camera.
+    """
+    uv = np.atleast_2d(np.asarray(uv, dtype=float))
+    rays_cam = np.column_stack([uv, np.ones(len(uv))]) @ np.linalg.inv(camera.K).T
+    r = camera.world_to_camera[:3, :3]
+    origin = -r.T @ camera.world_to_camera[:3, 3]
+    rays = rays_cam @ r  # camera -> world directions (rows)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = (z - origin[2]) / rays[:, 2]
+    if not np.all(np.isfinite(s)) or np.any(s <= 0):
+        raise PerceptionError(f"the plane z = {z} m is not in front of the camera for every pixel")
+    return origin + s[:, None] * rays
+
+
+def project(camera: CameraLike, points: np.ndarray) -> np.ndarray:
+    """Pixels of world points, shape (n, 3) [m] -> (n, 2) [px]."""
+    pts = np.atleast_2d(np.asarray(points, dtype=float))
+    cam = pts @ camera.world_to_camera[:3, :3].T + camera.world_to_camera[:3, 3]
+    uvw = cam @ camera.K.T
+    return uvw[:, :2] / uvw[:, 2:3]
+
+
+@dataclass(frozen=True, eq=False)
+class PerceivedTile:
+    """One whole tile seen by a camera.
+
+    Attributes:
+        index: Position in the extraction order (stable for one image).
+        figure_px: The extracted figure, pixel coordinates, ``y_down=True``.
+        figure: The same figure on the plane of the tile tops, world x, y in [mm] (y up).
+        description: qshape description of ``figure``.
+        centre: World area centroid of the figure, shape (2,) [m].
+        centre_ray: Ray-plane intersection of the pixel area centroid, shape (2,) [m].
+        grasp: Where the pad should seal, shape (2,) [m]: the centre when it lies at least
+            ``pad_clearance`` inside the material, else the pole of inaccessibility.
+        color: Measured RGB in [0, 1].
+        area: Area on the plane [m^2].
+    """
+
+    index: int
+    figure_px: Figure
+    figure: Figure
+    description: Description
+    centre: np.ndarray
+    centre_ray: np.ndarray
+    grasp: np.ndarray
+    color: tuple[float, float, float]
+    area: float
+
+
+@dataclass(frozen=True, eq=False)
+class PartialRegion:
+    """A region touching the image border (part of a tile): never described, never placed.
+
+    Attributes:
+        centre: World position of the visible part's centroid, shape (2,) [m].
+        area: Visible area on the plane [m^2].
+        color: Median RGB in [0, 1].
+    """
+
+    centre: np.ndarray
+    area: float
+    color: tuple[float, float, float]
+
+
+@dataclass(frozen=True, eq=False)
+class Perception:
+    """Everything perceived in one image.
+
+    Attributes:
+        tiles: Whole tiles, described.
+        partial: Regions touching the image border.
+        unrecognised: Messages for regions whose outline could not be made into a figure.
+        plane_z: Height of the plane the figures were mapped to [m].
+    """
+
+    tiles: tuple[PerceivedTile, ...]
+    partial: tuple[PartialRegion, ...]
+    unrecognised: tuple[str, ...]
+    plane_z: float
+
+
+def _to_world_boundary(
+    camera: CameraLike, b: Boundary, z: float, scale: float
+) -> tuple[np.ndarray, np.ndarray]:
+    pts = unproject(camera, np.asarray(b.points), z)[:, :2] * scale
+    return pts, np.asarray(b.curve_mask)
+
+
+def figure_to_world(
+    camera: CameraLike, fig: Figure, z: float, cfg: PerceptionConfig | None = None
+) -> Figure:
+    """Map a pixel figure (``y_down``) onto the world plane at height ``z``, in [mm], y up.
+
+    Relevant points and curve marks are mapped one by one (a camera looking down maps circles
+    to circles; a small tilt keeps arcs within the curve tolerances).
+
+    Raises:
+        PerceptionError: Plane not in front of the camera.
+        qshape.InvalidFigureError: The mapped outline is degenerate.
+    """
+    cfg = cfg or PerceptionConfig()
+    outer, mask = _to_world_boundary(camera, fig.outer, z, cfg.mm_per_m)
+    holes = []
+    for h in fig.holes:
+        hp, hm = _to_world_boundary(camera, h, z, cfg.mm_per_m)
+        holes.append(Boundary.make(hp, hm, y_down=False, what="hole"))
+    return Figure.from_polygon(outer, holes, fig.color, curve_mask=mask, y_down=False)
+
+
+def grasp_point(fig_mm: Figure, centre: np.ndarray, cfg: PerceptionConfig) -> np.ndarray:
+    """Pad position [m], shape (2,): the centre if the pad fits there, else the pole.
+
+    Args:
+        fig_mm: World figure in [mm].
+        centre: Its centroid [m], shape (2,).
+        cfg: Clearance and search tolerance.
+    """
+    s = 1.0 / cfg.mm_per_m
+    poly = Polygon(
+        np.asarray(fig_mm.outer.dense()) * s,
+        [np.asarray(h.dense()) * s for h in fig_mm.holes],
+    )
+    if not poly.is_valid:
+        poly = poly.buffer(0)
+    c = Point(float(centre[0]), float(centre[1]))
+    if poly.contains(c) and poly.boundary.distance(c) >= cfg.pad_clearance:
+        return np.asarray(centre, dtype=float).copy()
+    best = shapely.ops.polylabel(poly, tolerance=cfg.polylabel_tolerance)
+    return np.array([best.x, best.y])
+
+
+def perceive_tiles(
+    image: np.ndarray,
+    camera: CameraLike,
+    belt_top_z: float,
+    cfg: PerceptionConfig | None = None,
+    extract_params: qshape.ExtractParams | None = None,
+    tolerances: qshape.Tolerances | None = None,
+) -> Perception:
+    """Tiles in an input-camera image, described and located in the world.
+
+    Args:
+        image: RGB uint8, shape (h, w, 3).
+        camera: Calibrated camera model of that image.
+        belt_top_z: Height of the belt surface [m]; tiles' tops are ``tile_thickness`` above.
+        cfg: Perception settings (bundled defaults when None).
+        extract_params: qshape extraction parameters (bundled when None).
+        tolerances: qshape tolerances for the descriptions (bundled when None).
+
+    Returns:
+        The perceived tiles, partial regions and unrecognised regions.
+
+    Raises:
+        qshape.ImageError: Invalid image.
+        PerceptionError: Plane not in front of the camera.
+    """
+    cfg = cfg or PerceptionConfig()
+    z = belt_top_z + cfg.tile_thickness
+    res = qshape.extract_detailed(image, cell_extract_params(cfg, extract_params))
+    world: list[Figure] = []
+    unrecognised = list(res.rejected)
+    kept_px: list[Figure] = []
+    for k, fig in enumerate(res.figures):
+        try:
+            world.append(figure_to_world(camera, fig, z, cfg))
+            kept_px.append(fig)
+        except qshape.QShapeError as exc:
+            unrecognised.append(f"figure {k}: not mapped to the belt plane: {exc}")
+    descs = qshape.describe_many(world, tolerances) if world else []
+    s = 1.0 / cfg.mm_per_m
+    tiles = []
+    for k, (fpx, fw, d) in enumerate(zip(kept_px, world, descs, strict=True)):
+        centre = np.asarray(fw.centroid) * s
+        ray = unproject(camera, np.asarray(fpx.centroid)[None], z)[0, :2]
+        color = fw.color if fw.color is not None else (0.0, 0.0, 0.0)
+        tiles.append(
+            PerceivedTile(
+                k, fpx, fw, d, centre, ray, grasp_point(fw, centre, cfg), color, fw.area * s * s
+            )
+        )
+    partial = tuple(
+        PartialRegion(
+            unproject(camera, np.asarray(p.centroid)[None], z)[0, :2],
+            _pixel_area_to_plane(camera, np.asarray(p.outline), z),
+            p.color,
+        )
+        for p in res.partial
+    )
+    return Perception(tuple(tiles), partial, tuple(unrecognised), z)
+
+
+def cell_extract_params(
+    cfg: PerceptionConfig, base: qshape.ExtractParams | None = None
+) -> qshape.ExtractParams:
+    """Qshape extraction parameters with this config's outline override applied."""
+    from qshape.extract import default_params  # noqa: PLC0415
+
+    p = base if base is not None else default_params()
+    if cfg.corner_angle_deg > 0:
+        p = dataclasses.replace(
+            p, outline=dataclasses.replace(p.outline, corner_angle_deg=cfg.corner_angle_deg)
+        )
+    return p
+
+
+def color_gain(
+    measured: np.ndarray, palette: np.ndarray, cfg: PerceptionConfig | None = None
+) -> np.ndarray:
+    """Per-channel gain mapping measured colours onto a known palette (white balance).
+
+    Each round assigns every measured colour (after the current gain) to its nearest palette
+    colour and takes the per-channel median of palette / measured.
+
+    Args:
+        measured: Measured colours, shape (n, 3), RGB in [0, 1].
+        palette: Known colours (the design's), shape (m, 3), RGB in [0, 1].
+        cfg: Rounds and gain clip.
+
+    Returns:
+        Gain, shape (3,); ones when there is nothing to fit.
+    """
+    cfg = cfg or PerceptionConfig()
+    meas = np.asarray(measured, dtype=float).reshape(-1, 3)
+    pal = np.asarray(palette, dtype=float).reshape(-1, 3)
+    gain = np.ones(3)
+    if len(meas) == 0 or len(pal) == 0:
+        return gain
+    lo, hi = 1.0 / cfg.max_color_gain, cfg.max_color_gain
+    # Saturated channels say nothing about the gain; near-black ones are all noise.
+    usable = (meas > 1.0 / 255.0) & (meas < 1.0 - 1.0 / 255.0)
+    for _ in range(cfg.color_balance_iterations):
+        adj = np.clip(meas * gain, 0.0, 1.0)
+        nearest = np.argmin(np.linalg.norm(adj[:, None] - pal[None], axis=2), axis=1)
+        ratio = np.where(usable, pal[nearest] / np.maximum(meas, 1e-6), np.nan)
+        med = np.nanmedian(ratio, axis=0) if np.any(usable) else np.ones(3)
+        gain = np.clip(np.where(np.isfinite(med), med, 1.0), lo, hi)
+    return gain
+
+
+def balance_colors(
+    perception: Perception,
+    palette: np.ndarray,
+    cfg: PerceptionConfig | None = None,
+    tolerances: qshape.Tolerances | None = None,
+) -> tuple[Perception, np.ndarray]:
+    """The perception with tile colours corrected by `color_gain` (tiles re-described).
+
+    Returns:
+        (corrected perception, gain (3,)).
+    """
+    cfg = cfg or PerceptionConfig()
+    if not perception.tiles:
+        return perception, np.ones(3)
+    gain = color_gain(np.array([t.color for t in perception.tiles]), palette, cfg)
+    figs = []
+    for t in perception.tiles:
+        c = np.clip(np.asarray(t.color) * gain, 0.0, 1.0)
+        figs.append(dataclasses.replace(t.figure, color=(float(c[0]), float(c[1]), float(c[2]))))
+    descs = qshape.describe_many(figs, tolerances)
+    tiles = tuple(
+        dataclasses.replace(t, figure=f, description=d, color=f.color or t.color)
+        for t, f, d in zip(perception.tiles, figs, descs, strict=True)
+    )
+    return dataclasses.replace(perception, tiles=tiles), gain
+
+
+def _pixel_area_to_plane(camera: CameraLike, outline_px: np.ndarray, z: float) -> float:
+    pts = unproject(camera, outline_px, z)[:, :2]
+    x, y = pts[:, 0], pts[:, 1]
+    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
+
+
+@dataclass(frozen=True, eq=False)
+class SlotTarget:
+    """One design slot in the world.
+
+    Attributes:
+        index: Slot index in the design.
+        name: Slot name.
+        figure: The slot's figure in mesh millimetres (y up).
+        description: Its qshape description.
+        pose: World x, y [m] of the slot's area centroid and its yaw [rad] (the design angle).
+        symmetry: Rotational symmetry order (1: none, 0: continuous).
+        color: Design RGB in [0, 1].
+    """
+
+    index: int
+    name: str
+    figure: Figure
+    description: Description
+    pose: np.ndarray
+    symmetry: int
+    color: tuple[float, float, float]
+
+
+def slot_targets(
+    design: qshape.Design,
+    mesh_centre_xy: Sequence[float],
+    tolerances: qshape.Tolerances | None = None,
+    mm_per_m: float = PerceptionConfig.mm_per_m,
+) -> tuple[SlotTarget, ...]:
+    """Describe a design's slots and place them in the world.
+
+    Args:
+        design: The design (millimetres, mesh origin at its lower-left corner, y up).
+        mesh_centre_xy: World x, y of the mesh centre, shape (2,) [m]; the mesh axes are the
+            world's (as the cell lays it out).
+        tolerances: qshape tolerances (bundled when None).
+        mm_per_m: Design units per metre [mm/m].
+
+    Returns:
+        One `SlotTarget` per design slot, in the design's order.
+    """
+    c = np.asarray(mesh_centre_xy, dtype=float)
+    if c.shape != (2,) or not np.all(np.isfinite(c)):
+        raise PerceptionError(f"mesh_centre_xy must be 2 finite numbers [m], got {c!r}")
+    w, h = design.mesh_size
+    figs = [s.figure() for s in design.slots]
+    descs = qshape.describe_many(figs, tolerances)
+    out = []
+    for k, (slot, fig, d) in enumerate(zip(design.slots, figs, descs, strict=True)):
+        pose = np.array(
+            [
+                c[0] + (slot.x - w / 2) / mm_per_m,
+                c[1] + (slot.y - h / 2) / mm_per_m,
+                math.radians(slot.angle),
+            ]
+        )
+        out.append(SlotTarget(k, slot.name, fig, d, pose, int(slot.symmetry), tuple(slot.color)))
+    return tuple(out)
+
+
+__all__ = [
+    "CameraLike",
+    "PartialRegion",
+    "PerceivedTile",
+    "Perception",
+    "SlotTarget",
+    "balance_colors",
+    "cell_extract_params",
+    "color_gain",
+    "figure_to_world",
+    "grasp_point",
+    "perceive_tiles",
+    "project",
+    "slot_targets",
+    "unproject",
+]

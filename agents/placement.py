@@ -1,0 +1,245 @@
+"""Assignments to pick-and-place commands: where to pick, where to place, and the yaws.
+
+Conventions. Tile figures come from `agents.perception` in world millimetres (x, y of the world,
+y up) and slot figures from the design in mesh millimetres with the mesh's axes along the
+world's, so `qshape.assign`'s rotation (counter-clockwise in the y-up frame, turning the tile
+about its centroid onto the slot) is the world yaw the tile must turn by, seen from above.
+(Had we matched the pixel figures, the same holds: extract's figures are ``y_down`` and qshape
+works in ``(u, -v)``, which for the cell's cameras is the world's (x, y) up to a translation and
+scale; `tests/test_placement.py` checks the sign on a real render.)
+
+A command picks with pad yaw ``yaw_pick`` and places with pad yaw ``yaw_place``; the tile turns
+by ``yaw_place - yaw_pick``. We report ``yaw_pick`` as the tile's estimated yaw in the slot
+shape's frame (slot yaw minus rotation, so it is comparable with a ground-truth tile yaw modulo
+symmetry) and ``yaw_place`` as the slot's yaw. ``place_yaws`` lists every equivalent place yaw
+(the tile's symmetries) so a planner can choose the cheapest wrist motion.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+import qshape
+from agents.config import PlacementConfig
+from agents.perception import PerceivedTile, SlotTarget
+from qshape.assign import feasible_pairs
+
+
+def wrap(angle: float) -> float:
+    """Angle wrapped to (-pi, pi] [rad]."""
+    w = math.remainder(angle, 2.0 * math.pi)
+    return math.pi if w == -math.pi else w
+
+
+@dataclass(frozen=True)
+class PickPlace:
+    """One tile to move into one slot.
+
+    Attributes:
+        tile: Index of the perceived tile.
+        slot: Index of the design slot.
+        slot_name: Design name of the slot.
+        pick: (x, y, yaw_pick) [m, m, rad]: tile centroid and its estimated yaw.
+        place: (x, y, yaw_place) [m, m, rad]: slot centroid and the slot's yaw.
+        grasp_pick: Where the pad seals at the pick, (x, y) [m] (the centroid unless the
+            centroid has too little material around it, e.g. a ring).
+        grasp_place: Where that pad point ends at the place, (x, y) [m].
+        rotation: Yaw the tile turns by, ``yaw_place - yaw_pick`` wrapped [rad].
+        place_yaws: Every equivalent ``yaw_place`` [rad] (symmetries), the chosen one first.
+        symmetry: Rotational symmetry order of the slot shape (1: none, 0: continuous).
+        score: qshape alignment residual of the pair (dimensionless, lower is better).
+    """
+
+    tile: int
+    slot: int
+    slot_name: str
+    pick: tuple[float, float, float]
+    place: tuple[float, float, float]
+    grasp_pick: tuple[float, float]
+    grasp_place: tuple[float, float]
+    rotation: float
+    place_yaws: tuple[float, ...]
+    symmetry: int
+    score: float
+
+
+@dataclass(frozen=True)
+class Unplaced:
+    """A perceived tile that will not be placed, and why.
+
+    Attributes:
+        tile: Index of the perceived tile.
+        reason: One of `REASONS`' keys.
+        detail: Human-readable explanation.
+    """
+
+    tile: int
+    reason: str
+    detail: str
+
+
+REASONS = {
+    "shape_absent": "no design slot has this shape",
+    "color_absent": "slots of this shape exist, but none of this colour",
+    "slots_taken": "every matching slot is taken by another tile",
+}
+"""Why a tile is not placed."""
+
+
+@dataclass(frozen=True)
+class PlacementPlan:
+    """The commands for one picture.
+
+    Attributes:
+        commands: Pick-and-place commands, in the assignment's tile order.
+        unplaced: Tiles left out with their reason.
+        open_slots: Slot indices no tile was assigned to.
+        method: "optimal" or "greedy".
+        use_color: Colour was matched.
+    """
+
+    commands: tuple[PickPlace, ...]
+    unplaced: tuple[Unplaced, ...]
+    open_slots: tuple[int, ...]
+    method: str
+    use_color: bool
+
+
+def _rot(theta: float) -> np.ndarray:
+    c, s = math.cos(theta), math.sin(theta)
+    return np.array([[c, -s], [s, c]])
+
+
+def equivalent_yaws(slot_yaw: float, symmetry: int, continuous_steps: int) -> tuple[float, ...]:
+    """Every place yaw equivalent under the slot shape's symmetry, ``slot_yaw`` first [rad].
+
+    Args:
+        slot_yaw: The slot's yaw [rad] (the chosen place yaw).
+        symmetry: Symmetry order of the slot shape from the design (1: none, 0: continuous).
+        continuous_steps: Yaws listed for a continuous shape.
+    """
+    order = continuous_steps if symmetry == 0 else max(symmetry, 1)
+    return tuple(wrap(slot_yaw + 2 * math.pi * k / order) for k in range(order))
+
+
+def outline_residual(tile: qshape.Figure, slot: qshape.Figure, rotation: float) -> float:
+    """Mean distance from the rotated tile outline to the slot outline (both centred) [unit].
+
+    Args:
+        tile: Tile figure (y-up units, e.g. world mm).
+        slot: Slot figure in the same units.
+        rotation: Rotation of the tile about its centroid [rad], CCW.
+    """
+    a = (np.asarray(tile.outer.dense()) - tile.centroid) @ _rot(rotation).T
+    b = np.asarray(slot.outer.dense()) - slot.centroid
+    return float(np.mean(cKDTree(b).query(a)[0]))
+
+
+def best_rotation(tile: qshape.Figure, slot: qshape.Figure, candidates: Sequence[float]) -> float:
+    """The candidate rotation whose turned tile outline lies closest to the slot's [rad].
+
+    qshape's labels cannot tell apart rotations of a shape that is only nearly symmetric (an
+    isosceles triangle whose sides are all "equal" within the length band): its `Match`
+    lists them all as equivalent; the metric residual picks the true one.
+    """
+    return min(candidates, key=lambda r: outline_residual(tile, slot, r))
+
+
+def plan_placements(
+    tiles: Sequence[PerceivedTile],
+    slots: Sequence[SlotTarget],
+    cfg: PlacementConfig | None = None,
+    tolerances: qshape.Tolerances | None = None,
+) -> PlacementPlan:
+    """Assign perceived tiles to slots and turn each pair into a pick-and-place command.
+
+    Tiles matching no slot (distractors, shapes or colours absent from the design) and tiles
+    left over when every matching slot is taken are reported in ``unplaced`` and never placed.
+
+    Args:
+        tiles: Perceived tiles (world figures in mm).
+        slots: Open design slots (already filled ones left out by the caller).
+        cfg: Method and colour option (bundled defaults when None).
+        tolerances: qshape tolerances (bundled when None).
+
+    Returns:
+        The plan.
+
+    Raises:
+        qshape.MatchError: Unknown method.
+    """
+    cfg = cfg or PlacementConfig()
+    tdesc = [t.description for t in tiles]
+    sdesc = [s.description for s in slots]
+    result = qshape.assign(tdesc, sdesc, tolerances, cfg.method, cfg.use_color)
+    commands = []
+    for a in result:
+        t, s = tiles[a.tile], slots[a.slot]
+        m = qshape.match(s.description, t.description, tolerances, cfg.use_color)
+        cands = [a.rotation, *(m.rotations if m is not None else ())]
+        rot = wrap(best_rotation(t.figure, s.figure, cands))
+        yaw_place = float(s.pose[2])
+        yaw_pick = wrap(yaw_place - rot)
+        g_off = _rot(rot) @ (t.grasp - t.centre)
+        g_place = s.pose[:2] + g_off
+        commands.append(
+            PickPlace(
+                tile=t.index,
+                slot=s.index,
+                slot_name=s.name,
+                pick=(float(t.centre[0]), float(t.centre[1]), yaw_pick),
+                place=(float(s.pose[0]), float(s.pose[1]), yaw_place),
+                grasp_pick=(float(t.grasp[0]), float(t.grasp[1])),
+                grasp_place=(float(g_place[0]), float(g_place[1])),
+                rotation=rot,
+                place_yaws=equivalent_yaws(yaw_place, s.symmetry, cfg.continuous_yaw_steps),
+                symmetry=s.symmetry,
+                score=a.score,
+            )
+        )
+    assigned = {a.tile for a in result}
+    left = [k for k in range(len(tiles)) if k not in assigned]
+    unplaced = []
+    if left:
+        ld = [tdesc[k] for k in left]
+        shape_ok = set(feasible_pairs(ld, sdesc, _tol(tolerances), False)[0].tolist())
+        color_ok = (
+            set(feasible_pairs(ld, sdesc, _tol(tolerances), True)[0].tolist())
+            if cfg.use_color
+            else shape_ok
+        )
+        for j, k in enumerate(left):
+            if j not in shape_ok:
+                reason = "shape_absent"
+            elif j not in color_ok:
+                reason = "color_absent"
+            else:
+                reason = "slots_taken"
+            unplaced.append(Unplaced(tiles[k].index, reason, REASONS[reason]))
+    filled = {a.slot for a in result}
+    open_slots = tuple(s.index for k, s in enumerate(slots) if k not in filled)
+    return PlacementPlan(tuple(commands), tuple(unplaced), open_slots, cfg.method, cfg.use_color)
+
+
+def _tol(tolerances: qshape.Tolerances | None) -> qshape.Tolerances:
+    from qshape.description import default_tolerances  # noqa: PLC0415
+
+    return default_tolerances() if tolerances is None else tolerances
+
+
+__all__ = [
+    "REASONS",
+    "PickPlace",
+    "PlacementPlan",
+    "Unplaced",
+    "best_rotation",
+    "equivalent_yaws",
+    "outline_residual",
+    "plan_placements",
+    "wrap",
+]
