@@ -114,7 +114,7 @@ class EnvConfig:
     pick_margin: float = 0.0
     place_margin: float = 0.0
     rotation_bins: int = 4
-    kinematic_settle: float = 0.04
+    kinematic_settle: float = 0.02
     failed_action_time: float = 0.04
     reset_settle: float = 0.1
     layout_tries: int = 20

@@ -86,7 +86,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     Dict (see `envs.observations`): ``input_camera``, ``output_camera`` RGB uint8
     (H, W, 3) at ``image_size`` (``rgb``/``rgb+state``; depth (H, W, 1) float32 [m] with
     ``depth``), ``robot`` float32 (19,) (joint pos/vel, tool pose, vacuum, held), and with
-    ``state``/``rgb+state`` the privileged ``tiles`` (n, 7) and ``slots`` (k, 6). Camera
+    ``state``/``rgb+state`` the privileged ``tiles`` (n * 7,) and ``slots`` (k * 6,). Camera
     intrinsics/extrinsics: ``env.unwrapped.camera_model("input", height, width)``.
 
     ## Rewards

@@ -5,9 +5,10 @@ Keys (by ``obs_mode``):
 - ``input_depth``, ``output_depth`` (with ``depth=True``): float32 (H, W, 1) [m].
 - ``robot`` (always): float32 (19,) = joint positions (6) [rad], joint velocities (6) [rad/s],
   tool position (3) [m], tool yaw as (cos, sin) (2), vacuum on (1), tile held (1).
-- ``tiles`` and ``slots`` (``state``, ``rgb+state``; privileged): float32 (n, 7) per tile =
-  x, y, z [m], cos yaw, sin yaw, class index, present (on the belts and not lost); float32 (k, 6)
-  per slot = x, y [m], cos yaw, sin yaw, class index, filled correctly.
+- ``tiles`` and ``slots`` (``state``, ``rgb+state``; privileged), flattened 1-D (SB3's
+  MultiInputPolicy wants vectors): float32 (n * 7,), per tile
+  x, y, z [m], cos yaw, sin yaw, class index, present (on the belts and not lost); float32
+  (k * 6,), per slot x, y [m], cos yaw, sin yaw, class index, filled correctly.
 
 Every observation is a fresh array (no memory shared between steps).
 """
@@ -61,8 +62,8 @@ class Observer:
         d["robot"] = spaces.Box(-BIG, BIG, (ROBOT_DIM,), np.float32)
         if self.state:
             n, k = len(cell.tiles), len(cell.slots)
-            d["tiles"] = spaces.Box(-BIG, BIG, (n, TILE_DIM), np.float32)
-            d["slots"] = spaces.Box(-BIG, BIG, (k, SLOT_DIM), np.float32)
+            d["tiles"] = spaces.Box(-BIG, BIG, (n * TILE_DIM,), np.float32)
+            d["slots"] = spaces.Box(-BIG, BIG, (k * SLOT_DIM,), np.float32)
         self.space = spaces.Dict(d)
 
     def observe(self, rng: np.random.Generator, evaluation: dict[str, Any]) -> dict[str, Any]:
@@ -112,8 +113,8 @@ class Observer:
              np.asarray(evaluation["slot_filled"], float)]
         ).reshape(len(cell.slots), SLOT_DIM)
         return (
-            np.clip(tiles, -BIG, BIG).astype(np.float32).reshape(len(cell.tiles), TILE_DIM),
-            slots.astype(np.float32),
+            np.clip(tiles, -BIG, BIG).astype(np.float32).reshape(-1),
+            slots.astype(np.float32).reshape(-1),
         )
 
 

@@ -143,7 +143,7 @@ class MosaicTask:
         tolerance), ``dropped`` (tiles the pad lost in transit), ``lost`` (tiles lost off the
         input belt), ``distractors_placed``, ``slots`` (number of slots), ``slot_filled`` (bool
         list), ``position_error_mm`` and ``yaw_error_deg`` (mean and max over tiles on the mesh,
-        NaN when none), ``placeable`` (open slots a remaining real tile of the right class could
+        None when no tile is on the mesh), ``placeable`` (open slots a remaining real tile of the right class could
         still fill).
         """
         p = self.placement()
@@ -170,10 +170,10 @@ class MosaicTask:
             "slots": len(p.slot_filled),
             "slot_filled": p.slot_filled.tolist(),
             "placeable": placeable,
-            "position_error_mm": float(pe.mean()) if pe.size else math.nan,
-            "position_error_mm_max": float(pe.max()) if pe.size else math.nan,
-            "yaw_error_deg": float(ye.mean()) if ye.size else math.nan,
-            "yaw_error_deg_max": float(ye.max()) if ye.size else math.nan,
+            "position_error_mm": float(pe.mean()) if pe.size else None,
+            "position_error_mm_max": float(pe.max()) if pe.size else None,
+            "yaw_error_deg": float(ye.mean()) if ye.size else None,
+            "yaw_error_deg_max": float(ye.max()) if ye.size else None,
         }
 
     def wanted_tiles(self, evaluation: dict[str, Any]) -> np.ndarray:
