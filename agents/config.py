@@ -37,6 +37,10 @@ class PerceptionConfig:
             design's palette (white balance against known colours) before matching.
         color_balance_iterations: Nearest-palette / median-gain rounds of that estimate.
         max_color_gain: The gain per channel is clipped to [1 / max, max] (dimensionless).
+        circle_residual: A boundary of two arcs whose dense outline stays within this fraction
+            of its radius of a fitted circle is a circle: it is re-split into two equal
+            halves (the split points a traced outline gives are arbitrary, and unequal
+            halves label one arc acute and the other plane), dimensionless; 0 disables.
     """
 
     mm_per_m: float = 1000.0
@@ -47,6 +51,7 @@ class PerceptionConfig:
     color_balance: bool = True
     color_balance_iterations: int = 3
     max_color_gain: float = 2.0
+    circle_residual: float = 0.03
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""

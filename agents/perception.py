@@ -1,4 +1,4 @@
-"""Perception of the scripted cell: camera image -> tiles in the world; design -> slots in the world.
+"""Perception of the scripted cell: image -> tiles in the world; design -> slots in the world.
 
 Tiles: `qshape.extract_detailed` finds the tiles' relevant points in pixels (y down); every
 relevant point is cast as a ray through the calibrated camera and intersected with the plane of
@@ -141,11 +141,76 @@ class Perception:
     plane_z: float
 
 
+_RESAMPLE = 256
+"""Samples, evenly spaced by arc length, of a boundary tested for being a circle."""
+
+
+def _dense_world(camera: CameraLike, b: Boundary, z: float, cfg: PerceptionConfig) -> np.ndarray:
+    pts = np.asarray(b.dense())
+    closed = np.vstack([pts, pts[:1]])
+    seg = np.linalg.norm(np.diff(closed, axis=0), axis=1)
+    cum = np.concatenate([[0.0], np.cumsum(seg)])
+    t = np.linspace(0.0, cum[-1], _RESAMPLE, endpoint=False)
+    even = np.column_stack([np.interp(t, cum, closed[:, 0]), np.interp(t, cum, closed[:, 1])])
+    return unproject(camera, even, z)[:, :2] * cfg.mm_per_m
+
+
 def _to_world_boundary(
     camera: CameraLike, b: Boundary, z: float, scale: float
 ) -> tuple[np.ndarray, np.ndarray]:
     pts = unproject(camera, np.asarray(b.points), z)[:, :2] * scale
     return pts, np.asarray(b.curve_mask)
+
+
+_CIRCLE_NODES = 4
+"""A circle as qshape describes it: start, middle, end of two half-circle arcs."""
+
+
+def _as_circle(pts: np.ndarray, mask: np.ndarray, dense: np.ndarray, residual: float) -> bool:
+    if residual <= 0 or not mask.any():
+        return False
+    if len(pts) != _CIRCLE_NODES:
+        return True  # any boundary with a curve that fits a circle (checked by the caller)
+    return int(mask.sum()) == _CIRCLE_NODES // 2 and bool(mask[0] != mask[1] and mask[0] == mask[2])
+
+
+def even_circle(
+    pts: np.ndarray, mask: np.ndarray, dense: np.ndarray, residual: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Re-split a curved boundary that is a circle into two equal half-circle arcs.
+
+    Args:
+        pts: Relevant points, shape (n, 2).
+        mask: Curve mask, shape (4,).
+        dense: Dense boundary samples, shape (m, 2), same units.
+        residual: Largest RMS radial deviation, as a fraction of the radius.
+
+    Returns:
+        (points, mask), unchanged unless the boundary is a circle.
+    """
+    if not _as_circle(pts, mask, dense, residual):
+        return pts, mask
+    # Algebraic (Kasa) circle fit: x^2 + y^2 + D x + E y + F = 0.
+    a = np.column_stack([dense, np.ones(len(dense))])
+    b = -(dense**2).sum(axis=1)
+    (dd, ee, ff), *_ = np.linalg.lstsq(a, b, rcond=None)
+    c = -0.5 * np.array([dd, ee])
+    r2 = float(c @ c - ff)
+    if r2 <= 0:
+        return pts, mask
+    r = math.sqrt(r2)
+    dev = np.linalg.norm(dense - c, axis=1) - r
+    if math.sqrt(float(np.mean(dev**2))) > residual * r:
+        return pts, mask
+    start = int(np.argmin(mask))  # first arc-end point
+    a0 = math.atan2(pts[start, 1] - c[1], pts[start, 0] - c[0])
+    # Keep the walking direction of the given points.
+    nxt = (start + 1) % len(pts)
+    a1 = math.atan2(pts[nxt, 1] - c[1], pts[nxt, 0] - c[0])
+    step = math.copysign(math.pi / 2, math.remainder(a1 - a0, 2 * math.pi))
+    ang = a0 + step * np.arange(_CIRCLE_NODES)
+    new = c + r * np.column_stack([np.cos(ang), np.sin(ang)])
+    return new, np.array([False, True, False, True])
 
 
 def figure_to_world(
@@ -162,9 +227,13 @@ def figure_to_world(
     """
     cfg = cfg or PerceptionConfig()
     outer, mask = _to_world_boundary(camera, fig.outer, z, cfg.mm_per_m)
+    outer, mask = even_circle(
+        outer, mask, _dense_world(camera, fig.outer, z, cfg), cfg.circle_residual
+    )
     holes = []
     for h in fig.holes:
         hp, hm = _to_world_boundary(camera, h, z, cfg.mm_per_m)
+        hp, hm = even_circle(hp, hm, _dense_world(camera, h, z, cfg), cfg.circle_residual)
         holes.append(Boundary.make(hp, hm, y_down=False, what="hole"))
     return Figure.from_polygon(outer, holes, fig.color, curve_mask=mask, y_down=False)
 
@@ -195,6 +264,7 @@ def perceive_tiles(
     image: np.ndarray,
     camera: CameraLike,
     belt_top_z: float,
+    *,
     cfg: PerceptionConfig | None = None,
     extract_params: qshape.ExtractParams | None = None,
     tolerances: qshape.Tolerances | None = None,
@@ -388,7 +458,8 @@ def slot_targets(
                 math.radians(slot.angle),
             ]
         )
-        out.append(SlotTarget(k, slot.name, fig, d, pose, int(slot.symmetry), tuple(slot.color)))
+        rgb = (float(slot.color[0]), float(slot.color[1]), float(slot.color[2]))
+        out.append(SlotTarget(k, slot.name, fig, d, pose, int(slot.symmetry), rgb))
     return tuple(out)
 
 

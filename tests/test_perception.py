@@ -1,0 +1,86 @@
+"""Perception on real renders of the cell (default design): recognition and world positions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from agents.cell_adapter import build_design_cell, nearest_tile
+from agents.config import PerceptionConfig
+from agents.errors import PerceptionError
+from agents.perception import (
+    balance_colors,
+    color_gain,
+    perceive_tiles,
+    project,
+    slot_targets,
+    unproject,
+)
+from qshape.design import Design
+
+POS_TOL = 0.002  # m
+
+
+@pytest.fixture(scope="module")
+def scene():
+    design = Design.load("paper_mixed")
+    cell, _ = build_design_cell(design, seed=0)
+    cell.step(100)
+    img = cell.render("input_camera")
+    cam = cell.camera_model("input_camera")
+    slots = slot_targets(design, cell.geometry.output_centre[:2])
+    per = perceive_tiles(img, cam, cell.geometry.belt_top)
+    per, gain = balance_colors(per, np.array([s.color for s in slots]))
+    yield cell, design, cam, slots, per, gain
+    cell.close()
+
+
+def test_every_tile_recognised_within_2mm(scene):
+    cell, design, _, _, per, _ = scene
+    assert len(per.tiles) == len(design.slots) == int(cell.on_stage.sum())
+    assert not per.partial and not per.unrecognised
+    seen = set()
+    for t in per.tiles:
+        i, d = nearest_tile(cell, t.centre)
+        assert d < POS_TOL, (i, d)
+        assert np.linalg.norm(cell.tile_poses().pos[i, :2] - t.centre_ray) < POS_TOL
+        seen.add(i)
+    assert len(seen) == len(per.tiles)
+
+
+def test_grasp_point_inside_material(scene):
+    _, _, _, _, per, _ = scene
+    ring = [t for t in per.tiles if t.figure.holes and abs(t.figure.area) > 0]
+    assert ring
+    for t in per.tiles:
+        assert np.linalg.norm(t.grasp - t.centre) < 0.03
+
+
+def test_slots_match_cell_slot_poses(scene):
+    cell, _, _, slots, _, _ = scene
+    want = cell.slot_poses_world()
+    got = np.array([s.pose for s in slots])
+    np.testing.assert_allclose(got, want, atol=1e-9)
+
+
+def test_unproject_project_round_trip(scene):
+    _, _, cam, _, _, _ = scene
+    uv = np.array([[0.0, 0.0], [655.0, 491.0], [300.5, 200.25]])
+    pts = unproject(cam, uv, 0.205)
+    np.testing.assert_allclose(project(cam, pts), uv, atol=1e-9)
+    np.testing.assert_allclose(pts, cam.unproject_to_plane(uv, 0.205), atol=1e-12)
+    with pytest.raises(PerceptionError):
+        unproject(cam, uv, 5.0)  # plane above the camera
+
+
+def test_color_gain_recovers_a_known_gain():
+    rng = np.random.default_rng(0)
+    palette = rng.uniform(0.1, 0.7, (6, 3))
+    true = np.array([1.2, 1.1, 0.9])
+    measured = np.clip(palette[rng.integers(0, 6, 20)] / true, 0, 1)
+    np.testing.assert_allclose(color_gain(measured, palette, PerceptionConfig()), true, rtol=1e-6)
+
+
+def test_color_balance_gain_is_moderate(scene):
+    *_, gain = scene
+    assert np.all((gain > 0.7) & (gain < 1.3))
