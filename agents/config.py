@@ -107,8 +107,8 @@ class CalibrationConfig:
         fix_k3: Do not estimate the third radial coefficient.
     """
 
-    squares: tuple[int, int] = (9, 7)
-    square_size: float = 0.018
+    squares: tuple[int, int] = (10, 7)
+    square_size: float = 0.016
     border: float = 0.012
     plate_thickness: float = 0.003
     square_height: float = 0.0002

@@ -1,0 +1,362 @@
+"""Camera calibration as a real cell does it: checkerboard images, OpenCV, reprojection error.
+
+A checkerboard target (a white plate with black square tiles, one mocap body) is added to the
+cell's own scene (`envs.scene.build_spec`, so the camera's configuration and pose are exactly the
+cell's) and rendered by that camera at several tilted, lifted and shifted poses. OpenCV finds the
+inner corners (`cv2.findChessboardCorners` + `cv2.cornerSubPix`) and estimates the intrinsics
+(`cv2.calibrateCamera`: one focal length, principal point, radial distortion k1, k2). A last
+view of the board lying flat on the belt at its known fixture position gives the extrinsics
+(`cv2.solvePnP` with the board's world corner coordinates): the pose of the belt plane.
+
+The board has an even by odd count of squares so its colour pattern is not symmetric under a
+half turn: the corner order is made unique by the colour of the square beyond the first corner
+and by handedness (see `_orient`).
+
+The estimated `envs.cameras.CameraModel` is what perception uses; the simulator's true model is
+read only to report the differences (focal %, principal point px, position mm, angle deg).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import mujoco
+import numpy as np
+
+from agents.config import CalibrationConfig
+from agents.errors import CalibrationError
+from envs.cameras import CameraModel, CameraRig, camera_model
+from envs.cell_config import CellConfig
+from envs.scene import build_spec, cell_geometry
+
+BOARD = "calibration_board"
+"""Name of the target's mocap body."""
+
+_WHITE = (0.92, 0.92, 0.92, 1.0)
+_BLACK = (0.04, 0.04, 0.04, 1.0)
+_DARK_LEVEL = 128
+"""Grey level (0-255) below which a sampled square counts as black."""
+
+
+@dataclass(frozen=True, eq=False)
+class CalibrationResult:
+    """An estimated camera and how it compares with the simulator's.
+
+    Attributes:
+        camera: The estimated model (K from calibrateCamera, world_to_camera from solvePnP).
+        true_camera: The simulator's model (for the comparison only).
+        distortion: OpenCV distortion coefficients (k1, k2, p1, p2, k3).
+        reprojection_px: RMS reprojection error of calibrateCamera over all views [px].
+        pnp_reprojection_px: RMS reprojection error of the flat (extrinsic) view [px].
+        views_used: Views in which the board was found.
+        views_total: Views rendered.
+        focal_error_pct: (f_est - f_true) / f_true [%].
+        principal_point_error_px: Distance between estimated and true principal points [px].
+        position_error_mm: Distance between estimated and true camera centres [mm].
+        angle_error_deg: Angle of the rotation between estimated and true orientations [deg].
+    """
+
+    camera: CameraModel
+    true_camera: CameraModel
+    distortion: np.ndarray
+    reprojection_px: float
+    pnp_reprojection_px: float
+    views_used: int
+    views_total: int
+    focal_error_pct: float
+    principal_point_error_px: float
+    position_error_mm: float
+    angle_error_deg: float
+
+    def summary(self) -> dict[str, float | int]:
+        """The scalar figures as a dict (for reports)."""
+        return {
+            "reprojection_px": self.reprojection_px,
+            "pnp_reprojection_px": self.pnp_reprojection_px,
+            "views_used": self.views_used,
+            "views_total": self.views_total,
+            "focal_error_pct": self.focal_error_pct,
+            "principal_point_error_px": self.principal_point_error_px,
+            "position_error_mm": self.position_error_mm,
+            "angle_error_deg": self.angle_error_deg,
+        }
+
+
+def board_corners(cfg: CalibrationConfig) -> np.ndarray:
+    """Inner corners in the board frame (origin at the board centre, on its top), (n, 3) [m].
+
+    Ordered as OpenCV reports them: along the board's x first, then y.
+    """
+    nx, ny = cfg.squares
+    s = cfg.square_size
+    i, j = np.meshgrid(np.arange(1, nx), np.arange(1, ny))
+    x = i.ravel() * s - nx * s / 2
+    y = j.ravel() * s - ny * s / 2
+    return np.column_stack([x, y, np.zeros_like(x)])
+
+
+def _board_half_height(cfg: CalibrationConfig) -> float:
+    return cfg.plate_thickness / 2
+
+
+def add_board(spec: mujoco.MjSpec, cfg: CalibrationConfig) -> None:
+    """Add the checkerboard (white plate + black squares) as a mocap body to a scene spec.
+
+    The body frame is at the centre of the plate's top face; black squares sit on it and the
+    square at the corner -x, -y is black.
+    """
+    nx, ny = cfg.squares
+    s = cfg.square_size
+    body = spec.worldbody.add_body(name=BOARD, mocap=True)
+    half = [nx * s / 2 + cfg.border, ny * s / 2 + cfg.border, cfg.plate_thickness / 2]
+    plate = body.add_geom(
+        type=mujoco.mjtGeom.mjGEOM_BOX, size=half, pos=[0, 0, -cfg.plate_thickness / 2]
+    )
+    plate.rgba = _WHITE
+    plate.contype = plate.conaffinity = 0
+    h = cfg.square_height / 2
+    for ix in range(nx):
+        for iy in range(ny):
+            if (ix + iy) % 2:
+                continue
+            g = body.add_geom(
+                type=mujoco.mjtGeom.mjGEOM_BOX,
+                size=[s / 2, s / 2, h],
+                pos=[(ix + 0.5) * s - nx * s / 2, (iy + 0.5) * s - ny * s / 2, h],
+            )
+            g.rgba = _BLACK
+            g.contype = g.conaffinity = 0
+
+
+def _quat(rx: float, ry: float, rz: float) -> np.ndarray:
+    """Quaternion (w, x, y, z) of rotations about x, then y, then z (extrinsic) [rad]."""
+    q = np.zeros(4)
+    mat = _rotmat(rx, ry, rz)
+    mujoco.mju_mat2Quat(q, mat.ravel())
+    return q
+
+
+def _rotmat(rx: float, ry: float, rz: float) -> np.ndarray:
+    cx, sx, cy, sy, cz, sz = (
+        math.cos(rx), math.sin(rx), math.cos(ry), math.sin(ry), math.cos(rz), math.sin(rz)
+    )  # fmt: skip
+    rot_x = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    rot_y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rot_z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rot_z @ rot_y @ rot_x
+
+
+@dataclass(frozen=True, eq=False)
+class CalibrationViews:
+    """Rendered calibration images.
+
+    Attributes:
+        intrinsic: RGB images of the tilted board, each (h, w, 3) uint8.
+        flat: RGB image of the board lying flat at its fixture pose.
+        flat_pose: World position of the flat board's frame (3,) [m] (its yaw is 0).
+        true_camera: The simulator's camera model (comparison only).
+    """
+
+    intrinsic: tuple[np.ndarray, ...]
+    flat: np.ndarray
+    flat_pose: np.ndarray
+    true_camera: CameraModel
+
+
+def render_views(
+    cell_cfg: CellConfig, camera: str, cfg: CalibrationConfig | None = None
+) -> CalibrationViews:
+    """Render the board at the calibration poses with one of the cell's cameras.
+
+    Args:
+        cell_cfg: The cell configuration (the scene is the cell's, without tiles).
+        camera: "input_camera" or "output_camera".
+        cfg: Board and poses.
+
+    Raises:
+        CalibrationError: Unknown camera.
+    """
+    cfg = cfg or CalibrationConfig()
+    cams = {"input_camera": cell_cfg.input_camera, "output_camera": cell_cfg.output_camera}
+    if camera not in cams:
+        raise CalibrationError(f"unknown camera {camera!r}; allowed: {sorted(cams)}")
+    cam_cfg = cams[camera]
+    geo = cell_geometry(cell_cfg)
+    if camera == "input_camera":
+        centre = np.array([geo.input_centre[0], geo.input_centre[1], geo.belt_top])
+    else:
+        centre = np.array([geo.output_centre[0], geo.output_centre[1], geo.mesh_top])
+    spec = build_spec(cell_cfg)
+    add_board(spec, cfg)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, BOARD)
+    mocap = int(model.body_mocapid[body])
+    cam_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera)
+    rig = CameraRig(model, cell_cfg.render)
+    try:
+
+        def shot(pos: np.ndarray, quat: np.ndarray) -> np.ndarray:
+            data.mocap_pos[mocap] = pos
+            data.mocap_quat[mocap] = quat
+            mujoco.mj_forward(model, data)
+            return rig.render(data, cam_id, cam_cfg.height, cam_cfg.width).copy()
+
+        views = []
+        top = cfg.plate_thickness + cfg.square_height
+        for k, tilt in enumerate(cfg.tilts_deg):
+            about_x = k % 2 == 0
+            t = math.radians(tilt)
+            yaw = math.radians(10.0 * (k - len(cfg.tilts_deg) / 2))  # varied in-plane turn
+            quat = _quat(t if about_x else 0.0, 0.0 if about_x else t, yaw)
+            dx, dy = cfg.shifts[k % len(cfg.shifts)]
+            pos = centre + [dx, dy, cfg.lift[k % len(cfg.lift)] + top]
+            views.append(shot(pos, quat))
+        flat_pose = centre + [0.0, 0.0, top]
+        flat = shot(flat_pose, np.array([1.0, 0.0, 0.0, 0.0]))
+        mujoco.mj_forward(model, data)
+        true_cam = camera_model(model, data, cam_id, cam_cfg.width, cam_cfg.height)
+    finally:
+        rig.close()
+    return CalibrationViews(tuple(views), flat, flat_pose, true_cam)
+
+
+def find_corners(image: np.ndarray, cfg: CalibrationConfig) -> np.ndarray | None:
+    """Inner corners in a view, shape (n, 2) [px], in `board_corners` order; None if not found."""
+    grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
+    nx, ny = cfg.squares
+    pattern = (nx - 1, ny - 1)
+    found, corners = cv2.findChessboardCorners(
+        grey, pattern, flags=cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
+    )
+    if not found:
+        return None
+    w = cfg.subpix_window_px
+    crit = (
+        cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER,
+        cfg.subpix_iterations,
+        cfg.subpix_epsilon_px,
+    )
+    corners = cv2.cornerSubPix(grey, corners, (w, w), (-1, -1), crit).reshape(-1, 2)
+    grid = corners.reshape(ny - 1, nx - 1, 2)
+    if grid.shape != (ny - 1, nx - 1, 2):
+        return None
+    return _orient(grid, grey)
+
+
+def _orient(grid: np.ndarray, grey: np.ndarray) -> np.ndarray | None:
+    """Put detected corners, shape (rows, cols, 2), into `board_corners` order, (n, 2).
+
+    The colour of the square beyond the first corner fixes the x direction (the board's
+    corner squares differ in colour along x, not along y); the y direction follows from
+    handedness: the camera sees the board's top face, and image axes (u right, v down) are a
+    mirror of a view from above, so x cross y must be negative in pixel coordinates.
+    """
+    probe = grid[0, 0] - 0.5 * (grid[0, 1] - grid[0, 0]) - 0.5 * (grid[1, 0] - grid[0, 0])
+    u, v = int(round(probe[0])), int(round(probe[1]))
+    if not (0 <= v < grey.shape[0] and 0 <= u < grey.shape[1]):
+        return None
+    if grey[v, u] >= _DARK_LEVEL:
+        grid = grid[:, ::-1]
+    dx = grid[0, 1] - grid[0, 0]
+    dy = grid[1, 0] - grid[0, 0]
+    if dx[0] * dy[1] - dx[1] * dy[0] > 0:
+        grid = grid[::-1]
+    return np.ascontiguousarray(grid).reshape(-1, 2)
+
+
+def _rotation_angle_deg(r: np.ndarray) -> float:
+    c = (np.trace(r) - 1.0) / 2.0
+    return math.degrees(math.acos(float(np.clip(c, -1.0, 1.0))))
+
+
+def calibrate(views: CalibrationViews, cfg: CalibrationConfig | None = None) -> CalibrationResult:
+    """Estimate the camera from rendered views and compare it with the true one.
+
+    Raises:
+        CalibrationError: Too few views with the board found, the flat view not found, or a
+            reprojection error above ``max_reprojection_px``.
+    """
+    cfg = cfg or CalibrationConfig()
+    true = views.true_camera
+    obj = board_corners(cfg).astype(np.float32)
+    img_pts, obj_pts = [], []
+    for image in (*views.intrinsic, views.flat):
+        c = find_corners(image, cfg)
+        if c is not None:
+            img_pts.append(c.astype(np.float32))
+            obj_pts.append(obj)
+    if len(img_pts) < cfg.min_views:
+        raise CalibrationError(
+            f"board found in {len(img_pts)} of {len(views.intrinsic) + 1} views; need at least "
+            f"{cfg.min_views} (check the board size against the camera's view)"
+        )
+    flags = 0
+    if cfg.fix_aspect_ratio:
+        flags |= cv2.CALIB_FIX_ASPECT_RATIO
+    if cfg.zero_tangential:
+        flags |= cv2.CALIB_ZERO_TANGENT_DIST
+    if cfg.fix_k3:
+        flags |= cv2.CALIB_FIX_K3
+    size = (true.width, true.height)
+    rms, k, dist, _, _ = cv2.calibrateCamera(obj_pts, img_pts, size, np.eye(3), None, flags=flags)
+    if not rms <= cfg.max_reprojection_px:
+        raise CalibrationError(
+            f"reprojection error {rms:.3f} px above the limit {cfg.max_reprojection_px} px"
+        )
+    flat = find_corners(views.flat, cfg)
+    if flat is None:
+        raise CalibrationError("the flat (extrinsic) view of the board was not found")
+    world = board_corners(cfg) + views.flat_pose
+    ok, rvec, tvec = cv2.solvePnP(world, flat.astype(np.float64), k, dist)
+    if not ok:
+        raise CalibrationError("solvePnP failed on the flat view")
+    proj, _ = cv2.projectPoints(world, rvec, tvec, k, dist)
+    pnp_rms = float(np.sqrt(np.mean(np.sum((proj.reshape(-1, 2) - flat) ** 2, axis=1))))
+    r, _ = cv2.Rodrigues(rvec)
+    t = np.eye(4)
+    t[:3, :3] = r
+    t[:3, 3] = tvec.ravel()
+    est = CameraModel(true.name, true.width, true.height, np.asarray(k, dtype=float), t)
+    centre_est = -r.T @ tvec.ravel()
+    r_true = true.world_to_camera[:3, :3]
+    centre_true = -r_true.T @ true.world_to_camera[:3, 3]
+    return CalibrationResult(
+        camera=est,
+        true_camera=true,
+        distortion=np.asarray(dist, dtype=float).ravel(),
+        reprojection_px=float(rms),
+        pnp_reprojection_px=pnp_rms,
+        views_used=len(img_pts),
+        views_total=len(views.intrinsic) + 1,
+        focal_error_pct=100.0 * (float(k[1, 1]) - float(true.K[1, 1])) / float(true.K[1, 1]),
+        principal_point_error_px=float(np.linalg.norm(k[:2, 2] - true.K[:2, 2])),
+        position_error_mm=1e3 * float(np.linalg.norm(centre_est - centre_true)),
+        angle_error_deg=_rotation_angle_deg(r @ r_true.T),
+    )
+
+
+def calibrate_cell_camera(
+    cell_cfg: CellConfig, camera: str, cfg: CalibrationConfig | None = None
+) -> CalibrationResult:
+    """Render the calibration views with a cell camera and calibrate it.
+
+    Raises:
+        CalibrationError: See `calibrate` and `render_views`.
+    """
+    return calibrate(render_views(cell_cfg, camera, cfg), cfg)
+
+
+__all__ = [
+    "BOARD",
+    "CalibrationResult",
+    "CalibrationViews",
+    "add_board",
+    "board_corners",
+    "calibrate",
+    "calibrate_cell_camera",
+    "find_corners",
+    "render_views",
+]
