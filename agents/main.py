@@ -113,7 +113,8 @@ class VideoSink:
             )
             if proc.returncode == 0:
                 return path
-        writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), self.fps, (w, h))
+        fourcc = cv2.VideoWriter_fourcc(*"mp4v")  # type: ignore[attr-defined]
+        writer = cv2.VideoWriter(str(path), fourcc, self.fps, (w, h))
         for f in self.frames:
             writer.write(cv2.cvtColor(f, cv2.COLOR_RGB2BGR))
         writer.release()
@@ -449,8 +450,9 @@ def report_text(r: dict[str, Any]) -> str:
         if c:
             lines.append(
                 f"calibration {name}: reprojection {c['reprojection_px']:.3f} px, focal "
-                f"{c['focal_error_pct']:+.3f} %, principal point {c['principal_point_error_px']:.2f}"
-                f" px, position {c['position_error_mm']:.2f} mm, angle {c['angle_error_deg']:.3f} deg"
+                f"{c['focal_error_pct']:+.3f} %, principal point "
+                f"{c['principal_point_error_px']:.2f} px, position "
+                f"{c['position_error_mm']:.2f} mm, angle {c['angle_error_deg']:.3f} deg"
             )
     for u in r["unplaced"]:
         lines.append(f"not placed: tile {u['tile']}: {u['detail']}")

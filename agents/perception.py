@@ -43,8 +43,15 @@ class CameraLike(Protocol):
             camera frame: x right, y down, z forward).
     """
 
-    K: np.ndarray
-    world_to_camera: np.ndarray
+    @property
+    def K(self) -> np.ndarray:  # noqa: N802 (the usual name of the intrinsic matrix)
+        """Intrinsic matrix, shape (3, 3) [px]."""
+        ...
+
+    @property
+    def world_to_camera(self) -> np.ndarray:
+        """World-to-camera transform, shape (4, 4)."""
+        ...
 
 
 def unproject(camera: CameraLike, uv: np.ndarray, z: float) -> np.ndarray:
@@ -427,7 +434,7 @@ class SlotTarget:
 
 def slot_targets(
     design: qshape.Design,
-    mesh_centre_xy: Sequence[float],
+    mesh_centre_xy: Sequence[float] | np.ndarray,
     tolerances: qshape.Tolerances | None = None,
     mm_per_m: float = PerceptionConfig.mm_per_m,
 ) -> tuple[SlotTarget, ...]:
