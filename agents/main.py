@@ -10,8 +10,12 @@ images first (``agents.calibration``) and the estimated models are what percepti
 
 Decisions use only images, the calibrated cameras and cell layout facts (belt top, mesh centre);
 the cell's ground truth is read only to score the run. Writes, under ``out/``: ``report.json``,
-``report.txt``, ``input_camera_annotated.png``, ``output_camera_annotated.png`` and
-``cell.mp4`` (when the cycles run).
+``report.txt``, ``input_camera_annotated.png`` (recognised relevant points, centres and the
+slot each tile goes to), ``output_camera_annotated.png`` (the empty mesh: relevant points the
+output camera recognises, design slot centres projected through the calibrated camera),
+``output_camera_final.png`` (the assembled mosaic) and ``cell.mp4`` (when the cycles run).
+``tiles_per_min`` counts correctly placed tiles per simulated minute from the first picture to
+the last release.
 
 This is the interim driver over `envs.cell.Cell`; the final scripted agent drives the Gymnasium
 env's ``pick_place`` action with the same perception and placement.
@@ -140,6 +144,7 @@ class Executor:
         self.start = JointState.at_rest(cell.qpos)
         self._at_rest = JointState.at_rest
         self.at_contact = False
+        self.last_release = cell.time
 
     def run(self, cmd: PickPlace, perceived: Perception, last: bool) -> bool:
         """Plan and execute one command; returns True when the pad sealed on a tile.
@@ -179,6 +184,7 @@ class Executor:
             if k == k_off:
                 grasped = cell.held_tile >= 0
                 cell.vacuum(False)
+                self.last_release = cell.time
             cell.set_servo(cmds.q[k], cmds.qd[k])
             cell.step(1)
             if self.video is not None:
@@ -247,7 +253,10 @@ def _pt(p: np.ndarray) -> tuple[int, int]:
 
 
 def _draw_figure(out: np.ndarray, pts: np.ndarray, mask: np.ndarray, r: int) -> None:
-    cv2.polylines(out, [np.round(pts).astype(np.int32)], True, _OUTLINE, 1, cv2.LINE_AA)
+    from qshape.figure import densify  # noqa: PLC0415
+
+    dense = densify(np.asarray(pts, dtype=float), np.asarray(mask, dtype=bool))
+    cv2.polylines(out, [np.round(dense).astype(np.int32)], True, _OUTLINE, 1, cv2.LINE_AA)
     for p, is_curve in zip(pts, mask, strict=True):
         cv2.circle(out, _pt(p), r, _CURVE if is_curve else _CORNER, -1, cv2.LINE_AA)
 
@@ -314,6 +323,7 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
         else:
             cell.step(max(1, int(round(rc.settle_s / cell.model.opt.timestep))))
         stats = RunStats()
+        output_before = cell.render("output_camera")
         open_slots = list(slots)
         t_sim0 = cell.time
         first: tuple[np.ndarray, Perception, PlacementPlan] | None = None
@@ -348,7 +358,8 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
             if not filled:
                 break
             open_slots = [s for s in open_slots if s.index not in filled]
-        sim_s = cell.time - t_sim0
+        sim_total = cell.time - t_sim0
+        sim_s = executor.last_release - t_sim0 if executor is not None else 0.0
         if executor is not None:
             executor.settle(rc.settle_s)
         scored = score(cell, design, rc)
@@ -361,10 +372,14 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
         cv2.imwrite(
             str(out_dir / "output_camera_annotated.png"),
             draw_slots(
-                cell.render("output_camera"), cams["output_camera"], tuple(slots),
-                cell.geometry.mesh_top, rc,
+                output_before, cams["output_camera"], tuple(slots), cell.geometry.mesh_top, rc
             ),
-        )  # fmt: skip
+        )
+        cell.set_qpos(np.asarray(cell.cfg.robot.home))  # out of the view, for the picture only
+        cv2.imwrite(
+            str(out_dir / "output_camera_final.png"),
+            cv2.cvtColor(cell.render("output_camera"), cv2.COLOR_RGB2BGR),
+        )
         video_path = video.write(out_dir / "cell.mp4") if video is not None else None
         n = len(design.slots)
         rec_ok = sum(1 for r in stats.recognition if r["class_ok"])
@@ -378,6 +393,7 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
                 "success": scored["correct"] == n,
                 "tiles_per_min": 60.0 * scored["correct"] / sim_s if sim_s > 0 else 0.0,
                 "sim_s": sim_s,
+                "sim_s_with_final_retreat": sim_total,
                 "wall_s": time.perf_counter() - t_wall,
                 "executed": executor is not None,
                 "pictures": stats.pictures,
