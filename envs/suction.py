@@ -3,8 +3,13 @@
 Why a weld (see NOTES): MuJoCo's adhesion actuator lets a held tile creep 9-13 mm across the pad
 during fast moves. Here, when the vacuum is on and the pad face is close to and flat on a tile
 (centre of the pad over tile material, not a hole), the weld is pointed at that tile with the
-current relative pose and activated. Each update measures the force the weld exerts on the tile
-(from the constraint forces): if the pull along the pad axis exceeds the vacuum force
+current relative pose and activated. Each update measures the net force the tool exerts on the
+tile: the weld's constraint force plus the contact forces of the pad body's geoms on the held tile.
+(The tile is sealed where the pad pressed it, slightly inside the soft pad contact, so the pad
+contact keeps pushing the tile out while the weld holds it in: an internal force of up to ~18 N
+that the weld alone would report as pull. A real cup's vacuum force is balanced by the rim's
+reaction in the same way, and the tile separates when the net pull exceeds the vacuum force.)
+If the pull along the pad axis exceeds the vacuum force
 (pressure x pad area) or the shear exceeds friction x (vacuum force - pull), the tile is dropped
 and the drop is reported. After a drop the pad does not re-seal until the vacuum is switched
 off and on again (the controller sees the pressure switch open). Torques are not limited (a
@@ -171,8 +176,34 @@ class Suction:
             self._armed = False
         self.held = -1
 
+    def _pad_contact_force(self, data: mujoco.MjData) -> np.ndarray:
+        """World force (3,) the pad body's geoms exert on the held tile through contacts [N]."""
+        total = np.zeros(3)
+        n = data.ncon
+        if n == 0 or self.held < 0:
+            return total
+        model, ids = self._model, self._ids
+        g0 = int(ids.tile_geom_start[self.held])
+        g1 = g0 + int(ids.tile_geom_count[self.held])
+        geom = data.contact.geom[:n]
+        on_pad = model.geom_bodyid[geom] == ids.pad_body
+        on_tile = (geom >= g0) & (geom < g1)
+        f6 = np.zeros(6)
+        # Normal from geom1 to geom2: the force acts on geom2 along +frame, on geom1 along -.
+        for j, sign in (
+            *((int(j), 1.0) for j in np.flatnonzero(on_pad[:, 0] & on_tile[:, 1])),
+            *((int(j), -1.0) for j in np.flatnonzero(on_pad[:, 1] & on_tile[:, 0])),
+        ):
+            mujoco.mj_contactForce(model, data, j, f6)
+            total += sign * (data.contact.frame[j].reshape(3, 3).T @ f6[:3])
+        return total
+
     def measure(self, data: mujoco.MjData) -> tuple[float, float]:
-        """Pull along the pad axis and shear the weld exerts on the held tile now [N]."""
+        """Pull along the pad axis and shear the tool exerts on the held tile now [N].
+
+        The tool's force is the weld's constraint force plus the pad's contact forces on the tile
+        (see the module docstring): the weld alone also carries the internal push of the pad.
+        """
         ids = self._ids
         rows = np.flatnonzero(
             (data.efc_type[: data.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY)
@@ -180,7 +211,7 @@ class Suction:
         )
         if len(rows) < 3:
             return 0.0, 0.0
-        force_on_tile = -data.efc_force[rows[:3]]
+        force_on_tile = -data.efc_force[rows[:3]] + self._pad_contact_force(data)
         axis = data.site_xmat[ids.tcp_site].reshape(3, 3)[:, 2]
         along = float(force_on_tile @ axis)
         pull = -along
