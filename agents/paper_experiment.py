@@ -1,7 +1,9 @@
 """The paper's matching experiment (its Figs. 5-6), reproduced from a rendered image.
 
 Run ``python -m agents.paper_experiment``: prints the table and writes
-``out/paper_experiment.png`` (the tiles with their numbers) and ``out/paper_experiment.json``.
+``out/paper_experiment.png`` (the tiles, their relevant points and numbers: Fig. 5c),
+``out/paper_experiment_design_shape.png`` and ``..._design_shape_colour.png`` (the design with
+the number of the tile that marked each object: Figs. 6a and 6b) and ``out/paper_experiment.json``.
 
 Eight physical tiles (numbered 1-8 as in the paper's Fig. 5c) are drawn on a belt-coloured image
 and recognised with `qshape.extract`; the design (Fig. 6) has 16 objects. The set reproduces the
@@ -39,7 +41,7 @@ import qshape
 from qshape.assign import feasible_pairs
 from qshape.description import default_tolerances
 from qshape.design import Design, Slot
-from qshape.render import RenderParams, fill_tiles
+from qshape.render import RenderParams, fill_tiles, mm_to_px, render_design
 from qshape.synth import place_path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -285,6 +287,23 @@ def table(r: ExperimentResult) -> str:
     return "\n".join(lines)
 
 
+DESIGN_PX_PER_MM = 2.5
+"""Scale of the design pictures [px/mm]."""
+
+
+def design_marks(design: Design, marks: dict[str, int]) -> np.ndarray:
+    """The design (Fig. 6) with each marked object showing the number of its tile, RGB."""
+    s = DESIGN_PX_PER_MM
+    image = render_design(design, s, overlay=True)
+    h_mm = design.mesh_size[1]
+    for slot in design.slots:
+        if slot.name in marks:
+            c = mm_to_px(np.asarray([slot.centroid]), h_mm, s)[0]
+            cv2.putText(image, str(marks[slot.name]), (int(c[0]) - 6, int(c[1]) + 8),
+                        cv2.FONT_HERSHEY_SIMPLEX, 0.8, (255, 255, 255), 2, cv2.LINE_AA)  # fmt: skip
+    return image
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run the experiment, print the table, write the picture and JSON."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -303,6 +322,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         cv2.putText(shown, str(n), (int(c[0]) - 5, int(c[1]) + 5), cv2.FONT_HERSHEY_SIMPLEX,
                     0.6, (255, 255, 255), 2, cv2.LINE_AA)  # fmt: skip
     cv2.imwrite(str(args.out / "paper_experiment.png"), shown)
+    design = paper_design()
+    for suffix, marks in (("shape", r.marks_shape), ("shape_colour", r.marks_color)):
+        cv2.imwrite(
+            str(args.out / f"paper_experiment_design_{suffix}.png"),
+            cv2.cvtColor(design_marks(design, marks), cv2.COLOR_RGB2BGR),
+        )
     data = {
         "marks_shape": r.marks_shape,
         "marks_shape_colour": r.marks_color,
