@@ -117,21 +117,39 @@ def _clean(dense: ArrayLike, what: str) -> FloatArray:
         raise InvalidFigureError(f"{what}: points must be numbers of shape (k, 2): {exc}") from exc
     if pts.ndim != 2 or pts.shape[1] != 2:
         raise InvalidFigureError(f"{what}: points must have shape (k, 2), got {pts.shape}")
-    if not np.all(np.isfinite(pts)):
-        raise InvalidFigureError(f"{what}: points must be finite (no NaN or inf)")
     if len(pts) == 0:
         raise InvalidFigureError(f"{what}: a closed outline needs at least 3 points, got 0")
-    if np.abs(pts).max() > MAX_COORDINATE:
+    lo, hi = float(pts.min()), float(pts.max())
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise InvalidFigureError(f"{what}: points must be finite (no NaN or inf)")
+    if max(-lo, hi) > MAX_COORDINATE:
         raise InvalidFigureError(
             f"{what}: coordinates must be at most {MAX_COORDINATE:g} in magnitude"
         )
-    step = np.hypot(*(np.roll(pts, -1, axis=0) - pts).T)
-    pts = pts[step > 0.0]  # drop consecutive repeats (and the closing copy)
+    d = np.concatenate([pts[1:], pts[:1]]) - pts
+    step = np.hypot(d[:, 0], d[:, 1])
+    if not step.all():
+        pts = pts[step > 0.0]  # drop consecutive repeats (and the closing copy)
     if len(pts) < 3:
         raise InvalidFigureError(
             f"{what}: a closed outline needs at least 3 distinct points, got {len(pts)}"
         )
     return pts
+
+
+def _resampled(pts: FloatArray, n: int) -> tuple[FloatArray, float]:
+    """``n`` uniform arc-length samples of a closed polygon (k, 2) and its perimeter."""
+    closed = np.concatenate([pts, pts[:1]])
+    d = closed[1:] - closed[:-1]
+    cum = np.empty(len(closed))
+    cum[0] = 0.0
+    np.cumsum(np.hypot(d[:, 0], d[:, 1]), out=cum[1:])
+    perimeter = float(cum[-1])
+    s = np.arange(n) * (perimeter / n)
+    res = np.empty((n, 2))
+    res[:, 0] = np.interp(s, cum, closed[:, 0])
+    res[:, 1] = np.interp(s, cum, closed[:, 1])
+    return res, perimeter
 
 
 def simplify_outline(
@@ -152,38 +170,35 @@ def simplify_outline(
     """
     p = default_outline_params() if params is None else params
     pts = _clean(dense, what)
-    seg = np.hypot(*(np.roll(pts, -1, axis=0) - pts).T)
-    cum = np.concatenate([[0.0], np.cumsum(seg)])
-    perimeter = float(cum[-1])
     n = p.resample_points
-    s = np.arange(n) * (perimeter / n)
-    closed = np.vstack([pts, pts[:1]])
-    res = np.stack([np.interp(s, cum, closed[:, 0]), np.interp(s, cum, closed[:, 1])], axis=1)
-    diameter = float(np.ptp(res, axis=0).max())
-    area2 = float(cross2(res, np.roll(res, -1, axis=0)).sum())
+    res, perimeter = _resampled(pts, n)
+    nxt = np.concatenate([res[1:], res[:1]])
+    diameter = float(max(np.ptp(res[:, 0]), np.ptp(res[:, 1])))
+    area2 = float(np.dot(res[:, 0], nxt[:, 1]) - np.dot(res[:, 1], nxt[:, 0]))
     if diameter <= 0.0 or abs(area2) <= 1e-12 * diameter * diameter:
         raise InvalidFigureError(f"{what}: zero area (the outline is a line or a point)")
     sign = 1.0 if area2 > 0.0 else -1.0  # +1: counter-clockwise in the given frame
 
+    # Circular moving average (same sums as a 'valid' convolution of the wrapped samples).
     half = max(1, round(p.smooth_fraction * n))
-    kernel = np.ones(2 * half + 1) / (2 * half + 1)
+    width = 2 * half + 1
     padded = np.concatenate([res[-half:], res, res[:half]])
-    smooth = np.stack([np.convolve(padded[:, k], kernel, mode="valid") for k in range(2)], axis=1)
+    smooth = np.empty_like(res)
+    for k in range(2):
+        smooth[:, k] = np.convolve(padded[:, k], np.full(width, 1.0 / width), mode="valid")
 
     w = max(1, round(p.corner_window * n))
-    back = smooth - np.roll(smooth, w, axis=0)
-    fwd = np.roll(smooth, -w, axis=0) - smooth
-    change = np.degrees(np.arctan2(np.abs(cross2(back, fwd)), np.einsum("ij,ij->i", back, fwd)))
-    # Local turning (signed, in the walk's sense) for curve splitting.
-    d1 = smooth - np.roll(smooth, 1, axis=0)
-    d2 = np.roll(smooth, -1, axis=0) - smooth
-    turn = np.degrees(np.arctan2(cross2(d1, d2), np.einsum("ij,ij->i", d1, d2))) * sign
-
+    ext = np.concatenate([smooth[-w:], smooth, smooth[:w]])  # ext[i + w] = smooth[i]
+    back = smooth - ext[:n]
+    fwd = ext[2 * w :] - smooth
+    bx, by, fx, fy = back[:, 0], back[:, 1], fwd[:, 0], fwd[:, 1]
+    change = np.degrees(np.arctan2(np.abs(bx * fy - by * fx), bx * fx + by * fy))
     corners = _corners(change, p.corner_angle_deg, w, max(w, round(p.merge_fraction * n)))
     noise = p.noise_fraction * diameter
-    out_pts: list[FloatArray] = []
-    out_curve: list[bool] = []
     if len(corners) == 0:
+        turn = _turning(smooth, ext[w - 1 : w + n + 1], sign)
+        out_pts: list[FloatArray] = []
+        out_curve: list[bool] = []
         _emit_run(
             res,
             turn,
@@ -195,12 +210,82 @@ def simplify_outline(
             closed_loop=True,
             guard=half,
         )
+        points = np.array(out_pts, dtype=np.float64)
+        mask = np.array(out_curve, dtype=bool)
     else:
-        runs: list[tuple[int, bool, FloatArray]] = []
-        for a, b in zip(corners, np.roll(corners, -1), strict=True):
-            idx = np.arange(a, b + (n if b <= a else 0) + 1) % n
-            start = len(out_pts)
-            straight = _emit_run(
+        points, mask = _polyline(
+            res, smooth, ext[w - 1 : w + n + 1], sign, corners, p, noise, half, w, perimeter
+        )
+    if len(points) < 3:
+        raise InvalidFigureError(
+            f"{what}: simplified to {len(points)} relevant points; a figure needs at least 3"
+        )
+    return points, mask
+
+
+def _turning(smooth: FloatArray, ring: FloatArray, sign: float) -> FloatArray:
+    """Local signed turning [deg] at each smoothed sample; ``ring[i + 1] = smooth[i]``."""
+    d1 = smooth - ring[:-2]
+    d2 = ring[2:] - smooth
+    crs = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    dot = d1[:, 0] * d2[:, 0] + d1[:, 1] * d2[:, 1]
+    return np.asarray(np.degrees(np.arctan2(crs, dot)) * sign)
+
+
+def _polyline(  # noqa: PLR0913, PLR0917
+    res: FloatArray,
+    smooth: FloatArray,
+    ring: FloatArray,
+    sign: float,
+    corners: np.ndarray,
+    p: OutlineParams,
+    noise: float,
+    half: int,
+    w: int,
+    perimeter: float,
+) -> tuple[FloatArray, BoolArray]:
+    """Relevant points of an outline with corners: all runs' chord tests at once.
+
+    The samples are rotated so that the first corner is sample 0; run r covers samples
+    ``c[r] .. c[r + 1]`` (the last one ends at sample n = sample 0). Straight runs emit their
+    corner; curved runs go through `_emit_run`.
+    """
+    n = len(res)
+    c0 = int(corners[0])
+    rolled = np.concatenate([res[c0:], res[: c0 + 1]])  # (n + 1, 2), rolled[n] = rolled[0]
+    starts = corners - c0
+    ends = np.append(starts[1:], n)
+    a, b = rolled[starts], rolled[ends]
+    chord = b - a
+    length = np.hypot(chord[:, 0], chord[:, 1])
+    run_id = np.repeat(np.arange(len(starts)), ends - starts)
+    rel = rolled[:n] - a[run_id]
+    dev = np.abs(chord[run_id, 0] * rel[:, 1] - chord[run_id, 1] * rel[:, 0])
+    dev_max = np.maximum.reduceat(dev, starts)
+    zero = length == 0.0
+    if zero.any():  # degenerate chord: distance from the run's start
+        dist0 = np.maximum.reduceat(np.hypot(rel[:, 0], rel[:, 1]), starts)
+        dev_max = np.where(zero, dist0, dev_max / np.where(zero, 1.0, length))
+    else:
+        dev_max = dev_max / length
+    straight = dev_max <= np.maximum(p.straight_sagitta_ratio * length, noise)
+    if straight.all():
+        points = a.copy()
+        mask = np.zeros(len(a), dtype=bool)
+        run_start = np.arange(len(a))
+    else:
+        turn = _turning(smooth, ring, sign)
+        out_pts: list[FloatArray] = []
+        out_curve: list[bool] = []
+        first: list[int] = []
+        for r, (s, e) in enumerate(zip(starts.tolist(), ends.tolist(), strict=True)):
+            first.append(len(out_pts))
+            if straight[r]:
+                out_pts.append(a[r])
+                out_curve.append(False)
+                continue
+            idx = (np.arange(s, e + 1) + c0) % n
+            _emit_run(
                 res,
                 turn,
                 idx,
@@ -211,37 +296,48 @@ def simplify_outline(
                 closed_loop=False,
                 guard=half,
             )
-            runs.append((start, straight, res[idx]))
-        if p.refine_corners:
-            _refine_corners(
-                runs,
-                out_pts,
-                trim=w,
-                reach=p.corner_window * perimeter,
-                min_sin=math.sin(math.radians(p.corner_angle_deg)),
-            )
-    points = np.array(out_pts, dtype=np.float64)
-    mask = np.array(out_curve, dtype=bool)
-    if len(points) < 3:
-        raise InvalidFigureError(
-            f"{what}: simplified to {len(points)} relevant points; a figure needs at least 3"
+        points = np.array(out_pts, dtype=np.float64)
+        mask = np.array(out_curve, dtype=bool)
+        run_start = np.array(first)
+    if p.refine_corners and len(starts) >= 2:
+        _refine_corners(
+            rolled,
+            starts,
+            ends,
+            straight,
+            points,
+            run_start,
+            trim=w,
+            reach=p.corner_window * perimeter,
+            min_sin=math.sin(math.radians(p.corner_angle_deg)),
         )
     return points, mask
 
 
 def _corners(change: FloatArray, threshold: float, window: int, spacing: int) -> np.ndarray:
-    """Indices of corners: local maxima of direction change above threshold, spaced apart."""
-    order = np.argsort(-change, kind="stable")
-    order = order[change[order] > threshold]
+    """Indices of corners: local maxima of direction change above threshold, spaced apart.
+
+    Greedy: the strongest remaining candidate is kept unless within ``spacing`` samples
+    (circularly) of one already kept.
+    """
     n = len(change)
-    taken = np.zeros(n, dtype=bool)
+    vals = np.where(change > threshold, change, -np.inf)
     keep: list[int] = []
-    for i in order.tolist():  # few candidates: only points above the corner threshold
-        if taken[i]:
-            continue
+    while True:  # one iteration per kept corner; argmax takes the first of equal values
+        i = int(np.argmax(vals))
+        if vals[i] == -np.inf:
+            break
         keep.append(i)
-        taken[np.arange(i - spacing, i + spacing + 1) % n] = True
-    return np.array(sorted(keep), dtype=np.int64)
+        if 2 * spacing + 1 >= n:
+            break
+        lo, hi = i - spacing, i + spacing + 1
+        vals[max(lo, 0) : min(hi, n)] = -np.inf
+        if lo < 0:
+            vals[n + lo :] = -np.inf
+        if hi > n:
+            vals[: hi - n] = -np.inf
+    keep.sort()
+    return np.array(keep, dtype=np.int64)
 
 
 def _emit_run(
@@ -301,17 +397,13 @@ def _emit_run(
     return False
 
 
-def _fit_line(run: FloatArray, trim: int) -> tuple[FloatArray, FloatArray]:
-    """Total-least-squares line (point, unit direction) through a run, its ends trimmed."""
-    inner = run[trim : len(run) - trim] if len(run) > 2 * trim + 2 else run
-    centre = inner.mean(axis=0)
-    _, vecs = np.linalg.eigh(np.cov((inner - centre).T))
-    return centre, vecs[:, -1]
-
-
-def _refine_corners(
-    runs: list[tuple[int, bool, FloatArray]],
-    out_pts: list[FloatArray],
+def _refine_corners(  # noqa: PLR0913, PLR0917
+    rolled: FloatArray,
+    starts: np.ndarray,
+    ends: np.ndarray,
+    straight: BoolArray,
+    points: FloatArray,
+    run_start: np.ndarray,
     *,
     trim: int,
     reach: float,
@@ -322,21 +414,41 @@ def _refine_corners(
     Smoothing and the sample spacing round a corner off; the lines through the middles of the
     adjacent edges meet at the true corner. Kept only when the lines cross at a corner angle
     (sine of the angle between them >= ``min_sin``) within ``reach`` of the detected corner.
+    Lines are total-least-squares fits of each run (its ends trimmed by ``trim`` samples when
+    long enough), all runs at once from prefix sums. ``points`` is updated in place.
     """
-    for r, (start, straight, run) in enumerate(runs):
-        _, prev_straight, prev_run = runs[r - 1]
-        if not (straight and prev_straight) or len(runs) < 2:
-            continue
-        m1, d1 = _fit_line(prev_run, trim)
-        m2, d2 = _fit_line(run, trim)
-        den = float(d1[0] * d2[1] - d1[1] * d2[0])
-        if abs(den) < min_sin:
-            continue
-        diff = m2 - m1
-        t = float(diff[0] * d2[1] - diff[1] * d2[0]) / den
-        corner = m1 + t * d1
-        if float(np.hypot(*(corner - out_pts[start]))) <= reach:
-            out_pts[start] = corner
+    prev = np.arange(len(starts)) - 1  # run r - 1 (index -1: the last run)
+    both = straight & straight[prev]
+    if not both.any():
+        return
+    long = ends - starts + 1 > 2 * trim + 2
+    lo = np.where(long, starts + trim, starts)
+    hi = np.where(long, ends - trim + 1, ends + 1)  # exclusive
+    origin = rolled[0]
+    q = rolled - origin
+    x, y = q[:, 0], q[:, 1]
+    sums = np.zeros((len(q) + 1, 5))
+    np.cumsum(np.stack([x, y, x * x, y * y, x * y], axis=1), axis=0, out=sums[1:])
+    tot = sums[hi] - sums[lo]
+    cnt = (hi - lo).astype(np.float64)
+    mx, my = tot[:, 0] / cnt, tot[:, 1] / cnt
+    sxx = tot[:, 2] - cnt * mx * mx
+    syy = tot[:, 3] - cnt * my * my
+    sxy = tot[:, 4] - cnt * mx * my
+    phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)  # principal direction of each run
+    dx, dy = np.cos(phi), np.sin(phi)
+    # Line r - 1 (previous run) meets line r.
+    pdx, pdy, pmx, pmy = dx[prev], dy[prev], mx[prev], my[prev]
+    den = pdx * dy - pdy * dx
+    ok = both & (np.abs(den) >= min_sin)
+    safe = np.where(ok, den, 1.0)
+    t = ((mx - pmx) * dy - (my - pmy) * dx) / safe
+    cx = pmx + t * pdx + origin[0]
+    cy = pmy + t * pdy + origin[1]
+    at = run_start
+    ok &= np.hypot(cx - points[at, 0], cy - points[at, 1]) <= reach
+    points[at[ok], 0] = cx[ok]
+    points[at[ok], 1] = cy[ok]
 
 
 def _chord_distance(run: FloatArray) -> FloatArray:
