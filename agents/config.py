@@ -41,6 +41,9 @@ class PerceptionConfig:
             of its radius of a fitted circle is a circle: it is re-split into two equal
             halves (the split points a traced outline gives are arbitrary, and unequal
             halves label one arc acute and the other plane), dimensionless; 0 disables.
+        merge_corner_fraction: Two neighbouring corners (no curve point) closer than this
+            fraction of their boundary's perimeter are one chamfered corner: they are replaced
+            by the intersection of the edges around them, dimensionless; 0 disables.
     """
 
     mm_per_m: float = 1000.0
@@ -52,6 +55,7 @@ class PerceptionConfig:
     color_balance_iterations: int = 3
     max_color_gain: float = 2.0
     circle_residual: float = 0.03
+    merge_corner_fraction: float = 0.03
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""
@@ -70,11 +74,16 @@ class PlacementConfig:
         use_color: Match shape and colour (True) or shape alone.
         continuous_yaw_steps: Equivalent yaws listed for a rotationally continuous tile
             (circle, ring): any yaw fits, this many evenly spaced ones are offered.
+        refine_span_deg: The matched rotation is refined within +- this by fitting the dense
+            outlines, [deg] (0: the relevant points' rotation as it is).
+        refine_tolerance_deg: Precision of that refinement, [deg].
     """
 
     method: Literal["optimal", "greedy"] = "optimal"
     use_color: bool = True
     continuous_yaw_steps: int = 12
+    refine_span_deg: float = 5.0
+    refine_tolerance_deg: float = 0.01
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on bad values."""

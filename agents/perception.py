@@ -220,6 +220,55 @@ def even_circle(
     return new, np.array([False, True, False, True])
 
 
+_PARALLEL_SIN = 1e-3
+"""Edges whose directions' cross product (unit vectors) is below this are parallel."""
+_MIN_CORNERS = 3
+
+
+def merge_close_corners(
+    pts: np.ndarray, mask: np.ndarray, fraction: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Replace pairs of neighbouring corners closer than ``fraction`` x perimeter by one.
+
+    The new corner is the intersection of the edge before the pair and the edge after it (the
+    corner a chamfer cut off), or the pair's midpoint when those edges are parallel.
+
+    Args:
+        pts: Relevant points of one boundary, shape (n, 2).
+        mask: Curve mask, shape (n,) (curve points are never merged, nor their neighbours).
+        fraction: Distance threshold as a fraction of the boundary's perimeter (0: off).
+
+    Returns:
+        (points, mask), possibly shorter.
+    """
+    pts, mask = np.asarray(pts, dtype=float), np.asarray(mask, dtype=bool)
+    while fraction > 0 and len(pts) > _MIN_CORNERS:
+        n = len(pts)
+        edges = np.roll(pts, -1, axis=0) - pts
+        lengths = np.linalg.norm(edges, axis=1)
+        limit = fraction * float(lengths.sum())
+        corner = ~mask & ~np.roll(mask, 1) & ~np.roll(mask, -1)
+        both = corner & np.roll(corner, -1) & (lengths < limit)
+        if not both.any():
+            break
+        i = int(np.argmin(np.where(both, lengths, np.inf)))
+        j = (i + 1) % n
+        a0, a1 = pts[(i - 1) % n], pts[i]
+        b0, b1 = pts[j], pts[(j + 1) % n]
+        da, db = a1 - a0, b1 - b0
+        cross = da[0] * db[1] - da[1] * db[0]
+        if abs(cross) > _PARALLEL_SIN * np.linalg.norm(da) * np.linalg.norm(db):
+            t = ((b0 - a0)[0] * db[1] - (b0 - a0)[1] * db[0]) / cross
+            new = a0 + t * da
+        else:
+            new = 0.5 * (a1 + b0)
+        keep = [k for k in range(n) if k not in (i, j)]
+        at = keep.index((j + 1) % n) if (j + 1) % n in keep else len(keep)
+        pts = np.insert(pts[keep], at, new, axis=0)
+        mask = np.insert(mask[keep], at, False)
+    return pts, mask
+
+
 def figure_to_world(
     camera: CameraLike, fig: Figure, z: float, cfg: PerceptionConfig | None = None
 ) -> Figure:
@@ -234,12 +283,14 @@ def figure_to_world(
     """
     cfg = cfg or PerceptionConfig()
     outer, mask = _to_world_boundary(camera, fig.outer, z, cfg.mm_per_m)
+    outer, mask = merge_close_corners(outer, mask, cfg.merge_corner_fraction)
     outer, mask = even_circle(
         outer, mask, _dense_world(camera, fig.outer, z, cfg), cfg.circle_residual
     )
     holes = []
     for h in fig.holes:
         hp, hm = _to_world_boundary(camera, h, z, cfg.mm_per_m)
+        hp, hm = merge_close_corners(hp, hm, cfg.merge_corner_fraction)
         hp, hm = even_circle(hp, hm, _dense_world(camera, h, z, cfg), cfg.circle_residual)
         holes.append(Boundary.make(hp, hm, y_down=False, what="hole"))
     return Figure.from_polygon(outer, holes, fig.color, curve_mask=mask, y_down=False)
@@ -481,6 +532,7 @@ __all__ = [
     "color_gain",
     "figure_to_world",
     "grasp_point",
+    "merge_close_corners",
     "perceive_tiles",
     "project",
     "slot_targets",

@@ -5,12 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from agents.bench_perception import bench
 from agents.cell_adapter import build_design_cell, nearest_tile
 from agents.config import PerceptionConfig
 from agents.errors import PerceptionError
 from agents.perception import (
     balance_colors,
     color_gain,
+    even_circle,
+    merge_close_corners,
     perceive_tiles,
     project,
     slot_targets,
@@ -84,3 +87,31 @@ def test_color_gain_recovers_a_known_gain():
 def test_color_balance_gain_is_moderate(scene):
     *_, gain = scene
     assert np.all((gain > 0.7) & (gain < 1.3))
+
+
+def test_merge_close_corners_restores_a_chamfered_square():
+    sq = np.array([[0, 0], [10, 0], [10, 9.7], [9.7, 10], [0, 10]], float)
+    pts, mask = merge_close_corners(sq, np.zeros(5, bool), 0.03)
+    assert len(pts) == 4 and not mask.any()
+    np.testing.assert_allclose(pts[2], [10, 10], atol=1e-9)
+    # A real short edge (10% of the perimeter) is kept.
+    keep, _ = merge_close_corners(sq, np.zeros(5, bool), 0.005)
+    assert len(keep) == 5
+
+
+def test_even_circle_resplits_unequal_arcs():
+    t = np.linspace(0, 2 * np.pi, 256, endpoint=False)
+    dense = 10 * np.column_stack([np.cos(t), np.sin(t)])
+    ang = np.radians([0, 40, 80, 230])  # arcs of 80 and 280 degrees
+    pts = 10 * np.column_stack([np.cos(ang), np.sin(ang)])
+    new, mask = even_circle(pts, np.array([False, True, False, True]), dense, 0.03)
+    d = np.degrees(np.diff(np.unwrap(np.arctan2(new[:, 1], new[:, 0]))))
+    np.testing.assert_allclose(np.abs(d), 90.0, atol=1e-6)
+    assert mask.tolist() == [False, True, False, True]
+
+
+@pytest.mark.slow
+def test_twenty_layouts_all_recognised():
+    r = bench(20, true_camera=False)
+    assert r["assigned_to_own_class"] == r["tiles"] == 320
+    assert r["pick_error_mm_max"] < 2.0 and r["yaw_error_deg_max"] < 2.0
