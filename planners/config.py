@@ -227,8 +227,14 @@ class CycleConfig:
             base and the wrist rotations, which the vertical moves barely use.
         lead_share: Fraction of the lead joints' acceleration and jerk given to the lead; the
             vertical moves keep the rest (the sum respects every limit), in (0, 1).
-        lateral_clearance_height: Below this height above a contact pose the tool may drift
-            at most `max_lateral_drift` sideways (tile clear of its neighbours) [m].
+        lateral_clearance_height: Below this height above a contact pose the tool carrying a
+            tile (lift off the pick, descent to the place) may drift at most
+            `max_lateral_drift` sideways (the held tile's underside clear of its neighbours'
+            tops: tile thickness plus a margin) [m].
+        empty_clearance_height: The same for the empty pad (descent to the pick, retreat from
+            the place): the pad's face only has to clear the tops of the tiles around the
+            contact, which are level with the contact (equal thickness), so a small margin
+            suffices [m]. At most `lateral_clearance_height`.
         max_lateral_drift: Allowed sideways drift below the clearance height [m].
         transfer_clearance: Minimum tool height above the lower contact pose during the
             transfer [m].
@@ -252,7 +258,8 @@ class CycleConfig:
     lead_bisections: int = 6
     lead_joints: tuple[int, ...] = (0, 3, 5)
     lead_share: float = 0.95
-    lateral_clearance_height: float = 0.008
+    lateral_clearance_height: float = 0.006
+    empty_clearance_height: float = 0.002
     max_lateral_drift: float = 0.001
     transfer_clearance: float = 0.008
     pick_press: float = 0.0005
@@ -271,6 +278,7 @@ class CycleConfig:
             "approach_height",
             "approach_speed",
             "lateral_clearance_height",
+            "empty_clearance_height",
             "max_lateral_drift",
             "predict_iterations",
             "predict_tolerance",
@@ -298,6 +306,12 @@ class CycleConfig:
                 "CycleConfig.lateral_clearance_height "
                 f"{self.lateral_clearance_height} m must not exceed approach_height "
                 f"{self.approach_height} m"
+            )
+        if self.empty_clearance_height > self.lateral_clearance_height:
+            raise LimitError(
+                "CycleConfig.empty_clearance_height "
+                f"{self.empty_clearance_height} m must not exceed lateral_clearance_height "
+                f"{self.lateral_clearance_height} m"
             )
 
 

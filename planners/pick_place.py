@@ -158,6 +158,7 @@ class _Contact:
     q: Array  # configuration at the contact [rad]
     qd: Array  # joint velocity at the contact [rad/s]
     approach_q: Array  # configuration at the approach point [rad]
+    clearance: float  # below this height above the contact the drift is limited [m]
 
 
 class PickPlacePlanner:
@@ -216,7 +217,7 @@ class PickPlacePlanner:
         taus, pos = self._positions(segs)
         t_rel = taus if leaving else taus - taus[-1]
         rel = pos - (contact.point[None, :] + contact.belt[None, :] * t_rel[:, None])
-        low = rel[:, 2] < c.lateral_clearance_height
+        low = rel[:, 2] < contact.clearance
         lateral = np.linalg.norm(rel[low, :2], axis=1)
         return bool(lateral.size == 0 or lateral.max() <= c.max_lateral_drift)
 
@@ -581,9 +582,11 @@ class PickPlacePlanner:
         # Approach points straight above the contacts (the belt's motion is superposed).
         pick_in_q = self._solve(pick_c + up, pick_yaw, pick_q)
         lift_q = self._solve(pick_end + up, pick_yaw, pick_end_q)
-        pick_in = _Contact(pick_c, belt, pick_q, belt_qd, pick_in_q)
-        pick_out = _Contact(pick_end, belt, pick_end_q, belt_qd, lift_q)
-        place_in = _Contact(place_c, zero, place_q, np.zeros(6), place_in_q)
+        # Drift limits: the empty pad only clears the tile tops, a held tile its own thickness.
+        empty, loaded = c.empty_clearance_height, c.lateral_clearance_height
+        pick_in = _Contact(pick_c, belt, pick_q, belt_qd, pick_in_q, empty)
+        pick_out = _Contact(pick_end, belt, pick_end_q, belt_qd, lift_q, loaded)
+        place_in = _Contact(place_c, zero, place_q, np.zeros(6), place_in_q, loaded)
         segs: list[Segment] = []
         lead_start = math.nan
 
@@ -591,7 +594,7 @@ class PickPlacePlanner:
         if start_at_contact:
             p_start = self.ik.fk(start.q)[0]
             start_up_q = self._solve(p_start + up, pick_yaw, start.q)
-            start_out = _Contact(p_start, zero, start.q, np.zeros(6), start_up_q)
+            start_out = _Contact(p_start, zero, start.q, np.zeros(6), start_up_q, empty)
             bridge = self._bridge(start_up_q, pick_in_q)
             s_ret, lead_start = self._leave(start, start_out, bridge, "retreat")
             floor_z = min(p_start[2], pick_c[2])

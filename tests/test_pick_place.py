@@ -65,11 +65,15 @@ def test_tool_moves_vertically_near_the_contacts(
     c = CFG.cycle
     tr = plan.trajectory
     pos = np.array([_tcp(planner, q) for q in tr.q])
+    # A held tile (between vacuum on and off) must clear its neighbours' tops: the loaded
+    # clearance height; the empty pad only the tile tops level with the contact.
+    loaded = (tr.times >= plan.vacuum_on) & (tr.times <= plan.vacuum_off)
     for contact in (PICK - [0, 0, c.pick_press], PLACE + [0, 0, c.place_gap]):
         rel = pos - contact
         near = np.hypot(rel[:, 0], rel[:, 1]) < 0.03
-        low = near & (rel[:, 2] < c.lateral_clearance_height)
-        assert low.any()
+        height = np.where(loaded, c.lateral_clearance_height, c.empty_clearance_height)
+        low = near & (rel[:, 2] < height)
+        assert (low & loaded).any() and (low & ~loaded).any()
         assert np.hypot(rel[low, 0], rel[low, 1]).max() <= c.max_lateral_drift + 1e-4
     # Blending: no stop at the approach points (the lead overlaps the transfer).
     assert all(lead > 0 for lead in plan.leads)
