@@ -166,7 +166,10 @@ class CalibrationViews:
 
 
 def render_views(
-    cell_cfg: CellConfig, camera: str, cfg: CalibrationConfig | None = None
+    cell_cfg: CellConfig,
+    camera: str,
+    cfg: CalibrationConfig | None = None,
+    size: tuple[int, int] | None = None,
 ) -> CalibrationViews:
     """Render the board at the calibration poses with one of the cell's cameras.
 
@@ -174,6 +177,7 @@ def render_views(
         cell_cfg: The cell configuration (the scene is the cell's, without tiles).
         camera: "input_camera" or "output_camera".
         cfg: Board and poses.
+        size: Image (height, width) [px]; the camera's configured size when None.
 
     Raises:
         CalibrationError: Unknown camera.
@@ -183,6 +187,7 @@ def render_views(
     if camera not in cams:
         raise CalibrationError(f"unknown camera {camera!r}; allowed: {sorted(cams)}")
     cam_cfg = cams[camera]
+    height, width = size if size is not None else (cam_cfg.height, cam_cfg.width)
     geo = cell_geometry(cell_cfg)
     if camera == "input_camera":
         centre = np.array([geo.input_centre[0], geo.input_centre[1], geo.belt_top])
@@ -202,7 +207,7 @@ def render_views(
             data.mocap_pos[mocap] = pos
             data.mocap_quat[mocap] = quat
             mujoco.mj_forward(model, data)
-            return rig.render(data, cam_id, cam_cfg.height, cam_cfg.width).copy()
+            return rig.render(data, cam_id, height, width).copy()
 
         views = []
         top = cfg.plate_thickness + cfg.square_height
@@ -217,7 +222,7 @@ def render_views(
         flat_pose = centre + [0.0, 0.0, top]
         flat = shot(flat_pose, np.array([1.0, 0.0, 0.0, 0.0]))
         mujoco.mj_forward(model, data)
-        true_cam = camera_model(model, data, cam_id, cam_cfg.width, cam_cfg.height)
+        true_cam = camera_model(model, data, cam_id, width, height)
     finally:
         rig.close()
     return CalibrationViews(tuple(views), flat, flat_pose, true_cam)
@@ -339,14 +344,23 @@ def calibrate(views: CalibrationViews, cfg: CalibrationConfig | None = None) -> 
 
 
 def calibrate_cell_camera(
-    cell_cfg: CellConfig, camera: str, cfg: CalibrationConfig | None = None
+    cell_cfg: CellConfig,
+    camera: str,
+    cfg: CalibrationConfig | None = None,
+    size: tuple[int, int] | None = None,
 ) -> CalibrationResult:
     """Render the calibration views with a cell camera and calibrate it.
+
+    Args:
+        cell_cfg: The cell configuration.
+        camera: "input_camera" or "output_camera".
+        cfg: Board, poses and solver options.
+        size: Image (height, width) [px] the camera will be used at (configured when None).
 
     Raises:
         CalibrationError: See `calibrate` and `render_views`.
     """
-    return calibrate(render_views(cell_cfg, camera, cfg), cfg)
+    return calibrate(render_views(cell_cfg, camera, cfg, size), cfg)
 
 
 __all__ = [

@@ -1,0 +1,170 @@
+"""The scripted cell as a policy of `MosaicAssembly-v0` (``pick_place`` action mode).
+
+The paper's loop through the env's public API only: the design named in the env's config is
+described once; each picture (the ``input_camera`` observation) is perceived
+(`agents.perception`) and assigned to the open slots (`agents.placement`); the resulting
+commands are returned one per step as normalised ``pick_place`` actions
+(``env.unwrapped.pick_place_action``), and a new picture is taken once they are used up.
+Tiles matching no open slot are never placed. The input camera is calibrated from rendered
+checkerboard images (`agents.calibration`) at the observation's image size, or the env's
+camera model is used (``calibrate=False``).
+
+`ScriptedAgent.predict` has stable-baselines3's signature, so ``evaluate_policy`` can run it
+like a learned policy (one env; a vectorised observation with a leading batch of 1 is
+accepted)::
+
+    env = gym.make("envs:MosaicAssembly-v0", action_mode="pick_place", image_size=(492, 656))
+    agent = ScriptedAgent(env)
+    obs, _ = env.reset(seed=0)
+    action, _ = agent.predict(obs)
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Any
+
+import numpy as np
+
+from agents.calibration import calibrate_cell_camera
+from agents.config import AgentsConfig, load_agents_config
+from agents.errors import AgentError
+from agents.perception import CameraLike, balance_colors, perceive_tiles, slot_targets
+from agents.placement import PickPlace, PlacementPlan, Unplaced, plan_placements
+from qshape.design import Design
+
+IMAGE_DIMS = 3
+"""An unbatched RGB observation has (height, width, 3)."""
+
+
+class ScriptedAgent:
+    """Vision + qualitative matching + planner cycles, as a policy.
+
+    Args:
+        env: A `MosaicAssembly-v0` env (wrapped or not) in ``pick_place`` action mode with an
+            ``input_camera`` image observation (full resolution recommended: 492 x 656).
+        config: Agent settings (bundled ``configs/agents.yaml`` when None).
+        calibrate: Calibrate the input camera from rendered checkerboard images (True) or use
+            the env's camera model.
+
+    Raises:
+        AgentError: Wrong action mode or no input-camera observation.
+    """
+
+    def __init__(
+        self, env: Any, config: AgentsConfig | None = None, calibrate: bool = True
+    ) -> None:
+        u = env.unwrapped
+        self.cfg = config or load_agents_config()
+        ecfg = u.config
+        if ecfg.action_mode != "pick_place":
+            raise AgentError(
+                f"the scripted agent needs action_mode 'pick_place', got {ecfg.action_mode!r}"
+            )
+        if "input_camera" not in u.observation_space.spaces:
+            raise AgentError("the scripted agent needs the input_camera observation (obs_mode rgb)")
+        self._env = u
+        height, width = ecfg.image_size
+        self.camera: CameraLike
+        self.calibration = None
+        if calibrate:
+            self.calibration = calibrate_cell_camera(
+                u.cell.cfg, "input_camera", self.cfg.calibration, (height, width)
+            )
+            self.camera = self.calibration.camera
+        else:
+            self.camera = u.camera_model("input", height, width)
+        design = Design.load(ecfg.design)
+        bounds = u.bounds
+        mesh_centre = (np.asarray(bounds.place_lo) + np.asarray(bounds.place_hi)) / 2
+        slots = slot_targets(design, mesh_centre, mm_per_m=self.cfg.perception.mm_per_m)
+        self.slots = slots[: ecfg.max_slots] if ecfg.max_slots else slots
+        self.belt_top = float(bounds.pick_z) - self.cfg.perception.tile_thickness
+        self.palette = np.array([s.color for s in self.slots])
+        self.queue: deque[PickPlace] = deque()
+        self.filled: set[int] = set()
+        self.unplaced: tuple[Unplaced, ...] = ()
+        self.last_plan: PlacementPlan | None = None
+
+    def reset(self) -> None:
+        """Forget the episode (open slots, queued commands)."""
+        self.queue.clear()
+        self.filled.clear()
+        self.unplaced = ()
+        self.last_plan = None
+
+    def plan(self, image: np.ndarray) -> PlacementPlan:
+        """Perceive one input-camera image and assign its tiles to the open slots."""
+        per = perceive_tiles(image, self.camera, self.belt_top, cfg=self.cfg.perception)
+        if self.cfg.perception.color_balance:
+            per, _ = balance_colors(per, self.palette, self.cfg.perception)
+        open_slots = [s for s in self.slots if s.index not in self.filled]
+        plan = plan_placements(per.tiles, open_slots, self.cfg.placement)
+        self.last_plan = plan
+        self.unplaced = plan.unplaced
+        return plan
+
+    def next_command(self, image: np.ndarray) -> PickPlace | None:
+        """The next command; a new picture is perceived when the queue is empty."""
+        if not self.queue:
+            self.queue.extend(self.plan(image).commands)
+        if not self.queue:
+            return None
+        cmd = self.queue.popleft()
+        self.filled.add(cmd.slot)
+        return cmd
+
+    def action(self, cmd: PickPlace | None) -> np.ndarray:
+        """The normalised ``pick_place`` action of a command (a rest action when None).
+
+        The rest action picks and places at the areas' centres with no turn: on an empty spot
+        it fails harmlessly (nothing sealed); it is only returned when nothing is placeable,
+        where the env terminates anyway.
+        """
+        u = self._env
+        if cmd is None:
+            b = u.bounds
+            return u.pick_place_action(
+                (np.asarray(b.pick_lo) + b.pick_hi) / 2,
+                0.0,
+                (np.asarray(b.place_lo) + b.place_hi) / 2,
+                0.0,
+            )
+        return u.pick_place_action(
+            np.asarray(cmd.grasp_pick), cmd.pick[2], np.asarray(cmd.grasp_place), cmd.place[2]
+        )
+
+    def predict(
+        self,
+        observation: dict[str, np.ndarray],
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
+        """stable-baselines3 policy interface.
+
+        Args:
+            observation: The env's observation dict (or a batch of one).
+            state: Unused (no recurrent state); returned as given.
+            episode_start: Per-env flags; a True resets the agent's memory.
+            deterministic: Unused (the agent is deterministic).
+
+        Returns:
+            (action, state): the (6,) float32 action, or (1, 6) for a batched observation.
+        """
+        del deterministic
+        image = np.asarray(observation["input_camera"])
+        batched = image.ndim == IMAGE_DIMS + 1
+        if batched:
+            if image.shape[0] != 1:
+                raise AgentError(
+                    f"the scripted agent drives one env, got a batch of {image.shape[0]}"
+                )
+            image = image[0]
+        if episode_start is not None and bool(np.asarray(episode_start).ravel()[0]):
+            self.reset()
+        act = self.action(self.next_command(image))
+        return (act[None] if batched else act), state
+
+
+__all__ = ["ScriptedAgent"]
