@@ -32,7 +32,7 @@ import numpy as np
 
 from qshape.design import load_section
 from qshape.errors import InvalidFigureError, QShapeError
-from qshape.figure import Figure
+from qshape.figure import Color, Figure, figures_from_outlines
 from qshape.geometry import FloatArray
 from qshape.simplify import OutlineParams
 
@@ -382,6 +382,7 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     partial: list[PartialTile] = []
     rejected: list[str] = []
     m = p.border_margin_px
+    todo: list[tuple[FloatArray, list[FloatArray], Color, str]] = []
     for i, cnt in enumerate(contours):
         if hier[i][3] != -1:
             continue  # a hole; handled with its parent
@@ -415,12 +416,17 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
                 sign = 1.0 if _signed_area(hp) > 0 else -1.0
                 holes.append(_offset_outline(hp, p.boundary_offset_px, -sign))
             child = hier[child][0]
-        sign = 1.0 if _signed_area(pts) > 0 else -1.0
-        outline = _offset_outline(pts, p.boundary_offset_px, sign)
-        try:
-            fig = Figure.from_outline(outline, holes, color3, params=p.outline, y_down=True)
-        except InvalidFigureError as exc:
-            rejected.append(f"region at ({x0}, {y0}) px, area {area:.0f} px^2: {exc}")
+        if p.boundary_offset_px != 0.0:
+            sign = 1.0 if _signed_area(pts) > 0 else -1.0
+            pts = _offset_outline(pts, p.boundary_offset_px, sign)
+        todo.append((pts, holes, color3, f"region at ({x0}, {y0}) px, area {area:.0f} px^2"))
+    # Every outline of the image simplified at once.
+    made = figures_from_outlines(
+        [t[0] for t in todo], [t[1] for t in todo], [t[2] for t in todo], p.outline, y_down=True
+    )
+    for (outline, _, _, where), fig in zip(todo, made, strict=True):
+        if isinstance(fig, InvalidFigureError):
+            rejected.append(f"{where}: {fig}")
             continue
         figures.append(fig)
         outlines.append(outline)

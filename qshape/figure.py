@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 from qshape import geometry as geo
 from qshape.errors import InvalidFigureError, InvalidHoleError
 from qshape.geometry import MAX_COORDINATE, BoolArray, FloatArray
-from qshape.simplify import OutlineParams, simplify_outline
+from qshape.simplify import OutlineParams, simplify_outlines
 
 _REL_EPS = 1e-12
 """Numerical precision: lengths below this fraction of the figure size count as zero."""
@@ -209,6 +209,23 @@ class Boundary:
             mask = mask[::-1].copy()
         return cls(_frozen(pts), _frozen(mask), y_down)
 
+    @classmethod
+    def from_simplified(
+        cls, points: FloatArray, curve_mask: BoolArray, *, y_down: bool, what: str
+    ) -> Boundary:
+        """`make` for the output of `qshape.simplify.simplify_outlines`.
+
+        The points are already a finite float64 (n >= 3, 2) array and the mask a bool (n,)
+        array, so only the geometric checks run (cheaply for convex boundaries).
+        """
+        if len(points) < 3 or np.array_equal(points[0], points[-1]):
+            return cls.make(points, curve_mask, y_down=y_down, what=what)
+        area = _validate_boundary(points, curve_mask, what)
+        if (area > 0.0) != y_down:
+            points = points[::-1].copy()
+            curve_mask = curve_mask[::-1].copy()
+        return cls(_frozen(points), _frozen(curve_mask), y_down)
+
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Boundary):
             return NotImplemented
@@ -310,10 +327,14 @@ class Figure:
             )
             for k, h in enumerate(self.holes)
         )
+        self._derive(outer, holes, _as_color(self.color))
+
+    def _derive(self, outer: Boundary, holes: tuple[Boundary, ...], color: Color | None) -> None:
+        """Set the boundaries and colour, check the holes, derive area and centroid."""
         object.__setattr__(self, "points", outer.points)
         object.__setattr__(self, "curve_mask", outer.curve_mask)
         object.__setattr__(self, "holes", holes)
-        object.__setattr__(self, "color", _as_color(self.color))
+        object.__setattr__(self, "color", color)
         area, centroid, perim = outer.measures()
         object.__setattr__(self, "outer_centroid", _frozen(centroid))
         object.__setattr__(self, "perimeter", perim)
@@ -327,6 +348,16 @@ class Figure:
             centroid = moments / area
         object.__setattr__(self, "area", float(area))
         object.__setattr__(self, "centroid", _frozen(np.asarray(centroid, dtype=np.float64)))
+
+    @classmethod
+    def _from_boundaries(
+        cls, outer: Boundary, holes: tuple[Boundary, ...], color: Iterable[float] | None
+    ) -> Figure:
+        """Figure from boundaries already validated (`Boundary.make`): no second validation."""
+        fig = object.__new__(cls)
+        object.__setattr__(fig, "y_down", outer.y_down)
+        fig._derive(outer, holes, _as_color(color))
+        return fig
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Figure):
@@ -395,12 +426,10 @@ class Figure:
             InvalidFigureError: Too few points, NaN/inf, zero area, or a simplified boundary
                 that is not a simple polygon.
         """
-        pts, mask = simplify_outline(dense_points, params, what="outline")
-        hole_bounds = []
-        for k, h in enumerate(holes):
-            hp, hm = simplify_outline(h, params, what=f"hole {k} outline")
-            hole_bounds.append(Boundary.make(hp, hm, y_down=y_down, what=f"hole {k}"))
-        return cls(pts, mask, tuple(hole_bounds), color, y_down)  # type: ignore[arg-type]
+        (out,) = figures_from_outlines([dense_points], [holes], [color], params, y_down=y_down)
+        if isinstance(out, InvalidFigureError):
+            raise out
+        return out
 
     @classmethod
     def rectangle(
@@ -488,6 +517,55 @@ class Figure:
         return cls(_pose(out, center, angle, y_down), mask, (hb,), _as_color(color), y_down)
 
 
+def figures_from_outlines(
+    outlines: Sequence[ArrayLike],
+    holes: Sequence[Sequence[ArrayLike]],
+    colors: Sequence[Iterable[float] | None],
+    params: OutlineParams | None = None,
+    *,
+    y_down: bool = False,
+) -> list[Figure | InvalidFigureError]:
+    """`Figure.from_outline` for many figures: every outline is simplified in one batch.
+
+    Args:
+        outlines: Dense outer outlines, each (k_i, 2).
+        holes: For each figure, the dense outlines of its holes.
+        colors: For each figure, RGB in [0, 1] or None.
+        params: Simplification parameters; None loads ``configs/qshape.yaml``.
+        y_down: Coordinates are image pixels with y pointing down.
+
+    Returns:
+        Per outline, the figure or the `InvalidFigureError` (or `InvalidHoleError`) it raised.
+    """
+    dense: list[ArrayLike] = list(outlines)
+    whats = ["outline"] * len(dense)
+    for h in holes:
+        dense.extend(h)
+        whats.extend(f"hole {k} outline" for k in range(len(h)))
+    simple = simplify_outlines(dense, params, whats=whats)
+    out: list[Figure | InvalidFigureError] = []
+    at = len(outlines)
+    for i, h in enumerate(holes):
+        outer = simple[i]
+        mine = simple[at : at + len(h)]
+        at += len(h)
+        try:
+            if isinstance(outer, InvalidFigureError):
+                raise outer
+            bound = Boundary.from_simplified(outer[0], outer[1], y_down=y_down, what="figure")
+            hole_bounds = []
+            for k, hs in enumerate(mine):
+                if isinstance(hs, InvalidFigureError):
+                    raise hs
+                hole_bounds.append(
+                    Boundary.from_simplified(hs[0], hs[1], y_down=y_down, what=f"hole {k}")
+                )
+            out.append(Figure._from_boundaries(bound, tuple(hole_bounds), colors[i]))
+        except InvalidFigureError as exc:
+            out.append(exc)
+    return out
+
+
 def _circle_local(r: float) -> tuple[FloatArray, BoolArray]:
     pts = np.array([[-r, 0.0], [0.0, r], [r, 0.0], [0.0, -r]])
     return pts, np.array([False, True, False, True])
@@ -528,4 +606,4 @@ def _check_holes(outer: Boundary, holes: tuple[Boundary, ...]) -> None:
                 raise InvalidHoleError(f"holes {a} and {b} overlap; holes must be disjoint")
 
 
-__all__ = ["Boundary", "Color", "Figure", "densify"]
+__all__ = ["Boundary", "Color", "Figure", "densify", "figures_from_outlines"]

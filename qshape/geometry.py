@@ -23,7 +23,7 @@ def cross2(a: FloatArray, b: FloatArray) -> FloatArray:
 def signed_area(points: FloatArray) -> float:
     """Shoelace area of a closed polygon, positive when counter-clockwise. Shape (n, 2)."""
     x, y = points[:, 0], points[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    return 0.5 * float(np.dot(x[:-1], y[1:]) + x[-1] * y[0] - np.dot(x[1:], y[:-1]) - x[0] * y[-1])
 
 
 def polygon_centroid(points: FloatArray) -> FloatArray:
@@ -169,7 +169,7 @@ def area_centroid_perimeter(
     Returns:
         (area > 0, centroid (2,), perimeter), in the points' unit (squared for the area).
     """
-    nxt = np.roll(points, -1, axis=0)
+    nxt = np.concatenate([points[1:], points[:1]])
     w = cross2(points, nxt)
     poly_area = 0.5 * float(w.sum())
     poly_moment = ((points + nxt) * w[:, None]).sum(axis=0) / 6.0

@@ -13,6 +13,7 @@ millimetres and pixels. Cost is linear in the number of outline points.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -137,21 +138,6 @@ def _clean(dense: ArrayLike, what: str) -> FloatArray:
     return pts
 
 
-def _resampled(pts: FloatArray, n: int) -> tuple[FloatArray, float]:
-    """``n`` uniform arc-length samples of a closed polygon (k, 2) and its perimeter."""
-    closed = np.concatenate([pts, pts[:1]])
-    d = closed[1:] - closed[:-1]
-    cum = np.empty(len(closed))
-    cum[0] = 0.0
-    np.cumsum(np.hypot(d[:, 0], d[:, 1]), out=cum[1:])
-    perimeter = float(cum[-1])
-    s = np.arange(n) * (perimeter / n)
-    res = np.empty((n, 2))
-    res[:, 0] = np.interp(s, cum, closed[:, 0])
-    res[:, 1] = np.interp(s, cum, closed[:, 1])
-    return res, perimeter
-
-
 def simplify_outline(
     dense: ArrayLike, params: OutlineParams | None = None, *, what: str = "outline"
 ) -> tuple[FloatArray, BoolArray]:
@@ -168,176 +154,285 @@ def simplify_outline(
     Raises:
         InvalidFigureError: Fewer than 3 distinct points, NaN/inf, or zero length/area.
     """
-    p = default_outline_params() if params is None else params
-    pts = _clean(dense, what)
-    n = p.resample_points
-    res, perimeter = _resampled(pts, n)
-    nxt = np.concatenate([res[1:], res[:1]])
-    diameter = float(max(np.ptp(res[:, 0]), np.ptp(res[:, 1])))
-    area2 = float(np.dot(res[:, 0], nxt[:, 1]) - np.dot(res[:, 1], nxt[:, 0]))
-    if diameter <= 0.0 or abs(area2) <= 1e-12 * diameter * diameter:
-        raise InvalidFigureError(f"{what}: zero area (the outline is a line or a point)")
-    sign = 1.0 if area2 > 0.0 else -1.0  # +1: counter-clockwise in the given frame
+    (out,) = simplify_outlines([dense], params, whats=[what])
+    if isinstance(out, InvalidFigureError):
+        raise out
+    return out
 
-    # Circular moving average (same sums as a 'valid' convolution of the wrapped samples).
+
+def simplify_outlines(
+    dense: Sequence[ArrayLike],
+    params: OutlineParams | None = None,
+    *,
+    whats: Sequence[str] | None = None,
+) -> list[tuple[FloatArray, BoolArray] | InvalidFigureError]:
+    """`simplify_outline` of many outlines at once (vectorised over all of them).
+
+    Args:
+        dense: Closed outlines, each of shape (k_i, 2).
+        params: Simplification parameters; None: the bundled defaults.
+        whats: Names used in error messages, one per outline (default "outline i").
+
+    Returns:
+        Per outline, (points, curve_mask) or the `InvalidFigureError` it raised.
+    """
+    p = default_outline_params() if params is None else params
+    names = [f"outline {i}" for i in range(len(dense))] if whats is None else list(whats)
+    out: list[tuple[FloatArray, BoolArray] | InvalidFigureError | None] = []
+    good: list[int] = []
+    cleaned: list[FloatArray] = []
+    for i, d in enumerate(dense):
+        try:
+            cleaned.append(_clean(d, names[i]))
+        except InvalidFigureError as exc:
+            out.append(exc)
+            continue
+        out.append(None)
+        good.append(i)
+    if good:
+        _simplify_clean(cleaned, p, [names[i] for i in good], out, good)
+    return [x for x in out if x is not None]
+
+
+def _simplify_clean(
+    cleaned: list[FloatArray],
+    p: OutlineParams,
+    names: list[str],
+    out: list[tuple[FloatArray, BoolArray] | InvalidFigureError | None],
+    slots: list[int],
+) -> None:
+    """Simplify cleaned outlines, writing each result (or error) to ``out[slots[f]]``."""
+    n = p.resample_points
+    res, perimeter = _resampled_many(cleaned, n)  # (F, n, 2), (F,)
+    centre = res.mean(axis=1, keepdims=True)
+    res_c = res - centre
+    diameter = np.maximum(np.ptp(res[:, :, 0], axis=1), np.ptp(res[:, :, 1], axis=1))
+    nxt = np.roll(res_c, -1, axis=1)
+    area2 = (res_c[:, :, 0] * nxt[:, :, 1] - res_c[:, :, 1] * nxt[:, :, 0]).sum(axis=1)
+    flat = (diameter <= 0.0) | (np.abs(area2) <= 1e-12 * diameter * diameter)
+    sign = np.where(area2 > 0.0, 1.0, -1.0)  # +1: counter-clockwise in the given frame
+
+    # Circular moving average (prefix sums of the wrapped, centred samples).
     half = max(1, round(p.smooth_fraction * n))
     width = 2 * half + 1
-    padded = np.concatenate([res[-half:], res, res[:half]])
-    smooth = np.empty_like(res)
-    for k in range(2):
-        smooth[:, k] = np.convolve(padded[:, k], np.full(width, 1.0 / width), mode="valid")
+    padded = np.concatenate([res_c[:, -half:], res_c, res_c[:, :half]], axis=1)
+    csum = np.zeros((len(cleaned), n + 2 * half + 1, 2))
+    np.cumsum(padded, axis=1, out=csum[:, 1:])
+    smooth = (csum[:, width:] - csum[:, :-width]) / width + centre
 
     w = max(1, round(p.corner_window * n))
-    ext = np.concatenate([smooth[-w:], smooth, smooth[:w]])  # ext[i + w] = smooth[i]
-    back = smooth - ext[:n]
-    fwd = ext[2 * w :] - smooth
-    bx, by, fx, fy = back[:, 0], back[:, 1], fwd[:, 0], fwd[:, 1]
+    ext = np.concatenate([smooth[:, -w:], smooth, smooth[:, :w]], axis=1)  # ext[i + w] = s[i]
+    back = smooth - ext[:, :n]
+    fwd = ext[:, 2 * w :] - smooth
+    bx, by, fx, fy = back[..., 0], back[..., 1], fwd[..., 0], fwd[..., 1]
     change = np.degrees(np.arctan2(np.abs(bx * fy - by * fx), bx * fx + by * fy))
-    corners = _corners(change, p.corner_angle_deg, w, max(w, round(p.merge_fraction * n)))
+    change[flat] = 0.0
+    corners = _corners_many(change, p.corner_angle_deg, max(w, round(p.merge_fraction * n)))
     noise = p.noise_fraction * diameter
-    if len(corners) == 0:
-        turn = _turning(smooth, ext[w - 1 : w + n + 1], sign)
-        out_pts: list[FloatArray] = []
-        out_curve: list[bool] = []
-        _emit_run(
-            res,
-            turn,
-            np.arange(n),
-            p=p,
-            noise=noise,
-            out_pts=out_pts,
-            out_curve=out_curve,
-            closed_loop=True,
-            guard=half,
-        )
-        points = np.array(out_pts, dtype=np.float64)
-        mask = np.array(out_curve, dtype=bool)
-    else:
-        points, mask = _polyline(
-            res, smooth, ext[w - 1 : w + n + 1], sign, corners, p, noise, half, w, perimeter
-        )
-    if len(points) < 3:
-        raise InvalidFigureError(
-            f"{what}: simplified to {len(points)} relevant points; a figure needs at least 3"
-        )
-    return points, mask
+    ring = ext[:, w - 1 : w + n + 1]
+    geom = _Samples(res, smooth, ring, sign, noise, perimeter, flat)
+    results = _polylines(geom, corners, p, half, w)
+    for f, i in enumerate(slots):
+        what = names[f]
+        if flat[f]:
+            out[i] = InvalidFigureError(f"{what}: zero area (the outline is a line or a point)")
+            continue
+        points, mask = results[f]
+        if len(points) < 3:
+            out[i] = InvalidFigureError(
+                f"{what}: simplified to {len(points)} relevant points; a figure needs at least 3"
+            )
+            continue
+        out[i] = (points, mask)
 
 
-def _turning(smooth: FloatArray, ring: FloatArray, sign: float) -> FloatArray:
-    """Local signed turning [deg] at each smoothed sample; ``ring[i + 1] = smooth[i]``."""
-    d1 = smooth - ring[:-2]
-    d2 = ring[2:] - smooth
-    crs = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
-    dot = d1[:, 0] * d2[:, 0] + d1[:, 1] * d2[:, 1]
-    return np.asarray(np.degrees(np.arctan2(crs, dot)) * sign)
+@dataclass(frozen=True)
+class _Samples:
+    """Resampled outlines, all of ``n`` samples.
 
-
-def _polyline(  # noqa: PLR0913, PLR0917
-    res: FloatArray,
-    smooth: FloatArray,
-    ring: FloatArray,
-    sign: float,
-    corners: np.ndarray,
-    p: OutlineParams,
-    noise: float,
-    half: int,
-    w: int,
-    perimeter: float,
-) -> tuple[FloatArray, BoolArray]:
-    """Relevant points of an outline with corners: all runs' chord tests at once.
-
-    The samples are rotated so that the first corner is sample 0; run r covers samples
-    ``c[r] .. c[r + 1]`` (the last one ends at sample n = sample 0). Straight runs emit their
-    corner; curved runs go through `_emit_run`.
+    Attributes:
+        res: Samples, shape (F, n, 2). smooth: Their moving average, (F, n, 2).
+        ring: ``ring[:, i + 1] = smooth[:, i]``, wrapped, shape (F, n + 2, 2).
+        sign: (F,) +1 for counter-clockwise outlines. noise: (F,) chord noise floor.
+        perimeter: (F,) outline lengths. skip: (F,) degenerate outlines (no result).
     """
-    n = len(res)
-    c0 = int(corners[0])
-    rolled = np.concatenate([res[c0:], res[: c0 + 1]])  # (n + 1, 2), rolled[n] = rolled[0]
-    starts = corners - c0
-    ends = np.append(starts[1:], n)
-    a, b = rolled[starts], rolled[ends]
-    chord = b - a
+
+    res: FloatArray
+    smooth: FloatArray
+    ring: FloatArray
+    sign: FloatArray
+    noise: FloatArray
+    perimeter: FloatArray
+    skip: BoolArray
+
+    def turning(self, f: int) -> FloatArray:
+        """Local signed turning [deg] at each smoothed sample of outline f, shape (n,)."""
+        sm, ring = self.smooth[f], self.ring[f]
+        d1 = sm - ring[:-2]
+        d2 = ring[2:] - sm
+        crs = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+        dot = d1[:, 0] * d2[:, 0] + d1[:, 1] * d2[:, 1]
+        return np.asarray(np.degrees(np.arctan2(crs, dot)) * self.sign[f])
+
+
+def _resampled_many(pts: list[FloatArray], n: int) -> tuple[FloatArray, FloatArray]:
+    """``n`` uniform arc-length samples of each closed polygon -> (F, n, 2), perimeters (F,).
+
+    One interpolation over all outlines: each one's arc length is offset past the previous.
+    """
+    sizes = np.array([len(q) + 1 for q in pts])
+    closed = np.concatenate([np.concatenate([q, q[:1]]) for q in pts])
+    seg = np.zeros(len(closed))
+    d = closed[1:] - closed[:-1]
+    seg[1:] = np.hypot(d[:, 0], d[:, 1])
+    first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    seg[first] = 0.0  # no length between one outline and the next
+    cum = np.cumsum(seg)
+    start = cum[first]
+    perimeter = np.append(start[1:], cum[-1]) - start
+    # Outline f spans [start_f + f, start_f + f + perimeter_f]: a gap of 1 between outlines.
+    gap = np.arange(len(pts), dtype=np.float64)
+    xp = cum + np.repeat(gap, sizes)
+    s = (start + gap)[:, None] + np.arange(n)[None, :] * (perimeter / n)[:, None]
+    res = np.empty((len(pts), n, 2))
+    res[:, :, 0] = np.interp(s.ravel(), xp, closed[:, 0]).reshape(len(pts), n)
+    res[:, :, 1] = np.interp(s.ravel(), xp, closed[:, 1]).reshape(len(pts), n)
+    return res, perimeter
+
+
+def _closed_loop(g: _Samples, f: int, p: OutlineParams, half: int) -> tuple[FloatArray, BoolArray]:
+    """Relevant points of an outline without corners (a closed curve)."""
+    out_pts: list[FloatArray] = []
+    out_curve: list[bool] = []
+    _emit_run(
+        g.res[f],
+        g.turning(f),
+        np.arange(g.res.shape[1]),
+        p=p,
+        noise=float(g.noise[f]),
+        out_pts=out_pts,
+        out_curve=out_curve,
+        closed_loop=True,
+        guard=half,
+    )
+    return np.array(out_pts, dtype=np.float64), np.array(out_curve, dtype=bool)
+
+
+def _polylines(  # noqa: PLR0914
+    g: _Samples, corners: list[np.ndarray], p: OutlineParams, half: int, w: int
+) -> list[tuple[FloatArray, BoolArray]]:
+    """Relevant points of every outline: all runs' chord tests and line fits at once.
+
+    Each outline's samples are rotated so that its first corner is sample 0; run r covers
+    samples ``c[r] .. c[r + 1]`` (the last one ends at sample n = sample 0). Straight runs
+    emit their corner; curved runs, and outlines without corners, go through `_emit_run`.
+    """
+    count, n = g.res.shape[:2]
+    empty = (np.zeros((0, 2)), np.zeros(0, dtype=bool))
+    results: list[tuple[FloatArray, BoolArray]] = [empty] * count
+    with_c: list[int] = []
+    for f in range(count):
+        if g.skip[f]:
+            continue
+        if len(corners[f]):
+            with_c.append(f)
+        else:
+            results[f] = _closed_loop(g, f, p, half)
+    if not with_c:
+        return results
+    fo = np.array(with_c)
+    m = np.array([len(corners[f]) for f in with_c])  # runs per outline
+    c0 = np.array([int(corners[f][0]) for f in with_c])
+    starts = np.concatenate([corners[f] - corners[f][0] for f in with_c])  # local
+    owner = np.repeat(np.arange(len(fo)), m)  # row of fo of each run
+    first_run = np.concatenate([[0], np.cumsum(m)[:-1]])
+    last_run = first_run + m - 1
+    ends = np.append(starts[1:], 0)
+    ends[last_run] = n
+    rolled = g.res[fo[:, None], (c0[:, None] + np.arange(n + 1)[None, :]) % n]  # (G, n+1, 2)
+    a = rolled[owner, starts]
+    chord = rolled[owner, ends] - a
     length = np.hypot(chord[:, 0], chord[:, 1])
-    run_id = np.repeat(np.arange(len(starts)), ends - starts)
-    rel = rolled[:n] - a[run_id]
+    # Every sample of every run (its start included, its end left out: distance 0 there).
+    lens = ends - starts
+    seg_start = np.concatenate([[0], np.cumsum(lens)[:-1]])
+    run_id = np.repeat(np.arange(len(starts)), lens)
+    flat_idx = (owner * (n + 1) + starts - seg_start)[run_id] + np.arange(int(lens.sum()))
+    rel = rolled.reshape(-1, 2)[flat_idx] - a[run_id]
     dev = np.abs(chord[run_id, 0] * rel[:, 1] - chord[run_id, 1] * rel[:, 0])
-    dev_max = np.maximum.reduceat(dev, starts)
+    dev_max = np.maximum.reduceat(dev, seg_start)
     zero = length == 0.0
     if zero.any():  # degenerate chord: distance from the run's start
-        dist0 = np.maximum.reduceat(np.hypot(rel[:, 0], rel[:, 1]), starts)
+        dist0 = np.maximum.reduceat(np.hypot(rel[:, 0], rel[:, 1]), seg_start)
         dev_max = np.where(zero, dist0, dev_max / np.where(zero, 1.0, length))
     else:
         dev_max = dev_max / length
-    straight = dev_max <= np.maximum(p.straight_sagitta_ratio * length, noise)
-    if straight.all():
-        points = a.copy()
-        mask = np.zeros(len(a), dtype=bool)
-        run_start = np.arange(len(a))
-    else:
-        turn = _turning(smooth, ring, sign)
+    straight = dev_max <= np.maximum(p.straight_sagitta_ratio * length, g.noise[fo][owner])
+    points = a.copy()
+    if p.refine_corners:
+        prev = np.arange(len(starts)) - 1
+        prev[first_run] = last_run
+        _refine_all(
+            rolled,
+            (owner, starts, ends, prev),
+            straight & (m >= 2)[owner],
+            points,
+            trim=w,
+            reach=p.corner_window * g.perimeter[fo],
+            min_sin=math.sin(math.radians(p.corner_angle_deg)),
+        )
+    for row, f in enumerate(with_c):
+        r0, r1 = int(first_run[row]), int(first_run[row] + m[row])
+        if straight[r0:r1].all():
+            results[f] = (points[r0:r1], np.zeros(r1 - r0, dtype=bool))
+            continue
+        turn = g.turning(f)
         out_pts: list[FloatArray] = []
         out_curve: list[bool] = []
-        first: list[int] = []
-        for r, (s, e) in enumerate(zip(starts.tolist(), ends.tolist(), strict=True)):
-            first.append(len(out_pts))
+        for r in range(r0, r1):
             if straight[r]:
-                out_pts.append(a[r])
+                out_pts.append(points[r])
                 out_curve.append(False)
                 continue
-            idx = (np.arange(s, e + 1) + c0) % n
+            idx = (np.arange(int(starts[r]), int(ends[r]) + 1) + int(c0[row])) % n
             _emit_run(
-                res,
+                g.res[f],
                 turn,
                 idx,
                 p=p,
-                noise=noise,
+                noise=float(g.noise[f]),
                 out_pts=out_pts,
                 out_curve=out_curve,
                 closed_loop=False,
                 guard=half,
             )
-        points = np.array(out_pts, dtype=np.float64)
-        mask = np.array(out_curve, dtype=bool)
-        run_start = np.array(first)
-    if p.refine_corners and len(starts) >= 2:
-        _refine_corners(
-            rolled,
-            starts,
-            ends,
-            straight,
-            points,
-            run_start,
-            trim=w,
-            reach=p.corner_window * perimeter,
-            min_sin=math.sin(math.radians(p.corner_angle_deg)),
-        )
-    return points, mask
+        results[f] = (np.array(out_pts, dtype=np.float64), np.array(out_curve, dtype=bool))
+    return results
 
 
-def _corners(change: FloatArray, threshold: float, window: int, spacing: int) -> np.ndarray:
-    """Indices of corners: local maxima of direction change above threshold, spaced apart.
+def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np.ndarray]:
+    """Corners of each row of ``change`` (F, n), all rows at once.
 
-    Greedy: the strongest remaining candidate is kept unless within ``spacing`` samples
-    (circularly) of one already kept.
+    Greedy, as the slope comparison wants: the strongest remaining sample above ``threshold``
+    (the first of equal values) is a corner, and the samples within ``spacing`` of it
+    (circularly) are no longer candidates. Each round does this for every row.
     """
-    n = len(change)
+    count, n = change.shape
     vals = np.where(change > threshold, change, -np.inf)
-    keep: list[int] = []
-    while True:  # one iteration per kept corner; argmax takes the first of equal values
-        i = int(np.argmax(vals))
-        if vals[i] == -np.inf:
+    keep: list[list[int]] = [[] for _ in range(count)]
+    pos = np.arange(n)
+    while True:
+        i = np.argmax(vals, axis=1)
+        live = np.flatnonzero(vals[np.arange(count), i] > -np.inf)
+        if len(live) == 0:
             break
-        keep.append(i)
-        if 2 * spacing + 1 >= n:
-            break
-        lo, hi = i - spacing, i + spacing + 1
-        vals[max(lo, 0) : min(hi, n)] = -np.inf
-        if lo < 0:
-            vals[n + lo :] = -np.inf
-        if hi > n:
-            vals[: hi - n] = -np.inf
-    keep.sort()
-    return np.array(keep, dtype=np.int64)
+        for f, k in zip(live.tolist(), i[live].tolist(), strict=True):
+            keep[f].append(k)
+        d = np.abs(pos[None, :] - i[live][:, None])
+        sub = vals[live]
+        sub[np.minimum(d, n - d) <= spacing] = -np.inf
+        vals[live] = sub
+    return [np.array(sorted(k), dtype=np.int64) for k in keep]
 
 
 def _emit_run(
@@ -397,16 +492,14 @@ def _emit_run(
     return False
 
 
-def _refine_corners(  # noqa: PLR0913, PLR0917
+def _refine_all(
     rolled: FloatArray,
-    starts: np.ndarray,
-    ends: np.ndarray,
+    runs: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     straight: BoolArray,
     points: FloatArray,
-    run_start: np.ndarray,
     *,
     trim: int,
-    reach: float,
+    reach: FloatArray,
     min_sin: float,
 ) -> None:
     """Move each corner between two straight runs to the intersection of their fitted lines.
@@ -415,21 +508,23 @@ def _refine_corners(  # noqa: PLR0913, PLR0917
     adjacent edges meet at the true corner. Kept only when the lines cross at a corner angle
     (sine of the angle between them >= ``min_sin``) within ``reach`` of the detected corner.
     Lines are total-least-squares fits of each run (its ends trimmed by ``trim`` samples when
-    long enough), all runs at once from prefix sums. ``points`` is updated in place.
+    long enough), all runs of all outlines at once from prefix sums. ``runs`` is (owner,
+    starts, ends, prev): run r covers ``rolled[owner[r], starts[r] .. ends[r]]`` and ``prev[r]``
+    is the run before it; ``points[r]`` (its corner) is updated in place.
     """
-    prev = np.arange(len(starts)) - 1  # run r - 1 (index -1: the last run)
+    owner, starts, ends, prev = runs
     both = straight & straight[prev]
     if not both.any():
         return
     long = ends - starts + 1 > 2 * trim + 2
     lo = np.where(long, starts + trim, starts)
     hi = np.where(long, ends - trim + 1, ends + 1)  # exclusive
-    origin = rolled[0]
-    q = rolled - origin
-    x, y = q[:, 0], q[:, 1]
-    sums = np.zeros((len(q) + 1, 5))
-    np.cumsum(np.stack([x, y, x * x, y * y, x * y], axis=1), axis=0, out=sums[1:])
-    tot = sums[hi] - sums[lo]
+    origin = rolled[:, 0, :]
+    q = rolled - origin[:, None, :]
+    x, y = q[..., 0], q[..., 1]
+    sums = np.zeros((q.shape[0], q.shape[1] + 1, 5))
+    np.cumsum(np.stack([x, y, x * x, y * y, x * y], axis=-1), axis=1, out=sums[:, 1:])
+    tot = sums[owner, hi] - sums[owner, lo]
     cnt = (hi - lo).astype(np.float64)
     mx, my = tot[:, 0] / cnt, tot[:, 1] / cnt
     sxx = tot[:, 2] - cnt * mx * mx
@@ -437,18 +532,16 @@ def _refine_corners(  # noqa: PLR0913, PLR0917
     sxy = tot[:, 4] - cnt * mx * my
     phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)  # principal direction of each run
     dx, dy = np.cos(phi), np.sin(phi)
-    # Line r - 1 (previous run) meets line r.
     pdx, pdy, pmx, pmy = dx[prev], dy[prev], mx[prev], my[prev]
     den = pdx * dy - pdy * dx
     ok = both & (np.abs(den) >= min_sin)
     safe = np.where(ok, den, 1.0)
     t = ((mx - pmx) * dy - (my - pmy) * dx) / safe
-    cx = pmx + t * pdx + origin[0]
-    cy = pmy + t * pdy + origin[1]
-    at = run_start
-    ok &= np.hypot(cx - points[at, 0], cy - points[at, 1]) <= reach
-    points[at[ok], 0] = cx[ok]
-    points[at[ok], 1] = cy[ok]
+    cx = pmx + t * pdx + origin[owner, 0]
+    cy = pmy + t * pdy + origin[owner, 1]
+    ok &= np.hypot(cx - points[:, 0], cy - points[:, 1]) <= reach[owner]
+    points[ok, 0] = cx[ok]
+    points[ok, 1] = cy[ok]
 
 
 def _chord_distance(run: FloatArray) -> FloatArray:
@@ -461,4 +554,4 @@ def _chord_distance(run: FloatArray) -> FloatArray:
     return np.asarray(np.abs(cross2(np.broadcast_to(chord, rel.shape), rel)) / length)
 
 
-__all__ = ["OutlineParams", "default_outline_params", "simplify_outline"]
+__all__ = ["OutlineParams", "default_outline_params", "simplify_outline", "simplify_outlines"]
