@@ -148,3 +148,35 @@ def test_full_cycle_in_simulation_places_within_tolerance(belt_speed: float) -> 
         assert cell.warnings() == 0
     finally:
         cell.close()
+
+
+def test_carried_tile_pull_is_its_load_not_the_pad_contact() -> None:
+    # A holed tile gripped off-centre (the case that dropped): while carried at full speed the
+    # measured pull is the tile's weight plus inertia (a few times its weight), not the pad
+    # contact's internal push on the sealed tile (15-40 x the weight when the weld alone was
+    # measured: 2.4 N here, 13 N for a 30 g tile).
+    ring = next(s for s in basic_shapes() if s.name == "ring")
+    cell = _build_cell(cell_config("paper", 0.0, 30.0), [ring], (), seed=1)
+    runner = CellRunner(cell, CFG)
+    pulls: list[tuple[float, float]] = []
+    update = cell.suction.update
+
+    def recording_update(data: object) -> object:
+        event = update(data)  # type: ignore[arg-type]
+        if cell.suction.held >= 0:
+            pulls.append((cell.time, cell.suction.pull))
+        return event
+
+    cell.suction.update = recording_update  # type: ignore[method-assign]
+    try:
+        runner.slots = np.array([[0.04, -0.52, 0.7]])
+        plan = runner.plan(0, 0, JointState.at_rest(cell.qpos), False, True)
+        t0 = cell.time
+        run = runner.execute(plan, 0)
+        assert run.grasped and cell.n_dropped == 0
+        carried = [p for t, p in pulls if plan.lift_off + 0.05 < t - t0 < plan.vacuum_off]
+        assert carried
+        weight = float(cell.model.body_mass[cell.ids.tile_body[0]]) * 9.81
+        assert max(carried) <= 5.0 * weight
+    finally:
+        cell.close()
