@@ -50,7 +50,9 @@ from agents.perception import (
     slot_targets,
 )
 from agents.placement import PickPlace, PlacementPlan, plan_placements
+from configs import ConfigError
 from envs.cell import Cell
+from qshape import QShapeError
 from qshape.design import Design
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -76,6 +78,7 @@ class RunStats:
     not_planned: list[str] = field(default_factory=list)
     unplaced: list[dict[str, Any]] = field(default_factory=list)
     recognition: list[dict[str, Any]] = field(default_factory=list)
+    unrecognised: list[str] = field(default_factory=list)
 
 
 class VideoSink:
@@ -341,7 +344,11 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
                 first = (image, perceived, plan)
                 stats.recognition = recognition(cell, perceived, plan, design)
             stats.unplaced = [asdict(u) for u in plan.unplaced]
-            if not plan.commands or executor is None:
+            stats.unrecognised = list(perceived.unrecognised)
+            if executor is None:  # vision only: the slots no tile was assigned to stay open
+                open_slots = [s for s in open_slots if s.index in plan.open_slots]
+                break
+            if not plan.commands:
                 break
             filled: set[int] = set()
             for k, c in enumerate(plan.commands):
@@ -409,6 +416,8 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
                     (r["yaw_error_deg"] for r in stats.recognition), default=math.nan
                 ),
                 "unplaced": stats.unplaced,
+                "unrecognised": stats.unrecognised,
+                "open_slots": [s.name for s in open_slots],
                 "not_planned": stats.not_planned,
                 "placement": asdict(cfg.placement),
                 "video": str(video_path) if video_path else None,
@@ -472,6 +481,10 @@ def report_text(r: dict[str, Any]) -> str:
             )
     for u in r["unplaced"]:
         lines.append(f"not placed: tile {u['tile']}: {u['detail']}")
+    for msg in r.get("unrecognised", []):
+        lines.append(f"not recognised: {msg}")
+    if r.get("open_slots"):
+        lines.append(f"slots left open: {', '.join(r['open_slots'])}")
     for s in r["not_planned"]:
         lines.append(f"not planned: {s}")
     return "\n".join(lines) + "\n"
@@ -516,7 +529,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     out = out if out.is_absolute() else ROOT / out
     try:
         report = run(cfg, out, quiet=args.quiet)
-    except AgentError as exc:
+    except (AgentError, QShapeError, ConfigError) as exc:
         raise SystemExit(f"error: {exc}") from exc
     print(report_text(report), end="")
     print(f"wrote {out / 'report.json'}")

@@ -338,15 +338,25 @@ def perceive_tiles(
         tolerances: qshape tolerances for the descriptions (bundled when None).
 
     Returns:
-        The perceived tiles, partial regions and unrecognised regions.
+        The perceived tiles, partial regions and unrecognised regions. An image qshape cannot
+        use (one uniform colour: a covered or dark camera) gives no tiles and its reason in
+        ``unrecognised``.
 
     Raises:
-        qshape.ImageError: Invalid image.
+        qshape.ImageError: Not an RGB uint8 image of a usable size.
         PerceptionError: Plane not in front of the camera.
     """
     cfg = cfg or PerceptionConfig()
     z = belt_top_z + cfg.tile_thickness
-    res = qshape.extract_detailed(image, cell_extract_params(cfg, extract_params))
+    params = cell_extract_params(cfg, extract_params)
+    try:
+        res = qshape.extract_detailed(image, params)
+    except qshape.ImageError as exc:
+        arr = np.asarray(image)
+        well_formed = arr.dtype == np.uint8 and arr.ndim == 3 and arr.shape[2] == 3  # noqa: PLR2004
+        if not well_formed:
+            raise
+        return Perception((), (), (f"image not usable: {exc}",), z)
     world: list[Figure] = []
     unrecognised = list(res.rejected)
     kept_px: list[Figure] = []

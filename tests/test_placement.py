@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -12,6 +13,7 @@ from agents.cell_adapter import build_design_cell, nearest_tile, yaw_error
 from agents.config import PlacementConfig
 from agents.perception import balance_colors, perceive_tiles, slot_targets
 from agents.placement import equivalent_yaws, plan_placements, wrap
+from envs.cell_config import load_cell_config
 from qshape.design import Design
 
 YAW_TOL = math.radians(2.0)
@@ -90,3 +92,40 @@ def test_empty_inputs():
     plan = plan_placements([], [])
     assert plan.commands == () and plan.unplaced == ()
     _ = qshape  # the library stays importable without the simulator in this module's scope
+
+
+def test_distractors_on_the_belt_are_never_placed():
+    full = Design.load("paper_mixed")
+    design = full.with_slots(full.slots[::2])
+    base = load_cell_config()
+    tiles = replace(base.tiles, distractor_rate=1.0, distractor_kinds=("color", "shape", "broken"))
+    cell, _ = build_design_cell(design, replace(base, tiles=tiles), seed=0)
+    try:
+        cell.step(100)
+        slots = slot_targets(design, cell.geometry.output_centre[:2])
+        per = perceive_tiles(
+            cell.render("input_camera"), cell.camera_model("input_camera"), cell.geometry.belt_top
+        )
+        per, _ = balance_colors(per, np.array([s.color for s in slots]))
+        plan = plan_placements(per.tiles, slots)
+        assert int(cell.is_distractor.sum()) == len(plan.unplaced) == len(design.slots)
+        assert not plan.open_slots
+        for c in plan.commands:
+            i, _ = nearest_tile(cell, np.array(c.pick[:2]))
+            assert not cell.is_distractor[i]
+            assert cell.tiles[i].shape.name == design.slots[c.slot].class_key
+        for u in plan.unplaced:
+            i, _ = nearest_tile(cell, per.tiles[u.tile].centre)
+            assert cell.is_distractor[i]
+            assert u.reason in ("shape_absent", "color_absent")
+    finally:
+        cell.close()
+
+
+def test_a_camera_that_sees_nothing_places_nothing(scene):
+    cell, _, slots, _ = scene
+    dark = np.zeros((492, 656, 3), np.uint8)
+    per = perceive_tiles(dark, cell.camera_model("input_camera"), cell.geometry.belt_top)
+    assert per.tiles == () and "not usable" in per.unrecognised[0]
+    plan = plan_placements(per.tiles, slots)
+    assert plan.commands == () and len(plan.open_slots) == len(slots)
