@@ -4,7 +4,7 @@ from __future__ import annotations
 
 
 class AgentError(Exception):
-    """Base class of every error raised by ``agents`` (the message says what and what is allowed)."""
+    """Base of every error raised by ``agents`` (the message says what, and what is allowed)."""
 
 
 class PerceptionError(AgentError):
