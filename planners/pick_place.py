@@ -18,10 +18,12 @@ passed with a vertical tool velocity (``approach_speed``) plus a *lead*: the sta
 of the time-optimal rest-to-rest move between the two approach points is superposed, so the
 base axis already turns while the tool rises (and still turns while it descends). tau is the
 largest lead (bisection, ``lead_bisections`` steps) up to the vertical move's duration for which
-the tool stays
-within ``max_lateral_drift`` of vertical (in the belt's frame) below
-``lateral_clearance_height``; the transfer must stay ``transfer_clearance`` above the lower
-contact. Otherwise the planner falls back to stopping at the approach point.
+the tool stays within ``max_lateral_drift`` of vertical (in the belt's frame) below a clearance
+height: ``lateral_clearance_height`` while it carries a tile (lift, place descent: the tile's
+underside must clear its neighbours' tops), ``empty_clearance_height`` for the empty pad (pick
+descent, retreat from the place: its face only clears tile tops level with the contact). The
+transfer must stay ``transfer_clearance`` above the lower contact. Otherwise the planner falls
+back to stopping at the approach point.
 
 Moving belt: the tile at ``pick_position`` (at the cycle's start) moves with ``belt_velocity``.
 The planner predicts where it is at contact (fixed-point iteration on the contact time), arrives
