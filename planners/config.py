@@ -9,7 +9,7 @@ Facts and assumptions:
     * ABB publishes no per-axis acceleration or jerk limits. The defaults assume each axis reaches
       its top speed in about 1/10 s (acceleration = 10 x speed per second) with jerk 10 x
       acceleration. At the 0.5-0.6 m radius of the work areas this is a tool acceleration of
-      about 17-22 m/s^2. Check: ABB's 25/300/25 mm standard cycle planned with these limits and
+      about 17-21 m/s^2. Check: ABB's 25/300/25 mm standard cycle planned with these limits and
       a stop at every corner takes 1.36 s (1.47 s at 8 x), slower than ABB's sub-second figure
       for the IRB 140, so the assumption is conservative. These are assumptions: change them in
       the YAML.
