@@ -39,6 +39,7 @@ from qshape.matching import (
     canonical_key,
     canonical_keys,
     coarse_key,
+    cyclic_compat_by_offset,
     evaluate_block,
     evaluate_pairs,
     pack,
@@ -92,10 +93,27 @@ class _Block:
     base: NDArray[np.bool_]
 
 
-def _groups(descs: Sequence[Description]) -> dict[str, list[int]]:
-    out: dict[str, list[int]] = defaultdict(list)
+def _groups(descs: Sequence[Description], tol: Tolerances) -> dict[str, tuple[list[int], set[str]]]:
+    """Descriptions by canonical key: (members ascending, union of their admissible keys).
+
+    Keys are generated once per distinct set of node codes (copies of a class mostly share
+    them), not once per description.
+    """
+    raw: dict[tuple[bytes, tuple[bytes, ...]], list[int]] = defaultdict(list)
     for i, d in enumerate(descs):
-        out[canonical_key(d)].append(i)
+        raw[(d.outer.codes.tobytes(), tuple(h.boundary.codes.tobytes() for h in d.holes))].append(i)
+    out: dict[str, tuple[list[int], set[str]]] = {}
+    for members in raw.values():
+        rep = descs[members[0]]
+        key = canonical_key(rep)
+        if key in out:
+            have, keys = out[key]
+            have.extend(members)
+            keys |= canonical_keys(rep, tol)
+        else:
+            out[key] = (members, set(canonical_keys(rep, tol)))
+    for members, _ in out.values():
+        members.sort()
     return out
 
 
@@ -112,24 +130,20 @@ def _blocks(
     expand). Each such pair of groups splits into the connected components of its size/colour
     agreement (in practice one per tile class).
     """
-    tile_groups = _groups(tiles)
-    slot_groups = _groups(slots)
+    tile_groups = _groups(tiles, tol)
+    slot_groups = _groups(slots, tol)
     slot_keys = list(slot_groups)
     by_key: dict[str, set[int]] = defaultdict(set)
     by_coarse: dict[str, set[int]] = defaultdict(set)
     for gi, key in enumerate(slot_keys):
-        members = slot_groups[key]
+        members, admissible = slot_groups[key]
         by_coarse[coarse_key(slots[members[0]])].add(gi)
-        for m in members:
-            for k in canonical_keys(slots[m], tol):
-                by_key[k].add(gi)
+        for k in admissible:
+            by_key[k].add(gi)
     blocks: list[_Block] = []
     slot_packs: dict[int, Pack] = {}
-    for members in tile_groups.values():
+    for members, keys in tile_groups.values():
         coarse = coarse_key(tiles[members[0]])
-        keys: set[str] = set()
-        for m in members:
-            keys |= canonical_keys(tiles[m], tol)
         found: set[int] = set(by_key.get(coarse, ()))
         if coarse in keys:  # too ambiguous to expand: every slot with the same coarse key
             found |= by_coarse.get(coarse, set())
@@ -138,7 +152,7 @@ def _blocks(
         t_idx = np.array(members)
         tpack = pack([tiles[m] for m in members])
         for gi in sorted(found):
-            s_idx = np.array(slot_groups[slot_keys[gi]])
+            s_idx = np.array(slot_groups[slot_keys[gi]][0])
             if gi not in slot_packs:
                 slot_packs[gi] = pack([slots[m] for m in s_idx])
             spack = slot_packs[gi]
@@ -162,10 +176,78 @@ def _blocks(
     return blocks
 
 
+def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray]:
+    """Best alignment of every (tile, slot) pair of a hole-free block, as matrices.
+
+    Every cyclic offset of every pair is fitted at once (one matrix product per chunk of
+    tiles); per pair, the offsets within ``tol.symmetry_residual`` of its least residual are
+    equivalent and the one of least rotation magnitude (largest cosine) is kept, as in
+    `Match.rotation`.
+
+    Returns:
+        (score, theta), each (T, S): residual (inf where the pair does not match) and rotation
+        [rad] turning the tile onto the slot (0 where it does not match).
+    """
+    ref, cand = block.spack, block.tpack
+    n = ref.codes.shape[1]
+    t_count, s_count = len(block.tiles), len(block.slots)
+    score = np.full((t_count, s_count), np.inf)
+    theta = np.zeros((t_count, s_count))
+    compat_all = cyclic_compat_by_offset(ref.codes, cand.codes)  # (T, n, S)
+    r = ref.pts.reshape(s_count, 2 * n)
+    r_perp = np.stack([ref.pts[..., 1], -ref.pts[..., 0]], axis=-1).reshape(s_count, 2 * n)
+    rr = np.concatenate([r, r_perp]).T  # (2n, 2S)
+    scale = n * ref.area
+    chunk = max(1, _BLOCK_ELEMENTS // max(1, s_count * n * n))
+    for a in range(0, t_count, chunk):
+        rows = slice(a, min(a + chunk, t_count))
+        compat = compat_all[rows] & block.base[rows, None, :]
+        offsets = np.flatnonzero(compat.any(axis=(0, 2)))
+        if len(offsets) == 0:
+            continue
+        k_count = len(offsets)
+        m = compat.shape[0]
+        ok = compat[:, offsets, :]  # (m, K, S)
+        idx = (np.arange(n)[None, :] + offsets[:, None]) % n  # (K, n)
+        cp = cand.pts[rows][:, idx, :].reshape(m * k_count, 2 * n)
+        prod = (cp @ rr).reshape(m, k_count, 2 * s_count)
+        dot, crs = prod[..., :s_count], prod[..., s_count:]
+        mag = np.sqrt(dot * dot + crs * crs)
+        rss = cand.sumsq[rows, None, None] + ref.sumsq[None, None, :] - 2.0 * mag
+        sc = np.sqrt(np.maximum(rss, 0.0) / scale)
+        sc[~ok] = np.inf
+        best = sc.min(axis=1)  # (m, S)
+        equiv = sc <= best[:, None, :] + tol.symmetry_residual
+        cosine = np.where(equiv, np.divide(dot, mag, out=np.ones_like(dot), where=mag > 0), -2.0)
+        kb = np.argmax(cosine, axis=1)[:, None, :]  # first of the least |rotation|
+        chosen = np.take_along_axis(sc, kb, axis=1)[:, 0, :]
+        score[rows] = chosen
+        hit = np.isfinite(chosen)
+        th = np.arctan2(
+            np.take_along_axis(crs, kb, axis=1)[:, 0, :][hit],
+            np.take_along_axis(dot, kb, axis=1)[:, 0, :][hit],
+        )
+        sub = theta[rows]
+        sub[hit] = th
+        theta[rows] = sub
+    return score, theta
+
+
 def _evaluate(
     block: _Block, tol: Tolerances, use_color: bool
 ) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
     """Every matching pair of a block: (tile, slot, score, rotation), global indices."""
+    if not block.tpack.hole_codes:
+        score, theta = _dense(block, tol)
+        ti, si = np.nonzero(np.isfinite(score))
+        return block.tiles[ti], block.slots[si], score[ti, si], theta[ti, si]
+    return _evaluate_entries(block, tol, use_color)
+
+
+def _evaluate_entries(
+    block: _Block, tol: Tolerances, use_color: bool
+) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
+    """`_evaluate` through `evaluate_block`'s matching entries (blocks with holes)."""
     n = block.tpack.codes.shape[1]
     chunk = max(1, _BLOCK_ELEMENTS // max(1, len(block.slots) * n * n))
     parts: list[tuple[IntArray, IntArray, FloatArray, FloatArray]] = []
@@ -322,6 +404,9 @@ def assign(
             if fast is not None:
                 out.extend(fast)
                 continue
+        if len(group) == 1 and not blocks[group[0]].tpack.hole_codes:
+            out.extend(_single(blocks[group[0]], tol, method, len(sd)))
+            continue
         parts = [_evaluate(blocks[b], tol, use_color) for b in group]
         t = np.concatenate([p[0] for p in parts])
         if len(t) == 0:
@@ -346,6 +431,34 @@ def assign(
             )
     out.sort(key=lambda x: x.tile)
     return out
+
+
+def _single(block: _Block, tol: Tolerances, method: str, n_slots: int) -> list[Assignment]:
+    """Assign within one hole-free block from its dense score and rotation matrices."""
+    score, theta = _dense(block, tol)
+    feasible = np.isfinite(score)
+    if method == "greedy":
+        ti, si = np.nonzero(feasible)
+        return _greedy(
+            block.tiles[ti], block.slots[si], score[ti, si], theta[ti, si], n_slots=n_slots
+        )
+    if not feasible.any():
+        return []
+    big = (min(score.shape) + 1.0) * (float(score[feasible].max()) + 1.0)
+    cost = np.where(feasible, score, big)
+    rows, cols = linear_sum_assignment(cost)
+    keep = feasible[rows, cols]
+    rows, cols = rows[keep], cols[keep]
+    return [
+        Assignment(int(t), int(s), float(r), float(c))
+        for t, s, r, c in zip(
+            block.tiles[rows].tolist(),
+            block.slots[cols].tolist(),
+            theta[rows, cols].tolist(),
+            score[rows, cols].tolist(),
+            strict=True,
+        )
+    ]
 
 
 def _solve(

@@ -254,6 +254,28 @@ def hole_angles(points: FloatArray, curve_mask: BoolArray) -> tuple[float, float
     return float(walk.min()), float(walk.max())
 
 
+def hole_angles_many(points: FloatArray, curve_mask: BoolArray) -> FloatArray:
+    """`hole_angles` of a stack of holes sharing one curve mask, all at once.
+
+    Args:
+        points: Holes' relevant points, shape (G, m, 2) (see `hole_angles`).
+        curve_mask: Shape (m,) bool.
+
+    Returns:
+        (G, 2) intervals [deg]; NaN rows for holes around the origin.
+    """
+    dense = densify(points, curve_mask, _HOLE_ARC_SAMPLES)
+    ang = np.degrees(np.arctan2(dense[..., 1], dense[..., 0]))  # (G, k)
+    step = (np.diff(ang, axis=1, append=ang[:, :1]) + 180.0) % 360.0 - 180.0
+    around = np.abs(step.sum(axis=1)) > 180.0
+    walk = ang[:, :1] + np.concatenate(
+        [np.zeros((len(ang), 1)), np.cumsum(step[:, :-1], axis=1)], axis=1
+    )
+    out = np.stack([walk.min(axis=1), walk.max(axis=1)], axis=1)
+    out[around] = np.nan
+    return out
+
+
 def hole_interval(
     points: FloatArray, curve_mask: BoolArray, north: FloatArray
 ) -> tuple[float, float] | None:
@@ -634,6 +656,7 @@ __all__ = [
     "describe_many",
     "format_description",
     "hole_angles",
+    "hole_angles_many",
     "hole_interval",
     "parse",
 ]

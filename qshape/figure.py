@@ -129,41 +129,51 @@ def densify(points: FloatArray, curve_mask: BoolArray, per_arc: int = _ARC_SAMPL
     and itself, strictly between the neighbours (vectorised over all arcs).
 
     Args:
-        points: Relevant points (n, 2), any orientation, in a right-handed frame.
+        points: Relevant points (n, 2), any orientation, in a right-handed frame; or a stack
+            (..., n, 2) of boundaries sharing one curve mask.
         curve_mask: (n,) bool; each curve point is the middle of the arc through its neighbours.
         per_arc: Samples per arc.
 
     Returns:
-        Shape (m, 2) polygon.
+        Shape (m, 2) polygon (or (..., m, 2) for a stack).
     """
     if not curve_mask.any():
         return points
-    n = len(points)
+    n = points.shape[-2]
     j = np.flatnonzero(curve_mask)
-    vi, vj, vk = points[(j - 1) % n], points[j], points[(j + 1) % n]
+    vi, vj, vk = points[..., (j - 1) % n, :], points[..., j, :], points[..., (j + 1) % n, :]
     d = 2.0 * geo.cross2(vj - vi, vk - vi)
     flat = d == 0.0
     safe_d = np.where(flat, 1.0, d)
-    bi, bj, bk = (vi * vi).sum(1), (vj * vj).sum(1), (vk * vk).sum(1)
-    ux = bi * (vj[:, 1] - vk[:, 1]) + bj * (vk[:, 1] - vi[:, 1]) + bk * (vi[:, 1] - vj[:, 1])
-    uy = bi * (vk[:, 0] - vj[:, 0]) + bj * (vi[:, 0] - vk[:, 0]) + bk * (vj[:, 0] - vi[:, 0])
-    centre = np.stack([ux, uy], axis=1) / safe_d[:, None]
-    radius = np.hypot(*(vi - centre).T)
-    ai = np.arctan2(vi[:, 1] - centre[:, 1], vi[:, 0] - centre[:, 0])
-    ak = np.arctan2(vk[:, 1] - centre[:, 1], vk[:, 0] - centre[:, 0])
+    bi, bj, bk = (vi * vi).sum(-1), (vj * vj).sum(-1), (vk * vk).sum(-1)
+    ux = bi * (vj[..., 1] - vk[..., 1]) + bj * (vk[..., 1] - vi[..., 1]) + bk * (
+        vi[..., 1] - vj[..., 1]
+    )
+    uy = bi * (vk[..., 0] - vj[..., 0]) + bj * (vi[..., 0] - vk[..., 0]) + bk * (
+        vj[..., 0] - vi[..., 0]
+    )
+    centre = np.stack([ux, uy], axis=-1) / safe_d[..., None]
+    rel = vi - centre
+    radius = np.hypot(rel[..., 0], rel[..., 1])
+    ai = np.arctan2(vi[..., 1] - centre[..., 1], vi[..., 0] - centre[..., 0])
+    ak = np.arctan2(vk[..., 1] - centre[..., 1], vk[..., 0] - centre[..., 0])
     two_pi = 2.0 * math.pi
     sweep = np.where(d > 0.0, (ak - ai) % two_pi, -((ai - ak) % two_pi))
     t = np.arange(1, per_arc + 1) / (per_arc + 1)
-    ang = ai[:, None] + t[None, :] * sweep[:, None]
-    arcs = centre[:, None, :] + radius[:, None, None] * np.stack([np.cos(ang), np.sin(ang)], -1)
-    line = vi[:, None, :] + t[None, :, None] * (vk - vi)[:, None, :]
-    arcs = np.where(flat[:, None, None], line, arcs)
+    ang = ai[..., None] + t * sweep[..., None]
+    arcs = centre[..., None, :] + radius[..., None, None] * np.stack(
+        [np.cos(ang), np.sin(ang)], -1
+    )
+    line = vi[..., None, :] + t[:, None] * (vk - vi)[..., None, :]
+    arcs = np.where(flat[..., None, None], line, arcs)
     size = np.where(curve_mask, per_arc, 1)
     start = np.concatenate([[0], np.cumsum(size)[:-1]])
-    out = np.empty((int(size.sum()), 2))
+    out = np.empty((*points.shape[:-2], int(size.sum()), 2))
     keep = ~curve_mask
-    out[start[keep]] = points[keep]
-    out[(start[j][:, None] + np.arange(per_arc)).ravel()] = arcs.reshape(-1, 2)
+    out[..., start[keep], :] = points[..., keep, :]
+    out[..., (start[j][:, None] + np.arange(per_arc)).ravel(), :] = arcs.reshape(
+        *points.shape[:-2], -1, 2
+    )
     return out
 
 

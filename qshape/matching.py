@@ -29,6 +29,7 @@ from qshape.description import (
     Description,
     default_tolerances,
     describe,
+    hole_angles_many,
 )
 from qshape.errors import MatchError
 from qshape.figure import Figure
@@ -267,11 +268,14 @@ def pack(descs: Sequence[Description]) -> Pack:
     hole_codes = tuple(np.stack([d.holes[h].boundary.codes for d in descs]) for h in range(nholes))
     hc = np.zeros((len(descs), nholes, 2))
     hi = np.full((len(descs), nholes, 2), np.nan)
-    for g, d in enumerate(descs):
-        for h, hole in enumerate(d.holes):
-            hc[g, h] = hole.boundary.points.mean(axis=0)
-            if hole.angles is not None:
-                hi[g, h] = hole.angles
+    for h in range(nholes):  # every description's hole h at once
+        hp = np.stack([d.holes[h].boundary.points for d in descs])
+        hc[:, h] = hp.mean(axis=1)
+        kinds, inv = np.unique(hole_codes[h] & lb.KIND_BIT, axis=0, return_inverse=True)
+        inv = inv.ravel()
+        for u in range(len(kinds)):
+            sel = inv == u
+            hi[sel, h] = hole_angles_many(hp[sel], kinds[u] == 1)
     nan3 = (np.nan, np.nan, np.nan)
     colors = np.array([nan3 if d.color is None else d.color for d in descs])
     return Pack(
@@ -300,6 +304,22 @@ def _cyclic_compat(ref: NDArray[np.int64], cand: NDArray[np.int64]) -> NDArray[n
     rolled = uc[:, idx]  # (Uc, k, i)
     ok = np.asarray(lb.compatible(rolled[:, None, :, :], ur[None, :, None, :]).all(axis=-1))
     return np.asarray(ok[inv_c.ravel()][:, inv_r.ravel()])
+
+
+def cyclic_compat_by_offset(
+    ref: NDArray[np.int64], cand: NDArray[np.int64]
+) -> NDArray[np.bool_]:
+    """`_cyclic_compat` laid out (T, n, S): candidate, offset, reference.
+
+    Computed over unique rows (noisy copies of a class mostly share their labels).
+    """
+    n = ref.shape[1]
+    ur, inv_r = np.unique(ref, axis=0, return_inverse=True)
+    uc, inv_c = np.unique(cand, axis=0, return_inverse=True)
+    idx = (np.arange(n)[None, :] + np.arange(n)[:, None]) % n  # (k, i)
+    rolled = uc[:, idx]  # (Uc, k, i)
+    ok = np.asarray(lb.compatible(rolled[:, :, None, :], ur[None, None, :, :]).all(axis=-1))
+    return np.asarray(ok[inv_c.ravel()][:, :, inv_r.ravel()])
 
 
 def _cone_bits(lo: FloatArray, hi: FloatArray, widen: float) -> NDArray[np.int64]:
@@ -593,6 +613,7 @@ __all__ = [
     "canonical_key",
     "canonical_keys",
     "coarse_key",
+    "cyclic_compat_by_offset",
     "evaluate_block",
     "evaluate_pairs",
     "is_continuous",
