@@ -1,0 +1,363 @@
+"""Train any stable-baselines3 algorithm on `MosaicAssembly-v0` from a YAML in ``configs/train/``.
+
+Run::
+
+    python -m agents.train --config configs/train/pick_place_discrete.yaml \\
+        [--timesteps N] [--out runs/NAME] [--seed S]
+
+The run folder gets ``model.zip`` (final model), ``checkpoints/`` (`CheckpointCallback`),
+``tb/`` (TensorBoard), ``monitor/`` (per-env episode CSVs with ``is_success``),
+``train_config.yaml`` (the resolved configuration; `agents.evaluate` rebuilds the env from it)
+and ``summary.json`` (timesteps, wall time, steps/s, first/last episode returns).
+
+The policy is picked from the observation space when ``policy: auto``: ``MultiInputPolicy``
+for Dict observations, ``CnnPolicy`` for image Boxes, ``MlpPolicy`` otherwise.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import yaml
+from gymnasium import spaces
+
+from configs import ConfigError, from_dict, load_yaml
+
+ENV_ID = "envs:MosaicAssembly-v0"
+"""Gymnasium id of the environment (the ``envs:`` prefix imports and registers it)."""
+VEC_ENVS = ("dummy", "subproc")
+"""Allowed ``vec_env`` values."""
+POLICIES = ("auto", "MlpPolicy", "CnnPolicy", "MultiInputPolicy")
+"""Allowed ``policy`` values."""
+RETURN_WINDOW = 100
+"""Episodes averaged for the first/last returns of ``summary.json``."""
+
+
+class TrainError(ConfigError):
+    """A training configuration that cannot run (unknown algorithm, policy or env key)."""
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """One training run.
+
+    Attributes:
+        algo: stable-baselines3 algorithm class name (``PPO``, ``A2C``, ``DQN``, ``SAC``,
+            ``TD3``, ``DDPG``; ``sb3_contrib`` ones too when installed).
+        policy: One of `POLICIES` (``auto`` picks from the observation space).
+        total_timesteps: Env steps over all envs.
+        n_envs: Parallel envs.
+        vec_env: ``dummy`` (one process) or ``subproc`` (one process per env).
+        seed: Seed of the algorithm and of the envs (env i gets seed + i).
+        max_episode_steps: `TimeLimit` of the training envs [steps]; 0 keeps the registered one.
+        env: Flat `EnvConfig` overrides (``envs/env_config.py``), e.g. ``action_mode``.
+        algo_kwargs: Keyword arguments of the algorithm (``n_steps``, ``learning_rate``...).
+        policy_kwargs: ``policy_kwargs`` of the algorithm (``net_arch``...).
+        checkpoint_freq: Env steps (over all envs) between checkpoints; 0: none.
+        tensorboard: Write TensorBoard logs to ``<out>/tb``.
+        progress_bar: Show SB3's progress bar (tqdm + rich).
+        torch_threads: ``torch.set_num_threads`` (shared CPUs: keep 1).
+        device: Torch device (``cpu``, ``cuda``, ``auto``).
+        verbose: SB3 verbosity (0, 1, 2).
+        max_wall_s: Stop ``learn`` after this wall time [s] even before ``total_timesteps``;
+            0: no limit (the final model is saved either way).
+    """
+
+    algo: str = "PPO"
+    policy: str = "auto"
+    total_timesteps: int = 100_000
+    n_envs: int = 1
+    vec_env: str = "dummy"
+    seed: int = 0
+    max_episode_steps: int = 0
+    env: Mapping[str, Any] = field(default_factory=dict)
+    algo_kwargs: Mapping[str, Any] = field(default_factory=dict)
+    policy_kwargs: Mapping[str, Any] = field(default_factory=dict)
+    checkpoint_freq: int = 10_000
+    tensorboard: bool = True
+    progress_bar: bool = True
+    torch_threads: int = 1
+    device: str = "cpu"
+    verbose: int = 0
+    max_wall_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.vec_env not in VEC_ENVS:
+            raise TrainError(f"unknown vec_env {self.vec_env!r}; allowed: {list(VEC_ENVS)}")
+        if self.policy not in POLICIES:
+            raise TrainError(f"unknown policy {self.policy!r}; allowed: {list(POLICIES)}")
+        for name in ("total_timesteps", "n_envs", "torch_threads"):
+            if getattr(self, name) < 1:
+                raise TrainError(f"{name} must be >= 1, got {getattr(self, name)}")
+        if self.max_episode_steps < 0 or self.checkpoint_freq < 0 or self.max_wall_s < 0:
+            raise TrainError("max_episode_steps, checkpoint_freq and max_wall_s must be >= 0")
+        from envs.env_config import load_env_config  # noqa: PLC0415 - validates env keys
+
+        load_env_config(**dict(self.env))
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain dict (YAML-serialisable) of every field."""
+        out = dataclasses.asdict(self)
+        for key in ("env", "algo_kwargs", "policy_kwargs"):
+            out[key] = _plain(dict(getattr(self, key)))
+        return out
+
+
+def _plain(value: Any) -> Any:
+    """Tuples -> lists, recursively, so YAML stays plain."""
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def load_train_config(path: str | Path, **overrides: Any) -> TrainConfig:
+    """Load a `TrainConfig` from a YAML path or a name in ``configs/train/``, strictly.
+
+    Raises:
+        ConfigError: Unknown key, wrong type, unknown env key, vec_env or policy.
+    """
+    data = load_yaml(path, "train")
+    data.update({k: v for k, v in overrides.items() if v is not None})
+    return from_dict(TrainConfig, data, source=str(path))
+
+
+def algorithm_class(name: str) -> type[Any]:
+    """The SB3 (or sb3_contrib) algorithm class called ``name``.
+
+    Raises:
+        TrainError: No such algorithm (lists the known ones).
+    """
+    import stable_baselines3 as sb3  # noqa: PLC0415 - heavy import
+
+    from stable_baselines3.common.base_class import BaseAlgorithm  # noqa: PLC0415
+
+    modules: list[Any] = [sb3]
+    try:
+        import sb3_contrib  # type: ignore[import-not-found]  # noqa: PLC0415
+
+        modules.append(sb3_contrib)
+    except ImportError:
+        pass
+    known = []
+    for module in modules:
+        for attr in dir(module):
+            obj = getattr(module, attr)
+            if isinstance(obj, type) and issubclass(obj, BaseAlgorithm):
+                known.append(attr)
+                if attr.lower() == name.lower():
+                    return obj
+    raise TrainError(f"unknown algorithm {name!r}; known: {sorted(set(known))}")
+
+
+def pick_policy(policy: str, observation_space: spaces.Space) -> str:
+    """Resolve ``auto`` from the observation space (Dict -> MultiInputPolicy)."""
+    if policy != "auto":
+        return policy
+    if isinstance(observation_space, spaces.Dict):
+        return "MultiInputPolicy"
+    shape = getattr(observation_space, "shape", None) or ()
+    if isinstance(observation_space, spaces.Box) and len(shape) == 3:
+        return "CnnPolicy"
+    return "MlpPolicy"
+
+
+def make_env_fn(cfg: TrainConfig) -> Any:
+    """A zero-argument env factory (``gym.make`` with the config's env overrides)."""
+    kwargs: dict[str, Any] = dict(cfg.env)
+    if cfg.max_episode_steps:
+        kwargs["max_episode_steps"] = cfg.max_episode_steps
+
+    def make() -> gym.Env:
+        return gym.make(ENV_ID, **kwargs)
+
+    return make
+
+
+def make_vec(cfg: TrainConfig, monitor_dir: Path | None) -> Any:
+    """The vectorised training envs (each wrapped in `Monitor` logging ``is_success``)."""
+    from stable_baselines3.common.env_util import make_vec_env  # noqa: PLC0415
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv  # noqa: PLC0415
+
+    cls = SubprocVecEnv if cfg.vec_env == "subproc" else DummyVecEnv
+    return make_vec_env(
+        make_env_fn(cfg),
+        n_envs=cfg.n_envs,
+        seed=cfg.seed,
+        vec_env_cls=cls,
+        monitor_dir=str(monitor_dir) if monitor_dir else None,
+        monitor_kwargs={"info_keywords": ("is_success",)},
+    )
+
+
+@dataclass(frozen=True)
+class TrainResult:
+    """What a run produced.
+
+    Attributes:
+        out: Run folder.
+        model_path: Final model (``model.zip``).
+        timesteps: Env steps trained.
+        wall_s: Wall time of ``learn`` [s].
+        steps_per_s: timesteps / wall_s.
+        episodes: Finished training episodes.
+        first_return: Mean return of the first `RETURN_WINDOW` episodes (NaN if none).
+        last_return: Mean return of the last `RETURN_WINDOW` episodes.
+        first_success: Success rate of the first episodes.
+        last_success: Success rate of the last episodes.
+    """
+
+    out: Path
+    model_path: Path
+    timesteps: int
+    wall_s: float
+    steps_per_s: float
+    episodes: int
+    first_return: float
+    last_return: float
+    first_success: float
+    last_success: float
+
+
+def _episode_stats(monitor_dir: Path) -> tuple[int, float, float, float, float]:
+    """(episodes, first/last mean return, first/last success rate) from Monitor CSVs."""
+    rows: list[tuple[float, float, float]] = []  # (end time, return, success)
+    for path in sorted(monitor_dir.glob("*.monitor.csv")):
+        lines = path.read_text(encoding="utf-8").splitlines()[1:]
+        if not lines:
+            continue
+        header = lines[0].split(",")
+        for line in lines[1:]:
+            rec = dict(zip(header, line.split(","), strict=False))
+            ok = 1.0 if rec.get("is_success", "False") in ("True", "1", "1.0") else 0.0
+            rows.append((float(rec["t"]), float(rec["r"]), ok))
+    rows.sort()
+    if not rows:
+        nan = float("nan")
+        return 0, nan, nan, nan, nan
+    arr = np.array(rows)
+    first, last = arr[:RETURN_WINDOW], arr[-RETURN_WINDOW:]
+    return (
+        len(arr),
+        float(first[:, 1].mean()),
+        float(last[:, 1].mean()),
+        float(first[:, 2].mean()),
+        float(last[:, 2].mean()),
+    )
+
+
+def _wall_clock_stop(limit_s: float) -> Any:
+    """A callback that ends ``learn`` once ``limit_s`` wall seconds have passed."""
+    from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
+
+    class WallClockStop(BaseCallback):
+        def _on_training_start(self) -> None:
+            self.t0 = time.perf_counter()
+
+        def _on_step(self) -> bool:
+            return time.perf_counter() - self.t0 < limit_s
+
+    return WallClockStop()
+
+
+def train(cfg: TrainConfig, out: Path) -> TrainResult:
+    """Train ``cfg`` and write the run folder ``out`` (see the module docstring)."""
+    import torch  # noqa: PLC0415 - heavy import
+
+    from stable_baselines3.common.callbacks import CheckpointCallback  # noqa: PLC0415
+
+    torch.set_num_threads(cfg.torch_threads)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "train_config.yaml").write_text(
+        yaml.safe_dump(cfg.to_dict(), sort_keys=False), encoding="utf-8"
+    )
+    monitor_dir = out / "monitor"
+    venv = make_vec(cfg, monitor_dir)
+    try:
+        algo = algorithm_class(cfg.algo)
+        kwargs: dict[str, Any] = dict(cfg.algo_kwargs)
+        if cfg.policy_kwargs:
+            kwargs["policy_kwargs"] = dict(cfg.policy_kwargs)
+        model = algo(
+            pick_policy(cfg.policy, venv.observation_space),
+            venv,
+            seed=cfg.seed,
+            device=cfg.device,
+            verbose=cfg.verbose,
+            tensorboard_log=str(out / "tb") if cfg.tensorboard else None,
+            **kwargs,
+        )
+        callbacks = []
+        if cfg.max_wall_s:
+            callbacks.append(_wall_clock_stop(cfg.max_wall_s))
+        if cfg.checkpoint_freq:
+            callbacks.append(
+                CheckpointCallback(
+                    save_freq=max(cfg.checkpoint_freq // cfg.n_envs, 1),
+                    save_path=str(out / "checkpoints"),
+                    name_prefix="model",
+                )
+            )
+        t0 = time.perf_counter()
+        model.learn(
+            total_timesteps=cfg.total_timesteps,
+            callback=callbacks or None,
+            progress_bar=cfg.progress_bar,
+            tb_log_name=cfg.algo,
+        )
+        wall = time.perf_counter() - t0
+        model_path = out / "model.zip"
+        model.save(str(model_path))
+        steps = int(model.num_timesteps)
+    finally:
+        venv.close()
+    episodes, r0, r1, s0, s1 = _episode_stats(monitor_dir)
+    result = TrainResult(out, model_path, steps, wall, steps / wall, episodes, r0, r1, s0, s1)
+    summary = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(result).items()}
+    (out / "summary.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
+    return result
+
+
+def main(argv: list[str] | None = None) -> TrainResult:
+    """Command line: ``python -m agents.train --config ... [--timesteps N] [--out DIR]``."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--config", required=True, help="YAML path or name in configs/train/")
+    ap.add_argument("--timesteps", type=int, default=None, help="override total_timesteps")
+    ap.add_argument("--seed", type=int, default=None, help="override seed")
+    ap.add_argument("--n-envs", type=int, default=None, help="override n_envs")
+    ap.add_argument("--out", type=Path, default=None, help="run folder (default runs/<config>)")
+    ap.add_argument("--no-progress", action="store_true", help="no progress bar")
+    args = ap.parse_args(argv)
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    overrides: dict[str, Any] = {
+        "total_timesteps": args.timesteps,
+        "seed": args.seed,
+        "n_envs": args.n_envs,
+    }
+    if args.no_progress:
+        overrides["progress_bar"] = False
+    cfg = load_train_config(args.config, **overrides)
+    out = args.out or Path("runs") / Path(args.config).stem
+    result = train(cfg, out)
+    print(
+        f"{cfg.algo} {result.timesteps} steps in {result.wall_s:.0f} s "
+        f"({result.steps_per_s:.0f} steps/s), {result.episodes} episodes; return "
+        f"{result.first_return:.2f} -> {result.last_return:.2f}, success "
+        f"{result.first_success:.2f} -> {result.last_success:.2f}; model {result.model_path}"
+    )
+    return result
+
+
+if __name__ == "__main__":
+    main()
