@@ -431,9 +431,11 @@ def color_gain(
     for _ in range(cfg.color_balance_iterations):
         adj = np.clip(meas * gain, 0.0, 1.0)
         nearest = np.argmin(np.linalg.norm(adj[:, None] - pal[None], axis=2), axis=1)
-        ratio = np.where(usable, pal[nearest] / np.maximum(meas, 1e-6), np.nan)
-        med = np.nanmedian(ratio, axis=0) if np.any(usable) else np.ones(3)
-        gain = np.clip(np.where(np.isfinite(med), med, 1.0), lo, hi)
+        ratio = pal[nearest] / np.maximum(meas, 1e-6)
+        med = np.array(
+            [np.median(ratio[usable[:, c], c]) if usable[:, c].any() else 1.0 for c in range(3)]
+        )
+        gain = np.clip(med, lo, hi)
     return gain
 
 

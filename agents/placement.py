@@ -186,6 +186,8 @@ def plan_placements(
     slots: Sequence[SlotTarget],
     cfg: PlacementConfig | None = None,
     tolerances: qshape.Tolerances | None = None,
+    *,
+    filled: Sequence[SlotTarget] = (),
 ) -> PlacementPlan:
     """Assign perceived tiles to slots and turn each pair into a pick-and-place command.
 
@@ -197,6 +199,8 @@ def plan_placements(
         slots: Open design slots (already filled ones left out by the caller).
         cfg: Method and colour option (bundled defaults when None).
         tolerances: qshape tolerances (bundled when None).
+        filled: The design's slots already filled: a left-over tile matching one of them is
+            reported as ``slots_taken`` (not as absent from the design).
 
     Returns:
         The plan.
@@ -246,9 +250,10 @@ def plan_placements(
     unplaced = []
     if left:
         ld = [tdesc[k] for k in left]
-        shape_ok = set(feasible_pairs(ld, sdesc, _tol(tolerances), False)[0].tolist())
+        every = sdesc + [f.description for f in filled]
+        shape_ok = set(feasible_pairs(ld, every, _tol(tolerances), False)[0].tolist())
         color_ok = (
-            set(feasible_pairs(ld, sdesc, _tol(tolerances), True)[0].tolist())
+            set(feasible_pairs(ld, every, _tol(tolerances), True)[0].tolist())
             if cfg.use_color
             else shape_ok
         )
@@ -260,8 +265,8 @@ def plan_placements(
             else:
                 reason = "slots_taken"
             unplaced.append(Unplaced(tiles[k].index, reason, REASONS[reason]))
-    filled = {a.slot for a in result}
-    open_slots = tuple(s.index for k, s in enumerate(slots) if k not in filled)
+    assigned_slots = {a.slot for a in result}
+    open_slots = tuple(s.index for k, s in enumerate(slots) if k not in assigned_slots)
     return PlacementPlan(tuple(commands), tuple(unplaced), open_slots, cfg.method, cfg.use_color)
 
 

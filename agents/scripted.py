@@ -5,7 +5,8 @@ described once; each picture (the ``input_camera`` observation) is perceived
 (`agents.perception`) and assigned to the open slots (`agents.placement`); the resulting
 commands are returned one per step as normalised ``pick_place`` actions
 (``env.unwrapped.pick_place_action``), and a new picture is taken once they are used up.
-Tiles matching no open slot are never placed. The input camera is calibrated from rendered
+Tiles matching no open slot are never placed; a tile still on the belt after its command
+(a failed pick) reopens its slot. The input camera is calibrated from rendered
 checkerboard images (`agents.calibration`) at the observation's image size, or the env's
 camera model is used (``calibrate=False``).
 
@@ -29,8 +30,17 @@ import numpy as np
 from agents.calibration import calibrate_cell_camera
 from agents.config import AgentsConfig, load_agents_config
 from agents.errors import AgentError
-from agents.perception import CameraLike, balance_colors, perceive_tiles, slot_targets
+from agents.perception import (
+    CameraLike,
+    PerceivedTile,
+    Perception,
+    balance_colors,
+    perceive_tiles,
+    slot_targets,
+)
 from agents.placement import PickPlace, PlacementPlan, Unplaced, plan_placements
+from qshape.assign import feasible_pairs
+from qshape.description import default_tolerances
 from qshape.design import Design
 
 IMAGE_DIMS = 3
@@ -46,13 +56,20 @@ class ScriptedAgent:
         config: Agent settings (bundled ``configs/agents.yaml`` when None).
         calibrate: Calibrate the input camera from rendered checkerboard images (True) or use
             the env's camera model.
+        replan_every_step: Take a new picture before every command (tiles move on a moving
+            belt, new ones arrive with a stream feed) instead of once per batch of commands
+            (the paper's static loop). None: every step when the belt moves or tiles stream.
 
     Raises:
         AgentError: Wrong action mode or no input-camera observation.
     """
 
     def __init__(
-        self, env: Any, config: AgentsConfig | None = None, calibrate: bool = True
+        self,
+        env: Any,
+        config: AgentsConfig | None = None,
+        calibrate: bool = True,
+        replan_every_step: bool | None = None,
     ) -> None:
         u = env.unwrapped
         self.cfg = config or load_agents_config()
@@ -64,6 +81,12 @@ class ScriptedAgent:
         if "input_camera" not in u.observation_space.spaces:
             raise AgentError("the scripted agent needs the input_camera observation (obs_mode rgb)")
         self._env = u
+        self.belt_speed = float(ecfg.belt_speed)
+        self.replan_every_step = (
+            bool(ecfg.belt_speed > 0 or ecfg.feed != "all")
+            if replan_every_step is None
+            else replan_every_step
+        )
         height, width = ecfg.image_size
         self.camera: CameraLike
         self.calibration = None
@@ -83,6 +106,7 @@ class ScriptedAgent:
         self.palette = np.array([s.color for s in self.slots])
         self.queue: deque[PickPlace] = deque()
         self.filled: set[int] = set()
+        self.order: list[int] = []
         self.unplaced: tuple[Unplaced, ...] = ()
         self.last_plan: PlacementPlan | None = None
 
@@ -90,28 +114,67 @@ class ScriptedAgent:
         """Forget the episode (open slots, queued commands)."""
         self.queue.clear()
         self.filled.clear()
+        self.order.clear()
         self.unplaced = ()
         self.last_plan = None
 
     def plan(self, image: np.ndarray) -> PlacementPlan:
-        """Perceive one input-camera image and assign its tiles to the open slots."""
+        """Perceive one input-camera image and assign its tiles to the open slots.
+
+        A real tile whose every matching slot was already commanded means a command failed
+        (the tile is still on the belt; the env gives one tile per slot): the most recently
+        commanded of those slots is reopened and the picture planned again.
+        """
         per = perceive_tiles(image, self.camera, self.belt_top, cfg=self.cfg.perception)
         if self.cfg.perception.color_balance:
             per, _ = balance_colors(per, self.palette, self.cfg.perception)
-        open_slots = [s for s in self.slots if s.index not in self.filled]
-        plan = plan_placements(per.tiles, open_slots, self.cfg.placement)
+        plan = self._assign(per)
+        taken = [u.tile for u in plan.unplaced if u.reason == "slots_taken"]
+        if taken and self._reopen([per.tiles[k] for k in taken]):
+            plan = self._assign(per)
         self.last_plan = plan
         self.unplaced = plan.unplaced
         return plan
 
+    def _assign(self, per: Perception) -> PlacementPlan:
+        open_slots = [s for s in self.slots if s.index not in self.filled]
+        done = [s for s in self.slots if s.index in self.filled]
+        return plan_placements(per.tiles, open_slots, self.cfg.placement, filled=done)
+
+    def _reopen(self, tiles: list[PerceivedTile]) -> bool:
+        """Reopen, per tile, the most recently commanded filled slot it matches."""
+        filled = [s for s in self.slots if s.index in self.filled]
+        if not filled:
+            return False
+        t, s, _, _ = feasible_pairs(
+            [x.description for x in tiles],
+            [x.description for x in filled],
+            default_tolerances(),
+            self.cfg.placement.use_color,
+        )
+        reopened = False
+        for k in range(len(tiles)):
+            cands = {filled[j].index for j in s[t == k].tolist()} & self.filled
+            recent = [i for i in reversed(self.order) if i in cands]
+            if recent:
+                self.filled.discard(recent[0])
+                reopened = True
+        return reopened
+
     def next_command(self, image: np.ndarray) -> PickPlace | None:
-        """The next command; a new picture is perceived when the queue is empty."""
+        """The next command; a new picture is perceived when the queue is empty (or always)."""
+        if self.replan_every_step:
+            self.queue.clear()
         if not self.queue:
-            self.queue.extend(self.plan(image).commands)
+            cmds = list(self.plan(image).commands)
+            if self.belt_speed > 0:  # the belt runs along +x: downstream tiles first
+                cmds.sort(key=lambda c: -c.grasp_pick[0])
+            self.queue.extend(cmds)
         if not self.queue:
             return None
         cmd = self.queue.popleft()
         self.filled.add(cmd.slot)
+        self.order.append(cmd.slot)
         return cmd
 
     def action(self, cmd: PickPlace | None) -> np.ndarray:

@@ -56,3 +56,14 @@ def test_wrong_action_mode():
             ScriptedAgent(e, calibrate=False)
     finally:
         e.close()
+
+
+def test_a_tile_still_on_the_belt_reopens_its_slot(env):
+    """Same picture twice (as after a failed pick): the same slot is commanded again."""
+    agent = ScriptedAgent(env, calibrate=False, replan_every_step=True)
+    obs, _ = env.reset(seed=1)
+    first, _ = agent.predict(obs, episode_start=np.array([True]))
+    slot = agent.order[-1]
+    again, _ = agent.predict(obs)
+    assert agent.order[-1] == slot
+    np.testing.assert_allclose(again, first, atol=1e-6)
