@@ -1,4 +1,4 @@
-"""Train any stable-baselines3 algorithm on `MosaicAssembly-v0` from a YAML in ``configs/train/``.
+r"""Train any stable-baselines3 algorithm on `MosaicAssembly-v0` from a YAML in ``configs/train/``.
 
 Run::
 
@@ -140,12 +140,11 @@ def algorithm_class(name: str) -> type[Any]:
         TrainError: No such algorithm (lists the known ones).
     """
     import stable_baselines3 as sb3  # noqa: PLC0415 - heavy import
-
     from stable_baselines3.common.base_class import BaseAlgorithm  # noqa: PLC0415
 
     modules: list[Any] = [sb3]
     try:
-        import sb3_contrib  # type: ignore[import-not-found]  # noqa: PLC0415
+        import sb3_contrib  # noqa: PLC0415 - optional
 
         modules.append(sb3_contrib)
     except ImportError:
@@ -274,7 +273,6 @@ def _wall_clock_stop(limit_s: float) -> Any:
 def train(cfg: TrainConfig, out: Path) -> TrainResult:
     """Train ``cfg`` and write the run folder ``out`` (see the module docstring)."""
     import torch  # noqa: PLC0415 - heavy import
-
     from stable_baselines3.common.callbacks import CheckpointCallback  # noqa: PLC0415
 
     torch.set_num_threads(cfg.torch_threads)
