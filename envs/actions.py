@@ -143,8 +143,7 @@ class ActionAdapter(ABC):
         space = self.space
         if a.shape != space.shape:
             raise ActionError(
-                f"action has shape {a.shape}; {type(self).__name__} expects {space.shape} "
-                f"({space})"
+                f"action has shape {a.shape}; {type(self).__name__} expects {space.shape} ({space})"
             )
         if not np.issubdtype(a.dtype, np.number):
             raise ActionError(f"action must be numeric, got dtype {a.dtype}")
@@ -218,9 +217,7 @@ class CartesianActions(ActionAdapter):
         self.ik = ik
         self.space = spaces.Box(-1.0, 1.0, (5,), np.float32)
         period = self.substeps * self.dt
-        self.max_step = np.array(
-            [config.tool_speed * period] * 3 + [config.tool_yaw_rate * period]
-        )
+        self.max_step = np.array([config.tool_speed * period] * 3 + [config.tool_yaw_rate * period])
         b = PickPlaceBounds.of(cell, config)
         z0 = cell.geometry.belt_top
         self._lo = np.array([*np.minimum(b.pick_lo, b.place_lo), z0 + config.tool_z_range[0]])
@@ -282,8 +279,11 @@ class PickPlaceExecutor:
     def run(
         self, pick_xy: np.ndarray, pick_yaw: float, place_xy: np.ndarray, place_yaw: float
     ) -> ActionResult:
-        """Pick at the pad point ``pick_xy`` [m] and place it at ``place_xy``, turning the tile
-        by ``place_yaw - pick_yaw`` [rad]."""
+        """Pick at the pad point ``pick_xy`` [m], place at ``place_xy``, turn by the yaw change.
+
+        The tile turns by ``place_yaw - pick_yaw`` [rad]; a planner or cell error (unreachable
+        pose, joint limit) is a failed action charged ``failed_action_time``.
+        """
         pick = np.array([pick_xy[0], pick_xy[1], self.bounds.pick_z])
         place = np.array([place_xy[0], place_xy[1], self.bounds.place_z])
         rotation = float(wrap_angle(place_yaw - pick_yaw))
@@ -335,18 +335,29 @@ class PickPlaceExecutor:
         above = place + [0.0, 0.0, c.approach_height]
         q_up = self.ik.solve(above, place_yaw, seed=q_place).q
         duration = self.planner.lower_bound(q0, q_pick, q_place) + c.pick_dwell + c.place_dwell
-        cell.set_qpos(q_pick)
+        self._put_arm(q_pick)  # `vacuum` updates the kinematics before its seal check
         cell.vacuum(True)
         grasped = cell.held_tile
         if grasped >= 0:
-            cell.set_qpos(q_place)
+            cell.set_qpos(q_place)  # carries the held tile
         cell.vacuum(False)
-        cell.set_qpos(q_up if grasped >= 0 else q_pick)
+        self._put_arm(q_up if grasped >= 0 else q_pick)
         cell.data.time += duration
         cell.step(self._settle)
         if grasped < 0:
             return ActionResult(True, "no tile sealed at the pick")
         return ActionResult(grasped=grasped)
+
+    def _put_arm(self, q: np.ndarray) -> None:
+        """Arm joints at ``q`` [rad] at rest, servo holding it, nothing held.
+
+        No `mj_forward`: the next `vacuum` or `step` computes what it needs.
+        """
+        d, ids = self.cell.data, self.cell.ids
+        d.qpos[ids.arm_qpos] = q
+        d.qvel[ids.arm_dof] = 0.0
+        d.ctrl[ids.pos_actuators] = q
+        d.ctrl[ids.vel_actuators] = 0.0
 
 
 class PickPlaceActions(ActionAdapter):
@@ -382,20 +393,10 @@ class DiscretePickPlaceActions(ActionAdapter):
         n = max(len(cell.tiles), 1)
         k = max(len(cell.slots), 1)
         self.space = spaces.MultiDiscrete([n, k, config.rotation_bins])
-        self._grasp = np.array([t.grasp for t in cell.tiles]).reshape(-1, 2)
-        self._slots = cell.slot_poses_world()
-        self._input_max_y = executor.bounds.pick_hi[1]
-        self._output_max_y = executor.bounds.place_hi[1]
 
     def poses(self, tile: int, slot: int, rot: int) -> tuple[np.ndarray, float, np.ndarray, float]:
         """World pick (x, y), yaw and place (x, y), yaw of a discrete action."""
-        poses = self.cell.tile_poses()
-        yaw = float(poses.yaw[tile])
-        g = self._grasp[tile]
-        pick = poses.pos[tile, :2] + _rot(g, yaw)
-        place_yaw = float(self._slots[slot, 2] + rot * 2 * math.pi / self.cfg.rotation_bins)
-        place = self._slots[slot, :2] + _rot(g, place_yaw)
-        return pick, yaw, place, place_yaw
+        return transfer_poses(self.cell, tile, slot, rot * 2 * math.pi / self.cfg.rotation_bins)
 
     def apply(self, action: np.ndarray) -> ActionResult:
         """Run one cycle moving the chosen tile to the chosen slot."""
@@ -404,13 +405,38 @@ class DiscretePickPlaceActions(ActionAdapter):
         on_input = (
             cell.on_stage[tile]
             and not cell.lost[tile]
-            and cell.tile_poses().pos[tile, 1] > cell.geometry.output_centre[1] / 2
-            + cell.geometry.input_centre[1] / 2
+            and cell.tile_poses().pos[tile, 1]
+            > cell.geometry.output_centre[1] / 2 + cell.geometry.input_centre[1] / 2
         )
         if tile >= len(cell.tiles) or slot >= len(cell.slots) or not on_input:
             cell.step(self.executor._fail_steps)
             return ActionResult(True, f"tile {tile} is not on the input belt")
         return self.executor.run(*self.poses(tile, slot, rot))
+
+
+def transfer_poses(
+    cell: Cell, tile: int, slot: int, extra_yaw: float = 0.0
+) -> tuple[np.ndarray, float, np.ndarray, float]:
+    """Ground-truth pick and place poses moving ``tile`` into ``slot`` (privileged).
+
+    Args:
+        cell: The cell.
+        tile: Tile index.
+        slot: Slot index.
+        extra_yaw: Rotation added to the slot's yaw [rad] (0: as the slot wants).
+
+    Returns:
+        Pick pad point (x, y) [m] (the tile's grasp point), the tile's yaw [rad], place pad
+        point (x, y) [m] and place yaw [rad], as a `PickPlaceActions` step expects.
+    """
+    poses = cell.tile_poses()
+    yaw = float(poses.yaw[tile])
+    g = cell.tiles[tile].grasp
+    sx, sy, syaw = cell.slot_poses_world()[slot]
+    place_yaw = float(syaw + extra_yaw)
+    pick = poses.pos[tile, :2] + _rot(g, yaw)
+    place = np.array([sx, sy]) + _rot(g, place_yaw)
+    return pick, yaw, place, place_yaw
 
 
 def _rot(v: np.ndarray, yaw: float) -> np.ndarray:
@@ -428,4 +454,5 @@ __all__ = [
     "PickPlaceActions",
     "PickPlaceBounds",
     "PickPlaceExecutor",
+    "transfer_poses",
 ]

@@ -114,9 +114,9 @@ class EnvConfig:
     pick_margin: float = 0.0
     place_margin: float = 0.0
     rotation_bins: int = 4
-    kinematic_settle: float = 0.02
+    kinematic_settle: float = 0.01
     failed_action_time: float = 0.04
-    reset_settle: float = 0.1
+    reset_settle: float = 0.16
     layout_tries: int = 20
     position_tolerance: float = 0.0015
     yaw_tolerance_deg: float = 2.0
@@ -134,10 +134,10 @@ class EnvConfig:
     render_mode: str | None = None
 
     def __post_init__(self) -> None:
-        size = self.image_size
-        if isinstance(size, int):
-            size = (size, size)
-        size = tuple(int(v) for v in size)
+        raw: Any = self.image_size
+        if isinstance(raw, int):
+            raw = (raw, raw)
+        size = tuple(int(v) for v in raw)
         object.__setattr__(self, "image_size", size)
         if len(size) != 2 or min(size) < 1:
             raise EnvConfigError(f"image_size must be (height, width) >= 1 px, got {size}")
@@ -155,14 +155,32 @@ class EnvConfig:
             raise EnvConfigError(
                 f"unknown render_mode {self.render_mode!r}; allowed: None, {list(RENDER_MODES)}"
             )
-        positive = ("control_dt", "tool_speed", "tool_yaw_rate", "position_tolerance",
-                    "yaw_tolerance_deg", "kinematic_settle", "failed_action_time")
+        positive = (
+            "control_dt",
+            "tool_speed",
+            "tool_yaw_rate",
+            "position_tolerance",
+            "yaw_tolerance_deg",
+            "kinematic_settle",
+            "failed_action_time",
+        )
         for name in positive:
             if not getattr(self, name) > 0:
                 raise EnvConfigError(f"{name} must be > 0, got {getattr(self, name)!r}")
-        nonneg = ("max_slots", "belt_speed", "distractor_rate", "vertex_jitter",
-                  "tile_color_jitter", "color_randomization", "light_randomization",
-                  "action_noise", "obs_noise", "reset_settle", "pick_margin", "place_margin")
+        nonneg = (
+            "max_slots",
+            "belt_speed",
+            "distractor_rate",
+            "vertex_jitter",
+            "tile_color_jitter",
+            "color_randomization",
+            "light_randomization",
+            "action_noise",
+            "obs_noise",
+            "reset_settle",
+            "pick_margin",
+            "place_margin",
+        )
         for name in nonneg:
             if not getattr(self, name) >= 0:
                 raise EnvConfigError(f"{name} must be >= 0, got {getattr(self, name)!r}")
@@ -175,9 +193,7 @@ def allowed_keys() -> list[str]:
     return [f.name for f in fields(EnvConfig)]
 
 
-def load_env_config(
-    config: EnvConfig | str | Path | None = "env", **overrides: Any
-) -> EnvConfig:
+def load_env_config(config: EnvConfig | str | Path | None = "env", **overrides: Any) -> EnvConfig:
     """Build an `EnvConfig` from a dataclass, a bundled name or path, plus flat overrides.
 
     Args:
@@ -191,9 +207,7 @@ def load_env_config(
         base = {f.name: getattr(config, f.name) for f in fields(EnvConfig)}
         unknown = sorted(set(overrides) - set(base))
         if unknown:
-            raise EnvConfigError(
-                f"unknown key(s) {unknown} for EnvConfig; allowed: {sorted(base)}"
-            )
+            raise EnvConfigError(f"unknown key(s) {unknown} for EnvConfig; allowed: {sorted(base)}")
         base.update(overrides)
         config, overrides = None, base
     if "image_size" in overrides and isinstance(overrides["image_size"], int):

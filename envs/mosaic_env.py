@@ -9,10 +9,9 @@ from __future__ import annotations
 import os
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, cast
 
 import gymnasium as gym
-import mujoco
 import numpy as np
 
 from envs.actions import (
@@ -24,6 +23,7 @@ from envs.actions import (
     PickPlaceActions,
     PickPlaceBounds,
     PickPlaceExecutor,
+    transfer_poses,
 )
 from envs.cameras import CameraModel
 from envs.cell import CAMERAS, Cell
@@ -196,9 +196,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         obs = self.observer.observe(rng, evaluation)
         return obs, self._info(evaluation, dict.fromkeys(REWARD_TERMS, 0.0), False, "")
 
-    def step(
-        self, action: np.ndarray
-    ) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
+    def step(self, action: np.ndarray) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
         """Apply one action (see the class docstring), evaluate, observe.
 
         Raises:
@@ -295,6 +293,21 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         """
         return self.bounds.normalize(pick_xy, pick_yaw, place_xy, place_yaw)
 
+    def expert_action(self, tile: int, slot: int) -> np.ndarray:
+        """Privileged action moving ``tile`` into ``slot`` exactly (pick_place modes only).
+
+        For baselines, tests and debugging: the ground-truth grasp point and yaws.
+
+        Raises:
+            MosaicEnvError: The action mode is not a pick_place mode.
+        """
+        mode = self.config.action_mode
+        if mode == "pick_place_discrete":
+            return np.array([tile, slot, 0], dtype=np.int64)
+        if mode != "pick_place":
+            raise MosaicEnvError(f"expert_action needs a pick_place mode, not {mode!r}")
+        return self.pick_place_action(*transfer_poses(self.cell, tile, slot))
+
     # ------------------------------------------------------------------ helpers
     def _info(
         self, evaluation: dict[str, Any], terms: dict[str, float], failed: bool, reason: str
@@ -340,7 +353,7 @@ def _cell_config(cfg: EnvConfig) -> CellConfig:
     base = load_cell_config(cfg.cell)
     tiles = replace(
         base.tiles,
-        feed=cfg.feed,
+        feed=cast(Literal["all", "stream"], cfg.feed),
         stream_period=cfg.stream_period,
         stream_initial=cfg.stream_initial,
         distractor_rate=cfg.distractor_rate,

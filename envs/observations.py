@@ -109,8 +109,13 @@ class Observer:
         )
         s = task.slot_xyyaw
         slots = np.column_stack(
-            [s[:, :2], np.cos(s[:, 2]), np.sin(s[:, 2]), task.slot_class,
-             np.asarray(evaluation["slot_filled"], float)]
+            [
+                s[:, :2],
+                np.cos(s[:, 2]),
+                np.sin(s[:, 2]),
+                task.slot_class,
+                np.asarray(evaluation["slot_filled"], float),
+            ]
         ).reshape(len(cell.slots), SLOT_DIM)
         return (
             np.clip(tiles, -BIG, BIG).astype(np.float32).reshape(-1),

@@ -143,8 +143,8 @@ class MosaicTask:
         tolerance), ``dropped`` (tiles the pad lost in transit), ``lost`` (tiles lost off the
         input belt), ``distractors_placed``, ``slots`` (number of slots), ``slot_filled`` (bool
         list), ``position_error_mm`` and ``yaw_error_deg`` (mean and max over tiles on the mesh,
-        None when no tile is on the mesh), ``placeable`` (open slots a remaining real tile of the right class could
-        still fill).
+        None when no tile is on the mesh), ``placeable`` (open slots a remaining real tile of
+        the right class could still fill).
         """
         p = self.placement()
         cell = self.cell

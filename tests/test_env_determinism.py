@@ -100,7 +100,7 @@ def test_observations_do_not_share_memory() -> None:
             assert not np.shares_memory(second[k], third[k]), k
         kept = {k: v.copy() for k, v in second.items()}
         env.step(env.action_space.sample())
-        for k in kept:
-            np.testing.assert_array_equal(kept[k], second[k])
+        for k, value in kept.items():
+            np.testing.assert_array_equal(value, second[k])
     finally:
         env.close()

@@ -33,7 +33,9 @@ def joint_env() -> MosaicAssemblyEnv:
         (np.array(["a"] * 7), "numeric"),
     ],
 )
-def test_bad_actions_are_rejected(joint_env: MosaicAssemblyEnv, action: np.ndarray, match: str) -> None:
+def test_bad_actions_are_rejected(
+    joint_env: MosaicAssemblyEnv, action: np.ndarray, match: str
+) -> None:
     t = joint_env.cell.time
     with pytest.raises(ActionError, match=match):
         joint_env.step(action)

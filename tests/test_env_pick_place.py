@@ -23,7 +23,9 @@ def _correct_action(env: MosaicAssemblyEnv, tile: int, slot: int) -> np.ndarray:
     slot_x, slot_y, slot_yaw = cell.slot_poses_world()[slot]
 
     def rot(v: np.ndarray, a: float) -> np.ndarray:
-        return np.array([math.cos(a) * v[0] - math.sin(a) * v[1], math.sin(a) * v[0] + math.cos(a) * v[1]])
+        return np.array(
+            [math.cos(a) * v[0] - math.sin(a) * v[1], math.sin(a) * v[0] + math.cos(a) * v[1]]
+        )
 
     pick = poses.pos[tile, :2] + rot(g, yaw)
     place = np.array([slot_x, slot_y]) + rot(g, slot_yaw)
@@ -32,7 +34,10 @@ def _correct_action(env: MosaicAssemblyEnv, tile: int, slot: int) -> np.ndarray:
 
 def _run(execution: str) -> tuple[list[dict], list[float], MosaicAssemblyEnv]:
     env = MosaicAssemblyEnv(
-        action_mode="pick_place", execution=execution, obs_mode="rgb", max_slots=N_SLOTS,
+        action_mode="pick_place",
+        execution=execution,
+        obs_mode="rgb",
+        max_slots=N_SLOTS,
         render_mode="rgb_array",
     )
     env.reset(seed=5)
@@ -55,9 +60,7 @@ def test_scripted_pick_place_places_every_tile(execution: str) -> None:
         assert ev["misplaced"] == ev["dropped"] == ev["lost"] == 0
         assert ev["position_error_mm_max"] < 0.5 and ev["yaw_error_deg_max"] < 0.5
         assert [i["tiles_placed"] for i in infos] == [1, 2, 3]
-        assert rewards[-1] == pytest.approx(
-            env.config.reward_correct + env.config.reward_success
-        )
+        assert rewards[-1] == pytest.approx(env.config.reward_correct + env.config.reward_success)
         assert infos[-1]["reward_success"] == env.config.reward_success
         assert 0 < infos[-1]["sim_time"] and infos[-1]["tiles_per_min"] > 10
         assert env.cell.warnings() == 0
@@ -87,7 +90,9 @@ def test_dynamic_and_kinematic_agree_on_clean_picks() -> None:
 
 def test_wrong_slot_is_misplaced_and_penalised() -> None:
     env = MosaicAssemblyEnv(
-        action_mode="pick_place_discrete", execution="kinematic", obs_mode="state",
+        action_mode="pick_place_discrete",
+        execution="kinematic",
+        obs_mode="state",
         design="paper_mixed",
     )
     try:

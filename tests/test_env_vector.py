@@ -22,7 +22,10 @@ def test_make_without_prior_import() -> None:
         "import sys; print('mujoco' in sys.modules)"
     )
     out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True,
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
         cwd=Path(__file__).resolve().parents[1],
     )
     assert out.stdout.strip() == "True"
@@ -31,7 +34,10 @@ def test_make_without_prior_import() -> None:
 def test_import_is_light() -> None:
     code = "import envs, sys; print('mujoco' in sys.modules, 'torch' in sys.modules)"
     out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True,
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
         cwd=Path(__file__).resolve().parents[1],
     )
     assert out.stdout.strip() == "False False"
@@ -53,8 +59,11 @@ def test_make_vec_sync() -> None:
 def test_make_vec_async() -> None:
     # "spawn": a forked worker hangs in EGL when the parent process has rendered before.
     vec = gym.make_vec(
-        envs.ENV_ID, num_envs=2, vectorization_mode="async",
-        vector_kwargs={"context": "spawn"}, **SMALL,
+        envs.ENV_ID,
+        num_envs=2,
+        vectorization_mode="async",
+        vector_kwargs={"context": "spawn"},
+        **SMALL,
     )
     try:
         obs, _ = vec.reset(seed=0)
@@ -89,11 +98,16 @@ def test_sb3_subproc_vec_env() -> None:
 
 def test_record_video(tmp_path: Path) -> None:
     env = gym.make(
-        envs.ENV_ID, render_mode="rgb_array", max_episode_steps=12, obs_mode="state",
-        max_slots=2, action_mode="joint",
+        envs.ENV_ID,
+        render_mode="rgb_array",
+        max_episode_steps=12,
+        obs_mode="state",
+        max_slots=2,
+        action_mode="joint",
     )
-    env = gym.wrappers.RecordVideo(env, str(tmp_path / "videos"), episode_trigger=lambda e: True,
-                                   disable_logger=True)
+    env = gym.wrappers.RecordVideo(
+        env, str(tmp_path / "videos"), episode_trigger=lambda e: True, disable_logger=True
+    )
     try:
         env.reset(seed=0)
         done = False

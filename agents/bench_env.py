@@ -1,0 +1,223 @@
+"""Benchmark of `MosaicAssembly-v0`: steps per second, memory per env, async vector scaling.
+
+Run ``python -m agents.bench_env`` (``--quick`` for shorter runs); prints the figures and writes
+``out/bench_env.json``. Every figure is measured in a fresh subprocess pinned to one CPU core
+(``os.sched_setaffinity``) with one BLAS/OpenMP thread, on the bundled ``paper_mixed`` design
+(16 tiles):
+
+- ``steps_per_s`` for each action mode, without images (``obs_mode="state"``) and with images
+  (``obs_mode="rgb"``, two 96 x 96 cameras); pick_place modes in ``dynamic`` and ``kinematic``
+  execution, driven by a scripted policy with privileged correct poses (every step a full
+  cycle); joint and cartesian modes by uniform random actions. Resets are timed separately.
+- ``peak_rss_mb``: peak resident memory of the process holding one env (Python, MuJoCo,
+  renderers included) after building it, resetting and stepping; ``env_rss_mb``: its increase
+  over the same process before the env was made.
+- ``async``: env steps per second of ``gym.make_vec(..., "async")`` with 1 and 2 workers
+  (joint mode, images), and the speed-up.
+
+Targets (issue 5): kinematic pick_place >= 500 steps/s; joint with images >= 60 steps/s on one
+core; <= 600 MB per env.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import multiprocessing as mp
+import os
+import platform
+import resource
+import time
+from pathlib import Path
+from typing import Any
+
+OUT = Path(__file__).resolve().parents[1] / "out" / "bench_env.json"
+TARGET_KINEMATIC = 500.0
+TARGET_JOINT_RGB = 60.0
+TARGET_RSS_MB = 600.0
+DESIGN = "paper_mixed"
+CASES = (
+    ("joint", "dynamic"),
+    ("cartesian", "dynamic"),
+    ("pick_place", "dynamic"),
+    ("pick_place", "kinematic"),
+    ("pick_place_discrete", "dynamic"),
+    ("pick_place_discrete", "kinematic"),
+)
+
+
+def _scripted(env: Any, step: int) -> Any:
+    """Privileged correct action for tile/slot ``step`` (pick_place modes)."""
+    i = step % len(env.unwrapped.cell.slots)
+    return env.unwrapped.expert_action(i, i)
+
+
+def _measure(mode: str, execution: str, obs_mode: str, seconds: float, queue: mp.Queue) -> None:
+    """Child process: build one env, step it for ``seconds``, report speed and memory."""
+    os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: PLC0415
+
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    env = gym.make(
+        envs.ENV_ID,
+        design=DESIGN,
+        action_mode=mode,
+        execution=execution,
+        obs_mode=obs_mode,
+        image_size=96,
+    )
+    picks = mode.startswith("pick_place")
+    env.action_space.seed(0)
+    t_reset = time.perf_counter()
+    env.reset(seed=0)
+    reset_s = [time.perf_counter() - t_reset]
+    steps, busy, k, placed, sim = 0, 0.0, 0, 0, 0.0
+    while busy < seconds:
+        action = _scripted(env, k) if picks else env.action_space.sample()
+        t = time.perf_counter()
+        _, _, term, trunc, info = env.step(action)
+        busy += time.perf_counter() - t
+        steps += 1
+        k += 1
+        if term or trunc:
+            placed += info["tiles_placed"]
+            sim += info["sim_time"]
+            t = time.perf_counter()
+            env.reset()
+            reset_s.append(time.perf_counter() - t)
+            k = 0
+    rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    env.close()
+    queue.put(
+        {
+            "action_mode": mode,
+            "execution": execution if picks else "-",
+            "obs_mode": obs_mode,
+            "steps": steps,
+            "steps_per_s": steps / busy,
+            "ms_per_step": 1e3 * busy / steps,
+            "reset_ms": 1e3 * sum(reset_s) / len(reset_s),
+            "tiles_per_min_sim": 60.0 * placed / sim if sim > 0 else math.nan,
+            "peak_rss_mb": rss1,
+            "env_rss_mb": rss1 - rss0,
+        }
+    )
+
+
+def _child(target: Any, *args: Any) -> Any:
+    ctx = mp.get_context("spawn")
+    q: mp.Queue = ctx.Queue()
+    p = ctx.Process(target=target, args=(*args, q))
+    p.start()
+    out = q.get()
+    p.join()
+    return out
+
+
+def _async(n: int, seconds: float, queue: mp.Queue) -> None:
+    """Child process: env steps/s of an async vector env of ``n`` workers (joint, images)."""
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: PLC0415
+
+    vec = gym.make_vec(
+        envs.ENV_ID,
+        num_envs=n,
+        vectorization_mode="async",
+        design=DESIGN,
+        action_mode="joint",
+        obs_mode="rgb",
+        image_size=96,
+        vector_kwargs={"context": "spawn"},
+    )
+    vec.reset(seed=0)
+    vec.action_space.seed(0)
+    for _ in range(5):
+        vec.step(vec.action_space.sample())
+    steps, t0 = 0, time.perf_counter()
+    while time.perf_counter() - t0 < seconds:
+        vec.step(vec.action_space.sample())
+        steps += n
+    rate = steps / (time.perf_counter() - t0)
+    vec.close()
+    queue.put(rate)
+
+
+def main() -> None:
+    """Run every measurement, print a table, write ``out/bench_env.json``."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=4.0, help="stepping time per case [s]")
+    parser.add_argument("--quick", action="store_true", help="1 s per case")
+    args = parser.parse_args()
+    seconds = 1.0 if args.quick else args.seconds
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        os.environ[var] = "1"
+    rows = []
+    for mode, execution in CASES:
+        for obs_mode in ("state", "rgb"):
+            r = _child(_measure, mode, execution, obs_mode, seconds)
+            rows.append(r)
+            print(
+                f"{mode:20s} {r['execution']:9s} {obs_mode:5s} {r['steps_per_s']:8.1f} steps/s "
+                f"({r['ms_per_step']:.2f} ms)  reset {r['reset_ms']:.0f} ms  "
+                f"peak RSS {r['peak_rss_mb']:.0f} MB (env +{r['env_rss_mb']:.0f} MB)",
+                flush=True,
+            )
+    one = _child(_async, 1, seconds * 2)
+    two = _child(_async, 2, seconds * 2)
+    print(
+        f"async joint+rgb: 1 worker {one:.1f}, 2 workers {two:.1f} env steps/s (x{two / one:.2f})"
+    )
+
+    def rate(mode: str, execution: str, obs: str) -> float:
+        return next(
+            r["steps_per_s"]
+            for r in rows
+            if r["action_mode"] == mode
+            and r["obs_mode"] == obs
+            and r["execution"] in (execution, "-")
+        )
+
+    kin = rate("pick_place", "kinematic", "state")
+    joint_rgb = rate("joint", "-", "rgb")
+    peak = max(r["peak_rss_mb"] for r in rows)
+    targets = {
+        "kinematic_pick_place_steps_per_s": {
+            "value": kin,
+            "target": TARGET_KINEMATIC,
+            "met": kin >= TARGET_KINEMATIC,
+        },
+        "joint_rgb_steps_per_s": {
+            "value": joint_rgb,
+            "target": TARGET_JOINT_RGB,
+            "met": joint_rgb >= TARGET_JOINT_RGB,
+        },
+        "peak_rss_mb": {"value": peak, "target": TARGET_RSS_MB, "met": peak <= TARGET_RSS_MB},
+    }
+    for k, v in targets.items():
+        print(f"{k}: {v['value']:.1f} (target {v['target']}) {'MET' if v['met'] else 'NOT MET'}")
+    result = {
+        "machine": {
+            "cpus": os.cpu_count(),
+            "platform": platform.platform(),
+            "python": platform.python_version(),
+            "note": "shared 2-core machine (other engineers' jobs may run); one core per case",
+            "gl": os.environ.get("MUJOCO_GL", ""),
+        },
+        "design": DESIGN,
+        "seconds_per_case": seconds,
+        "cases": rows,
+        "async": {"workers_1": one, "workers_2": two, "speedup": two / one},
+        "targets": targets,
+    }
+    OUT.parent.mkdir(exist_ok=True)
+    OUT.write_text(json.dumps(result, indent=2))
+    print(f"wrote {OUT}")
+
+
+if __name__ == "__main__":
+    main()
