@@ -176,7 +176,7 @@ def _blocks(
     return blocks
 
 
-def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray]:
+def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Best alignment of every (tile, slot) pair of a hole-free block, as matrices.
 
     Every cyclic offset of every pair is fitted at once (one matrix product per chunk of
@@ -185,20 +185,23 @@ def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray]:
     `Match.rotation`.
 
     Returns:
-        (score, theta), each (T, S): residual (inf where the pair does not match) and rotation
-        [rad] turning the tile onto the slot (0 where it does not match).
+        (score, dot, cross), each (T, S): the residual (inf where the pair does not match) and
+        the kept offset's sums of dot and cross products; the rotation turning the tile onto
+        the slot is ``arctan2(cross, dot)`` (computed only for the pairs that are used).
     """
     ref, cand = block.spack, block.tpack
     n = ref.codes.shape[1]
     t_count, s_count = len(block.tiles), len(block.slots)
     score = np.full((t_count, s_count), np.inf)
-    theta = np.zeros((t_count, s_count))
+    dot_out = np.ones((t_count, s_count))
+    crs_out = np.zeros((t_count, s_count))
     compat_all = cyclic_compat_by_offset(ref.codes, cand.codes)  # (T, n, S)
     r = ref.pts.reshape(s_count, 2 * n)
     r_perp = np.stack([ref.pts[..., 1], -ref.pts[..., 0]], axis=-1).reshape(s_count, 2 * n)
     rr = np.concatenate([r, r_perp]).T  # (2n, 2S)
     scale = n * ref.area
     chunk = max(1, _BLOCK_ELEMENTS // max(1, s_count * n * n))
+    cols = np.arange(s_count)
     for a in range(0, t_count, chunk):
         rows = slice(a, min(a + chunk, t_count))
         compat = compat_all[rows] & block.base[rows, None, :]
@@ -213,24 +216,26 @@ def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray]:
         prod = (cp @ rr).reshape(m, k_count, 2 * s_count)
         dot, crs = prod[..., :s_count], prod[..., s_count:]
         mag = np.sqrt(dot * dot + crs * crs)
-        rss = cand.sumsq[rows, None, None] + ref.sumsq[None, None, :] - 2.0 * mag
-        sc = np.sqrt(np.maximum(rss, 0.0) / scale)
-        sc[~ok] = np.inf
-        best = sc.min(axis=1)  # (m, S)
-        equiv = sc <= best[:, None, :] + tol.symmetry_residual
-        cosine = np.where(equiv, np.divide(dot, mag, out=np.ones_like(dot), where=mag > 0), -2.0)
-        kb = np.argmax(cosine, axis=1)[:, None, :]  # first of the least |rotation|
-        chosen = np.take_along_axis(sc, kb, axis=1)[:, 0, :]
+        mag[~ok] = -1.0  # the residual falls as the fit magnitude grows: best = largest
+        top = mag.max(axis=1)  # (m, S)
+        sums = cand.sumsq[rows, None] + ref.sumsq[None, :]
+        best = np.sqrt(np.maximum(sums - 2.0 * top, 0.0) / scale)
+        # Equivalent offsets: residual within symmetry_residual of the best, i.e. a fit
+        # magnitude of at least `floor`.
+        bound = best + tol.symmetry_residual
+        floor = 0.5 * (sums - bound * bound * scale)
+        cosine = np.divide(dot, mag, out=np.ones_like(dot), where=mag > 0.0)
+        cosine[mag < floor[:, None, :]] = -2.0
+        kb = np.argmax(cosine, axis=1)  # first of the least |rotation| (largest cosine)
+        at = np.arange(m)[:, None] * k_count + kb  # (m, S) row of the kept offset
+        mag_sel = mag.reshape(m * k_count, s_count)[at, cols]
+        chosen = np.sqrt(np.maximum(sums - 2.0 * mag_sel, 0.0) / scale)
+        chosen[top < 0.0] = np.inf
         score[rows] = chosen
-        hit = np.isfinite(chosen)
-        th = np.arctan2(
-            np.take_along_axis(crs, kb, axis=1)[:, 0, :][hit],
-            np.take_along_axis(dot, kb, axis=1)[:, 0, :][hit],
-        )
-        sub = theta[rows]
-        sub[hit] = th
-        theta[rows] = sub
-    return score, theta
+        flat_prod = prod.reshape(m * k_count, 2 * s_count)
+        dot_out[rows] = flat_prod[at, cols]
+        crs_out[rows] = flat_prod[at, s_count + cols]
+    return score, dot_out, crs_out
 
 
 def _evaluate(
@@ -238,9 +243,10 @@ def _evaluate(
 ) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
     """Every matching pair of a block: (tile, slot, score, rotation), global indices."""
     if not block.tpack.hole_codes:
-        score, theta = _dense(block, tol)
+        score, dot, crs = _dense(block, tol)
         ti, si = np.nonzero(np.isfinite(score))
-        return block.tiles[ti], block.slots[si], score[ti, si], theta[ti, si]
+        theta = np.arctan2(crs[ti, si], dot[ti, si])
+        return block.tiles[ti], block.slots[si], score[ti, si], theta
     return _evaluate_entries(block, tol, use_color)
 
 
@@ -434,14 +440,13 @@ def assign(
 
 
 def _single(block: _Block, tol: Tolerances, method: str, n_slots: int) -> list[Assignment]:
-    """Assign within one hole-free block from its dense score and rotation matrices."""
-    score, theta = _dense(block, tol)
+    """Assign within one hole-free block from its dense score matrix."""
+    score, dot, crs = _dense(block, tol)
     feasible = np.isfinite(score)
     if method == "greedy":
         ti, si = np.nonzero(feasible)
-        return _greedy(
-            block.tiles[ti], block.slots[si], score[ti, si], theta[ti, si], n_slots=n_slots
-        )
+        theta = np.arctan2(crs[ti, si], dot[ti, si])
+        return _greedy(block.tiles[ti], block.slots[si], score[ti, si], theta, n_slots=n_slots)
     if not feasible.any():
         return []
     big = (min(score.shape) + 1.0) * (float(score[feasible].max()) + 1.0)
@@ -449,12 +454,13 @@ def _single(block: _Block, tol: Tolerances, method: str, n_slots: int) -> list[A
     rows, cols = linear_sum_assignment(cost)
     keep = feasible[rows, cols]
     rows, cols = rows[keep], cols[keep]
+    theta = np.arctan2(crs[rows, cols], dot[rows, cols])
     return [
         Assignment(int(t), int(s), float(r), float(c))
         for t, s, r, c in zip(
             block.tiles[rows].tolist(),
             block.slots[cols].tolist(),
-            theta[rows, cols].tolist(),
+            theta.tolist(),
             score[rows, cols].tolist(),
             strict=True,
         )

@@ -181,6 +181,13 @@ def _keys(codes: bytes, holes: str, cap: int) -> frozenset[str]:
     )
 
 
+def clear_key_caches() -> None:
+    """Empty the memoised key computations (for cold-start timings)."""
+    _kinds_key.cache_clear()
+    _primary_key.cache_clear()
+    _keys.cache_clear()
+
+
 # ---------------------------------------------------------------------- block evaluation
 @dataclass(frozen=True)
 class Pack:
@@ -612,6 +619,7 @@ __all__ = [
     "Match",
     "canonical_key",
     "canonical_keys",
+    "clear_key_caches",
     "coarse_key",
     "cyclic_compat_by_offset",
     "evaluate_block",
