@@ -151,8 +151,9 @@ class MosaicTask:
         real = ~self.distractor
         misplaced = int(np.sum(p.on_mesh & real & ~p.correct))
         distractors = int(np.sum(p.on_mesh & self.distractor))
-        # Tiles still available: real, not lost, not filling a slot (waiting ones included).
-        avail = real & ~cell.lost & ~p.correct
+        # Tiles still available: real, not lost, not on the mesh (pick areas cover the input
+        # belt only), waiting ones included.
+        avail = real & ~cell.lost & ~p.on_mesh
         open_classes = self.slot_class[~p.slot_filled]
         counts = np.bincount(self.tile_class[avail], minlength=len(self.class_names))
         need = np.bincount(open_classes, minlength=len(self.class_names))

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from envs.actions import transfer_poses
 from envs.mosaic_env import MosaicAssemblyEnv
 
 OUT = Path(__file__).resolve().parents[1] / "out"
@@ -130,5 +131,61 @@ def test_camera_models_at_observation_and_full_resolution() -> None:
         full = env.camera_model("output_camera", 492, 656)
         assert (small.width, small.height) == (64, 48)
         assert (full.width, full.height) == (656, 492)
+    finally:
+        env.close()
+
+
+def test_nothing_placeable_terminates() -> None:
+    env = MosaicAssemblyEnv(execution="kinematic", obs_mode="state", max_slots=1)
+    try:
+        env.reset(seed=0)
+        pick, yaw, place, place_yaw = transfer_poses(env.cell, 0, 0)
+        off = place + [env.config.position_tolerance * 3, 0.0]  # beyond the tolerance
+        _, r, term, _, info = env.step(env.pick_place_action(pick, yaw, off, place_yaw))
+        ev = info["evaluation"]
+        assert ev["misplaced"] == 1 and ev["correct"] == 0 and ev["placeable"] == 0
+        assert term and not ev["success"]
+        assert ev["position_error_mm"] == pytest.approx(
+            3 * 1e3 * env.config.position_tolerance, abs=0.3
+        )
+    finally:
+        env.close()
+
+
+def test_distractor_placed_is_counted() -> None:
+    env = MosaicAssemblyEnv(
+        action_mode="pick_place_discrete",
+        execution="kinematic",
+        obs_mode="state",
+        max_slots=3,
+        distractor_rate=1.0,
+    )
+    try:
+        env.reset(seed=0)
+        d = int(np.flatnonzero(env.cell.is_distractor)[0])
+        assert env.action_space.nvec[0] == len(env.cell.tiles) > 3
+        _, r, _, _, info = env.step(np.array([d, 0, 0]))
+        assert not info["action_failed"], info["action_error"]
+        assert info["evaluation"]["distractors_placed"] == 1
+        assert info["reward_distractor"] == -env.config.penalty_distractor
+    finally:
+        env.close()
+
+
+def test_stream_feed_large_design() -> None:
+    env = MosaicAssemblyEnv(
+        design="hexagon",
+        feed="stream",
+        action_mode="joint",
+        obs_mode="state",
+        stream_initial=6,
+    )
+    try:
+        env.reset(seed=0)
+        assert env.cell.on_stage.sum() == 6
+        for _ in range(int(2.5 / env.config.control_dt)):
+            env.step(np.zeros(7, np.float32))
+        assert env.cell.on_stage.sum() > 6  # streamed in
+        assert env.evaluate()["placeable"] == len(env.cell.slots)
     finally:
         env.close()
