@@ -29,3 +29,14 @@ def test_full_run_places_every_tile(tmp_path):
     assert report["success"] and report["correct"] == 16
     assert report["misplaced"] == 0 and report["dropped"] == 0
     assert (tmp_path / "cell.mp4").is_file()
+
+
+def test_a_design_that_fails_validation_is_a_clear_error(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(
+        "name: bad\nmesh: {width: 50, height: 50}\njoint: 2\nslots:\n"
+        "- name: a\n  shape: {kind: square, size: 40}\n  color: '#ff0000'\n"
+        "  pose: {x: 10, y: 10, angle: 0}\n"
+    )
+    with pytest.raises(SystemExit, match="error: .*"):
+        main(["--no-execute", "--quiet", "--design", str(bad), "--out", str(tmp_path)])
