@@ -99,9 +99,12 @@ def _groups(descs: Sequence[Description], tol: Tolerances) -> dict[str, tuple[li
     Keys are generated once per distinct set of node codes (copies of a class mostly share
     them), not once per description.
     """
-    raw: dict[tuple[bytes, tuple[bytes, ...]], list[int]] = defaultdict(list)
+    raw: dict[bytes | tuple[bytes, ...], list[int]] = defaultdict(list)
     for i, d in enumerate(descs):
-        raw[(d.outer.codes.tobytes(), tuple(h.boundary.codes.tobytes() for h in d.holes))].append(i)
+        if d.holes:
+            raw[(d.outer.codes.tobytes(), *(h.boundary.codes.tobytes() for h in d.holes))].append(i)
+        else:
+            raw[d.outer.codes.tobytes()].append(i)
     out: dict[str, tuple[list[int], set[str]]] = {}
     for members in raw.values():
         rep = descs[members[0]]

@@ -504,8 +504,10 @@ def _holes(
     )
     scale = np.sqrt(ref.area[si])
     c, s = np.cos(theta), np.sin(theta)
-    north = np.degrees(ref.north[si])
+    north_ref = np.degrees(ref.north)
+    north = north_ref[si]
     theta_deg = np.degrees(theta)
+    margin = tol.cone_margin_deg
     for perm in perms:
         ok = np.ones(theta.shape, dtype=bool)
         sq = np.zeros(theta.shape)
@@ -519,11 +521,16 @@ def _holes(
             ok &= labels_ok[ti, si]
             # Candidate hole's CCW angle interval turned by theta; both as bearings (clockwise
             # from the reference's north, its first vertex).
+            # The reference's cone sets depend on the reference alone: once per reference.
+            riv = ref.hole_interval[:, h, :]
+            r_lo, r_hi = north_ref - riv[:, 1], north_ref - riv[:, 0]
+            rs = _cone_bits(r_lo, r_hi, -margin)[si]
+            rl = _cone_bits(r_lo, r_hi, margin)[si]
             civ = cand.hole_interval[ti, g, :] + theta_deg[:, None]
-            riv = ref.hole_interval[si, h, :]
-            rb = np.stack([north - riv[:, 1], north - riv[:, 0]], axis=-1)
-            cb = np.stack([north - civ[:, 1], north - civ[:, 0]], axis=-1)
-            ok &= _positions_agree(rb, cb, tol.cone_margin_deg)
+            c_lo, c_hi = north - civ[:, 1], north - civ[:, 0]
+            cs = _cone_bits(c_lo, c_hi, -margin)
+            cl = _cone_bits(c_lo, c_hi, margin)
+            ok &= ((rs & ~cl) == 0) & ((cs & ~rl) == 0)  # as `_positions_agree`
             hc = cand.hole_centroid[ti, g, :]
             rc = ref.hole_centroid[si, h, :]
             rx = c * hc[:, 0] - s * hc[:, 1]
