@@ -118,6 +118,14 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     (per simulated minute), ``evaluation`` (the `evaluate()` dict), ``reward_<term>``,
     ``action_failed`` and ``action_error`` (why), ``is_success``.
 
+    ## Rendering
+    ``rgb_array``: the overview camera (left) beside the input and output cameras (right),
+    uint8. ``human``: MuJoCo's passive viewer (needs a display; a clear `MosaicEnvError`
+    otherwise). Headless rendering uses ``MUJOCO_GL=egl`` unless set. ``render_fps`` is
+    1 / ``control_dt`` in every mode (a pick_place step spans a whole cycle). In a process that
+    has rendered already, start async/subprocess workers with ``spawn`` (a forked worker can
+    hang in EGL).
+
     ## Version History
     - v0: initial version.
     """
