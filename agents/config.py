@@ -33,6 +33,10 @@ class PerceptionConfig:
         corner_angle_deg: Override of qshape's outline ``corner_angle_deg`` for camera images
             of the cell, [deg] (the bundled 25 deg splits rendered arcs of 20-24 mm radius
             into a straight piece and a curve; 35 keeps them whole); 0 keeps the bundled value.
+        alternative_corner_angles_deg: Further corner thresholds, [deg]: the image is also
+            simplified with each, and a tile matching no slot is tried again with those
+            outlines (35 turns the shallow corners of broken "trencadis" pieces into curves,
+            25 splits arcs: neither suits every design).
         color_balance: Estimate a per-channel gain mapping measured tile colours onto the
             design's palette (white balance against known colours) before matching.
         color_balance_iterations: Nearest-palette / median-gain rounds of that estimate.
@@ -51,6 +55,7 @@ class PerceptionConfig:
     pad_clearance: float = 0.0115
     polylabel_tolerance: float = 1e-4
     corner_angle_deg: float = 35.0
+    alternative_corner_angles_deg: tuple[float, ...] = (25.0,)
     color_balance: bool = True
     color_balance_iterations: int = 3
     max_color_gain: float = 2.0

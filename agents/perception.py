@@ -103,6 +103,8 @@ class PerceivedTile:
             ``pad_clearance`` inside the material, else the pole of inaccessibility.
         color: Measured RGB in [0, 1].
         area: Area on the plane [m^2].
+        alternatives: The same tile simplified with the alternative corner thresholds:
+            (world figure, description) pairs, tried when this description matches no slot.
     """
 
     index: int
@@ -114,6 +116,7 @@ class PerceivedTile:
     grasp: np.ndarray
     color: tuple[float, float, float]
     area: float
+    alternatives: tuple[tuple[Figure, Description], ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -378,6 +381,10 @@ def perceive_tiles(
                 k, fpx, fw, d, centre, ray, grasp_point(fw, centre, cfg), color, fw.area * s * s
             )
         )
+    if tiles and cfg.alternative_corner_angles_deg:
+        tiles = _with_alternatives(
+            image, camera, z, tiles, cfg=cfg, extract_params=extract_params, tolerances=tolerances
+        )
     partial = tuple(
         PartialRegion(
             unproject(camera, np.asarray(p.centroid)[None], z)[0, :2],
@@ -389,17 +396,69 @@ def perceive_tiles(
     return Perception(tuple(tiles), partial, tuple(unrecognised), z)
 
 
+def _with_alternatives(
+    image: np.ndarray,
+    camera: CameraLike,
+    z: float,
+    tiles: list[PerceivedTile],
+    *,
+    cfg: PerceptionConfig,
+    extract_params: qshape.ExtractParams | None,
+    tolerances: qshape.Tolerances | None,
+) -> list[PerceivedTile]:
+    """Attach each tile's outlines simplified with the alternative corner thresholds.
+
+    Figures of the alternative extraction are paired with tiles by nearest centre (within
+    `_PAIR_FRACTION` of the tile's equivalent radius).
+    """
+    centres = np.array([t.centre for t in tiles])
+    radius = np.sqrt(np.array([t.area for t in tiles]) / math.pi)
+    alts: list[list[tuple[Figure, Description]]] = [[] for _ in tiles]
+    for angle in cfg.alternative_corner_angles_deg:
+        params = cell_extract_params(cfg, extract_params, angle)
+        figs = []
+        for fig in qshape.extract_detailed(image, params).figures:
+            try:
+                figs.append(figure_to_world(camera, fig, z, cfg))
+            except qshape.QShapeError:
+                continue
+        if not figs:
+            continue
+        descs = qshape.describe_many(figs, tolerances)
+        for f, d in zip(figs, descs, strict=True):
+            c = np.asarray(f.centroid) / cfg.mm_per_m
+            dist = np.linalg.norm(centres - c, axis=1)
+            k = int(np.argmin(dist))
+            if dist[k] <= _PAIR_FRACTION * radius[k]:
+                alts[k].append((f, d))
+    return [
+        dataclasses.replace(t, alternatives=tuple(a)) if a else t
+        for t, a in zip(tiles, alts, strict=True)
+    ]
+
+
+_PAIR_FRACTION = 0.1
+"""An alternative figure belongs to a tile when their centres are this close (x radius)."""
+
+
 def cell_extract_params(
-    cfg: PerceptionConfig, base: qshape.ExtractParams | None = None
+    cfg: PerceptionConfig,
+    base: qshape.ExtractParams | None = None,
+    corner_angle_deg: float | None = None,
 ) -> qshape.ExtractParams:
-    """Qshape extraction parameters with this config's outline override applied."""
+    """The qshape extraction parameters with the outline corner override applied.
+
+    Args:
+        cfg: Perception settings (``corner_angle_deg``).
+        base: Parameters to start from (bundled when None).
+        corner_angle_deg: Threshold to use instead of ``cfg.corner_angle_deg`` [deg].
+    """
     from qshape.extract import default_params  # noqa: PLC0415
 
     p = base if base is not None else default_params()
-    if cfg.corner_angle_deg > 0:
-        p = dataclasses.replace(
-            p, outline=dataclasses.replace(p.outline, corner_angle_deg=cfg.corner_angle_deg)
-        )
+    angle = cfg.corner_angle_deg if corner_angle_deg is None else corner_angle_deg
+    if angle > 0:
+        p = dataclasses.replace(p, outline=dataclasses.replace(p.outline, corner_angle_deg=angle))
     return p
 
 
@@ -459,11 +518,18 @@ def balance_colors(
         c = np.clip(np.asarray(t.color) * gain, 0.0, 1.0)
         figs.append(dataclasses.replace(t.figure, color=(float(c[0]), float(c[1]), float(c[2]))))
     descs = qshape.describe_many(figs, tolerances)
-    tiles = tuple(
-        dataclasses.replace(t, figure=f, description=d, color=f.color or t.color)
-        for t, f, d in zip(perception.tiles, figs, descs, strict=True)
-    )
-    return dataclasses.replace(perception, tiles=tiles), gain
+    tiles = []
+    for t, f, d in zip(perception.tiles, figs, descs, strict=True):
+        alts = tuple((dataclasses.replace(af, color=f.color), ad) for af, ad in t.alternatives)
+        if alts:
+            alt_descs = qshape.describe_many([af for af, _ in alts], tolerances)
+            alts = tuple((af, ad) for (af, _), ad in zip(alts, alt_descs, strict=True))
+        tiles.append(
+            dataclasses.replace(
+                t, figure=f, description=d, color=f.color or t.color, alternatives=alts
+            )
+        )
+    return dataclasses.replace(perception, tiles=tuple(tiles)), gain
 
 
 def _pixel_area_to_plane(camera: CameraLike, outline_px: np.ndarray, z: float) -> float:

@@ -17,6 +17,7 @@ symmetry) and ``yaw_place`` as the slot's yaw. ``place_yaws`` lists every equiva
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -205,10 +206,51 @@ def plan_placements(
     Returns:
         The plan.
 
+    Tiles left out because their shape or colour matches no slot are tried once more with
+    their alternative outlines (`PerceivedTile.alternatives`) against the slots still open.
+
     Raises:
         qshape.MatchError: Unknown method.
     """
     cfg = cfg or PlacementConfig()
+    plan = _plan_once(tiles, slots, cfg, tolerances, filled)
+    by_index = {t.index: t for t in tiles}
+    level = 0
+    while True:
+        retry = [
+            by_index[u.tile]
+            for u in plan.unplaced
+            if u.reason != "slots_taken" and len(by_index[u.tile].alternatives) > level
+        ]
+        if not retry or not plan.open_slots:
+            return plan
+        subs = [
+            dataclasses.replace(
+                t, figure=t.alternatives[level][0], description=t.alternatives[level][1]
+            )
+            for t in retry
+        ]
+        open_now = [s for s in slots if s.index in plan.open_slots]
+        extra = _plan_once(subs, open_now, cfg, tolerances, filled)
+        if extra.commands:
+            moved = {c.tile for c in extra.commands}
+            plan = dataclasses.replace(
+                plan,
+                commands=plan.commands + extra.commands,
+                unplaced=tuple(u for u in plan.unplaced if u.tile not in moved),
+                open_slots=extra.open_slots,
+            )
+        level += 1
+
+
+def _plan_once(
+    tiles: Sequence[PerceivedTile],
+    slots: Sequence[SlotTarget],
+    cfg: PlacementConfig,
+    tolerances: qshape.Tolerances | None,
+    filled: Sequence[SlotTarget],
+) -> PlacementPlan:
+    """One assignment of the tiles' descriptions to the slots, with reasons for the rest."""
     tdesc = [t.description for t in tiles]
     sdesc = [s.description for s in slots]
     result = qshape.assign(tdesc, sdesc, tolerances, cfg.method, cfg.use_color)
