@@ -218,7 +218,10 @@ def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray, Floa
         cp = cand.pts[rows][:, idx, :].reshape(m * k_count, 2 * n)
         prod = (cp @ rr).reshape(m, k_count, 2 * s_count)
         dot, crs = prod[..., :s_count], prod[..., s_count:]
-        mag = np.sqrt(dot * dot + crs * crs)
+        mag = np.multiply(dot, dot)  # in place below: sqrt(dot^2 + cross^2)
+        sq = np.multiply(crs, crs)
+        mag += sq
+        np.sqrt(mag, out=mag)
         mag[~ok] = -1.0  # the residual falls as the fit magnitude grows: best = largest
         top = mag.max(axis=1)  # (m, S)
         sums = cand.sumsq[rows, None] + ref.sumsq[None, :]
@@ -227,7 +230,8 @@ def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray, Floa
         # magnitude of at least `floor`.
         bound = best + tol.symmetry_residual
         floor = 0.5 * (sums - bound * bound * scale)
-        cosine = np.divide(dot, mag, out=np.ones_like(dot), where=mag > 0.0)
+        cosine = np.divide(dot, mag, out=sq, where=mag > 0.0)  # reuses the buffer
+        cosine[mag <= 0.0] = 1.0
         cosine[mag < floor[:, None, :]] = -2.0
         kb = np.argmax(cosine, axis=1)  # first of the least |rotation| (largest cosine)
         at = np.arange(m)[:, None] * k_count + kb  # (m, S) row of the kept offset

@@ -230,13 +230,17 @@ def prefilter(ref: Pack, cand: Pack, tol: Tolerances, use_color: bool) -> NDArra
             if tol.size_area_threshold is not None
             else tol.joint_width * 0.5 * (cand.perimeter[:, None] + ref.perimeter[None, :])
         )
-        base &= np.abs(cand.area[:, None] - ref.area[None, :]) <= thr
-    if use_color:
-        diff = cand.color[:, None, 0] - ref.color[None, :, 0]
-        dist2 = diff * diff
+        gap = np.subtract(cand.area[:, None], ref.area[None, :])
+        np.abs(gap, out=gap)
+        base &= gap <= thr
+    if use_color:  # in place: two (T, S) buffers in all
+        dist2 = np.subtract(cand.color[:, None, 0], ref.color[None, :, 0])
+        np.multiply(dist2, dist2, out=dist2)
+        diff = np.empty_like(dist2)
         for ch in (1, 2):
-            diff = cand.color[:, None, ch] - ref.color[None, :, ch]
-            dist2 += diff * diff
+            np.subtract(cand.color[:, None, ch], ref.color[None, :, ch], out=diff)
+            np.multiply(diff, diff, out=diff)
+            dist2 += diff
         base &= ~(dist2 > tol.color_distance**2)  # unknown colour (NaN) matches any
     return base
 
