@@ -44,7 +44,10 @@ class EnvConfig:
         planner: Planner configuration: bundled name or path (``configs/planner.yaml``).
         action_mode: One of `ACTION_MODES`.
         obs_mode: One of `OBS_MODES` (``state`` = robot + privileged state, no images).
-        image_size: Observation image (height, width) [px]; an int gives a square image.
+        image_size: Observation image (height, width) [px]; an int gives a square image. The
+            default 72 x 96 keeps the cameras' 4:3 aspect: a square image narrows the
+            horizontal field (fixed vertical field of view) and crops the ends of the tile
+            area.
         depth: Add depth images [m] to the observation.
         belt_speed: Input belt speed [m/s].
         reward_mode: One of `REWARD_MODES`.
@@ -92,7 +95,7 @@ class EnvConfig:
     planner: str = "planner"
     action_mode: str = "pick_place"
     obs_mode: str = "rgb"
-    image_size: tuple[int, int] = (96, 96)
+    image_size: tuple[int, int] = (72, 96)
     depth: bool = False
     belt_speed: float = 0.0
     reward_mode: str = "sparse"
