@@ -60,8 +60,8 @@ class PickPlaceBounds:
     """World bounds that normalised pick and place actions map onto.
 
     Attributes:
-        pick_lo: Lower (x, y) of the pick area [m] (input tile area minus margin).
-        pick_hi: Upper (x, y) of the pick area [m].
+        pick_lo: Lower (x, y) of the pick area [m] (input tile area grown by the margin).
+        pick_hi: Upper (x, y) of the pick area [m] (x up to the belt's end when it moves).
         place_lo: Lower (x, y) of the place area [m] (mesh minus margin).
         place_hi: Upper (x, y) of the place area [m].
         pick_z: Height of a tile's top face on the input belt [m].
@@ -82,9 +82,12 @@ class PickPlaceBounds:
         area = np.asarray(c.input_belt.tile_area) / 2 + config.pick_margin
         mesh = np.asarray(c.output_belt.mesh_size) / 2 + config.place_margin
         t = c.tiles.thickness
+        pick_hi = g.input_centre[:2] + area
+        if config.belt_speed > 0:  # tiles travel downstream: up to the belt's end
+            pick_hi[0] = max(pick_hi[0], g.input_belt_end)
         return PickPlaceBounds(
             g.input_centre[:2] - area,
-            g.input_centre[:2] + area,
+            pick_hi,
             g.output_centre[:2] - mesh,
             g.output_centre[:2] + mesh,
             float(g.input_centre[2] + t),
