@@ -222,22 +222,23 @@ def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray, Floa
         sq = np.multiply(crs, crs)
         mag += sq
         np.sqrt(mag, out=mag)
-        mag[~ok] = -1.0  # the residual falls as the fit magnitude grows: best = largest
+        # The residual falls as the fit magnitude grows: the best offset has the largest.
+        np.putmask(mag, ~ok, -np.inf)  # incompatible: never the best, never equivalent
         top = mag.max(axis=1)  # (m, S)
         sums = cand.sumsq[rows, None] + ref.sumsq[None, :]
-        best = np.sqrt(np.maximum(sums - 2.0 * top, 0.0) / scale)
+        best = np.sqrt(np.maximum(sums - 2.0 * top, 0.0) / scale)  # inf: nothing compatible
         # Equivalent offsets: residual within symmetry_residual of the best, i.e. a fit
         # magnitude of at least `floor`.
         bound = best + tol.symmetry_residual
         floor = 0.5 * (sums - bound * bound * scale)
         cosine = np.divide(dot, mag, out=sq, where=mag > 0.0)  # reuses the buffer
-        cosine[mag <= 0.0] = 1.0
-        cosine[mag < floor[:, None, :]] = -2.0
+        np.putmask(cosine, mag == 0.0, 1.0)  # a zero fit: rotation 0
+        np.putmask(cosine, mag < floor[:, None, :], -2.0)
         kb = np.argmax(cosine, axis=1)  # first of the least |rotation| (largest cosine)
         at = np.arange(m)[:, None] * k_count + kb  # (m, S) row of the kept offset
         mag_sel = mag.reshape(m * k_count, s_count)[at, cols]
         chosen = np.sqrt(np.maximum(sums - 2.0 * mag_sel, 0.0) / scale)
-        chosen[top < 0.0] = np.inf
+        chosen[top == -np.inf] = np.inf
         score[rows] = chosen
         flat_prod = prod.reshape(m * k_count, 2 * s_count)
         dot_out[rows] = flat_prod[at, cols]

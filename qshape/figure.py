@@ -146,11 +146,15 @@ def densify(points: FloatArray, curve_mask: BoolArray, per_arc: int = _ARC_SAMPL
     flat = d == 0.0
     safe_d = np.where(flat, 1.0, d)
     bi, bj, bk = (vi * vi).sum(-1), (vj * vj).sum(-1), (vk * vk).sum(-1)
-    ux = bi * (vj[..., 1] - vk[..., 1]) + bj * (vk[..., 1] - vi[..., 1]) + bk * (
-        vi[..., 1] - vj[..., 1]
+    ux = (
+        bi * (vj[..., 1] - vk[..., 1])
+        + bj * (vk[..., 1] - vi[..., 1])
+        + bk * (vi[..., 1] - vj[..., 1])
     )
-    uy = bi * (vk[..., 0] - vj[..., 0]) + bj * (vi[..., 0] - vk[..., 0]) + bk * (
-        vj[..., 0] - vi[..., 0]
+    uy = (
+        bi * (vk[..., 0] - vj[..., 0])
+        + bj * (vi[..., 0] - vk[..., 0])
+        + bk * (vj[..., 0] - vi[..., 0])
     )
     centre = np.stack([ux, uy], axis=-1) / safe_d[..., None]
     rel = vi - centre
@@ -161,9 +165,7 @@ def densify(points: FloatArray, curve_mask: BoolArray, per_arc: int = _ARC_SAMPL
     sweep = np.where(d > 0.0, (ak - ai) % two_pi, -((ai - ak) % two_pi))
     t = np.arange(1, per_arc + 1) / (per_arc + 1)
     ang = ai[..., None] + t * sweep[..., None]
-    arcs = centre[..., None, :] + radius[..., None, None] * np.stack(
-        [np.cos(ang), np.sin(ang)], -1
-    )
+    arcs = centre[..., None, :] + radius[..., None, None] * np.stack([np.cos(ang), np.sin(ang)], -1)
     line = vi[..., None, :] + t[:, None] * (vk - vi)[..., None, :]
     arcs = np.where(flat[..., None, None], line, arcs)
     size = np.where(curve_mask, per_arc, 1)

@@ -317,9 +317,7 @@ def _cyclic_compat(ref: NDArray[np.int64], cand: NDArray[np.int64]) -> NDArray[n
     return np.asarray(ok[inv_c.ravel()][:, inv_r.ravel()])
 
 
-def cyclic_compat_by_offset(
-    ref: NDArray[np.int64], cand: NDArray[np.int64]
-) -> NDArray[np.bool_]:
+def cyclic_compat_by_offset(ref: NDArray[np.int64], cand: NDArray[np.int64]) -> NDArray[np.bool_]:
     """`_cyclic_compat` laid out (T, n, S): candidate, offset, reference.
 
     Computed over unique rows (noisy copies of a class mostly share their labels).

@@ -8,6 +8,7 @@ from scipy.optimize import linear_sum_assignment
 
 import qshape
 from qshape import Assignment, Figure, MatchError, Tolerances, assign, describe, match
+from qshape.assign import feasible_pairs
 
 SEED = 11
 
@@ -174,3 +175,33 @@ def test_qshape_imports_no_simulator():
         "if m in sys.modules]; assert not bad, bad"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_feasible_pairs_agree_with_pairwise_match_on_poor_fits():
+    # No size check and a wide symmetry band: label-compatible but geometrically different
+    # quadrilaterals, whose residuals are large (the dense block scoring must still pick only
+    # compatible offsets, and the same score and least rotation as `match`).
+    rng = np.random.default_rng(SEED + 7)
+    tol = Tolerances(check_size=False, symmetry_residual=0.5)
+    quads = []
+    while len(quads) < 40:
+        t = np.sort(rng.uniform(0.0, 2 * math.pi, 4))
+        if np.diff(np.r_[t, t[0] + 2 * math.pi]).max() > 0.9 * math.pi:
+            continue
+        r = rng.uniform(2.0, 20.0, 4)
+        pts = np.stack([r * np.cos(t), r * np.sin(t)], 1)
+        quads.append(describe(Figure.from_polygon(pts), tol))
+    ti, si, score, rot = feasible_pairs(quads[:20], quads[20:], tol, use_color=False)
+    assert len(ti) > 5
+    found = {
+        (int(a), int(b)): (float(c), float(d))
+        for a, b, c, d in zip(ti, si, score, rot, strict=True)
+    }
+    for a in range(20):
+        for b in range(20):
+            m = match(quads[20 + b], quads[a], tol, use_color=False)
+            assert (m is not None) == ((a, b) in found)
+            if m is not None:
+                c, d = found[(a, b)]
+                assert c == pytest.approx(m.score, rel=1e-9, abs=1e-12)
+                assert abs(math.remainder(d - m.rotation, 2 * math.pi)) < 1e-9
