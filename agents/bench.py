@@ -226,12 +226,13 @@ def learned_figures(d: dict[str, Any]) -> list[Figure]:
     out = []
     for r in rows:
         p = r["policy"]
-        if p == "scripted":
-            out.append(fig(g, "scripted success rate", r["success_rate"], "", "==", 1.0))
-            out.append(fig(g, "scripted tiles/min (sim)", r["tiles_per_min"], "tiles/min", ">=",
+        kind = p.split("@")[0]
+        if kind == "scripted":
+            out.append(fig(g, f"{p} success rate", r["success_rate"], "", "==", 1.0))
+            out.append(fig(g, f"{p} tiles/min (sim)", r["tiles_per_min"], "tiles/min", ">=",
                            SCRIPTED_TILES_PER_MIN))
-        elif p == "random":
-            out.append(fig(g, "random success rate", r["success_rate"]))
+        elif kind == "random":
+            out.append(fig(g, f"{p} success rate", r["success_rate"]))
         else:
             out.append(fig(g, f"{p} success rate", r["success_rate"]))
             out.append(fig(g, f"{p} tiles/min (sim)", r["tiles_per_min"], "tiles/min"))
@@ -305,7 +306,8 @@ def command(bench: Bench, out_dir: Path, quick: bool, model: Path | None) -> lis
         return None
     cmd = [sys.executable, "-m", bench.module]
     if bench.module == "agents.evaluate":
-        policies = ["scripted", "random"] + ([str(model)] if model else [])
+        policies = ["scripted", "scripted@execution=dynamic", "random"]
+        policies += [str(model)] if model else []
         cmd += ["--policies", *policies, "--seeds", "1000-1004" if quick else EVAL_SEEDS,
                 "--out", str(out_dir), "--quiet"]
         if model is not None:

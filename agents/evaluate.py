@@ -161,11 +161,7 @@ def load_env_overrides(path: str | Path | None, pairs: Sequence[str] = ()) -> di
     if path is not None:
         raw = load_yaml(path)
         data = dict(raw["env"]) if isinstance(raw.get("env"), dict) else raw
-    for pair in pairs:
-        if "=" not in pair:
-            raise EvaluateError(f"--env wants KEY=VALUE, got {pair!r}")
-        key, value = pair.split("=", 1)
-        data[key] = yaml.safe_load(value)
+    data.update(_pairs(pairs))
     try:
         load_env_config(**data)
     except ConfigError as exc:
@@ -277,17 +273,41 @@ def make_policies(
 ) -> list[Policy]:
     """`Policy` objects for ``scripted``, ``random`` and model paths.
 
+    A name may end with ``@KEY=VALUE[,KEY=VALUE]``: env overrides of that policy only (its
+    label keeps them), e.g. ``scripted@execution=dynamic``.
+
     Raises:
-        EvaluateError: A name that is none of those.
+        EvaluateError: A name that is none of those, or a malformed override.
     """
     out = []
-    for name in names:
+    for spec in names:
+        name, _, extra = spec.partition("@")
+        overrides = _pairs(extra.split(",")) if extra else {}
         if name == "scripted":
-            out.append(_scripted(base, scripted_image_size, calibrate))
+            pol = _scripted(base, scripted_image_size, calibrate)
         elif name == "random":
-            out.append(_random(base))
+            pol = _random(base)
         else:
-            out.append(_trained(base, Path(name)))
+            pol = _trained(base, Path(name))
+        if overrides:
+            pol = Policy(spec if name in ("scripted", "random") else f"{pol.label}@{extra}",
+                         {**pol.env_kwargs, **overrides}, pol.factory)
+        out.append(pol)
+    return out
+
+
+def _pairs(pairs: Sequence[str]) -> dict[str, Any]:
+    """``KEY=VALUE`` strings -> a dict (values parsed as YAML).
+
+    Raises:
+        EvaluateError: A string without ``=``.
+    """
+    out: dict[str, Any] = {}
+    for pair in pairs:
+        if "=" not in pair:
+            raise EvaluateError(f"env overrides want KEY=VALUE, got {pair!r}")
+        key, value = pair.split("=", 1)
+        out[key.strip()] = yaml.safe_load(value)
     return out
 
 
@@ -476,7 +496,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line (see the module docstring)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--policies", nargs="+", required=True,
-                    help="'scripted', 'random' and/or model .zip paths")
+                    help="'scripted', 'random' and/or model .zip paths, each optionally with "
+                         "@KEY=VALUE[,KEY=VALUE] env overrides (scripted@execution=dynamic)")
     ap.add_argument("--seeds", nargs="+", default=["1000-1019"], help="e.g. 1000-1019 or 1,2")
     ap.add_argument("--env-config", default=None,
                     help="env YAML (EnvConfig keys) or a configs/train YAML (its env)")

@@ -67,5 +67,12 @@ def test_seeds_and_bad_input(tmp_path):
     with pytest.raises(EvaluateError, match="unknown"):
         load_env_overrides(None, ["max_slot=2"])
     assert load_env_overrides("configs/train/tiny.yaml", ["max_slots=1"])["max_slots"] == 1
+    pols = make_policies(["scripted@execution=dynamic,belt_speed=0.1", "random"], BASE)
+    assert pols[0].label == "scripted@execution=dynamic,belt_speed=0.1"
+    assert pols[0].env_kwargs["execution"] == "dynamic"
+    assert pols[0].env_kwargs["belt_speed"] == 0.1
+    assert pols[1].env_kwargs["execution"] == "kinematic"
+    with pytest.raises(EvaluateError, match="KEY=VALUE"):
+        make_policies(["random@oops"], BASE)
     with pytest.raises(EvaluateError, match="scripted"):
         make_policies([str(tmp_path / "missing.zip")], BASE)
