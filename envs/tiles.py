@@ -42,6 +42,10 @@ def signed_area(poly: np.ndarray) -> float:
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
+JITTER_TRIES = 8
+"""Draws of manufacturing noise tried before a tile keeps its nominal outline (noise on a very
+short edge can fold the outline into a self-intersecting polygon MuJoCo cannot mesh)."""
+
 @dataclass(frozen=True, eq=False)
 class TileShape:
     """A tile's nominal geometry and colour.
@@ -315,13 +319,19 @@ def make_tile(
     elif distractor != "":
         raise CellError(f"unknown distractor kind {distractor!r}; allowed: color, broken, shape")
     points, piece_ids = _decompose(outline, holes)
-    noisy = points + rng.normal(0.0, cfg.vertex_jitter, points.shape)
     n_out = len(outline)
-    n_outline = noisy[:n_out]
-    n_holes, start = [], n_out
-    for h in holes:
-        n_holes.append(noisy[start : start + len(h)])
-        start += len(h)
+    for _ in range(JITTER_TRIES):
+        noisy = points + rng.normal(0.0, cfg.vertex_jitter, points.shape)
+        n_outline = noisy[:n_out]
+        n_holes, start = [], n_out
+        for h in holes:
+            n_holes.append(noisy[start : start + len(h)])
+            start += len(h)
+        if Polygon(n_outline, n_holes).is_valid:
+            break
+    else:  # jitter keeps folding a short edge (e.g. at a break line): keep the nominal outline
+        noisy = points.astype(float)
+        n_outline, n_holes = outline, list(holes)
     off = np.array(Polygon(n_outline, n_holes).centroid.coords[0])
     noisy = noisy - off
     n_outline = noisy[:n_out]

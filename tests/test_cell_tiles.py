@@ -8,7 +8,8 @@ import shapely
 from shapely.geometry import Polygon
 
 from envs.cell import Cell
-from envs.cell_config import TileConfig
+from envs.cell_config import TileConfig, load_cell_config
+from envs.scene import extrusion
 from envs.tiles import basic_shapes, convex_decomposition, make_tile, make_tiles, sample_layout
 
 SHAPES = basic_shapes()
@@ -113,3 +114,15 @@ def test_exact_layout_packs_40_tiles_without_overlap() -> None:
         assert -0.15 <= x0 and x1 <= 0.15 and -0.13 <= y0 and y1 <= 0.13
         for b in range(a):
             assert polys[a].distance(polys[b]) >= 0.004 - 1e-12
+
+
+@pytest.mark.parametrize("kind", ["", "broken", "shape"])
+def test_noisy_tiles_always_mesh(kind: str) -> None:
+    """Jitter on a short edge (a ring broken next to its hole) must never fold the outline."""
+    cfg = load_cell_config().tiles
+    for shape in basic_shapes():
+        for seed in range(40 if shape.name == "ring" else 8):
+            tile = make_tile(shape, cfg, np.random.default_rng(seed), kind)
+            assert Polygon(tile.outline, tile.holes).is_valid, (shape.name, seed)
+            verts, faces = extrusion(tile.outline, tile.holes, 0.0, cfg.thickness)
+            assert len(faces) > 0 and np.isfinite(verts).all()
