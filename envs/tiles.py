@@ -46,6 +46,7 @@ JITTER_TRIES = 8
 """Draws of manufacturing noise tried before a tile keeps its nominal outline (noise on a very
 short edge can fold the outline into a self-intersecting polygon MuJoCo cannot mesh)."""
 
+
 @dataclass(frozen=True, eq=False)
 class TileShape:
     """A tile's nominal geometry and colour.
