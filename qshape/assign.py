@@ -372,6 +372,8 @@ def feasible_pairs(
 
 
 def _descriptions(items: Sequence[Description | Figure], tol: Tolerances) -> list[Description]:
+    if all(type(x) is Description for x in items):  # the usual case: nothing to describe
+        return list(items)  # type: ignore[arg-type]
     figs = [x for x in items if isinstance(x, Figure)]
     if not figs:
         return [as_description(x, tol) for x in items]
