@@ -38,6 +38,7 @@ import gymnasium as gym
 import numpy as np
 import yaml
 
+from agents.wrappers import FlatDiscreteActions
 from configs import ConfigError, load_yaml
 
 ENV_ID = "envs:MosaicAssembly-v0"
@@ -197,11 +198,13 @@ class Policy:
         label: Table label.
         env_kwargs: Env overrides of its env.
         factory: Builds the per-env predict function (called once the env exists).
+        wrap: Wrapper applied to its env (a trained model's `FlatDiscreteActions`), or None.
     """
 
     label: str
     env_kwargs: dict[str, Any]
     factory: Callable[[gym.Env], Predict]
+    wrap: Callable[[gym.Env], gym.Env] | None = None
 
 
 def _scripted(base: dict[str, Any], image_size: tuple[int, int], calibrate: bool) -> Policy:
@@ -262,7 +265,8 @@ def _trained(base: dict[str, Any], model_path: Path) -> Policy:
 
         return predict
 
-    return Policy(_label(model_path), env_kwargs, factory)
+    wrap = FlatDiscreteActions if run.get("flatten_actions") else None
+    return Policy(_label(model_path), env_kwargs, factory, wrap)
 
 
 def make_policies(
@@ -291,7 +295,7 @@ def make_policies(
             pol = _trained(base, Path(name))
         if overrides:
             pol = Policy(spec if name in ("scripted", "random") else f"{pol.label}@{extra}",
-                         {**pol.env_kwargs, **overrides}, pol.factory)
+                         {**pol.env_kwargs, **overrides}, pol.factory, pol.wrap)
         out.append(pol)
     return out
 
@@ -383,6 +387,8 @@ def evaluate_policy_set(
     per: dict[str, list[EpisodeResult]] = {}
     for pol in policies:
         env = gym.make(ENV_ID, **pol.env_kwargs)
+        if pol.wrap is not None:
+            env = pol.wrap(env)
         try:
             predict = pol.factory(env)
             limit = max_steps or STEPS_PER_SLOT * len(env.unwrapped.task.slot_class)  # type: ignore[attr-defined]

@@ -31,6 +31,7 @@ import numpy as np
 import yaml
 from gymnasium import spaces
 
+from agents.wrappers import FlatDiscreteActions
 from configs import ConfigError, from_dict, load_yaml
 
 ENV_ID = "envs:MosaicAssembly-v0"
@@ -69,6 +70,8 @@ class TrainConfig:
         torch_threads: ``torch.set_num_threads`` (shared CPUs: keep 1).
         device: Torch device (``cpu``, ``cuda``, ``auto``).
         verbose: SB3 verbosity (0, 1, 2).
+        flatten_actions: Wrap the envs in `agents.wrappers.FlatDiscreteActions` (MultiDiscrete
+            -> one Discrete over all combinations).
         max_wall_s: Stop ``learn`` after this wall time [s] even before ``total_timesteps``;
             0: no limit (the final model is saved either way).
     """
@@ -89,6 +92,7 @@ class TrainConfig:
     torch_threads: int = 1
     device: str = "cpu"
     verbose: int = 0
+    flatten_actions: bool = False
     max_wall_s: float = 0.0
 
     def __post_init__(self) -> None:
@@ -179,7 +183,8 @@ def make_env_fn(cfg: TrainConfig) -> Any:
         kwargs["max_episode_steps"] = cfg.max_episode_steps
 
     def make() -> gym.Env:
-        return gym.make(ENV_ID, **kwargs)
+        env = gym.make(ENV_ID, **kwargs)
+        return FlatDiscreteActions(env) if cfg.flatten_actions else env
 
     return make
 
