@@ -17,6 +17,7 @@ from agents.train import (
     main,
     pick_policy,
 )
+from agents.wrappers import FlatDiscreteActions
 from configs import ConfigError
 
 TINY = "configs/train/tiny.yaml"
@@ -72,3 +73,20 @@ def test_policy_choice():
     assert pick_policy("auto", d) == "MultiInputPolicy"
     assert pick_policy("auto", spaces.Box(0, 255, (64, 64, 3), np.uint8)) == "CnnPolicy"
     assert pick_policy("auto", spaces.Box(-1, 1, (3,))) == "MlpPolicy"
+
+
+def test_flat_discrete_actions_round_trip():
+    env = FlatDiscreteActions(gym.make("envs:MosaicAssembly-v0", max_slots=2,
+                                       action_mode="pick_place_discrete", obs_mode="state",
+                                       execution="kinematic"))
+    try:
+        assert env.action_space == spaces.Discrete(2 * 2 * 4)
+        for k in range(env.action_space.n):
+            assert env.flat(env.action(k)) == k
+        assert env.action(5).tolist() == [0, 1, 1]
+        env.reset(seed=0)
+        env.step(env.flat(np.array([0, 0, 0])))
+    finally:
+        env.close()
+    with pytest.raises(TypeError, match="MultiDiscrete"):
+        FlatDiscreteActions(gym.make("CartPole-v1"))
