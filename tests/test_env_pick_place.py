@@ -189,3 +189,24 @@ def test_stream_feed_large_design() -> None:
         assert env.evaluate()["placeable"] == len(env.cell.slots)
     finally:
         env.close()
+
+
+def test_info_keys_and_dense_terms() -> None:
+    from envs.task import REWARD_TERMS  # noqa: PLC0415
+
+    env = MosaicAssemblyEnv(
+        execution="kinematic", obs_mode="state", max_slots=2, reward_mode="dense"
+    )
+    try:
+        _, info = env.reset(seed=0)
+        _, r, _, _, info = env.step(env.expert_action(0, 0))
+        for key in ("sim_time", "tiles_placed", "tiles_per_min", "evaluation", "is_success"):
+            assert key in info
+        terms = {t: info[f"reward_{t}"] for t in REWARD_TERMS}
+        assert r == pytest.approx(sum(terms.values()))
+        assert terms["correct"] == env.config.reward_correct and terms["reach"] < 0
+        for key in ("success", "correct", "misplaced", "dropped", "lost", "distractors_placed"):
+            assert key in info["evaluation"]
+        assert info["evaluation"] == env.evaluate()
+    finally:
+        env.close()
