@@ -34,6 +34,8 @@ from planners.trajectory import JointState
 RANGE_SLACK = 1e-6
 """Allowed excess over [-1, 1] for float rounding in normalised actions."""
 N_JOINTS = 6
+EVENT_SLACK = 1e-9
+"""Time slack [s] so a vacuum event falls on the physics step at (not after) its time."""
 
 
 class ActionError(ValueError):
@@ -312,8 +314,8 @@ class PickPlaceExecutor:
             belt_velocity=(cell.belt_speed, 0.0, 0.0),
         )
         cmds = self.servo.commands(plan.trajectory, self.dt)
-        k_on = int(np.searchsorted(cmds.times, plan.vacuum_on - 1e-9))
-        k_off = int(np.searchsorted(cmds.times, plan.vacuum_off - 1e-9))
+        k_on = int(np.searchsorted(cmds.times, plan.vacuum_on - EVENT_SLACK))
+        k_off = int(np.searchsorted(cmds.times, plan.vacuum_off - EVENT_SLACK))
         grasped = -1
         for k in range(len(cmds.times)):  # servo commands change every physics step
             if k == k_on:

@@ -76,6 +76,7 @@ class EnvConfig:
         position_tolerance: Placement position tolerance [m].
         yaw_tolerance_deg: Placement yaw tolerance [deg], modulo the tile's symmetry.
         mesh_height_tolerance: A tile counts as on the mesh within this height [m].
+        max_tilt_deg: ... and when tilted less than this from flat [deg].
         reward_correct: Sparse reward per correctly filled slot.
         reward_success: Bonus when the mosaic is complete.
         penalty_misplaced: Penalty per newly misplaced tile (positive number).
@@ -124,6 +125,7 @@ class EnvConfig:
     position_tolerance: float = 0.0015
     yaw_tolerance_deg: float = 2.0
     mesh_height_tolerance: float = 0.003
+    max_tilt_deg: float = 8.0
     reward_correct: float = 1.0
     reward_success: float = 5.0
     penalty_misplaced: float = 0.5

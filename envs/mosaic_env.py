@@ -39,6 +39,8 @@ from planners.ik import IKSolver
 
 DEFAULT_CONTROL_DT = 0.04
 """Default control period [s] (``configs/env.yaml``); the class's ``render_fps`` is 1 / it."""
+SEED_BOUND = 2**63
+"""Exclusive bound of the layout seeds drawn from ``np_random`` at each reset."""
 VISUAL_GROUP = 2
 """Geom group of the tiles' visual geoms (colour randomisation)."""
 CAMERA_PANEL_DIVISOR = 2
@@ -187,7 +189,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         cell, rng = self.cell, self.np_random
         for attempt in range(self.config.layout_tries):
             try:
-                cell.reset(seed=np.random.default_rng(rng.integers(2**63)))
+                cell.reset(seed=np.random.default_rng(rng.integers(SEED_BOUND)))
                 break
             except CellError:
                 if attempt == self.config.layout_tries - 1:

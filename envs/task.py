@@ -32,6 +32,9 @@ REWARD_TERMS = (
 """Names of the reward terms (each is reported in ``info`` as ``reward_<name>``)."""
 
 
+MM_PER_M = 1e3
+
+
 @dataclass(frozen=True)
 class Placement:
     """Placement of every tile at one instant.
@@ -79,6 +82,7 @@ class MosaicTask:
         self._mesh_hi = cell.geometry.output_centre[:2] + mesh
         self._rest_z = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2
         self._yaw_tol = math.radians(config.yaw_tolerance_deg)
+        self._flat = math.cos(math.radians(config.max_tilt_deg))
         self._prev: dict[str, Any] = {}
         self.reset()
 
@@ -99,7 +103,7 @@ class MosaicTask:
         on_mesh = (
             np.all((xy >= self._mesh_lo) & (xy <= self._mesh_hi), axis=1)
             & (np.abs(poses.pos[:, 2] - self._rest_z) <= self.cfg.mesh_height_tolerance)
-            & (up > math.cos(self._yaw_tol * 4))
+            & (up > self._flat)
             & ~held
             & cell.on_stage
         )
@@ -159,7 +163,7 @@ class MosaicTask:
         need = np.bincount(open_classes, minlength=len(self.class_names))
         placeable = int(np.minimum(counts, need).sum())
         on = p.on_mesh
-        pe = p.position_error[on] * 1e3
+        pe = p.position_error[on] * MM_PER_M
         ye = np.degrees(p.yaw_error[on])
         return {
             "success": bool(p.slot_filled.all()) and len(p.slot_filled) > 0,
