@@ -438,11 +438,13 @@ def plot(rows: Sequence[PolicyRow], path: Path) -> None:
     except ImportError:
         _plot_cv(labels, panels, path)
         return
-    fig, axes = plt.subplots(1, len(panels), figsize=(4 * len(panels), 3.5))
+    height = 1.2 + 0.45 * len(labels)
+    fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), height), sharey=True)
+    colors = [f"C{i % 10}" for i in range(len(labels))]
     for ax, (title, values) in zip(axes, panels, strict=True):
-        ax.bar(labels, values, color=["C0", "C1", "C2", "C3", "C4"][: len(labels)])
+        ax.barh(labels, values, color=colors)
         ax.set_title(title)
-        ax.tick_params(axis="x", labelrotation=20)
+        ax.invert_yaxis()
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
