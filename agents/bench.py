@@ -20,6 +20,7 @@ import argparse
 import json
 import os
 import platform
+import shutil
 import subprocess
 import sys
 import time
@@ -110,8 +111,7 @@ def qshape_figures(d: dict[str, Any]) -> list[Figure]:
     g = "qshape"
     n = d.get("tiles", "?")
     return [
-        fig(g, f"describe {n} tiles (one by one)", d.get("describe_s"), "s", "<=",
-            QSHAPE_DESCRIBE_S),
+        fig(g, f"describe {n} tiles (one by one)", d.get("describe_s"), "s"),
         fig(g, f"describe {n} tiles (describe_many)", d.get("describe_many_s"), "s", "<=",
             QSHAPE_DESCRIBE_S),
         fig(g, f"assign {n} x {n} optimal", _get(d, "assign_optimal", "seconds"), "s", "<=",
@@ -269,6 +269,8 @@ class Bench:
         json_name: File name of its JSON under the out folder.
         quick_args: Extra arguments of ``--quick`` runs.
         figures: Extractor of its figures.
+        takes_out: The script accepts ``--out PATH``; otherwise it writes ``out/<json_name>``
+            (copied to the out folder after the run when that differs).
     """
 
     name: str
@@ -276,6 +278,7 @@ class Bench:
     json_name: str
     quick_args: tuple[str, ...]
     figures: Callable[[dict[str, Any]], list[Figure]]
+    takes_out: bool = True
 
 
 BENCHES = (
@@ -285,7 +288,7 @@ BENCHES = (
           cell_figures),
     Bench("planner", "agents.bench_planner", "planner_bench.json", ("--quick",),
           planner_figures),
-    Bench("env", "agents.bench_env", "bench_env.json", ("--quick",), env_figures),
+    Bench("env", "agents.bench_env", "bench_env.json", ("--quick",), env_figures, False),
     Bench("perception", "agents.bench_perception", "bench_perception.json", ("--seeds", "5"),
           perception_figures),
     Bench("learned", "agents.evaluate", "eval.json", (), learned_figures),
@@ -313,7 +316,8 @@ def command(bench: Bench, out_dir: Path, quick: bool, model: Path | None) -> lis
         if model is not None:
             cmd += ["--env-config", str(model.parent / "train_config.yaml")]
         return cmd
-    cmd += ["--out", str(out_dir / bench.json_name)]
+    if bench.takes_out:
+        cmd += ["--out", str(out_dir / bench.json_name)]
     return cmd + list(bench.quick_args if quick else ())
 
 
@@ -337,6 +341,9 @@ def run_benches(
             rc, tail = -1, f"timed out after {timeout:.0f} s"
         status[b.name] = {"rc": rc, "wall_s": time.perf_counter() - t0,
                           "error": tail if rc else ""}
+        fixed, wanted = OUT_DIR / b.json_name, out_dir / b.json_name
+        if not rc and not b.takes_out and fixed.resolve() != wanted.resolve():
+            shutil.copyfile(fixed, wanted)
         if rc:
             print(f"  {b.name} failed (rc {rc}): {tail.strip().splitlines()[-1:]}")
     return status

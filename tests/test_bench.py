@@ -34,7 +34,8 @@ def test_collect_checks_targets(tmp_path):
     _fakes(tmp_path)
     figures, sources = collect(BENCHES, tmp_path)
     by = {(f.group, f.name): f for f in figures}
-    assert by[("qshape", "describe 100 tiles (one by one)")].passed is True
+    assert by[("qshape", "describe 100 tiles (describe_many)")].passed is True
+    assert by[("qshape", "describe 100 tiles (one by one)")].passed is None
     assert by[("qshape", "assign 100 x 100 optimal")].passed is False
     assert by[("env", "kinematic pick place steps per s")].passed is True
     assert by[("env", "peak rss mb")].passed is False
@@ -66,5 +67,7 @@ def test_fig_and_commands(tmp_path):
     assert command(by["main"], tmp_path, False, None) is None
     cmd = command(by["planner"], tmp_path, True, None)
     assert cmd is not None and cmd[2] == "agents.bench_planner" and "--quick" in cmd
+    env_cmd = command(by["env"], tmp_path, False, None)
+    assert env_cmd is not None and "--out" not in env_cmd
     ev = command(by["learned"], tmp_path, False, tmp_path / "run" / "model.zip")
     assert ev is not None and str(tmp_path / "run" / "model.zip") in ev
