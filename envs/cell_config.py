@@ -9,38 +9,24 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
+from functools import partial
 from pathlib import Path
 from typing import Any, Literal
 
-from configs import ConfigError, load_config
+from configs import ConfigError, check_positive, load_config
 from envs.errors import CellError
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 """Repository root (assets are resolved relative to it)."""
 
-
-def _positive(obj: object, *names: str) -> None:
-    for name in names:
-        value = getattr(obj, name)
-        values = value if isinstance(value, tuple) else (value,)
-        for v in values:
-            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
-                raise CellError(
-                    f"{type(obj).__name__}.{name} must be positive and finite, got {value!r}"
-                )
+_positive = partial(check_positive, error=CellError)
+_non_negative = partial(check_positive, error=CellError, strict=False)
 
 
 def _length(obj: object, name: str, n: int) -> None:
     value = getattr(obj, name)
     if len(value) != n:
         raise CellError(f"{type(obj).__name__}.{name} needs {n} values, got {value!r}")
-
-
-def _non_negative(obj: object, *names: str) -> None:
-    for name in names:
-        v = getattr(obj, name)
-        if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
-            raise CellError(f"{type(obj).__name__}.{name} must be >= 0 and finite, got {v!r}")
 
 
 @dataclass(frozen=True)

@@ -19,16 +19,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
-from configs import load_config
+from configs import check_positive, load_config
 from planners.errors import LimitError
 
 N_JOINTS = 6
 """Number of arm joints."""
 
 _DEG = math.pi / 180.0
+
+_check_positive = partial(check_positive, error=LimitError)
+_check_non_negative = partial(check_positive, error=LimitError, strict=False)
 
 
 def _check_tuple(obj: object, name: str, *, positive: bool = True) -> None:
@@ -43,20 +47,6 @@ def _check_tuple(obj: object, name: str, *, positive: bool = True) -> None:
                 f"{type(obj).__name__}.{name}[{i}] (joint {i + 1}) must be "
                 f"{'positive and ' if positive else ''}finite, got {v!r}"
             )
-
-
-def _check_positive(obj: object, *names: str) -> None:
-    for name in names:
-        v = getattr(obj, name)
-        if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
-            raise LimitError(f"{type(obj).__name__}.{name} must be positive and finite, got {v!r}")
-
-
-def _check_non_negative(obj: object, *names: str) -> None:
-    for name in names:
-        v = getattr(obj, name)
-        if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
-            raise LimitError(f"{type(obj).__name__}.{name} must be >= 0 and finite, got {v!r}")
 
 
 @dataclass(frozen=True)
