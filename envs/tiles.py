@@ -437,13 +437,25 @@ def sample_layout(
             f"{have * 1e4:.0f} cm^2 (random placement fills at most ~{fill:.0%}); use fewer "
             "tiles, a larger input_belt.tile_area, or feed='stream'"
         )
-    rest = {"outlines": outlines, "occupied": occupied, "occupied_radii": occupied_radii}
+
+    def once() -> np.ndarray:
+        return _layout_once(
+            radii,
+            half,
+            gap,
+            attempts,
+            rng,
+            outlines=outlines,
+            occupied=occupied,
+            occupied_radii=occupied_radii,
+        )
+
     for _ in range(max(restarts, 1) - 1):
         try:
-            return _layout_once(radii, half, gap, attempts, rng, **rest)
+            return once()
         except CellError:
             continue
-    return _layout_once(radii, half, gap, attempts, rng, **rest)
+    return once()
 
 
 def _layout_once(
