@@ -34,6 +34,7 @@ import math  # noqa: E402
 import time  # noqa: E402
 from collections.abc import Callable  # noqa: E402
 from dataclasses import dataclass  # noqa: E402
+from functools import partial  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import TypeVar  # noqa: E402
 
@@ -123,7 +124,7 @@ def _shapes(rng: np.random.Generator) -> list[tuple[np.ndarray, np.ndarray, tupl
 def make_classes(rng: np.random.Generator, count: int) -> list[ShapeClass]:
     """``count`` classes: every shape in two colours, then more colours as needed."""
     shapes = _shapes(rng)
-    out = []
+    out: list[ShapeClass] = []
     k = 0
     while len(out) < count:
         pts, mask, holes, sym = shapes[k % len(shapes)]
@@ -149,7 +150,7 @@ def make_figure(
 
     color = np.clip(np.array(cls.color) + rng.uniform(-color_jitter, color_jitter, 3), 0, 1)
     holes = tuple(Boundary.make(noisy(hp), hm) for hp, hm in cls.holes)
-    return Figure(noisy(cls.points), cls.mask, holes, tuple(color.tolist()))  # type: ignore[arg-type]
+    return Figure(noisy(cls.points), cls.mask, holes, tuple(color.tolist()))
 
 
 def paper_pairwise(
@@ -287,7 +288,7 @@ def main(argv: list[str] | None = None) -> dict:
     for method in ("optimal", "greedy"):
         clear_key_caches()  # each method's first run starts cold
         dt, dt_first, assignment = _timed(
-            args.repeat, lambda m=method: qshape.assign(tile_desc, slot_desc, tol, method=m)
+            args.repeat, partial(qshape.assign, tile_desc, slot_desc, tol, method=method)
         )
         correct = sum(tile_class[a.tile] == slot_class[a.slot] for a in assignment)
         rot_err = [
