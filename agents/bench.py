@@ -112,14 +112,40 @@ def qshape_figures(d: dict[str, Any]) -> list[Figure]:
     n = d.get("tiles", "?")
     return [
         fig(g, f"describe {n} tiles (one by one)", d.get("describe_s"), "s"),
-        fig(g, f"describe {n} tiles (describe_many)", d.get("describe_many_s"), "s", "<=",
-            QSHAPE_DESCRIBE_S),
-        fig(g, f"assign {n} x {n} optimal", _get(d, "assign_optimal", "seconds"), "s", "<=",
-            QSHAPE_ASSIGN_S),
-        fig(g, f"assign {n} x {n} greedy", _get(d, "assign_greedy", "seconds"), "s", "<=",
-            QSHAPE_ASSIGN_S),
-        fig(g, "assign correct class (optimal)", _ratio(_get(d, "assign_optimal", "correct_class"),
-            _get(d, "assign_optimal", "assigned")), "", "==", 1.0),
+        fig(
+            g,
+            f"describe {n} tiles (describe_many)",
+            d.get("describe_many_s"),
+            "s",
+            "<=",
+            QSHAPE_DESCRIBE_S,
+        ),
+        fig(
+            g,
+            f"assign {n} x {n} optimal",
+            _get(d, "assign_optimal", "seconds"),
+            "s",
+            "<=",
+            QSHAPE_ASSIGN_S,
+        ),
+        fig(
+            g,
+            f"assign {n} x {n} greedy",
+            _get(d, "assign_greedy", "seconds"),
+            "s",
+            "<=",
+            QSHAPE_ASSIGN_S,
+        ),
+        fig(
+            g,
+            "assign correct class (optimal)",
+            _ratio(
+                _get(d, "assign_optimal", "correct_class"), _get(d, "assign_optimal", "assigned")
+            ),
+            "",
+            "==",
+            1.0,
+        ),
         fig(g, "speed-up vs paper's pairwise (greedy)", d.get("speedup_vs_paper_greedy"), "x"),
     ]
 
@@ -140,11 +166,23 @@ def vision_figures(d: dict[str, Any]) -> list[Figure]:
         for v in default.values()
     ]
     out = [
-        fig(g, "class + rotation within 2 deg (worst design, default noise)",
-            min(cr) if cr and None not in cr else None, "", ">=", VISION_CLASS_ROTATION),
+        fig(
+            g,
+            "class + rotation within 2 deg (worst design, default noise)",
+            min(cr) if cr and None not in cr else None,
+            "",
+            ">=",
+            VISION_CLASS_ROTATION,
+        ),
         fig(g, "false matches (default noise)", sum(false) if default else None, "", "==", 0),
-        fig(g, "extract 656x492 / cv2.Canny", _get(d, "timing", "ratio_vs_canny_rgb"), "x", "<=",
-            VISION_CANNY_RATIO),
+        fig(
+            g,
+            "extract 656x492 / cv2.Canny",
+            _get(d, "timing", "ratio_vs_canny_rgb"),
+            "x",
+            "<=",
+            VISION_CANNY_RATIO,
+        ),
         fig(g, "extract 656x492, 30 tiles", _get(d, "timing", "extract_ms"), "ms"),
     ]
     return out
@@ -154,12 +192,30 @@ def cell_figures(d: dict[str, Any]) -> list[Figure]:
     """Figures of ``bench_cell.json``."""
     g = "cell"
     return [
-        fig(g, "physics, 40 resting tiles", _get(d, "physics_resting_arm_still",
-            "realtime_factor"), "x real time", ">=", CELL_REALTIME),
-        fig(g, "physics, arm moving", _get(d, "physics_resting_arm_moving", "realtime_factor"),
-            "x real time", ">=", CELL_REALTIME),
-        fig(g, "render 2 cameras 128x128", _get(d, "render_128", "fps_total"), "frames/s", ">=",
-            CELL_RENDER_FPS),
+        fig(
+            g,
+            "physics, 40 resting tiles",
+            _get(d, "physics_resting_arm_still", "realtime_factor"),
+            "x real time",
+            ">=",
+            CELL_REALTIME,
+        ),
+        fig(
+            g,
+            "physics, arm moving",
+            _get(d, "physics_resting_arm_moving", "realtime_factor"),
+            "x real time",
+            ">=",
+            CELL_REALTIME,
+        ),
+        fig(
+            g,
+            "render 2 cameras 128x128",
+            _get(d, "render_128", "fps_total"),
+            "frames/s",
+            ">=",
+            CELL_RENDER_FPS,
+        ),
         fig(g, "render 2 cameras 656x492", _get(d, "render_656x492", "fps_total"), "frames/s"),
     ]
 
@@ -170,26 +226,47 @@ def planner_figures(d: dict[str, Any]) -> list[Figure]:
     results = d.get("results") or []
     paper = results[0] if results else {}
     out = [
-        fig(g, "paper layout tiles/min (sim)", paper.get("tiles_per_min"), "tiles/min", ">=",
-            PLANNER_TILES_PER_MIN),
+        fig(
+            g,
+            "paper layout tiles/min (sim)",
+            paper.get("tiles_per_min"),
+            "tiles/min",
+            ">=",
+            PLANNER_TILES_PER_MIN,
+        ),
         fig(g, "cycle / lower bound", paper.get("ratio"), "", "<=", PLANNER_RATIO),
         fig(g, "cycle time", paper.get("cycle_s"), "s"),
-        fig(g, "placed within tolerance", _ratio(paper.get("placed_within_tolerance"),
-            paper.get("tiles")), "", "==", 1.0),
-        fig(g, "tracking error max", paper.get("tracking_max_mm"), "mm", "<=",
-            PLANNER_TRACKING_MM),
-        fig(g, "placement error max", paper.get("place_err_max_mm"), "mm", "<=",
-            PLANNER_PLACE_MM),
-        fig(g, "placement yaw error max", paper.get("yaw_err_max_deg"), "deg", "<=",
-            PLANNER_PLACE_DEG),
+        fig(
+            g,
+            "placed within tolerance",
+            _ratio(paper.get("placed_within_tolerance"), paper.get("tiles")),
+            "",
+            "==",
+            1.0,
+        ),
+        fig(g, "tracking error max", paper.get("tracking_max_mm"), "mm", "<=", PLANNER_TRACKING_MM),
+        fig(g, "placement error max", paper.get("place_err_max_mm"), "mm", "<=", PLANNER_PLACE_MM),
+        fig(
+            g,
+            "placement yaw error max",
+            paper.get("yaw_err_max_deg"),
+            "deg",
+            "<=",
+            PLANNER_PLACE_DEG,
+        ),
         fig(g, "planning per cycle (median)", paper.get("plan_ms"), "ms"),
         fig(g, "ABB standard cycle 25/300/25 mm", d.get("standard_cycle_s"), "s"),
     ]
     for r in results[1:]:
         label = f"{r.get('layout', '?')} layout, belt {r.get('belt_speed_m_s', '?')} m/s"
         out.append(fig(g, f"{label} tiles/min", r.get("tiles_per_min"), "tiles/min"))
-        out.append(fig(g, f"{label} placed within tolerance",
-                       _ratio(r.get("placed_within_tolerance"), r.get("tiles"))))
+        out.append(
+            fig(
+                g,
+                f"{label} placed within tolerance",
+                _ratio(r.get("placed_within_tolerance"), r.get("tiles")),
+            )
+        )
     return out
 
 
@@ -208,8 +285,14 @@ def perception_figures(d: dict[str, Any]) -> list[Figure]:
     """Figures of ``bench_perception.json`` (reported; the cell's targets are downstream)."""
     g = "perception"
     return [
-        fig(g, f"tiles recognised ({d.get('tiles', '?')} tiles)", d.get("recognition_accuracy"),
-            "", "==", 1.0),
+        fig(
+            g,
+            f"tiles recognised ({d.get('tiles', '?')} tiles)",
+            d.get("recognition_accuracy"),
+            "",
+            "==",
+            1.0,
+        ),
         fig(g, "pick point error max", d.get("pick_error_mm_max"), "mm"),
         fig(g, "yaw error max", d.get("yaw_error_deg_max"), "deg"),
         fig(g, "calibration reprojection", _get(d, "calibration", "reprojection_px"), "px"),
@@ -229,16 +312,27 @@ def learned_figures(d: dict[str, Any]) -> list[Figure]:
         kind = p.split("@")[0]
         if kind == "scripted":
             out.append(fig(g, f"{p} success rate", r["success_rate"], "", "==", 1.0))
-            out.append(fig(g, f"{p} tiles/min (sim)", r["tiles_per_min"], "tiles/min", ">=",
-                           SCRIPTED_TILES_PER_MIN))
+            out.append(
+                fig(
+                    g,
+                    f"{p} tiles/min (sim)",
+                    r["tiles_per_min"],
+                    "tiles/min",
+                    ">=",
+                    SCRIPTED_TILES_PER_MIN,
+                )
+            )
         elif kind == "random":
             out.append(fig(g, f"{p} success rate", r["success_rate"]))
         else:
             out.append(fig(g, f"{p} success rate", r["success_rate"]))
             out.append(fig(g, f"{p} tiles/min (sim)", r["tiles_per_min"], "tiles/min"))
             if rand is not None:
-                out.append(fig(g, f"{p} correct/episode vs random", r["correct"], "tiles", ">",
-                               float(rand)))
+                out.append(
+                    fig(
+                        g, f"{p} correct/episode vs random", r["correct"], "tiles", ">", float(rand)
+                    )
+                )
                 continue
         out.append(fig(g, f"{p} correct/episode", r["correct"], "tiles"))
         out.append(fig(g, f"{p} wall s/tile", r["wall_s_per_tile"], "s"))
@@ -250,10 +344,22 @@ def main_job_figures(d: dict[str, Any]) -> list[Figure]:
     g = "main"
     return [
         fig(g, "scripted cell success", d.get("success"), "", "==", 1.0),
-        fig(g, "scripted cell correct / tiles", _ratio(d.get("correct"), d.get("tiles_total")),
-            "", "==", 1.0),
-        fig(g, "scripted cell tiles/min (sim)", d.get("tiles_per_min"), "tiles/min", ">=",
-            SCRIPTED_TILES_PER_MIN),
+        fig(
+            g,
+            "scripted cell correct / tiles",
+            _ratio(d.get("correct"), d.get("tiles_total")),
+            "",
+            "==",
+            1.0,
+        ),
+        fig(
+            g,
+            "scripted cell tiles/min (sim)",
+            d.get("tiles_per_min"),
+            "tiles/min",
+            ">=",
+            SCRIPTED_TILES_PER_MIN,
+        ),
         fig(g, "scripted cell misplaced", d.get("misplaced"), "tiles", "==", 0),
         fig(g, "scripted cell wall time", d.get("wall_s"), "s"),
     ]
@@ -284,13 +390,22 @@ class Bench:
 BENCHES = (
     Bench("qshape", "agents.bench_qshape", "bench_qshape.json", ("--repeat", "1"), qshape_figures),
     Bench("vision", "agents.bench_vision", "bench_vision.json", ("--images", "4"), vision_figures),
-    Bench("cell", "agents.bench_cell", "bench_cell.json", ("--seconds", "5", "--frames", "100"),
-          cell_figures),
-    Bench("planner", "agents.bench_planner", "planner_bench.json", ("--quick",),
-          planner_figures),
+    Bench(
+        "cell",
+        "agents.bench_cell",
+        "bench_cell.json",
+        ("--seconds", "5", "--frames", "100"),
+        cell_figures,
+    ),
+    Bench("planner", "agents.bench_planner", "planner_bench.json", ("--quick",), planner_figures),
     Bench("env", "agents.bench_env", "bench_env.json", ("--quick",), env_figures, False),
-    Bench("perception", "agents.bench_perception", "bench_perception.json", ("--seeds", "5"),
-          perception_figures),
+    Bench(
+        "perception",
+        "agents.bench_perception",
+        "bench_perception.json",
+        ("--seeds", "5"),
+        perception_figures,
+    ),
     Bench("learned", "agents.evaluate", "eval.json", (), learned_figures),
     Bench("main", "", "report.json", (), main_job_figures),
 )
@@ -311,8 +426,15 @@ def command(bench: Bench, out_dir: Path, quick: bool, model: Path | None) -> lis
     if bench.module == "agents.evaluate":
         policies = ["scripted", "scripted@execution=dynamic", "random"]
         policies += [str(model)] if model else []
-        cmd += ["--policies", *policies, "--seeds", "1000-1004" if quick else EVAL_SEEDS,
-                "--out", str(out_dir), "--quiet"]
+        cmd += [
+            "--policies",
+            *policies,
+            "--seeds",
+            "1000-1004" if quick else EVAL_SEEDS,
+            "--out",
+            str(out_dir),
+            "--quiet",
+        ]
         if model is not None:
             cmd += ["--env-config", str(model.parent / "train_config.yaml")]
         return cmd
@@ -334,13 +456,13 @@ def run_benches(
         print(f"running {' '.join(cmd[1:])}", flush=True)
         t0 = time.perf_counter()
         try:
-            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env,
-                                  check=False)
+            proc = subprocess.run(
+                cmd, capture_output=True, text=True, timeout=timeout, env=env, check=False
+            )
             rc, tail = proc.returncode, (proc.stderr or proc.stdout)[-600:]
         except subprocess.TimeoutExpired:
             rc, tail = -1, f"timed out after {timeout:.0f} s"
-        status[b.name] = {"rc": rc, "wall_s": time.perf_counter() - t0,
-                          "error": tail if rc else ""}
+        status[b.name] = {"rc": rc, "wall_s": time.perf_counter() - t0, "error": tail if rc else ""}
         fixed, wanted = OUT_DIR / b.json_name, out_dir / b.json_name
         if not rc and not b.takes_out and fixed.resolve() != wanted.resolve():
             shutil.copyfile(fixed, wanted)
@@ -380,8 +502,9 @@ def table(figures: Sequence[Figure]) -> str:
     lines = ["| group | figure | value | unit | target | pass |", "|---|---|---|---|---|---|"]
     for f in figures:
         mark = {True: "PASS", False: "FAIL", None: "-"}[f.passed]
-        lines.append(f"| {f.group} | {f.name} | {_cell(f.value)} | {f.unit} | {f.target} | "
-                     f"{mark} |")
+        lines.append(
+            f"| {f.group} | {f.name} | {_cell(f.value)} | {f.unit} | {f.target} | {mark} |"
+        )
     return "\n".join(lines)
 
 
@@ -411,10 +534,19 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--from-json", action="store_true", help="only collect existing JSON files")
     ap.add_argument("--quick", action="store_true", help="smaller runs of each script")
-    ap.add_argument("--only", nargs="*", default=None, metavar="GROUP",
-                    help=f"subset of {[b.name for b in BENCHES]}")
-    ap.add_argument("--model", type=Path, default=None,
-                    help="trained model for the learned row (default: newest runs/*/model.zip)")
+    ap.add_argument(
+        "--only",
+        nargs="*",
+        default=None,
+        metavar="GROUP",
+        help=f"subset of {[b.name for b in BENCHES]}",
+    )
+    ap.add_argument(
+        "--model",
+        type=Path,
+        default=None,
+        help="trained model for the learned row (default: newest runs/*/model.zip)",
+    )
     ap.add_argument("--out-dir", type=Path, default=OUT_DIR, help="folder of the JSON files")
     ap.add_argument("--out", type=Path, default=None, help="bench.json path (default out-dir)")
     ap.add_argument("--timeout", type=float, default=TIMEOUT_S, help="per script [s]")
@@ -434,7 +566,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     checked = [f for f in figures if f.passed is not None]
     mach = machine()
     summary: dict[str, Any] = {
-        "figures": len(figures), "with_target": len(checked),
+        "figures": len(figures),
+        "with_target": len(checked),
         "passed": sum(bool(f.passed) for f in checked),
         "failed": [f"{f.group}: {f.name}" for f in checked if not f.passed],
     }
@@ -455,8 +588,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         f"Benchmark {date} on {mach['node']} ({mach['cpus']} CPUs)\n\n{text}\n", encoding="utf-8"
     )
     print(text)
-    print(f"{summary['passed']}/{summary['with_target']} targets met; wrote {out} and "
-          f"{out.with_suffix('.md')}")
+    print(
+        f"{summary['passed']}/{summary['with_target']} targets met; wrote {out} and "
+        f"{out.with_suffix('.md')}"
+    )
     return report
 
 

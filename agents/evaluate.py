@@ -208,8 +208,12 @@ class Policy:
 
 
 def _scripted(base: dict[str, Any], image_size: tuple[int, int], calibrate: bool) -> Policy:
-    env_kwargs = {**base, "action_mode": "pick_place", "obs_mode": "rgb",
-                  "image_size": list(image_size)}
+    env_kwargs = {
+        **base,
+        "action_mode": "pick_place",
+        "obs_mode": "rgb",
+        "image_size": list(image_size),
+    }
 
     def factory(env: gym.Env) -> Predict:
         from agents.scripted import ScriptedAgent  # noqa: PLC0415 - vision stack
@@ -294,8 +298,12 @@ def make_policies(
         else:
             pol = _trained(base, Path(name))
         if overrides:
-            pol = Policy(spec if name in ("scripted", "random") else f"{pol.label}@{extra}",
-                         {**pol.env_kwargs, **overrides}, pol.factory, pol.wrap)
+            pol = Policy(
+                spec if name in ("scripted", "random") else f"{pol.label}@{extra}",
+                {**pol.env_kwargs, **overrides},
+                pol.factory,
+                pol.wrap,
+            )
         out.append(pol)
     return out
 
@@ -397,8 +405,10 @@ def evaluate_policy_set(
                 ep = run_episode(env, predict, seed, limit)
                 eps.append(ep)
                 if progress:
-                    print(f"  {pol.label} seed {seed}: {ep.correct}/{ep.slots} correct, "
-                          f"{ep.misplaced} misplaced, {ep.steps} steps, {ep.wall_s:.2f} s")
+                    print(
+                        f"  {pol.label} seed {seed}: {ep.correct}/{ep.slots} correct, "
+                        f"{ep.misplaced} misplaced, {ep.steps} steps, {ep.wall_s:.2f} s"
+                    )
         finally:
             env.close()
         per[pol.label] = eps
@@ -416,9 +426,7 @@ def markdown_table(rows: Sequence[PolicyRow]) -> str:
     """The rows as a Markdown table (`COLUMNS`)."""
     head = "| " + " | ".join(h for _, h, _ in COLUMNS) + " |"
     sep = "|" + "|".join("---" for _ in COLUMNS) + "|"
-    body = [
-        "| " + " | ".join(_fmt(getattr(r, k), f) for k, _, f in COLUMNS) + " |" for r in rows
-    ]
+    body = ["| " + " | ".join(_fmt(getattr(r, k), f) for k, _, f in COLUMNS) + " |" for r in rows]
     return "\n".join([head, sep, *body])
 
 
@@ -465,10 +473,18 @@ def _plot_cv(labels: list[str], panels: Any, path: Path) -> None:
             bh = int((h - 2 * pad - 20) * v / top)
             x = x0 + pad + i * bw
             cv2.rectangle(img, (x + 4, h - pad - bh), (x + bw - 4, h - pad), (180, 110, 40), -1)
-            cv2.putText(img, f"{v:.2f}", (x + 4, h - pad - bh - 4), cv2.FONT_HERSHEY_SIMPLEX,
-                        0.4, (0, 0, 0), 1)
-            cv2.putText(img, lab[:12], (x + 2, h - pad + 15), cv2.FONT_HERSHEY_SIMPLEX, 0.4,
-                        (0, 0, 0), 1)
+            cv2.putText(
+                img,
+                f"{v:.2f}",
+                (x + 4, h - pad - bh - 4),
+                cv2.FONT_HERSHEY_SIMPLEX,
+                0.4,
+                (0, 0, 0),
+                1,
+            )
+            cv2.putText(
+                img, lab[:12], (x + 2, h - pad + 15), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1
+            )
     cv2.imwrite(str(path), img)
 
 
@@ -483,8 +499,11 @@ def write_outputs(
     out.mkdir(parents=True, exist_ok=True)
     report = {
         "date": datetime.now(UTC).isoformat(timespec="seconds"),
-        "machine": {"node": platform.node(), "cpus": os.cpu_count(),
-                    "python": platform.python_version()},
+        "machine": {
+            "node": platform.node(),
+            "cpus": os.cpu_count(),
+            "python": platform.python_version(),
+        },
         "seeds": list(seeds),
         "columns": [k for k, _, _ in COLUMNS],
         "rows": [asdict(r) for r in rows],
@@ -493,8 +512,11 @@ def write_outputs(
     }
     (out / "eval.json").write_text(json.dumps(report, indent=2), encoding="utf-8")
     seed_text = f"{seeds[0]}-{seeds[-1]}" if len(seeds) > 1 else str(seeds[0])
-    md = (f"Evaluation on {len(seeds)} seeds ({seed_text}), {report['date']}\n\n"
-          + markdown_table(rows) + "\n")
+    md = (
+        f"Evaluation on {len(seeds)} seeds ({seed_text}), {report['date']}\n\n"
+        + markdown_table(rows)
+        + "\n"
+    )
     (out / "eval.md").write_text(md, encoding="utf-8")
     plot(rows, out / "eval.png")
     return report
@@ -503,18 +525,27 @@ def write_outputs(
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line (see the module docstring)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--policies", nargs="+", required=True,
-                    help="'scripted', 'random' and/or model .zip paths, each optionally with "
-                         "@KEY=VALUE[,KEY=VALUE] env overrides (scripted@execution=dynamic)")
+    ap.add_argument(
+        "--policies",
+        nargs="+",
+        required=True,
+        help="'scripted', 'random' and/or model .zip paths, each optionally with "
+        "@KEY=VALUE[,KEY=VALUE] env overrides (scripted@execution=dynamic)",
+    )
     ap.add_argument("--seeds", nargs="+", default=["1000-1019"], help="e.g. 1000-1019 or 1,2")
-    ap.add_argument("--env-config", default=None,
-                    help="env YAML (EnvConfig keys) or a configs/train YAML (its env)")
+    ap.add_argument(
+        "--env-config",
+        default=None,
+        help="env YAML (EnvConfig keys) or a configs/train YAML (its env)",
+    )
     ap.add_argument("--env", nargs="*", default=[], metavar="KEY=VALUE", help="env overrides")
     ap.add_argument("--max-steps", type=int, default=0, help="0: 2 x slots")
-    ap.add_argument("--scripted-image-size", type=int, nargs=2, default=SCRIPTED_IMAGE_SIZE,
-                    metavar=("H", "W"))
-    ap.add_argument("--no-calibrate", action="store_true",
-                    help="scripted agent uses the true camera model")
+    ap.add_argument(
+        "--scripted-image-size", type=int, nargs=2, default=SCRIPTED_IMAGE_SIZE, metavar=("H", "W")
+    )
+    ap.add_argument(
+        "--no-calibrate", action="store_true", help="scripted agent uses the true camera model"
+    )
     ap.add_argument("--out", type=Path, default=Path("out"))
     ap.add_argument("--quiet", action="store_true")
     args = ap.parse_args(argv)
@@ -524,8 +555,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     torch.set_num_threads(1)
     seeds = parse_seeds(args.seeds)
     base = load_env_overrides(args.env_config, args.env)
-    policies = make_policies(args.policies, base, tuple(args.scripted_image_size),
-                             calibrate=not args.no_calibrate)
+    policies = make_policies(
+        args.policies, base, tuple(args.scripted_image_size), calibrate=not args.no_calibrate
+    )
     rows, episodes = evaluate_policy_set(policies, seeds, args.max_steps, not args.quiet)
     report = write_outputs(rows, episodes, seeds, args.out, {"base_env": base})
     print(markdown_table(rows))

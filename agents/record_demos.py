@@ -178,8 +178,13 @@ def record(
             env.close()
         size = sum(f.stat().st_size for f in path.rglob("*") if f.is_file()) / 1e6
         return RecordResult(
-            dataset_id, path, dataset.total_episodes, dataset.total_steps, seeds,
-            successes / max(episodes, 1), size,
+            dataset_id,
+            path,
+            dataset.total_episodes,
+            dataset.total_steps,
+            seeds,
+            successes / max(episodes, 1),
+            size,
         )
 
 
@@ -259,18 +264,28 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--replay", action="store_true", help="load back and replay")
     args = ap.parse_args(argv)
     os.environ.setdefault("MUJOCO_GL", "egl")
-    rec = record(args.episodes, seed=args.seed, root=args.root, dataset_id=args.dataset_id,
-                 env_kwargs=_pairs(args.env), calibrate=not args.no_calibrate,
-                 overwrite=args.overwrite)
+    rec = record(
+        args.episodes,
+        seed=args.seed,
+        root=args.root,
+        dataset_id=args.dataset_id,
+        env_kwargs=_pairs(args.env),
+        calibrate=not args.no_calibrate,
+        overwrite=args.overwrite,
+    )
     report: dict[str, Any] = {"record": {**asdict(rec), "path": str(rec.path)}}
-    print(f"{rec.dataset_id}: {rec.episodes} episodes, {rec.steps} steps, success "
-          f"{rec.success_rate:.0%}, {rec.size_mb:.1f} MB at {rec.path}")
+    print(
+        f"{rec.dataset_id}: {rec.episodes} episodes, {rec.steps} steps, success "
+        f"{rec.success_rate:.0%}, {rec.size_mb:.1f} MB at {rec.path}"
+    )
     if args.replay:
         rep = replay(load(args.dataset_id, args.root))
         report["replay"] = asdict(rep)
-        print(f"replay: {rep.matching_episodes}/{rep.episodes} episodes match "
-              f"(state error {rep.max_state_error:.2e}, reward error "
-              f"{rep.max_reward_error:.2e}), {rep.replayed_success} successful")
+        print(
+            f"replay: {rep.matching_episodes}/{rep.episodes} episodes match "
+            f"(state error {rep.max_state_error:.2e}, reward error "
+            f"{rep.max_reward_error:.2e}), {rep.replayed_success} successful"
+        )
     (rec.path / "record_report.json").write_text(json.dumps(report, indent=2), encoding="utf-8")
     return report
 

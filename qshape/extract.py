@@ -227,12 +227,14 @@ def _dominant_color(img: np.ndarray, p: ExtractParams) -> np.ndarray:
     """Median colour of the most populated coarse colour bin (border band), (3,) levels."""
     b, step = p.background_border_px, p.background_sample_step
     if b > 0 and 2 * b < min(img.shape[:2]):
-        sample = np.concatenate([
-            img[:b, ::step].reshape(-1, 3),
-            img[-b:, ::step].reshape(-1, 3),
-            img[b:-b:step, :b].reshape(-1, 3),
-            img[b:-b:step, -b:].reshape(-1, 3),
-        ])
+        sample = np.concatenate(
+            [
+                img[:b, ::step].reshape(-1, 3),
+                img[-b:, ::step].reshape(-1, 3),
+                img[b:-b:step, :b].reshape(-1, 3),
+                img[b:-b:step, -b:].reshape(-1, 3),
+            ]
+        )
     else:
         sample = img[::step, ::step].reshape(-1, 3)
     q = (sample.astype(np.int32) * p.background_bins) >> 8
@@ -255,8 +257,11 @@ def _illumination(
     if p.illumination_degree > 0 and int(is_bg.sum()) >= 2 * terms:
         yy, xx = np.mgrid[0:gh, 0:gw]
         u, v = (xx.ravel() + 0.5) / gw - 0.5, (yy.ravel() + 0.5) / gh - 0.5
-        cols = [u**i * v**j for i in range(p.illumination_degree + 1)
-                for j in range(p.illumination_degree + 1 - i)]
+        cols = [
+            u**i * v**j
+            for i in range(p.illumination_degree + 1)
+            for j in range(p.illumination_degree + 1 - i)
+        ]
         basis = np.stack(cols, axis=1)
         keep = is_bg.ravel()
         coef, *_ = np.linalg.lstsq(basis[keep], small.reshape(-1, 3)[keep], rcond=None)
@@ -356,8 +361,11 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     else:
         count, labels = cv2.connectedComponents(mask, connectivity=8)
         pieces = mask
-    background = (float(dominant[0]) / 255.0, float(dominant[1]) / 255.0,
-                  float(dominant[2]) / 255.0)
+    background = (
+        float(dominant[0]) / 255.0,
+        float(dominant[1]) / 255.0,
+        float(dominant[2]) / 255.0,
+    )
     contours, hierarchy = cv2.findContours(pieces, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
     if count <= 1 or hierarchy is None:
         return ExtractResult([], [], [], [], background, thr)

@@ -64,8 +64,15 @@ class SynthParams:
         """Raise `QShapeError` on out-of-range values."""
         if self.width_px < 16 or self.height_px < 16 or not self.px_per_mm > 0.0:
             raise QShapeError("image must be at least 16 x 16 px and px_per_mm > 0")
-        for name in ("gap_mm", "vertex_jitter_mm", "bulge_jitter", "color_jitter", "noise_std",
-                     "blur_sigma_px", "illumination"):
+        for name in (
+            "gap_mm",
+            "vertex_jitter_mm",
+            "bulge_jitter",
+            "color_jitter",
+            "noise_std",
+            "blur_sigma_px",
+            "illumination",
+        ):
             if getattr(self, name) < 0.0:
                 raise QShapeError(f"{name} must be >= 0, got {getattr(self, name)}")
         if self.illumination >= 1.0:
@@ -221,18 +228,20 @@ def generate(
             rgb = (float(color[0]), float(color[1]), float(color[2]))
             pts, mask = placed.outer.relevant(slot.rules.max_arc_deg)
             hole_rel = [hl.relevant(slot.rules.max_arc_deg) for hl in placed.holes]
-            truths.append(TileTruth(
-                slot=slot,
-                slot_index=idx,
-                angle=angle,
-                rotation=wrap_angle(math.radians(slot.angle) - angle),
-                center_px=center,
-                points_px=pts,
-                curve_mask=mask,
-                hole_points_px=tuple(hp for hp, _ in hole_rel),
-                hole_curve_masks=tuple(hm for _, hm in hole_rel),
-                color=rgb,
-            ))
+            truths.append(
+                TileTruth(
+                    slot=slot,
+                    slot_index=idx,
+                    angle=angle,
+                    rotation=wrap_angle(math.radians(slot.angle) - angle),
+                    center_px=center,
+                    points_px=pts,
+                    curve_mask=mask,
+                    hole_points_px=tuple(hp for hp, _ in hole_rel),
+                    hole_curve_masks=tuple(hm for _, hm in hole_rel),
+                    color=rgb,
+                )
+            )
             drawn.append((outline, [hl.dense(step) for hl in placed.holes]))
             colors.append(rgb)
             break

@@ -12,22 +12,58 @@ def _write(folder, name, data):
 
 
 def _fakes(folder):
-    _write(folder, "bench_qshape.json", {
-        "tiles": 100, "describe_s": 0.5, "describe_many_s": 0.1,
-        "assign_optimal": {"seconds": 2.0, "assigned": 100, "correct_class": 100},
-        "assign_greedy": {"seconds": 0.2, "assigned": 100, "correct_class": 99},
-        "speedup_vs_paper_greedy": 4.0})
-    _write(folder, "bench_env.json", {
-        "targets": {"kinematic_pick_place_steps_per_s": {"value": 600.0, "target": 500.0},
-                    "peak_rss_mb": {"value": 700.0, "target": 600.0}},
-        "async": {"speedup": 1.5}})
-    _write(folder, "eval.json", {"rows": [
-        {"policy": "scripted", "success_rate": 1.0, "correct": 6.0, "tiles_per_min": 26.0,
-         "wall_s_per_tile": 0.2},
-        {"policy": "random", "success_rate": 0.0, "correct": 0.5, "tiles_per_min": 2.0,
-         "wall_s_per_tile": 0.1},
-        {"policy": "ppo", "success_rate": 0.5, "correct": 4.0, "tiles_per_min": 20.0,
-         "wall_s_per_tile": 0.01}]})
+    _write(
+        folder,
+        "bench_qshape.json",
+        {
+            "tiles": 100,
+            "describe_s": 0.5,
+            "describe_many_s": 0.1,
+            "assign_optimal": {"seconds": 2.0, "assigned": 100, "correct_class": 100},
+            "assign_greedy": {"seconds": 0.2, "assigned": 100, "correct_class": 99},
+            "speedup_vs_paper_greedy": 4.0,
+        },
+    )
+    _write(
+        folder,
+        "bench_env.json",
+        {
+            "targets": {
+                "kinematic_pick_place_steps_per_s": {"value": 600.0, "target": 500.0},
+                "peak_rss_mb": {"value": 700.0, "target": 600.0},
+            },
+            "async": {"speedup": 1.5},
+        },
+    )
+    _write(
+        folder,
+        "eval.json",
+        {
+            "rows": [
+                {
+                    "policy": "scripted",
+                    "success_rate": 1.0,
+                    "correct": 6.0,
+                    "tiles_per_min": 26.0,
+                    "wall_s_per_tile": 0.2,
+                },
+                {
+                    "policy": "random",
+                    "success_rate": 0.0,
+                    "correct": 0.5,
+                    "tiles_per_min": 2.0,
+                    "wall_s_per_tile": 0.1,
+                },
+                {
+                    "policy": "ppo",
+                    "success_rate": 0.5,
+                    "correct": 4.0,
+                    "tiles_per_min": 20.0,
+                    "wall_s_per_tile": 0.01,
+                },
+            ]
+        },
+    )
 
 
 def test_collect_checks_targets(tmp_path):

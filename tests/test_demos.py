@@ -14,8 +14,9 @@ ENV = {"max_slots": 2}
 
 @pytest.mark.slow
 def test_record_load_replay(tmp_path):
-    rec = record(2, seed=7, root=tmp_path, dataset_id="mosaic/test-v0", env_kwargs=ENV,
-                 calibrate=False)
+    rec = record(
+        2, seed=7, root=tmp_path, dataset_id="mosaic/test-v0", env_kwargs=ENV, calibrate=False
+    )
     assert rec.episodes == 2 and rec.seeds == (7, 8) and rec.success_rate == 1.0
     assert rec.steps >= 4 and rec.path.is_relative_to(tmp_path)
     ds = load("mosaic/test-v0", tmp_path)

@@ -17,8 +17,13 @@ from agents.evaluate import (
     write_outputs,
 )
 
-BASE = {"design": "paper_mixed", "max_slots": 2, "execution": "kinematic",
-        "action_mode": "pick_place_discrete", "obs_mode": "state"}
+BASE = {
+    "design": "paper_mixed",
+    "max_slots": 2,
+    "execution": "kinematic",
+    "action_mode": "pick_place_discrete",
+    "obs_mode": "state",
+}
 
 
 @pytest.fixture(scope="module")

@@ -76,9 +76,15 @@ def test_policy_choice():
 
 
 def test_flat_discrete_actions_round_trip():
-    env = FlatDiscreteActions(gym.make("envs:MosaicAssembly-v0", max_slots=2,
-                                       action_mode="pick_place_discrete", obs_mode="state",
-                                       execution="kinematic"))
+    env = FlatDiscreteActions(
+        gym.make(
+            "envs:MosaicAssembly-v0",
+            max_slots=2,
+            action_mode="pick_place_discrete",
+            obs_mode="state",
+            execution="kinematic",
+        )
+    )
     try:
         assert env.action_space == spaces.Discrete(2 * 2 * 4)
         for k in range(env.action_space.n):
