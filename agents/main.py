@@ -317,6 +317,7 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
                 report[f"calibration_{name}"] = cal.summary()
             else:
                 cams[name] = cell.camera_model(name)
+        bar.set_postfix_str("picking and placing")
         slots = slot_targets(design, cell.geometry.output_centre[:2])
         palette = np.array([s.color for s in slots])
         video = VideoSink(cell, rc) if rc.execute else None
