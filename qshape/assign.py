@@ -246,6 +246,24 @@ def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray, Floa
     return score, dot_out, crs_out
 
 
+_Pairs = tuple[IntArray, IntArray, FloatArray, FloatArray]
+"""Matching pairs as parallel arrays: (tile, slot, score, rotation)."""
+
+
+def _concat_parts(parts: list[_Pairs]) -> _Pairs:
+    """Concatenate pair arrays from several blocks (empty arrays for none)."""
+    if not parts:
+        empty = np.zeros(0)
+        return empty.astype(np.int64), empty.astype(np.int64), empty, empty
+    tiles, slots, scores, rotations = zip(*parts, strict=True)
+    return (
+        np.concatenate(tiles),
+        np.concatenate(slots),
+        np.concatenate(scores),
+        np.concatenate(rotations),
+    )
+
+
 def _evaluate(
     block: _Block, tol: Tolerances, use_color: bool
 ) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
@@ -288,15 +306,7 @@ def _evaluate_entries(
                 np.arctan2(res.cross[first], res.dot[first]),
             )
         )
-    if not parts:
-        empty = np.zeros(0)
-        return empty.astype(np.int64), empty.astype(np.int64), empty, empty
-    return (
-        np.concatenate([p[0] for p in parts]),
-        np.concatenate([p[1] for p in parts]),
-        np.concatenate([p[2] for p in parts]),
-        np.concatenate([p[3] for p in parts]),
-    )
+    return _concat_parts(parts)
 
 
 def _diagonal(block: _Block, tol: Tolerances, use_color: bool) -> list[Assignment] | None:
@@ -360,15 +370,7 @@ def feasible_pairs(
         (tile, slot, score, rotation) arrays of equal length, in no particular order.
     """
     parts = [_evaluate(b, tol, use_color) for b in _blocks(tiles, slots, tol, use_color)]
-    if not parts:
-        empty = np.zeros(0)
-        return empty.astype(np.int64), empty.astype(np.int64), empty, empty
-    return (
-        np.concatenate([p[0] for p in parts]),
-        np.concatenate([p[1] for p in parts]),
-        np.concatenate([p[2] for p in parts]),
-        np.concatenate([p[3] for p in parts]),
-    )
+    return _concat_parts(parts)
 
 
 def _descriptions(items: Sequence[Description | Figure], tol: Tolerances) -> list[Description]:

@@ -9,6 +9,7 @@ it, floats written exactly, so ``parse(str(d)) == d`` and matching parsed descri
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from collections.abc import Sequence
@@ -34,15 +35,11 @@ _CONE_DEG = 45.0
 _HOLE_ARC_SAMPLES = 8
 """Samples per arc when measuring the angles a hole spans (numerical resolution only)."""
 
-_DEFAULT_TOL: Tolerances | None = None
 
-
+@functools.cache
 def default_tolerances() -> Tolerances:
     """The bundled tolerances (``configs/qshape.yaml``), loaded once."""
-    global _DEFAULT_TOL  # noqa: PLW0603
-    if _DEFAULT_TOL is None:
-        _DEFAULT_TOL = Tolerances.load()
-    return _DEFAULT_TOL
+    return Tolerances.load()
 
 
 @dataclass(frozen=True)

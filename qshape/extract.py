@@ -23,6 +23,7 @@ names with ``from qshape.extract import ExtractParams, extract_detailed, ...``.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -174,15 +175,10 @@ class ExtractResult:
     threshold: float
 
 
-_DEFAULT: ExtractParams | None = None
-
-
+@functools.cache
 def default_params() -> ExtractParams:
     """Bundled parameters (``configs/vision.yaml``), loaded once."""
-    global _DEFAULT  # noqa: PLW0603
-    if _DEFAULT is None:
-        _DEFAULT = ExtractParams.load()
-    return _DEFAULT
+    return ExtractParams.load()
 
 
 def read_image(path: str | Path) -> np.ndarray:

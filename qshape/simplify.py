@@ -12,6 +12,7 @@ millimetres and pixels. Cost is linear in the number of outline points.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -100,15 +101,10 @@ class OutlineParams:
         return _load_section(cls, "outline", name_or_path, overrides)
 
 
-_DEFAULT: OutlineParams | None = None
-
-
+@functools.cache
 def default_outline_params() -> OutlineParams:
     """Bundled outline parameters, loaded once."""
-    global _DEFAULT  # noqa: PLW0603
-    if _DEFAULT is None:
-        _DEFAULT = OutlineParams.load()
-    return _DEFAULT
+    return OutlineParams.load()
 
 
 def _clean(dense: ArrayLike, what: str) -> FloatArray:
