@@ -102,8 +102,8 @@ class EnvConfig:
     reward_mode: str = "sparse"
     execution: str = "dynamic"
     feed: str = "all"
-    stream_period: float = 2.0
-    stream_initial: int = 6
+    stream_period: float = 2.5
+    stream_initial: int = 1
     distractor_rate: float = 0.0
     vertex_jitter: float = 0.0002
     tile_color_jitter: float = 0.02
