@@ -178,28 +178,19 @@ def main() -> None:
         f"async joint+rgb: 1 worker {one:.1f}, 2 workers {two:.1f} env steps/s (x{two / one:.2f})"
     )
 
-    def rate(mode: str, execution: str, obs: str) -> float:
+    def figure(key: str, mode: str, execution: str, obs: str) -> float:
         return next(
-            r["steps_per_s"]
+            r[key]
             for r in rows
             if r["action_mode"] == mode
             and r["obs_mode"] == obs
             and r["execution"] in (execution, "-")
         )
 
-    def cpu_rate(mode: str, execution: str, obs: str) -> float:
-        return next(
-            r["steps_per_cpu_s"]
-            for r in rows
-            if r["action_mode"] == mode
-            and r["obs_mode"] == obs
-            and r["execution"] in (execution, "-")
-        )
-
-    kin = rate("pick_place", "kinematic", "state")
-    joint_rgb = rate("joint", "-", "rgb")
-    kin_cpu = cpu_rate("pick_place", "kinematic", "state")
-    joint_rgb_cpu = cpu_rate("joint", "-", "rgb")
+    kin = figure("steps_per_s", "pick_place", "kinematic", "state")
+    joint_rgb = figure("steps_per_s", "joint", "-", "rgb")
+    kin_cpu = figure("steps_per_cpu_s", "pick_place", "kinematic", "state")
+    joint_rgb_cpu = figure("steps_per_cpu_s", "joint", "-", "rgb")
     peak = max(r["peak_rss_mb"] for r in rows)
     targets = {
         "kinematic_pick_place_steps_per_s": {

@@ -15,32 +15,30 @@ import envs
 SMALL = {"max_slots": 3, "image_size": 48, "action_mode": "joint"}
 
 
+def _python(code: str) -> str:
+    """Stdout (stripped) of ``code`` run in a fresh interpreter at the repository root."""
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=Path(__file__).resolve().parents[1],
+    )
+    return out.stdout.strip()
+
+
 def test_make_without_prior_import() -> None:
     code = (
         "import gymnasium as gym; e = gym.make('envs:MosaicAssembly-v0', max_slots=2, "
         "obs_mode='state'); e.reset(seed=0); e.close(); "
         "import sys; print('mujoco' in sys.modules)"
     )
-    out = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        check=True,
-        cwd=Path(__file__).resolve().parents[1],
-    )
-    assert out.stdout.strip() == "True"
+    assert _python(code) == "True"
 
 
 def test_import_is_light() -> None:
     code = "import envs, sys; print('mujoco' in sys.modules, 'torch' in sys.modules)"
-    out = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        check=True,
-        cwd=Path(__file__).resolve().parents[1],
-    )
-    assert out.stdout.strip() == "False False"
+    assert _python(code) == "False False"
 
 
 def test_make_vec_sync() -> None:
