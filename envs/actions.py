@@ -280,6 +280,12 @@ class PickPlaceExecutor:
         self.bounds = PickPlaceBounds.of(cell, config)
         self._settle = max(1, round(config.kinematic_settle / self.dt))
         self._fail_steps = max(1, round(config.failed_action_time / self.dt))
+        self.at_contact = False
+        """The arm rests at the last place contact (a chained dynamic cycle ended there)."""
+
+    def reset(self) -> None:
+        """Episode start: the arm is at home, not at a contact."""
+        self.at_contact = False
 
     def run(
         self, pick_xy: np.ndarray, pick_yaw: float, place_xy: np.ndarray, place_yaw: float
@@ -312,6 +318,8 @@ class PickPlaceExecutor:
             rotation,
             object_yaw=pick_yaw,
             belt_velocity=(cell.belt_speed, 0.0, 0.0),
+            start_at_contact=self.at_contact,
+            end_retreat=not self.cfg.chain_cycles,
         )
         cmds = self.servo.commands(plan.trajectory, self.dt)
         k_on = int(np.searchsorted(cmds.times, plan.vacuum_on - EVENT_SLACK))
@@ -326,6 +334,7 @@ class PickPlaceExecutor:
             cell.set_servo(cmds.q[k], cmds.qd[k])
             cell.step(1)
         cell.vacuum(False)
+        self.at_contact = self.cfg.chain_cycles
         if grasped < 0:
             return ActionResult(True, "nothing held at the place (empty pick or dropped)")
         return ActionResult(grasped=grasped)
@@ -392,6 +401,10 @@ class PickPlaceActions(ActionAdapter):
         self.bounds = executor.bounds
         self.space = spaces.Box(-1.0, 1.0, (6,), np.float32)
 
+    def reset(self) -> None:
+        """Episode start (the executor forgets the last contact)."""
+        self.executor.reset()
+
     def apply(self, action: np.ndarray) -> ActionResult:
         """Run one cycle to the de-normalised poses."""
         return self.executor.run(*self.bounds.to_world(action))
@@ -411,6 +424,10 @@ class DiscretePickPlaceActions(ActionAdapter):
         n = max(len(cell.tiles), 1)
         k = max(len(cell.slots), 1)
         self.space = spaces.MultiDiscrete([n, k, config.rotation_bins])
+
+    def reset(self) -> None:
+        """Episode start (the executor forgets the last contact)."""
+        self.executor.reset()
 
     def poses(self, tile: int, slot: int, rot: int) -> tuple[np.ndarray, float, np.ndarray, float]:
         """World pick (x, y), yaw and place (x, y), yaw of a discrete action."""

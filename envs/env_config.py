@@ -52,6 +52,10 @@ class EnvConfig:
         belt_speed: Input belt speed [m/s].
         reward_mode: One of `REWARD_MODES`.
         execution: One of `EXECUTIONS` (pick_place modes only).
+        chain_cycles: Dynamic pick_place: a step's cycle ends at rest at the place contact
+            (vacuum off, pad 0.5 mm above the released tile) and the next step's cycle leaves
+            it vertically, blended into its move to the pick, as a real cell chains its
+            cycles; False ends every cycle at rest at the approach point above the place.
         feed: ``all`` tiles at reset or a ``stream`` along the input belt.
         stream_period: Time between streamed tiles [s].
         stream_initial: Tiles laid out at reset when streaming.
@@ -101,6 +105,7 @@ class EnvConfig:
     belt_speed: float = 0.0
     reward_mode: str = "sparse"
     execution: str = "dynamic"
+    chain_cycles: bool = True
     feed: str = "all"
     stream_period: float = 2.5
     stream_initial: int = 1

@@ -70,7 +70,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     - ``pick_place``: Box(6): pick x, y, yaw and place x, y, yaw. x, y map linearly onto the
       input tile area (pick) and the mesh (place), see ``env.unwrapped.bounds``; yaw onto
       [-pi, pi]. The pad goes to the pick point and then to the place point; the tile turns by
-      place yaw - pick yaw. One step = one full time-optimal cycle planned by the planners.
+      place yaw - pick yaw. One step = one full time-optimal cycle planned by the planners;
+      with ``chain_cycles`` (default) a dynamic cycle ends at rest at the place contact and
+      the next one leaves it vertically, blended into its move (as a real cell chains them).
       ``env.unwrapped.pick_place_action(pick_xy, pick_yaw, place_xy, place_yaw)`` normalises
       world poses [m, rad].
     - ``pick_place_discrete``: MultiDiscrete([tiles, slots, rotation_bins]): move tile i
