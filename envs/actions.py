@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -282,6 +283,8 @@ class PickPlaceExecutor:
         self._fail_steps = max(1, round(config.failed_action_time / self.dt))
         self.at_contact = False
         """The arm rests at the last place contact (a chained dynamic cycle ended there)."""
+        self.on_physics_step: Callable[[], None] | None = None
+        """Called after every physics step of a dynamic cycle (video frames mid-cycle)."""
 
     def reset(self) -> None:
         """Episode start: the arm is at home, not at a contact."""
@@ -333,6 +336,8 @@ class PickPlaceExecutor:
                 cell.vacuum(False)
             cell.set_servo(cmds.q[k], cmds.qd[k])
             cell.step(1)
+            if self.on_physics_step is not None:
+                self.on_physics_step()
         cell.vacuum(False)
         self.at_contact = self.cfg.chain_cycles
         if grasped < 0:

@@ -7,7 +7,8 @@ an `ActionAdapter` (one per action mode) acts. See `MosaicAssemblyEnv` for the s
 from __future__ import annotations
 
 import os
-from dataclasses import replace
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal, cast
 
@@ -169,6 +170,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._needs_reset = True
         self._closed = False
         self._viewer: Any = None
+        self._listeners: list[_FrameListener] = []
 
     def _adapter(self, pcfg: Any) -> ActionAdapter:
         cfg, cell = self.config, self.cell
@@ -203,6 +205,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._t0 = cell.time
         self.task.reset()
         self.actions.reset()
+        for f in self._listeners:
+            f.next_time = cell.time
         self._needs_reset = False
         evaluation = self.task.evaluate()
         obs = self.observer.observe(rng, evaluation)
@@ -221,6 +225,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         a = self.actions.validate(action)
         a = self.actions.noisy(a, self.np_random)
         result = self.actions.apply(a)
+        if self._listeners:
+            self._tick()
         evaluation = self.task.evaluate()
         terms = self.task.rewards(evaluation, result.failed)
         reward = float(sum(terms.values()))
@@ -320,6 +326,31 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             raise MosaicEnvError(f"expert_action needs a pick_place mode, not {mode!r}")
         return self.pick_place_action(*transfer_poses(self.cell, tile, slot))
 
+    def add_frame_listener(self, listener: Callable[[], None], fps: float) -> None:
+        """Call ``listener()`` every ``1 / fps`` s of simulated time, also inside a step.
+
+        A ``pick_place`` step spans a whole cycle; a listener that renders (``env.render()``
+        or ``env.unwrapped.cell.render(...)``) records a video of the motion within it. In the
+        other modes it is called at most once per step (after it). The schedule restarts at
+        each reset.
+
+        Raises:
+            MosaicEnvError: ``fps`` is not a positive finite number.
+        """
+        if not (np.isfinite(fps) and fps > 0):
+            raise MosaicEnvError(f"fps must be a positive number of frames per second, got {fps}")
+        self._listeners.append(_FrameListener(listener, 1.0 / fps, self.cell.time))
+        executor = getattr(self.actions, "executor", None)
+        if executor is not None:
+            executor.on_physics_step = self._tick
+
+    def _tick(self) -> None:
+        t = self.cell.time + 1e-9
+        for f in self._listeners:
+            if t >= f.next_time:
+                f.callback()
+                f.next_time += f.period * (1 + int((t - f.next_time) / f.period))
+
     # ------------------------------------------------------------------ helpers
     def _info(
         self, evaluation: dict[str, Any], terms: dict[str, float], failed: bool, reason: str
@@ -350,6 +381,15 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def _check_open(self) -> None:
         if self._closed:
             raise MosaicEnvError("the environment is closed; make a new one")
+
+
+@dataclass
+class _FrameListener:
+    """A callback and its simulated-time schedule [s]."""
+
+    callback: Callable[[], None]
+    period: float
+    next_time: float
 
 
 def _design(cfg: EnvConfig) -> tuple[tuple[TileShape, ...], tuple[SlotSpec, ...]]:
