@@ -152,36 +152,41 @@ class RunConfig:
 
     Attributes:
         design: Bundled design name or path.
-        seed: Layout seed of the cell (the first seed from it whose layout fits is used).
-        layout_seed_tries: Seeds tried until the design's tiles fit the input belt.
-        settle_s: Simulated time let pass before the first picture, [s].
-        position_tolerance: A placed tile is correct within this distance of its slot, [m].
-        yaw_tolerance_deg: ... and this yaw error modulo its symmetry, [deg].
-        execute: Run the pick-and-place cycles through the planners (when they work).
-        calibrate: Use the calibrated camera instead of the simulator's true one.
+        seed: Episode seed (``env.reset(seed=...)``: tile layout and noise).
+        belt_speed: Input belt speed [m/s].
+        feed: ``all`` tiles at reset or a ``stream`` (``configs/env.yaml`` sets its pace).
+        distractor_rate: Distractor tiles (absent from the design) per real tile.
+        max_slots: Use only the design's first ``max_slots`` slots and their tiles (0: all).
+        max_steps_per_slot: Episode step limit per design slot (failed picks retry).
+        execute: Run the pick-and-place cycles (False: one picture, perception and plan only).
+        calibrate: Use the calibrated cameras instead of the simulator's true ones.
         video_fps: Frames per second of the cell video (simulated time), [1/s].
-        video_size: Overview video frame (height, width), [px].
-        marker_radius_px: Radius of drawn relevant points, [px].
+        video_size: Overview part of the video frame (height, width), [px]; the two camera
+            views stack beside it at half its height each.
+        marker_radius_px: Radius of drawn relevant points at full camera resolution, [px].
         out_dir: Output folder (relative to the repository root unless absolute).
     """
 
     design: str = "paper_mixed"
     seed: int = 0
-    layout_seed_tries: int = 20
-    settle_s: float = 0.3
-    position_tolerance: float = 0.002
-    yaw_tolerance_deg: float = 2.0
+    belt_speed: float = 0.0
+    feed: str = "all"
+    distractor_rate: float = 0.0
+    max_slots: int = 0
+    max_steps_per_slot: int = 2
     execute: bool = True
     calibrate: bool = True
     video_fps: float = 10.0
-    video_size: tuple[int, int] = (360, 480)
+    video_size: tuple[int, int] = (480, 640)
     marker_radius_px: int = 3
     out_dir: str = "out"
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on bad values."""
-        if self.position_tolerance <= 0 or self.yaw_tolerance_deg <= 0 or self.video_fps <= 0:
-            raise AgentError("run: tolerances and video_fps must be > 0")
+        if self.video_fps <= 0 or self.max_steps_per_slot < 1:
+            raise AgentError("run: video_fps must be > 0 and max_steps_per_slot >= 1")
+        if self.belt_speed < 0 or self.distractor_rate < 0 or self.max_slots < 0:
+            raise AgentError("run: belt_speed, distractor_rate and max_slots must be >= 0")
 
 
 @dataclass(frozen=True)

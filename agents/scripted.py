@@ -109,6 +109,9 @@ class ScriptedAgent:
         self.order: list[int] = []
         self.unplaced: tuple[Unplaced, ...] = ()
         self.last_plan: PlacementPlan | None = None
+        self.last_perception: Perception | None = None
+        self.last_command: PickPlace | None = None
+        self.pictures = 0
 
     def reset(self) -> None:
         """Forget the episode (open slots, queued commands)."""
@@ -117,6 +120,9 @@ class ScriptedAgent:
         self.order.clear()
         self.unplaced = ()
         self.last_plan = None
+        self.last_perception = None
+        self.last_command = None
+        self.pictures = 0
 
     def plan(self, image: np.ndarray) -> PlacementPlan:
         """Perceive one input-camera image and assign its tiles to the open slots.
@@ -132,6 +138,8 @@ class ScriptedAgent:
         taken = [u.tile for u in plan.unplaced if u.reason == "slots_taken"]
         if taken and self._reopen([per.tiles[k] for k in taken]):
             plan = self._assign(per)
+        self.pictures += 1
+        self.last_perception = per
         self.last_plan = plan
         self.unplaced = plan.unplaced
         return plan
@@ -171,10 +179,12 @@ class ScriptedAgent:
                 cmds.sort(key=lambda c: -c.grasp_pick[0])
             self.queue.extend(cmds)
         if not self.queue:
+            self.last_command = None
             return None
         cmd = self.queue.popleft()
         self.filled.add(cmd.slot)
         self.order.append(cmd.slot)
+        self.last_command = cmd
         return cmd
 
     def action(self, cmd: PickPlace | None) -> np.ndarray:
