@@ -45,6 +45,10 @@ from qshape.design import Design
 
 IMAGE_DIMS = 3
 """An unbatched RGB observation has (height, width, 3)."""
+IDLE_GRID = (25, 13)
+"""Candidate points (along x, y) of the rest action's pick and place searches."""
+IDLE_HORIZON_S = 3.0
+"""Belt travel time [s] the rest action's pick keeps clear of (about one cycle)."""
 
 
 class ScriptedAgent:
@@ -190,22 +194,45 @@ class ScriptedAgent:
     def action(self, cmd: PickPlace | None) -> np.ndarray:
         """The normalised ``pick_place`` action of a command (a rest action when None).
 
-        The rest action picks and places at the areas' centres with no turn: on an empty spot
-        it fails harmlessly (nothing sealed); it is only returned when nothing is placeable,
-        where the env terminates anyway.
+        The rest action (nothing placeable is seen, e.g. a stream feed has not delivered the
+        next tile yet) picks where nothing is: the point of the pick area farthest from every
+        region of the last picture, swept downstream over `IDLE_HORIZON_S` of belt travel and
+        away from the upstream edge where streamed tiles appear; and it "places" at the mesh
+        point farthest from every slot. Nothing seals, so nothing moves: a harmless wait.
         """
         u = self._env
         if cmd is None:
-            b = u.bounds
-            return u.pick_place_action(
-                (np.asarray(b.pick_lo) + b.pick_hi) / 2,
-                0.0,
-                (np.asarray(b.place_lo) + b.place_hi) / 2,
-                0.0,
-            )
+            pick, place = self._idle_points()
+            return u.pick_place_action(pick, 0.0, place, 0.0)
         return u.pick_place_action(
             np.asarray(cmd.grasp_pick), cmd.pick[2], np.asarray(cmd.grasp_place), cmd.place[2]
         )
+
+    def _idle_points(self) -> tuple[np.ndarray, np.ndarray]:
+        b = self._env.bounds
+        nx, ny = IDLE_GRID
+
+        def grid(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+            gx, gy = np.meshgrid(np.linspace(lo[0], hi[0], nx), np.linspace(lo[1], hi[1], ny))
+            return np.column_stack([gx.ravel(), gy.ravel()])
+
+        cand = grid(np.asarray(b.pick_lo, float), np.asarray(b.pick_hi, float))
+        clear = cand[:, 0] - float(b.pick_lo[0])  # streamed tiles enter at the upstream edge
+        per = self.last_perception
+        regions = [(t.centre, t.area) for t in per.tiles] if per else []
+        regions += [(r.centre, r.area) for r in per.partial] if per else []
+        travel = np.array([self.belt_speed * IDLE_HORIZON_S, 0.0])
+        for centre, area in regions:
+            a = np.asarray(centre, float)
+            d = cand - a
+            s = np.clip(d @ travel / max(float(travel @ travel), 1e-12), 0.0, 1.0)
+            gap = np.linalg.norm(d - s[:, None] * travel, axis=1) - np.sqrt(area / np.pi)
+            clear = np.minimum(clear, gap)
+        pick = cand[int(np.argmax(clear))]
+        spots = grid(np.asarray(b.place_lo, float), np.asarray(b.place_hi, float))
+        slots = np.array([s.pose[:2] for s in self.slots]).reshape(-1, 2)
+        far = np.min(np.linalg.norm(spots[:, None] - slots[None], axis=2), axis=1)
+        return pick, spots[int(np.argmax(far))]
 
     def predict(
         self,

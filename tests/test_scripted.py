@@ -67,3 +67,30 @@ def test_a_tile_still_on_the_belt_reopens_its_slot(env):
     again, _ = agent.predict(obs)
     assert agent.order[-1] == slot
     np.testing.assert_allclose(again, first, atol=1e-6)
+
+
+def test_a_camera_that_sees_nothing_gives_a_harmless_rest_action(env):
+    agent = ScriptedAgent(env, calibrate=False)
+    obs, _ = env.reset(seed=3)
+    cell = env.unwrapped.cell
+    before = cell.tile_poses().pos.copy()
+    dark = {**obs, "input_camera": np.zeros_like(obs["input_camera"])}
+    action, _ = agent.predict(dark)
+    assert agent.last_command is None and not agent.last_plan.commands
+    _, _, _, _, info = env.step(action)
+    assert info["action_failed"] and "no tile" in info["action_error"]
+    moved = np.linalg.norm(cell.tile_poses().pos - before, axis=1)
+    assert moved.max() < 1e-3  # the rest pick found empty belt: nothing moved
+    assert info["evaluation"]["misplaced"] == info["evaluation"]["correct"] == 0
+
+
+def test_rest_action_picks_away_from_every_tile_seen(env):
+    agent = ScriptedAgent(env, calibrate=False)
+    obs, _ = env.reset(seed=4)
+    agent.plan(obs["input_camera"])
+    pick, place = agent._idle_points()
+    seen = np.array([t.centre for t in agent.last_perception.tiles])
+    assert len(seen) == 6
+    assert np.min(np.linalg.norm(seen - pick, axis=1)) > 0.03  # 3 cm from any tile centre
+    slots = np.array([s.pose[:2] for s in agent.slots])
+    assert np.min(np.linalg.norm(slots - place, axis=1)) > 0.02
