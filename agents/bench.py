@@ -9,7 +9,8 @@ Sources (``BENCHES``): ``agents.bench_qshape`` (describe/assign 10,000 tiles),
 ``agents.bench_vision`` (recognition on synthetic images), ``agents.bench_cell`` (physics and
 rendering speed), ``agents.bench_planner`` (cycle time, tiles/min, tracking),
 ``agents.bench_env`` (env steps/s, memory), ``agents.bench_perception`` (camera-to-world
-perception), ``agents.evaluate`` (learned vs scripted vs random), and the main job's
+perception), ``agents.bench_scripted`` (the scripted cell over 20 seeds per scenario),
+``agents.evaluate`` (learned vs scripted vs random), and the main job's
 ``out/report.json`` when present (collected only). A missing source gives rows marked
 ``missing``; a figure without a target is reported only.
 """
@@ -339,6 +340,30 @@ def learned_figures(d: dict[str, Any]) -> list[Figure]:
     return out
 
 
+def scripted_figures(d: dict[str, Any]) -> list[Figure]:
+    """Figures of ``bench_scripted.json``: each scenario's correctness and tiles/min."""
+    g = "scripted"
+    out = []
+    for r in d.get("scenarios") or []:
+        name = f"{r.get('scenario', '?')} ({r.get('episodes', '?')} seeds)"
+        out.append(
+            fig(g, f"{name} correct", r.get("correct_fraction"), "", ">=", r.get("target_correct"))
+        )
+        target = r.get("target_tiles_per_min") or None
+        out.append(
+            fig(
+                g,
+                f"{name} tiles/min, worst episode",
+                r.get("tiles_per_min_worst"),
+                "tiles/min",
+                ">=" if target else "",
+                target,
+            )
+        )
+        out.append(fig(g, f"{name} misplaced", r.get("misplaced"), "tiles", "==", 0))
+    return out
+
+
 def main_job_figures(d: dict[str, Any]) -> list[Figure]:
     """Figures of the main job's ``report.json``."""
     g = "main"
@@ -405,6 +430,13 @@ BENCHES = (
         "bench_perception.json",
         ("--seeds", "5"),
         perception_figures,
+    ),
+    Bench(
+        "scripted",
+        "agents.bench_scripted",
+        "bench_scripted.json",
+        ("--seeds", "0-1"),
+        scripted_figures,
     ),
     Bench("learned", "agents.evaluate", "eval.json", (), learned_figures),
     Bench("main", "", "report.json", (), main_job_figures),
