@@ -27,7 +27,15 @@ from envs.cell_config import CameraConfig, CellConfig, load_cell_config
 from envs.errors import CellError
 from envs.scene import WAKE_FORCE, build_scene, cell_geometry, park_positions, yaw_quat
 from envs.suction import Suction, SuctionEvent
-from envs.tiles import PhysicalTile, SlotSpec, TileShape, basic_shapes, make_tiles, sample_layout
+from envs.tiles import (
+    PhysicalTile,
+    SlotSpec,
+    TileShape,
+    basic_shapes,
+    jitter_colors,
+    make_tile_pool,
+    sample_layout,
+)
 
 CAMERAS = ("input_camera", "output_camera")
 """Names of the observation cameras."""
@@ -73,20 +81,31 @@ class Cell:
         self._rng = np.random.default_rng(seed)
         self.shapes = tuple(shapes) if shapes is not None else basic_shapes()
         self.slots = tuple(slots)
-        self.tiles: tuple[PhysicalTile, ...] = make_tiles(self.shapes, self.cfg.tiles, self._rng)
-        self._radii = np.array([t.radius for t in self.tiles])
-        self.is_distractor = np.array([t.distractor != "" for t in self.tiles])
+        self.tile_pool = make_tile_pool(self.shapes, self.cfg.tiles, self._rng)
+        """Every built tile, ``[variant][tile]`` (``cfg.tiles.variants`` variants)."""
+        pool = [t for variant in self.tile_pool for t in variant]
+        n, n_variants = len(self.tile_pool[0]), len(self.tile_pool)
+        self.is_distractor = np.array([t.distractor != "" for t in self.tile_pool[0]])
         self.geometry = cell_geometry(self.cfg)
-        self.model, self.ids = build_scene(self.cfg, self.tiles, self.slots)
+        self.model, self.pool_ids = build_scene(self.cfg, pool, self.slots, n_variants)
+        """`pool_ids` indexes every variant's body, variant-major (``v * n + i``)."""
         self.data = mujoco.MjData(self.model)
-        self.suction = Suction(
-            self.model, self.ids, self.cfg.suction, self.tiles, self.cfg.tiles.thickness
+        self._pool_park = park_positions(len(pool), self.cfg.tiles.thickness)
+        m = self.model
+        self._collision = (  # as built; unused variants get 0 (out of collision detection)
+            m.body_contype.copy(),
+            m.body_conaffinity.copy(),
+            m.geom_contype.copy(),
+            m.geom_conaffinity.copy(),
         )
-        self.lost_tracker = LostTracker(self.cfg, len(self.tiles))
+        self._body_rgba = np.array([*self.cfg.tiles.body_color, 1.0])
+        self.variant = np.zeros(n, int)
+        """Variant of each tile in this episode, shape (n,)."""
+        self._select(self.variant, self.tile_pool[0])
+        self.lost_tracker = LostTracker(self.cfg, n)
         self.cameras = CameraRig(self.model, self.cfg.render)  # renderers open lazily
-        self._park = park_positions(len(self.tiles), self.cfg.tiles.thickness)
-        self.on_stage = np.zeros(len(self.tiles), bool)
-        self._wake = np.zeros(len(self.tiles), bool)
+        self.on_stage = np.zeros(n, bool)
+        self._wake = np.zeros(n, bool)
         self._next_feed_time = 0.0
         self._speed_lo = -np.asarray(self.cfg.robot.max_joint_speed)
         self._speed_hi = np.asarray(self.cfg.robot.max_joint_speed)
@@ -104,18 +123,72 @@ class Cell:
             return len(self.tiles)
         return min(self.cfg.tiles.stream_initial, len(self.tiles))
 
+    def _select(self, variant: np.ndarray, tiles: Sequence[PhysicalTile]) -> None:
+        """Make ``tiles`` (tile i is variant ``variant[i]``) the episode's tiles.
+
+        Points `tiles`, `ids`, suction and parking at those bodies (`_paint` shows them) and
+        takes the other variants out of collision detection (they sleep where they are parked;
+        asleep and without contacts nothing moves or wakes them).
+        """
+        n = len(tiles)
+        active = variant * n + np.arange(n)
+        self.variant = variant
+        self.tiles = tuple(tiles)
+        self.ids = self.pool_ids.select(active)
+        self._radii = np.array([t.radius for t in self.tiles])
+        self._park = self._pool_park[active]
+        self.suction = Suction(
+            self.model, self.ids, self.cfg.suction, self.tiles, self.cfg.tiles.thickness
+        )
+        m = self.model
+        body_type, body_affinity, geom_type, geom_affinity = self._collision
+        unused = np.zeros(m.nbody, bool)
+        unused[self.pool_ids.tile_body] = True
+        unused[self.ids.tile_body] = False
+        m.body_contype[:] = np.where(unused, 0, body_type)
+        m.body_conaffinity[:] = np.where(unused, 0, body_affinity)
+        geom_unused = unused[m.geom_bodyid]
+        m.geom_contype[:] = np.where(geom_unused, 0, geom_type)
+        m.geom_conaffinity[:] = np.where(geom_unused, 0, geom_affinity)
+
+    def _paint(self) -> None:
+        """Visual colours as built: the episode's tiles in theirs, other variants hidden."""
+        if not len(self.tiles):
+            return
+        rgba = self.model.geom_rgba
+        rgba[self.pool_ids.tile_visual, 3] = 0.0
+        rgba[self.ids.tile_visual[:, 0]] = self._body_rgba
+        rgba[self.ids.tile_visual[:, 1], :3] = [t.color for t in self.tiles]
+        rgba[self.ids.tile_visual[:, 1], 3] = 1.0
+
+    def _draw_variants(self) -> None:
+        """A random variant per tile with fresh colour noise (``tiles.variants`` > 1 only)."""
+        n_variants = len(self.tile_pool)
+        if n_variants == 1:
+            return
+        variant = self._rng.integers(n_variants, size=len(self.tiles))
+        tiles = [self.tile_pool[v][i] for i, v in enumerate(variant)]
+        self._select(variant, jitter_colors(tiles, self.cfg.tiles.color_jitter, self._rng))
+
     def reset(self, seed: int | np.random.Generator | None = None) -> None:
         """Arm at home, vacuum off, tiles laid out afresh on the input belt, counters cleared.
 
-        The tiles' geometry and noise are fixed when the cell is built; reset only re-draws
-        their layout (a new `Cell` draws new noise).
+        With ``tiles.variants`` V > 1, each tile first gets one of its V pre-built variants
+        at random (outline noise) and a fresh glaze colour noise; `tiles`, `ids`, `suction`
+        and every per-tile array then refer to those n bodies (the others stay parked,
+        hidden and asleep). With V = 1 the noise drawn at build is kept. Tile colours are
+        restored to the drawn ones (undoing run-time changes such as the env's
+        ``color_randomization``).
 
         Args:
-            seed: New seed or generator for the layout; None continues the cell's generator.
+            seed: New seed or generator for the noise and layout; None continues the cell's
+                generator.
         """
         self._check_open()
         if seed is not None:
             self._rng = np.random.default_rng(seed)
+        self._draw_variants()
+        self._paint()
         m, d, ids = self.model, self.data, self.ids
         mujoco.mj_resetData(m, d)
         self._wake[:] = False
@@ -127,9 +200,10 @@ class Cell:
         d.ctrl[ids.vel_actuators] = 0.0
         n = len(self.tiles)
         if n:
-            qadr = ids.tile_qpos_index
-            d.qpos[qadr[:, :3]] = self._park
+            qadr = self.pool_ids.tile_qpos_index
+            d.qpos[qadr[:, :3]] = self._pool_park
             d.qpos[qadr[:, 3:]] = [1.0, 0.0, 0.0, 0.0]
+            qadr = ids.tile_qpos_index
             self.on_stage[:] = False
             k = self._initial_count()
             if k:

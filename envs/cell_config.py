@@ -215,6 +215,11 @@ class TileConfig:
             (visual only).
         vertex_jitter: Std of the manufacturing noise added to outline vertices [m].
         color_jitter: Std of the noise added to each RGB channel [0..1 units].
+        variants: Noisy copies built per tile [count]. With 1 the noise (outline and colour)
+            is drawn once when the cell is built and kept by every reset. With V > 1 the cell
+            holds V bodies per tile, each with its own outline noise; every reset picks one
+            per tile at random (the others stay parked, hidden and asleep) and re-draws its
+            glaze colour noise, so episodes see fresh manufacturing noise without a rebuild.
         min_gap: Minimum clearance between bounding circles of placed tiles [m].
         placement_attempts: Random tries per tile before a layout attempt is abandoned.
         placement_restarts: Whole layouts drawn before the layout is declared impossible.
@@ -234,6 +239,7 @@ class TileConfig:
     glaze_thickness: float = 0.0008
     vertex_jitter: float = 0.0002
     color_jitter: float = 0.02
+    variants: int = 1
     min_gap: float = 0.006
     placement_attempts: int = 400
     placement_restarts: int = 40
@@ -245,9 +251,17 @@ class TileConfig:
 
     def __post_init__(self) -> None:
         _positive(
-            self, "thickness", "density", "friction", "placement_attempts", "placement_restarts"
+            self,
+            "thickness",
+            "density",
+            "friction",
+            "placement_attempts",
+            "placement_restarts",
+            "variants",
         )
         _positive(self, "glaze_thickness")
+        if not isinstance(self.variants, int) or isinstance(self.variants, bool):
+            raise CellError(f"TileConfig.variants must be an int >= 1, got {self.variants!r}")
         _length(self, "body_color", 3)
         if not all(0.0 <= c <= 1.0 for c in self.body_color):
             raise CellError(f"TileConfig.body_color must be RGB in [0, 1], got {self.body_color}")

@@ -60,8 +60,14 @@ class EnvConfig:
         stream_period: Time between streamed tiles [s].
         stream_initial: Tiles laid out at reset when streaming.
         distractor_rate: Distractor tiles per real tile.
-        vertex_jitter: Std of tile outline noise [m] (drawn when the env is built).
-        tile_color_jitter: Std of tile colour noise per RGB channel (drawn when built).
+        vertex_jitter: Std of tile outline (manufacturing) noise [m].
+        tile_color_jitter: Std of tile glaze colour noise per RGB channel [0..1 units].
+        tile_variants: Noisy variants built per tile [count]: each reset gives every tile one
+            of its variants at random (outline noise) and a fresh colour noise, so episodes
+            differ in manufacturing noise without rebuilding the model (V bodies per tile,
+            the unused ones parked out of view and asleep). 1: the noise is drawn once when
+            the env is built and kept by every episode. Build time and model size grow
+            about linearly with it; step, reset and render speed do not.
         color_randomization: Std of a per-reset multiplicative tile colour change (0: off).
         light_randomization: Std of a per-reset multiplicative light change (0: off).
         action_noise: Std of Gaussian noise added to continuous actions, in normalised units.
@@ -112,6 +118,7 @@ class EnvConfig:
     distractor_rate: float = 0.0
     vertex_jitter: float = 0.0002
     tile_color_jitter: float = 0.02
+    tile_variants: int = 8
     color_randomization: float = 0.0
     light_randomization: float = 0.0
     action_noise: float = 0.0
@@ -194,8 +201,10 @@ class EnvConfig:
         for name in nonneg:
             if not getattr(self, name) >= 0:
                 raise EnvConfigError(f"{name} must be >= 0, got {getattr(self, name)!r}")
-        if self.rotation_bins < 1 or self.layout_tries < 1:
-            raise EnvConfigError("rotation_bins and layout_tries must be >= 1")
+        for name in ("rotation_bins", "layout_tries", "tile_variants"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+                raise EnvConfigError(f"{name} must be an int >= 1, got {value!r}")
 
 
 def allowed_keys() -> list[str]:

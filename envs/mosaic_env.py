@@ -42,8 +42,6 @@ DEFAULT_CONTROL_DT = 0.04
 """Default control period [s] (``configs/env.yaml``); the class's ``render_fps`` is 1 / it."""
 SEED_BOUND = 2**63
 """Exclusive bound of the layout seeds drawn from ``np_random`` at each reset."""
-VISUAL_GROUP = 2
-"""Geom group of the tiles' visual geoms (colour randomisation)."""
 CAMERA_PANEL_DIVISOR = 2
 """Each camera panel of the ``rgb_array`` frame is the overview's height / this."""
 
@@ -104,8 +102,13 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ## Starting State
     Arm at home, vacuum off, tiles laid out at random (non-overlapping) on the input belt
     (``feed="all"``) or the first ``stream_initial`` of them (``feed="stream"``), settled for
-    ``reset_settle``. Tile geometry/colour noise is drawn when the env is built; per-reset
-    colour and light changes with ``color_randomization``/``light_randomization``.
+    ``reset_settle``. Manufacturing noise is re-drawn at every reset: each tile gets one of
+    ``tile_variants`` outlines built with ``vertex_jitter`` (pre-built bodies, the unused ones
+    parked out of view and asleep, so a reset costs no rebuild) and a fresh glaze colour
+    noise (``tile_color_jitter``); with ``tile_variants=1`` both are drawn once when the env
+    is built. ``env.unwrapped.cell.tiles`` holds the episode's tiles (outline, grasp point,
+    colour). Further per-reset colour and light changes with
+    ``color_randomization``/``light_randomization``.
 
     ## Episode End
     ``terminated`` when every slot is filled correctly or no remaining real tile can fill an
@@ -115,8 +118,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ``gym.make("MosaicAssembly-v0", config=None, render_mode=None, **overrides)``; ``config``
     is an `EnvConfig`, a bundled name or a YAML path (``configs/env.yaml``); overrides are
     the flat `EnvConfig` fields: design, max_slots, action_mode, obs_mode, image_size, depth,
-    belt_speed, reward_mode, execution, feed, distractor_rate, noise and randomisation levels,
-    tolerances, reward weights. Unknown keys raise `EnvConfigError` listing the allowed ones.
+    belt_speed, reward_mode, execution, feed, distractor_rate, tile_variants, noise and
+    randomisation levels, tolerances, reward weights. Unknown keys raise `EnvConfigError`
+    listing the allowed ones.
 
     ## Info
     ``sim_time`` [s since reset], ``tiles_placed`` (slots filled correctly), ``tiles_per_min``
@@ -132,7 +136,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     hang in EGL).
 
     ## Version History
-    - v0: initial version.
+    - v0: initial version; manufacturing noise re-drawn per reset (``tile_variants``).
     """
 
     metadata = {  # noqa: RUF012 - Gymnasium convention
@@ -162,8 +166,6 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.actions = self._adapter(pcfg)
         self.action_space = self.actions.space
         self.observation_space = self.observer.space
-        self._visual = _visual_geoms(self.cell)
-        self._base_rgba = self.cell.model.geom_rgba[self._visual].copy()
         self._base_light = self.cell.model.light_diffuse.copy()
         self._settle_steps = round(cfg.reset_settle / float(self.cell.model.opt.timestep))
         self._t0 = 0.0
@@ -370,10 +372,12 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         return info
 
     def _randomize(self, rng: np.random.Generator) -> None:
+        """Per-episode colour and light changes (the cell's reset restored the tile colours)."""
         m, cfg = self.cell.model, self.config
-        if cfg.color_randomization > 0 and len(self._visual):
-            f = 1 + rng.normal(0.0, cfg.color_randomization, (len(self._visual), 3))
-            m.geom_rgba[self._visual, :3] = np.clip(self._base_rgba[:, :3] * f, 0.0, 1.0)
+        visual = self.cell.ids.tile_visual.ravel()
+        if cfg.color_randomization > 0 and len(visual):
+            f = 1 + rng.normal(0.0, cfg.color_randomization, (len(visual), 3))
+            m.geom_rgba[visual, :3] = np.clip(m.geom_rgba[visual, :3] * f, 0.0, 1.0)
         if cfg.light_randomization > 0 and m.nlight:
             f = 1 + rng.normal(0.0, cfg.light_randomization, (m.nlight, 1))
             m.light_diffuse[:] = np.clip(self._base_light * f, 0.0, 1.0)
@@ -411,6 +415,7 @@ def _cell_config(cfg: EnvConfig) -> CellConfig:
         distractor_rate=cfg.distractor_rate,
         vertex_jitter=cfg.vertex_jitter,
         color_jitter=cfg.tile_color_jitter,
+        variants=cfg.tile_variants,
     )
     return replace(base, tiles=tiles, input_belt=replace(base.input_belt, speed=cfg.belt_speed))
 
@@ -426,15 +431,6 @@ def _build_cell(
             if "could not place" not in str(exc) or seed == tries - 1:
                 raise
     raise AssertionError("unreachable")
-
-
-def _visual_geoms(cell: Cell) -> np.ndarray:
-    ids = cell.ids
-    geoms = np.concatenate(
-        [np.arange(s, s + c) for s, c in zip(ids.tile_geom_start, ids.tile_geom_count, strict=True)]
-        or [np.zeros(0, int)]
-    ).astype(int)
-    return geoms[cell.model.geom_group[geoms] == VISUAL_GROUP]
 
 
 __all__ = ["ActionError", "MosaicAssemblyEnv", "MosaicEnvError"]

@@ -11,7 +11,7 @@ the working areas are centred at x = work_x.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
@@ -64,6 +64,7 @@ class SceneIds:
         tile_dof: First dof address of each tile's free joint, shape (n,).
         tile_geom_start: First geom id of each tile, shape (n,).
         tile_geom_count: Number of geoms of each tile, shape (n,).
+        tile_visual: Visual geoms (ceramic body, glaze) of each tile, shape (n, 2).
         input_belt_geom: Geom carrying tiles on the input belt (surfacevel).
         mesh_geom: The mesh sheet on the output belt.
         input_camera: Camera id above the input belt.
@@ -83,10 +84,23 @@ class SceneIds:
     tile_dof: np.ndarray
     tile_geom_start: np.ndarray
     tile_geom_count: np.ndarray
+    tile_visual: np.ndarray
     input_belt_geom: int
     mesh_geom: int
     input_camera: int
     output_camera: int
+
+    def select(self, tiles: np.ndarray) -> SceneIds:
+        """These ids with the tile arrays restricted to (and ordered by) ``tiles``, shape (m,)."""
+        return replace(
+            self,
+            tile_body=self.tile_body[tiles],
+            tile_qpos=self.tile_qpos[tiles],
+            tile_dof=self.tile_dof[tiles],
+            tile_geom_start=self.tile_geom_start[tiles],
+            tile_geom_count=self.tile_geom_count[tiles],
+            tile_visual=self.tile_visual[tiles],
+        )
 
     @property
     def tile_qpos_index(self) -> np.ndarray:
@@ -409,12 +423,23 @@ def _robot_spec(cfg: CellConfig) -> mujoco.MjSpec:
     return spec
 
 
-def _add_tiles(spec: mujoco.MjSpec, cfg: CellConfig, tiles: Sequence[PhysicalTile]) -> None:
+def tile_name(tile: int, variant: int = 0) -> str:
+    """Body name of a tile's variant (``tile3``; other variants ``tile3v1``, ``tile3v2``...)."""
+    return f"tile{tile}" if variant == 0 else f"tile{tile}v{variant}"
+
+
+def _add_tiles(
+    spec: mujoco.MjSpec, cfg: CellConfig, tiles: Sequence[PhysicalTile], variants: int
+) -> None:
     t = cfg.tiles.thickness
+    per_variant = len(tiles) // variants
     park = park_positions(len(tiles), t)
-    for i, tile in enumerate(tiles):
-        body = spec.worldbody.add_body(name=f"tile{i}", pos=park[i])
-        body.add_freejoint(name=f"tile{i}_joint")
+    for j, tile in enumerate(tiles):
+        name = tile_name(j % per_variant, j // per_variant)
+        body = spec.worldbody.add_body(name=name, pos=park[j])
+        if variants > 1:
+            body.sleep = mujoco.mjtSleepPolicy.mjSLEEP_INIT  # parked until chosen and woken
+        body.add_freejoint(name=f"{name}_joint")
         for k, piece in enumerate(tile.pieces):
             n = len(piece)
             verts = np.vstack(
@@ -423,12 +448,12 @@ def _add_tiles(spec: mujoco.MjSpec, cfg: CellConfig, tiles: Sequence[PhysicalTil
                     np.column_stack([piece, np.full(n, t / 2)]),
                 ]
             )
-            mesh = spec.add_mesh(name=f"tile{i}_piece{k}")
+            mesh = spec.add_mesh(name=f"{name}_piece{k}")
             mesh.uservert = verts.ravel().tolist()
             g = body.add_geom(
-                name=f"tile{i}_geom{k}",
+                name=f"{name}_geom{k}",
                 type=mujoco.mjtGeom.mjGEOM_MESH,
-                meshname=f"tile{i}_piece{k}",
+                meshname=f"{name}_piece{k}",
             )
             g.density = cfg.tiles.density
             g.rgba = [*cfg.tiles.body_color, 1.0]
@@ -444,11 +469,11 @@ def _add_tiles(spec: mujoco.MjSpec, cfg: CellConfig, tiles: Sequence[PhysicalTil
             ("glaze", t / 2 - glaze, t / 2 + 1e-5, [*tile.color, 1.0]),
         ):
             verts, faces = extrusion(tile.outline, tile.holes, z0, z1)
-            mesh = spec.add_mesh(name=f"tile{i}_{part}")
+            mesh = spec.add_mesh(name=f"{name}_{part}")
             mesh.uservert = verts.ravel().tolist()
             mesh.userface = faces.ravel().tolist()
             g = body.add_geom(
-                name=f"tile{i}_{part}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"tile{i}_{part}"
+                name=f"{name}_{part}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"{name}_{part}"
             )
             g.contype = g.conaffinity = 0
             g.density = 0.0
@@ -457,23 +482,34 @@ def _add_tiles(spec: mujoco.MjSpec, cfg: CellConfig, tiles: Sequence[PhysicalTil
 
 
 def build_spec(
-    cfg: CellConfig, tiles: Sequence[PhysicalTile] = (), slots: Sequence[SlotSpec] = ()
+    cfg: CellConfig,
+    tiles: Sequence[PhysicalTile] = (),
+    slots: Sequence[SlotSpec] = (),
+    variants: int = 1,
 ) -> mujoco.MjSpec:
     """The whole cell as an editable MjSpec (tiles parked on the floor far away).
 
     Args:
         cfg: Cell configuration.
-        tiles: Physical tiles (one free body each); empty for an arm + cell model.
+        tiles: Physical tiles (one free body each); empty for an arm + cell model. With
+            ``variants`` V > 1: V variants of n tiles, variant-major (``v * n + i``), whose
+            bodies start asleep.
         slots: Slots of the mesh (visual marks).
+        variants: Variants per tile in ``tiles``.
 
     Raises:
-        CellError: A slot outside the mesh.
+        CellError: A slot outside the mesh, or ``tiles`` not a multiple of ``variants``.
     """
+    if variants < 1 or len(tiles) % variants:
+        raise CellError(
+            f"{len(tiles)} tiles cannot be {variants} variants of each tile; allowed: "
+            "variants >= 1 dividing the number of tiles"
+        )
     spec = _robot_spec(cfg)
     _configure(spec, cfg)
     _add_environment(spec, cfg, slots)
     if tiles:
-        _add_tiles(spec, cfg, tiles)
+        _add_tiles(spec, cfg, tiles, variants)
         eq = spec.add_equality(name="suction_weld", type=mujoco.mjtEq.mjEQ_WELD)
         eq.objtype = mujoco.mjtObj.mjOBJ_BODY
         eq.name1, eq.name2 = "vacuum_pad", "tile0"
@@ -482,8 +518,15 @@ def build_spec(
     return spec
 
 
-def resolve_ids(model: mujoco.MjModel, n_tiles: int) -> SceneIds:
-    """Resolve every name the cell uses to ids, once."""
+def resolve_ids(model: mujoco.MjModel, n_tiles: int, variants: int = 1) -> SceneIds:
+    """Resolve every name the cell uses to ids, once.
+
+    Args:
+        model: The compiled cell.
+        n_tiles: Tiles per variant.
+        variants: Variants per tile; the tile arrays hold all ``variants * n_tiles`` bodies,
+            variant-major (``v * n_tiles + i``).
+    """
 
     def nid(kind: mujoco.mjtObj, name: str) -> int:
         i = mujoco.mj_name2id(model, kind, name)
@@ -492,8 +535,16 @@ def resolve_ids(model: mujoco.MjModel, n_tiles: int) -> SceneIds:
         return int(i)
 
     joints = [nid(mujoco.mjtObj.mjOBJ_JOINT, f"joint{k}") for k in range(1, 7)]
-    bodies = np.array([nid(mujoco.mjtObj.mjOBJ_BODY, f"tile{i}") for i in range(n_tiles)], int)
-    tjoints = [nid(mujoco.mjtObj.mjOBJ_JOINT, f"tile{i}_joint") for i in range(n_tiles)]
+    names = [tile_name(i, v) for v in range(variants) for i in range(n_tiles)]
+    bodies = np.array([nid(mujoco.mjtObj.mjOBJ_BODY, b) for b in names], int)
+    tjoints = [nid(mujoco.mjtObj.mjOBJ_JOINT, f"{b}_joint") for b in names]
+    visual = np.array(
+        [
+            [nid(mujoco.mjtObj.mjOBJ_GEOM, f"{b}_{part}") for part in ("body", "glaze")]
+            for b in names
+        ],
+        int,
+    ).reshape(-1, 2)
     return SceneIds(
         arm_qpos=model.jnt_qposadr[joints].copy(),
         arm_dof=model.jnt_dofadr[joints].copy(),
@@ -504,10 +555,11 @@ def resolve_ids(model: mujoco.MjModel, n_tiles: int) -> SceneIds:
         pad_body=nid(mujoco.mjtObj.mjOBJ_BODY, "vacuum_pad"),
         weld=nid(mujoco.mjtObj.mjOBJ_EQUALITY, "suction_weld") if n_tiles else -1,
         tile_body=bodies,
-        tile_qpos=model.jnt_qposadr[tjoints].copy() if n_tiles else np.zeros(0, int),
-        tile_dof=model.jnt_dofadr[tjoints].copy() if n_tiles else np.zeros(0, int),
+        tile_qpos=model.jnt_qposadr[tjoints].copy() if names else np.zeros(0, int),
+        tile_dof=model.jnt_dofadr[tjoints].copy() if names else np.zeros(0, int),
         tile_geom_start=model.body_geomadr[bodies].copy(),
         tile_geom_count=model.body_geomnum[bodies].copy(),
+        tile_visual=visual,
         input_belt_geom=nid(mujoco.mjtObj.mjOBJ_GEOM, "input_belt"),
         mesh_geom=nid(mujoco.mjtObj.mjOBJ_GEOM, "mesh_sheet"),
         input_camera=nid(mujoco.mjtObj.mjOBJ_CAMERA, "input_camera"),
@@ -516,19 +568,23 @@ def resolve_ids(model: mujoco.MjModel, n_tiles: int) -> SceneIds:
 
 
 def build_scene(
-    cfg: CellConfig, tiles: Sequence[PhysicalTile] = (), slots: Sequence[SlotSpec] = ()
+    cfg: CellConfig,
+    tiles: Sequence[PhysicalTile] = (),
+    slots: Sequence[SlotSpec] = (),
+    variants: int = 1,
 ) -> tuple[mujoco.MjModel, SceneIds]:
-    """Compile the cell and resolve its ids.
+    """Compile the cell and resolve its ids (all ``len(tiles)`` bodies; see `build_spec`).
 
     Raises:
-        CellError: Bad slots, or MuJoCo refused the composed model (message included).
+        CellError: Bad slots or variants, or MuJoCo refused the composed model (message
+            included).
     """
-    spec = build_spec(cfg, tiles, slots)
+    spec = build_spec(cfg, tiles, slots, variants)
     try:
         model = spec.compile()
     except ValueError as exc:
         raise CellError(f"MuJoCo could not compile the cell: {exc}") from exc
-    return model, resolve_ids(model, len(tiles))
+    return model, resolve_ids(model, len(tiles) // variants, variants)
 
 
 def build_arm_model(cfg: CellConfig | None = None, with_cell: bool = True) -> mujoco.MjModel:
@@ -559,5 +615,6 @@ __all__ = [
     "extrusion",
     "park_positions",
     "resolve_ids",
+    "tile_name",
     "yaw_quat",
 ]

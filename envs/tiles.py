@@ -10,7 +10,7 @@ from __future__ import annotations
 import colorsys
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Any
 
@@ -139,7 +139,9 @@ class PhysicalTile:
         outline: Noisy outer boundary in the tile frame, shape (n, 2) [m].
         holes: Noisy holes in the tile frame [m].
         pieces: Convex pieces covering the tile, each shape (k, 2) [m], for collision.
-        color: Noisy RGB in [0, 1].
+        color: Noisy RGB in [0, 1] (the glaze).
+        base_color: RGB in [0, 1] before the colour noise (the shape's colour, or a colour
+            distractor's wrong one); `jitter_colors` re-draws ``color`` from it.
         radius: Bounding-circle radius about the tile origin [m].
         area: Area [m^2].
         grasp: Where to put the pad, in the tile frame, shape (2,) [m]: the point of the tile
@@ -152,6 +154,7 @@ class PhysicalTile:
     holes: tuple[np.ndarray, ...]
     pieces: tuple[np.ndarray, ...]
     color: tuple[float, float, float]
+    base_color: tuple[float, float, float]
     radius: float
     area: float
     grasp: np.ndarray
@@ -347,6 +350,7 @@ def make_tile(
         holes=tuple(n_holes),
         pieces=pieces,
         color=_jitter_color(color, cfg.color_jitter, rng),
+        base_color=(float(color[0]), float(color[1]), float(color[2])),
         radius=float(np.max(np.linalg.norm(n_outline, axis=1))),
         area=float(Polygon(n_outline, n_holes).area),
         grasp=grasp_point(n_outline, n_holes),
@@ -373,6 +377,41 @@ def make_tiles(
             kind = str(rng.choice(list(cfg.distractor_kinds)))
             tiles.append(make_tile(s, cfg, rng, kind))
     return tuple(tiles)
+
+
+def make_tile_pool(
+    shapes: Sequence[TileShape], cfg: TileConfig, rng: np.random.Generator
+) -> tuple[tuple[PhysicalTile, ...], ...]:
+    """``cfg.variants`` independently noisy copies of the tiles `make_tiles` draws.
+
+    Variant 0 is exactly `make_tiles`'s draw (same generator calls); variants 1.. re-draw the
+    outline and colour noise (and a distractor's random cut, scale or wrong colour) of each
+    tile, keeping its shape and distractor kind.
+
+    Returns:
+        Tiles indexed ``[variant][tile]``: ``cfg.variants`` tuples of the same length.
+
+    Raises:
+        CellError: No shapes.
+    """
+    first = make_tiles(shapes, cfg, rng)
+    others = tuple(
+        tuple(make_tile(t.shape, cfg, rng, t.distractor) for t in first)
+        for _ in range(cfg.variants - 1)
+    )
+    return (first, *others)
+
+
+def jitter_colors(
+    tiles: Sequence[PhysicalTile], std: float, rng: np.random.Generator
+) -> tuple[PhysicalTile, ...]:
+    """The tiles with freshly drawn glaze colour noise (std per RGB channel) on `base_color`."""
+    base = np.array([t.base_color for t in tiles], dtype=float).reshape(-1, 3)
+    colors = np.clip(base + rng.normal(0.0, std, base.shape), 0.0, 1.0)
+    return tuple(
+        replace(t, color=(float(c[0]), float(c[1]), float(c[2])))
+        for t, c in zip(tiles, colors, strict=True)
+    )
 
 
 def sample_layout(
@@ -670,7 +709,9 @@ __all__ = [
     "basic_shapes",
     "convex_decomposition",
     "grasp_point",
+    "jitter_colors",
     "make_tile",
+    "make_tile_pool",
     "make_tiles",
     "sample_layout",
     "signed_area",

@@ -62,6 +62,8 @@ def test_unknown_key_names_allowed_keys() -> None:
         (TileConfig, {"distractor_rate": 1.5}, "allowed: 0..1"),
         (TileConfig, {"distractor_kinds": ("cracked",)}, "allowed"),
         (TileConfig, {"feed": "trickle"}, "allowed: 'all', 'stream'"),
+        (TileConfig, {"variants": 0}, "variants must be positive"),
+        (TileConfig, {"variants": 2.0}, "variants must be an int"),
         (SuctionConfig, {"vacuum_pressure": 0.0}, "vacuum_pressure must be positive"),
         (SuctionConfig, {"pad_diameter": float("nan")}, "pad_diameter must be positive"),
         (CameraConfig, {"width": 0}, "width must be positive"),

@@ -10,7 +10,15 @@ from shapely.geometry import Polygon
 from envs.cell import Cell
 from envs.cell_config import TileConfig, load_cell_config
 from envs.scene import extrusion
-from envs.tiles import basic_shapes, convex_decomposition, make_tile, make_tiles, sample_layout
+from envs.tiles import (
+    basic_shapes,
+    convex_decomposition,
+    jitter_colors,
+    make_tile,
+    make_tile_pool,
+    make_tiles,
+    sample_layout,
+)
 
 SHAPES = basic_shapes()
 
@@ -68,6 +76,36 @@ def test_distractors_rate_and_kinds() -> None:
         if t.distractor == "color":
             assert np.linalg.norm(np.subtract(t.color, t.shape.color)) > 0.2
     assert make_tiles(SHAPES, TileConfig(), np.random.default_rng(1))[-1].distractor == ""
+
+
+def test_tile_pool_variants_share_shape_and_kind() -> None:
+    cfg = TileConfig(distractor_rate=0.5, variants=3)
+    pool = make_tile_pool(SHAPES, cfg, np.random.default_rng(2))
+    first = make_tiles(SHAPES, cfg, np.random.default_rng(2))
+    assert len(pool) == 3 and all(len(v) == len(first) for v in pool)
+    for a, b in zip(pool[0], first, strict=True):  # variant 0 is make_tiles' draw
+        np.testing.assert_array_equal(a.outline, b.outline)
+        assert a.color == b.color
+    for i in range(len(first)):
+        variants = [pool[v][i] for v in range(3)]
+        assert len({t.shape.name for t in variants}) == 1
+        assert len({t.distractor for t in variants}) == 1
+        assert len({t.outline.tobytes() for t in variants}) == 3
+
+
+def test_jitter_colors_redraws_around_the_base_colour() -> None:
+    cfg = TileConfig(color_jitter=0.03)
+    tiles = make_tiles(SHAPES, cfg, np.random.default_rng(0))
+    a = jitter_colors(tiles, cfg.color_jitter, np.random.default_rng(1))
+    b = jitter_colors(tiles, cfg.color_jitter, np.random.default_rng(1))
+    assert [t.color for t in a] == [t.color for t in b]
+    assert [t.color for t in a] != [t.color for t in tiles]
+    base = np.array([t.base_color for t in tiles])
+    np.testing.assert_allclose([t.color for t in a], base, atol=0.15)
+    assert all(t.outline is u.outline for t, u in zip(a, tiles, strict=True))
+    assert all(
+        t.color == tuple(t.base_color) for t in jitter_colors(tiles, 0.0, np.random.default_rng())
+    )
 
 
 def test_layout_is_seeded_and_non_overlapping() -> None:
