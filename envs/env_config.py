@@ -85,7 +85,9 @@ class EnvConfig:
         layout_tries: Layout draws tried at reset until the tiles fit the belt.
         position_tolerance: Placement position tolerance [m].
         yaw_tolerance_deg: Placement yaw tolerance [deg], modulo the tile's symmetry.
-        mesh_height_tolerance: A tile counts as on the mesh within this height [m].
+        mesh_height_tolerance: A tile on the mesh lies flat on the sheet (can fill a slot)
+            within this height of resting on it [m]; higher (e.g. stacked on another tile)
+            it is misplaced.
         max_tilt_deg: ... and when tilted less than this from flat [deg].
         reward_correct: Sparse reward per correctly filled slot.
         reward_success: Bonus when the mosaic is complete.

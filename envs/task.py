@@ -2,8 +2,10 @@
 
 `MosaicTask.evaluate` returns one dict the reward, the episode end and ``info`` all read.
 Tiles and slots are matched by class name (the design's shape-and-colour class); distractors are
-never correct. A tile counts as placed when it lies flat on the mesh (not held); it fills the
-nearest slot when class, position and yaw (modulo the tile's symmetry) are within tolerance.
+never correct. A tile counts as placed when it lies over the mesh (not held, at any height: flat
+on the sheet, stacked on another tile or tilted); it fills the nearest slot when it lies flat on
+the sheet and class, position and yaw (modulo the tile's symmetry) are within tolerance. Every
+other placed real tile is misplaced.
 """
 
 from __future__ import annotations
@@ -40,7 +42,10 @@ class Placement:
     """Placement of every tile at one instant.
 
     Attributes:
-        on_mesh: Tiles lying on the mesh and not held, shape (n,) bool.
+        on_mesh: Tiles over the mesh, fed and not held, shape (n,) bool (any height above the
+            sheet: a tile stacked on another one is on the mesh too).
+        flat: Tiles on the mesh lying flat on the sheet (height and tilt within tolerance),
+            shape (n,) bool.
         slot: Nearest slot of each tile on the mesh (-1 otherwise), shape (n,).
         position_error: Distance of each tile's centroid to that slot's [m], NaN off the mesh.
         yaw_error: Yaw error modulo the tile's symmetry [rad], NaN off the mesh.
@@ -49,6 +54,7 @@ class Placement:
     """
 
     on_mesh: np.ndarray
+    flat: np.ndarray
     slot: np.ndarray
     position_error: np.ndarray
     yaw_error: np.ndarray
@@ -100,13 +106,15 @@ class MosaicTask:
         held = np.zeros(n, bool)
         if cell.held_tile >= 0:
             held[cell.held_tile] = True
+        dz = poses.pos[:, 2] - self._rest_z
+        tol = self.cfg.mesh_height_tolerance
         on_mesh = (
             np.all((xy >= self._mesh_lo) & (xy <= self._mesh_hi), axis=1)
-            & (np.abs(poses.pos[:, 2] - self._rest_z) <= self.cfg.mesh_height_tolerance)
-            & (up > self._flat)
+            & (dz >= -tol)
             & ~held
             & cell.on_stage
         )
+        flat = on_mesh & (dz <= tol) & (up > self._flat)
         slot = np.full(n, -1)
         perr = np.full(n, np.nan)
         yerr = np.full(n, np.nan)
@@ -125,7 +133,8 @@ class MosaicTask:
             )
             yerr[idx] = np.abs(wrapped)
             ok = (
-                (self.tile_class[idx] == self.slot_class[nearest])
+                flat[idx]
+                & (self.tile_class[idx] == self.slot_class[nearest])
                 & ~self.distractor[idx]
                 & (perr[idx] <= self.cfg.position_tolerance)
                 & (yerr[idx] <= self._yaw_tol)
@@ -137,14 +146,15 @@ class MosaicTask:
                 if not filled[s]:
                     filled[s] = True
                     correct[idx[j]] = True
-        return Placement(on_mesh, slot, perr, yerr, correct, filled)
+        return Placement(on_mesh, flat, slot, perr, yerr, correct, filled)
 
     def evaluate(self) -> dict[str, Any]:
         """The task's state as one dict (also ``info["evaluation"]``).
 
         Keys: ``success`` (every slot filled correctly), ``correct`` (slots filled correctly),
-        ``misplaced`` (real tiles on the mesh not filling a slot: wrong class or pose beyond
-        tolerance), ``dropped`` (tiles the pad lost in transit), ``lost`` (tiles lost off the
+        ``misplaced`` (real tiles on the mesh not filling a slot: wrong class, pose beyond
+        tolerance, stacked on another tile (e.g. put into a filled slot) or tilted),
+        ``dropped`` (tiles the pad lost in transit), ``lost`` (tiles lost off the
         input belt), ``distractors_placed``, ``slots`` (number of slots), ``slot_filled`` (bool
         list), ``position_error_mm`` and ``yaw_error_deg`` (mean and max over tiles on the mesh,
         None when no tile is on the mesh), ``placeable`` (open slots a remaining real tile of

@@ -210,3 +210,27 @@ def test_info_keys_and_dense_terms() -> None:
         assert info["evaluation"] == env.evaluate()
     finally:
         env.close()
+
+
+def test_tile_into_a_filled_slot_is_misplaced_and_penalised() -> None:
+    env = MosaicAssemblyEnv(
+        action_mode="pick_place_discrete",
+        execution="kinematic",
+        obs_mode="state",
+        design="paper_mixed",
+    )
+    try:
+        env.reset(seed=0)
+        task = env.task
+        twin = int(np.flatnonzero(task.tile_class == task.tile_class[0])[1])  # same class
+        _, r, _, _, info = env.step(env.expert_action(0, 0))
+        assert info["evaluation"]["correct"] == 1 and r == pytest.approx(env.config.reward_correct)
+        _, r, _, _, info = env.step(env.expert_action(twin, 0))
+        ev = info["evaluation"]
+        assert not info["action_failed"], info["action_error"]
+        assert ev["misplaced"] == 1 and ev["correct"] == 1 and ev["slot_filled"][0]
+        assert info["reward_misplaced"] == -env.config.penalty_misplaced
+        assert r == pytest.approx(-env.config.penalty_misplaced)
+        assert ev["placeable"] == len(env.cell.slots) - 2  # the twin's class has no open slot
+    finally:
+        env.close()
