@@ -3,11 +3,18 @@
 Pixel convention (OpenCV): u to the right, v down, pixel centres at integer coordinates, so
 pixel ``image[row, col]`` is centred at ``(u, v) = (col, row)``. Camera frame (OpenCV): x right,
 y down, z forward (along the view).
+
+Renderers a program leaves open (an env never closed) are freed at interpreter exit by an
+`atexit` hook, before EGL terminates and before module teardown (where freeing them prints
+"Exception ignored ... TypeError: 'NoneType' object is not callable").
 """
 
 from __future__ import annotations
 
+import atexit
+import functools
 import math
+import weakref
 from dataclasses import dataclass
 
 import mujoco
@@ -89,6 +96,26 @@ def camera_model(
     return CameraModel(name, width, height, k, t)
 
 
+_OPEN_RIGS: weakref.WeakSet[CameraRig] = weakref.WeakSet()
+"""Rigs holding renderers (weak references: a rig that is collected frees its own)."""
+
+
+def _close_open_rigs() -> None:
+    """Free every open rig's renderers (run at interpreter exit)."""
+    for rig in list(_OPEN_RIGS):
+        rig.close()
+
+
+@functools.cache
+def _close_at_exit() -> None:
+    """Register `_close_open_rigs` with atexit, once, after the first renderer is made.
+
+    atexit runs hooks last-in first-out, and MuJoCo's EGL backend registers its
+    ``eglTerminate`` when it makes its first context: registered after it, the hook runs first.
+    """
+    atexit.register(_close_open_rigs)
+
+
 class CameraRig:
     """Renders named cameras with one `mujoco.Renderer` per image size (reused).
 
@@ -117,6 +144,8 @@ class CameraRig:
             if depth:
                 r.enable_depth_rendering()
             pool[key] = r
+            _OPEN_RIGS.add(self)
+            _close_at_exit()
         return r
 
     def render(
@@ -153,6 +182,7 @@ class CameraRig:
             for r in pool.values():
                 r.close()
             pool.clear()
+        _OPEN_RIGS.discard(self)
         self._closed = True
 
 

@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import mujoco
 import numpy as np
 import pytest
@@ -101,3 +106,35 @@ def test_renderers_reused_and_closed() -> None:
     cell.close()
     with pytest.raises(CellError, match="closed"):
         cell.render("input_camera")
+
+
+UNCLOSED = """
+import numpy as np
+from envs.cell import Cell
+from envs.mosaic_env import MosaicAssemblyEnv
+cell = Cell(seed=0)
+cell.render("input_camera", 32, 32)
+cell.render("output_camera", 32, 32, depth=True)
+env = MosaicAssemblyEnv(action_mode="joint", obs_mode="rgb", max_slots=2, image_size=32)
+env.reset(seed=0)
+env.step(np.zeros(7, np.float32))
+print("stepped")
+"""
+
+
+def test_unclosed_renderers_exit_quietly() -> None:
+    """A script that never closes its cell or env exits without EGL teardown noise."""
+    root = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), "PYTHONPATH": str(root)}
+    run = subprocess.run(
+        [sys.executable, "-c", UNCLOSED],
+        cwd=root,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert run.returncode == 0 and "stepped" in run.stdout, run.stderr
+    assert "Exception ignored" not in run.stderr, run.stderr
+    assert "Traceback" not in run.stderr, run.stderr
