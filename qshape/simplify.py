@@ -6,6 +6,9 @@ smoothed; a point is a corner where the direction of the outline changes by more
 window. Between consecutive corners the outline is a straight edge when it stays close to its
 chord, otherwise a curve segment, whose maximum-curvature point is the one farthest from the
 chord; curves turning more than `OutlineParams.max_curve_turn_deg` are split into equal pieces.
+Three optional steps serve traced image contours (``configs/vision.yaml``): corners measured
+against an arc's own turning, round outlines snapped to two equal semicircles, and corners cut
+off or rounded by the pixel grid merged back into one.
 Every length parameter is a fraction of the outline's own size, so the same parameters serve
 millimetres and pixels. Cost is linear in the number of outline points.
 """
@@ -49,6 +52,22 @@ class OutlineParams:
         refine_corners: Move each corner between two straight edges to the intersection of
             lines fitted to those edges (sub-sample accuracy on clean polygons; at very acute
             corners small line errors can push the corner outwards).
+        arc_turning_deg: A point whose outline turns by at least this much on both sides
+            (the direction change measured 2 and 3 windows away, mean per side) lies inside an
+            arc: only its change in excess of the smaller side's counts towards a corner, in
+            [deg] (0: off). An arc turns by several degrees over every window and noise adds
+            to that, while a corner's turning is concentrated: so the pixel staircase of a
+            20 mm arc at 2 px/mm stays below ``corner_angle_deg``, and a shallow corner
+            between straight edges keeps its full angle.
+        circle_residual: An outline with a curve whose samples stay within this RMS radial
+            distance of a fitted circle, as a fraction of its radius, is a circle: two equal
+            semicircle arcs (dimensionless; 0: off). Where a traced closed curve is split
+            depends on its noise, and two unequal halves label one arc acute and the other
+            plane (a ring's hole seen through a thick tile, whose visible inner wall dents
+            the outline, even gets shallow corners).
+        chamfer_fraction: Two neighbouring corners joined by a straight edge shorter than
+            this fraction of the perimeter are one corner cut off by noise: they become the
+            intersection of the edges before and after them (dimensionless; 0: off).
     """
 
     resample_points: int = 256
@@ -60,6 +79,9 @@ class OutlineParams:
     max_curve_turn_deg: float = 240.0
     merge_fraction: float = 0.02
     refine_corners: bool = False
+    arc_turning_deg: float = 0.0
+    circle_residual: float = 0.0
+    chamfer_fraction: float = 0.0
 
     def __post_init__(self) -> None:
         """Validate ranges.
@@ -75,12 +97,16 @@ class OutlineParams:
             "straight_sagitta_ratio",
             "noise_fraction",
             "merge_fraction",
+            "circle_residual",
+            "chamfer_fraction",
         ):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0.0 <= v < 0.5):
                 raise ToleranceError(f"{name} must be in [0, 0.5), got {v!r}")
         if self.corner_window <= 0.0:
             raise ToleranceError("corner_window must be > 0")
+        if not 0.0 <= self.arc_turning_deg < 180.0:
+            raise ToleranceError(f"arc_turning_deg must be in [0, 180), got {self.arc_turning_deg}")
         if not 0.0 < self.corner_angle_deg < 180.0:
             raise ToleranceError(
                 f"corner_angle_deg must be in (0, 180), got {self.corner_angle_deg}"
@@ -223,11 +249,19 @@ def _simplify_clean(
     bx, by, fx, fy = back[..., 0], back[..., 1], fwd[..., 0], fwd[..., 1]
     change = np.degrees(np.arctan2(np.abs(bx * fy - by * fx), bx * fx + by * fy))
     change[flat] = 0.0
+    if p.arc_turning_deg > 0.0:
+        change = _excess_turning(change, w, p.arc_turning_deg)
     corners = _corners_many(change, p.corner_angle_deg, max(w, round(p.merge_fraction * n)))
     noise = p.noise_fraction * diameter
     ring = ext[:, w - 1 : w + n + 1]
     geom = _Samples(res, smooth, ring, sign, noise, perimeter, flat)
     results = _polylines(geom, corners, p, half, w)
+    if p.chamfer_fraction > 0.0:
+        for f in _with_chamfers(results, p.chamfer_fraction).tolist():
+            points, mask = results[f]
+            results[f] = _merge_chamfers(points, mask, p.chamfer_fraction)
+    if p.circle_residual > 0.0:
+        _snap_circles(res, sign, results, p.circle_residual)
     for f, i in enumerate(slots):
         what = names[f]
         if flat[f]:
@@ -240,6 +274,127 @@ def _simplify_clean(
             )
             continue
         out[i] = (points, mask)
+
+
+def _excess_turning(change: FloatArray, w: int, arc_deg: float) -> FloatArray:
+    """``change`` (F, n) less the turning beside each point that lies inside an arc.
+
+    Each side's turning is the mean change 2 and 3 windows ``w`` away; where the smaller
+    side turns by ``arc_deg`` or more, it is subtracted (see `OutlineParams.arc_turning_deg`).
+    """
+    before = np.roll(change, 2 * w, axis=1) + np.roll(change, 3 * w, axis=1)
+    after = np.roll(change, -2 * w, axis=1) + np.roll(change, -3 * w, axis=1)
+    side = 0.5 * np.minimum(before, after)
+    return np.asarray(change - np.where(side >= arc_deg, side, 0.0))
+
+
+def _snap_circles(
+    res: FloatArray, sign: FloatArray, results: list[tuple[FloatArray, BoolArray]], tol: float
+) -> None:
+    """Replace, in place, each curved result whose samples fit a circle by two semicircles.
+
+    Algebraic (Kasa) circle fits of all outlines at once: x^2 + y^2 + D x + E y + F = 0.
+    The new points start at the result's first point's bearing and keep the orientation.
+    """
+    curved = np.array([len(m) > 0 and bool(m.any()) for _, m in results])
+    if not curved.any():
+        return
+    idx = np.flatnonzero(curved)
+    pts = res[idx]  # (C, n, 2)
+    c0 = pts.mean(axis=1, keepdims=True)
+    q = pts - c0  # centred: better conditioned
+    a = np.concatenate([q, np.ones(q.shape[:2] + (1,))], axis=2)  # (C, n, 3)
+    b = -(q**2).sum(axis=2)  # (C, n)
+    ata = np.einsum("cni,cnj->cij", a, a)
+    atb = np.einsum("cni,cn->ci", a, b)
+    sol = np.linalg.solve(ata, atb[..., None])[..., 0]  # (C, 3)
+    centre = -0.5 * sol[:, :2]
+    r2 = (centre**2).sum(axis=1) - sol[:, 2]
+    r = np.sqrt(np.maximum(r2, 0.0))
+    dev = np.hypot(q[..., 0] - centre[:, None, 0], q[..., 1] - centre[:, None, 1]) - r[:, None]
+    rms = np.sqrt((dev**2).mean(axis=1))
+    good = (r2 > 0.0) & (rms <= tol * r)
+    steps = np.arange(_CIRCLE_POINTS) * (2.0 * math.pi / _CIRCLE_POINTS)
+    for j in np.flatnonzero(good).tolist():
+        f = int(idx[j])
+        cen = centre[j] + c0[j, 0]
+        first = results[f][0][0] - cen
+        ang = math.atan2(first[1], first[0]) + sign[f] * steps
+        new = cen + r[j] * np.column_stack([np.cos(ang), np.sin(ang)])
+        results[f] = (new, np.arange(_CIRCLE_POINTS) % 2 == 1)
+
+
+_CIRCLE_POINTS = 4
+"""A circle as relevant points: start, middle, end of two semicircle arcs."""
+
+_PARALLEL_SIN = 1e-3
+"""Edges whose unit directions' cross product is below this are parallel."""
+
+
+def _with_chamfers(results: list[tuple[FloatArray, BoolArray]], fraction: float) -> np.ndarray:
+    """Indices of the results `_merge_chamfers` would change, all outlines at once."""
+    sizes = np.array([len(m) for _, m in results])
+    if sizes.sum() == 0:
+        return np.zeros(0, dtype=np.int64)
+    pts = np.concatenate([q.reshape(-1, 2) for q, _ in results])
+    mask = np.concatenate([m for _, m in results])
+    start = np.repeat(np.cumsum(sizes) - sizes, sizes)
+    size = np.repeat(sizes, sizes)
+    local = np.arange(len(mask)) - start
+    nxt1 = start + (local + 1) % size
+    nxt2 = start + (local + 2) % size
+    d1 = np.hypot(*(pts[nxt1] - pts).T)
+    d2 = np.hypot(*(pts[nxt2] - pts).T)
+    owner = np.repeat(np.arange(len(results)), sizes)
+    limit = fraction * np.bincount(owner, d1, minlength=len(results))[owner]
+    corner = ~mask
+    one = corner & corner[nxt1] & (d1 < limit) & (size > 3)  # noqa: PLR2004
+    two = corner & mask[nxt1] & corner[nxt2] & (d2 < limit) & (size > 4)  # noqa: PLR2004
+    return np.unique(owner[one | two])
+
+
+def _merge_chamfers(
+    pts: FloatArray, mask: BoolArray, fraction: float
+) -> tuple[FloatArray, BoolArray]:
+    """Merge neighbouring corners closer than ``fraction`` x perimeter (see `OutlineParams`).
+
+    Two corners count as neighbours when joined by one edge (a cut-off corner) or by one short
+    curve (a rounded one). The pair (and the curve point between) becomes the point where
+    the edge before meets the edge after when both are straight and not parallel, else the
+    pair's midpoint (an arc's chord says little about its tangent).
+    """
+    while len(pts) > 3:  # noqa: PLR2004 (a figure's fewest points)
+        n = len(pts)
+        steps = np.roll(pts, -1, axis=0) - pts
+        limit = fraction * float(np.hypot(steps[:, 0], steps[:, 1]).sum())
+        best: tuple[float, int, int] | None = None
+        corners = np.flatnonzero(~mask)
+        for a, b in zip(corners.tolist(), np.roll(corners, -1).tolist(), strict=True):
+            gap = (b - a) % n
+            if gap not in (1, 2) or n - gap < 3:  # noqa: PLR2004
+                continue
+            dist = float(np.hypot(*(pts[b] - pts[a])))
+            if dist < limit and (best is None or dist < best[0]):
+                best = (dist, a, gap)
+        if best is None:
+            break
+        _, a, gap = best
+        b = (a + gap) % n
+        a0, da = pts[(a - 1) % n], pts[a] - pts[(a - 1) % n]
+        b0, db = pts[b], pts[(b + 1) % n] - pts[b]
+        cross = float(da[0] * db[1] - da[1] * db[0])
+        straight = not (mask[(a - 1) % n] or mask[(b + 1) % n])
+        if straight and abs(cross) > _PARALLEL_SIN * float(np.hypot(*da) * np.hypot(*db)):
+            t = float((b0 - a0)[0] * db[1] - (b0 - a0)[1] * db[0]) / cross
+            new = a0 + t * da
+        else:
+            new = 0.5 * (pts[a] + b0)
+        gone = {(a + k) % n for k in range(gap + 1)}
+        keep = np.array([k for k in range(n) if k not in gone])
+        at = int(np.searchsorted(keep, a))  # where the pair was, in the kept order
+        pts = np.insert(pts[keep], at, new, axis=0)
+        mask = np.insert(mask[keep], at, False)
+    return pts, mask
 
 
 @dataclass(frozen=True)
@@ -468,13 +623,20 @@ def _emit_run(
     pieces = max(1, math.ceil(total / p.max_curve_turn_deg))
     if closed_loop:
         pieces = max(pieces, 2)
-    # Split at equal cumulative (signed, made monotonic) turning.
-    cum = np.maximum.accumulate(np.concatenate([[0.0], np.cumsum(turn[idx[1:]])]))
-    goal = float(cum[-1])
-    bounds = [0]
-    for k in range(1, pieces):
-        bounds.append(int(np.clip(np.searchsorted(cum, goal * k / pieces), 1, len(idx) - 2)))
-    bounds.append(len(idx) - 1)
+    if closed_loop:
+        # A closed curve has no natural split point: equal arc lengths (the samples are
+        # uniform in arc length). Equal turning would put the split where the outline's
+        # noise puts it: a traced circle would come out as two unequal arcs, labelled
+        # acute and plane instead of semicircle.
+        bounds = [round(k * (len(idx) - 1) / pieces) for k in range(pieces + 1)]
+    else:
+        # Split at equal cumulative (signed, made monotonic) turning.
+        cum = np.maximum.accumulate(np.concatenate([[0.0], np.cumsum(turn[idx[1:]])]))
+        goal = float(cum[-1])
+        bounds = [0]
+        for k in range(1, pieces):
+            bounds.append(int(np.clip(np.searchsorted(cum, goal * k / pieces), 1, len(idx) - 2)))
+        bounds.append(len(idx) - 1)
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         sub = run[a : b + 1]
         out_pts.append(sub[0])

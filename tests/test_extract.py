@@ -275,3 +275,83 @@ def test_synthetic_view_matches_slots() -> None:
             err = min(abs(math.remainder(r - t.rotation, period)) for r in m.rotations)
             assert math.degrees(err) < 2.0
     assert ok >= len(img.tiles) - 1
+
+
+# --- Cell-scale pixel outlines (the cell's input camera sees the belt at 2 px/mm) ----------
+CELL_PX_PER_MM = 2.0
+
+
+def _posed_slots(shape: dict, angles: list[float], color: str, pitch: float) -> Design:
+    """One slot of ``shape`` per angle [deg], on a grid ``pitch`` mm apart, dark grout."""
+    per_row = 12
+    slots = [
+        {
+            "name": f"s{k}",
+            "shape": shape,
+            "color": color,
+            "pose": {
+                "x": pitch * (0.5 + k % per_row),
+                "y": pitch * (0.5 + k // per_row),
+                "angle": a,
+            },
+        }
+        for k, a in enumerate(angles)
+    ]
+    rows = -(-len(angles) // per_row)
+    mesh = {"width": pitch * min(per_row, len(angles)), "height": pitch * rows}
+    return Design.from_dict(
+        {"name": "posed", "mesh": mesh, "joint": 2.0, "grout_color": "#3d4247", "slots": slots}
+    )
+
+
+@pytest.mark.parametrize("px_per_mm", [1.7, 1.8, CELL_PX_PER_MM])
+def test_coarse_arcs_are_not_split(px_per_mm: float) -> None:
+    # The pixel staircase of a traced 20-24 mm arc at ~2 px/mm turns the outline by more
+    # than corner_angle_deg over the corner window unless the outline is smoothed enough.
+    angles = [float(a) for a in range(0, 180, 15)]
+    for radius in (20.0, 22.0, 24.0):
+        design = _posed_slots({"kind": "semicircle", "radius": radius}, angles, "#e8c33a", 60.0)
+        figs = extract(render_design(design, px_per_mm))
+        assert len(figs) == len(angles)
+        for fig in figs:
+            assert len(fig.points) == 3 and int(fig.curve_mask.sum()) == 1, radius
+
+
+def test_traced_circles_are_two_semicircles() -> None:
+    # Where a traced closed curve is split depends on its noise; two unequal halves would
+    # label one arc acute and the other plane (vision.yaml extract.outline.circle_residual).
+    design = Design.load("paper_mixed")
+    slots = [s for s in design.slots if s.name in ("ring_orange", "circle_teal")]
+    sp = replace(SynthParams.load(), px_per_mm=CELL_PX_PER_MM)
+    tol = Tolerances(joint_width=design.joint * CELL_PX_PER_MM)
+    boundaries = 0
+    for seed in range(4):
+        img = generate(slots, 8, seed, sp)
+        figs = extract(img.image)
+        assert len(figs) == len(img.tiles)
+        for fig in figs:
+            d = describe(fig, tol)
+            for b in (d.outer, *(h.boundary for h in d.holes)):
+                curves = [n for n in b.nodes if n.kind == "curve"]
+                assert len(b.nodes) == 4 and len(curves) == 2
+                assert all("semicircle" in n.admissible[2] for n in curves)
+                boundaries += 1
+    assert boundaries >= 30
+
+
+@pytest.mark.parametrize("px_per_mm", [1.6, CELL_PX_PER_MM])
+def test_square_hole_corners_are_single_vertices(px_per_mm: float) -> None:
+    # A small square hole's corner, cut off or rounded by the pixel grid, must stay one
+    # vertex (vision.yaml extract.outline.chamfer_fraction).
+    holed = {
+        "kind": "square",
+        "size": 50.0,
+        "holes": [{"kind": "square", "size": 18.0, "x": 11.0, "y": 11.0}],
+    }
+    angles = [float(a) for a in np.arange(0.0, 90.0, 3.0)]
+    design = _posed_slots(holed, angles, "#c0392b", 75.0)
+    figs = extract(render_design(design, px_per_mm))
+    assert len(figs) == len(angles)
+    for fig in figs:
+        assert len(fig.points) == 4 and len(fig.holes) == 1
+        assert len(fig.holes[0].points) == 4 and not fig.holes[0].curve_mask.any()

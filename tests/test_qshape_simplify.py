@@ -112,3 +112,10 @@ def test_refine_corners_is_sub_sample_accurate_on_a_clean_polygon():
         return float(np.hypot(*(tri[:, None, :] - points[None]).transpose(2, 0, 1)).min(1).max())
 
     assert worst(refined) < 1e-6 < worst(plain)
+
+
+@pytest.mark.parametrize("field", ["arc_turning_deg", "circle_residual", "chamfer_fraction"])
+def test_cell_image_fixes_validate(field):
+    with pytest.raises(qshape.ToleranceError, match=field):
+        OutlineParams(**{field: -0.1})
+    assert getattr(OutlineParams(), field) == 0.0  # off for the bundled (vector) outlines
