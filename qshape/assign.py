@@ -40,6 +40,7 @@ from qshape.matching import (
     canonical_keys,
     coarse_key,
     cyclic_compat_by_offset,
+    equivalent_entries,
     evaluate_block,
     evaluate_pairs,
     pack,
@@ -183,9 +184,9 @@ def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray, Floa
     """Best alignment of every (tile, slot) pair of a hole-free block, as matrices.
 
     Every cyclic offset of every pair is fitted at once (one matrix product per chunk of
-    tiles); per pair, the offsets within ``tol.symmetry_residual`` of its least residual are
-    equivalent and the one of least rotation magnitude (largest cosine) is kept, as in
-    `Match.rotation`.
+    tiles); per pair, the offsets within ``tol.symmetry_residual`` of its least residual and
+    a symmetry of the slot apart from it (``tol.symmetry_tolerance``) are equivalent, and the
+    one of least rotation magnitude (largest cosine) is kept, as in `Match.rotation`.
 
     Returns:
         (score, dot, cross), each (T, S): the residual (inf where the pair does not match) and
@@ -224,7 +225,8 @@ def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray, Floa
         np.sqrt(mag, out=mag)
         # The residual falls as the fit magnitude grows: the best offset has the largest.
         np.putmask(mag, ~ok, -np.inf)  # incompatible: never the best, never equivalent
-        top = mag.max(axis=1)  # (m, S)
+        kt = np.argmax(mag, axis=1)  # (m, S) index into offsets of the best fit
+        top = np.take_along_axis(mag, kt[:, None, :], axis=1)[:, 0, :]  # (m, S)
         sums = cand.sumsq[rows, None] + ref.sumsq[None, :]
         best = np.sqrt(np.maximum(sums - 2.0 * top, 0.0) / scale)  # inf: nothing compatible
         # Equivalent offsets: residual within symmetry_residual of the best, i.e. a fit
@@ -234,6 +236,10 @@ def _dense(block: _Block, tol: Tolerances) -> tuple[FloatArray, FloatArray, Floa
         cosine = np.divide(dot, mag, out=sq, where=mag > 0.0)  # reuses the buffer
         np.putmask(cosine, mag == 0.0, 1.0)  # a zero fit: rotation 0
         np.putmask(cosine, mag < floor[:, None, :], -2.0)
+        # ... and only a symmetry of the slot away from the best offset.
+        shift = (offsets[None, :, None] - offsets[kt][:, None, :]) % n  # (m, K, S)
+        sym = ref.self_residual[cols[None, None, :], shift] <= tol.symmetry_tolerance
+        np.putmask(cosine, ~sym, -2.0)
         kb = np.argmax(cosine, axis=1)  # first of the least |rotation| (largest cosine)
         at = np.arange(m)[:, None] * k_count + kb  # (m, S) row of the kept offset
         mag_sel = mag.reshape(m * k_count, s_count)[at, cols]
@@ -291,8 +297,10 @@ def _evaluate_entries(
         pair = res.ti * len(block.slots) + res.si  # entries come ordered by pair
         starts = np.flatnonzero(np.r_[True, pair[1:] != pair[:-1]])
         counts = np.diff(np.r_[starts, len(pair)])
-        best = np.minimum.reduceat(res.score, starts)
-        equiv = res.score <= np.repeat(best + tol.symmetry_residual, counts)
+        group = np.repeat(np.arange(len(starts)), counts)
+        equiv = equivalent_entries(
+            group, res.k, res.score, block.spack.self_residual[res.si[starts]], tol
+        )
         key = np.full(len(pair), np.inf)
         key[equiv] = np.abs(np.arctan2(res.cross[equiv], res.dot[equiv]))
         low = np.minimum.reduceat(key, starts)

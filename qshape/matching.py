@@ -50,12 +50,15 @@ class Match:
 
     Attributes:
         rotation: Rotation in [rad], counter-clockwise in the y-up frame, in (-pi, pi], that
-            turns the candidate (about its centroid) onto the reference; of the equivalent
-            rotations of a symmetric shape, the one of smallest magnitude. For y_down (image)
-            figures a CCW rotation in y-up is clockwise in pixel coordinates' math sense, i.e.
-            counter-clockwise as seen on screen.
-        rotations: Every equivalent rotation (symmetries of the shape), smallest magnitude
-            first; `rotation` is the first. For a square 4 values, for an equilateral triangle 3.
+            turns the candidate (about its centroid) onto the reference: the best fit, or of
+            the rotations a symmetry of the reference apart from it (its geometry decides,
+            ``Tolerances.symmetry_tolerance``, not its labels), the one of smallest magnitude.
+            For y_down (image) figures a CCW rotation in y-up is clockwise in pixel
+            coordinates' math sense, i.e. counter-clockwise as seen on screen.
+        rotations: `rotation` first, then every other rotation whose residual is within
+            ``Tolerances.symmetry_residual`` of the best, smallest magnitude first: the
+            shape's symmetries (a square 4 values, an equilateral triangle 3) and, for a
+            nearly symmetric shape, the turns its fit can barely tell apart.
         score: Alignment residual: RMS distance between corresponding relevant points after the
             rotation, divided by sqrt(reference area), plus the same measure for hole centroids.
             Dimensionless; 0 is perfect, lower is better.
@@ -203,6 +206,7 @@ class Pack:
     hole_codes: tuple[NDArray[np.int64], ...]  # per hole (G, m_h)
     hole_centroid: FloatArray  # (G, H, 2)
     hole_interval: FloatArray  # (G, H, 2) CCW angle interval [deg]; NaN when around centroid
+    self_residual: FloatArray  # (G, n) `self_residuals` of the outer points
 
 
 def take(p: Pack, idx: NDArray[np.int64]) -> Pack:
@@ -218,7 +222,29 @@ def take(p: Pack, idx: NDArray[np.int64]) -> Pack:
         hole_codes=tuple(h[idx] for h in p.hole_codes),
         hole_centroid=p.hole_centroid[idx],
         hole_interval=p.hole_interval[idx],
+        self_residual=p.self_residual[idx],
     )
+
+
+def self_residuals(pts: FloatArray, area: FloatArray) -> FloatArray:
+    """Residual of each member's points against themselves shifted cyclically: (G, n).
+
+    Entry (g, d): RMS distance between point i and point i + d best turned onto it (about
+    the centroid), divided by sqrt(area), as `Match.score` measures it. Column 0 is 0; a
+    small value at d is a rotational symmetry of the figure (a square's every column).
+
+    Args:
+        pts: Centred relevant points, shape (G, n, 2).
+        area: Areas, shape (G,).
+    """
+    n = pts.shape[1]
+    shifted = pts[:, (np.arange(n)[:, None] + np.arange(n)[None, :]) % n]  # (G, d, i, 2)
+    dot = np.einsum("gdik,gik->gd", shifted, pts)
+    crs = np.einsum("gdi,gi->gd", shifted[..., 0], pts[..., 1]) - np.einsum(
+        "gdi,gi->gd", shifted[..., 1], pts[..., 0]
+    )
+    rss = 2.0 * np.einsum("gik,gik->g", pts, pts)[:, None] - 2.0 * np.hypot(dot, crs)
+    return np.asarray(np.sqrt(np.maximum(rss, 0.0) / (n * np.maximum(area, 1e-300))[:, None]))
 
 
 def prefilter(ref: Pack, cand: Pack, tol: Tolerances, use_color: bool) -> NDArray[np.bool_]:
@@ -295,17 +321,19 @@ def pack(descs: Sequence[Description]) -> Pack:
             hi[sel, h] = hole_angles_many(hp[sel], kinds[u] == 1)
     nan3 = (np.nan, np.nan, np.nan)
     colors = np.array([nan3 if d.color is None else d.color for d in descs])
+    area = np.array([d.area for d in descs])
     return Pack(
         codes=codes,
         pts=pts,
         sumsq=np.einsum("gnd,gnd->g", pts, pts),
-        area=np.array([d.area for d in descs]),
+        area=area,
         perimeter=np.array([d.perimeter for d in descs]),
         color=colors,
         north=np.arctan2(pts[:, 0, 1], pts[:, 0, 0]),
         hole_codes=hole_codes,
         hole_centroid=hc,
         hole_interval=hi,
+        self_residual=self_residuals(pts, area),
     )
 
 
@@ -444,7 +472,8 @@ def evaluate_pairs(
 
     Returns:
         (ok, score, rotation), each shape (P,). For symmetric shapes the rotation is the
-        equivalent one (score within ``tol.symmetry_residual`` of the best) of least magnitude.
+        equivalent one (score within ``tol.symmetry_residual`` of the best, and the reference
+        symmetric under the turn between them) of least magnitude.
     """
     count, n = ref.codes.shape
     base = np.ones(count, dtype=bool)
@@ -473,12 +502,10 @@ def evaluate_pairs(
     theta = np.arctan2(crs, dot)
     if ref.hole_codes:
         hok, hole_score = _holes(ref, cand, (pi, pi, theta), tol)
-        pi, sc, theta = pi[hok], (sc + hole_score)[hok], theta[hok]
+        pi, k, sc, theta = pi[hok], k[hok], (sc + hole_score)[hok], theta[hok]
     ok = np.zeros(count, dtype=bool)
     ok[pi] = True
-    best = np.full(count, np.inf)
-    np.minimum.at(best, pi, sc)
-    equiv = sc <= best[pi] + tol.symmetry_residual
+    equiv = equivalent_entries(pi, k, sc, ref.self_residual, tol)
     mag = np.where(equiv, np.abs(theta), np.inf)
     low = np.full(count, np.inf)
     np.minimum.at(low, pi, mag)
@@ -488,6 +515,41 @@ def evaluate_pairs(
     rotation[pi[hit]] = theta[hit]
     score[pi[hit]] = sc[hit]
     return ok, score, rotation
+
+
+def equivalent_entries(
+    pair: NDArray[np.int64],
+    k: NDArray[np.int64],
+    score: FloatArray,
+    self_residual: FloatArray,
+    tol: Tolerances,
+) -> NDArray[np.bool_]:
+    """Entries equivalent to their pair's best one: a symmetry of the reference apart.
+
+    Args:
+        pair: (E,) pair of each entry, also the row of ``self_residual`` (its reference).
+        k: (E,) cyclic offset of each entry.
+        score: (E,) residual of each entry.
+        self_residual: (P, n) `self_residuals` of each pair's reference.
+        tol: ``symmetry_residual`` and ``symmetry_tolerance``.
+
+    Returns:
+        (E,) True where the score is within ``symmetry_residual`` of the pair's best and the
+        reference is symmetric (``symmetry_tolerance``) under the shift from the best offset.
+    """
+    if len(pair) == 0:
+        return np.zeros(0, dtype=bool)
+    order = np.lexsort((score, pair))  # per pair, its best entry first
+    first = order[np.r_[True, pair[order][1:] != pair[order][:-1]]]
+    best_of = np.zeros(int(pair.max()) + 1, dtype=np.int64)
+    best_of[pair[first]] = first
+    b = best_of[pair]
+    n = self_residual.shape[1]
+    shift = (k - k[b]) % n
+    return np.asarray(
+        (score <= score[b] + tol.symmetry_residual)
+        & (self_residual[pair, shift] <= tol.symmetry_tolerance)
+    )
 
 
 def _holes(
@@ -607,16 +669,19 @@ def match(
         return None
     if ref.type_hole != cand.type_hole or ref.type_curve != cand.type_curve:
         return None
-    res = evaluate_block(pack([ref]), pack([cand]), tol, use_color)
+    ref_pack = pack([ref])
+    res = evaluate_block(ref_pack, pack([cand]), tol, use_color)
     if len(res.k) == 0:
         return None
     scores = res.score
     thetas = [_wrap(float(t)) for t in res.theta]
-    equivalent = [
-        j for j in range(len(scores)) if scores[j] <= scores.min() + tol.symmetry_residual
-    ]
-    equivalent.sort(key=lambda j: abs(thetas[j]))
-    chosen = equivalent[0]
+    same = equivalent_entries(
+        np.zeros(len(scores), dtype=np.int64), res.k, scores, ref_pack.self_residual, tol
+    )
+    chosen = min(np.flatnonzero(same).tolist(), key=lambda j: abs(thetas[j]))
+    # Listed too: rotations the residual barely tells from it (a nearly symmetric shape).
+    near = [j for j in range(len(scores)) if scores[j] <= scores.min() + tol.symmetry_residual]
+    equivalent = [chosen, *sorted((j for j in near if j != chosen), key=lambda j: abs(thetas[j]))]
     n = len(ref.outer.codes)
     k = int(res.k[chosen])
     return Match(
@@ -638,10 +703,12 @@ __all__ = [
     "coarse_key",
     "cyclic_compat_by_offset",
     "evaluate_block",
+    "equivalent_entries",
     "evaluate_pairs",
     "is_continuous",
     "match",
     "pack",
     "prefilter",
+    "self_residuals",
     "take",
 ]

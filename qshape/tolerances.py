@@ -64,7 +64,15 @@ class Tolerances:
         check_size: Compare qualitative size at all (False when tiles and slots are in
             different units, e.g. pixels against millimetres).
         symmetry_residual: Two rotations are equivalent (a symmetry of the shape) when their
-            alignment residuals differ by at most this fraction of sqrt(area). Dimensionless.
+            alignment residuals differ by at most this fraction of sqrt(area), and the
+            reference is symmetric under the turn between them (``symmetry_tolerance``).
+            Dimensionless.
+        symmetry_tolerance: The reference figure is symmetric under a cyclic shift of its
+            relevant points when, best turned onto themselves so shifted, they lie within
+            this RMS distance of themselves, as a fraction of sqrt(area). The symmetry comes
+            from the geometry, not from the labels: an isosceles triangle whose three edges
+            all label "equal" (base 44, height 40 mm: 0.037) is not 3-fold symmetric, and its
+            three label-compatible rotations are not equivalent. Dimensionless.
         max_key_variants: Largest number of admissible label combinations expanded into
             canonical keys for one figure; beyond it the figure is looked up by a coarse key.
         tie_tolerance: Fraction of the figure's size within which two vertices count as equally
@@ -84,6 +92,7 @@ class Tolerances:
     size_area_threshold: float | None = None
     check_size: bool = True
     symmetry_residual: float = 0.05
+    symmetry_tolerance: float = 0.02
     max_key_variants: int = 64
     tie_tolerance: float = 1e-6
 
@@ -111,6 +120,7 @@ class Tolerances:
             "cone_margin_deg",
             "joint_width",
             "symmetry_residual",
+            "symmetry_tolerance",
             "tie_tolerance",
         ):
             value = getattr(self, name)

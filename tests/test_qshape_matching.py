@@ -250,3 +250,50 @@ def test_fig3_in_image_coordinates():
     assert m is not None and len(m.rotations) == 1
     # the y-up construction turned it by +1.1; read as pixels that is -1.1 as seen
     assert angle_diff(m.rotation, 1.1) < 1e-9
+
+
+def test_symmetry_comes_from_geometry_not_labels():
+    # An isosceles triangle (base 44, height 40) has three "equal" edges by the length band
+    # but one true rotation: qshape must report it, not the smallest of three turns.
+    from dataclasses import replace  # noqa: PLC0415
+
+    from qshape.design import Design  # noqa: PLC0415
+    from qshape.extract import extract  # noqa: PLC0415
+    from qshape.synth import SynthParams, generate  # noqa: PLC0415
+
+    design = Design.load("paper_mixed")
+    iso = design.slot("iso_blue")
+    sp = SynthParams.load()
+    s = sp.px_per_mm
+    ref = Figure.from_polygon(iso.figure().points * s, color=iso.color)
+    tol = Tolerances(joint_width=design.joint * s)
+    img = generate([iso], 8, 3, replace(sp, vertex_jitter_mm=0.3))
+    figs = extract(img.image)
+    assert len(figs) == len(img.tiles) >= 5
+    tiles = []
+    for t in img.tiles:
+        fig = min(figs, key=lambda f: float(np.hypot(*(f.centroid - t.center_px))))
+        tiles.append((fig, t.rotation))
+        m = match(ref, fig, tol)
+        assert m is not None and m.rotations[0] == m.rotation
+        assert math.degrees(angle_diff(m.rotation, t.rotation)) < 2.0
+    got = qshape.assign([f for f, _ in tiles], [ref] * len(tiles), tol)
+    assert len(got) == len(tiles)
+    for a in got:
+        assert math.degrees(angle_diff(a.rotation, tiles[a.tile][1])) < 2.0
+
+
+def test_true_symmetries_stay_equivalent():
+    square = Figure.rectangle(30, 30)
+    turned = Figure.rectangle(30, 30, angle=0.3, center=(100.0, 50.0))
+    m = match(square, turned)
+    assert m is not None and len(m.rotations) == 4
+    assert abs(m.rotation) <= math.pi / 4 + 1e-9
+    hexagon = Figure.regular_polygon(6, 20)
+    m = match(hexagon, Figure.regular_polygon(6, 20, angle=1.0))
+    assert m is not None and len(m.rotations) == 6
+    tri = Figure.from_polygon([[0, 0], [44, 0], [22, 40]])
+    res = qshape.matching.self_residuals(
+        np.asarray(describe(tri).outer.points)[None], np.array([tri.area])
+    )
+    assert res[0, 0] == 0.0 and 0.03 < res[0, 1] < 0.05  # not a symmetry at 0.02
