@@ -30,37 +30,23 @@ class PerceptionConfig:
             far inside the tile material; otherwise at its pole of inaccessibility, [m] (half
             the 23 mm pad of the paper: the pad seals on material all round).
         polylabel_tolerance: Precision of the pole-of-inaccessibility search, [m].
-        corner_angle_deg: Override of qshape's outline ``corner_angle_deg`` for camera images
-            of the cell, [deg] (the bundled 25 deg splits rendered arcs of 20-24 mm radius
-            into a straight piece and a curve; 35 keeps them whole); 0 keeps the bundled value.
-        alternative_corner_angles_deg: Further corner thresholds, [deg]: the image is also
-            simplified with each, and a tile matching no slot is tried again with those
-            outlines (35 turns the shallow corners of broken "trencadis" pieces into curves,
-            25 splits arcs: neither suits every design).
         color_balance: Estimate a per-channel gain mapping measured tile colours onto the
-            design's palette (white balance against known colours) before matching.
+            design's palette (white balance against known colours: camera calibration)
+            before matching.
         color_balance_iterations: Nearest-palette / median-gain rounds of that estimate.
         max_color_gain: The gain per channel is clipped to [1 / max, max] (dimensionless).
-        circle_residual: A boundary of two arcs whose dense outline stays within this fraction
-            of its radius of a fitted circle is a circle: it is re-split into two equal
-            halves (the split points a traced outline gives are arbitrary, and unequal
-            halves label one arc acute and the other plane), dimensionless; 0 disables.
-        merge_corner_fraction: Two neighbouring corners (no curve point) closer than this
-            fraction of their boundary's perimeter are one chamfered corner: they are replaced
-            by the intersection of the edges around them, dimensionless; 0 disables.
+
+    How outlines become figures (corner threshold, circles, chamfered corners) is qshape's
+    business: ``configs/vision.yaml`` section ``extract``.
     """
 
     mm_per_m: float = 1000.0
     tile_thickness: float = 0.005
     pad_clearance: float = 0.0115
     polylabel_tolerance: float = 1e-4
-    corner_angle_deg: float = 35.0
-    alternative_corner_angles_deg: tuple[float, ...] = (25.0,)
     color_balance: bool = True
     color_balance_iterations: int = 3
     max_color_gain: float = 2.0
-    circle_residual: float = 0.03
-    merge_corner_fraction: float = 0.03
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""
@@ -79,8 +65,9 @@ class PlacementConfig:
         use_color: Match shape and colour (True) or shape alone.
         continuous_yaw_steps: Equivalent yaws listed for a rotationally continuous tile
             (circle, ring): any yaw fits, this many evenly spaced ones are offered.
-        refine_span_deg: The matched rotation is refined within +- this by fitting the dense
-            outlines, [deg] (0: the relevant points' rotation as it is).
+        refine_span_deg: qshape's rotation is refined within +- this by fitting the dense
+            outlines, [deg] (a precision step: relevant points alone fix a curved tile's turn
+            to a degree or two; 0: qshape's rotation as it is).
         refine_tolerance_deg: Precision of that refinement, [deg].
     """
 

@@ -103,8 +103,6 @@ class PerceivedTile:
             ``pad_clearance`` inside the material, else the pole of inaccessibility.
         color: Measured RGB in [0, 1].
         area: Area on the plane [m^2].
-        alternatives: The same tile simplified with the alternative corner thresholds:
-            (world figure, description) pairs, tried when this description matches no slot.
     """
 
     index: int
@@ -116,7 +114,6 @@ class PerceivedTile:
     grasp: np.ndarray
     color: tuple[float, float, float]
     area: float
-    alternatives: tuple[tuple[Figure, Description], ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,125 +148,11 @@ class Perception:
     plane_z: float
 
 
-_RESAMPLE = 256
-"""Samples, evenly spaced by arc length, of a boundary tested for being a circle."""
-
-
-def _dense_world(camera: CameraLike, b: Boundary, z: float, cfg: PerceptionConfig) -> np.ndarray:
-    pts = np.asarray(b.dense())
-    closed = np.vstack([pts, pts[:1]])
-    seg = np.linalg.norm(np.diff(closed, axis=0), axis=1)
-    cum = np.concatenate([[0.0], np.cumsum(seg)])
-    t = np.linspace(0.0, cum[-1], _RESAMPLE, endpoint=False)
-    even = np.column_stack([np.interp(t, cum, closed[:, 0]), np.interp(t, cum, closed[:, 1])])
-    return unproject(camera, even, z)[:, :2] * cfg.mm_per_m
-
-
 def _to_world_boundary(
     camera: CameraLike, b: Boundary, z: float, scale: float
 ) -> tuple[np.ndarray, np.ndarray]:
     pts = unproject(camera, np.asarray(b.points), z)[:, :2] * scale
     return pts, np.asarray(b.curve_mask)
-
-
-_CIRCLE_NODES = 4
-"""A circle as qshape describes it: start, middle, end of two half-circle arcs."""
-
-
-def _as_circle(pts: np.ndarray, mask: np.ndarray, dense: np.ndarray, residual: float) -> bool:
-    if residual <= 0 or not mask.any():
-        return False
-    if len(pts) != _CIRCLE_NODES:
-        return True  # any boundary with a curve that fits a circle (checked by the caller)
-    return int(mask.sum()) == _CIRCLE_NODES // 2 and bool(mask[0] != mask[1] and mask[0] == mask[2])
-
-
-def even_circle(
-    pts: np.ndarray, mask: np.ndarray, dense: np.ndarray, residual: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Re-split a curved boundary that is a circle into two equal half-circle arcs.
-
-    Args:
-        pts: Relevant points, shape (n, 2).
-        mask: Curve mask, shape (4,).
-        dense: Dense boundary samples, shape (m, 2), same units.
-        residual: Largest RMS radial deviation, as a fraction of the radius.
-
-    Returns:
-        (points, mask), unchanged unless the boundary is a circle.
-    """
-    if not _as_circle(pts, mask, dense, residual):
-        return pts, mask
-    # Algebraic (Kasa) circle fit: x^2 + y^2 + D x + E y + F = 0.
-    a = np.column_stack([dense, np.ones(len(dense))])
-    b = -(dense**2).sum(axis=1)
-    (dd, ee, ff), *_ = np.linalg.lstsq(a, b, rcond=None)
-    c = -0.5 * np.array([dd, ee])
-    r2 = float(c @ c - ff)
-    if r2 <= 0:
-        return pts, mask
-    r = math.sqrt(r2)
-    dev = np.linalg.norm(dense - c, axis=1) - r
-    if math.sqrt(float(np.mean(dev**2))) > residual * r:
-        return pts, mask
-    start = int(np.argmin(mask))  # first arc-end point
-    a0 = math.atan2(pts[start, 1] - c[1], pts[start, 0] - c[0])
-    # Keep the walking direction of the given points.
-    nxt = (start + 1) % len(pts)
-    a1 = math.atan2(pts[nxt, 1] - c[1], pts[nxt, 0] - c[0])
-    step = math.copysign(math.pi / 2, math.remainder(a1 - a0, 2 * math.pi))
-    ang = a0 + step * np.arange(_CIRCLE_NODES)
-    new = c + r * np.column_stack([np.cos(ang), np.sin(ang)])
-    return new, np.array([False, True, False, True])
-
-
-_PARALLEL_SIN = 1e-3
-"""Edges whose directions' cross product (unit vectors) is below this are parallel."""
-_MIN_CORNERS = 3
-
-
-def merge_close_corners(
-    pts: np.ndarray, mask: np.ndarray, fraction: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Replace pairs of neighbouring corners closer than ``fraction`` x perimeter by one.
-
-    The new corner is the intersection of the edge before the pair and the edge after it (the
-    corner a chamfer cut off), or the pair's midpoint when those edges are parallel.
-
-    Args:
-        pts: Relevant points of one boundary, shape (n, 2).
-        mask: Curve mask, shape (n,) (curve points are never merged, nor their neighbours).
-        fraction: Distance threshold as a fraction of the boundary's perimeter (0: off).
-
-    Returns:
-        (points, mask), possibly shorter.
-    """
-    pts, mask = np.asarray(pts, dtype=float), np.asarray(mask, dtype=bool)
-    while fraction > 0 and len(pts) > _MIN_CORNERS:
-        n = len(pts)
-        edges = np.roll(pts, -1, axis=0) - pts
-        lengths = np.linalg.norm(edges, axis=1)
-        limit = fraction * float(lengths.sum())
-        corner = ~mask & ~np.roll(mask, 1) & ~np.roll(mask, -1)
-        both = corner & np.roll(corner, -1) & (lengths < limit)
-        if not both.any():
-            break
-        i = int(np.argmin(np.where(both, lengths, np.inf)))
-        j = (i + 1) % n
-        a0, a1 = pts[(i - 1) % n], pts[i]
-        b0, b1 = pts[j], pts[(j + 1) % n]
-        da, db = a1 - a0, b1 - b0
-        cross = da[0] * db[1] - da[1] * db[0]
-        if abs(cross) > _PARALLEL_SIN * np.linalg.norm(da) * np.linalg.norm(db):
-            t = ((b0 - a0)[0] * db[1] - (b0 - a0)[1] * db[0]) / cross
-            new = a0 + t * da
-        else:
-            new = 0.5 * (a1 + b0)
-        keep = [k for k in range(n) if k not in (i, j)]
-        at = keep.index((j + 1) % n) if (j + 1) % n in keep else len(keep)
-        pts = np.insert(pts[keep], at, new, axis=0)
-        mask = np.insert(mask[keep], at, False)
-    return pts, mask
 
 
 def figure_to_world(
@@ -278,7 +161,8 @@ def figure_to_world(
     """Map a pixel figure (``y_down``) onto the world plane at height ``z``, in [mm], y up.
 
     Relevant points and curve marks are mapped one by one (a camera looking down maps circles
-    to circles; a small tilt keeps arcs within the curve tolerances).
+    to circles; a small tilt keeps arcs within the curve tolerances). The figure is taken as
+    qshape extracted it: no shape correction happens here.
 
     Raises:
         PerceptionError: Plane not in front of the camera.
@@ -286,15 +170,9 @@ def figure_to_world(
     """
     cfg = cfg or PerceptionConfig()
     outer, mask = _to_world_boundary(camera, fig.outer, z, cfg.mm_per_m)
-    outer, mask = merge_close_corners(outer, mask, cfg.merge_corner_fraction)
-    outer, mask = even_circle(
-        outer, mask, _dense_world(camera, fig.outer, z, cfg), cfg.circle_residual
-    )
     holes = []
     for h in fig.holes:
         hp, hm = _to_world_boundary(camera, h, z, cfg.mm_per_m)
-        hp, hm = merge_close_corners(hp, hm, cfg.merge_corner_fraction)
-        hp, hm = even_circle(hp, hm, _dense_world(camera, h, z, cfg), cfg.circle_residual)
         holes.append(Boundary.make(hp, hm, y_down=False, what="hole"))
     return Figure.from_polygon(outer, holes, fig.color, curve_mask=mask, y_down=False)
 
@@ -337,7 +215,8 @@ def perceive_tiles(
         camera: Calibrated camera model of that image.
         belt_top_z: Height of the belt surface [m]; tiles' tops are ``tile_thickness`` above.
         cfg: Perception settings (bundled defaults when None).
-        extract_params: qshape extraction parameters (bundled when None).
+        extract_params: qshape extraction parameters (bundled ``configs/vision.yaml`` when
+            None).
         tolerances: qshape tolerances for the descriptions (bundled when None).
 
     Returns:
@@ -351,9 +230,8 @@ def perceive_tiles(
     """
     cfg = cfg or PerceptionConfig()
     z = belt_top_z + cfg.tile_thickness
-    params = cell_extract_params(cfg, extract_params)
     try:
-        res = qshape.extract_detailed(image, params)
+        res = qshape.extract_detailed(image, extract_params)
     except qshape.ImageError as exc:
         arr = np.asarray(image)
         well_formed = arr.dtype == np.uint8 and arr.ndim == 3 and arr.shape[2] == 3  # noqa: PLR2004
@@ -381,10 +259,6 @@ def perceive_tiles(
                 k, fpx, fw, d, centre, ray, grasp_point(fw, centre, cfg), color, fw.area * s * s
             )
         )
-    if tiles and cfg.alternative_corner_angles_deg:
-        tiles = _with_alternatives(
-            image, camera, z, tiles, cfg=cfg, extract_params=extract_params, tolerances=tolerances
-        )
     partial = tuple(
         PartialRegion(
             unproject(camera, np.asarray(p.centroid)[None], z)[0, :2],
@@ -396,72 +270,6 @@ def perceive_tiles(
     return Perception(tuple(tiles), partial, tuple(unrecognised), z)
 
 
-def _with_alternatives(
-    image: np.ndarray,
-    camera: CameraLike,
-    z: float,
-    tiles: list[PerceivedTile],
-    *,
-    cfg: PerceptionConfig,
-    extract_params: qshape.ExtractParams | None,
-    tolerances: qshape.Tolerances | None,
-) -> list[PerceivedTile]:
-    """Attach each tile's outlines simplified with the alternative corner thresholds.
-
-    Figures of the alternative extraction are paired with tiles by nearest centre (within
-    `_PAIR_FRACTION` of the tile's equivalent radius).
-    """
-    centres = np.array([t.centre for t in tiles])
-    radius = np.sqrt(np.array([t.area for t in tiles]) / math.pi)
-    alts: list[list[tuple[Figure, Description]]] = [[] for _ in tiles]
-    for angle in cfg.alternative_corner_angles_deg:
-        params = cell_extract_params(cfg, extract_params, angle)
-        figs = []
-        for fig in qshape.extract_detailed(image, params).figures:
-            try:
-                figs.append(figure_to_world(camera, fig, z, cfg))
-            except qshape.QShapeError:
-                continue
-        if not figs:
-            continue
-        descs = qshape.describe_many(figs, tolerances)
-        for f, d in zip(figs, descs, strict=True):
-            c = np.asarray(f.centroid) / cfg.mm_per_m
-            dist = np.linalg.norm(centres - c, axis=1)
-            k = int(np.argmin(dist))
-            if dist[k] <= _PAIR_FRACTION * radius[k]:
-                alts[k].append((f, d))
-    return [
-        dataclasses.replace(t, alternatives=tuple(a)) if a else t
-        for t, a in zip(tiles, alts, strict=True)
-    ]
-
-
-_PAIR_FRACTION = 0.1
-"""An alternative figure belongs to a tile when their centres are this close (x radius)."""
-
-
-def cell_extract_params(
-    cfg: PerceptionConfig,
-    base: qshape.ExtractParams | None = None,
-    corner_angle_deg: float | None = None,
-) -> qshape.ExtractParams:
-    """The qshape extraction parameters with the outline corner override applied.
-
-    Args:
-        cfg: Perception settings (``corner_angle_deg``).
-        base: Parameters to start from (bundled when None).
-        corner_angle_deg: Threshold to use instead of ``cfg.corner_angle_deg`` [deg].
-    """
-    from qshape.extract import default_params  # noqa: PLC0415
-
-    p = base if base is not None else default_params()
-    angle = cfg.corner_angle_deg if corner_angle_deg is None else corner_angle_deg
-    if angle > 0:
-        p = dataclasses.replace(p, outline=dataclasses.replace(p.outline, corner_angle_deg=angle))
-    return p
-
-
 def color_gain(
     measured: np.ndarray, palette: np.ndarray, cfg: PerceptionConfig | None = None
 ) -> np.ndarray:
@@ -469,6 +277,13 @@ def color_gain(
 
     Each round assigns every measured colour (after the current gain) to its nearest palette
     colour and takes the per-channel median of palette / measured.
+
+    This is camera calibration, not shape recognition, so it lives here and not in qshape:
+    qshape.extract reports the colour the camera measured (corrected only for uneven light
+    across the image, which it can see on the belt), and qshape.match compares colours as
+    given. How much brighter the cell's lights and camera make every tile (10-40 % per
+    channel) is a property of this cell, fitted against the one thing the cell knows and
+    qshape does not: the design's palette.
 
     Args:
         measured: Measured colours, shape (n, 3), RGB in [0, 1].
@@ -518,17 +333,10 @@ def balance_colors(
         c = np.clip(np.asarray(t.color) * gain, 0.0, 1.0)
         figs.append(dataclasses.replace(t.figure, color=(float(c[0]), float(c[1]), float(c[2]))))
     descs = qshape.describe_many(figs, tolerances)
-    tiles = []
-    for t, f, d in zip(perception.tiles, figs, descs, strict=True):
-        alts = tuple((dataclasses.replace(af, color=f.color), ad) for af, ad in t.alternatives)
-        if alts:
-            alt_descs = qshape.describe_many([af for af, _ in alts], tolerances)
-            alts = tuple((af, ad) for (af, _), ad in zip(alts, alt_descs, strict=True))
-        tiles.append(
-            dataclasses.replace(
-                t, figure=f, description=d, color=f.color or t.color, alternatives=alts
-            )
-        )
+    tiles = [
+        dataclasses.replace(t, figure=f, description=d, color=f.color or t.color)
+        for t, f, d in zip(perception.tiles, figs, descs, strict=True)
+    ]
     return dataclasses.replace(perception, tiles=tuple(tiles)), gain
 
 
@@ -606,11 +414,9 @@ __all__ = [
     "Perception",
     "SlotTarget",
     "balance_colors",
-    "cell_extract_params",
     "color_gain",
     "figure_to_world",
     "grasp_point",
-    "merge_close_corners",
     "perceive_tiles",
     "project",
     "slot_targets",

@@ -17,7 +17,6 @@ symmetry) and ``yaw_place`` as the slot's yaw. ``place_yaws`` lists every equiva
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -142,44 +141,41 @@ def outline_residual(tile: qshape.Figure, slot: qshape.Figure, rotation: float) 
     return float(np.mean(cKDTree(b).query(a)[0]))
 
 
-def best_rotation(
+def refine_rotation(
     tile: qshape.Figure,
     slot: qshape.Figure,
-    candidates: Sequence[float],
-    refine_span: float = 0.0,
-    refine_tolerance: float = 1e-4,
+    rotation: float,
+    span: float,
+    tolerance: float = 1e-4,
 ) -> float:
-    """The candidate rotation whose turned tile outline lies closest to the slot's [rad].
+    """The rotation within +-``span`` of ``rotation`` whose turned tile outline fits best [rad].
 
-    qshape's labels cannot tell apart rotations of a shape that is only nearly symmetric (an
-    isosceles triangle whose sides are all "equal" within the length band): its `Match`
-    lists them all as equivalent; the metric residual picks the true one. The chosen one is
-    then refined within +-``refine_span`` [rad] by minimising the mean outline distance (the
-    relevant points alone fix the turn of a curved tile only to a degree or two).
+    A precision step, not a choice between rotations: qshape's rotation comes from the
+    relevant points alone, which fix the turn of a curved tile only to a degree or two; the
+    mean distance of the dense outlines refines it (kept only when it does fit better).
 
     Args:
-        tile: Tile figure.
+        tile: Tile figure (y-up units, e.g. world mm).
         slot: Slot figure, same units.
-        candidates: Rotations to choose from [rad].
-        refine_span: Half width of the refinement interval [rad] (0: no refinement).
-        refine_tolerance: Refinement precision [rad].
+        rotation: qshape's rotation of the pair [rad].
+        span: Half width of the refinement interval [rad] (0: ``rotation`` as it is).
+        tolerance: Refinement precision [rad].
     """
+    if span <= 0:
+        return rotation
     a = np.asarray(tile.outer.dense()) - tile.centroid
     tree = cKDTree(np.asarray(slot.outer.dense()) - slot.centroid)
 
     def cost(r: float) -> float:
         return float(np.mean(tree.query(a @ _rot(r).T)[0]))
 
-    best = float(min(candidates, key=cost))
-    if refine_span <= 0:
-        return best
     res = minimize_scalar(
         cost,
-        bounds=(best - refine_span, best + refine_span),
+        bounds=(rotation - span, rotation + span),
         method="bounded",
-        options={"xatol": refine_tolerance},
+        options={"xatol": tolerance},
     )
-    return float(res.x) if float(res.fun) <= cost(best) else best
+    return float(res.x) if float(res.fun) <= cost(rotation) else rotation
 
 
 def plan_placements(
@@ -206,64 +202,21 @@ def plan_placements(
     Returns:
         The plan.
 
-    Tiles left out because their shape or colour matches no slot are tried once more with
-    their alternative outlines (`PerceivedTile.alternatives`) against the slots still open.
-
     Raises:
         qshape.MatchError: Unknown method.
     """
     cfg = cfg or PlacementConfig()
-    plan = _plan_once(tiles, slots, cfg, tolerances, filled)
-    by_index = {t.index: t for t in tiles}
-    level = 0
-    while True:
-        retry = [
-            by_index[u.tile]
-            for u in plan.unplaced
-            if u.reason != "slots_taken" and len(by_index[u.tile].alternatives) > level
-        ]
-        if not retry or not plan.open_slots:
-            return plan
-        subs = [
-            dataclasses.replace(
-                t, figure=t.alternatives[level][0], description=t.alternatives[level][1]
-            )
-            for t in retry
-        ]
-        open_now = [s for s in slots if s.index in plan.open_slots]
-        extra = _plan_once(subs, open_now, cfg, tolerances, filled)
-        if extra.commands:
-            moved = {c.tile for c in extra.commands}
-            plan = dataclasses.replace(
-                plan,
-                commands=plan.commands + extra.commands,
-                unplaced=tuple(u for u in plan.unplaced if u.tile not in moved),
-                open_slots=extra.open_slots,
-            )
-        level += 1
-
-
-def _plan_once(
-    tiles: Sequence[PerceivedTile],
-    slots: Sequence[SlotTarget],
-    cfg: PlacementConfig,
-    tolerances: qshape.Tolerances | None,
-    filled: Sequence[SlotTarget],
-) -> PlacementPlan:
-    """One assignment of the tiles' descriptions to the slots, with reasons for the rest."""
     tdesc = [t.description for t in tiles]
     sdesc = [s.description for s in slots]
     result = qshape.assign(tdesc, sdesc, tolerances, cfg.method, cfg.use_color)
     commands = []
     for a in result:
         t, s = tiles[a.tile], slots[a.slot]
-        m = qshape.match(s.description, t.description, tolerances, cfg.use_color)
-        cands = [a.rotation, *(m.rotations if m is not None else ())]
         rot = wrap(
-            best_rotation(
+            refine_rotation(
                 t.figure,
                 s.figure,
-                cands,
+                a.rotation,
                 math.radians(cfg.refine_span_deg),
                 math.radians(cfg.refine_tolerance_deg),
             )
@@ -323,9 +276,9 @@ __all__ = [
     "PickPlace",
     "PlacementPlan",
     "Unplaced",
-    "best_rotation",
     "equivalent_yaws",
     "outline_residual",
     "plan_placements",
+    "refine_rotation",
     "wrap",
 ]

@@ -12,8 +12,6 @@ from agents.errors import PerceptionError
 from agents.perception import (
     balance_colors,
     color_gain,
-    even_circle,
-    merge_close_corners,
     perceive_tiles,
     project,
     slot_targets,
@@ -89,25 +87,14 @@ def test_color_balance_gain_is_moderate(scene):
     assert np.all((gain > 0.7) & (gain < 1.3))
 
 
-def test_merge_close_corners_restores_a_chamfered_square():
-    sq = np.array([[0, 0], [10, 0], [10, 9.7], [9.7, 10], [0, 10]], float)
-    pts, mask = merge_close_corners(sq, np.zeros(5, bool), 0.03)
-    assert len(pts) == 4 and not mask.any()
-    np.testing.assert_allclose(pts[2], [10, 10], atol=1e-9)
-    # A real short edge (10% of the perimeter) is kept.
-    keep, _ = merge_close_corners(sq, np.zeros(5, bool), 0.005)
-    assert len(keep) == 5
-
-
-def test_even_circle_resplits_unequal_arcs():
-    t = np.linspace(0, 2 * np.pi, 256, endpoint=False)
-    dense = 10 * np.column_stack([np.cos(t), np.sin(t)])
-    ang = np.radians([0, 40, 80, 230])  # arcs of 80 and 280 degrees
-    pts = 10 * np.column_stack([np.cos(ang), np.sin(ang)])
-    new, mask = even_circle(pts, np.array([False, True, False, True]), dense, 0.03)
-    d = np.degrees(np.diff(np.unwrap(np.arctan2(new[:, 1], new[:, 0]))))
-    np.testing.assert_allclose(np.abs(d), 90.0, atol=1e-6)
-    assert mask.tolist() == [False, True, False, True]
+def test_perception_takes_qshape_figures_as_they_are(scene):
+    # Shape fixes (corner threshold, circles, cut-off corners) live in qshape's extraction:
+    # the world figure has exactly the pixel figure's relevant points and curve marks.
+    *_, per, _ = scene
+    for t in per.tiles:
+        assert len(t.figure.outer.points) == len(t.figure_px.outer.points)
+        assert t.figure.outer.curve_mask.tolist() == t.figure_px.outer.curve_mask.tolist()
+        assert [len(h.points) for h in t.figure.holes] == [len(h.points) for h in t.figure_px.holes]
 
 
 @pytest.mark.slow
