@@ -307,7 +307,8 @@ def _posed_slots(shape: dict, angles: list[float], color: str, pitch: float) -> 
 @pytest.mark.parametrize("px_per_mm", [1.7, 1.8, CELL_PX_PER_MM])
 def test_coarse_arcs_are_not_split(px_per_mm: float) -> None:
     # The pixel staircase of a traced 20-24 mm arc at ~2 px/mm turns the outline by more
-    # than corner_angle_deg over the corner window unless the outline is smoothed enough.
+    # than corner_angle_deg over the corner window: only the change in excess of the arc's
+    # own turning may make a corner (vision.yaml extract.outline.arc_turning_deg).
     angles = [float(a) for a in range(0, 180, 15)]
     for radius in (20.0, 22.0, 24.0):
         design = _posed_slots({"kind": "semicircle", "radius": radius}, angles, "#e8c33a", 60.0)
