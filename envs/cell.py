@@ -87,17 +87,15 @@ class Cell:
         n, n_variants = len(self.tile_pool[0]), len(self.tile_pool)
         self.is_distractor = np.array([t.distractor != "" for t in self.tile_pool[0]])
         self.geometry = cell_geometry(self.cfg)
-        self.model, self.pool_ids = build_scene(self.cfg, pool, self.slots, n_variants)
-        """`pool_ids` indexes every variant's body, variant-major (``v * n + i``)."""
+        self.model, self.ids = build_scene(self.cfg, pool, self.slots, n_variants)
         self.data = mujoco.MjData(self.model)
-        self._pool_park = park_positions(len(pool), self.cfg.tiles.thickness)
+        self._park = park_positions(n, self.cfg.tiles.thickness)
         m = self.model
-        self._collision = (  # as built; unused variants get 0 (out of collision detection)
-            m.body_contype.copy(),
-            m.body_conaffinity.copy(),
-            m.geom_contype.copy(),
-            m.geom_conaffinity.copy(),
-        )
+        self._built = {  # a variant not shown gets 0 (massless, no contacts)
+            f: getattr(m, f).copy()
+            for f in ("body_mass", "body_inertia", "body_contype", "body_conaffinity")
+        }
+        self._built_geoms = (m.geom_contype.copy(), m.geom_conaffinity.copy())
         self._body_rgba = np.array([*self.cfg.tiles.body_color, 1.0])
         self.variant = np.zeros(n, int)
         """Variant of each tile in this episode, shape (n,)."""
@@ -126,37 +124,37 @@ class Cell:
     def _select(self, variant: np.ndarray, tiles: Sequence[PhysicalTile]) -> None:
         """Make ``tiles`` (tile i is variant ``variant[i]``) the episode's tiles.
 
-        Points `tiles`, `ids`, suction and parking at those bodies (`_paint` shows them) and
-        takes the other variants out of collision detection (they sleep where they are parked;
-        asleep and without contacts nothing moves or wakes them).
+        Each variant's geoms sit in a child body of its tile's free body (`envs.scene`): the
+        variants not shown get zero mass and inertia and no contacts (`_paint` hides them);
+        `tiles`, `ids` and the suction's seal check follow the shown ones.
         """
-        n = len(tiles)
-        active = variant * n + np.arange(n)
+        m = self.model
         self.variant = variant
         self.tiles = tuple(tiles)
-        self.ids = self.pool_ids.select(active)
+        self.ids = self.ids.with_variants(variant)
         self._radii = np.array([t.radius for t in self.tiles])
-        self._park = self._pool_park[active]
-        self.suction = Suction(
-            self.model, self.ids, self.cfg.suction, self.tiles, self.cfg.tiles.thickness
-        )
-        m = self.model
-        body_type, body_affinity, geom_type, geom_affinity = self._collision
-        unused = np.zeros(m.nbody, bool)
-        unused[self.pool_ids.tile_body] = True
-        unused[self.ids.tile_body] = False
-        m.body_contype[:] = np.where(unused, 0, body_type)
-        m.body_conaffinity[:] = np.where(unused, 0, body_affinity)
-        geom_unused = unused[m.geom_bodyid]
-        m.geom_contype[:] = np.where(geom_unused, 0, geom_type)
-        m.geom_conaffinity[:] = np.where(geom_unused, 0, geom_affinity)
+        self.suction = Suction(m, self.ids, self.cfg.suction, self.tiles, self.cfg.tiles.thickness)
+        if len(self.tile_pool) == 1:
+            return  # as built
+        bodies = self.ids.variant_body
+        hidden = np.arange(len(bodies))[:, None] != variant[None, :]
+        for field, built in self._built.items():
+            value = getattr(m, field)
+            value[bodies] = built[bodies]
+            value[bodies[hidden]] = 0
+        off = np.zeros(m.nbody, bool)
+        off[bodies[hidden]] = True
+        contype, conaffinity = self._built_geoms
+        m.geom_contype[:] = np.where(off[m.geom_bodyid], 0, contype)
+        m.geom_conaffinity[:] = np.where(off[m.geom_bodyid], 0, conaffinity)
+        mujoco.mj_setConst(m, self.data)  # constants derived from the masses (solver weights)
 
     def _paint(self) -> None:
         """Visual colours as built: the episode's tiles in theirs, other variants hidden."""
         if not len(self.tiles):
             return
         rgba = self.model.geom_rgba
-        rgba[self.pool_ids.tile_visual, 3] = 0.0
+        rgba[self.ids.variant_visual, 3] = 0.0
         rgba[self.ids.tile_visual[:, 0]] = self._body_rgba
         rgba[self.ids.tile_visual[:, 1], :3] = [t.color for t in self.tiles]
         rgba[self.ids.tile_visual[:, 1], 3] = 1.0
@@ -175,10 +173,10 @@ class Cell:
 
         With ``tiles.variants`` V > 1, each tile first gets one of its V pre-built variants
         at random (outline noise) and a fresh glaze colour noise; `tiles`, `ids`, `suction`
-        and every per-tile array then refer to those n bodies (the others stay parked,
-        hidden and asleep). With V = 1 the noise drawn at build is kept. Tile colours are
-        restored to the drawn ones (undoing run-time changes such as the env's
-        ``color_randomization``).
+        and every per-tile array then describe that variant (each tile's body holds the
+        shapes of all its variants; the others are massless, out of contact and hidden). With
+        V = 1 the noise drawn at build is kept. Tile colours are restored to the drawn ones
+        (undoing run-time changes such as the env's ``color_randomization``).
 
         Args:
             seed: New seed or generator for the noise and layout; None continues the cell's
@@ -200,10 +198,9 @@ class Cell:
         d.ctrl[ids.vel_actuators] = 0.0
         n = len(self.tiles)
         if n:
-            qadr = self.pool_ids.tile_qpos_index
-            d.qpos[qadr[:, :3]] = self._pool_park
-            d.qpos[qadr[:, 3:]] = [1.0, 0.0, 0.0, 0.0]
             qadr = ids.tile_qpos_index
+            d.qpos[qadr[:, :3]] = self._park
+            d.qpos[qadr[:, 3:]] = [1.0, 0.0, 0.0, 0.0]
             self.on_stage[:] = False
             k = self._initial_count()
             if k:

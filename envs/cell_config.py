@@ -216,10 +216,11 @@ class TileConfig:
         vertex_jitter: Std of the manufacturing noise added to outline vertices [m].
         color_jitter: Std of the noise added to each RGB channel [0..1 units].
         variants: Noisy copies built per tile [count]. With 1 the noise (outline and colour)
-            is drawn once when the cell is built and kept by every reset. With V > 1 the cell
-            holds V bodies per tile, each with its own outline noise; every reset picks one
-            per tile at random (the others stay parked, hidden and asleep) and re-draws its
-            glaze colour noise, so episodes see fresh manufacturing noise without a rebuild.
+            is drawn once when the cell is built and kept by every reset. With V > 1 each
+            tile's body holds V shapes (jointless child bodies), each with its own outline
+            noise; every reset shows one per tile at random (the others massless, without
+            contacts and invisible) and re-draws its glaze colour noise, so episodes see fresh
+            manufacturing noise without a rebuild.
         min_gap: Minimum clearance between bounding circles of placed tiles [m].
         placement_attempts: Random tries per tile before a layout attempt is abandoned.
         placement_restarts: Whole layouts drawn before the layout is declared impossible.

@@ -103,12 +103,12 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     Arm at home, vacuum off, tiles laid out at random (non-overlapping) on the input belt
     (``feed="all"``) or the first ``stream_initial`` of them (``feed="stream"``), settled for
     ``reset_settle``. Manufacturing noise is re-drawn at every reset: each tile gets one of
-    ``tile_variants`` outlines built with ``vertex_jitter`` (pre-built bodies, the unused ones
-    parked out of view and asleep, so a reset costs no rebuild) and a fresh glaze colour
-    noise (``tile_color_jitter``); with ``tile_variants=1`` both are drawn once when the env
-    is built. ``env.unwrapped.cell.tiles`` holds the episode's tiles (outline, grasp point,
-    colour). Further per-reset colour and light changes with
-    ``color_randomization``/``light_randomization``.
+    ``tile_variants`` outlines built with ``vertex_jitter`` (pre-built shapes in the tile's
+    body, the ones not shown massless, without contacts and invisible, so a reset costs no
+    rebuild) and a fresh glaze colour noise (``tile_color_jitter``); with ``tile_variants=1``
+    both are drawn once when the env is built. ``env.unwrapped.cell.tiles`` holds the
+    episode's tiles (outline, grasp point, colour). Further per-reset colour and light changes
+    with ``color_randomization``/``light_randomization``.
 
     ## Episode End
     ``terminated`` when every slot is filled correctly or no remaining real tile can fill an

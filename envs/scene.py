@@ -59,12 +59,20 @@ class SceneIds:
         flange_site: Site at the flange (DH frame 6).
         pad_body: Body of the vacuum pad.
         weld: Equality id of the suction weld (inactive when nothing is held).
-        tile_body: Body ids of the tiles, shape (n,).
+        tile_body: Body ids of the tiles' shown shapes, shape (n,): the tile's free body, or
+            with variants the jointless child holding the shown variant (same frame; welds
+            and forces go there, where the mass is).
         tile_qpos: First qpos address of each tile's free joint, shape (n,).
         tile_dof: First dof address of each tile's free joint, shape (n,).
-        tile_geom_start: First geom id of each tile, shape (n,).
-        tile_geom_count: Number of geoms of each tile, shape (n,).
-        tile_visual: Visual geoms (ceramic body, glaze) of each tile, shape (n, 2).
+        tile_geom_start: First geom id of each tile's shown variant, shape (n,).
+        tile_geom_count: Number of geoms of each tile's shown variant, shape (n,).
+        tile_visual: Visual geoms (ceramic body, glaze) of each tile's shown variant, shape
+            (n, 2).
+        variant_body: Body holding each variant's geoms, shape (variants, n) (the tile's own
+            body with one variant).
+        variant_geom_start: First geom id of each variant, shape (variants, n).
+        variant_geom_count: Number of geoms of each variant, shape (variants, n).
+        variant_visual: Visual geoms of every variant, shape (variants, n, 2).
         input_belt_geom: Geom carrying tiles on the input belt (surfacevel).
         mesh_geom: The mesh sheet on the output belt.
         input_camera: Camera id above the input belt.
@@ -85,21 +93,24 @@ class SceneIds:
     tile_geom_start: np.ndarray
     tile_geom_count: np.ndarray
     tile_visual: np.ndarray
+    variant_body: np.ndarray
+    variant_geom_start: np.ndarray
+    variant_geom_count: np.ndarray
+    variant_visual: np.ndarray
     input_belt_geom: int
     mesh_geom: int
     input_camera: int
     output_camera: int
 
-    def select(self, tiles: np.ndarray) -> SceneIds:
-        """These ids with the tile arrays restricted to (and ordered by) ``tiles``, shape (m,)."""
+    def with_variants(self, variant: np.ndarray) -> SceneIds:
+        """These ids with tile i's geoms those of its variant ``variant[i]``, shape (n,)."""
+        shown = (variant, np.arange(len(self.tile_body)))
         return replace(
             self,
-            tile_body=self.tile_body[tiles],
-            tile_qpos=self.tile_qpos[tiles],
-            tile_dof=self.tile_dof[tiles],
-            tile_geom_start=self.tile_geom_start[tiles],
-            tile_geom_count=self.tile_geom_count[tiles],
-            tile_visual=self.tile_visual[tiles],
+            tile_body=self.variant_body[shown],
+            tile_geom_start=self.variant_geom_start[shown],
+            tile_geom_count=self.variant_geom_count[shown],
+            tile_visual=self.variant_visual[shown],
         )
 
     @property
@@ -431,21 +442,29 @@ def tile_name(tile: int, variant: int = 0) -> str:
 def _add_tiles(
     spec: mujoco.MjSpec, cfg: CellConfig, tiles: Sequence[PhysicalTile], variants: int
 ) -> None:
+    """One free body per tile (``tiles`` variant-major); with variants, a child body each.
+
+    With ``variants`` V > 1 the free body ``tile{i}`` has no geoms of its own: each variant's
+    geoms sit in a jointless child body ``{tile_name(i, v)}_shape`` (one tree, no extra degrees
+    of freedom); a cell zeroes the mass and contact bits of the variants it does not show.
+    """
     t = cfg.tiles.thickness
-    per_variant = len(tiles) // variants
-    park = park_positions(len(tiles), t)
+    n = len(tiles) // variants
+    park = park_positions(n, t)
+    bodies = []
+    for i in range(n):
+        body = spec.worldbody.add_body(name=tile_name(i), pos=park[i])
+        body.add_freejoint(name=f"{tile_name(i)}_joint")
+        bodies.append(body)
     for j, tile in enumerate(tiles):
-        name = tile_name(j % per_variant, j // per_variant)
-        body = spec.worldbody.add_body(name=name, pos=park[j])
-        if variants > 1:
-            body.sleep = mujoco.mjtSleepPolicy.mjSLEEP_INIT  # parked until chosen and woken
-        body.add_freejoint(name=f"{name}_joint")
+        name = tile_name(j % n, j // n)
+        body = bodies[j % n] if variants == 1 else bodies[j % n].add_body(name=f"{name}_shape")
         for k, piece in enumerate(tile.pieces):
-            n = len(piece)
+            m = len(piece)
             verts = np.vstack(
                 [
-                    np.column_stack([piece, np.full(n, -t / 2)]),
-                    np.column_stack([piece, np.full(n, t / 2)]),
+                    np.column_stack([piece, np.full(m, -t / 2)]),
+                    np.column_stack([piece, np.full(m, t / 2)]),
                 ]
             )
             mesh = spec.add_mesh(name=f"{name}_piece{k}")
@@ -492,8 +511,8 @@ def build_spec(
     Args:
         cfg: Cell configuration.
         tiles: Physical tiles (one free body each); empty for an arm + cell model. With
-            ``variants`` V > 1: V variants of n tiles, variant-major (``v * n + i``), whose
-            bodies start asleep.
+            ``variants`` V > 1: V variants of n tiles, variant-major (``v * n + i``), each in
+            a child body of its tile's free body.
         slots: Slots of the mesh (visual marks).
         variants: Variants per tile in ``tiles``.
 
@@ -524,8 +543,7 @@ def resolve_ids(model: mujoco.MjModel, n_tiles: int, variants: int = 1) -> Scene
     Args:
         model: The compiled cell.
         n_tiles: Tiles per variant.
-        variants: Variants per tile; the tile arrays hold all ``variants * n_tiles`` bodies,
-            variant-major (``v * n_tiles + i``).
+        variants: Variants per tile; the tile arrays describe variant 0.
     """
 
     def nid(kind: mujoco.mjtObj, name: str) -> int:
@@ -535,16 +553,28 @@ def resolve_ids(model: mujoco.MjModel, n_tiles: int, variants: int = 1) -> Scene
         return int(i)
 
     joints = [nid(mujoco.mjtObj.mjOBJ_JOINT, f"joint{k}") for k in range(1, 7)]
-    names = [tile_name(i, v) for v in range(variants) for i in range(n_tiles)]
+    names = [tile_name(i) for i in range(n_tiles)]
     bodies = np.array([nid(mujoco.mjtObj.mjOBJ_BODY, b) for b in names], int)
     tjoints = [nid(mujoco.mjtObj.mjOBJ_JOINT, f"{b}_joint") for b in names]
+    parts = ("body", "glaze")
     visual = np.array(
         [
-            [nid(mujoco.mjtObj.mjOBJ_GEOM, f"{b}_{part}") for part in ("body", "glaze")]
-            for b in names
+            [nid(mujoco.mjtObj.mjOBJ_GEOM, f"{tile_name(i, v)}_{part}") for part in parts]
+            for v in range(variants)
+            for i in range(n_tiles)
         ],
         int,
-    ).reshape(-1, 2)
+    ).reshape(variants, n_tiles, 2)
+    if variants == 1:
+        shape_bodies = bodies.reshape(1, -1)
+    else:
+        shape_bodies = np.array(
+            [
+                [nid(mujoco.mjtObj.mjOBJ_BODY, f"{tile_name(i, v)}_shape") for i in range(n_tiles)]
+                for v in range(variants)
+            ],
+            int,
+        ).reshape(variants, n_tiles)
     return SceneIds(
         arm_qpos=model.jnt_qposadr[joints].copy(),
         arm_dof=model.jnt_dofadr[joints].copy(),
@@ -554,12 +584,16 @@ def resolve_ids(model: mujoco.MjModel, n_tiles: int, variants: int = 1) -> Scene
         flange_site=nid(mujoco.mjtObj.mjOBJ_SITE, "flange"),
         pad_body=nid(mujoco.mjtObj.mjOBJ_BODY, "vacuum_pad"),
         weld=nid(mujoco.mjtObj.mjOBJ_EQUALITY, "suction_weld") if n_tiles else -1,
-        tile_body=bodies,
+        tile_body=shape_bodies[0].copy(),
         tile_qpos=model.jnt_qposadr[tjoints].copy() if names else np.zeros(0, int),
         tile_dof=model.jnt_dofadr[tjoints].copy() if names else np.zeros(0, int),
-        tile_geom_start=model.body_geomadr[bodies].copy(),
-        tile_geom_count=model.body_geomnum[bodies].copy(),
-        tile_visual=visual,
+        tile_geom_start=model.body_geomadr[shape_bodies[0]].copy(),
+        tile_geom_count=model.body_geomnum[shape_bodies[0]].copy(),
+        tile_visual=visual[0],
+        variant_body=shape_bodies,
+        variant_geom_start=model.body_geomadr[shape_bodies].copy(),
+        variant_geom_count=model.body_geomnum[shape_bodies].copy(),
+        variant_visual=visual,
         input_belt_geom=nid(mujoco.mjtObj.mjOBJ_GEOM, "input_belt"),
         mesh_geom=nid(mujoco.mjtObj.mjOBJ_GEOM, "mesh_sheet"),
         input_camera=nid(mujoco.mjtObj.mjOBJ_CAMERA, "input_camera"),

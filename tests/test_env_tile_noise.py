@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-import mujoco
 import numpy as np
 import pytest
 
@@ -82,23 +81,50 @@ def test_same_seed_same_noise(env: MosaicAssemblyEnv) -> None:
         other.close()
 
 
-def test_unused_variants_parked_hidden_asleep(env: MosaicAssemblyEnv) -> None:
+def test_hidden_variants_are_massless_without_contacts_and_invisible(
+    env: MosaicAssemblyEnv,
+) -> None:
     env.reset(seed=1)
     cell = env.cell
     env.step(env.expert_action(0, 0))
-    pool = cell.pool_ids.tile_body
-    unused = np.setdiff1d(pool, cell.ids.tile_body)
-    assert len(pool) == env.config.tile_variants * len(cell.tiles)
-    assert len(unused) == (env.config.tile_variants - 1) * len(cell.tiles)
-    m, d = cell.model, cell.data
-    assert np.all(d.body_awake[unused] == mujoco.mjtSleepState.mjS_ASLEEP)
-    np.testing.assert_array_equal(d.xpos[unused], m.body_pos[unused])  # where built: parked
-    assert np.all(np.linalg.norm(d.xpos[unused, :2] - cell.geometry.input_centre[:2], axis=1) > 3)
-    assert np.all(m.body_contype[unused] == 0) and np.all(m.body_conaffinity[unused] == 0)
-    hidden = np.isin(m.geom_bodyid, unused) & (m.geom_group == 2)
-    assert hidden.sum() == 2 * len(unused) and np.all(m.geom_rgba[hidden, 3] == 0)
-    shown = cell.ids.tile_visual.ravel()
-    assert np.all(m.geom_rgba[shown, 3] == 1)
+    m, ids, n = cell.model, cell.ids, len(cell.tiles)
+    assert ids.variant_body.shape == (env.config.tile_variants, n)
+    shown = ids.variant_body[cell.variant, np.arange(n)]
+    hidden = np.setdiff1d(ids.variant_body, shown)
+    assert len(hidden) == (env.config.tile_variants - 1) * n
+    assert np.all(m.body_mass[hidden] == 0) and np.all(m.body_inertia[hidden] == 0)
+    assert np.all(m.body_contype[hidden] == 0) and np.all(m.body_conaffinity[hidden] == 0)
+    in_hidden = np.isin(m.geom_bodyid, hidden)
+    assert np.all(m.geom_contype[in_hidden] == 0) and np.all(m.geom_conaffinity[in_hidden] == 0)
+    visual = in_hidden & (m.geom_group == 2)
+    assert visual.sum() == 2 * len(hidden) and np.all(m.geom_rgba[visual, 3] == 0)
+    assert np.all(m.geom_rgba[ids.tile_visual.ravel(), 3] == 1)
+    # The free body weighs what its shown shape does; the tile's body and geoms are that shape's.
+    free = m.body_parentid[shown]
+    assert np.all(m.body_jntnum[free] == 1) and np.all(m.body_jntnum[shown] == 0)
+    np.testing.assert_allclose(m.body_subtreemass[free], m.body_mass[shown])
+    np.testing.assert_array_equal(ids.tile_body, shown)
+    assert np.all(m.geom_bodyid[ids.tile_geom_start] == shown)
+    np.testing.assert_allclose(cell.data.xpos[shown], cell.data.xpos[free])  # one frame
+    assert m.nv == 6 + 6 * n and cell.warnings() == 0  # no extra degrees of freedom
+
+
+def test_variant_masses_match_the_single_variant_model() -> None:
+    one = MosaicAssemblyEnv(obs_mode="state", max_slots=N_SLOTS, tile_variants=1)
+    many = MosaicAssemblyEnv(obs_mode="state", max_slots=N_SLOTS)
+    try:
+        one.reset(seed=0)
+        expected = one.cell.model.body_mass[one.cell.ids.tile_body]
+        seed = next(s for s in range(100) if _variant_of_first_tile(many, s) == 0)
+        many.reset(seed=seed)
+        c = many.cell
+        zero = c.variant == 0  # variant 0 is the single-variant model's tile
+        mass = c.model.body_subtreemass[c.model.body_parentid[c.ids.tile_body]]
+        np.testing.assert_allclose(mass[zero], expected[zero], rtol=1e-12)
+        assert np.all(np.abs(mass / expected - 1) < 0.05)  # other variants: noise only
+    finally:
+        one.close()
+        many.close()
 
 
 def test_non_first_variant_is_picked_and_placed(env: MosaicAssemblyEnv) -> None:
@@ -106,7 +132,8 @@ def test_non_first_variant_is_picked_and_placed(env: MosaicAssemblyEnv) -> None:
     env.reset(seed=seed)
     cell = env.cell
     body = int(cell.ids.tile_body[0])
-    assert body != int(cell.pool_ids.tile_body[0])  # not variant 0's body
+    assert cell.variant[0] > 0 and body == cell.ids.variant_body[cell.variant[0], 0]
+    assert cell.model.body_mass[body] > 0
     _, reward, _, _, info = env.step(env.expert_action(0, 0))
     ev = info["evaluation"]
     assert not info["action_failed"], info["action_error"]
@@ -133,7 +160,7 @@ def test_one_variant_keeps_the_build_noise() -> None:
         for a, b in zip(shapes, _geometry(env), strict=True):
             np.testing.assert_array_equal(a, b)
         np.testing.assert_array_equal(colours, _glaze(env))
-        assert len(env.cell.pool_ids.tile_body) == len(env.cell.tiles)
+        assert env.cell.ids.variant_body.shape == (1, len(env.cell.tiles))
     finally:
         env.close()
 
