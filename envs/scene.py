@@ -435,7 +435,11 @@ def _robot_spec(cfg: CellConfig) -> mujoco.MjSpec:
 
 
 def tile_name(tile: int, variant: int = 0) -> str:
-    """Body name of a tile's variant (``tile3``; other variants ``tile3v1``, ``tile3v2``...)."""
+    """Name prefix of a tile's variant: ``tile3``, ``tile3v1``, ``tile3v2``...
+
+    Its meshes and geoms carry the prefix; ``tile3`` also names the tile's free body and, with
+    variants, ``{prefix}_shape`` the child body holding the variant's geoms.
+    """
     return f"tile{tile}" if variant == 0 else f"tile{tile}v{variant}"
 
 
