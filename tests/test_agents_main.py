@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import subprocess
+import sys
 
 import cv2
 import numpy as np
@@ -83,7 +84,8 @@ def test_a_design_that_fails_validation_is_a_clear_error(tmp_path):
 
 def test_command_line_reports_a_bad_setting_in_one_line(tmp_path):
     proc = subprocess.run(
-        ["python", "-m", "agents.main", "--quiet", "--belt-speed", "-1", "--out", str(tmp_path)],
+        [sys.executable, "-m", "agents.main", "--quiet", "--belt-speed", "-1"]
+        + ["--out", str(tmp_path)],
         capture_output=True,
         text=True,
         check=False,
