@@ -33,6 +33,7 @@ from envs.tiles import (
     TileShape,
     basic_shapes,
     jitter_colors,
+    layout_capacity,
     make_tile_pool,
     sample_layout,
 )
@@ -104,7 +105,11 @@ class Cell:
         self.cameras = CameraRig(self.model, self.cfg.render)  # renderers open lazily
         self.on_stage = np.zeros(n, bool)
         self._wake = np.zeros(n, bool)
+        self.retired = np.zeros(n, bool)
+        """Tiles the batch feed took off the belt with their batch (leftover distractors)."""
         self._next_feed_time = 0.0
+        self._feed_order = np.arange(n)
+        self._batch_due = np.inf
         self._speed_lo = -np.asarray(self.cfg.robot.max_joint_speed)
         self._speed_hi = np.asarray(self.cfg.robot.max_joint_speed)
         self._q_lo = self.model.jnt_range[self._arm_joints(), 0].copy()
@@ -117,8 +122,11 @@ class Cell:
         return np.searchsorted(self.model.jnt_qposadr, self.ids.arm_qpos)
 
     def _initial_count(self) -> int:
-        if self.cfg.tiles.feed == "all":
+        feed = self.cfg.tiles.feed
+        if feed == "all":
             return len(self.tiles)
+        if feed == "batch":
+            return min(self.cfg.tiles.batch_size, len(self.tiles))
         return min(self.cfg.tiles.stream_initial, len(self.tiles))
 
     def _select(self, variant: np.ndarray, tiles: Sequence[PhysicalTile]) -> None:
@@ -202,23 +210,40 @@ class Cell:
             d.qpos[qadr[:, :3]] = self._park
             d.qpos[qadr[:, 3:]] = [1.0, 0.0, 0.0, 0.0]
             self.on_stage[:] = False
+            self.retired[:] = False
             k = self._initial_count()
+            self._feed_order = self._rng.permutation(n) if k < n else np.arange(n)
             if k:
-                order = self._rng.permutation(n)[:k] if k < n else np.arange(n)
-                poses = sample_layout(
-                    self._radii[order],
-                    tuple(self.cfg.input_belt.tile_area),
-                    self.cfg.tiles.min_gap,
-                    self.cfg.tiles.placement_attempts,
-                    self._rng,
-                    outlines=[self.tiles[k].outline for k in order],
-                    restarts=self.cfg.tiles.placement_restarts,
-                )
-                self._place(order, poses)
-        self._next_feed_time = (
-            self.cfg.tiles.stream_period if self.cfg.tiles.feed == "stream" else np.inf
+                self._lay_out(self._feed_order[:k])
+        self._batch_due = np.inf
+        feed = self.cfg.tiles.feed
+        self._next_feed_time = {"stream": self.cfg.tiles.stream_period, "batch": 0.0}.get(
+            feed, np.inf
         )
         mujoco.mj_forward(m, d)
+
+    def _lay_out(self, order: np.ndarray) -> None:
+        """Lay tiles ``order`` out at random over the whole tile area, at rest.
+
+        In batch mode the batch ends early where the tile area would be too full.
+        """
+        if self.cfg.tiles.feed == "batch":
+            k = layout_capacity(
+                [self.tiles[i].outline for i in order],
+                tuple(self.cfg.input_belt.tile_area),
+                self.cfg.tiles.min_gap,
+            )
+            order = order[: max(k, 1)]
+        poses = sample_layout(
+            self._radii[order],
+            tuple(self.cfg.input_belt.tile_area),
+            self.cfg.tiles.min_gap,
+            self.cfg.tiles.placement_attempts,
+            self._rng,
+            outlines=[self.tiles[k].outline for k in order],
+            restarts=self.cfg.tiles.placement_restarts,
+        )
+        self._place(order, poses)
 
     def _place(self, idx: np.ndarray, poses: np.ndarray) -> None:
         """Put tiles at (x, y, yaw) poses relative to the tile area's centre, at rest."""
@@ -262,6 +287,47 @@ class Cell:
         self._place(np.array([i]), pose)
         self._next_feed_time += self.cfg.tiles.stream_period
 
+    def _input_side(self) -> np.ndarray:
+        """Tiles on the input belt (fed, not lost, not on the pad), shape (n,) bool."""
+        pos = self.data.xpos[self.ids.tile_body]
+        half_w = self.cfg.input_belt.width / 2 + self._radii
+        side = self.on_stage & ~self.lost_tracker.lost
+        side &= np.abs(pos[:, 1] - self.geometry.input_y) < half_w
+        if self.suction.held >= 0:
+            side[self.suction.held] = False
+        return side
+
+    def _feed_batch(self) -> None:
+        """Index the next batch in once the input side has held no real tile long enough.
+
+        Leftover tiles (distractors the agent rightly left) leave with the old batch: they
+        are parked and marked `retired`.
+        """
+        order = self._feed_order
+        waiting = order[~(self.on_stage | self.retired)[order]]
+        if len(waiting) == 0:
+            self._next_feed_time = np.inf
+            return
+        side = self._input_side()
+        if np.any(side & ~self.is_distractor):
+            self._batch_due = np.inf
+            return
+        if not np.isfinite(self._batch_due):
+            self._batch_due = self.data.time + self.cfg.tiles.batch_index_time
+            return
+        if self.data.time < self._batch_due:
+            return
+        left = np.flatnonzero(side)
+        if len(left):
+            qadr = self.ids.tile_qpos_index[left]
+            self.data.qpos[qadr[:, :3]] = self._park[left]
+            self.data.qpos[qadr[:, 3:]] = [1.0, 0.0, 0.0, 0.0]
+            self.data.qvel[self.ids.tile_dof_index[left]] = 0.0
+            self.on_stage[left] = False
+            self.retired[left] = True
+        self._lay_out(waiting[: self.cfg.tiles.batch_size])
+        self._batch_due = np.inf
+
     # ------------------------------------------------------------- stepping
     def step(self, n: int = 1) -> list[SuctionEvent]:
         """Advance ``n`` physics steps (one `mj_step` call), then update suction and counters.
@@ -287,7 +353,10 @@ class Cell:
         if ev is not None:
             events.append(ev)
         if self.data.time >= self._next_feed_time:
-            self._feed_stream()
+            if self.cfg.tiles.feed == "batch":
+                self._feed_batch()
+            else:
+                self._feed_stream()
             mujoco.mj_forward(self.model, self.data)
         self.lost_tracker.update(
             self.data.xpos[self.ids.tile_body], self.on_stage, self.suction.held

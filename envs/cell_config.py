@@ -228,9 +228,16 @@ class TileConfig:
         distractor_kinds: Kinds drawn uniformly: "color" (wrong colour), "broken" (a corner
             cut off), "shape" (scaled to a wrong size).
         feed: "all" lays every tile out at reset; "stream" spawns tiles one at a time at the
-            upstream end of the tile area (use with a moving belt).
+            upstream end of the tile area (use with a moving belt); "batch" lays out
+            ``batch_size`` tiles over the whole tile area and indexes the next batch in once
+            the input side holds no real tile (the last one picked), as an indexing conveyor
+            does: leftovers (distractors) leave with the old batch into the reject bin.
         stream_period: Time between spawned tiles in "stream" mode [s].
         stream_initial: Tiles laid out at reset in "stream" mode (the rest are spawned).
+        batch_size: Tiles per batch in "batch" mode [count].
+        batch_index_time: Time from the input side holding no real tile to the next batch
+            lying at rest in the tile area, in "batch" mode [s] (the arm lifts the last
+            picked tile clear first).
     """
 
     thickness: float = 0.005
@@ -246,9 +253,11 @@ class TileConfig:
     placement_restarts: int = 40
     distractor_rate: float = 0.0
     distractor_kinds: tuple[str, ...] = ("color", "broken", "shape")
-    feed: Literal["all", "stream"] = "all"
+    feed: Literal["all", "stream", "batch"] = "all"
     stream_period: float = 2.0
     stream_initial: int = 0
+    batch_size: int = 16
+    batch_index_time: float = 0.5
 
     def __post_init__(self) -> None:
         _positive(
@@ -261,8 +270,10 @@ class TileConfig:
             "variants",
         )
         _positive(self, "glaze_thickness")
-        if not isinstance(self.variants, int) or isinstance(self.variants, bool):
-            raise CellError(f"TileConfig.variants must be an int >= 1, got {self.variants!r}")
+        for name in ("variants", "batch_size"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool):
+                raise CellError(f"TileConfig.{name} must be an int >= 1, got {value!r}")
         _length(self, "body_color", 3)
         if not all(0.0 <= c <= 1.0 for c in self.body_color):
             raise CellError(f"TileConfig.body_color must be RGB in [0, 1], got {self.body_color}")
@@ -271,7 +282,7 @@ class TileConfig:
                 f"TileConfig.glaze_thickness {self.glaze_thickness} m must be < thickness "
                 f"{self.thickness} m"
             )
-        _positive(self, "stream_period")
+        _positive(self, "stream_period", "batch_size", "batch_index_time")
         _non_negative(self, "vertex_jitter", "color_jitter", "min_gap", "distractor_rate")
         _non_negative(self, "stream_initial")
         if self.distractor_rate > 1.0:
@@ -283,8 +294,8 @@ class TileConfig:
                 f"TileConfig.distractor_kinds {self.distractor_kinds}; allowed: non-empty subset "
                 f"of {sorted(allowed)}"
             )
-        if self.feed not in ("all", "stream"):
-            raise CellError(f"TileConfig.feed {self.feed!r}; allowed: 'all', 'stream'")
+        if self.feed not in ("all", "stream", "batch"):
+            raise CellError(f"TileConfig.feed {self.feed!r}; allowed: 'all', 'stream', 'batch'")
         if self.thickness > 0.02:
             raise CellError(f"TileConfig.thickness {self.thickness} m; allowed: (0, 0.02]")
 

@@ -23,7 +23,7 @@ REWARD_MODES = ("sparse", "dense")
 """Allowed ``reward_mode`` values."""
 EXECUTIONS = ("dynamic", "kinematic")
 """Allowed ``execution`` values (``pick_place`` modes)."""
-FEEDS = ("all", "stream")
+FEEDS = ("all", "stream", "batch")
 """Allowed ``feed`` values."""
 RENDER_MODES = ("rgb_array", "human")
 """Allowed ``render_mode`` values (or None)."""
@@ -56,9 +56,14 @@ class EnvConfig:
             (vacuum off, pad 0.5 mm above the released tile) and the next step's cycle leaves
             it vertically, blended into its move to the pick, as a real cell chains its
             cycles; False ends every cycle at rest at the approach point above the place.
-        feed: ``all`` tiles at reset or a ``stream`` along the input belt.
+        feed: ``all`` tiles at reset, a ``stream`` along the input belt, or ``batch``es of
+            ``batch_size`` over the whole tile area, the next one indexed in once the input
+            side holds no real tile (leftover distractors leave with their batch).
         stream_period: Time between streamed tiles [s].
         stream_initial: Tiles laid out at reset when streaming.
+        batch_size: Tiles per batch [count].
+        batch_index_time: From the last real tile of a batch picked to the next batch at rest
+            [s].
         distractor_rate: Distractor tiles per real tile.
         vertex_jitter: Std of tile outline (manufacturing) noise [m].
         tile_color_jitter: Std of tile glaze colour noise per RGB channel [0..1 units].
@@ -118,6 +123,8 @@ class EnvConfig:
     feed: str = "all"
     stream_period: float = 2.5
     stream_initial: int = 1
+    batch_size: int = 16
+    batch_index_time: float = 0.5
     distractor_rate: float = 0.0
     vertex_jitter: float = 0.0002
     tile_color_jitter: float = 0.02
@@ -183,6 +190,7 @@ class EnvConfig:
             "yaw_tolerance_deg",
             "kinematic_settle",
             "failed_action_time",
+            "batch_index_time",
         )
         for name in positive:
             if not getattr(self, name) > 0:
@@ -204,7 +212,7 @@ class EnvConfig:
         for name in nonneg:
             if not getattr(self, name) >= 0:
                 raise EnvConfigError(f"{name} must be >= 0, got {getattr(self, name)!r}")
-        for name in ("rotation_bins", "layout_tries", "tile_variants"):
+        for name in ("rotation_bins", "layout_tries", "tile_variants", "batch_size"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise EnvConfigError(f"{name} must be an int >= 1, got {value!r}")

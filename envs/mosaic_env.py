@@ -101,7 +101,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     ## Starting State
     Arm at home, vacuum off, tiles laid out at random (non-overlapping) on the input belt
-    (``feed="all"``) or the first ``stream_initial`` of them (``feed="stream"``), settled for
+    (``feed="all"``), the first ``stream_initial`` of them (``feed="stream"``) or the first
+    ``batch_size`` (``feed="batch"``), settled for
     ``reset_settle``. Manufacturing noise is re-drawn at every reset: each tile gets one of
     ``tile_variants`` outlines built with ``vertex_jitter`` (pre-built shapes in the tile's
     body, the ones not shown massless, without contacts and invisible, so a reset costs no
@@ -409,9 +410,11 @@ def _cell_config(cfg: EnvConfig) -> CellConfig:
     base = load_cell_config(cfg.cell)
     tiles = replace(
         base.tiles,
-        feed=cast(Literal["all", "stream"], cfg.feed),
+        feed=cast(Literal["all", "stream", "batch"], cfg.feed),
         stream_period=cfg.stream_period,
         stream_initial=cfg.stream_initial,
+        batch_size=cfg.batch_size,
+        batch_index_time=cfg.batch_index_time,
         distractor_rate=cfg.distractor_rate,
         vertex_jitter=cfg.vertex_jitter,
         color_jitter=cfg.tile_color_jitter,

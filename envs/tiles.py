@@ -414,6 +414,30 @@ def jitter_colors(
     )
 
 
+OUTLINE_FILL = 0.5
+"""Largest fraction of a tile area random placement of outlines is asked to fill."""
+CIRCLE_FILL = 0.8
+"""The same for bounding circles (no outlines given)."""
+
+
+def layout_capacity(
+    outlines: Sequence[np.ndarray], area_size: Sequence[float], gap: float
+) -> int:
+    """How many of ``outlines``, taken in order, `sample_layout` can be asked to lay out.
+
+    Args:
+        outlines: Tile outlines in their own frames, each shape (k, 2) [m].
+        area_size: (x, y) size of the rectangle [m].
+        gap: Minimum clearance between tiles [m].
+
+    Returns:
+        The longest prefix whose area (each outline grown by ``gap / 2``) is within
+        `OUTLINE_FILL` of the rectangle's.
+    """
+    need = np.cumsum([Polygon(o).buffer(gap / 2).area for o in outlines])
+    return int(np.searchsorted(need, OUTLINE_FILL * area_size[0] * area_size[1], side="right"))
+
+
 def sample_layout(
     radii: np.ndarray,
     area_size: tuple[float, ...],
@@ -465,16 +489,16 @@ def sample_layout(
         )
     if outlines is not None:
         need = float(sum(Polygon(o).buffer(gap / 2).area for o in outlines))
-        fill = 0.5
+        fill = OUTLINE_FILL
     else:
         need = float(np.sum(np.pi * (radii + gap / 2) ** 2))
-        fill = 0.8
+        fill = CIRCLE_FILL
     have = float(area_size[0] * area_size[1])
     if need > fill * have:
         raise CellError(
             f"{len(radii)} tiles need about {need * 1e4:.0f} cm^2 of belt but the tile area is "
             f"{have * 1e4:.0f} cm^2 (random placement fills at most ~{fill:.0%}); use fewer "
-            "tiles, a larger input_belt.tile_area, or feed='stream'"
+            "tiles, a larger input_belt.tile_area, or feed='stream' or 'batch'"
         )
 
     def once() -> np.ndarray:
@@ -702,6 +726,8 @@ def basic_shapes(spec: BasicShapes | None = None) -> tuple[TileShape, ...]:
 
 
 __all__ = [
+    "CIRCLE_FILL",
+    "OUTLINE_FILL",
     "BasicShapes",
     "PhysicalTile",
     "SlotSpec",
@@ -710,6 +736,7 @@ __all__ = [
     "convex_decomposition",
     "grasp_point",
     "jitter_colors",
+    "layout_capacity",
     "make_tile",
     "make_tile_pool",
     "make_tiles",

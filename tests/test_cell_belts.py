@@ -1,4 +1,4 @@
-"""Input belt: surface speed carries tiles, tiles past the end are lost, stream feeding."""
+"""Input belt: surface speed carries tiles, tiles past the end are lost, stream/batch feeding."""
 
 from __future__ import annotations
 
@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from envs.cell import Cell
-from envs.cell_config import CellConfig, InputBeltConfig, TileConfig
+from envs.cell_config import CellConfig, InputBeltConfig, TileConfig, load_cell_config
 from envs.errors import CellError
-from envs.tiles import basic_shapes
+from envs.tiles import basic_shapes, tile_shapes_from_design
+from qshape.design import Design
 
 
 def _cell(speed: float, **tiles: object) -> Cell:
@@ -79,5 +80,53 @@ def test_stream_feeding_spawns_tiles_over_time() -> None:
         staged = cell.tile_poses().pos[cell.on_stage]
         assert np.all(np.abs(staged[:, 2] - cell.geometry.belt_top - 0.0025) < 1e-3)
         assert cell.n_lost == 0 and cell.warnings() == 0
+    finally:
+        cell.close()
+
+
+def _take_away(cell: Cell, idx: np.ndarray) -> None:
+    """Lift tiles off the input belt onto the floor far away (as if picked and carried off)."""
+    qadr = cell.ids.tile_qpos_index[idx]
+    cell.data.qpos[qadr[:, 0]] = -3.0 - 0.3 * np.arange(len(idx))
+    cell.data.qpos[qadr[:, 1]] = -3.0
+    cell.data.qpos[qadr[:, 2]] = cell.cfg.tiles.thickness / 2 + 1e-3
+    cell.data.qvel[cell.ids.tile_dof_index[idx]] = 0.0
+
+
+def test_batch_feeding_indexes_the_next_batch_once_no_real_tile_is_left() -> None:
+    shapes, slots = tile_shapes_from_design(Design.load("hexagon"))
+    cfg = load_cell_config(
+        tiles={"feed": "batch", "batch_size": 10, "batch_index_time": 0.3, "distractor_rate": 0.2}
+    )
+    cell = Cell(cfg, shapes, slots, seed=3)
+    try:
+        n = len(cell.tiles)
+        first = cell.on_stage.copy()
+        assert first.sum() == 10 and n > 20
+        real, fake = first & ~cell.is_distractor, first & cell.is_distractor
+        assert fake.any(), "seed 3 puts a distractor into the first batch"
+        cell.step(100)
+        _take_away(cell, np.flatnonzero(real)[1:])  # one real tile left: the batch stays
+        dt = cell.model.opt.timestep
+
+        def wait(seconds: float) -> None:
+            for _ in range(round(seconds / (5 * dt))):
+                cell.step(5)
+
+        wait(1.0)
+        assert np.array_equal(cell.on_stage, first)
+        _take_away(cell, np.flatnonzero(real)[:1])
+        wait(0.25)  # < batch_index_time
+        assert np.array_equal(cell.on_stage, first)
+        wait(0.1)
+        second = cell.on_stage & ~first
+        assert 0 < second.sum() <= 10
+        assert np.array_equal(cell.retired, fake), "leftover distractors leave with the batch"
+        assert not (cell.on_stage & fake).any()
+        cell.step(100)
+        pos = cell.tile_poses().pos[second]
+        assert np.all(np.abs(pos[:, 2] - cell.geometry.belt_top - 0.0025) < 1e-3)
+        assert np.all(np.abs(pos[:, 1] - cell.geometry.input_y) < cfg.input_belt.tile_area[1] / 2)
+        assert cell.warnings() == 0 and cell.n_lost == real.sum()  # the taken ones: on the floor
     finally:
         cell.close()

@@ -39,7 +39,7 @@ def test_unknown_key_lists_allowed() -> None:
         ("obs_mode", "lidar"),
         ("reward_mode", "shaped"),
         ("execution", "magic"),
-        ("feed", "batch"),
+        ("feed", "trickle"),
         ("render_mode", "ansi"),
     ],
 )
@@ -53,6 +53,10 @@ def test_bad_values() -> None:
         load_env_config(control_dt=0.0)
     with pytest.raises(EnvConfigError, match="belt_speed"):
         load_env_config(belt_speed=-1.0)
+    with pytest.raises(EnvConfigError, match="batch_size"):
+        load_env_config(feed="batch", batch_size=0)
+    with pytest.raises(EnvConfigError, match="batch_index_time"):
+        load_env_config(feed="batch", batch_index_time=0.0)
 
 
 def test_registration() -> None:
