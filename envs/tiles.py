@@ -420,9 +420,7 @@ CIRCLE_FILL = 0.8
 """The same for bounding circles (no outlines given)."""
 
 
-def layout_capacity(
-    outlines: Sequence[np.ndarray], area_size: Sequence[float], gap: float
-) -> int:
+def layout_capacity(outlines: Sequence[np.ndarray], area_size: Sequence[float], gap: float) -> int:
     """How many of ``outlines``, taken in order, `sample_layout` can be asked to lay out.
 
     Args:
