@@ -25,7 +25,14 @@ from envs.belts import LostTracker, input_speed, set_input_speed
 from envs.cameras import CameraModel, CameraRig, camera_model
 from envs.cell_config import CameraConfig, CellConfig, load_cell_config
 from envs.errors import CellError
-from envs.scene import WAKE_FORCE, build_scene, cell_geometry, park_positions, yaw_quat
+from envs.scene import (
+    WAKE_FORCE,
+    build_scene,
+    cell_geometry,
+    park_positions,
+    set_tile_rotation_lengths,
+    yaw_quat,
+)
 from envs.suction import Suction, SuctionEvent
 from envs.tiles import (
     PhysicalTile,
@@ -156,6 +163,7 @@ class Cell:
         m.geom_contype[:] = np.where(off[m.geom_bodyid], 0, contype)
         m.geom_conaffinity[:] = np.where(off[m.geom_bodyid], 0, conaffinity)
         mujoco.mj_setConst(m, self.data)  # constants derived from the masses (solver weights)
+        set_tile_rotation_lengths(m, self.ids)  # mj_setConst measured them to the origin
 
     def _paint(self) -> None:
         """Visual colours as built: the episode's tiles in theirs, other variants hidden."""

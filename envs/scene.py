@@ -622,7 +622,30 @@ def build_scene(
         model = spec.compile()
     except ValueError as exc:
         raise CellError(f"MuJoCo could not compile the cell: {exc}") from exc
-    return model, resolve_ids(model, len(tiles) // variants, variants)
+    ids = resolve_ids(model, len(tiles) // variants, variants)
+    if variants > 1:
+        set_tile_rotation_lengths(model, ids)
+    return model, ids
+
+
+def set_tile_rotation_lengths(model: mujoco.MjModel, ids: SceneIds) -> None:
+    """Rotational dof lengths of tiles whose geoms sit in variant child bodies.
+
+    MuJoCo scales a rotational velocity by its dof's length before comparing it with the
+    sleep tolerance. For a free body without geoms of its own the compiler measures that
+    length to the world origin (about 6 m from the parking spots) instead of the tile's size,
+    so a tile had to be ~200 times stiller to fall asleep, and piles of tiles stayed awake
+    (3x the physics cost per step). Here each length becomes the farthest corner of the
+    tile's collision geoms' boxes from its free body, the tile's size as for a one-variant
+    tile. `mujoco.mj_setConst` recomputes the lengths: call this again after it.
+    """
+    corner = np.abs(model.geom_pos + model.geom_aabb[:, :3]) + model.geom_aabb[:, 3:]
+    reach = np.linalg.norm(corner, axis=1)  # child bodies sit at their tile body's origin
+    start, count = ids.variant_geom_start, ids.variant_geom_count
+    for i in range(start.shape[1]):
+        spans = zip(start[:, i], count[:, i], strict=True)
+        mine = np.concatenate([np.arange(a, a + k) for a, k in spans])
+        model.dof_length[ids.tile_dof_index[i, 3:]] = float(reach[mine].max())
 
 
 def build_arm_model(cfg: CellConfig | None = None, with_cell: bool = True) -> mujoco.MjModel:
@@ -653,6 +676,7 @@ __all__ = [
     "extrusion",
     "park_positions",
     "resolve_ids",
+    "set_tile_rotation_lengths",
     "tile_name",
     "yaw_quat",
 ]

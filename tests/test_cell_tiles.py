@@ -164,3 +164,34 @@ def test_noisy_tiles_always_mesh(kind: str) -> None:
             assert Polygon(tile.outline, tile.holes).is_valid, (shape.name, seed)
             verts, faces = extrusion(tile.outline, tile.holes, 0.0, cfg.thickness)
             assert len(faces) > 0 and np.isfinite(verts).all()
+
+
+def test_tiles_with_variants_fall_asleep_like_plain_tiles() -> None:
+    """A tile dropped 3 mm onto the belt sleeps as soon with 4 variants as with one.
+
+    (With its shapes in child bodies MuJoCo measured the tile's rotational dof length to the
+    world origin, ~6 m, and a tile needed to be ~200x stiller to sleep.)
+    """
+    steps = {}
+    for variants in (1, 4):
+        cfg = load_cell_config(tiles={"variants": variants})
+        cell = Cell(cfg, basic_shapes(), seed=2)
+        try:
+            m, d = cell.model, cell.data
+            lengths = m.dof_length[cell.ids.tile_dof_index[:, 3:]]
+            assert np.all(lengths < 0.1), "rotational dof lengths: the tile's size [m]"
+            counts = []
+            for i in range(len(cell.tiles)):
+                d.qpos[cell.ids.tile_qpos_index[i, 2]] += 0.003
+                cell._wake[i] = True
+                tree = m.body_treeid[cell.ids.tile_body[i]]
+                n = 0
+                while d.tree_asleep[tree] < 0 and n < 1000:
+                    cell.step(1)
+                    n += 1
+                counts.append(n)
+            steps[variants] = np.array(counts)
+        finally:
+            cell.close()
+    assert np.all(steps[1] < 200)
+    assert np.all(steps[4] < 2 * steps[1] + 20)
