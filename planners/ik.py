@@ -174,7 +174,11 @@ class IKSolver:
                 raise PlannerError(f"obstacle geom not in the model: {exc}") from exc
             self._pairs = np.array([(a, b) for a in robot_geoms for b in obstacle_ids], dtype=int)
         self._rng = np.random.default_rng(cfg.restart_seed)
-        self._known: list[tuple[Array, Array]] = []  # (target xyz+yaw feature, q)
+        # Known-good solutions, a ring buffer: target (x, y, z, yaw) features and joint angles.
+        self._known_feature = np.zeros((cfg.memory, 4))
+        self._known_q = np.zeros((cfg.memory, N_JOINTS))
+        self._n_known = 0
+        self._next_known = 0
         self._home = 0.5 * (self.lower + self.upper)
         self._reach = self._reach_geometry()
         self._yaw_sign = self._joint6_yaw_sign()
@@ -309,18 +313,18 @@ class IKSolver:
     def _seeds(self, seed: Array | None, feature: Array) -> list[Array]:
         """Seeds to try: given, nearest known and default (nearest pose first), then random."""
         candidates: list[Array] = [] if seed is None else [seed]
-        if self._known:
-            feats = np.array([f for f, _ in self._known])
-            order = np.argsort(self._feature_distance(feats, feature))
-            candidates.extend(self._known[int(i)][1] for i in order[:2])
+        if self._n_known:
+            d = self._feature_distance(self._known_feature[: self._n_known], feature)
+            nearest = np.argsort(d)[:2]
+            candidates.extend(self._known_q[i].copy() for i in nearest)
         candidates.append(self._default_seed(feature))
         candidates.append(self._default_seed(feature, elbow_up=False))
-        dist = []
-        for c in candidates:
+        feats = np.empty((len(candidates), 4))
+        for k, c in enumerate(candidates):
             p, r = self.fk(np.clip(c, self.lower, self.upper))
-            f = np.array([p[0], p[1], p[2], self.yaw_of(r)])
-            dist.append(float(self._feature_distance(f[None, :], feature)[0]))
-        seeds = [candidates[int(i)] for i in np.argsort(dist, kind="stable")]
+            feats[k] = p[0], p[1], p[2], self.yaw_of(r)
+        order = np.argsort(self._feature_distance(feats, feature), kind="stable")
+        seeds = [candidates[int(i)] for i in order]
         cfg = self.config
         base = seeds[0]
         for _ in range(cfg.restarts):
@@ -407,9 +411,12 @@ class IKSolver:
         )
 
     def _remember(self, feature: Array, q: Array) -> None:
-        self._known.append((feature, q.copy()))
-        if len(self._known) > self.config.memory:
-            self._known.pop(0)
+        """Keep a solution as a seed (the oldest goes once ``memory`` are kept)."""
+        i = self._next_known
+        self._known_feature[i] = feature
+        self._known_q[i] = q
+        self._next_known = (i + 1) % len(self._known_q)
+        self._n_known = min(self._n_known + 1, len(self._known_q))
 
     def solve_yaws(
         self,
