@@ -357,7 +357,7 @@ class PickPlaceExecutor:
         cell.vacuum(True)
         grasped = cell.held_tile
         if grasped >= 0:
-            cell.set_qpos(q_place)  # carries the held tile
+            cell.set_qpos(q_place, forward=False)  # carries the held tile; stepped below
         cell.vacuum(False)
         self._put_arm(q_up if grasped >= 0 else q_pick)
         cell.data.time += duration

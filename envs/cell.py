@@ -349,13 +349,14 @@ class Cell:
         self._check_open()
         if n < 1:
             raise CellError(f"step needs n >= 1 physics steps, got {n}")
-        waking = self._wake.any()
-        if waking:
+        if self._wake.any():  # for one physics step: a force held longer keeps tiles awake
             self.data.xfrc_applied[self.ids.tile_body[self._wake], 2] = WAKE_FORCE
-        mujoco.mj_step(self.model, self.data, nstep=n)
-        if waking:
+            mujoco.mj_step(self.model, self.data)
             self.data.xfrc_applied[self.ids.tile_body[self._wake], 2] = 0.0
             self._wake[:] = False
+            n -= 1
+        if n:
+            mujoco.mj_step(self.model, self.data, nstep=n)
         events = []
         ev = self.suction.update(self.data)
         if ev is not None:
@@ -384,10 +385,15 @@ class Cell:
         self.data.ctrl[self.ids.pos_actuators] = np.clip(q, self._q_lo, self._q_hi)
         self.data.ctrl[self.ids.vel_actuators] = np.clip(qd, self._speed_lo, self._speed_hi)
 
-    def set_qpos(self, q: np.ndarray) -> None:
+    def set_qpos(self, q: np.ndarray, forward: bool = True) -> None:
         """Kinematic mode: put the arm at ``q`` [rad] at rest (no dynamics), carrying a held tile.
 
         Servo targets are set to ``q`` too, so a following `step` holds the pose.
+
+        Args:
+            q: Joint angles, shape (6,) [rad].
+            forward: Recompute all derived quantities (`mujoco.mj_forward`); False updates
+                positions only (`mujoco.mj_kinematics`), for callers that step next.
 
         Raises:
             CellError: Wrong shape, non-finite, or outside the joint ranges.
@@ -414,7 +420,10 @@ class Cell:
             mujoco.mju_mulQuat(quat, d.xquat[b1], m.eq_data[ids.weld, 6:10])
             d.qpos[qa + 3 : qa + 7] = quat
             d.qvel[ids.tile_dof_index[held]] = 0.0
-        mujoco.mj_forward(m, d)
+        if forward:
+            mujoco.mj_forward(m, d)
+        else:
+            mujoco.mj_kinematics(m, d)
 
     def vacuum(self, on: bool) -> SuctionEvent | None:
         """Switch the vacuum on (seals at once if the pad is on a tile) or off (releases).

@@ -31,7 +31,7 @@ PARK_SPACING = 0.08
 PARK_ORIGIN = np.array([-6.0, -1.0])
 """Corner of the parking grid, outside the rendered floor [m]."""
 WAKE_FORCE = 1e-12
-"""Negligible force [N] applied for one `Cell.step` to wake sleeping tiles (any applied force
+"""Negligible force [N] applied for one physics step to wake sleeping tiles (any applied force
 wakes a sleeping tree in MuJoCo; changing qpos or surfacevel does not)."""
 CONTACT_SOLREF = (0.004, 1.0)
 """Contact time constant [s] and damping ratio of tiles and belts: stiff (2x the default

@@ -273,7 +273,7 @@ class IKSolver:
     def _attempt(self, seed: Array, position: Array, yaw: float) -> tuple[Array, float, float, int]:
         cfg = self.config
         conf = self.configuration
-        conf.update(np.clip(seed, self.lower, self.upper))
+        conf.update(self._in_range(seed))
         self.task.set_target(
             mink.SE3.from_rotation_and_translation(
                 mink.SO3.from_matrix(tool_down_rotation(yaw)), position
@@ -321,7 +321,7 @@ class IKSolver:
         candidates.append(self._default_seed(feature, elbow_up=False))
         feats = np.empty((len(candidates), 4))
         for k, c in enumerate(candidates):
-            p, r = self.fk(np.clip(c, self.lower, self.upper))
+            p, r = self.fk(self._in_range(c))
             feats[k] = p[0], p[1], p[2], self.yaw_of(r)
         order = np.argsort(self._feature_distance(feats, feature), kind="stable")
         seeds = [candidates[int(i)] for i in order]
@@ -330,6 +330,10 @@ class IKSolver:
         for _ in range(cfg.restarts):
             seeds.append(base + self._rng.normal(0.0, cfg.restart_spread, N_JOINTS))
         return seeds
+
+    def _in_range(self, q: Array) -> Array:
+        """``q`` clipped to the joint ranges (`np.clip` costs ~3x more on 6 values)."""
+        return np.minimum(np.maximum(q, self.lower), self.upper)
 
     def _feature_distance(self, feats: Array, feature: Array) -> Array:
         """Distance [m] of (x, y, z, yaw) features, yaw weighted by the tool length."""
@@ -357,10 +361,10 @@ class IKSolver:
         phi = math.atan2(-(dz - ez), dr - er)  # forearm angle below horizontal
         q[2] = phi - q[1]
         q[4] = 0.5 * math.pi - phi
-        q = np.clip(q, self.lower, self.upper)
+        q = self._in_range(q)
         yaw0 = self.yaw_of(self.fk(q)[1])
         q[5] = self._yaw_sign * float(wrap_angle(feature[3] - yaw0))
-        return np.clip(q, self.lower, self.upper)
+        return self._in_range(q)
 
     def solve(
         self, position: npt.ArrayLike, yaw: float, seed: npt.ArrayLike | None = None
