@@ -433,7 +433,8 @@ class Cell:
         """
         self._check_open()
         before = len(self.suction.events)
-        mujoco.mj_kinematics(self.model, self.data)
+        if on:  # the seal check reads the pad and tile poses
+            mujoco.mj_kinematics(self.model, self.data)
         self.suction.set_vacuum(self.data, on)
         return self.suction.events[-1] if len(self.suction.events) > before else None
 

@@ -19,7 +19,7 @@ tile's equivalent yaws (its rotational symmetry) and joint 6's turns, the one ne
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -272,21 +272,20 @@ class IKSolver:
 
     def _attempt(self, seed: Array, position: Array, yaw: float) -> tuple[Array, float, float, int]:
         cfg = self.config
+        tol_ori = math.radians(cfg.orientation_tolerance_deg)
+        q = self._in_range(seed)
+        self.fk(q)
+        pos_err, ori_err = self._error_from_data(self._data, position, yaw)
+        if pos_err <= cfg.position_tolerance and ori_err <= tol_ori:
+            return q, pos_err, ori_err, 0  # already there: no QP set up
         conf = self.configuration
-        conf.update(self._in_range(seed))
+        conf.update(q)
         self.task.set_target(
             mink.SE3.from_rotation_and_translation(
                 mink.SO3.from_matrix(tool_down_rotation(yaw)), position
             )
         )
-        pos_err, ori_err = math.inf, math.inf
-        tol_ori = math.radians(cfg.orientation_tolerance_deg)
-        for it in range(cfg.max_iterations + 1):
-            pos_err, ori_err = self._error_from_data(conf.data, position, yaw)
-            if pos_err <= cfg.position_tolerance and ori_err <= tol_ori:
-                return conf.q.copy(), pos_err, ori_err, it
-            if it == cfg.max_iterations:
-                break
+        for it in range(1, cfg.max_iterations + 1):
             try:
                 vel = mink.solve_ik(
                     conf,
@@ -297,8 +296,11 @@ class IKSolver:
                     limits=self.mink_limits,
                 )
             except mink.NoSolutionFound:
-                break
+                return conf.q.copy(), pos_err, ori_err, it - 1
             conf.integrate_inplace(vel, cfg.step_dt)
+            pos_err, ori_err = self._error_from_data(conf.data, position, yaw)
+            if pos_err <= cfg.position_tolerance and ori_err <= tol_ori:
+                return conf.q.copy(), pos_err, ori_err, it
         return conf.q.copy(), pos_err, ori_err, cfg.max_iterations
 
     def _error_from_data(
@@ -310,26 +312,39 @@ class IKSolver:
         cos_angle = min(max(0.5 * (float(np.trace(r_err)) - 1.0), -1.0), 1.0)
         return float(np.linalg.norm(p - position)), math.acos(cos_angle)
 
-    def _seeds(self, seed: Array | None, feature: Array) -> list[Array]:
-        """Seeds to try: given, nearest known and default (nearest pose first), then random."""
+    def _seeds(self, seed: Array | None, feature: Array) -> Iterator[Array]:
+        """Seeds to try, made as needed.
+
+        The geometric guess alone when it already meets the tolerances (the usual case inside
+        the joint ranges); else given, nearest known and default (nearest pose first); then
+        random perturbations of the nearest.
+        """
+        cfg = self.config
+        up = self._default_seed(feature)
+        p, r = self.fk(up)
+        yaw_err = abs(float(wrap_angle(self.yaw_of(r) - feature[3])))
+        exact = math.dist(p, feature[:3]) <= cfg.position_tolerance and yaw_err <= math.radians(
+            cfg.orientation_tolerance_deg
+        )
+        if exact:
+            yield up
         candidates: list[Array] = [] if seed is None else [seed]
         if self._n_known:
             d = self._feature_distance(self._known_feature[: self._n_known], feature)
             nearest = np.argsort(d)[:2]
             candidates.extend(self._known_q[i].copy() for i in nearest)
-        candidates.append(self._default_seed(feature))
+        if not exact:
+            candidates.append(up)
         candidates.append(self._default_seed(feature, elbow_up=False))
         feats = np.empty((len(candidates), 4))
         for k, c in enumerate(candidates):
             p, r = self.fk(self._in_range(c))
             feats[k] = p[0], p[1], p[2], self.yaw_of(r)
         order = np.argsort(self._feature_distance(feats, feature), kind="stable")
-        seeds = [candidates[int(i)] for i in order]
-        cfg = self.config
-        base = seeds[0]
+        yield from (candidates[int(i)] for i in order)
+        base = up if exact else candidates[int(order[0])]
         for _ in range(cfg.restarts):
-            seeds.append(base + self._rng.normal(0.0, cfg.restart_spread, N_JOINTS))
-        return seeds
+            yield base + self._rng.normal(0.0, cfg.restart_spread, N_JOINTS)
 
     def _in_range(self, q: Array) -> Array:
         """``q`` clipped to the joint ranges (`np.clip` costs ~3x more on 6 values)."""
@@ -338,8 +353,8 @@ class IKSolver:
     def _feature_distance(self, feats: Array, feature: Array) -> Array:
         """Distance [m] of (x, y, z, yaw) features, yaw weighted by the tool length."""
         diff = feats - feature
-        diff[:, 3] = np.asarray(wrap_angle(diff[:, 3])) * self._reach[3]
-        return np.asarray(np.linalg.norm(diff, axis=1))
+        diff[:, 3] = ((diff[:, 3] + math.pi) % _TWO_PI - math.pi) * self._reach[3]
+        return np.sqrt(np.einsum("ij,ij->i", diff, diff))
 
     def _default_seed(self, feature: Array, elbow_up: bool = True) -> Array:
         """Geometric guess: elbow up (or down), wrist flat, tool down, facing the target.
@@ -393,8 +408,8 @@ class IKSolver:
         cfg = self.config
         total_it = 0
         best = (math.inf, math.inf)
-        seeds = self._seeds(seed_q, feature)
-        for k, s in enumerate(seeds, start=1):
+        attempts = 0
+        for attempts, s in enumerate(self._seeds(seed_q, feature), start=1):
             q, pe, oe, it = self._attempt(s, pos, yaw)
             total_it += it
             if (
@@ -403,12 +418,12 @@ class IKSolver:
                 and self.clearance(q) >= cfg.collision_min_distance
             ):
                 self._remember(feature, q)
-                return IKSolution(q, float(yaw), pe, oe, total_it, k)
+                return IKSolution(q, float(yaw), pe, oe, total_it, attempts)
             if pe + oe * self._reach[3] < best[0] + best[1] * self._reach[3]:
                 best = (pe, oe)
         raise UnreachableError(
             f"no tool-down solution at position {np.round(pos, 4).tolist()} m, yaw "
-            f"{math.degrees(yaw):.2f} deg after {len(seeds)} attempts: best residual "
+            f"{math.degrees(yaw):.2f} deg after {attempts} attempts: best residual "
             f"{best[0] * 1e3:.2f} mm / {math.degrees(best[1]):.2f} deg, tolerance "
             f"{cfg.position_tolerance * 1e3:.2f} mm / {cfg.orientation_tolerance_deg:.2f} deg "
             "(joint limits, obstacles or a flipped tool)"
