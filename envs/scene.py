@@ -261,6 +261,11 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
     spec.add_material(
         name="floor_mat", textures=["", "floor_tex"], texrepeat=[8, 8], texuniform=True
     )
+    # Rubber belts are matte: MuJoCo's default material (specular 0.5) puts the headlight's
+    # highlight in the middle of each camera image, which the perception's illumination model
+    # (fitted to the belt) would read as brighter light there and so over-correct the tiles
+    # near the image corners.
+    spec.add_material(name="belt_mat", rgba=list(BELT_RGBA), specular=0.0, shininess=0.0)
     floor = wb.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[4, 4, 0.05])
     floor.material = "floor_mat"
     floor.contype, floor.conaffinity = WORLD_CONTYPE, WORLD_CONAFFINITY
@@ -284,6 +289,7 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         [ib.length / 2, ib.width / 2, ib.thickness / 2],
         BELT_RGBA,
     )
+    belt.material = "belt_mat"
     belt.friction = friction
     belt.surfacevel = [ib.speed, 0.0, 0.0, 0.0, 0.0, 0.0]
     rail_h = 0.01
@@ -348,6 +354,7 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         [ob.length / 2, ob.width / 2, ob.thickness / 2],
         BELT_RGBA,
     )
+    obelt.material = "belt_mat"
     obelt.friction = friction
     _box(
         wb,

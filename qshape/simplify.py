@@ -68,6 +68,12 @@ class OutlineParams:
         chamfer_fraction: Two neighbouring corners joined by a straight edge shorter than
             this fraction of the perimeter are one corner cut off by noise: they become the
             intersection of the edges before and after them (dimensionless; 0: off).
+        missed_corner_ratio: A run that is not straight but splits, at its sample farthest
+            from the chord, into two halves each within this fraction of its own chord (or the
+            noise floor) is two straight edges meeting at a corner the window measure missed
+            (a shallow concave corner beside a pixel staircase), not a curve (dimensionless;
+            0: off). Keep it below the halves of the shallowest arc that is not straight:
+            with ``straight_sagitta_ratio`` 0.1 those are 0.049.
     """
 
     resample_points: int = 256
@@ -82,6 +88,7 @@ class OutlineParams:
     arc_turning_deg: float = 0.0
     circle_residual: float = 0.0
     chamfer_fraction: float = 0.0
+    missed_corner_ratio: float = 0.0
 
     def __post_init__(self) -> None:
         """Validate ranges.
@@ -99,6 +106,7 @@ class OutlineParams:
             "merge_fraction",
             "circle_residual",
             "chamfer_fraction",
+            "missed_corner_ratio",
         ):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0.0 <= v < 0.5):
@@ -620,6 +628,15 @@ def _emit_run(
         out_pts.append(run[0])
         out_curve.append(False)
         return True
+    if not closed_loop and p.missed_corner_ratio > 0.0 and len(run) >= 5:
+        k = int(np.argmax(dev))
+        if 0 < k < len(run) - 1 and all(
+            _straight_within(half_run, p.missed_corner_ratio, noise)
+            for half_run in (run[: k + 1], run[k:])
+        ):
+            out_pts.extend((run[0], run[k]))
+            out_curve.extend((False, False))
+            return False
     pieces = max(1, math.ceil(total / p.max_curve_turn_deg))
     if closed_loop:
         pieces = max(pieces, 2)
@@ -700,6 +717,12 @@ def _refine_all(
     ok &= np.hypot(cx - points[:, 0], cy - points[:, 1]) <= reach[owner]
     points[ok, 0] = cx[ok]
     points[ok, 1] = cy[ok]
+
+
+def _straight_within(run: FloatArray, ratio: float, noise: float) -> bool:
+    """``run`` stays within ``ratio`` x its chord (or ``noise``) of its chord."""
+    chord = float(np.hypot(*(run[-1] - run[0])))
+    return float(_chord_distance(run).max(initial=0.0)) <= max(ratio * chord, noise)
 
 
 def _chord_distance(run: FloatArray) -> FloatArray:
