@@ -1,14 +1,19 @@
+import dataclasses
 import math
+from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
 import qshape
 from qshape import Figure, InvalidFigureError, OutlineParams, canonical_key, describe
+from qshape.extract import default_params
 from qshape.figure import densify
 from qshape.simplify import simplify_outline
 
 SEED = 5
+DATA = Path(__file__).parent / "data"
 L_TILE = [[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]]
 
 
@@ -114,8 +119,46 @@ def test_refine_corners_is_sub_sample_accurate_on_a_clean_polygon():
     assert worst(refined) < 1e-6 < worst(plain)
 
 
-@pytest.mark.parametrize("field", ["arc_turning_deg", "circle_residual", "chamfer_fraction"])
+@pytest.mark.parametrize(
+    "field", ["arc_turning_deg", "circle_residual", "chamfer_fraction", "missed_corner_ratio"]
+)
 def test_cell_image_fixes_validate(field):
     with pytest.raises(qshape.ToleranceError, match=field):
         OutlineParams(**{field: -0.1})
     assert getattr(OutlineParams(), field) == 0.0  # off for the bundled (vector) outlines
+
+
+def _cell_outline_params(missed_corner_ratio: float) -> OutlineParams:
+    """The bundled pixel-outline parameters with ``missed_corner_ratio`` set."""
+    return dataclasses.replace(default_params().outline, missed_corner_ratio=missed_corner_ratio)
+
+
+def test_shallow_concave_corner_of_a_rendered_tile_is_a_corner_not_a_curve():
+    # A trencadis piece as the cell's input camera rendered it (seed 2): its 34 deg concave
+    # corner sits beside a long pixel staircase, so the window measure misses it and the two
+    # edges came out as one curve (no design slot has that shape: the cell stalled).
+    image = cv2.cvtColor(cv2.imread(str(DATA / "concave_tile_cell.png")), cv2.COLOR_BGR2RGB)
+    params = default_params()
+    (fig,) = qshape.extract(image, params)
+    assert fig.curve_mask.tolist() == [False] * 5
+    nodes = describe(fig, qshape.Tolerances.load(check_size=False)).nodes
+    assert [n.labels[1] for n in nodes].count("concave") == 1
+    assert all(n.kind == "vertex" for n in nodes)
+    off = dataclasses.replace(params, outline=_cell_outline_params(0.0))
+    (missed,) = qshape.extract(image, off)
+    assert missed.curve_mask.any()
+
+
+@pytest.mark.parametrize("arc_deg", [60.0, 90.0, 180.0])
+def test_missed_corner_rule_keeps_arcs_curved(arc_deg):
+    # A circular segment (arc + chord, radius 60 px) traced to whole pixels: the arc must stay
+    # one curve, not become two straight edges.
+    r, a = 60.0, math.radians(arc_deg) / 2
+    t = np.linspace(-a, a, 400)
+    arc = np.stack([r * np.sin(t), r * np.cos(t)], 1)
+    x = np.linspace(r * math.sin(a), -r * math.sin(a), 200)[1:-1]
+    chord = np.stack([x, np.full_like(x, r * math.cos(a))], 1)
+    dense = np.round(np.vstack([arc, chord]) + 100.0)
+    dense = dense[np.r_[True, np.any(np.diff(dense, axis=0) != 0, axis=1)]]
+    _, mask = simplify_outline(dense, _cell_outline_params(0.035))
+    assert mask.tolist().count(True) == 1
