@@ -35,6 +35,12 @@ class PerceptionConfig:
             before matching.
         color_balance_iterations: Nearest-palette / median-gain rounds of that estimate.
         max_color_gain: The gain per channel is clipped to [1 / max, max] (dimensionless).
+        color_history: Tile colours (from every picture of the episode, newest kept) the gain
+            is fitted on. A white balance is the camera's, not one picture's: fitted on one
+            tile it maps that tile onto its nearest palette colour, right or wrong (a red tile
+            measured brighter is nearer orange).
+        color_min_samples: Fewer colours in the history than this: the gain is fitted on the
+            current picture alone (the first pictures of a streamed belt).
 
     How outlines become figures (corner threshold, circles, chamfered corners) is qshape's
     business: ``configs/vision.yaml`` section ``extract``.
@@ -47,11 +53,18 @@ class PerceptionConfig:
     color_balance: bool = True
     color_balance_iterations: int = 3
     max_color_gain: float = 2.0
+    color_history: int = 64
+    color_min_samples: int = 6
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""
         if not (self.mm_per_m > 0 and self.pad_clearance >= 0 and self.polylabel_tolerance > 0):
             raise AgentError("perception: mm_per_m, polylabel_tolerance > 0, pad_clearance >= 0")
+        if self.color_history < 1 or self.color_min_samples < 1:
+            raise AgentError(
+                "perception: color_history and color_min_samples must be >= 1, got "
+                f"{self.color_history}, {self.color_min_samples}"
+            )
         if self.tile_thickness < 0:
             raise AgentError("perception: tile_thickness must be >= 0 [m]")
 

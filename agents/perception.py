@@ -318,8 +318,16 @@ def balance_colors(
     palette: np.ndarray,
     cfg: PerceptionConfig | None = None,
     tolerances: qshape.Tolerances | None = None,
+    history: np.ndarray | None = None,
 ) -> tuple[Perception, np.ndarray]:
     """The perception with tile colours corrected by `color_gain` (tiles re-described).
+
+    Args:
+        perception: Tiles as measured.
+        palette: The design's colours, shape (m, 3).
+        cfg: Gain settings.
+        tolerances: For the new descriptions.
+        history: Measured colours, shape (k, 3), to fit the gain on instead of this picture's.
 
     Returns:
         (corrected perception, gain (3,)).
@@ -327,7 +335,8 @@ def balance_colors(
     cfg = cfg or PerceptionConfig()
     if not perception.tiles:
         return perception, np.ones(3)
-    gain = color_gain(np.array([t.color for t in perception.tiles]), palette, cfg)
+    fit_on = np.array([t.color for t in perception.tiles]) if history is None else history
+    gain = color_gain(fit_on, palette, cfg)
     figs = []
     for t in perception.tiles:
         c = np.clip(np.asarray(t.color) * gain, 0.0, 1.0)

@@ -116,9 +116,13 @@ class ScriptedAgent:
         self.last_perception: Perception | None = None
         self.last_command: PickPlace | None = None
         self.pictures = 0
+        self.colors: deque[tuple[float, float, float]] = deque(
+            maxlen=self.cfg.perception.color_history
+        )
 
     def reset(self) -> None:
-        """Forget the episode (open slots, queued commands)."""
+        """Forget the episode (open slots, queued commands, measured colours)."""
+        self.colors.clear()
         self.queue.clear()
         self.filled.clear()
         self.order.clear()
@@ -135,9 +139,12 @@ class ScriptedAgent:
         (the tile is still on the belt; the env gives one tile per slot): the most recently
         commanded of those slots is reopened and the picture planned again.
         """
-        per = perceive_tiles(image, self.camera, self.belt_top, cfg=self.cfg.perception)
-        if self.cfg.perception.color_balance:
-            per, _ = balance_colors(per, self.palette, self.cfg.perception)
+        pcfg = self.cfg.perception
+        per = perceive_tiles(image, self.camera, self.belt_top, cfg=pcfg)
+        if pcfg.color_balance:
+            self.colors.extend(t.color for t in per.tiles)
+            history = np.array(self.colors) if len(self.colors) >= pcfg.color_min_samples else None
+            per, _ = balance_colors(per, self.palette, pcfg, history=history)
         plan = self._assign(per)
         taken = [u.tile for u in plan.unplaced if u.reason == "slots_taken"]
         if taken and self._reopen([per.tiles[k] for k in taken]):

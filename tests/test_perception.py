@@ -82,6 +82,20 @@ def test_color_gain_recovers_a_known_gain():
     np.testing.assert_allclose(color_gain(measured, palette, PerceptionConfig()), true, rtol=1e-6)
 
 
+def test_one_tile_snaps_to_its_nearest_colour_and_a_history_does_not():
+    # paper_mixed's red and orange, and a red tile as the moving-belt camera measured it
+    # (brighter in every channel, most in green): nearer orange than red.
+    red, orange = np.array([0.753, 0.224, 0.169]), np.array([0.878, 0.482, 0.165])
+    palette = np.array([red, orange, [0.18, 0.435, 0.82], [0.247, 0.62, 0.302]])
+    gain = np.array([1.0 / 1.17, 1.0 / 1.47, 1.0 / 1.32])
+    tile = red / gain
+    alone = np.clip(tile * color_gain(tile[None], palette, PerceptionConfig()), 0, 1)
+    np.testing.assert_allclose(alone, orange, atol=1e-9)  # wrong: fitted on one tile
+    history = np.vstack([palette[[0, 1, 2, 3, 1, 2]] / gain, tile])
+    fitted = np.clip(tile * color_gain(history, palette, PerceptionConfig()), 0, 1)
+    np.testing.assert_allclose(fitted, red, atol=1e-6)
+
+
 def test_color_balance_gain_is_moderate(scene):
     *_, gain = scene
     assert np.all((gain > 0.7) & (gain < 1.3))
