@@ -94,3 +94,15 @@ def test_rest_action_picks_away_from_every_tile_seen(env):
     assert np.min(np.linalg.norm(seen - pick, axis=1)) > 0.03  # 3 cm from any tile centre
     slots = np.array([s.pose[:2] for s in agent.slots])
     assert np.min(np.linalg.norm(slots - place, axis=1)) > 0.02
+
+
+def test_white_balance_history_is_the_episode_s(env):
+    agent = ScriptedAgent(env, calibrate=False)
+    obs, _ = env.reset(seed=1)
+    agent.plan(obs["input_camera"])
+    seen = len(agent.last_perception.tiles)
+    assert seen > 0 and len(agent.colors) == seen  # every tile of the picture measured
+    agent.plan(obs["input_camera"])  # a second picture adds to the history
+    assert len(agent.colors) == min(2 * seen, agent.cfg.perception.color_history)
+    agent.reset()
+    assert len(agent.colors) == 0
