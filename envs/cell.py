@@ -335,6 +335,7 @@ class Cell:
             self.retired[left] = True
         self._lay_out(waiting[: self.cfg.tiles.batch_size])
         self._batch_due = np.inf
+        mujoco.mj_forward(self.model, self.data)
 
     # ------------------------------------------------------------- stepping
     def step(self, n: int = 1) -> list[SuctionEvent]:
@@ -363,10 +364,10 @@ class Cell:
             events.append(ev)
         if self.data.time >= self._next_feed_time:
             if self.cfg.tiles.feed == "batch":
-                self._feed_batch()
+                self._feed_batch()  # checked every call; forwards only when it lays out
             else:
                 self._feed_stream()
-            mujoco.mj_forward(self.model, self.data)
+                mujoco.mj_forward(self.model, self.data)
         self.lost_tracker.update(
             self.data.xpos[self.ids.tile_body], self.on_stage, self.suction.held
         )
