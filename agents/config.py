@@ -39,8 +39,9 @@ class PerceptionConfig:
             is fitted on. A white balance is the camera's, not one picture's: fitted on one
             tile it maps that tile onto its nearest palette colour, right or wrong (a red tile
             measured brighter is nearer orange).
-        color_min_samples: Fewer colours in the history than this: the gain is fitted on the
-            current picture alone (the first pictures of a streamed belt).
+        color_min_samples: Fewer colours in the history than this (the first pictures of a
+            streamed belt): one brightness gain for all channels, which keeps each colour's
+            hue, instead of a gain per channel.
 
     How outlines become figures (corner threshold, circles, chamfered corners) is qshape's
     business: ``configs/vision.yaml`` section ``extract``.

@@ -271,7 +271,10 @@ def perceive_tiles(
 
 
 def color_gain(
-    measured: np.ndarray, palette: np.ndarray, cfg: PerceptionConfig | None = None
+    measured: np.ndarray,
+    palette: np.ndarray,
+    cfg: PerceptionConfig | None = None,
+    per_channel: bool = True,
 ) -> np.ndarray:
     """Per-channel gain mapping measured colours onto a known palette (white balance).
 
@@ -285,10 +288,16 @@ def color_gain(
     channel) is a property of this cell, fitted against the one thing the cell knows and
     qshape does not: the design's palette.
 
+    With few colours a per-channel gain can map any colour onto any palette colour, so it
+    only repeats the raw nearest-colour guess; ``per_channel=False`` fits one brightness gain
+    instead, which keeps each colour's hue: every colour goes to the palette colour its best
+    scaled copy lies nearest to, and the gain is the median of those scales.
+
     Args:
         measured: Measured colours, shape (n, 3), RGB in [0, 1].
         palette: Known colours (the design's), shape (m, 3), RGB in [0, 1].
         cfg: Rounds and gain clip.
+        per_channel: Fit a gain per channel (True) or one for all three.
 
     Returns:
         Gain, shape (3,); ones when there is nothing to fit.
@@ -300,6 +309,12 @@ def color_gain(
     if len(meas) == 0 or len(pal) == 0:
         return gain
     lo, hi = 1.0 / cfg.max_color_gain, cfg.max_color_gain
+    if not per_channel:
+        norm2 = np.maximum(np.einsum("ij,ij->i", meas, meas), 1e-12)
+        scale = (meas @ pal.T) / norm2[:, None]  # (n, m): best scale onto each palette colour
+        resid = np.linalg.norm(scale[..., None] * meas[:, None, :] - pal[None], axis=2)
+        best = scale[np.arange(len(meas)), np.argmin(resid, axis=1)]
+        return np.full(3, float(np.clip(np.median(best), lo, hi)))
     # Saturated channels say nothing about the gain; near-black ones are all noise.
     usable = (meas > 1.0 / 255.0) & (meas < 1.0 - 1.0 / 255.0)
     for _ in range(cfg.color_balance_iterations):
@@ -318,7 +333,9 @@ def balance_colors(
     palette: np.ndarray,
     cfg: PerceptionConfig | None = None,
     tolerances: qshape.Tolerances | None = None,
+    *,
     history: np.ndarray | None = None,
+    per_channel: bool = True,
 ) -> tuple[Perception, np.ndarray]:
     """The perception with tile colours corrected by `color_gain` (tiles re-described).
 
@@ -328,6 +345,7 @@ def balance_colors(
         cfg: Gain settings.
         tolerances: For the new descriptions.
         history: Measured colours, shape (k, 3), to fit the gain on instead of this picture's.
+        per_channel: See `color_gain`.
 
     Returns:
         (corrected perception, gain (3,)).
@@ -336,7 +354,7 @@ def balance_colors(
     if not perception.tiles:
         return perception, np.ones(3)
     fit_on = np.array([t.color for t in perception.tiles]) if history is None else history
-    gain = color_gain(fit_on, palette, cfg)
+    gain = color_gain(fit_on, palette, cfg, per_channel)
     figs = []
     for t in perception.tiles:
         c = np.clip(np.asarray(t.color) * gain, 0.0, 1.0)

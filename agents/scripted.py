@@ -143,8 +143,10 @@ class ScriptedAgent:
         per = perceive_tiles(image, self.camera, self.belt_top, cfg=pcfg)
         if pcfg.color_balance:
             self.colors.extend(t.color for t in per.tiles)
-            history = np.array(self.colors) if len(self.colors) >= pcfg.color_min_samples else None
-            per, _ = balance_colors(per, self.palette, pcfg, history=history)
+            many = len(self.colors) >= pcfg.color_min_samples
+            per, _ = balance_colors(
+                per, self.palette, pcfg, history=np.array(self.colors), per_channel=many
+            )
         plan = self._assign(per)
         taken = [u.tile for u in plan.unplaced if u.reason == "slots_taken"]
         if taken and self._reopen([per.tiles[k] for k in taken]):

@@ -94,6 +94,16 @@ def test_one_tile_snaps_to_its_nearest_colour_and_a_history_does_not():
     history = np.vstack([palette[[0, 1, 2, 3, 1, 2]] / gain, tile])
     fitted = np.clip(tile * color_gain(history, palette, PerceptionConfig()), 0, 1)
     np.testing.assert_allclose(fitted, red, atol=1e-6)
+    # Alone, one brightness gain keeps the hue: the tile stays nearest red.
+    scaled = tile * color_gain(tile[None], palette, PerceptionConfig(), per_channel=False)
+    assert np.argmin(np.linalg.norm(palette - scaled, axis=1)) == 0
+    # An orange tile measured with its red channel saturated (nearer yellow as measured).
+    yellow = np.array([0.91, 0.765, 0.227])
+    palette = np.vstack([palette, yellow])
+    sat = np.array([1.0, 0.604, 0.247])
+    assert np.argmin(np.linalg.norm(palette - sat, axis=1)) == 4
+    scaled = sat * color_gain(sat[None], palette, PerceptionConfig(), per_channel=False)
+    assert np.argmin(np.linalg.norm(palette - scaled, axis=1)) == 1
 
 
 def test_color_balance_gain_is_moderate(scene):
