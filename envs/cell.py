@@ -214,10 +214,7 @@ class Cell:
         d.ctrl[ids.vel_actuators] = 0.0
         n = len(self.tiles)
         if n:
-            qadr = ids.tile_qpos_index
-            d.qpos[qadr[:, :3]] = self._park
-            d.qpos[qadr[:, 3:]] = [1.0, 0.0, 0.0, 0.0]
-            self.on_stage[:] = False
+            self._park_tiles(np.arange(n))
             self.retired[:] = False
             k = self._initial_count()
             self._feed_order = self._rng.permutation(n) if k < n else np.arange(n)
@@ -295,6 +292,14 @@ class Cell:
         self._place(np.array([i]), pose)
         self._next_feed_time += self.cfg.tiles.stream_period
 
+    def _park_tiles(self, idx: np.ndarray) -> None:
+        """Tiles ``idx`` to their parking spots, at rest, off the stage."""
+        qadr = self.ids.tile_qpos_index[idx]
+        self.data.qpos[qadr[:, :3]] = self._park[idx]
+        self.data.qpos[qadr[:, 3:]] = [1.0, 0.0, 0.0, 0.0]
+        self.data.qvel[self.ids.tile_dof_index[idx]] = 0.0
+        self.on_stage[idx] = False
+
     def _input_side(self) -> np.ndarray:
         """Tiles on the input belt (fed, not lost, not on the pad), shape (n,) bool."""
         pos = self.data.xpos[self.ids.tile_body]
@@ -326,13 +331,8 @@ class Cell:
         if self.data.time < self._batch_due:
             return
         left = np.flatnonzero(side)
-        if len(left):
-            qadr = self.ids.tile_qpos_index[left]
-            self.data.qpos[qadr[:, :3]] = self._park[left]
-            self.data.qpos[qadr[:, 3:]] = [1.0, 0.0, 0.0, 0.0]
-            self.data.qvel[self.ids.tile_dof_index[left]] = 0.0
-            self.on_stage[left] = False
-            self.retired[left] = True
+        self._park_tiles(left)
+        self.retired[left] = True
         self._lay_out(waiting[: self.cfg.tiles.batch_size])
         self._batch_due = np.inf
         mujoco.mj_forward(self.model, self.data)
