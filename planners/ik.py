@@ -272,11 +272,10 @@ class IKSolver:
 
     def _attempt(self, seed: Array, position: Array, yaw: float) -> tuple[Array, float, float, int]:
         cfg = self.config
-        tol_ori = math.radians(cfg.orientation_tolerance_deg)
         q = self._in_range(seed)
         self.fk(q)
         pos_err, ori_err = self._error_from_data(self._data, position, yaw)
-        if pos_err <= cfg.position_tolerance and ori_err <= tol_ori:
+        if self._within_tolerance(pos_err, ori_err):
             return q, pos_err, ori_err, 0  # already there: no QP set up
         conf = self.configuration
         conf.update(q)
@@ -299,9 +298,16 @@ class IKSolver:
                 return conf.q.copy(), pos_err, ori_err, it - 1
             conf.integrate_inplace(vel, cfg.step_dt)
             pos_err, ori_err = self._error_from_data(conf.data, position, yaw)
-            if pos_err <= cfg.position_tolerance and ori_err <= tol_ori:
+            if self._within_tolerance(pos_err, ori_err):
                 return conf.q.copy(), pos_err, ori_err, it
         return conf.q.copy(), pos_err, ori_err, cfg.max_iterations
+
+    def _within_tolerance(self, pos_err: float, ori_err: float) -> bool:
+        """Position [m] and orientation [rad] errors both within the configured tolerances."""
+        cfg = self.config
+        return pos_err <= cfg.position_tolerance and ori_err <= math.radians(
+            cfg.orientation_tolerance_deg
+        )
 
     def _error_from_data(
         self, data: mujoco.MjData, position: Array, yaw: float
@@ -321,10 +327,9 @@ class IKSolver:
         """
         cfg = self.config
         up = self._default_seed(feature)
-        p, r = self.fk(up)
-        yaw_err = abs(float(wrap_angle(self.yaw_of(r) - feature[3])))
-        exact = math.dist(p, feature[:3]) <= cfg.position_tolerance and yaw_err <= math.radians(
-            cfg.orientation_tolerance_deg
+        self.fk(up)
+        exact = self._within_tolerance(
+            *self._error_from_data(self._data, feature[:3], float(feature[3]))
         )
         if exact:
             yield up
