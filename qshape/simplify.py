@@ -619,17 +619,12 @@ def _emit_run(
         inner = turn[idx[guard + 1 : len(idx) - guard - 1]]
     total = max(float(inner.sum()), 0.0)
     run = res[idx]
-    dev = _chord_distance(run)
-    chord = float(np.hypot(*(run[-1] - run[0])))
-    straight = (not closed_loop) and float(dev.max(initial=0.0)) <= max(
-        p.straight_sagitta_ratio * chord, noise
-    )
-    if straight:
+    if not closed_loop and _straight_within(run, p.straight_sagitta_ratio, noise):
         out_pts.append(run[0])
         out_curve.append(False)
         return True
     if not closed_loop and p.missed_corner_ratio > 0.0 and len(run) >= 5:
-        k = int(np.argmax(dev))
+        k = int(np.argmax(_chord_distance(run)))
         if 0 < k < len(run) - 1 and all(
             _straight_within(half_run, p.missed_corner_ratio, noise)
             for half_run in (run[: k + 1], run[k:])
