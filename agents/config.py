@@ -149,7 +149,7 @@ class CalibrationConfig:
 
 @dataclass(frozen=True)
 class RunConfig:
-    """The main job (``python -m agents.main``).
+    """The main job (``python -m apps.main``).
 
     Attributes:
         design: Bundled design name or path.

@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 import pytest
 
-from agents.main import main
+from apps.main import main
 
 KEYS = {"tiles_total", "correct", "misplaced", "dropped", "success", "tiles_per_min", "wall_s"}
 
@@ -84,7 +84,7 @@ def test_a_design_that_fails_validation_is_a_clear_error(tmp_path):
 
 def test_command_line_reports_a_bad_setting_in_one_line(tmp_path):
     proc = subprocess.run(
-        [sys.executable, "-m", "agents.main", "--quiet", "--belt-speed", "-1"]
+        [sys.executable, "-m", "apps.main", "--quiet", "--belt-speed", "-1"]
         + ["--out", str(tmp_path)],
         capture_output=True,
         text=True,

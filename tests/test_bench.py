@@ -1,10 +1,10 @@
-"""agents.bench: aggregation of small fake benchmark JSON files into one table."""
+"""benchmarks: aggregation of small fake benchmark JSON files into one table."""
 
 from __future__ import annotations
 
 import json
 
-from agents.bench import BENCHES, collect, command, fig, main, table
+from benchmarks.table import BENCHES, collect, command, fig, main, table
 
 
 def _write(folder, name, data):
@@ -102,7 +102,7 @@ def test_fig_and_commands(tmp_path):
     by = {b.name: b for b in BENCHES}
     assert command(by["main"], tmp_path, False, None) is None
     cmd = command(by["planner"], tmp_path, True, None)
-    assert cmd is not None and cmd[2] == "agents.bench_planner" and "--quick" in cmd
+    assert cmd is not None and cmd[2] == "benchmarks.planner" and "--quick" in cmd
     env_cmd = command(by["env"], tmp_path, False, None)
     assert env_cmd is not None and "--out" not in env_cmd
     ev = command(by["learned"], tmp_path, False, tmp_path / "run" / "model.zip")

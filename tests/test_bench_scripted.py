@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from agents.bench import scripted_figures
-from agents.bench_scripted import (
+from benchmarks.scripted import (
     Episode,
     Scenario,
     ScriptedBenchConfig,
@@ -13,6 +12,7 @@ from agents.bench_scripted import (
     play,
     summarise,
 )
+from benchmarks.table import scripted_figures
 from configs import ConfigError, load_config
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from agents.paper_experiment import DESIGN_OBJECTS, TILES, run_experiment, table
+from apps.paper_experiment import DESIGN_OBJECTS, TILES, run_experiment, table
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agents.bench_perception import bench
 from agents.cell_adapter import build_design_cell, nearest_tile
 from agents.config import PerceptionConfig
 from agents.errors import PerceptionError
@@ -17,6 +16,7 @@ from agents.perception import (
     slot_targets,
     unproject,
 )
+from benchmarks.perception import bench
 from qshape.design import Design
 
 POS_TOL = 0.002  # m

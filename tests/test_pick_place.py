@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from agents.bench_planner import CellRunner, _build_cell, cell_config
+from benchmarks.planner import CellRunner, _build_cell, cell_config
 from envs.tiles import basic_shapes
 from planners.config import load_planner_config
 from planners.errors import InvalidTargetError, UnreachableError

@@ -1,6 +1,6 @@
 """The paper's matching experiment (its Figs. 5-6), reproduced from a rendered image.
 
-Run ``python -m agents.paper_experiment``: prints the table and writes
+Run ``python -m apps.paper_experiment``: prints the table and writes
 ``out/paper_experiment.png`` (the tiles, their relevant points and numbers: Fig. 5c),
 ``out/paper_experiment_design_shape.png`` and ``..._design_shape_colour.png`` (the design with
 the number of the tile that marked each object: Figs. 6a and 6b) and ``out/paper_experiment.json``.

@@ -1,6 +1,6 @@
 """Benchmark of the scripted cell: success, correctness and tiles/min over many seeds.
 
-Run ``python -m agents.bench_scripted`` (``--seeds 0-4`` for a quick look, ``--workers 2``).
+Run ``python -m benchmarks.scripted`` (``--seeds 0-4`` for a quick look, ``--workers 2``).
 Every scenario of ``configs/bench_scripted.yaml`` (a design, a belt speed, a feed) plays one
 episode of `MosaicAssembly-v0` per seed, driven by `agents.scripted.ScriptedAgent` from
 full-resolution camera images (calibrated cameras, dynamic execution). Prints one row per

@@ -1,6 +1,6 @@
 """Benchmark of the qshape library: describing and assigning 10,000 tiles.
 
-Run ``python -m agents.bench_qshape [--tiles N] [--classes K] [--seed S] [--paper-full]``.
+Run ``python -m benchmarks.shapes [--tiles N] [--classes K] [--seed S] [--paper-full]``.
 
 Tiles are noisy, rotated, translated copies of slots drawn from ~50 shape/colour classes
 (squares, rectangles, triangles, regular polygons, an L tile, rhombi, random convex polygons,

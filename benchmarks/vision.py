@@ -1,6 +1,6 @@
 """Recognition benchmark of `qshape.extract` + `qshape.match` on synthetic tile images.
 
-``python -m agents.bench_vision`` draws tiles from the bundled designs at random poses on a belt
+``python -m benchmarks.vision`` draws tiles from the bundled designs at random poses on a belt
 (``qshape.synth``), extracts them, and matches each against the design's shape classes (shape
 only) and shape-and-colour classes. Printed and written to ``out/bench_vision.json``:
 

@@ -1,15 +1,15 @@
 """The project's benchmark: every tracked figure, its target and pass/fail, in one table.
 
-Run ``python -m agents.bench`` to run the benchmark scripts (each in its own process, writing its
+Run ``python -m benchmarks`` to run the benchmark scripts (each in its own process, writing its
 JSON under ``--out-dir``) and the learned-vs-scripted evaluation, or
-``python -m agents.bench --from-json`` to collect the JSON files they already wrote. Prints one
+``python -m benchmarks --from-json`` to collect the JSON files they already wrote. Prints one
 table and writes ``out/bench.json`` (date, machine, every figure) and ``out/bench.md``.
 
-Sources (``BENCHES``): ``agents.bench_qshape`` (describe/assign 10,000 tiles),
-``agents.bench_vision`` (recognition on synthetic images), ``agents.bench_cell`` (physics and
-rendering speed), ``agents.bench_planner`` (cycle time, tiles/min, tracking),
-``agents.bench_env`` (env steps/s, memory), ``agents.bench_perception`` (camera-to-world
-perception), ``agents.bench_scripted`` (the scripted cell over 20 seeds per scenario),
+Sources (``BENCHES``): ``benchmarks.shapes`` (describe/assign 10,000 tiles),
+``benchmarks.vision`` (recognition on synthetic images), ``benchmarks.cell`` (physics and
+rendering speed), ``benchmarks.planner`` (cycle time, tiles/min, tracking),
+``benchmarks.env`` (env steps/s, memory), ``benchmarks.perception`` (camera-to-world
+perception), ``benchmarks.scripted`` (the scripted cell over 20 seeds per scenario),
 ``agents.evaluate`` (learned vs scripted vs random), and the main job's
 ``out/report.json`` when present (collected only). A missing source gives rows marked
 ``missing``; a figure without a target is reported only.
@@ -413,27 +413,27 @@ class Bench:
 
 
 BENCHES = (
-    Bench("qshape", "agents.bench_qshape", "bench_qshape.json", ("--repeat", "1"), qshape_figures),
-    Bench("vision", "agents.bench_vision", "bench_vision.json", ("--images", "4"), vision_figures),
+    Bench("qshape", "benchmarks.shapes", "bench_qshape.json", ("--repeat", "1"), qshape_figures),
+    Bench("vision", "benchmarks.vision", "bench_vision.json", ("--images", "4"), vision_figures),
     Bench(
         "cell",
-        "agents.bench_cell",
+        "benchmarks.cell",
         "bench_cell.json",
         ("--seconds", "5", "--frames", "100"),
         cell_figures,
     ),
-    Bench("planner", "agents.bench_planner", "planner_bench.json", ("--quick",), planner_figures),
-    Bench("env", "agents.bench_env", "bench_env.json", ("--quick",), env_figures, False),
+    Bench("planner", "benchmarks.planner", "planner_bench.json", ("--quick",), planner_figures),
+    Bench("env", "benchmarks.env", "bench_env.json", ("--quick",), env_figures, False),
     Bench(
         "perception",
-        "agents.bench_perception",
+        "benchmarks.perception",
         "bench_perception.json",
         ("--seeds", "5"),
         perception_figures,
     ),
     Bench(
         "scripted",
-        "agents.bench_scripted",
+        "benchmarks.scripted",
         "bench_scripted.json",
         ("--seeds", "0-1"),
         scripted_figures,

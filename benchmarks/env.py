@@ -1,6 +1,6 @@
 """Benchmark of `MosaicAssembly-v0`: steps per second, memory per env, async vector scaling.
 
-Run ``python -m agents.bench_env`` (``--quick`` for shorter runs); prints the figures and writes
+Run ``python -m benchmarks.env`` (``--quick`` for shorter runs); prints the figures and writes
 ``out/bench_env.json``. Every figure is measured in a fresh subprocess pinned to one CPU core
 (``os.sched_setaffinity``) with one BLAS/OpenMP thread, on the bundled ``paper_mixed`` design
 (16 tiles):

@@ -1,6 +1,6 @@
 """Benchmark of the simulated cell: physics speed with resting tiles and camera rendering.
 
-Run ``MUJOCO_GL=egl python -m agents.bench_cell``; prints the figures and writes
+Run ``MUJOCO_GL=egl python -m benchmarks.cell``; prints the figures and writes
 ``out/bench_cell.json``. Targets (issue 4): physics with 40 resting tiles >= 20x real time on one
 core; both cameras at 128 x 128 >= 100 frames/s in total; 656 x 492 reported.
 """

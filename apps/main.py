@@ -1,6 +1,6 @@
 """The main job: the scripted cell on a design, end to end from camera images, with its video.
 
-Run ``python -m agents.main`` (options: ``--help``). The paper's loop ("The prototype", steps
+Run ``python -m apps.main`` (options: ``--help``). The paper's loop ("The prototype", steps
 1-7) through the Gymnasium env's public API: `MosaicAssembly-v0` in ``pick_place`` action mode
 with full-resolution camera images, driven by `agents.scripted.ScriptedAgent` (describe the
 design's slots; take an input-camera picture; extract and describe the tiles; assign them to

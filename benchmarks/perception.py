@@ -1,6 +1,6 @@
 """Recognition benchmark of the scripted cell's perception on real cell renders.
 
-Run ``python -m agents.bench_perception [--seeds N] [--true-camera]``: for N layouts of the
+Run ``python -m benchmarks.perception [--seeds N] [--true-camera]``: for N layouts of the
 default design, renders the input camera (656 x 492), perceives and assigns (optimal,
 colour-aware) and scores against the cell's ground truth: tiles assigned to a slot of their
 class, pick-position error (mm), place-yaw error modulo symmetry (deg), wall time per image.

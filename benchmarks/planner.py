@@ -1,6 +1,6 @@
 """Planner benchmark: full designs picked and placed by the planners in the simulated cell.
 
-Run ``python -m agents.bench_planner``; prints the figures and writes ``out/planner_bench.json``
+Run ``python -m benchmarks.planner``; prints the figures and writes ``out/planner_bench.json``
 with, for each layout and belt speed: ``tiles_per_min`` (correctly placed tiles per minute of
 simulated time), ``cycle_s`` (simulated seconds per tile), ``bound_s`` (the planners' lower bound
 per cycle, same limits, no dwell, no approach points), ``ratio`` (cycle over bound),

@@ -1,0 +1,5 @@
+"""Benchmarks of the cell's packages: each module measures one and writes a JSON of figures.
+
+``python -m benchmarks`` runs them all and prints one table against the targets
+(``benchmarks.table``); ``python -m benchmarks.<name>`` runs one.
+"""
