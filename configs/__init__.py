@@ -2,8 +2,10 @@
 
 Every tunable number of the project lives in a frozen dataclass whose defaults are documented
 (with units) and whose values can be loaded from a YAML file in this folder. Loading is strict:
-an unknown key, a missing required key or a value of the wrong type raises `ConfigError` naming
-the key, the file and what is allowed.
+an unknown key, a key written twice in one mapping, a missing required key or a value of the
+wrong type (a string for a number, a number for a true/false, a non-finite number) raises
+`ConfigError` naming the key, the file and what is allowed. `check_field_types` applies the
+same type rules to a dataclass built directly in Python (call it from ``__post_init__``).
 
 Typical use::
 
@@ -16,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 import types
 import typing
 from collections.abc import Mapping
@@ -34,6 +37,46 @@ class ConfigError(ValueError):
     """A configuration file or override is malformed (unknown key, wrong type, missing file)."""
 
 
+class _DuplicateKey(yaml.YAMLError):
+    """A mapping of a YAML document has the same key twice (the loader refuses it)."""
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """`yaml.SafeLoader` that refuses duplicate keys instead of keeping the last one."""
+
+
+def _strict_mapping(loader: _StrictLoader, node: yaml.MappingNode, deep: bool = False) -> Any:
+    first_line: dict[Any, int] = {}
+    for key_node, _ in node.value:
+        if key_node.tag == "tag:yaml.org,2002:merge":
+            continue  # `<<: *anchor` merges are allowed to be overridden
+        key = loader.construct_object(key_node, deep=True)
+        line = key_node.start_mark.line + 1
+        try:
+            earlier = first_line.get(key)
+        except TypeError:
+            raise _DuplicateKey(f"line {line}: a mapping key must be a plain value") from None
+        if earlier is not None:
+            raise _DuplicateKey(
+                f"line {line}: duplicate key {key!r} (first at line {earlier}); each key may "
+                "appear once per mapping"
+            )
+        first_line[key] = line
+    return yaml.SafeLoader.construct_mapping(loader, node, deep=deep)
+
+
+_StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _strict_mapping)
+
+
+def parse_yaml(text: str) -> Any:
+    """Parse YAML text safely, refusing duplicate keys.
+
+    Raises:
+        yaml.YAMLError: Malformed YAML or a duplicate key (the message names it and its lines).
+    """
+    return yaml.load(text, Loader=_StrictLoader)  # noqa: S506 (a SafeLoader subclass)
+
+
 def resolve_path(name_or_path: str | Path, subdir: str = "") -> Path:
     """Find a YAML file by bundled name (``"qshape"``) or by path.
 
@@ -43,8 +86,14 @@ def resolve_path(name_or_path: str | Path, subdir: str = "") -> Path:
         subdir: Sub-folder of ``configs/`` searched for bundled names.
 
     Raises:
-        ConfigError: Neither a file nor a bundled name; the message lists the bundled names.
+        ConfigError: Neither a file nor a bundled name (the message lists the bundled names),
+            or not a string or path at all.
     """
+    if not isinstance(name_or_path, str | Path):
+        raise ConfigError(
+            f"a configuration is named by a bundled name or a file path (str or Path), got "
+            f"{type(name_or_path).__name__}"
+        )
     path = Path(name_or_path)
     if path.is_file():
         return path
@@ -63,11 +112,12 @@ def load_yaml(name_or_path: str | Path, subdir: str = "") -> dict[str, Any]:
     """Read a YAML mapping from a bundled name or a path.
 
     Raises:
-        ConfigError: The file is missing, unreadable, not YAML, or not a mapping at top level.
+        ConfigError: The file is missing, unreadable, not YAML, has a duplicate key, or is not
+            a mapping at top level.
     """
     path = resolve_path(name_or_path, subdir)
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        data = parse_yaml(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
         raise ConfigError(f"cannot read configuration {path}: {exc}") from exc
     if data is None:
@@ -126,13 +176,15 @@ def _convert(value: Any, hint: Any, where: str) -> Any:
             raise ConfigError(f"{where}: expected true/false, got {value!r}")
         return value
     if hint is float:
-        if isinstance(value, bool) or not isinstance(value, int | float):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise ConfigError(f"{where}: expected a number, got {value!r}")
-        return float(value)
+        if not math.isfinite(value):
+            raise ConfigError(f"{where}: expected a finite number, got {value!r}")
+        return value if type(value) is float else float(value)
     if hint is int:
-        if isinstance(value, bool) or not isinstance(value, int):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
             raise ConfigError(f"{where}: expected an integer, got {value!r}")
-        return value
+        return value if type(value) is int else int(value)
     if hint is str:
         if not isinstance(value, str):
             raise ConfigError(f"{where}: expected a string, got {value!r}")
@@ -163,6 +215,29 @@ def from_dict(cls: type[T], data: Mapping[str, Any], *, source: str = "<dict>") 
         return cls(**kwargs)
     except TypeError as exc:
         raise ConfigError(f"{source}: {exc}") from exc
+
+
+def check_field_types(obj: object) -> None:
+    """Apply `from_dict`'s type rules to a dataclass instance built directly (``__post_init__``).
+
+    bool fields must hold bools, number fields finite numbers (ints are widened to float),
+    tuple fields sequences of the right element type (lists become tuples), Literal fields one
+    of their values. Converted values are written back into the (frozen) instance.
+
+    Raises:
+        ConfigError: A field of the wrong type; the message names the class, field and value.
+    """
+    cls = type(obj)
+    if not dataclasses.is_dataclass(obj) or not isinstance(cls, type):
+        raise TypeError(f"{obj!r} is not a dataclass instance")
+    hints = typing.get_type_hints(cls)
+    for f in dataclasses.fields(cls):
+        if not f.init:
+            continue
+        value = getattr(obj, f.name)
+        converted = _convert(value, hints[f.name], f"{cls.__name__}.{f.name}")
+        if converted is not value:
+            object.__setattr__(obj, f.name, converted)
 
 
 def check_positive(
@@ -218,9 +293,11 @@ def load_config(
 __all__ = [
     "CONFIG_DIR",
     "ConfigError",
+    "check_field_types",
     "check_positive",
     "from_dict",
     "load_config",
     "load_yaml",
+    "parse_yaml",
     "resolve_path",
 ]

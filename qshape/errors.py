@@ -27,11 +27,31 @@ class MatchError(QShapeError):
     """Arguments to `match` or `assign` are of the wrong kind (e.g. an unknown method name)."""
 
 
+class DesignError(QShapeError):
+    """A design file or design value is malformed; the message names the slot and the problem."""
+
+
+class LimitError(QShapeError):
+    """An input exceeds a documented cap (``limits`` in configs/qshape.yaml); the message names it."""
+
+
+class FigureLimitError(LimitError, InvalidFigureError):
+    """A figure or outline exceeds a cap (points, holes, coordinate range)."""
+
+
+class TextLimitError(LimitError, ParseError):
+    """A description text exceeds a cap (characters, node count)."""
+
+
 __all__ = [
+    "DesignError",
+    "FigureLimitError",
     "InvalidFigureError",
+    "LimitError",
     "InvalidHoleError",
     "MatchError",
     "ParseError",
     "QShapeError",
+    "TextLimitError",
     "ToleranceError",
 ]

@@ -13,16 +13,19 @@ line from its previous to its next neighbour.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+import numbers
+from collections.abc import Iterable, Sequence, Sized
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import shapely
 from numpy.typing import ArrayLike
 
 from qshape import geometry as geo
-from qshape.errors import InvalidFigureError, InvalidHoleError
+from qshape.errors import FigureLimitError, InvalidFigureError, InvalidHoleError
 from qshape.geometry import MAX_COORDINATE, BoolArray, FloatArray
+from qshape.limits import default_limits
 from qshape.simplify import OutlineParams, simplify_outlines
 
 _REL_EPS = 1e-12
@@ -34,19 +37,39 @@ _ARC_SAMPLES = 16
 Color = tuple[float, float, float]
 
 
-def _as_points(points: ArrayLike, what: str) -> FloatArray:
-    """Convert to a finite float64 (n, 2) array with n >= 3 distinct points, or raise."""
+def _as_points(points: ArrayLike, what: str, cap: str = "max_points") -> FloatArray:
+    """Convert to a finite float64 (n, 2) array with n >= 3 distinct points, or raise.
+
+    Real numbers only (no strings, booleans or complex numbers); at most ``Limits.<cap>`` rows.
+    """
     try:
-        arr = np.array(points, dtype=np.float64)
+        raw = np.asarray(points)
+        kind = raw.dtype.kind
+        if kind == "O":  # mixed Python objects: real numbers only
+            if not all(
+                isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_)
+                for v in raw.ravel()
+            ):
+                raise TypeError("points hold values that are not real numbers")
+            raw = raw.astype(np.float64)
+            kind = "f"
     except (TypeError, ValueError) as exc:
         raise InvalidFigureError(f"{what}: points must be numbers of shape (n, 2): {exc}") from exc
-    if arr.ndim != 2 or arr.shape[1] != 2:
-        raise InvalidFigureError(f"{what}: points must have shape (n, 2), got {arr.shape}")
+    if kind not in "iuf":
+        named = {"c": "complex numbers", "b": "booleans", "U": "strings", "S": "bytes"}
+        raise InvalidFigureError(
+            f"{what}: points must be real numbers of shape (n, 2), got "
+            f"{named.get(kind, raw.dtype.name)}"
+        )
+    if raw.ndim != 2 or raw.shape[1] != 2:
+        raise InvalidFigureError(f"{what}: points must have shape (n, 2), got {raw.shape}")
+    default_limits().check_count(len(raw), cap, f"{what}: points", FigureLimitError)
+    arr = np.array(raw, dtype=np.float64)
     if not np.all(np.isfinite(arr)):
         bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1)).tolist()
-        raise InvalidFigureError(f"{what}: points must be finite; NaN or inf at rows {bad}")
+        raise InvalidFigureError(f"{what}: points must be finite; NaN or inf at rows {bad[:10]}")
     if np.abs(arr).max(initial=0.0) > MAX_COORDINATE:
-        raise InvalidFigureError(
+        raise FigureLimitError(
             f"{what}: coordinates must be at most {MAX_COORDINATE:g} in magnitude (so that areas "
             "stay finite)"
         )
@@ -75,19 +98,29 @@ def _strictly_convex(pts: FloatArray) -> bool:
 
 
 def _validate_boundary(pts: FloatArray, mask: BoolArray, what: str) -> float:
-    """Check distinct points, non-zero area, simple polygon, curve mask; return signed area."""
+    """Check range, distinct points, non-zero area, simple polygon, curve mask; signed area.
+
+    O(n log n): duplicates by sorting, simplicity by a sweep (GEOS).
+    """
     size = float(np.ptp(pts, axis=0).max())
     if size <= 0.0:
         raise InvalidFigureError(f"{what}: all points coincide; a figure needs a non-zero area")
+    default_limits().check_range(float(np.abs(pts).max()), size, what)
     convex = _strictly_convex(pts)
-    rounded = pts / size
-    if not convex and len(np.unique(rounded, axis=0)) < len(pts):
-        d = np.hypot(*(rounded[:, None, :] - rounded[None, :, :]).transpose(2, 0, 1))
-        i, j = np.argwhere(np.triu(d == 0.0, k=1))[0]
-        raise InvalidFigureError(
-            f"{what}: repeated point {pts[i].tolist()} at indices {int(i)} and {int(j)}; "
-            "every relevant point must be distinct"
-        )
+    if not convex:
+        order = np.lexsort((pts[:, 1], pts[:, 0]))
+        same = np.all(pts[order][1:] == pts[order][:-1], axis=1)
+        if same.any():
+            k = int(np.flatnonzero(same)[0])
+            i, j = sorted((int(order[k]), int(order[k + 1])))
+            raise InvalidFigureError(
+                f"{what}: repeated point {pts[i].tolist()} at indices {i} and {j}; "
+                "every relevant point must be distinct"
+            )
+    rel = pts - pts[0]
+    far = rel[int(np.argmax(np.abs(rel).sum(axis=1)))]
+    if np.abs(geo.cross2(rel, far)).max() <= _REL_EPS * size * size:
+        raise InvalidFigureError(f"{what}: zero area (all points collinear); a figure needs area")
     if not convex and geo.self_intersects(pts):
         raise InvalidFigureError(
             f"{what}: the boundary crosses or touches itself; only simple closed boundaries are "
@@ -95,7 +128,7 @@ def _validate_boundary(pts: FloatArray, mask: BoolArray, what: str) -> float:
         )
     area = geo.signed_area(pts)
     if abs(area) <= _REL_EPS * size * size:
-        raise InvalidFigureError(f"{what}: zero area (all points collinear); a figure needs area")
+        raise InvalidFigureError(f"{what}: zero area; a figure needs area")
     if mask.shape != (len(pts),):
         raise InvalidFigureError(
             f"{what}: curve_mask must have shape ({len(pts)},), got {mask.shape}"
@@ -270,8 +303,7 @@ class Boundary:
 
 def _pose(local: FloatArray, center: Sequence[float], angle: float, y_down: bool) -> FloatArray:
     """Rotate y-up local points by ``angle`` (rad, CCW in y-up), flip if y_down, translate."""
-    c, s = math.cos(angle), math.sin(angle)
-    pts = local @ np.array([[c, s], [-s, c]])
+    pts = geo.rotate(local, angle)
     if y_down:
         pts = pts * np.array([1.0, -1.0])
     return pts + np.asarray(center, dtype=np.float64)
@@ -329,6 +361,16 @@ class Figure:
             InvalidFigureError: Bad outer boundary or colour.
             InvalidHoleError: A hole outside the parent, crossing it, or overlapping a hole.
         """
+        if not isinstance(self.y_down, bool | np.bool_):
+            raise InvalidFigureError(f"y_down must be True or False, got {self.y_down!r}")
+        limits = default_limits()
+        if isinstance(self.holes, str | bytes) or not isinstance(self.holes, Iterable):
+            raise InvalidFigureError(
+                f"holes must be a sequence of hole boundaries (each (m, 2) points or a Boundary), "
+                f"got {type(self.holes).__name__}"
+            )
+        object.__setattr__(self, "holes", tuple(self.holes))
+        limits.check_count(len(self.holes), "max_holes", "figure: holes", FigureLimitError)
         outer = Boundary.make(self.points, self.curve_mask, y_down=self.y_down, what="figure")
         holes = tuple(
             Boundary.make(
@@ -339,6 +381,8 @@ class Figure:
             )
             for k, h in enumerate(self.holes)
         )
+        total = len(outer.points) + sum(len(h.points) for h in holes)
+        limits.check_count(total, "max_points", "figure: relevant points", FigureLimitError)
         self._derive(outer, holes, _as_color(self.color))
 
     def _derive(self, outer: Boundary, holes: tuple[Boundary, ...], color: Color | None) -> None:
@@ -410,7 +454,7 @@ class Figure:
         return cls(
             points,  # type: ignore[arg-type]
             curve_mask,  # type: ignore[arg-type]
-            tuple(holes),  # type: ignore[arg-type]
+            holes,  # type: ignore[arg-type]
             color,  # type: ignore[arg-type]
             y_down,
         )
@@ -549,11 +593,16 @@ def figures_from_outlines(
     Returns:
         Per outline, the figure or the `InvalidFigureError` (or `InvalidHoleError`) it raised.
     """
+    limits = default_limits()
     dense: list[ArrayLike] = list(outlines)
     whats = ["outline"] * len(dense)
     for h in holes:
+        limits.check_count(len(h), "max_holes", "outline: holes", FigureLimitError)
         dense.extend(h)
         whats.extend(f"hole {k} outline" for k in range(len(h)))
+    for d, what in zip(dense, whats, strict=True):
+        count = len(d) if isinstance(d, Sized) else 0
+        limits.check_count(count, "max_dense_points", f"{what}: points", FigureLimitError)
     simple = simplify_outlines(dense, params, whats=whats)
     out: list[Figure | InvalidFigureError] = []
     at = len(outlines)
@@ -591,31 +640,34 @@ def _positive(value: float, name: str) -> float:
 
 
 def _check_holes(outer: Boundary, holes: tuple[Boundary, ...]) -> None:
-    """Raise `InvalidHoleError` unless every hole is strictly inside the parent, holes disjoint."""
-    parent = outer.dense()
-    dense = [h.dense() for h in holes]
-    for k, hd in enumerate(dense):
-        inside = geo.points_in_polygon(hd, parent)
-        if not inside.all():
-            if not inside.any() and not geo.points_in_polygon(parent[:1], hd).any():
+    """Raise `InvalidHoleError` unless every hole is strictly inside the parent, holes disjoint.
+
+    O(N log N) in the total number of (arc-sampled) boundary points (GEOS, an R-tree for the
+    hole pairs).
+    """
+    parent_pts = outer.dense()
+    ref = parent_pts[0]
+    parent = geo.polygon_of(parent_pts, ref)
+    polys = []
+    for k, h in enumerate(holes):
+        hd = h.dense()
+        poly = shapely.Polygon(hd - ref)
+        if not parent.contains_properly(poly):
+            if parent.disjoint(poly) and not poly.contains(shapely.Point(parent_pts[0] - ref)):
                 raise InvalidHoleError(
                     f"hole {k} lies outside its parent figure; holes must be strictly inside"
                 )
             raise InvalidHoleError(
-                f"hole {k} crosses its parent's boundary; holes must be strictly inside"
-            )
-        if geo.boundaries_cross(hd, parent):
-            raise InvalidHoleError(
                 f"hole {k} touches or crosses its parent's boundary; holes must be strictly inside"
             )
-    for a in range(len(dense)):
-        for b in range(a + 1, len(dense)):
-            if (
-                geo.boundaries_cross(dense[a], dense[b])
-                or geo.points_in_polygon(dense[a][:1], dense[b]).any()
-                or geo.points_in_polygon(dense[b][:1], dense[a]).any()
-            ):
-                raise InvalidHoleError(f"holes {a} and {b} overlap; holes must be disjoint")
+        polys.append(poly)
+    if len(polys) > 1:
+        tree = shapely.STRtree(polys)
+        a, b = tree.query(polys, predicate="intersects")
+        pairs = sorted((int(i), int(j)) for i, j in zip(a, b, strict=True) if i < j)
+        if pairs:
+            i, j = pairs[0]
+            raise InvalidHoleError(f"holes {i} and {j} overlap; holes must be disjoint")
 
 
 __all__ = ["Boundary", "Color", "Figure", "densify", "figures_from_outlines"]

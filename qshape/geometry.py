@@ -1,43 +1,108 @@
-"""Vectorised polygon helpers (all vertices at once, no per-vertex Python loops).
+"""Plane geometry of qshape: angles, rotations, polygon measures and simplicity tests.
+
+One home per fact: angle wrapping (`wrap_angle`, `wrap_angles`), 2D rotation (`rotate`,
+`rotation_matrix`), signed area and area centroid (`signed_area`, `polygon_centroid`,
+`area_centroid_perimeter`) and the yaw error modulo a rotational symmetry (`yaw_error`,
+`yaw_errors`). Everything else in the project that needs one of these imports it from here.
 
 Points are arrays of shape (n, 2), in any length unit, in a right-handed frame unless stated.
+Areas and centroids are computed relative to the polygon's first point, so a figure far from
+the origin keeps the precision of its own size (a 40 mm square at 1e11 mm has area 1600 mm^2).
+Simplicity and crossing tests use GEOS through shapely (O(n log n)), never n x n arrays.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from numpy.typing import NDArray
+import shapely
+from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 MAX_COORDINATE = 1e100
-"""Largest accepted coordinate magnitude: products of coordinates must not overflow."""
+"""Hard bound on coordinate magnitude: products of coordinates must not overflow float64.
+
+The documented, tighter cap is ``Limits.max_coordinate`` (``configs/qshape.yaml``)."""
+
+TWO_PI = 2.0 * math.pi
 
 
+# ------------------------------------------------------------------------------ angles
+def wrap_angle(angle: float) -> float:
+    """Angle wrapped to (-pi, pi], in [rad]."""
+    w = math.remainder(float(angle), TWO_PI)
+    return math.pi if w == -math.pi else w
+
+
+def wrap_angles(angles: ArrayLike) -> FloatArray:
+    """`wrap_angle` element-wise: any shape, [rad] -> (-pi, pi] [rad]."""
+    w = np.remainder(np.asarray(angles, dtype=np.float64) + math.pi, TWO_PI) - math.pi
+    return np.asarray(np.where(w <= -math.pi, math.pi, w), dtype=np.float64)
+
+
+def yaw_error(yaw: float, target: float, symmetry: int) -> float:
+    """|yaw - target| modulo the rotational symmetry, in [rad], in [0, pi / symmetry].
+
+    Args:
+        yaw: Measured yaw [rad].
+        target: Wanted yaw [rad].
+        symmetry: Rotational symmetry order (1: none, 4: a square, 0: continuous, error 0).
+    """
+    return float(yaw_errors(yaw, target, symmetry))
+
+
+def yaw_errors(yaw: ArrayLike, target: ArrayLike, symmetry: ArrayLike) -> FloatArray:
+    """`yaw_error` element-wise (broadcasting), in [rad]."""
+    order = np.asarray(symmetry, dtype=np.int64)
+    period = TWO_PI / np.maximum(order, 1)
+    diff = np.asarray(yaw, dtype=np.float64) - np.asarray(target, dtype=np.float64)
+    err = np.abs(np.remainder(diff + 0.5 * period, period) - 0.5 * period)
+    return np.asarray(np.where(order == 0, 0.0, err), dtype=np.float64)
+
+
+def rotation_matrix(angle: float) -> FloatArray:
+    """2 x 2 matrix R turning column vectors counter-clockwise by ``angle`` [rad]: R @ p."""
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s], [s, c]])
+
+
+def rotate(points: ArrayLike, angle: float) -> FloatArray:
+    """Points (..., 2) turned counter-clockwise by ``angle`` [rad] about the origin."""
+    return np.asarray(np.asarray(points, dtype=np.float64) @ rotation_matrix(angle).T)
+
+
+# ---------------------------------------------------------------------- polygon measures
 def cross2(a: FloatArray, b: FloatArray) -> FloatArray:
     """Z component of the cross product of 2D vectors (broadcasting over leading axes)."""
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return np.asarray(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
 
 
 def signed_area(points: FloatArray) -> float:
-    """Shoelace area of a closed polygon, positive when counter-clockwise. Shape (n, 2)."""
-    x, y = points[:, 0], points[:, 1]
-    return 0.5 * float(np.dot(x[:-1], y[1:]) + x[-1] * y[0] - np.dot(x[1:], y[:-1]) - x[0] * y[-1])
+    """Shoelace area of a closed polygon, positive when counter-clockwise. Shape (n, 2).
+
+    Computed relative to the first point (precision of the polygon's size, not its offset).
+    """
+    p = points - points[0]
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * float(np.dot(x[:-1], y[1:]) - np.dot(x[1:], y[:-1]))
 
 
 def polygon_centroid(points: FloatArray) -> FloatArray:
     """Centroid of the polygon area (not of the vertices). Shape (n, 2) -> (2,).
 
-    Raises:
-        ZeroDivisionError: Never; a zero-area polygon returns the vertex mean instead.
+    A zero-area polygon returns the vertex mean instead.
     """
-    nxt = np.roll(points, -1, axis=0)
-    w = cross2(points, nxt)
-    a = w.sum()
+    ref = points[0]
+    p = points - ref
+    nxt = np.roll(p, -1, axis=0)
+    w = cross2(p, nxt)
+    a = float(w.sum())
     if a == 0.0:
         return np.asarray(points.mean(axis=0), dtype=np.float64)
-    return np.asarray(((points + nxt) * w[:, None]).sum(axis=0) / (3.0 * a), dtype=np.float64)
+    return np.asarray(ref + ((p + nxt) * w[:, None]).sum(axis=0) / (3.0 * a), dtype=np.float64)
 
 
 def is_counter_clockwise(points: FloatArray) -> bool:
@@ -45,54 +110,43 @@ def is_counter_clockwise(points: FloatArray) -> bool:
     return signed_area(points) > 0.0
 
 
-def _segment_pairs_cross(
-    a0: FloatArray, a1: FloatArray, b0: FloatArray, b1: FloatArray
-) -> BoolArray:
-    """Which segments a (m, 2) properly or improperly intersect segments b (k, 2). -> (m, k)."""
-    da = (a1 - a0)[:, None, :]
-    db = (b1 - b0)[None, :, :]
-    o1 = cross2(da, b0[None, :, :] - a0[:, None, :])
-    o2 = cross2(da, b1[None, :, :] - a0[:, None, :])
-    o3 = cross2(db, a0[:, None, :] - b0[None, :, :])
-    o4 = cross2(db, a1[:, None, :] - b0[None, :, :])
-    proper = (o1 * o2 < 0.0) & (o3 * o4 < 0.0)
-
-    # Touching / collinear overlap: an endpoint lies on the other segment.
-    def on_seg(p: FloatArray, q0: FloatArray, q1: FloatArray, o: FloatArray) -> BoolArray:
-        lo = np.minimum(q0, q1)
-        hi = np.maximum(q0, q1)
-        inside = np.all((p >= lo) & (p <= hi), axis=-1)
-        return (o == 0.0) & inside
-
-    touch = (
-        on_seg(b0[None, :, :], a0[:, None, :], a1[:, None, :], o1)
-        | on_seg(b1[None, :, :], a0[:, None, :], a1[:, None, :], o2)
-        | on_seg(a0[:, None, :], b0[None, :, :], b1[None, :, :], o3)
-        | on_seg(a1[:, None, :], b0[None, :, :], b1[None, :, :], o4)
-    )
-    return np.asarray(proper | touch)
+# --------------------------------------------------------------------- simplicity tests
+def _ring(points: FloatArray, ref: FloatArray) -> shapely.LinearRing:
+    """Closed shapely ring of ``points - ref`` (relative coordinates keep precision)."""
+    return shapely.LinearRing(points - ref)
 
 
 def self_intersects(points: FloatArray) -> bool:
-    """True when two non-adjacent edges of the closed polygon touch or cross. Shape (n, 2)."""
-    n = len(points)
-    if n < 4:
+    """True when two edges of the closed polygon touch or cross away from their shared vertex.
+
+    O(n log n) (GEOS). Shape (n, 2), n >= 3 distinct consecutive points.
+    """
+    if len(points) < 4:
         return False
-    nxt = np.roll(points, -1, axis=0)
-    hit = _segment_pairs_cross(points, nxt, points, nxt)
-    i, j = np.triu_indices(n, k=2)
-    keep = ~((i == 0) & (j == n - 1))
-    return bool(np.any(hit[i[keep], j[keep]]))
+    return not bool(_ring(points, points[0]).is_simple)
 
 
 def boundaries_cross(a: FloatArray, b: FloatArray) -> bool:
     """True when any edge of closed polygon a touches or crosses any edge of closed polygon b."""
-    hit = _segment_pairs_cross(a, np.roll(a, -1, axis=0), b, np.roll(b, -1, axis=0))
-    return bool(np.any(hit))
+    return bool(_ring(a, a[0]).intersects(_ring(b, a[0])))
 
 
 def points_in_polygon(query: FloatArray, polygon: FloatArray) -> BoolArray:
-    """Even-odd test of points (m, 2) against a closed polygon (n, 2). -> (m,) bool."""
+    """Even-odd test of points (m, 2) against a closed polygon (n, 2). -> (m,) bool.
+
+    Points exactly on the boundary may fall either way. O((m + n) log n) (GEOS).
+    """
+    ref = polygon[0]
+    poly = shapely.Polygon(polygon - ref)
+    if not poly.is_valid:  # a self-crossing outline: fall back to the even-odd ray count
+        return _points_in_polygon_even_odd(query, polygon)
+    shapely.prepare(poly)
+    rel = np.asarray(query, dtype=np.float64) - ref
+    return np.asarray(shapely.contains_xy(poly, rel[:, 0], rel[:, 1]), dtype=bool)
+
+
+def _points_in_polygon_even_odd(query: FloatArray, polygon: FloatArray) -> BoolArray:
+    """Even-odd ray count (m x n work) for polygons GEOS calls invalid."""
     p0 = polygon[None, :, :]
     p1 = np.roll(polygon, -1, axis=0)[None, :, :]
     qx = query[:, None, 0]
@@ -103,6 +157,13 @@ def points_in_polygon(query: FloatArray, polygon: FloatArray) -> BoolArray:
     x_at = p0[..., 0] + (qy - p0[..., 1]) * (p1[..., 0] - p0[..., 0]) / safe_dy
     crossings = straddle & (qx < x_at)
     return np.asarray(np.count_nonzero(crossings, axis=1) % 2 == 1)
+
+
+def polygon_of(points: FloatArray, ref: FloatArray) -> shapely.Polygon:
+    """Prepared shapely polygon of ``points - ref`` (for repeated containment queries)."""
+    poly = shapely.Polygon(points - ref)
+    shapely.prepare(poly)
+    return poly
 
 
 def arc_segments(
@@ -168,7 +229,10 @@ def area_centroid_perimeter(
 
     Returns:
         (area > 0, centroid (2,), perimeter), in the points' unit (squared for the area).
+        Computed relative to the first point (precision of the size, not of the offset).
     """
+    ref = points[0].copy()
+    points = points - ref
     nxt = np.concatenate([points[1:], points[:1]])
     w = cross2(points, nxt)
     poly_area = 0.5 * float(w.sum())
@@ -184,19 +248,27 @@ def area_centroid_perimeter(
         poly_moment = poly_moment + (extra_c * extra[:, None]).sum(axis=0)
         poly_area += float(extra.sum())
     if poly_area == 0.0:
-        return 0.0, np.asarray(points.mean(axis=0), dtype=np.float64), perimeter
-    return poly_area, np.asarray(poly_moment / poly_area, dtype=np.float64), perimeter
+        return 0.0, np.asarray(ref + points.mean(axis=0), dtype=np.float64), perimeter
+    return poly_area, np.asarray(ref + poly_moment / poly_area, dtype=np.float64), perimeter
 
 
 __all__ = [
     "MAX_COORDINATE",
-    "area_centroid_perimeter",
+    "TWO_PI",
     "arc_segments",
+    "area_centroid_perimeter",
     "boundaries_cross",
     "cross2",
     "is_counter_clockwise",
     "points_in_polygon",
     "polygon_centroid",
+    "polygon_of",
+    "rotate",
+    "rotation_matrix",
     "self_intersects",
     "signed_area",
+    "wrap_angle",
+    "wrap_angles",
+    "yaw_error",
+    "yaw_errors",
 ]

@@ -11,10 +11,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
-from configs import ConfigError, from_dict, load_yaml, resolve_path
+from configs import ConfigError, check_field_types
+from qshape.config_sections import load_section
 from qshape.errors import ToleranceError
+
+T = TypeVar("T")
 
 
 def _check_band(name: str, band: tuple[float, ...], low_min: float = 0.0) -> None:
@@ -103,10 +106,13 @@ class Tolerances:
             ToleranceError: Naming the field and the allowed range.
         """
         for name in ("right_angle_deg", "equal_length_ratio", "semicircle_ratio"):
-            try:
-                object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
-            except (TypeError, ValueError) as exc:
-                raise ToleranceError(f"{name} must be two numbers (low, high): {exc}") from exc
+            value = getattr(self, name)
+            if not isinstance(value, str) and hasattr(value, "__len__"):
+                object.__setattr__(self, name, tuple(value))  # lists, arrays: checked below
+        try:
+            check_field_types(self)
+        except ConfigError as exc:
+            raise ToleranceError(str(exc)) from None
         _check_band("right_angle_deg", self.right_angle_deg)
         if self.right_angle_deg[1] >= 180.0:
             raise ToleranceError(f"right_angle_deg high must be < 180, got {self.right_angle_deg}")
@@ -173,25 +179,14 @@ class Tolerances:
             configs.ConfigError: Unknown key, wrong type or missing file.
             ToleranceError: Values out of range.
         """
-        return _load_section(cls, "tolerances", name_or_path, overrides)
+        return load_section(cls, "tolerances", name_or_path, overrides, default="qshape")
 
 
 def _load_section(
-    cls: type[Any], section: str, name_or_path: str | Path | None, overrides: dict[str, Any]
-) -> Any:
-    """Load one section of a qshape YAML file strictly into ``cls``."""
-    data = load_yaml("qshape" if name_or_path is None else name_or_path)
-    source = str(resolve_path("qshape" if name_or_path is None else name_or_path))
-    if section in data:
-        body = data[section]
-        if not isinstance(body, dict):
-            raise ConfigError(f"{source}: {section!r} must be a mapping")
-    elif any(isinstance(v, dict) for v in data.values()):
-        body = {}
-    else:
-        body = data
-    merged = {**body, **overrides}
-    return from_dict(cls, merged, source=f"{source}:{section}")
+    cls: type[T], section: str, name_or_path: str | Path | None, overrides: dict[str, Any]
+) -> T:
+    """One section of ``configs/qshape.yaml`` (or another file); see `load_section`."""
+    return load_section(cls, section, name_or_path, overrides, default="qshape")
 
 
 __all__ = ["Tolerances"]
