@@ -21,19 +21,24 @@ from qshape.description import (
     Node,
     describe,
     describe_many,
-    parse,
 )
 from qshape.errors import (
+    DesignError,
+    FigureLimitError,
     InvalidFigureError,
     InvalidHoleError,
+    LimitError,
     MatchError,
     ParseError,
     QShapeError,
+    TextLimitError,
     ToleranceError,
 )
 from qshape.figure import Boundary, Figure
+from qshape.limits import Limits
 from qshape.matching import Match, canonical_key, canonical_keys, match
 from qshape.simplify import OutlineParams
+from qshape.text_parser import parse
 from qshape.tolerances import Tolerances
 
 __all__ = [
@@ -41,16 +46,21 @@ __all__ = [
     "Boundary",
     "BoundaryDescription",
     "Description",
+    "DesignError",
+    "FigureLimitError",
     "Figure",
     "HoleDescription",
     "InvalidFigureError",
     "InvalidHoleError",
+    "LimitError",
+    "Limits",
     "Match",
     "MatchError",
     "Node",
     "OutlineParams",
     "ParseError",
     "QShapeError",
+    "TextLimitError",
     "ToleranceError",
     "Tolerances",
     "assign",
@@ -63,7 +73,7 @@ __all__ = [
 ]
 
 # Vision: mosaic designs, rendering, extraction from images (issue 3).
-from qshape.design import Design, DesignError, Slot  # noqa: E402
+from qshape.design import Design, Slot  # noqa: E402
 from qshape.extract import (  # noqa: E402
     ExtractParams,
     ExtractResult,
@@ -75,7 +85,6 @@ from qshape.render import render_design, save_png  # noqa: E402
 
 __all__ += [
     "Design",
-    "DesignError",
     "ExtractParams",
     "ExtractResult",
     "ImageError",

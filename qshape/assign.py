@@ -29,16 +29,10 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from qshape.description import Description, default_tolerances, describe_many
+from qshape.description import Description, describe_many
 from qshape.errors import MatchError
-from qshape.figure import Figure
-from qshape.geometry import FloatArray
-from qshape.matching import (
+from qshape.evaluator import (
     Pack,
-    as_description,
-    canonical_key,
-    canonical_keys,
-    coarse_key,
     cyclic_compat_by_offset,
     equivalent_entries,
     evaluate_block,
@@ -47,6 +41,10 @@ from qshape.matching import (
     prefilter,
     take,
 )
+from qshape.figure import Figure
+from qshape.geometry import FloatArray
+from qshape.keys import canonical_key, canonical_keys, coarse_key
+from qshape.matching import as_description, check_match_inputs
 from qshape.tolerances import Tolerances
 
 IntArray = NDArray[np.int64]
@@ -417,7 +415,7 @@ def assign(
     """
     if method not in METHODS:
         raise MatchError(f"unknown assign method {method!r}; allowed: {', '.join(METHODS)}")
-    tol = default_tolerances() if tolerances is None else tolerances
+    tol = check_match_inputs(tiles, slots, tolerances, use_color)
     td = _descriptions(tiles, tol)
     sd = _descriptions(slots, tol)
     if not td or not sd:

@@ -9,9 +9,7 @@ it, floats written exactly, so ``parse(str(d)) == d`` and matching parsed descri
 
 from __future__ import annotations
 
-import functools
 import math
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -19,11 +17,11 @@ from functools import cached_property
 import numpy as np
 
 from qshape import labels as lb
-from qshape.errors import ParseError
+from qshape.errors import InvalidFigureError
 from qshape.figure import Color, Figure, densify
 from qshape.geometry import BoolArray, FloatArray
 from qshape.labels import CodeArray
-from qshape.tolerances import Tolerances
+from qshape.tolerances import Tolerances, default_tolerances, resolve_tolerances  # noqa: F401
 
 WITHOUT_HOLES, WITH_HOLES = "without holes", "with holes"
 WITHOUT_CURVES, WITH_CURVES, ONLY_CURVES = "without curves", "with curves", "only curves"
@@ -34,12 +32,6 @@ HEADER = "qshape-description v1"
 _CONE_DEG = 45.0
 _HOLE_ARC_SAMPLES = 8
 """Samples per arc when measuring the angles a hole spans (numerical resolution only)."""
-
-
-@functools.cache
-def default_tolerances() -> Tolerances:
-    """The bundled tolerances (``configs/qshape.yaml``), loaded once."""
-    return Tolerances.load()
 
 
 @dataclass(frozen=True)
@@ -322,8 +314,14 @@ def describe(figure: Figure, tolerances: Tolerances | None = None) -> Descriptio
 
     Returns:
         The `Description`; the outer boundary starts at its uppermost-left vertex (y-up).
+
+    Raises:
+        InvalidFigureError: ``figure`` is not a `Figure`.
+        ToleranceError: ``tolerances`` is not a `Tolerances` (or None).
     """
-    tol = default_tolerances() if tolerances is None else tolerances
+    tol = resolve_tolerances(tolerances)
+    if not isinstance(figure, Figure):
+        raise InvalidFigureError(f"describe expects a qshape.Figure, got {type(figure).__name__}")
     flip = np.array([1.0, -1.0]) if figure.y_down else np.array([1.0, 1.0])
     centre = figure.outer_centroid * flip
     rel = figure.points * flip - centre
@@ -362,8 +360,21 @@ def describe_many(
     Args:
         figures: The figures.
         tolerances: Bands and margins; None uses the bundled defaults.
+
+    Raises:
+        InvalidFigureError: ``figures`` is not a sequence of `Figure`.
+        ToleranceError: ``tolerances`` is not a `Tolerances` (or None).
     """
-    tol = default_tolerances() if tolerances is None else tolerances
+    tol = resolve_tolerances(tolerances)
+    if not isinstance(figures, Sequence) or isinstance(figures, str | bytes):
+        raise InvalidFigureError(
+            f"describe_many expects a sequence of qshape.Figure, got {type(figures).__name__}"
+        )
+    for k, f in enumerate(figures):
+        if not isinstance(f, Figure):
+            raise InvalidFigureError(
+                f"describe_many: item {k} must be a qshape.Figure, got {type(f).__name__}"
+            )
     if not figures:
         return []
     counts = np.array([len(f.points) for f in figures])
@@ -467,182 +478,6 @@ def format_description(d: Description) -> str:
     return "\n".join(lines) + "\n"
 
 
-_FLOAT = r"[-+]?(?:\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?|inf|nan)"
-_NODE_RE = re.compile(
-    r"^\s+<([^,<>]+),\s*([^,<>]+),\s*([^,<>]+)>\s*@\s*\(("
-    + _FLOAT
-    + r"),\s*("
-    + _FLOAT
-    + r")\)\s*$"
-)
-_HOLE_RE = re.compile(
-    r"^hole:\s*(\w+)\s*\[([^\]]*)\]\s*(without curves|with curves|only curves)"
-    r",\s*nodes:\s*(\d+)\s*$"
-)
-
-
-def _component(text: str, names: tuple[str, ...], where: str) -> tuple[int, int]:
-    parts = [p.strip() for p in text.split("/")]
-    idx = []
-    for p in parts:
-        if p not in names:
-            raise ParseError(f"{where}: unknown label {p!r}; allowed: {', '.join(names)}")
-        idx.append(names.index(p))
-    if len(set(idx)) != len(idx):
-        raise ParseError(f"{where}: repeated label in {text!r}")
-    mask = 0
-    for k in idx:
-        mask |= 1 << k
-    return idx[0], mask
-
-
-def _parse_node(line: str, where: str) -> tuple[int, tuple[float, float]]:
-    m = _NODE_RE.match(line)
-    if not m:
-        raise ParseError(
-            f"{where}: expected a node '  <A, C, L> @ (x, y)' or '  <Curve, C, TC> @ (x, y)', "
-            f"got {line!r}"
-        )
-    first, conv, third, xs, ys = (g.strip() for g in m.groups())
-    c = _component(conv, lb.CONVEXITY_LABELS, where)
-    if first == lb.CURVE:
-        code = lb.encode(True, (0, 1), c, _component(third, lb.CURVATURE_LABELS, where))
-    else:
-        a = _component(first, lb.ANGLE_LABELS, where)
-        code = lb.encode(False, a, c, _component(third, lb.LENGTH_LABELS, where))
-    x, y = float(xs), float(ys)
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise ParseError(f"{where}: point coordinates must be finite, got ({xs}, {ys})")
-    return code, (x, y)
-
-
-def _parse_boundary(lines: list[str], at: int, count: int, what: str) -> BoundaryDescription:
-    if count < 3:
-        raise ParseError(f"line {at}: {what} needs at least 3 nodes, got {count}")
-    if at + count > len(lines):
-        raise ParseError(
-            f"line {at}: {what} announces {count} nodes but the text ends after {len(lines) - at}"
-        )
-    codes, pts = [], []
-    for k in range(count):
-        code, p = _parse_node(lines[at + k], f"line {at + k + 1}")
-        codes.append(code)
-        pts.append(p)
-    c = np.array(codes, dtype=np.int64)
-    p_arr = np.array(pts, dtype=np.float64)
-    curve = (c & lb.KIND_BIT) == 1
-    if np.any(curve & np.roll(curve, 1)):
-        raise ParseError(
-            f"line {at}: {what} has two adjacent Curve nodes; a curve node needs "
-            "its start and end vertices as neighbours"
-        )
-    c.setflags(write=False)
-    p_arr.setflags(write=False)
-    return BoundaryDescription(c, p_arr)
-
-
-def _value(line: str, key: str, where: str) -> str:
-    prefix = f"{key}:"
-    if not line.startswith(prefix):
-        raise ParseError(f"{where}: expected '{key}: ...', got {line!r}")
-    return line[len(prefix) :].strip()
-
-
-def _float(text: str, what: str, where: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise ParseError(f"{where}: {what} must be a number, got {text!r}") from None
-    if not math.isfinite(v):
-        raise ParseError(f"{where}: {what} must be finite, got {text!r}")
-    return v
-
-
-def parse(text: str) -> Description:
-    """Read the text form of a description back (exact inverse of ``str(description)``).
-
-    Raises:
-        ParseError: Naming the line and what was expected.
-    """
-    if not isinstance(text, str):
-        raise ParseError(f"parse expects a string, got {type(text).__name__}")
-    lines = [ln for ln in text.splitlines() if ln.strip()]
-    if len(lines) < 6 or lines[0].strip() != HEADER:
-        raise ParseError(
-            f"line 1: expected the header {HEADER!r} followed by type, color, area, "
-            "perimeter and nodes lines"
-        )
-    types = [t.strip() for t in _value(lines[1], "type", "line 2").split(",")]
-    if (
-        len(types) != 2
-        or types[0] not in (WITHOUT_HOLES, WITH_HOLES)
-        or types[1] not in (WITHOUT_CURVES, WITH_CURVES, ONLY_CURVES)
-    ):
-        raise ParseError(
-            f"line 2: type must be '<without holes|with holes>, <without curves|with curves|"
-            f"only curves>', got {lines[1]!r}"
-        )
-    ctext = _value(lines[2], "color", "line 3")
-    color: Color | None = None
-    if ctext != "none":
-        parts = ctext.split()
-        if len(parts) != 3:
-            raise ParseError(f"line 3: color must be 'none' or three numbers, got {ctext!r}")
-        rgb = [_float(p, "color", "line 3") for p in parts]
-        if not all(0.0 <= v <= 1.0 for v in rgb):
-            raise ParseError(f"line 3: color components must be in [0, 1], got {ctext!r}")
-        color = (rgb[0], rgb[1], rgb[2])
-    area = _float(_value(lines[3], "area", "line 4"), "area", "line 4")
-    perimeter = _float(_value(lines[4], "perimeter", "line 5"), "perimeter", "line 5")
-    if area <= 0.0 or perimeter <= 0.0:
-        raise ParseError("lines 4-5: area and perimeter must be > 0")
-    count = _int(_value(lines[5], "nodes", "line 6"), "line 6")
-    outer = _parse_boundary(lines, 6, count, "the outer boundary")
-    if type_curve_of(outer.codes) != types[1]:
-        raise ParseError(
-            f"line 2: type says {types[1]!r} but the nodes are {type_curve_of(outer.codes)!r}"
-        )
-    at = 6 + count
-    holes: list[HoleDescription] = []
-    while at < len(lines):
-        m = _HOLE_RE.match(lines[at])
-        if not m:
-            raise ParseError(
-                f"line {at + 1}: expected 'hole: CIi [cones] <type_curve>, nodes: n'"
-                f", got {lines[at]!r}"
-            )
-        rel, pos, hcurve, hcount = m.groups()
-        if rel != CIi:
-            raise ParseError(f"line {at + 1}: hole relation must be {CIi!r}, got {rel!r}")
-        position = tuple(p.strip() for p in pos.split(",") if p.strip())
-        allowed = (*CONES, CENTRE)
-        if (
-            not position
-            or any(p not in allowed for p in position)
-            or (CENTRE in position and len(position) > 1)
-        ):
-            raise ParseError(
-                f"line {at + 1}: position must be 'C' or cones from {', '.join(CONES)}, got [{pos}]"
-            )
-        boundary = _parse_boundary(lines, at + 1, int(hcount), f"hole {len(holes)}")
-        if boundary.type_curve != hcurve:
-            raise ParseError(
-                f"line {at + 1}: hole type says {hcurve!r} but its nodes are "
-                f"{boundary.type_curve!r}"
-            )
-        holes.append(HoleDescription(position, boundary, rel))
-        at += 1 + int(hcount)
-    if (types[0] == WITH_HOLES) != bool(holes):
-        raise ParseError(f"line 2: type says {types[0]!r} but {len(holes)} holes follow")
-    return Description(types[0], types[1], color, area, perimeter, outer, tuple(holes))
-
-
-def _int(text: str, where: str) -> int:
-    if not text.isdigit():
-        raise ParseError(f"{where}: expected a node count, got {text!r}")
-    return int(text)
-
-
 __all__ = [
     "BoundaryDescription",
     "Description",
@@ -655,5 +490,4 @@ __all__ = [
     "hole_angles",
     "hole_angles_many",
     "hole_interval",
-    "parse",
 ]

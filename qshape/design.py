@@ -28,16 +28,12 @@ from scipy.spatial import cKDTree
 
 from configs import CONFIG_DIR, ConfigError, from_dict, load_yaml, resolve_path
 from qshape import geometry as geo
-from qshape.errors import InvalidFigureError, QShapeError
+from qshape.errors import DesignError, InvalidFigureError
 from qshape.figure import Boundary, Figure
 from qshape.geometry import BoolArray, FloatArray
 
 DESIGN_SUBDIR = "designs"
 """Sub-folder of ``configs/`` holding the bundled designs."""
-
-
-class DesignError(QShapeError):
-    """A design file or design value is malformed; the message names the slot and the problem."""
 
 
 # --------------------------------------------------------------------------------- parameters

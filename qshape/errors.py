@@ -32,7 +32,7 @@ class DesignError(QShapeError):
 
 
 class LimitError(QShapeError):
-    """An input exceeds a documented cap (``limits`` in configs/qshape.yaml); the message names it."""
+    """An input exceeds a documented cap (``limits`` of configs/qshape.yaml), named in it."""
 
 
 class FigureLimitError(LimitError, InvalidFigureError):

@@ -8,6 +8,7 @@ Bundled values live in ``configs/qshape.yaml``; load them with `Tolerances.load`
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -182,6 +183,28 @@ class Tolerances:
         return load_section(cls, "tolerances", name_or_path, overrides, default="qshape")
 
 
+@functools.cache
+def default_tolerances() -> Tolerances:
+    """The bundled tolerances (``configs/qshape.yaml``), loaded once."""
+    return Tolerances.load()
+
+
+def resolve_tolerances(tolerances: object) -> Tolerances:
+    """``tolerances`` itself, or the bundled defaults for None.
+
+    Raises:
+        ToleranceError: Anything but None or a `Tolerances`.
+    """
+    if tolerances is None:
+        return default_tolerances()
+    if not isinstance(tolerances, Tolerances):
+        raise ToleranceError(
+            f"tolerances must be a qshape.Tolerances or None (the bundled defaults), got "
+            f"{type(tolerances).__name__}"
+        )
+    return tolerances
+
+
 def _load_section(
     cls: type[T], section: str, name_or_path: str | Path | None, overrides: dict[str, Any]
 ) -> T:
@@ -189,4 +212,4 @@ def _load_section(
     return load_section(cls, section, name_or_path, overrides, default="qshape")
 
 
-__all__ = ["Tolerances"]
+__all__ = ["Tolerances", "default_tolerances", "resolve_tolerances"]
