@@ -180,11 +180,11 @@ def _convert(value: Any, hint: Any, where: str) -> Any:
             raise ConfigError(f"{where}: expected a number, got {value!r}")
         if not math.isfinite(value):
             raise ConfigError(f"{where}: expected a finite number, got {value!r}")
-        return value if type(value) is float else float(value)
+        return float(value)
     if hint is int:
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
             raise ConfigError(f"{where}: expected an integer, got {value!r}")
-        return value if type(value) is int else int(value)
+        return int(value)
     if hint is str:
         if not isinstance(value, str):
             raise ConfigError(f"{where}: expected a string, got {value!r}")
@@ -227,11 +227,11 @@ def check_field_types(obj: object) -> None:
     Raises:
         ConfigError: A field of the wrong type; the message names the class, field and value.
     """
-    cls = type(obj)
-    if not dataclasses.is_dataclass(obj) or not isinstance(cls, type):
+    if not dataclasses.is_dataclass(obj) or isinstance(obj, type):
         raise TypeError(f"{obj!r} is not a dataclass instance")
+    cls = type(obj)
     hints = typing.get_type_hints(cls)
-    for f in dataclasses.fields(cls):
+    for f in dataclasses.fields(obj):
         if not f.init:
             continue
         value = getattr(obj, f.name)

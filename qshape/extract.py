@@ -31,7 +31,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from qshape.design import load_section
+from qshape.config_sections import load_section
 from qshape.errors import InvalidFigureError, QShapeError
 from qshape.figure import Color, Figure, figures_from_outlines
 from qshape.geometry import FloatArray

@@ -285,7 +285,7 @@ class Boundary:
     def points_yup(self) -> FloatArray:
         """Relevant points in the right-handed y-up frame, shape (n, 2)."""
         if self.y_down:
-            return self.points * np.array([1.0, -1.0])
+            return np.asarray(self.points * np.array([1.0, -1.0]))
         return self.points
 
     def measures(self) -> tuple[float, FloatArray, float]:

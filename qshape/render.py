@@ -15,7 +15,8 @@ from typing import Any
 import cv2
 import numpy as np
 
-from qshape.design import Design, load_section
+from qshape.config_sections import load_section
+from qshape.design import Design
 from qshape.errors import QShapeError
 from qshape.geometry import FloatArray
 

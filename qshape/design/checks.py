@@ -1,0 +1,83 @@
+"""Validation of a design's layout: slot outlines, slots inside the mesh, joints between slots."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import shapely
+
+from qshape import geometry as geo
+from qshape.errors import DesignError, InvalidFigureError
+from qshape.geometry import FloatArray
+
+if TYPE_CHECKING:
+    from qshape.design.model import Design
+
+
+def validate(design: Design, source: str = "") -> None:
+    """Check every slot and the layout.
+
+    Raises:
+        DesignError: Duplicate names, degenerate or self-crossing outlines, bad holes,
+            slots outside the mesh (by more than ``rules.mesh_margin_mm``), or two slots
+            closer than ``rules.min_gap_fraction`` x joint.
+    """
+    pre = f"{source}: " if source else f"design {design.name!r}: "
+    names = [s.name for s in design.slots]
+    dupes = sorted({n for n in names if names.count(n) > 1})
+    if dupes:
+        raise DesignError(f"{pre}duplicate slot name(s) {dupes}")
+    w, h = design.mesh_size
+    margin = design.rules.mesh_margin_mm
+    outlines = []
+    for s in design.slots:
+        try:
+            dense = s.path.outer.dense(design.rules.check_step_mm)
+            if geo.self_intersects(dense):
+                raise DesignError("its outline crosses itself")
+            s.figure()
+        except (DesignError, InvalidFigureError) as exc:
+            text = str(exc)
+            named = text if text.startswith(f"slot {s.name!r}") else f"slot {s.name!r}: {text}"
+            raise DesignError(f"{pre}{named}") from exc
+        lo, hi = dense.min(axis=0), dense.max(axis=0)
+        if lo[0] < margin or lo[1] < margin or hi[0] > w - margin or hi[1] > h - margin:
+            raise DesignError(
+                f"{pre}slot {s.name!r} lies outside the {w} x {h} mm mesh (extent x "
+                f"{lo[0]:.1f}..{hi[0]:.1f}, y {lo[1]:.1f}..{hi[1]:.1f} mm; margin {margin} mm)"
+            )
+        outlines.append(dense)
+    min_gap = design.rules.min_gap_fraction * design.joint
+    centres = np.array([d.mean(axis=0) for d in outlines])
+    radii = np.array(
+        [np.max(np.hypot(*(d - c).T)) for d, c in zip(outlines, centres, strict=False)]
+    )
+    dc = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
+    ii, jj = np.nonzero(np.triu(dc < radii[:, None] + radii[None, :] + min_gap, k=1))
+    for i, j in zip(ii.tolist(), jj.tolist(), strict=False):
+        gap = _outline_gap(outlines[i], outlines[j])
+        if gap < min_gap:
+            what = "overlap" if gap < 0 else f"are {gap:.2f} mm apart"
+            raise DesignError(
+                f"{pre}slots {design.slots[i].name!r} and {design.slots[j].name!r} {what}; the "
+                f"joint is {design.joint} mm (at least {min_gap:.2f} mm required)"
+            )
+
+
+def _outline_gap(a: FloatArray, b: FloatArray) -> float:
+    """Smallest distance between two closed outlines; negative when they overlap.
+
+    O((m + n) log(m + n)) (GEOS), relative to a's first point.
+    """
+    ref = a[0]
+    pa = shapely.Polygon(a - ref)
+    pb = shapely.Polygon(b - ref)
+    if pa.is_valid and pb.is_valid and pa.intersection(pb).area > 0.0:
+        return -1.0
+    if geo.points_in_polygon(a[:1], b).any() or geo.points_in_polygon(b[:1], a).any():
+        return -1.0
+    return float(shapely.LinearRing(a - ref).distance(shapely.LinearRing(b - ref)))
+
+
+__all__ = ["validate"]

@@ -1,0 +1,163 @@
+"""`Design`: a mosaic design (mesh, joint, slots) and its queries.
+
+Reading and writing the file format live in `qshape.design.fileformat`, layout validation in
+`qshape.design.checks`, designs from images in `qshape.design.from_image`; `Design`'s methods
+are the public entry points to them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from configs import CONFIG_DIR, ConfigError, load_yaml
+from qshape.design import checks, fileformat
+from qshape.design.from_image import design_mapping
+from qshape.design.rules import DesignRules
+from qshape.design.slot import Slot
+from qshape.errors import DesignError
+from qshape.figure import Figure
+
+DESIGN_SUBDIR = "designs"
+"""Sub-folder of ``configs/`` holding the bundled designs."""
+
+
+@dataclass(frozen=True)
+class Design:
+    """A mosaic design: a rectangular mesh, a joint width and the slots to fill.
+
+    Attributes:
+        name: Design name.
+        mesh_size: (width, height) of the mesh, in [mm]; the origin is its lower-left corner,
+            y up.
+        joint: Joint (grout) width between neighbouring tiles, in [mm].
+        slots: The slots, names unique.
+        grout_color: RGB in [0, 1] of the joints and empty mesh (used for rendering).
+        description: Free text.
+        rules: Sampling and validation rules.
+    """
+
+    name: str
+    mesh_size: tuple[float, float]
+    joint: float
+    slots: tuple[Slot, ...]
+    grout_color: tuple[float, float, float] = (0.85, 0.83, 0.78)
+    description: str = ""
+    rules: DesignRules = field(default_factory=DesignRules, compare=False, repr=False)
+
+    # ------------------------------------------------------------------ loading and saving
+
+    @classmethod
+    def load(cls, name_or_path: str | Path, rules: DesignRules | None = None) -> Design:
+        """Load and validate a design: a bundled name (``"paper_mixed"``) or a YAML path.
+
+        Raises:
+            DesignError: Missing or unreadable file, duplicate or unknown keys, bad values,
+                degenerate or overlapping slots, slots outside the mesh; the message names the
+                slot.
+        """
+        try:
+            data = load_yaml(name_or_path, DESIGN_SUBDIR)
+        except ConfigError as exc:
+            raise DesignError(str(exc)) from exc
+        return cls.from_dict(data, rules=rules, source=str(name_or_path))
+
+    @classmethod
+    def from_dict(
+        cls, data: Mapping[str, Any], rules: DesignRules | None = None, source: str = "<dict>"
+    ) -> Design:
+        """Build and validate a design from its file mapping (see `load`).
+
+        Raises:
+            DesignError: As `load`.
+        """
+        if rules is not None and not isinstance(rules, DesignRules):
+            raise DesignError(f"rules must be DesignRules or None, got {type(rules).__name__}")
+        design = cls(**fileformat.read_fields(data, rules, source))
+        design.validate(source)
+        return design
+
+    def to_dict(self) -> dict[str, Any]:
+        """The design as a file mapping (inverse of `from_dict`)."""
+        return fileformat.to_mapping(self)
+
+    def save(self, path: str | Path, header: str = "") -> None:
+        """Write the design as YAML (``header`` lines become leading comments)."""
+        fileformat.save(self, path, header)
+
+    def validate(self, source: str = "") -> None:
+        """Check every slot and the layout (see `qshape.design.checks.validate`).
+
+        Raises:
+            DesignError: Duplicate names, degenerate or self-crossing outlines, bad holes,
+                slots outside the mesh, or slots closer than the joint allows.
+        """
+        checks.validate(self, source)
+
+    # ------------------------------------------------------------------------- queries
+    def figures(self) -> list[Figure]:
+        """Every slot as a `qshape.Figure` in mesh millimetres, in slot order."""
+        return [s.figure() for s in self.slots]
+
+    def slot(self, name: str) -> Slot:
+        """The slot called ``name``.
+
+        Raises:
+            DesignError: No such slot (the message lists the names).
+        """
+        for s in self.slots:
+            if s.name == name:
+                return s
+        raise DesignError(
+            f"design {self.name!r} has no slot {name!r}; slots: {[s.name for s in self.slots]}"
+        )
+
+    def with_slots(self, slots: Sequence[Slot]) -> Design:
+        """Copy with other slots (validated)."""
+        d = replace(self, slots=tuple(slots))
+        d.validate()
+        return d
+
+    @classmethod
+    def from_image(
+        cls,
+        image: str | Path | np.ndarray,
+        mm_per_px: float,
+        joint_mm: float,
+        *,
+        name: str = "from_image",
+        params: Any = None,
+        rules: DesignRules | None = None,
+    ) -> Design:
+        """Design from a design image (tiles on a joint colour), e.g. drawn in any editor.
+
+        Tiles are found by `qshape.extract`; tiles touching the image border are left out.
+        Each tile becomes a ``polygon`` slot (arcs as bulges) with the extracted colour. The
+        mesh is the whole image.
+
+        Args:
+            image: RGB uint8 array (H, W, 3) or a path to an image file (PNG, JPEG, ...).
+            mm_per_px: Scale, in [mm/px].
+            joint_mm: Joint width of the design, in [mm].
+            name: Design name.
+            params: `qshape.extract.ExtractParams` (None: ``configs/vision.yaml``).
+            rules: Validation rules.
+
+        Raises:
+            DesignError: Unreadable file, bad scale, no tiles, or an invalid resulting design.
+            qshape.extract.ImageError: Malformed image.
+        """
+        data = design_mapping(image, mm_per_px, joint_mm, name=name, params=params, rules=rules)
+        return cls.from_dict(data, rules=rules, source=f"design image {name!r}")
+
+
+def bundled_designs() -> list[str]:
+    """Names of the designs in ``configs/designs/``."""
+    return sorted(p.stem for p in (CONFIG_DIR / DESIGN_SUBDIR).glob("*.yaml"))
+
+
+__all__ = ["DESIGN_SUBDIR", "Design", "bundled_designs"]

@@ -1,0 +1,70 @@
+"""`DesignRules`: how design outlines are sampled and designs validated.
+
+Bundled values: the ``design`` section of ``configs/vision.yaml``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from qshape.config_sections import load_section
+from qshape.errors import DesignError
+
+
+@dataclass(frozen=True)
+class DesignRules:
+    """How outlines are sampled and designs validated.
+
+    Attributes:
+        outline_step_mm: Largest distance between consecutive samples of a dense outline, in
+            [mm] (straight edges and arcs alike).
+        max_arc_deg: Arcs turning more than this are split into equal arcs, each with its own
+            maximum-curvature point, in [deg]. 240 keeps (noisy) semicircles whole and splits
+            circles given as one arc (the rule of ``OutlineParams.max_curve_turn_deg``).
+        check_step_mm: Outline sampling used for the self-crossing, gap and mesh checks, in
+            [mm] (vertices are always samples, so straight edges are exact).
+        min_gap_fraction: Two slots closer than this fraction of the joint width overlap
+            (dimensionless; 0.5 accepts joints narrowed by rounding in a design image).
+        mesh_margin_mm: Slots must stay at least this far inside the mesh outline, in [mm]
+            (negative values let tiles overhang).
+        symmetry_tolerance: A rotation is a symmetry when every rotated outline sample lies
+            within this fraction of sqrt(area) of the outline (dimensionless).
+        max_symmetry_order: Largest finite rotational symmetry order looked for.
+        symmetry_samples: Outline samples used for the symmetry test.
+    """
+
+    outline_step_mm: float = 0.25
+    max_arc_deg: float = 240.0
+    check_step_mm: float = 1.0
+    min_gap_fraction: float = 0.5
+    mesh_margin_mm: float = 0.0
+    symmetry_tolerance: float = 0.01
+    max_symmetry_order: int = 12
+    symmetry_samples: int = 512
+
+    def __post_init__(self) -> None:
+        """Raise `DesignError` on out-of-range values."""
+        if not (self.outline_step_mm > 0.0 and self.check_step_mm > 0.0):
+            raise DesignError("outline_step_mm and check_step_mm must be > 0")
+        if not 90.0 <= self.max_arc_deg < 360.0:
+            raise DesignError(f"max_arc_deg must be in [90, 360), got {self.max_arc_deg}")
+        if not 0.0 <= self.min_gap_fraction <= 1.0:
+            raise DesignError(f"min_gap_fraction must be in [0, 1], got {self.min_gap_fraction}")
+        if not self.symmetry_tolerance > 0.0:
+            raise DesignError("symmetry_tolerance must be > 0")
+        if self.max_symmetry_order < 1 or self.symmetry_samples < 16:
+            raise DesignError("max_symmetry_order must be >= 1 and symmetry_samples >= 16")
+
+    @classmethod
+    def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> DesignRules:
+        """Load the ``design`` section of ``configs/vision.yaml`` (or another file).
+
+        Raises:
+            configs.ConfigError: Unknown key or wrong type.
+        """
+        return load_section(cls, "design", name_or_path, overrides, default="vision")
+
+
+__all__ = ["DesignRules"]

@@ -1,0 +1,132 @@
+"""`Slot`: one tile position of a design (shape, colour, pose) and what derives from it."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+import yaml
+from scipy.spatial import cKDTree
+
+from qshape import geometry as geo
+from qshape.design.paths import TilePath
+from qshape.design.rules import DesignRules
+from qshape.design.shapes import tile_path
+from qshape.design.values import color_hex, plain, round_mm
+from qshape.errors import DesignError
+from qshape.figure import Figure
+from qshape.geometry import FloatArray
+
+
+@dataclass(frozen=True)
+class Slot:
+    """One tile position of a design.
+
+    Attributes:
+        name: Unique name within the design.
+        shape: The shape mapping as written in the design file (``kind``, its parameters and
+            optional ``holes``); see ``configs/designs/README.md``.
+        color: RGB in [0, 1].
+        x: Mesh x of the tile's area centroid, in [mm].
+        y: Mesh y of the tile's area centroid, in [mm] (y up).
+        angle: Rotation of the shape about its centroid, in [deg], counter-clockwise.
+        rules: Sampling and validation rules.
+    """
+
+    name: str
+    shape: Mapping[str, Any]
+    color: tuple[float, float, float]
+    x: float
+    y: float
+    angle: float = 0.0
+    rules: DesignRules = field(default_factory=DesignRules, compare=False, repr=False)
+
+    @cached_property
+    def local_path(self) -> TilePath:
+        """Tile outline and holes in the tile frame: area centroid at the origin, angle 0, [mm].
+
+        Raises:
+            DesignError: Malformed shape.
+        """
+        path = tile_path(self.shape, f"slot {self.name!r}.shape")
+        area, c = path.area_centroid(self.rules.outline_step_mm)
+        if not area > 0.0:
+            raise DesignError(f"slot {self.name!r}: zero or negative area (holes too large?)")
+        return path.transformed(0.0, -c)
+
+    @cached_property
+    def path(self) -> TilePath:
+        """Tile outline and holes placed on the mesh, [mm], y up."""
+        return self.local_path.transformed(math.radians(self.angle), (self.x, self.y))
+
+    def outline_mm(self) -> FloatArray:
+        """Dense closed outline on the mesh, counter-clockwise, [mm], shape (m, 2)."""
+        return self.path.outer.dense(self.rules.outline_step_mm)
+
+    def holes_mm(self) -> list[FloatArray]:
+        """Dense closed outline of each hole on the mesh, counter-clockwise, [mm]."""
+        return [h.dense(self.rules.outline_step_mm) for h in self.path.holes]
+
+    def figure(self) -> Figure:
+        """The slot as a `qshape.Figure` in mesh millimetres (y up), with its colour."""
+        return self.path.figure(self.color, self.rules.max_arc_deg)
+
+    @property
+    def centroid(self) -> FloatArray:
+        """Area centroid on the mesh, [mm], shape (2,)."""
+        return np.array([self.x, self.y])
+
+    @cached_property
+    def area(self) -> float:
+        """Tile area with holes subtracted, in [mm^2]."""
+        return self.local_path.area_centroid(self.rules.outline_step_mm)[0]
+
+    @cached_property
+    def shape_key(self) -> str:
+        """Identifier of the shape class: equal for slots whose shapes are equal (any pose)."""
+        text = yaml.safe_dump(plain(self.shape), sort_keys=True)
+        return hashlib.sha1(text.encode()).hexdigest()[:12]
+
+    @property
+    def class_key(self) -> str:
+        """Identifier of the shape-and-colour class."""
+        return f"{self.shape_key}{color_hex(self.color)}"
+
+    @cached_property
+    def symmetry(self) -> int:
+        """Rotational symmetry order of the shape (1: none, 4: square, 0: continuous)."""
+        rules = self.rules
+        loops = (self.local_path.outer, *self.local_path.holes)
+        samples = np.concatenate([lp.dense(rules.outline_step_mm / 4.0) for lp in loops])
+        tree = cKDTree(samples)
+        step = max(1, len(samples) // rules.symmetry_samples)
+        probe = samples[::step]
+        tol = rules.symmetry_tolerance * math.sqrt(self.area)
+
+        def invariant(angle: float) -> bool:
+            dist, _ = tree.query(geo.rotate(probe, angle))
+            return bool(np.max(dist) <= tol)
+
+        if invariant(1.0) and invariant(math.sqrt(2.0)):
+            return 0
+        for order in range(rules.max_symmetry_order, 1, -1):
+            if invariant(2.0 * math.pi / order):
+                return order
+        return 1
+
+    def to_dict(self) -> dict[str, Any]:
+        """The slot as written in a design file."""
+        return {
+            "name": self.name,
+            "shape": plain(self.shape),
+            "color": color_hex(self.color),
+            "pose": {"x": round_mm(self.x), "y": round_mm(self.y), "angle": round_mm(self.angle)},
+        }
+
+
+__all__ = ["Slot"]
