@@ -272,3 +272,44 @@ def test_design_reloads_from_its_rendering(
         assert np.hypot(*(centres[k] - [slot.x, slot.y])) < 1.0, slot.name
         m = match(slot.figure(), again.slots[k].figure(), tol, use_color=True)
         assert m is not None, slot.name
+
+
+# Pinned by mutation testing (benchmarks/mutation.py): changes these tests must notice.
+def test_slot_touching_the_mesh_edge_is_inside() -> None:
+    data = _base()
+    data["slots"][0]["pose"] = {"x": 10, "y": 10}  # the 20 mm square ends exactly at 0
+    data["slots"][1]["pose"] = {"x": 90, "y": 90}  # the r 10 circle ends exactly at 100
+    d = Design.from_dict(data)
+    lo = d.slots[0].outline_mm().min(axis=0)
+    hi = d.slots[1].outline_mm().max(axis=0)
+    np.testing.assert_allclose(lo, [0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(hi, [100.0, 100.0], atol=1e-9)
+    data["slots"][0]["pose"] = {"x": 9.9, "y": 10}
+    with pytest.raises(DesignError, match="outside"):
+        Design.from_dict(data)
+
+
+@pytest.mark.parametrize("bulge", [0.3, 1.0, -0.5])
+def test_arc_samples_lie_on_their_circle(bulge: float) -> None:
+    data = _base()
+    data["slots"][0]["shape"] = {
+        "kind": "polygon",
+        "vertices": [[-10, -10], [10, -10, bulge], [10, 10], [-10, 10]],
+    }
+    slot = Design.from_dict(data).slots[0]
+    loop = slot.local_path.outer
+    edge = int(np.flatnonzero(loop.bulges)[0])
+    p = loop.edge_points(np.linspace(0.0, 1.0, 9), np.full(9, edge))
+    nxt = loop.vertices[(edge + 1) % len(loop.vertices)]
+    np.testing.assert_allclose(p[[0, 8]], [loop.vertices[edge], nxt], atol=1e-9)
+    # The circle through the arc's ends and middle: every sample at the same distance.
+    a, m, b = p[0], p[4], p[8]
+    d = 2 * (a[0] * (m[1] - b[1]) + m[0] * (b[1] - a[1]) + b[0] * (a[1] - m[1]))
+    ux = (a @ a * (m[1] - b[1]) + m @ m * (b[1] - a[1]) + b @ b * (a[1] - m[1])) / d
+    uy = (a @ a * (b[0] - m[0]) + m @ m * (a[0] - b[0]) + b @ b * (m[0] - a[0])) / d
+    r = np.hypot(p[:, 0] - ux, p[:, 1] - uy)
+    np.testing.assert_allclose(r, r[0], rtol=1e-9)
+    chord = np.hypot(*(b - a))
+    sagitta = abs(bulge) * chord / 2.0  # bulge = 2 sagitta / chord
+    mid = 0.5 * (a + b)
+    assert np.hypot(*(m - mid)) == pytest.approx(sagitta, rel=1e-9)

@@ -238,3 +238,15 @@ def test_duplicate_keys_in_config_and_design_files(tmp_path: Path) -> None:
 def test_every_error_is_a_qshape_error() -> None:
     for cls in (FigureLimitError, TextLimitError, LimitError, DesignError, MatchError):
         assert issubclass(cls, QShapeError)
+
+
+def test_key_variants_at_the_cap_are_expanded_not_coarse() -> None:
+    # Pinned by mutation testing: exactly max_key_variants combinations still get real keys.
+    d = describe(Figure.rectangle(40.0, 20.0))
+    variants = math.prod(math.prod(len(a) for a in node.admissible) for node in d.nodes)
+    tol = Tolerances(max_key_variants=variants)
+    keys = qshape.canonical_keys(d, tol)
+    assert keys and not any(k.startswith("K:") for k in keys)
+    if variants > 1:
+        coarse = qshape.canonical_keys(d, Tolerances(max_key_variants=variants - 1))
+        assert all(k.startswith("K:") for k in coarse)
