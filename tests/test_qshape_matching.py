@@ -297,3 +297,11 @@ def test_true_symmetries_stay_equivalent():
         np.asarray(describe(tri).outer.points)[None], np.array([tri.area])
     )
     assert res[0, 0] == 0.0 and 0.03 < res[0, 1] < 0.05  # not a symmetry at 0.02
+
+
+def test_zero_width_bearing_interval_covers_its_cone() -> None:
+    # Pinned by mutation testing: a point-like interval is one cone, not "no constraint".
+    from qshape.evaluator import _cone_bits  # noqa: PLC0415
+
+    bits = _cone_bits(np.array([10.0, 90.0, 10.0]), np.array([10.0, 90.0, 5.0]), 0.0)
+    assert bits.tolist() == [1, 1 << 2, 0]  # N, E, and an empty (reversed) interval
