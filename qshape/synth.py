@@ -243,9 +243,10 @@ def generate(
                 local_mask = _tile_mask(outline, gap_px, w, h)
                 if local_mask is None or layout.hits(local_mask, layout.occupied):
                     continue
-            if local_mask is None:
+            solid = _tile_mask(outline, 0, w, h)
+            if local_mask is None or solid is None:
                 continue
-            layout.add(local_mask, _tile_mask(outline, 0, w, h))
+            layout.add(local_mask, solid)
             color = np.clip(np.array(slot.color) + gen.normal(0.0, p.color_jitter, 3), 0, 1)
             rgb = (float(color[0]), float(color[1]), float(color[2]))
             pts, mask = placed.outer.relevant(slot.rules.max_arc_deg)
@@ -300,7 +301,7 @@ class _Layout:
         x0, y0, m = window
         return bool(np.any(grid[y0 : y0 + m.shape[0], x0 : x0 + m.shape[1]] & m))
 
-    def add(self, gapped: tuple[int, int, np.ndarray], solid: Any) -> None:
+    def add(self, gapped: tuple[int, int, np.ndarray], solid: tuple[int, int, np.ndarray]) -> None:
         for (x0, y0, m), grid in ((gapped, self.occupied), (solid, self.solid)):
             grid[y0 : y0 + m.shape[0], x0 : x0 + m.shape[1]] |= m
 
