@@ -114,7 +114,7 @@ def _synth_for(level: Level, sp: SynthParams, rng: np.random.Generator) -> Synth
     return replace(sp, effects=e, illumination=ill)
 
 
-def run_level(  # noqa: PLR0914, PLR0915
+def run_level(  # noqa: PLR0914, PLR0915, PLR0917
     level: Level,
     images: int,
     bench: RealisticBench,
@@ -249,14 +249,20 @@ def plot(rows: list[dict[str, Any]], path: Path) -> None:
         ax.plot(x, [100 * r["class_and_rotation"] for r in sel], "s--", label="class + rot")
         for xi, r in zip(x, sel, strict=True):
             if r["false_matches"]:
-                ax.annotate(f"{r['false_matches']} false", (xi, 100 * r["class_accuracy"]),
-                            textcoords="offset points", xytext=(0, -14), ha="center",
-                            color="red", fontsize=7)
+                ax.annotate(
+                    f"{r['false_matches']} false",
+                    (xi, 100 * r["class_accuracy"]),
+                    textcoords="offset points",
+                    xytext=(0, -14),
+                    ha="center",
+                    color="red",
+                    fontsize=7,
+                )
         ax.set_xticks(x, ["none"] + [r["label"] for r in sel[1:]], rotation=25, fontsize=7)
         ax.set_ylim(min(80.0, min(100 * r["class_and_rotation"] for r in sel) - 2), 100.5)
         ax.set_title(eff, fontsize=10)
         ax.grid(alpha=0.3)
-    for ax in axes.ravel()[len(effects):]:
+    for ax in axes.ravel()[len(effects) :]:
         ax.axis("off")
     axes[0, 0].set_ylabel("% of whole tiles")
     axes[0, 0].legend(fontsize=7, loc="lower left")

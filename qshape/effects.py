@@ -1,8 +1,8 @@
-"""What a real production line adds to a picture of tiles: rough and chipped edges, motion
-blur on the moving belt, radial lens distortion, shadows, glaze highlights, JPEG.
+"""What a real production line adds to a picture of tiles.
 
-Outline effects (`roughen`, `chip_corners`) change a tile's dense outline before it is drawn;
-image effects (`soft_shadow`, `glaze_highlights`, `motion_blur`, `lens_distort`, `jpeg`)
+Rough and chipped edges, motion blur on the moving belt, radial lens distortion, shadows,
+glaze highlights, JPEG. Outline effects (`roughen`, `chip_corners`) change a tile's dense
+outline before it is drawn; image effects (`soft_shadow`, `glaze_highlights`, `motion_blur`, `lens_distort`, `jpeg`)
 change the picture. `CameraEffects` holds their sizes; every effect is off at its default, so
 ``CameraEffects()`` leaves a synthetic picture as it was. Lens distortion follows OpenCV's
 radial model: a normalised point x (about the principal point, divided by the focal length)
@@ -140,7 +140,9 @@ def roughen(
     k = max(1, round(length_px / max(spacing, 1e-9)))
     reps = math.ceil(3 * k / m) + 1
     tiled = np.tile(white, 2 * reps + 1).reshape(1, -1).astype(np.float64)
-    smooth = cv2.GaussianBlur(tiled, (0, 0), sigmaX=float(k), sigmaY=0.1)[0, reps * m : reps * m + m]
+    smooth = cv2.GaussianBlur(tiled, (0, 0), sigmaX=float(k), sigmaY=0.1)[
+        0, reps * m : reps * m + m
+    ]
     std = float(smooth.std())
     disp = smooth * (sigma_px / std) if std > 0.0 else smooth
     tangent = np.roll(outline, -1, axis=0) - np.roll(outline, 1, axis=0)
@@ -193,9 +195,7 @@ def chip_corners(
 
 
 # ------------------------------------------------------------------------------ picture
-def soft_shadow(
-    image: np.ndarray, e: CameraEffects, rng: np.random.Generator
-) -> np.ndarray:
+def soft_shadow(image: np.ndarray, e: CameraEffects, rng: np.random.Generator) -> np.ndarray:
     """A float32 picture darkened by a soft-edged band across it (an arm's or a rail's shadow)."""
     if e.shadow_strength <= 0.0:
         return image
@@ -213,7 +213,7 @@ def soft_shadow(
     return np.asarray(image * (1.0 - e.shadow_strength * inside)[..., None])
 
 
-def glaze_highlights(
+def glaze_highlights(  # noqa: PLR0917
     image: np.ndarray,
     tiles_mask: np.ndarray,
     centres_px: list[FloatArray],
@@ -325,9 +325,7 @@ def lens_distort(image: np.ndarray, e: CameraEffects) -> np.ndarray:
         return image
     h, w = image.shape[:2]
     mx, my = _undistort_maps(w, h, e.lens_k1, e.lens_k2, e.focal_px)
-    return np.asarray(
-        cv2.remap(image, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    )
+    return np.asarray(cv2.remap(image, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE))
 
 
 def jpeg(image: np.ndarray, quality: int) -> np.ndarray:
@@ -339,7 +337,9 @@ def jpeg(image: np.ndarray, quality: int) -> np.ndarray:
     )
     if not ok:
         raise QShapeError(f"JPEG encoding at quality {quality} failed")
-    return np.ascontiguousarray(cv2.cvtColor(cv2.imdecode(buf, cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB))
+    return np.ascontiguousarray(
+        cv2.cvtColor(cv2.imdecode(buf, cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
+    )
 
 
 __all__ = [

@@ -229,8 +229,12 @@ def _channel_span(image: np.ndarray) -> int:
 
 
 def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, float]:
-    """Median colour (3,) [levels] of the most populated coarse colour bin (border band), and
-    the fraction of sampled pixels within ``background_tolerance`` of it."""
+    """Dominant colour of the border band and its share.
+
+    Returns:
+        The median colour (3,) [levels] of the most populated coarse colour bin, and the
+        fraction of sampled pixels within ``background_tolerance`` of it.
+    """
     b, step = p.background_border_px, p.background_sample_step
     if b > 0 and 2 * b < min(img.shape[:2]):
         sample = np.concatenate(
@@ -298,6 +302,20 @@ def _median_colors(
     return out
 
 
+def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
+    """Canny edges of any channel: the union of one single-channel Canny per channel, uint8.
+
+    Colour tiles that touch differ in at least one channel. OpenCV's single-channel Canny is
+    several times faster than its three-channel one (which thresholds the largest channel
+    gradient); the union marks the same boundaries.
+    """
+    r, g, b = cv2.split(img)
+    edges = cv2.Canny(r, p.canny_low, p.canny_high)
+    cv2.bitwise_or(edges, cv2.Canny(g, p.canny_low, p.canny_high), dst=edges)
+    cv2.bitwise_or(edges, cv2.Canny(b, p.canny_low, p.canny_high), dst=edges)
+    return edges
+
+
 def _offset_outline(contour: FloatArray, offset: float, outward_sign: float) -> FloatArray:
     """Move a closed outline along its normals by ``offset`` (outwards for the given sign)."""
     if offset == 0.0 or len(contour) < 3:
@@ -361,7 +379,7 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         # Cut the foreground along Canny edges, label the pieces, give the cut pixels (and
         # crumbs smaller than a tile) back to a neighbouring piece, then separate touching
         # pieces by dropping the pixels that border a piece with a higher label.
-        edges = cv2.Canny(img, p.canny_low, p.canny_high)
+        edges = _color_edges(img, p)
         cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
         count, labels = cv2.connectedComponents(cut, connectivity=4)
         areas = np.bincount(labels.ravel(), minlength=count)

@@ -106,11 +106,14 @@ def image_health(image: Any, params: HealthParams | None = None) -> ImageHealth:
     level = float(mean.mean())
     span = max(int(hi - lo) for lo, hi, *_ in (cv2.minMaxLoc(c) for c in cv2.split(img)))
     top = cv2.max(cv2.max(img[..., 0], img[..., 1]), img[..., 2])
-    clipped = cv2.countNonZero(cv2.compare(top, p.saturated_level, cv2.CMP_GE)) / top.size
+    clipped = float(np.count_nonzero(np.asarray(top) >= p.saturated_level)) / top.size
     color = (float(mean[0]) / 255.0, float(mean[1]) / 255.0, float(mean[2]) / 255.0)
     verdict: Verdict
     if level < p.dark_level:
-        verdict, why = "dark", f"mean level {level:.1f} is below {p.dark_level:g}: no light or exposure"
+        verdict, why = (
+            "dark",
+            f"mean level {level:.1f} is below {p.dark_level:g}: no light or exposure",
+        )
     elif clipped > p.saturated_fraction:
         verdict, why = (
             "overexposed",
@@ -118,7 +121,10 @@ def image_health(image: Any, params: HealthParams | None = None) -> ImageHealth:
             f"{100 * p.saturated_fraction:.0f}%)",
         )
     elif span <= p.uniform_range:
-        verdict, why = "uniform", f"one colour (channels span {span} levels): empty belt or covered lens"
+        verdict, why = (
+            "uniform",
+            f"one colour (channels span {span} levels): empty belt or covered lens",
+        )
     else:
         verdict, why = "ok", "picture has content"
     return ImageHealth(verdict, color, level, span, float(clipped), why)

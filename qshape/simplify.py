@@ -127,7 +127,9 @@ class OutlineParams:
         if self.corner_window <= 0.0:
             raise ToleranceError("corner_window must be > 0")
         if not (math.isfinite(self.roughness_sigmas) and 0.0 <= self.roughness_sigmas <= 20.0):  # noqa: PLR2004
-            raise ToleranceError(f"roughness_sigmas must be in [0, 20], got {self.roughness_sigmas}")
+            raise ToleranceError(
+                f"roughness_sigmas must be in [0, 20], got {self.roughness_sigmas}"
+            )
         if not 0.0 <= self.min_corner_deg < 90.0:  # noqa: PLR2004
             raise ToleranceError(f"min_corner_deg must be in [0, 90), got {self.min_corner_deg}")
         if not 0.0 <= self.arc_turning_deg < 180.0:
@@ -281,10 +283,9 @@ def _simplify_clean(
     if p.roughness_sigmas > 0.0:
         noise = np.maximum(noise, p.roughness_sigmas * _roughness(res, w))
     if p.min_corner_deg > 0.0:
-        corners = [
-            c if flat[f] else _verified_corners(res[f], c, p, float(noise[f]), half)
-            for f, c in enumerate(corners)
-        ]
+        for f in _with_flat_corners(res, corners, p.min_corner_deg, half).tolist():
+            if not flat[f]:
+                corners[f] = _verified_corners(res[f], corners[f], p, float(noise[f]), half)
     ring = ext[:, w - 1 : w + n + 1]
     geom = _Samples(res, smooth, ring, sign, noise, perimeter, flat)
     results = _polylines(geom, corners, p, half, w)
@@ -326,13 +327,57 @@ def _roughness(res: FloatArray, w: int) -> FloatArray:
     ext = np.concatenate([dist[:, -k:], dist, dist[:, :k]], axis=1)
     csum = np.zeros((len(res), n + 2 * k + 1))
     np.cumsum(ext, axis=1, out=csum[:, 1:])
-    local = (csum[:, 2 * k + 1 :] - csum[:, : n]) / (2 * k + 1)
+    local = (csum[:, 2 * k + 1 :] - csum[:, :n]) / (2 * k + 1)
     dev = np.abs(dist - local)
     return np.asarray(_MAD_TO_SIGMA * np.median(dev, axis=1) * math.sqrt(2.0 / 3.0))
 
 
 _MAD_TO_SIGMA = 1.4826
 """Median absolute deviation of a normal sample x this = its standard deviation."""
+
+
+def _with_flat_corners(
+    res: FloatArray, corners: list[np.ndarray], min_deg: float, trim: int
+) -> np.ndarray:
+    """Outlines with a corner whose neighbouring runs' fitted lines meet below ``min_deg``.
+
+    All runs of all outlines at once (prefix sums of the moments), straight or not: a
+    superset of the outlines `_verified_corners` changes.
+    """
+    count, n = res.shape[:2]
+    m = np.array([len(c) for c in corners])
+    rows = np.flatnonzero(m > 3)  # noqa: PLR2004 (a figure's fewest corners)
+    if len(rows) == 0:
+        return rows
+    mm = m[rows]
+    owner = np.repeat(np.arange(len(rows)), mm)
+    starts = np.concatenate([corners[f] for f in rows.tolist()]).astype(np.int64)
+    first = np.concatenate([[0], np.cumsum(mm)[:-1]])
+    nxt = np.arange(len(starts)) + 1
+    nxt[first + mm - 1] = first
+    ends = starts[nxt] + np.where(starts[nxt] <= starts, n, 0)  # unwrapped
+    long = ends - starts + 1 > 2 * trim + 4
+    lo = np.where(long, starts + trim, starts)
+    hi = np.where(long, ends - trim + 1, ends + 1)
+    sub = res[rows]
+    origin = sub[:, 0, :]
+    q = np.concatenate([sub, sub], axis=1) - origin[:, None, :]  # twice round: unwrapped runs
+    x, y = q[..., 0], q[..., 1]
+    sums = np.zeros((len(rows), 2 * n + 1, 5))
+    np.cumsum(np.stack([x, y, x * x, y * y, x * y], axis=-1), axis=1, out=sums[:, 1:])
+    tot = sums[owner, hi] - sums[owner, lo]
+    cnt = (hi - lo).astype(np.float64)
+    mx, my = tot[:, 0] / cnt, tot[:, 1] / cnt
+    phi = 0.5 * np.arctan2(
+        2.0 * (tot[:, 4] - cnt * mx * my), (tot[:, 2] - cnt * mx * mx) - (tot[:, 3] - cnt * my * my)
+    )
+    d = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    chord = q[owner, ends] - q[owner, starts]
+    d *= np.where((d * chord).sum(axis=1) >= 0.0, 1.0, -1.0)[:, None]
+    prev = np.arange(len(starts)) - 1
+    prev[first] = first + mm - 1
+    ang = np.degrees(np.arccos(np.clip((d * d[prev]).sum(axis=1), -1.0, 1.0)))
+    return np.asarray(rows[np.unique(owner[ang < min_deg])])
 
 
 def _verified_corners(
@@ -349,7 +394,9 @@ def _verified_corners(
     while len(c) > 3:  # noqa: PLR2004 (a figure's fewest corners)
         runs = [_run(res, c[i], c[(i + 1) % len(c)], n) for i in range(len(c))]
         dirs = [
-            _line_direction(r, trim) if _straight_within(r, p.straight_sagitta_ratio, noise) else None
+            _line_direction(r, trim)
+            if _straight_within(r, p.straight_sagitta_ratio, noise)
+            else None
             for r in runs
         ]
         best: tuple[float, int] | None = None

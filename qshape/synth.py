@@ -377,7 +377,7 @@ def _cut_by_border(outline: FloatArray, w: int, h: int) -> bool:
     return bool(lo[0] < 0.0 or lo[1] < 0.0 or hi[0] > w - 1 or hi[1] > h - 1)
 
 
-def _worn_edges(
+def _worn_edges(  # noqa: PLR0917
     placed: TilePath,
     outline: FloatArray,
     holes: list[FloatArray],
