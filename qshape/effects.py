@@ -2,8 +2,8 @@
 
 Rough and chipped edges, motion blur on the moving belt, radial lens distortion, shadows,
 glaze highlights, JPEG. Outline effects (`roughen`, `chip_corners`) change a tile's dense
-outline before it is drawn; image effects (`soft_shadow`, `glaze_highlights`, `motion_blur`, `lens_distort`, `jpeg`)
-change the picture. `CameraEffects` holds their sizes; every effect is off at its default, so
+outline before it is drawn; image effects (`soft_shadow`, `glaze_highlights`,
+`motion_blur`, `lens_distort`, `jpeg`) change the picture. `CameraEffects` holds their sizes; every effect is off at its default, so
 ``CameraEffects()`` leaves a synthetic picture as it was. Lens distortion follows OpenCV's
 radial model: a normalised point x (about the principal point, divided by the focal length)
 is seen at x (1 + k1 r^2 + k2 r^4).
@@ -337,9 +337,10 @@ def jpeg(image: np.ndarray, quality: int) -> np.ndarray:
     )
     if not ok:
         raise QShapeError(f"JPEG encoding at quality {quality} failed")
-    return np.ascontiguousarray(
-        cv2.cvtColor(cv2.imdecode(buf, cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
-    )
+    decoded = cv2.imdecode(buf, cv2.IMREAD_COLOR)
+    if decoded is None:
+        raise QShapeError(f"JPEG decoding at quality {quality} failed")
+    return np.ascontiguousarray(cv2.cvtColor(decoded, cv2.COLOR_BGR2RGB))
 
 
 __all__ = [
