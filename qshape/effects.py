@@ -4,9 +4,9 @@ Rough and chipped edges, motion blur on the moving belt, radial lens distortion,
 glaze highlights, JPEG. Outline effects (`roughen`, `chip_corners`) change a tile's dense
 outline before it is drawn; image effects (`soft_shadow`, `glaze_highlights`,
 `motion_blur`, `lens_distort`, `jpeg`) change the picture. `CameraEffects` holds their
-sizes; every effect is off at its default, so ``CameraEffects()`` leaves a synthetic picture as it was. Lens distortion follows OpenCV's
-radial model: a normalised point x (about the principal point, divided by the focal length)
-is seen at x (1 + k1 r^2 + k2 r^4).
+sizes; every effect is off at its default, so ``CameraEffects()`` leaves a synthetic
+picture as it was. Lens distortion follows OpenCV's radial model: a normalised point x
+(about the principal point, divided by the focal length) is seen at x (1 + k1 r^2 + k2 r^4).
 """
 
 from __future__ import annotations
