@@ -157,7 +157,9 @@ def test_lens_truth_follows_the_picture(design: Design) -> None:
     plain = generate(design, 6, 8, sp)
     bent = generate(design, 6, 8, replace(sp, effects=e))
     assert len(plain.tiles) == len(bent.tiles)
-    moved = [np.hypot(*(a.center_px - b.center_px)) for a, b in zip(plain.tiles, bent.tiles)]
+    moved = [
+        np.hypot(*(a.center_px - b.center_px)) for a, b in zip(plain.tiles, bent.tiles, strict=True)
+    ]
     assert max(moved) > 2.0
     res = extract_detailed(bent.image)
     for t in bent.tiles:
