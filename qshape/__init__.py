@@ -81,6 +81,7 @@ from qshape.extract import (  # noqa: E402
     extract,
     extract_detailed,
 )
+from qshape.health import ImageHealth, image_health  # noqa: E402
 from qshape.render import render_design, save_png  # noqa: E402
 
 __all__ += [
@@ -88,9 +89,11 @@ __all__ += [
     "ExtractParams",
     "ExtractResult",
     "ImageError",
+    "ImageHealth",
     "Slot",
     "extract",
     "extract_detailed",
+    "image_health",
     "render_design",
     "save_png",
 ]

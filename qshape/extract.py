@@ -2,9 +2,12 @@
 
 Pipeline, all O(height x width) image operations in OpenCV plus linear work per outline:
 
-1. Validate the RGB uint8 image; light Gaussian blur.
+1. Validate the RGB uint8 image; light Gaussian blur. A single-colour image (an empty belt, or
+   a covered camera: `image_health` tells them apart for the caller) has no figures.
 2. Background: the most frequent colour (coarse histogram), then a smooth illumination model
    (a low-order polynomial per channel fitted to background cells of a downsampled image).
+   Without a dominant background colour (noise, or a picture filled by one object) there is
+   nothing to segment against: no figures, and the reason in ``ExtractResult.rejected``.
 3. Segmentation: per-pixel colour distance to the modelled background, thresholded (Otsu,
    clamped), cleaned by a morphological opening. Canny edges inside the foreground split tiles
    of different colours that touch.
@@ -39,7 +42,7 @@ from qshape.simplify import OutlineParams
 
 
 class ImageError(QShapeError):
-    """The image cannot be processed (wrong type, shape, size, or no contrast at all)."""
+    """The image cannot be processed (wrong type, shape or size)."""
 
 
 @dataclass(frozen=True)
@@ -50,13 +53,17 @@ class ExtractParams:
         min_size_px: Smallest accepted image height and width, in [px].
         max_size_px: Largest accepted image height and width, in [px].
         uniform_range: An image whose every channel spans at most this many levels is "one
-            colour" and rejected (camera covered, not exposed, ...), in [levels].
+            colour": an empty belt (or a covered camera, see `image_health`); it has no
+            figures, in [levels].
         blur_sigma_px: Gaussian blur before everything, in [px] (0: none).
         background_bins: Histogram bins per channel used to find the dominant colour.
         background_border_px: The dominant colour is taken from a band of this width along
             the image border (belt or grout shows there even when tiles cover most of the
             image), in [px]; 0 uses the whole image.
         background_sample_step: Every n-th pixel (each axis) enters the colour histogram.
+        min_background_fraction: Fewer of the sampled border pixels than this fraction within
+            ``background_tolerance`` of the dominant colour: no dominant background (noise,
+            or one object filling the view), so no figures, in [0, 1].
         illumination_cell_px: Cell size of the downsampled image the illumination model is
             fitted on, in [px].
         illumination_degree: Degree of the per-channel polynomial illumination model (0: flat).
@@ -91,6 +98,7 @@ class ExtractParams:
     background_bins: int = 16
     background_border_px: int = 4
     background_sample_step: int = 4
+    min_background_fraction: float = 0.25
     illumination_cell_px: int = 16
     illumination_degree: int = 2
     background_tolerance: float = 40.0
@@ -117,6 +125,8 @@ class ExtractParams:
             raise ImageError("need 1 <= min_size_px <= max_size_px")
         if not 2 <= self.background_bins <= 256 or self.background_sample_step < 1:
             raise ImageError("background_bins must be in 2..256, background_sample_step >= 1")
+        if not 0.0 <= self.min_background_fraction <= 1.0:
+            raise ImageError("min_background_fraction must be in [0, 1]")
         if self.illumination_cell_px < 1 or not 0 <= self.illumination_degree <= 3:
             raise ImageError("illumination_cell_px must be >= 1, illumination_degree in 0..3")
         if not 0.0 < self.threshold_min <= self.threshold_max:
@@ -197,8 +207,8 @@ def check_image(image: Any, params: ExtractParams) -> np.ndarray:
     """Validate an RGB uint8 image, returning it as a contiguous array.
 
     Raises:
-        ImageError: Not an array, wrong dtype, wrong shape or channel count, size out of
-            range, or a single colour.
+        ImageError: Not an array, wrong dtype, wrong shape or channel count, or size out of
+            range.
     """
     if not isinstance(image, np.ndarray):
         raise ImageError(f"image must be a numpy array (H, W, 3) uint8, got {type(image).__name__}")
@@ -210,17 +220,21 @@ def check_image(image: Any, params: ExtractParams) -> np.ndarray:
     lo, hi = params.min_size_px, params.max_size_px
     if not (lo <= h <= hi and lo <= w <= hi):
         raise ImageError(f"image size {w} x {h} px is outside the accepted {lo}..{hi} px per side")
-    span = [int(hi_ - lo_) for lo_, hi_, *_ in (cv2.minMaxLoc(c) for c in cv2.split(image))]
-    if max(span) <= params.uniform_range:
-        raise ImageError(
-            f"image is a single colour (channel spans {span} levels): nothing can be "
-            "seen; check the camera"
-        )
     return np.ascontiguousarray(image)
 
 
-def _dominant_color(img: np.ndarray, p: ExtractParams) -> np.ndarray:
-    """Median colour of the most populated coarse colour bin (border band), (3,) levels."""
+def _channel_span(image: np.ndarray) -> int:
+    """Largest range of levels over the three channels."""
+    return max(int(hi - lo) for lo, hi, *_ in (cv2.minMaxLoc(c) for c in cv2.split(image)))
+
+
+def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, float]:
+    """Dominant colour of the border band and its share.
+
+    Returns:
+        The median colour (3,) [levels] of the most populated coarse colour bin, and the
+        fraction of sampled pixels within ``background_tolerance`` of it.
+    """
     b, step = p.background_border_px, p.background_sample_step
     if b > 0 and 2 * b < min(img.shape[:2]):
         sample = np.concatenate(
@@ -236,7 +250,9 @@ def _dominant_color(img: np.ndarray, p: ExtractParams) -> np.ndarray:
     q = (sample.astype(np.int32) * p.background_bins) >> 8
     code = (q[:, 0] * p.background_bins + q[:, 1]) * p.background_bins + q[:, 2]
     top = int(np.argmax(np.bincount(code, minlength=p.background_bins**3)))
-    return np.asarray(np.median(sample[code == top], axis=0), dtype=np.float64)
+    dominant = np.asarray(np.median(sample[code == top], axis=0), dtype=np.float64)
+    near = np.abs(sample.astype(np.float64) - dominant).max(axis=1) <= p.background_tolerance
+    return dominant, float(near.mean())
 
 
 def _illumination(
@@ -286,6 +302,20 @@ def _median_colors(
     return out
 
 
+def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
+    """Canny edges of any channel: the union of one single-channel Canny per channel, uint8.
+
+    Colour tiles that touch differ in at least one channel. OpenCV's single-channel Canny is
+    several times faster than its three-channel one (which thresholds the largest channel
+    gradient); the union marks the same boundaries.
+    """
+    r, g, b = cv2.split(img)
+    edges = cv2.Canny(r, p.canny_low, p.canny_high)
+    cv2.bitwise_or(edges, cv2.Canny(g, p.canny_low, p.canny_high), dst=edges)
+    cv2.bitwise_or(edges, cv2.Canny(b, p.canny_low, p.canny_high), dst=edges)
+    return edges
+
+
 def _offset_outline(contour: FloatArray, offset: float, outward_sign: float) -> FloatArray:
     """Move a closed outline along its normals by ``offset`` (outwards for the given sign)."""
     if offset == 0.0 or len(contour) < 3:
@@ -311,7 +341,9 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         params: Parameters; None loads ``configs/vision.yaml``.
 
     Returns:
-        An `ExtractResult`; an image with no tiles gives empty lists.
+        An `ExtractResult`; an image with no tiles gives empty lists, and so does a
+        single-colour image (an empty belt) and an image without a dominant background colour
+        (noise; its reason is in ``rejected``).
 
     Raises:
         ImageError: Invalid image (see `check_image`).
@@ -319,9 +351,20 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     p = default_params() if params is None else params
     img = check_image(image, p)
     h, w = img.shape[:2]
+    if _channel_span(img) <= p.uniform_range:
+        level = img[0, 0].astype(np.float64) / 255.0
+        return ExtractResult([], [], [], [], (level[0], level[1], level[2]), 0.0)
     if p.blur_sigma_px > 0.0:
         img = cv2.GaussianBlur(img, (0, 0), p.blur_sigma_px)
-    dominant = _dominant_color(img, p)
+    dominant, share = _dominant_color(img, p)
+    if share < p.min_background_fraction:
+        col = (float(dominant[0]) / 255.0, float(dominant[1]) / 255.0, float(dominant[2]) / 255.0)
+        why = (
+            f"no dominant background: {100 * share:.0f}% of the border is near its commonest "
+            f"colour (at least {100 * p.min_background_fraction:.0f}% needed); nothing is "
+            "segmented"
+        )
+        return ExtractResult([], [], [], [why], col, 0.0)
     model, mean_light = _illumination(img, dominant, p)
     diff = cv2.absdiff(img, model)
     r, g, b = cv2.split(diff)
@@ -336,7 +379,7 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         # Cut the foreground along Canny edges, label the pieces, give the cut pixels (and
         # crumbs smaller than a tile) back to a neighbouring piece, then separate touching
         # pieces by dropping the pixels that border a piece with a higher label.
-        edges = cv2.Canny(img, p.canny_low, p.canny_high)
+        edges = _color_edges(img, p)
         cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
         count, labels = cv2.connectedComponents(cut, connectivity=4)
         areas = np.bincount(labels.ravel(), minlength=count)

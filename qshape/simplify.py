@@ -74,6 +74,17 @@ class OutlineParams:
             (a shallow concave corner beside a pixel staircase), not a curve (dimensionless;
             0: off). Keep it below the halves of the shallowest arc that is not straight:
             with ``straight_sagitta_ratio`` 0.1 those are 0.049.
+        roughness_sigmas: The noise floor of an outline is at least this many times its
+            measured edge roughness (robust standard deviation of each sample's distance
+            from the chord of its neighbours one corner window away, less the local mean
+            that an arc's own sagitta gives), so a chipped, ground edge stays straight
+            (dimensionless; 0: off).
+        min_corner_deg: A corner between two straight runs whose fitted lines (total least
+            squares over each run) meet at less than this angle is roughness on one edge,
+            not a corner, and is dropped, weakest first, in [deg] (0: off). The lines are fitted
+            over whole edges, so this holds where the window measure of
+            ``corner_angle_deg`` is fooled by a rough edge; keep it below the shallowest real
+            corner of the tiles (33 degrees in the bundled trencadis).
     """
 
     resample_points: int = 256
@@ -89,6 +100,8 @@ class OutlineParams:
     circle_residual: float = 0.0
     chamfer_fraction: float = 0.0
     missed_corner_ratio: float = 0.0
+    roughness_sigmas: float = 0.0
+    min_corner_deg: float = 0.0
 
     def __post_init__(self) -> None:
         """Validate ranges.
@@ -113,6 +126,12 @@ class OutlineParams:
                 raise ToleranceError(f"{name} must be in [0, 0.5), got {v!r}")
         if self.corner_window <= 0.0:
             raise ToleranceError("corner_window must be > 0")
+        if not (math.isfinite(self.roughness_sigmas) and 0.0 <= self.roughness_sigmas <= 20.0):  # noqa: PLR2004
+            raise ToleranceError(
+                f"roughness_sigmas must be in [0, 20], got {self.roughness_sigmas}"
+            )
+        if not 0.0 <= self.min_corner_deg < 90.0:  # noqa: PLR2004
+            raise ToleranceError(f"min_corner_deg must be in [0, 90), got {self.min_corner_deg}")
         if not 0.0 <= self.arc_turning_deg < 180.0:
             raise ToleranceError(f"arc_turning_deg must be in [0, 180), got {self.arc_turning_deg}")
         if not 0.0 < self.corner_angle_deg < 180.0:
@@ -261,6 +280,12 @@ def _simplify_clean(
         change = _excess_turning(change, w, p.arc_turning_deg)
     corners = _corners_many(change, p.corner_angle_deg, max(w, round(p.merge_fraction * n)))
     noise = p.noise_fraction * diameter
+    if p.roughness_sigmas > 0.0:
+        noise = np.maximum(noise, p.roughness_sigmas * _roughness(res, w))
+    if p.min_corner_deg > 0.0:
+        for f in _with_flat_corners(res, corners, p.min_corner_deg, half).tolist():
+            if not flat[f]:
+                corners[f] = _verified_corners(res[f], corners[f], p, float(noise[f]), half)
     ring = ext[:, w - 1 : w + n + 1]
     geom = _Samples(res, smooth, ring, sign, noise, perimeter, flat)
     results = _polylines(geom, corners, p, half, w)
@@ -282,6 +307,125 @@ def _simplify_clean(
             )
             continue
         out[i] = (points, mask)
+
+
+def _roughness(res: FloatArray, w: int) -> FloatArray:
+    """Robust edge roughness of each outline (F, n, 2) -> (F,), in the outline's unit.
+
+    Each sample's signed distance from the chord of its neighbours ``w`` samples away, less
+    its moving mean over 4 w + 1 samples (an arc's sagitta, constant along it), scaled by the
+    normal-consistency factor of the median absolute deviation and by sqrt(2/3) (the chord's
+    ends carry noise too).
+    """
+    n = res.shape[1]
+    a, b = np.roll(res, w, axis=1), np.roll(res, -w, axis=1)
+    chord = b - a
+    length = np.hypot(chord[..., 0], chord[..., 1])
+    rel = res - a
+    dist = (chord[..., 0] * rel[..., 1] - chord[..., 1] * rel[..., 0]) / np.maximum(length, 1e-12)
+    k = min(2 * w, (n - 1) // 2)
+    ext = np.concatenate([dist[:, -k:], dist, dist[:, :k]], axis=1)
+    csum = np.zeros((len(res), n + 2 * k + 1))
+    np.cumsum(ext, axis=1, out=csum[:, 1:])
+    local = (csum[:, 2 * k + 1 :] - csum[:, :n]) / (2 * k + 1)
+    dev = np.abs(dist - local)
+    return np.asarray(_MAD_TO_SIGMA * np.median(dev, axis=1) * math.sqrt(2.0 / 3.0))
+
+
+_MAD_TO_SIGMA = 1.4826
+"""Median absolute deviation of a normal sample x this = its standard deviation."""
+
+
+def _with_flat_corners(
+    res: FloatArray, corners: list[np.ndarray], min_deg: float, trim: int
+) -> np.ndarray:
+    """Outlines with a corner whose neighbouring runs' fitted lines meet below ``min_deg``.
+
+    All runs of all outlines at once (prefix sums of the moments), straight or not: a
+    superset of the outlines `_verified_corners` changes.
+    """
+    count, n = res.shape[:2]
+    m = np.array([len(c) for c in corners])
+    rows = np.flatnonzero(m > 3)  # noqa: PLR2004 (a figure's fewest corners)
+    if len(rows) == 0:
+        return rows
+    mm = m[rows]
+    owner = np.repeat(np.arange(len(rows)), mm)
+    starts = np.concatenate([corners[f] for f in rows.tolist()]).astype(np.int64)
+    first = np.concatenate([[0], np.cumsum(mm)[:-1]])
+    nxt = np.arange(len(starts)) + 1
+    nxt[first + mm - 1] = first
+    ends = starts[nxt] + np.where(starts[nxt] <= starts, n, 0)  # unwrapped
+    long = ends - starts + 1 > 2 * trim + 4
+    lo = np.where(long, starts + trim, starts)
+    hi = np.where(long, ends - trim + 1, ends + 1)
+    sub = res[rows]
+    origin = sub[:, 0, :]
+    q = np.concatenate([sub, sub], axis=1) - origin[:, None, :]  # twice round: unwrapped runs
+    x, y = q[..., 0], q[..., 1]
+    sums = np.zeros((len(rows), 2 * n + 1, 5))
+    np.cumsum(np.stack([x, y, x * x, y * y, x * y], axis=-1), axis=1, out=sums[:, 1:])
+    tot = sums[owner, hi] - sums[owner, lo]
+    cnt = (hi - lo).astype(np.float64)
+    mx, my = tot[:, 0] / cnt, tot[:, 1] / cnt
+    phi = 0.5 * np.arctan2(
+        2.0 * (tot[:, 4] - cnt * mx * my), (tot[:, 2] - cnt * mx * mx) - (tot[:, 3] - cnt * my * my)
+    )
+    d = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    chord = q[owner, ends] - q[owner, starts]
+    d *= np.where((d * chord).sum(axis=1) >= 0.0, 1.0, -1.0)[:, None]
+    prev = np.arange(len(starts)) - 1
+    prev[first] = first + mm - 1
+    ang = np.degrees(np.arccos(np.clip((d * d[prev]).sum(axis=1), -1.0, 1.0)))
+    return np.asarray(rows[np.unique(owner[ang < min_deg])])
+
+
+def _verified_corners(
+    res: FloatArray, corners: np.ndarray, p: OutlineParams, noise: float, trim: int
+) -> np.ndarray:
+    """``corners`` (sample indices) less those between two straight runs meeting too flat.
+
+    Repeatedly drops the corner whose neighbouring runs are both straight (within
+    ``straight_sagitta_ratio`` x chord or ``noise``) and whose fitted lines meet at the
+    smallest angle, while that angle is below ``min_corner_deg``.
+    """
+    n = len(res)
+    c = [int(x) for x in corners]
+    while len(c) > 3:  # noqa: PLR2004 (a figure's fewest corners)
+        runs = [_run(res, c[i], c[(i + 1) % len(c)], n) for i in range(len(c))]
+        dirs = [
+            _line_direction(r, trim)
+            if _straight_within(r, p.straight_sagitta_ratio, noise)
+            else None
+            for r in runs
+        ]
+        best: tuple[float, int] | None = None
+        for i in range(len(c)):
+            d0, d1 = dirs[i - 1], dirs[i]
+            if d0 is None or d1 is None:
+                continue
+            ang = math.degrees(math.acos(max(-1.0, min(1.0, float(d0 @ d1)))))
+            if ang < p.min_corner_deg and (best is None or ang < best[0]):
+                best = (ang, i)
+        if best is None:
+            break
+        del c[best[1]]
+    return np.array(c, dtype=np.int64)
+
+
+def _run(res: FloatArray, a: int, b: int, n: int) -> FloatArray:
+    """Samples from index a to b inclusive, circularly."""
+    return res[(a + np.arange((b - a) % n + 1)) % n]
+
+
+def _line_direction(run: FloatArray, trim: int) -> FloatArray:
+    """Unit direction (2,) of the total-least-squares line of a run (ends trimmed if long)."""
+    core = run[trim : len(run) - trim] if len(run) > 2 * trim + 4 else run  # noqa: PLR2004
+    q = core - core.mean(axis=0)
+    sxx, syy, sxy = float(q[:, 0] @ q[:, 0]), float(q[:, 1] @ q[:, 1]), float(q[:, 0] @ q[:, 1])
+    phi = 0.5 * math.atan2(2.0 * sxy, sxx - syy)
+    d = np.array([math.cos(phi), math.sin(phi)])
+    return d if float(d @ (run[-1] - run[0])) >= 0.0 else -d
 
 
 def _excess_turning(change: FloatArray, w: int, arc_deg: float) -> FloatArray:

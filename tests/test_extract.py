@@ -6,6 +6,7 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
@@ -216,8 +217,6 @@ def test_touching_tiles_split_by_canny() -> None:
         np.zeros((100, 100, 3), np.float32),
         np.zeros((100, 100), np.uint8),
         np.zeros((100, 100, 4), np.uint8),
-        np.zeros((100, 100, 3), np.uint8),
-        np.full((100, 100, 3), 137, np.uint8),
         np.zeros((8, 8, 3), np.uint8),
         np.zeros((9000, 20, 3), np.uint8),
         [[1, 2, 3]],
@@ -227,6 +226,52 @@ def test_bad_input(bad: object) -> None:
     with pytest.raises(ImageError):
         extract(bad)  # type: ignore[arg-type]
     assert issubclass(ImageError, QShapeError)
+
+
+@pytest.mark.parametrize("level", [0, 137, 255])
+def test_uniform_picture_is_an_empty_belt(level: int) -> None:
+    image = np.full((120, 160, 3), level, np.uint8)
+    res = extract_detailed(image)
+    assert res.figures == [] and res.partial == [] and res.rejected == []
+    assert res.background == pytest.approx((level / 255.0,) * 3)
+    assert extract(image) == []
+
+
+def test_uniform_noise_gives_no_figures() -> None:
+    rng = np.random.default_rng(3)
+    noise = rng.integers(0, 256, (1000, 1000, 3), dtype=np.uint8)
+    res = extract_detailed(noise)
+    assert res.figures == [] and res.partial == []
+    assert any("no dominant background" in r for r in res.rejected)
+
+
+def test_narrow_hole_filter_uses_twice_area_over_perimeter() -> None:
+    """A hole is kept when 2 x area / perimeter (its width) reaches ``min_hole_width_px``.
+
+    The slit's width is measured as extraction traces it; thresholds at 0.7 and 1.3 x that
+    width put it between one and two minimum widths (kept) and below one (dropped).
+    """
+    image = np.full((240, 240, 3), 60, np.uint8)
+    image[40:200, 40:200] = (200, 60, 50)
+    image[80:160, 117:123] = 60  # a 6 x 80 px slit
+    kept = extract(image)
+    assert len(kept) == 1 and len(kept[0].holes) == 1
+    res = extract_detailed(image)
+    fg = np.zeros((240, 240), np.uint8)
+    cv2.fillPoly(fg, [np.round(res.outlines[0]).astype(np.int32)], 255)
+    fg[80:160, 117:123] = 0
+    contours, hier = cv2.findContours(fg, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    hole = next(c for c, h in zip(contours, hier[0], strict=True) if h[3] != -1)
+    width = 2.0 * cv2.contourArea(hole) / cv2.arcLength(hole, True)
+    base = ExtractParams.load()
+    between = replace(base, min_hole_width_px=0.7 * width, min_hole_area_px=10.0)
+    above = replace(base, min_hole_width_px=1.3 * width, min_hole_area_px=10.0)
+    assert len(extract(image, between)[0].holes) == 1
+    assert len(extract(image, above)[0].holes) == 0
+    square = image.copy()
+    square[80:160, 117:123] = (200, 60, 50)
+    square[100:140, 100:140] = 60  # a wide hole is kept whatever the slit threshold
+    assert len(extract(square, above)[0].holes) == 1
 
 
 def test_no_tiles_is_empty() -> None:

@@ -162,3 +162,31 @@ def test_missed_corner_rule_keeps_arcs_curved(arc_deg):
     dense = dense[np.r_[True, np.any(np.diff(dense, axis=0) != 0, axis=1)]]
     _, mask = simplify_outline(dense, _cell_outline_params(0.035))
     assert mask.tolist().count(True) == 1
+
+
+@pytest.mark.parametrize("sides", [3, 4, 6])
+def test_rough_edges_keep_their_corners(sides: int) -> None:
+    """A chipped, ground edge (~1 px of roughness on a 60 px polygon) is still one edge."""
+    from qshape.effects import roughen  # noqa: PLC0415
+    from qshape.extract import ExtractParams  # noqa: PLC0415
+
+    p = ExtractParams.load().outline
+    plain = dataclasses.replace(p, roughness_sigmas=0.0, min_corner_deg=0.0)
+    ang = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
+    v = 60.0 * np.stack([np.cos(ang), np.sin(ang)], axis=1) + 200.0
+    dense = np.concatenate(
+        [
+            v[i] + (v[(i + 1) % sides] - v[i]) * np.linspace(0, 1, 200, endpoint=False)[:, None]
+            for i in range(sides)
+        ]
+    )
+    rng = np.random.default_rng(sides)
+    good = bad_plain = 0
+    for _ in range(10):
+        rough = roughen(dense, 1.0, 2.5, rng)
+        pts, mask = simplify_outline(rough, p)
+        good += len(pts) == sides and not mask.any()
+        pts0, mask0 = simplify_outline(rough, plain)
+        bad_plain += len(pts0) != sides or bool(mask0.any())
+    assert good >= 8
+    assert good >= 10 - bad_plain  # the roughness checks never lose what plain finds
