@@ -30,10 +30,12 @@ The planner predicts where it is at contact (fixed-point iteration on the contac
 with the belt's velocity, travels with the belt during the vacuum dwell and lifts still moving
 with it.
 
-Lower bound of a cycle: time-optimal moves at the same limits from the bound's start
-configuration to the pick contact (matching the belt) and from there to the place contact, with
-no dwell and no approach points. Any cycle that stops at (or matches the belt at) both contacts
-takes at least this long.
+Lower bound of a cycle (`PickPlacePlanner.cycle_bound`): time-optimal moves at the same limits
+from the bound's start configuration to the pick contact (matching the belt), the pick dwell,
+the time-optimal move from the end of the dwell to the place contact, and the place dwell; no
+approach points and no clearance zones. Every cycle that holds the pad on the tile for the
+vacuum dwells takes at least this long: the dwells are process time no motion can overlap. The
+motion-only bound (`PickPlacePlanner.lower_bound`, no dwell) is kept as ``motion_bound``.
 
 The module knows poses, yaw sets and belt velocities only: no tiles, shapes or tasks.
 """
@@ -96,7 +98,9 @@ class CyclePlan:
         vacuum_off: Time the vacuum switches off (tile at the place contact) [s].
         lift_off: Time the tool starts lifting the tile [s].
         duration: Total duration [s].
-        bound: Lower bound of the cycle [s] (see the module docstring).
+        bound: Lower bound of the cycle, vacuum dwells included [s] (see the module docstring).
+        motion_bound: Lower bound of the motion alone: start -> pick contact -> place contact,
+            time-optimal, no dwell [s].
         pick_q: Configuration at the pick contact, shape (6,) [rad].
         place_q: Configuration at the place contact, shape (6,) [rad].
         pick_position: Predicted tile top centre at contact, shape (3,) [m].
@@ -117,6 +121,7 @@ class CyclePlan:
     lift_off: float
     duration: float
     bound: float
+    motion_bound: float
     pick_q: Array
     place_q: Array
     pick_position: Array
@@ -134,8 +139,13 @@ class CyclePlan:
 
     @property
     def ratio(self) -> float:
-        """Cycle duration over its lower bound."""
+        """Cycle duration over its lower bound (dwells included)."""
         return self.duration / self.bound
+
+    @property
+    def motion_ratio(self) -> float:
+        """Cycle duration over the motion-only bound (no dwell)."""
+        return self.duration / self.motion_bound
 
 
 def _rotate(xy: Array, yaw: float) -> Array:
@@ -531,13 +541,16 @@ class PickPlacePlanner:
                 )
             wait = t_aim - t_plan
         pw, pick_q, place_q, place_yaw, leads = result
+        dwell = pw.segments[pw.index("dwell_pick")]
         if wait > 0.0:
             pw = Piecewise((hold_segment(start, wait, "wait"), *pw.segments))
         t_contact = t_aim
         contact_error = speed * abs(pw.end_time("descend_pick") - t_aim)
         traj = pw.sample(self.config.trajectory.sample_dt)
         bound_q = start.q if bound_from is None else as_joint_vector(bound_from, "bound_from")
-        bound = self.lower_bound(bound_q, pick_q, place_q, self.joint_velocity(pick_q, belt))
+        belt_qd = self.joint_velocity(pick_q, belt)
+        motion_bound = self.lower_bound(bound_q, pick_q, place_q, belt_qd)
+        bound = self.cycle_bound(bound_q, pick_q, belt_qd, dwell.duration, place_q)
         return CyclePlan(
             trajectory=traj,
             piecewise=pw,
@@ -546,6 +559,7 @@ class PickPlacePlanner:
             lift_off=pw.start_time("lift"),
             duration=pw.duration,
             bound=bound,
+            motion_bound=motion_bound,
             pick_q=pick_q,
             place_q=place_q,
             pick_position=pick0 + belt * t_contact - _rotate(grasp, object_yaw),
@@ -652,6 +666,32 @@ class PickPlacePlanner:
         a = self._segment(s0, pick_q, pick_qd, "bound_pick")
         b = self._segment(a.end, place_q, None, "bound_place")
         return a.duration + b.duration
+
+    def cycle_bound(
+        self,
+        start_q: npt.ArrayLike,
+        pick_q: Array,
+        pick_qd: Array,
+        pick_dwell: float,
+        place_q: Array,
+    ) -> float:
+        """Lower bound [s] of a cycle with vacuum dwells (see the module docstring).
+
+        Time-optimal start -> pick contact (arriving with ``pick_qd``), the pick dwell travelling
+        at ``pick_qd``, time-optimal from there to rest at the place contact, the place dwell.
+
+        Args:
+            start_q: Start configuration (at rest), shape (6,) [rad].
+            pick_q: Pick contact configuration, shape (6,) [rad].
+            pick_qd: Joint velocity at the pick contact (belt matching), shape (6,) [rad/s].
+            pick_dwell: Time at the pick contact (vacuum build-up, belt matching) [s].
+            place_q: Place contact configuration, shape (6,) [rad].
+        """
+        s0 = JointState.at_rest(as_joint_vector(start_q, "start_q"))
+        a = self._segment(s0, pick_q, pick_qd, "bound_pick")
+        held = hold_segment(a.end, pick_dwell, "bound_dwell")
+        b = self._segment(held.end, place_q, None, "bound_place")
+        return a.duration + pick_dwell + b.duration + self.config.cycle.place_dwell
 
     def plan_move(self, start: JointState, q: npt.ArrayLike, label: str = "move") -> Piecewise:
         """Time-optimal move from ``start`` to rest at ``q`` (6,) [rad] (e.g. back home).
