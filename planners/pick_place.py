@@ -72,6 +72,9 @@ Array = npt.NDArray[np.float64]
 
 _CHECK_SAMPLES = 40
 """FK samples per segment when checking drift and clearance (resolution, not a tunable)."""
+_CROSSING_BISECTIONS = 12
+"""Bisection steps locating where the tool crosses a clearance height between two check samples
+(the drift grows fastest there; resolution, not a tunable)."""
 _MIN_SHARE = 0.05
 """Smallest fraction of a limit left to the lead's bridge (keeps ruckig's input valid)."""
 
@@ -224,14 +227,42 @@ class PickPlacePlanner:
         return np.asarray(times), np.asarray(pos)
 
     def _drift_ok(self, segs: list[Segment], contact: _Contact, leaving: bool) -> bool:
-        """Below the clearance height the tool stays over the (belt-moving) contact point."""
+        """Below the clearance height the tool stays over the (belt-moving) contact point.
+
+        Checked at the samples and, by bisection, where the tool crosses the clearance height
+        (between two samples the drift can grow by a tenth of a millimetre there).
+        """
         c = self.config.cycle
         taus, pos = self._positions(segs)
-        t_rel = taus if leaving else taus - taus[-1]
-        rel = pos - (contact.point[None, :] + contact.belt[None, :] * t_rel[:, None])
+        total = taus[-1]
+
+        def relative(t: Array, p: Array) -> Array:
+            t_rel = t if leaving else t - total
+            return p - (contact.point[None, :] + contact.belt[None, :] * t_rel[:, None])
+
+        rel = relative(taus, pos)
         low = rel[:, 2] < contact.clearance
-        lateral = np.linalg.norm(rel[low, :2], axis=1)
-        return bool(lateral.size == 0 or lateral.max() <= c.max_lateral_drift)
+        lateral = list(np.linalg.norm(rel[low, :2], axis=1))
+        for k in np.flatnonzero(low[:-1] != low[1:]):
+            t_low, t_high = (taus[k], taus[k + 1]) if low[k] else (taus[k + 1], taus[k])
+            for _ in range(_CROSSING_BISECTIONS):
+                t_mid = 0.5 * (t_low + t_high)
+                r = relative(np.array([t_mid]), self._tcp_at(segs, t_mid)[None, :])[0]
+                if r[2] < contact.clearance:
+                    t_low = t_mid
+                else:
+                    t_high = t_mid
+            r = relative(np.array([t_low]), self._tcp_at(segs, t_low)[None, :])[0]
+            lateral.append(float(np.linalg.norm(r[:2])))
+        return bool(not lateral or max(lateral) <= c.max_lateral_drift)
+
+    def _tcp_at(self, segs: list[Segment], t: float) -> Array:
+        """TCP position (3,) [m] at time ``t`` [s] from the first segment's start."""
+        for seg in segs:
+            if t <= seg.duration:
+                return self.ik.fk(seg.state(t)[0])[0]
+            t -= seg.duration
+        return self.ik.fk(segs[-1].state(segs[-1].duration)[0])[0]
 
     def _clearance_ok(self, seg: Segment, floor_z: float) -> bool:
         _, pos = self._positions([seg])
