@@ -249,7 +249,7 @@ class CycleConfig:
 
     approach_height: float = 0.015
     approach_speed: float = 0.25
-    lead_bisections: int = 10
+    lead_bisections: int = 6
     lead_joints: tuple[int, ...] = (0, 3, 5)
     lead_share: float = 0.99
     lateral_clearance_height: float = 0.006
