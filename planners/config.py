@@ -11,7 +11,7 @@ Facts and assumptions:
       (about 15-19 m/s^2 at the tool at the 0.5-0.6 m radius of the work areas). Calibrated, not
       conservative: ABB's 25/300/25 mm standard cycle (1 kg) is quoted at about 0.85 s for the
       IRB 140, for a blended path. Planned here with the top of the cycle flown through as the
-      cell flies through its approach points, it takes 0.844 s at 9 x (0.815 s at 10 x, 0.885 s
+      cell flies through its approach points, it takes 0.851 s at 9 x (0.819 s at 10 x, 0.884 s
       at 8 x); stopping at all six corners takes 1.41 s at 9 x, which says nothing about the
       limits. These are assumptions: change them in the YAML.
 """
