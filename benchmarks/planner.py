@@ -6,11 +6,14 @@ simulated time), ``cycle_s`` (simulated seconds per tile), ``bound_s`` (the plan
 per cycle, same limits, no dwell, no approach points), ``ratio`` (cycle over bound),
 ``placed_within_tolerance`` (tiles within the position and yaw tolerances), ``tiles``, ``plan_ms``
 (median wall-clock planning per cycle: IK + trajectories), plus tracking and placement errors.
+``bound_s`` includes the two vacuum dwells (process time no motion can overlap);
+``motion_bound_s`` and ``ratio_motion`` are the same without them. ``standard_cycle_s`` and
+``standard_cycle_blended_s`` check the acceleration assumption against ABB's catalogue cycle.
 
-Targets (issue 6): paper layout (belts 1 m apart) >= 24 tiles/min with every tile placed within
-tolerance and within 15% of the bound; tool tracking error <= 1 mm along full-speed cycles;
-placement within 1 mm and 1 degree. Also reported: compact layout (0.5 m) and a moving input
-belt at 0.1 and 0.2 m/s.
+Targets: paper layout (belts 1 m apart) >= 24 tiles/min with every tile placed within
+tolerance (issue 6) and within 3% of the bound with dwells (issue 14); tool tracking error
+<= 1 mm along full-speed cycles; placement within 1 mm and 1 degree. Also reported: compact
+layout (0.5 m) and a moving input belt at 0.1 and 0.2 m/s.
 
 The execution loop (`execute_cycle`) drives the cell's servo actuators with the planned
 positions (plus an inverse-dynamics feed-forward) and velocities every physics step, switching the
@@ -66,7 +69,8 @@ BELT_SPEED_MATCH = 0.01
 LAYOUT_SEED_TRIES = 20
 """Layout seeds tried until the design's tiles fit the input belt's tile area."""
 TARGET_TILES_PER_MIN = 24.0
-TARGET_RATIO = 1.15
+TARGET_RATIO = 1.03
+"""Paper layout: cycle over its lower bound, vacuum dwells included (issue 14)."""
 LAYOUTS = {
     "paper": {"belt_separation": 1.0, "work_x": 0.0},
     # Tool-down poses at belt height are out of reach closer than ~0.33 m to the base axis:
@@ -83,7 +87,8 @@ class CycleRun:
     Attributes:
         tile: Tile index.
         duration: Planned cycle duration [s].
-        bound: Lower bound of the cycle [s].
+        bound: Lower bound of the cycle, vacuum dwells included [s].
+        motion_bound: Lower bound of the cycle's motion alone (no dwell) [s].
         plan_ms: Planning wall-clock time [ms].
         tracking_max: Largest tool position error against the plan along the cycle [m].
         tracking_rms: RMS tool position error [m].
@@ -96,6 +101,7 @@ class CycleRun:
     tile: int
     duration: float
     bound: float
+    motion_bound: float
     plan_ms: float
     tracking_max: float
     tracking_rms: float
@@ -194,6 +200,7 @@ class CellRunner:
             tile,
             plan.duration,
             plan.bound,
+            plan.motion_bound,
             plan.plan_ms,
             float(err.max()),
             float(np.sqrt(np.mean(err**2))),
@@ -222,21 +229,28 @@ STANDARD_CYCLE_CENTRE = (0.5, 0.0, 0.3)
 """Where the standard cycle is planned: its lower midpoint, 0.5 m in front of the base [m]."""
 
 
-def standard_cycle_s(planner_config: PlannerConfig) -> float:
-    """The standard cycle's duration [s] with the planners' limits and a stop at every corner.
-
-    A check of the acceleration and jerk assumptions: tool down, up 25 mm, 300 mm sideways,
-    down 25 mm and the same way back, each leg a time-optimal joint-space move from rest to rest
-    (ABB's figure is measured with a 1 kg payload and its own path blending, so a stop at every
-    corner is slower than the real arm at the same limits).
-    """
+def _standard_cycle_ends(
+    planner_config: PlannerConfig,
+) -> tuple[IKSolver, PickPlacePlanner, np.ndarray, np.ndarray, np.ndarray]:
+    """IK, planner, the two lower corners (3,) [m] and the lift (3,) [m] of the standard cycle."""
     up, across, _ = STANDARD_CYCLE
     arm = build_arm_model(load_cell_config(), with_cell=False)
     ik = IKSolver(arm, planner_config.ik, planner_config.limits)
     planner = PickPlacePlanner(ik, planner_config)
     cx, cy, cz = STANDARD_CYCLE_CENTRE
     a, b = np.array([cx, cy - across / 2, cz]), np.array([cx, cy + across / 2, cz])
-    lift = np.array([0.0, 0.0, up])
+    return ik, planner, a, b, np.array([0.0, 0.0, up])
+
+
+def standard_cycle_s(planner_config: PlannerConfig) -> float:
+    """The standard cycle's duration [s] with the planners' limits and a stop at every corner.
+
+    Tool down, up 25 mm, 300 mm sideways, down 25 mm and the same way back, each leg a
+    time-optimal joint-space move from rest to rest. ABB's catalogue figure is for a blended
+    path (1 kg payload), so this stop-everywhere time is no check of the limits: compare
+    `standard_cycle_blended_s`.
+    """
+    ik, planner, a, b, lift = _standard_cycle_ends(planner_config)
     corners = [a, a + lift, b + lift, b, b + lift, a + lift, a]
     q = ik.solve(corners[0], 0.0).q
     total = 0.0
@@ -246,6 +260,33 @@ def standard_cycle_s(planner_config: PlannerConfig) -> float:
         total += move.duration
         q = move.end.q
     return total
+
+
+def standard_cycle_blended_s(planner_config: PlannerConfig) -> float:
+    """The standard cycle's duration [s] with the top of the cycle flown through.
+
+    The cell's own pick-and-place planning with the approach points at the cycle's 25 mm height
+    and no vacuum dwell, press or gap: from one lower corner, up, across and down to the other
+    (the vertical legs flown through with the planner's lead, the tool within
+    ``max_lateral_drift`` of vertical below the clearance heights), and back. This is the
+    figure to hold against ABB's (about 0.85 s for the IRB 140, 1 kg, blended path).
+    """
+    up = STANDARD_CYCLE[0]
+    cycle = replace(
+        planner_config.cycle,
+        approach_height=up,
+        pick_dwell=0.0,
+        place_dwell=0.0,
+        belt_match_time=0.0,
+        pick_press=0.0,
+        place_gap=0.0,
+    )
+    ik, planner, a, b, _ = _standard_cycle_ends(replace(planner_config, cycle=cycle))
+    q_b = ik.solve(b, 0.0).q
+    plan = planner.plan_cycle(
+        JointState.at_rest(q_b), a, b, 0.0, start_at_contact=True, end_retreat=False
+    )
+    return plan.duration
 
 
 def _next_tile(runner: CellRunner, todo: list[int], belt_speed: float) -> int | None:
@@ -333,6 +374,12 @@ def run_design(
         middle = [r.duration for r in runs[1:-1]]
         steady = float(np.median(middle)) if middle else math.nan
         bound = sum(r.bound for r in runs)
+        motion_bound = sum(r.motion_bound for r in runs)
+        steady_ratio = (
+            sum(r.duration for r in runs[1:-1]) / sum(r.bound for r in runs[1:-1])
+            if len(runs) > 2
+            else math.nan
+        )
         tiles = len(slots)
         return {
             "design": design,
@@ -351,6 +398,9 @@ def run_design(
             "cycle_s": busy / max(len(runs), 1),
             "bound_s": bound / max(len(runs), 1),
             "ratio": busy / bound if bound > 0 else math.nan,
+            "motion_bound_s": motion_bound / max(len(runs), 1),
+            "ratio_motion": busy / motion_bound if motion_bound > 0 else math.nan,
+            "steady_ratio": steady_ratio,
             "plan_ms": float(np.median([r.plan_ms for r in runs])) if runs else math.nan,
             "plan_ms_max": float(np.max([r.plan_ms for r in runs])) if runs else math.nan,
             "steady_cycle_s": steady,
@@ -427,7 +477,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         results.append(r)
         print(
             f"{layout:8s} belt {speed:.1f} m/s: {r['tiles_per_min']:.1f} tiles/min, cycle "
-            f"{r['cycle_s']:.3f} s, bound {r['bound_s']:.3f} s, ratio {r['ratio']:.3f}, placed "
+            f"{r['cycle_s']:.3f} s, bound {r['bound_s']:.3f} s, ratio {r['ratio']:.3f} (steady "
+            f"{r['steady_ratio']:.3f}; motion bound {r['motion_bound_s']:.3f} s, ratio "
+            f"{r['ratio_motion']:.3f}), placed "
             f"{r['placed_within_tolerance']}/{r['tiles']}, tracking max {r['tracking_max_mm']:.2f}"
             f" mm, place err max {r['place_err_max_mm']:.2f} mm / {r['yaw_err_max_deg']:.2f} deg,"
             f" plan {r['plan_ms']:.1f} ms"
@@ -448,11 +500,17 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             and paper["all_placed_within_tolerance"]
         ),
         "standard_cycle_s": standard_cycle_s(pcfg),
+        "standard_cycle_blended_s": standard_cycle_blended_s(pcfg),
         "planner_config": asdict(pcfg),
         "results": results,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(report, indent=2, default=float), encoding="utf-8")
+    print(
+        f"ABB standard cycle 25/300/25 mm: blended {report['standard_cycle_blended_s']:.3f} s, "
+        f"stopping at every corner {report['standard_cycle_s']:.3f} s (ABB: about 0.85 s, "
+        "blended)"
+    )
     print(f"wrote {args.out}")
     return report
 

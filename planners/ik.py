@@ -214,7 +214,7 @@ class IKSolver:
         mujoco.mj_kinematics(self.model, d)
         dmax = self.config.collision_detection_distance
         return min(
-            mujoco.mj_geomDistance(self.model, d, int(a), int(b), dmax, None)
+            float(mujoco.mj_geomDistance(self.model, d, int(a), int(b), dmax, None))
             for a, b in self._pairs
         )
 
@@ -225,10 +225,8 @@ class IKSolver:
 
     def pose_error(self, q: Array, position: Array, yaw: float) -> tuple[float, float]:
         """Position error [m] and orientation error [rad] of ``q`` against a tool-down target."""
-        p, r = self.fk(q)
-        r_err = tool_down_rotation(yaw).T @ r
-        cos_angle = np.clip(0.5 * (np.trace(r_err) - 1.0), -1.0, 1.0)
-        return float(np.linalg.norm(p - position)), float(math.acos(cos_angle))
+        self.fk(q)
+        return self._error_from_data(self._data, position, yaw)
 
     def _reach_geometry(self) -> tuple[Array, float, float, float]:
         """Shoulder anchor at q=0, upper-arm and forearm lengths, tool offset below the wrist."""
@@ -312,6 +310,11 @@ class IKSolver:
     def _error_from_data(
         self, data: mujoco.MjData, position: Array, yaw: float
     ) -> tuple[float, float]:
+        """Position error [m] and rotation angle [rad] from the tool-down target, from ``data``.
+
+        The rotation angle of ``R_target^T R`` (from its trace): the one orientation-error
+        formula of the solver (convergence, seeds, `pose_error`).
+        """
         p = data.site_xpos[self.site_id]
         r = data.site_xmat[self.site_id].reshape(3, 3)
         r_err = tool_down_rotation(yaw).T @ r
@@ -353,13 +356,15 @@ class IKSolver:
 
     def _in_range(self, q: Array) -> Array:
         """``q`` clipped to the joint ranges (`np.clip` costs ~3x more on 6 values)."""
-        return np.minimum(np.maximum(q, self.lower), self.upper)
+        out: Array = np.minimum(np.maximum(q, self.lower), self.upper)
+        return out
 
     def _feature_distance(self, feats: Array, feature: Array) -> Array:
         """Distance [m] of (x, y, z, yaw) features, yaw weighted by the tool length."""
         diff = feats - feature
         diff[:, 3] = ((diff[:, 3] + math.pi) % _TWO_PI - math.pi) * self._reach[3]
-        return np.sqrt(np.einsum("ij,ij->i", diff, diff))
+        dist: Array = np.sqrt(np.einsum("ij,ij->i", diff, diff))
+        return dist
 
     def _default_seed(self, feature: Array, elbow_up: bool = True) -> Array:
         """Geometric guess: elbow up (or down), wrist flat, tool down, facing the target.

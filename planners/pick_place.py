@@ -30,10 +30,12 @@ The planner predicts where it is at contact (fixed-point iteration on the contac
 with the belt's velocity, travels with the belt during the vacuum dwell and lifts still moving
 with it.
 
-Lower bound of a cycle: time-optimal moves at the same limits from the bound's start
-configuration to the pick contact (matching the belt) and from there to the place contact, with
-no dwell and no approach points. Any cycle that stops at (or matches the belt at) both contacts
-takes at least this long.
+Lower bound of a cycle (`PickPlacePlanner.cycle_bound`): time-optimal moves at the same limits
+from the bound's start configuration to the pick contact (matching the belt), the pick dwell,
+the time-optimal move from the end of the dwell to the place contact, and the place dwell; no
+approach points and no clearance zones. Every cycle that holds the pad on the tile for the
+vacuum dwells takes at least this long: the dwells are process time no motion can overlap. The
+motion-only bound (`PickPlacePlanner.lower_bound`, no dwell) is kept as ``motion_bound``.
 
 The module knows poses, yaw sets and belt velocities only: no tiles, shapes or tasks.
 """
@@ -70,6 +72,9 @@ Array = npt.NDArray[np.float64]
 
 _CHECK_SAMPLES = 40
 """FK samples per segment when checking drift and clearance (resolution, not a tunable)."""
+_CROSSING_BISECTIONS = 12
+"""Bisection steps locating where the tool crosses a clearance height between two check samples
+(the drift grows fastest there; resolution, not a tunable)."""
 _MIN_SHARE = 0.05
 """Smallest fraction of a limit left to the lead's bridge (keeps ruckig's input valid)."""
 
@@ -96,7 +101,9 @@ class CyclePlan:
         vacuum_off: Time the vacuum switches off (tile at the place contact) [s].
         lift_off: Time the tool starts lifting the tile [s].
         duration: Total duration [s].
-        bound: Lower bound of the cycle [s] (see the module docstring).
+        bound: Lower bound of the cycle, vacuum dwells included [s] (see the module docstring).
+        motion_bound: Lower bound of the motion alone: start -> pick contact -> place contact,
+            time-optimal, no dwell [s].
         pick_q: Configuration at the pick contact, shape (6,) [rad].
         place_q: Configuration at the place contact, shape (6,) [rad].
         pick_position: Predicted tile top centre at contact, shape (3,) [m].
@@ -117,6 +124,7 @@ class CyclePlan:
     lift_off: float
     duration: float
     bound: float
+    motion_bound: float
     pick_q: Array
     place_q: Array
     pick_position: Array
@@ -134,8 +142,13 @@ class CyclePlan:
 
     @property
     def ratio(self) -> float:
-        """Cycle duration over its lower bound."""
+        """Cycle duration over its lower bound (dwells included)."""
         return self.duration / self.bound
+
+    @property
+    def motion_ratio(self) -> float:
+        """Cycle duration over the motion-only bound (no dwell)."""
+        return self.duration / self.motion_bound
 
 
 def _rotate(xy: Array, yaw: float) -> Array:
@@ -214,14 +227,42 @@ class PickPlacePlanner:
         return np.asarray(times), np.asarray(pos)
 
     def _drift_ok(self, segs: list[Segment], contact: _Contact, leaving: bool) -> bool:
-        """Below the clearance height the tool stays over the (belt-moving) contact point."""
+        """Below the clearance height the tool stays over the (belt-moving) contact point.
+
+        Checked at the samples and, by bisection, where the tool crosses the clearance height
+        (between two samples the drift can grow by a tenth of a millimetre there).
+        """
         c = self.config.cycle
         taus, pos = self._positions(segs)
-        t_rel = taus if leaving else taus - taus[-1]
-        rel = pos - (contact.point[None, :] + contact.belt[None, :] * t_rel[:, None])
+        total = taus[-1]
+
+        def relative(t: Array, p: Array) -> Array:
+            t_rel = t if leaving else t - total
+            return p - (contact.point[None, :] + contact.belt[None, :] * t_rel[:, None])
+
+        rel = relative(taus, pos)
         low = rel[:, 2] < contact.clearance
-        lateral = np.linalg.norm(rel[low, :2], axis=1)
-        return bool(lateral.size == 0 or lateral.max() <= c.max_lateral_drift)
+        lateral = list(np.linalg.norm(rel[low, :2], axis=1))
+        for k in np.flatnonzero(low[:-1] != low[1:]):
+            t_low, t_high = (taus[k], taus[k + 1]) if low[k] else (taus[k + 1], taus[k])
+            for _ in range(_CROSSING_BISECTIONS):
+                t_mid = 0.5 * (t_low + t_high)
+                r = relative(np.array([t_mid]), self._tcp_at(segs, t_mid)[None, :])[0]
+                if r[2] < contact.clearance:
+                    t_low = t_mid
+                else:
+                    t_high = t_mid
+            r = relative(np.array([t_low]), self._tcp_at(segs, t_low)[None, :])[0]
+            lateral.append(float(np.linalg.norm(r[:2])))
+        return bool(not lateral or max(lateral) <= c.max_lateral_drift)
+
+    def _tcp_at(self, segs: list[Segment], t: float) -> Array:
+        """TCP position (3,) [m] at time ``t`` [s] from the first segment's start."""
+        for seg in segs:
+            if t <= seg.duration:
+                return self.ik.fk(seg.state(t)[0])[0]
+            t -= seg.duration
+        return self.ik.fk(segs[-1].state(segs[-1].duration)[0])[0]
 
     def _clearance_ok(self, seg: Segment, floor_z: float) -> bool:
         _, pos = self._positions([seg])
@@ -531,13 +572,16 @@ class PickPlacePlanner:
                 )
             wait = t_aim - t_plan
         pw, pick_q, place_q, place_yaw, leads = result
+        dwell = pw.segments[pw.index("dwell_pick")]
         if wait > 0.0:
             pw = Piecewise((hold_segment(start, wait, "wait"), *pw.segments))
         t_contact = t_aim
         contact_error = speed * abs(pw.end_time("descend_pick") - t_aim)
         traj = pw.sample(self.config.trajectory.sample_dt)
         bound_q = start.q if bound_from is None else as_joint_vector(bound_from, "bound_from")
-        bound = self.lower_bound(bound_q, pick_q, place_q, self.joint_velocity(pick_q, belt))
+        belt_qd = self.joint_velocity(pick_q, belt)
+        motion_bound = self.lower_bound(bound_q, pick_q, place_q, belt_qd)
+        bound = self.cycle_bound(bound_q, pick_q, belt_qd, dwell.duration, place_q)
         return CyclePlan(
             trajectory=traj,
             piecewise=pw,
@@ -546,6 +590,7 @@ class PickPlacePlanner:
             lift_off=pw.start_time("lift"),
             duration=pw.duration,
             bound=bound,
+            motion_bound=motion_bound,
             pick_q=pick_q,
             place_q=place_q,
             pick_position=pick0 + belt * t_contact - _rotate(grasp, object_yaw),
@@ -652,6 +697,32 @@ class PickPlacePlanner:
         a = self._segment(s0, pick_q, pick_qd, "bound_pick")
         b = self._segment(a.end, place_q, None, "bound_place")
         return a.duration + b.duration
+
+    def cycle_bound(
+        self,
+        start_q: npt.ArrayLike,
+        pick_q: Array,
+        pick_qd: Array,
+        pick_dwell: float,
+        place_q: Array,
+    ) -> float:
+        """Lower bound [s] of a cycle with vacuum dwells (see the module docstring).
+
+        Time-optimal start -> pick contact (arriving with ``pick_qd``), the pick dwell travelling
+        at ``pick_qd``, time-optimal from there to rest at the place contact, the place dwell.
+
+        Args:
+            start_q: Start configuration (at rest), shape (6,) [rad].
+            pick_q: Pick contact configuration, shape (6,) [rad].
+            pick_qd: Joint velocity at the pick contact (belt matching), shape (6,) [rad/s].
+            pick_dwell: Time at the pick contact (vacuum build-up, belt matching) [s].
+            place_q: Place contact configuration, shape (6,) [rad].
+        """
+        s0 = JointState.at_rest(as_joint_vector(start_q, "start_q"))
+        a = self._segment(s0, pick_q, pick_qd, "bound_pick")
+        held = hold_segment(a.end, pick_dwell, "bound_dwell")
+        b = self._segment(held.end, place_q, None, "bound_place")
+        return a.duration + pick_dwell + b.duration + self.config.cycle.place_dwell
 
     def plan_move(self, start: JointState, q: npt.ArrayLike, label: str = "move") -> Piecewise:
         """Time-optimal move from ``start`` to rest at ``q`` (6,) [rad] (e.g. back home).

@@ -385,6 +385,17 @@ class Piecewise:
         """State at the end."""
         return self.segments[-1].end
 
+    def index(self, label: str) -> int:
+        """Index of the first segment with ``label``.
+
+        Raises:
+            KeyError: No segment has that label.
+        """
+        for i, s in enumerate(self.segments):
+            if s.label == label:
+                return i
+        raise KeyError(f"no segment labelled {label!r}; labels: {[s.label for s in self.segments]}")
+
     def start_time(self, label: str) -> float:
         """Start time [s] of the first segment with ``label``.
 

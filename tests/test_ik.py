@@ -5,13 +5,15 @@ from __future__ import annotations
 import math
 import time
 
+import mujoco
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from envs.scene import build_arm_model
 from planners.config import IKConfig, load_planner_config
 from planners.errors import InvalidTargetError, PlannerError, UnreachableError
-from planners.ik import IKSolver, symmetric_yaws, tool_down_rotation, wrap_angle
+from planners.ik import ROBOT_XML, IKSolver, symmetric_yaws, tool_down_rotation, wrap_angle
 
 CFG = load_planner_config()
 POS_TOL = 5e-4  # m, issue target
@@ -124,3 +126,44 @@ def test_collision_avoidance_against_static_cell_geoms() -> None:
     IKSolver(config=CFG.ik, limits=CFG.limits).solve(inside, 0.3)
     with pytest.raises(UnreachableError, match="obstacles"):
         solver.solve(inside, 0.3)
+
+
+def _tilted_tool_solver(tilt_deg: float, offset: float) -> IKSolver:
+    """A solver for the arm with its TCP tilted about the pad's x axis and shifted along it.
+
+    The geometric seed assumes the tool on joint 6's axis, so it misses this target by about
+    ``tilt_deg`` and ``offset``: only mink's QP iterations can meet the tolerances.
+    """
+    model = mujoco.MjModel.from_xml_path(str(ROBOT_XML))
+    site = model.site(CFG.ik.site).id
+    half = math.radians(tilt_deg) / 2
+    tilt = np.array([math.cos(half), math.sin(half), 0.0, 0.0])
+    quat = np.empty(4)
+    mujoco.mju_mulQuat(quat, model.site_quat[site], tilt)
+    model.site_quat[site] = quat
+    model.site_sameframe[site] = 0  # compiled as "same rotation as its body": undo that
+    model.site_pos[site, 0] += offset
+    return IKSolver(model, CFG.ik, CFG.limits)
+
+
+@pytest.mark.parametrize(("pos", "yaw"), [([0.05, 0.5, 0.21], 0.4), ([0.45, -0.3, 0.25], -1.2)])
+def test_qp_path_meets_the_configured_orientation_tolerance(pos: list[float], yaw: float) -> None:
+    """The QP iterations (not the geometric seed) reach the configured tolerances.
+
+    The orientation error is measured here independently (rotation vector of R_target^T R), so a
+    wrong orientation-error formula inside the solver, which would stop the iterations while the
+    tool is still tilted, fails this test.
+    """
+    solver = _tilted_tool_solver(tilt_deg=3.0, offset=0.004)
+    target = np.array(pos)
+    seed = solver._default_seed(np.array([*pos, yaw]))
+    p0, r0 = solver.fk(seed)
+    seed_err = Rotation.from_matrix(tool_down_rotation(yaw).T @ r0).magnitude()
+    assert math.degrees(seed_err) > 2.0  # the seed alone is far outside the tolerance
+    sol = solver.solve(target, yaw)
+    assert sol.iterations > 0
+    p, r = solver.fk(sol.q)
+    assert np.linalg.norm(p - target) <= CFG.ik.position_tolerance
+    angle = Rotation.from_matrix(tool_down_rotation(yaw).T @ r).magnitude()
+    assert math.degrees(angle) <= CFG.ik.orientation_tolerance_deg
+    assert sol.orientation_error == pytest.approx(angle, abs=1e-6)

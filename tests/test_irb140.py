@@ -117,3 +117,23 @@ def test_servo_tracks_fast_trajectory(model: mujoco.MjModel) -> None:
         worst = max(worst, float(np.max(np.abs(data.qpos[:6] - want))))
     assert np.rad2deg(worst) < 0.15
     assert not np.any(data.warning.number)
+
+
+# Public CAD-based mass splits of the 98 kg arm (kg), see assets/irb140/README.md.
+LINK_MASS_RANGES = {
+    "link1": (30.0, 38.0),
+    "link2": (14.0, 18.0),
+    "link3": (17.0, 21.0),
+    "link4": (3.0, 4.5),
+    "link5": (0.3, 1.0),
+    "link6": (0.05, 0.2),
+}
+
+
+def test_link_masses_follow_the_public_splits(model: mujoco.MjModel) -> None:
+    for name, (lo, hi) in LINK_MASS_RANGES.items():
+        assert lo <= model.body(name).mass[0] <= hi, name
+    moving = sum(model.body(n).mass[0] for n in (*LINK_MASS_RANGES, "vacuum_pad"))
+    assert 70.0 <= moving <= 76.0
+    # Link 2's inertia about its own length (z at zero) about 3x the earlier model's 0.02.
+    assert model.body("link2").inertia[2] == pytest.approx(0.06, rel=0.1)
