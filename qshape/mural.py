@@ -41,12 +41,15 @@ class MuralMesh:
         design: The mesh's design, in the mesh's own frame (lower-left corner at the origin).
         x: Mural x of the mesh's lower-left corner, in [mm].
         y: Mural y of the mesh's lower-left corner, in [mm] (y up).
+        source: The design file it was loaded from ("" when built in memory); what a cell
+            loads to assemble this mesh.
     """
 
     name: str
     design: Design
     x: float
     y: float
+    source: str = ""
 
 
 @dataclass(frozen=True)
@@ -186,7 +189,13 @@ class Mural:
             except DesignError as exc:
                 raise MuralError(f"{where}: {exc}") from exc
             meshes.append(
-                MuralMesh(str(m["name"]), design, _number(m["x"], where), _number(m["y"], where))
+                MuralMesh(
+                    str(m["name"]),
+                    design,
+                    _number(m["x"], where),
+                    _number(m["y"], where),
+                    str(file),
+                )
             )
         joint = _number(data["joint"], f"{source}: joint")
         if not joint > 0:
