@@ -47,8 +47,8 @@ from qshape.matching import (
     prefilter,
     take,
 )
+from qshape.slot_classes import SlotClasses, transport
 from qshape.slot_classes import slot_classes as find_slot_classes
-from qshape.slot_classes import transport
 from qshape.tolerances import Tolerances
 
 IntArray = NDArray[np.int64]
@@ -429,8 +429,11 @@ def assign(
     sd = _descriptions(slots, tol)
     if not td or not sd:
         return []
-    classes = find_slot_classes(sd, tol, use_color) if slot_classes else []
-    if len(classes) in {0, len(sd)}:  # no two slots alike: compare with every slot
+    if not slot_classes:
+        return _assign_pairwise(td, sd, tol, method, use_color)
+    found = find_slot_classes(sd, tol, use_color)
+    classes = found.members
+    if len(classes) == len(sd):  # no two slots alike: compare with every slot
         return _assign_pairwise(td, sd, tol, method, use_color)
     reps = [sd[int(m[0])] for m in classes]
     blocks = _blocks(td, reps, tol, use_color)
@@ -447,10 +450,10 @@ def assign(
         if len(t) == 0:
             continue
         if method == "greedy":
-            pt, ps = _greedy_classes(t, c, classes)
+            pt, pc = _greedy_classes(t, c, classes)
         else:
-            pt, ps = _optimal_classes(t, c, score, classes, g_classes)
-        placed = _finish(td, sd, pt, ps, tol, use_color)
+            pt, pc = _optimal_classes(t, c, score, classes, g_classes)
+        placed = _finish([blocks[b] for b in group], found, pt, pc, tol, use_color)
         if placed is None:  # a member differs from its representative at a threshold
             placed = _subset(td, sd, g_tiles, g_slots, tol, method, use_color)
         out.extend(placed)
@@ -480,17 +483,18 @@ def _greedy_classes(
     """The paper's loop over slot classes: each tile in order takes the first free slot.
 
     A tile matching a class matches every slot of it, so the first free matching slot is the
-    least next-free member over the tile's classes (one pointer per class).
+    least next-free member over the tile's classes (one pointer per class); classes fill in
+    member order.
 
     Returns:
-        (tile, slot) of the pairs made.
+        (tile, class) of the pairs made, tiles ascending.
     """
     order = np.lexsort((c, t))
     tl, cl = t[order].tolist(), c[order].tolist()
     taken: dict[int, int] = defaultdict(int)
     members = {k: classes[k].tolist() for k in set(cl)}
     out_t: list[int] = []
-    out_s: list[int] = []
+    out_c: list[int] = []
     i, n = 0, len(tl)
     while i < n:
         tile, best, best_slot = tl[i], -1, -1
@@ -503,8 +507,8 @@ def _greedy_classes(
         if best >= 0:
             taken[best] += 1
             out_t.append(tile)
-            out_s.append(best_slot)
-    return np.asarray(out_t, dtype=np.int64), np.asarray(out_s, dtype=np.int64)
+            out_c.append(best)
+    return np.asarray(out_t, dtype=np.int64), np.asarray(out_c, dtype=np.int64)
 
 
 def _optimal_classes(
@@ -516,56 +520,56 @@ def _optimal_classes(
 ) -> tuple[IntArray, IntArray]:
     """Most tiles, then least total residual, over slot classes (see `transport`).
 
-    Within a class, its chosen tiles (ascending) take its slots in index order.
-
     Returns:
-        (tile, slot) of the pairs made.
+        (tile, class) of the pairs made, tiles ascending.
     """
     local = np.searchsorted(g_classes, c)
     capacity = np.array([len(classes[k]) for k in g_classes.tolist()], dtype=np.int64)
     used = transport(t, local, score, capacity)
-    t, local = t[used], local[used]
-    order = np.lexsort((t, local))
-    t, local = t[order], local[order]
-    starts = np.searchsorted(local, np.arange(len(g_classes)))
-    rank = np.arange(len(t)) - starts[local]
-    flat = np.concatenate([classes[k] for k in g_classes.tolist()])
-    offset = np.r_[0, np.cumsum(capacity)[:-1]]
-    return t, flat[offset[local] + rank]
+    return t[used], c[used]
 
 
 def _finish(  # noqa: PLR0913, PLR0917
-    td: Sequence[Description],
-    sd: Sequence[Description],
+    blocks: Sequence[_Block],
+    found: SlotClasses,
     t: IntArray,
-    s: IntArray,
+    c: IntArray,
     tol: Tolerances,
     use_color: bool,
 ) -> list[Assignment] | None:
-    """Assignments of the chosen pairs with each pair's own rotation and residual.
+    """Assignments of (tile, class) pairs, each with its own rotation and residual.
 
-    Pairs are matched in one vectorised pass per slot class (packs need equal node counts).
-    None when some pair does not match after all (a slot told apart from its class's
+    Within a class, the tiles (ascending) take its slots in index order. Pairs are matched in
+    one vectorised pass per block and class, from the blocks' tile arrays and the classes' slot
+    arrays. None when some pair does not match after all (a slot told apart from its class's
     representative only at a threshold).
     """
+    order = np.lexsort((t, c))
+    t, c = t[order], c[order]
+    first = np.searchsorted(c, c, side="left")
+    rank = np.arange(len(t)) - first  # position of the pair within its class
+    done = np.zeros(len(t), dtype=bool)
     out: list[Assignment] = []
-    by_shape: dict[tuple[int, ...], list[int]] = defaultdict(list)
-    for e, slot in enumerate(s.tolist()):
-        d = sd[slot]
-        by_shape[(len(d.outer.codes), *(len(h.boundary.codes) for h in d.holes))].append(e)
-    for edges in by_shape.values():
-        ti, si = t[edges], s[edges]
-        ok, score, rotation = evaluate_pairs(
-            pack([sd[i] for i in si.tolist()]), pack([td[i] for i in ti.tolist()]), tol, use_color
-        )
-        if not ok.all():
-            return None
-        out.extend(
-            Assignment(a, b, r, q)
-            for a, b, r, q in zip(
-                ti.tolist(), si.tolist(), rotation.tolist(), score.tolist(), strict=True
+    for block in blocks:
+        sel = ~done & np.isin(c, block.slots) & np.isin(t, block.tiles)
+        done |= sel
+        for k in np.unique(c[sel]).tolist():
+            e = np.flatnonzero(sel & (c == k))
+            slots = found.members[k][rank[e]]
+            ok, score, rotation = evaluate_pairs(
+                take(found.packs[k], rank[e]),
+                take(block.tpack, np.searchsorted(block.tiles, t[e])),
+                tol,
+                use_color,
             )
-        )
+            if not ok.all():
+                return None
+            out.extend(
+                Assignment(a, b, r, q)
+                for a, b, r, q in zip(
+                    t[e].tolist(), slots.tolist(), rotation.tolist(), score.tolist(), strict=True
+                )
+            )
     return out
 
 

@@ -14,9 +14,9 @@ representative (fraction of sqrt(area), as `qshape.Match.score`) must all stay w
 
 from __future__ import annotations
 
-import math
 from collections import defaultdict
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,7 +25,8 @@ from scipy.sparse import coo_matrix, vstack
 
 from qshape.description import Description
 from qshape.errors import MatchError
-from qshape.matching import evaluate_pairs, pack
+from qshape.geometry import FloatArray
+from qshape.matching import Pack, evaluate_pairs, pack, take
 from qshape.tolerances import Tolerances
 
 IntArray = NDArray[np.int64]
@@ -38,78 +39,91 @@ def _least_rotation(codes: bytes) -> bytes:
     return np.asarray(best, dtype=np.int64).tobytes()
 
 
-def _bucket(
-    d: Description, step: float, use_color: bool, cyclic: dict[bytes, bytes]
-) -> tuple[object, ...]:
-    """Hashable key that identical slots share, whatever their pose.
+@dataclass(frozen=True)
+class SlotClasses:
+    """Slots partitioned into classes of identical figures.
 
-    Node codes (with their admissible labels) up to the starting vertex, hole codes likewise
-    (sorted), type flags, and area, perimeter and colour quantised to ``step`` (relative).
-    ``cyclic`` memoises `_least_rotation`.
+    Attributes:
+        members: Slot indices per class, each ascending; classes ordered by their first
+            member, which is the class's representative.
+        packs: Per class, its members' matching arrays (`qshape.matching.Pack`), in member
+            order.
     """
+
+    members: tuple[IntArray, ...]
+    packs: tuple[Pack, ...]
+
+
+def _quantised(slots: Sequence[Description], step: float, use_color: bool) -> FloatArray:
+    """(S, 5): log area, log perimeter and RGB of every slot in units of ``step``, rounded."""
+    area = np.array([d.area for d in slots])
+    perimeter = np.array([d.perimeter for d in slots])
+    q = [np.log(np.maximum(area, 1e-300)), np.log(np.maximum(perimeter, 1e-300))]
+    if use_color:
+        nan3 = (np.nan, np.nan, np.nan)
+        color = np.array([nan3 if d.color is None else d.color for d in slots])
+        q += [np.nan_to_num(color, nan=-1.0)[:, k] for k in range(3)]  # unknown: its own value
+    return np.round(np.stack(q, axis=1) / step)
+
+
+def slot_classes(
+    slots: Sequence[Description], tol: Tolerances, use_color: bool = True
+) -> SlotClasses:
+    """Partition slots into classes of identical figures (up to pose).
+
+    Slots are first bucketed by node codes (with their admissible labels) up to the starting
+    vertex, type flags, and area, perimeter and colour quantised to ``tol.tie_tolerance``;
+    within a bucket, the members whose alignment residual against the first is within
+    ``tol.tie_tolerance`` form its class, and the rest are split again.
+
+    Args:
+        slots: Slot descriptions.
+        tol: Tolerances; ``tie_tolerance`` bounds what counts as identical.
+        use_color: Colours must agree too (False: shape-only matching, colours ignored).
+    """
+    step = tol.tie_tolerance
+    raw: dict[tuple[object, ...], list[int]] = defaultdict(list)
+    for i, d in enumerate(slots):
+        holes = tuple(h.boundary.codes.tobytes() for h in d.holes)
+        raw[(d.type_hole, d.type_curve, d.outer.codes.tobytes(), holes)].append(i)
+    cyclic: dict[bytes, bytes] = {}
 
     def least(codes: bytes) -> bytes:
         if codes not in cyclic:
             cyclic[codes] = _least_rotation(codes)
         return cyclic[codes]
 
-    holes = tuple(sorted(least(h.boundary.codes.tobytes()) for h in d.holes))
-    color: tuple[object, ...] = ("any",)
-    if use_color and d.color is not None:
-        color = tuple(round(c / step) for c in d.color)
-    return (
-        d.type_hole,
-        d.type_curve,
-        least(d.outer.codes.tobytes()),
-        holes,
-        round(math.log(max(d.area, 1e-300)) / step),
-        round(math.log(max(d.perimeter, 1e-300)) / step),
-        color,
-    )
+    shapes: dict[tuple[object, ...], list[int]] = defaultdict(list)
+    for (hole_type, curve_type, outer, holes), members in raw.items():
+        key = (hole_type, curve_type, least(outer), tuple(sorted(least(h) for h in holes)))
+        shapes[key].extend(members)
+    q = _quantised(slots, step, use_color)
+    classes: list[tuple[IntArray, Pack]] = []
+    for members in shapes.values():
+        idx = np.sort(np.asarray(members, dtype=np.int64))
+        _, inv = np.unique(q[idx], axis=0, return_inverse=True)
+        for u in range(int(inv.max()) + 1):
+            classes.extend(_split(slots, idx[inv.ravel() == u], tol, use_color))
+    classes.sort(key=lambda c: int(c[0][0]))
+    return SlotClasses(tuple(c[0] for c in classes), tuple(c[1] for c in classes))
 
 
-def slot_classes(
-    slots: Sequence[Description], tol: Tolerances, use_color: bool = True
-) -> list[IntArray]:
-    """Partition slots into classes of identical figures (up to pose).
-
-    Args:
-        slots: Slot descriptions.
-        tol: Tolerances; ``tie_tolerance`` bounds what counts as identical.
-        use_color: Colours must agree too (False: shape-only matching, colours ignored).
-
-    Returns:
-        Member indices per class, each ascending, classes ordered by their first member. The
-        first member is the class's representative.
-    """
-    step = tol.tie_tolerance
-    buckets: dict[tuple[object, ...], list[int]] = defaultdict(list)
-    cyclic: dict[bytes, bytes] = {}
-    for i, d in enumerate(slots):
-        buckets[_bucket(d, step, use_color, cyclic)].append(i)
-    out: list[IntArray] = []
-    for members in buckets.values():
-        rest = np.asarray(members, dtype=np.int64)
-        while len(rest):
-            same = _same_as_first(slots, rest, tol, use_color)
-            out.append(rest[same])
-            rest = rest[~same]
-    out.sort(key=lambda m: int(m[0]))
+def _split(
+    slots: Sequence[Description], bucket: IntArray, tol: Tolerances, use_color: bool
+) -> list[tuple[IntArray, Pack]]:
+    """Classes of one bucket (ascending indices): members the same figure as their first."""
+    group = pack([slots[i] for i in bucket.tolist()])
+    out = []
+    rest = np.arange(len(bucket))
+    while len(rest):
+        ok, score, _ = evaluate_pairs(
+            take(group, np.full(len(rest), rest[0])), take(group, rest), tol, use_color
+        )
+        same = ok & (score <= tol.tie_tolerance)
+        same[0] = True
+        out.append((bucket[rest[same]], take(group, rest[same])))
+        rest = rest[~same]
     return out
-
-
-def _same_as_first(
-    slots: Sequence[Description], idx: IntArray, tol: Tolerances, use_color: bool
-) -> NDArray[np.bool_]:
-    """Which of ``slots[idx]`` are the same figure as ``slots[idx[0]]`` (the first: True)."""
-    if len(idx) == 1:
-        return np.ones(1, dtype=bool)
-    group = pack([slots[i] for i in idx.tolist()])
-    ref = pack([slots[int(idx[0])]] * len(idx))
-    ok, score, _ = evaluate_pairs(ref, group, tol, use_color)
-    same = ok & (score <= tol.tie_tolerance)
-    same[0] = True
-    return same
 
 
 def transport(
@@ -177,4 +191,4 @@ def _transport_lp(
     return np.asarray(best.x > 0.5)
 
 
-__all__ = ["slot_classes", "transport"]
+__all__ = ["SlotClasses", "slot_classes", "transport"]
