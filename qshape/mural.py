@@ -254,12 +254,9 @@ class Mural:
         )
 
     def design(self) -> Design:
-        """Every mesh's slots in the mural frame as one validated design.
+        """Every mesh's slots in the mural frame as one design (already valid: see `validate`).
 
         Slot names are ``<mesh>/<slot>``; the mesh of the design is the mural's bounding box.
-
-        Raises:
-            MuralError: Tiles of neighbouring meshes overlap or are closer than the joint rule.
         """
         slots = tuple(
             replace(s, name=f"{m.name}/{s.name}", x=s.x + m.x, y=s.y + m.y)
@@ -267,7 +264,7 @@ class Mural:
             for s in m.design.slots
         )
         first = self.meshes[0].design
-        whole = Design(
+        return Design(
             name=self.name,
             mesh_size=self.size,
             joint=self.joint,
@@ -276,11 +273,6 @@ class Mural:
             description=self.description,
             rules=first.rules,
         )
-        try:
-            whole.validate()
-        except DesignError as exc:
-            raise MuralError(f"mural {self.name!r}: {exc}") from exc
-        return whole
 
     def check_fits(self, width: float, height: float) -> None:
         """Check that every mesh fits a mesh area of ``width`` x ``height`` [mm] (a cell's).
@@ -300,9 +292,15 @@ class Mural:
     def validate(self, source: str = "") -> None:
         """Check names, joints and layout.
 
+        Each mesh design is valid on its own (checked when it is built or loaded); tiles of
+        two meshes are a joint apart when meshes do not overlap and every tile keeps half the
+        design rules' least gap (``min_gap_fraction`` x joint) from its mesh's edges, as cuts
+        along the middle of joints do.
+
         Raises:
             MuralError: No meshes, duplicate mesh names, a mesh design with another joint,
-                meshes whose rectangles overlap, or tiles of neighbouring meshes too close.
+                meshes whose rectangles overlap, or a tile closer to its mesh edge than half
+                the least gap.
         """
         pre = f"{source}: " if source else f"mural {self.name!r}: "
         if not self.meshes:
@@ -328,7 +326,20 @@ class Mural:
                         f"{pre}meshes {names[i]!r} and {names[j]!r} overlap "
                         f"({a} and {b}, mm: x0, y0, x1, y1)"
                     )
-        self.design()
+        for m in self.meshes:
+            half_gap = 0.5 * m.design.rules.min_gap_fraction * self.joint
+            w, h = m.design.mesh_size
+            for s in m.design.slots:
+                pts = s.outline_mm()
+                edge = min(
+                    pts[:, 0].min(), pts[:, 1].min(), w - pts[:, 0].max(), h - pts[:, 1].max()
+                )
+                if edge < half_gap - 1e-9:
+                    raise MuralError(
+                        f"{pre}mesh {m.name!r}: slot {s.name!r} is {edge:.2f} mm from the mesh "
+                        f"edge; at least {half_gap:.2f} mm (half the least joint) so tiles of "
+                        f"neighbouring meshes stay a joint apart"
+                    )
 
 
 def _number(value: Any, where: str) -> float:

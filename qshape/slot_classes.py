@@ -82,7 +82,7 @@ def slot_classes(
         use_color: Colours must agree too (False: shape-only matching, colours ignored).
     """
     step = tol.tie_tolerance
-    raw: dict[tuple[object, ...], list[int]] = defaultdict(list)
+    raw: dict[tuple[str, str, bytes, tuple[bytes, ...]], list[int]] = defaultdict(list)
     for i, d in enumerate(slots):
         holes = tuple(h.boundary.codes.tobytes() for h in d.holes)
         raw[(d.type_hole, d.type_curve, d.outer.codes.tobytes(), holes)].append(i)
