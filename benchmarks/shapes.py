@@ -244,31 +244,68 @@ def _best(repeat: int, fn: Callable[[], T]) -> tuple[float, T]:
     return best, result
 
 
-def main(argv: list[str] | None = None) -> dict:
-    """Run the benchmark; return the results written to ``out/bench_qshape.json``."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--tiles", type=int, default=10_000)
-    ap.add_argument("--classes", type=int, default=50)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--jitter", type=float, default=0.1, help="vertex jitter [mm], uniform")
-    ap.add_argument("--repeat", type=int, default=3, help="timed runs; the fastest is kept")
-    ap.add_argument(
-        "--paper-full",
-        action="store_true",
-        help="run the paper's loop on all tiles instead of extrapolating",
-    )
-    ap.add_argument("--out", type=Path, default=Path("out/bench_qshape.json"))
-    args = ap.parse_args(argv)
-    rng = np.random.default_rng(args.seed)
-    tol = Tolerances.load()
-    classes = make_classes(rng, args.classes)
-    slot_class = rng.integers(0, len(classes), args.tiles)
-    slot_angle = rng.uniform(-math.pi, math.pi, args.tiles)
-    tile_order = rng.permutation(args.tiles)
-    tile_class = slot_class[tile_order]
-    tile_angle = rng.uniform(-math.pi, math.pi, args.tiles)
+TESSERA = np.array([[-10.0, -10], [10, -10], [10, 10], [-10, 10]])
+"""A 20 mm square tessera, local points (y-up, mm)."""
 
-    t0 = time.perf_counter()
+
+def mix_classes(
+    mix: str, rng: np.random.Generator, balanced: int
+) -> tuple[list[ShapeClass], np.ndarray]:
+    """Classes of a class mix and the probability of each.
+
+    ``balanced``: ``balanced`` classes of `make_classes`, equally likely. ``one_class``: one
+    20 mm square tessera in one colour. ``five_colours``: that tessera in five colours, equally
+    likely. ``zipf20``: 20 classes of `make_classes`, the k-th (from 1) with probability
+    proportional to 1/k.
+    """
+    none = np.zeros(4, bool)
+    if mix == "balanced":
+        classes = make_classes(rng, balanced)
+        return classes, np.full(len(classes), 1.0 / len(classes))
+    if mix == "one_class":
+        return [ShapeClass(TESSERA, none, (), PALETTE[0], 4)], np.ones(1)
+    if mix == "five_colours":
+        return [ShapeClass(TESSERA, none, (), PALETTE[k], 4) for k in range(5)], np.full(5, 0.2)
+    if mix == "zipf20":
+        weights = 1.0 / np.arange(1, 21)
+        return make_classes(rng, 20), weights / weights.sum()
+    raise SystemExit(f"error: unknown mix {mix!r}; allowed: {', '.join(MIXES)}")
+
+
+MIXES = ("balanced", "one_class", "five_colours", "zipf20")
+"""Class mixes of the assignment cases, in table order."""
+
+
+@dataclass(frozen=True)
+class Case:
+    """One assignment input: posed slots and noisy tiles copied from them (tile order shuffled).
+
+    Attributes:
+        classes: Tile classes.
+        slot_class, slot_angle, tile_class, tile_angle: Per slot / tile, class and pose [rad].
+        tile_order: Tile i is a copy of slot ``tile_order[i]``.
+        tile_figs, slot_desc: Tile figures and slot descriptions.
+    """
+
+    classes: list[ShapeClass]
+    slot_class: np.ndarray
+    slot_angle: np.ndarray
+    tile_class: np.ndarray
+    tile_angle: np.ndarray
+    tile_order: np.ndarray
+    tile_figs: list[Figure]
+    slot_desc: list[Description]
+
+
+def make_case(
+    *, classes: list[ShapeClass], weights: np.ndarray, n: int, rng: np.random.Generator, args, tol
+) -> Case:
+    """Draw ``n`` slots from ``classes`` with probabilities ``weights`` and ``n`` tiles."""
+    slot_class = rng.choice(len(classes), n, p=weights)
+    slot_angle = rng.uniform(-math.pi, math.pi, n)
+    tile_order = rng.permutation(n)
+    tile_class = slot_class[tile_order]
+    tile_angle = rng.uniform(-math.pi, math.pi, n)
     slot_figs = [
         make_figure(classes[c], rng, a, 0.0, 0.0)
         for c, a in zip(slot_class, slot_angle, strict=True)
@@ -277,32 +314,43 @@ def main(argv: list[str] | None = None) -> dict:
         make_figure(classes[c], rng, a, args.jitter, 0.03)
         for c, a in zip(tile_class, tile_angle, strict=True)
     ]
-    t_build = (time.perf_counter() - t0) / 2
+    return Case(
+        classes,
+        slot_class,
+        slot_angle,
+        tile_class,
+        tile_angle,
+        tile_order,
+        tile_figs,
+        describe_many(slot_figs, tol),
+    )
 
-    t_describe, tile_desc = _best(args.repeat, lambda: [qshape.describe(f, tol) for f in tile_figs])
-    t_describe_many, tile_many = _best(args.repeat, lambda: describe_many(tile_figs, tol))
-    assert all(a == b for a, b in zip(tile_desc, tile_many, strict=True))
-    slot_desc = describe_many(slot_figs, tol)
 
+def _assign_methods(case: Case, tile_desc: list[Description], tol: Tolerances, args) -> dict:
+    """Time ``qshape.assign`` (optimal, greedy) and, with ``--pairwise``, the every-slot path."""
+    runs = [("optimal", qshape.assign), ("greedy", qshape.assign)]
+    if args.pairwise:
+        every = partial(qshape.assign, slot_classes=False)
+        runs += [("pairwise_optimal", every), ("pairwise_greedy", every)]
     results: dict = {}
-    for method in ("optimal", "greedy"):
+    for label, fn in runs:
+        method = label.rsplit("_", 1)[-1]
         clear_key_caches()  # each method's first run starts cold
-        dt, dt_first, assignment = _timed(
-            args.repeat, partial(qshape.assign, tile_desc, slot_desc, tol, method=method)
-        )
-        correct = sum(tile_class[a.tile] == slot_class[a.slot] for a in assignment)
+        call = partial(fn, tile_desc, case.slot_desc, tol, method=method)
+        dt, dt_first, assignment = _timed(args.repeat, call)
+        correct = sum(case.tile_class[a.tile] == case.slot_class[a.slot] for a in assignment)
         rot_err = [
             math.degrees(
                 _rotation_error(
                     a.rotation,
-                    slot_angle[a.slot] - tile_angle[a.tile],
-                    classes[tile_class[a.tile]].symmetry,
+                    case.slot_angle[a.slot] - case.tile_angle[a.tile],
+                    case.classes[case.tile_class[a.tile]].symmetry,
                 )
             )
             for a in assignment
-            if tile_class[a.tile] == slot_class[a.slot]
+            if case.tile_class[a.tile] == case.slot_class[a.slot]
         ]
-        results[method] = {
+        results[label] = {
             "seconds": dt,
             "seconds_first_run": dt_first,
             "assigned": len(assignment),
@@ -310,83 +358,162 @@ def main(argv: list[str] | None = None) -> dict:
             "rotation_error_deg_max": max(rot_err, default=0.0),
             "rotation_error_deg_mean": float(np.mean(rot_err)) if rot_err else 0.0,
         }
+    return results
+
+
+def _paper(case: Case, tile_desc: list[Description], tol: Tolerances, args) -> dict:
+    """The paper's loop on the same input, measured or extrapolated (see the module doc)."""
+    n = len(tile_desc)
     # The paper's loop costs about (tiles x slots): measure it on nested sub-problems (the first
     # m slots and the tiles copied from them), fit t = a * m^p, extrapolate to the full size.
-    sizes = [m for m in (args.tiles // 8, args.tiles // 4, args.tiles // 2) if m >= 10]
+    sizes = [m for m in (n // 8, n // 4, n // 2) if m >= 10]
     if args.paper_full or not sizes:
-        sizes = [args.tiles]
-    paper_runs = []
+        sizes = [n]
+    runs = []
     for m in sizes:
-        keep = [i for i in range(args.tiles) if tile_order[i] < m]
+        keep = [i for i in range(n) if case.tile_order[i] < m]
         t_m, found_m = min(
-            paper_pairwise([tile_desc[i] for i in keep], slot_desc[:m], tol, len(keep))
+            paper_pairwise([tile_desc[i] for i in keep], case.slot_desc[:m], tol, len(keep))
             for _ in range(args.repeat)
         )
-        paper_runs.append({"size": m, "seconds": t_m, "matched": found_m, "tiles": len(keep)})
-    if sizes[-1] == args.tiles:
-        exponent = float("nan")
-        t_paper = paper_runs[-1]["seconds"]
-        paper_label = f"paper pairwise, {args.tiles} tiles (measured)"
-    else:
-        x = np.log([r["size"] for r in paper_runs])
-        y = np.log([max(r["seconds"], 1e-9) for r in paper_runs])
-        exponent, log_a = np.polyfit(x, y, 1)
-        t_paper = float(math.exp(log_a) * args.tiles**exponent)
-        paper_label = (
-            f"paper pairwise, {args.tiles} tiles (EXTRAPOLATED from "
+        runs.append({"size": m, "seconds": t_m, "matched": found_m, "tiles": len(keep)})
+    if sizes[-1] == n:
+        return {
+            "runs": runs,
+            "exponent": None,
+            "seconds": runs[-1]["seconds"],
+            "label": (f"paper pairwise, {n} tiles (measured)"),
+            "extrapolated": False,
+        }
+    x = np.log([r["size"] for r in runs])
+    y = np.log([max(r["seconds"], 1e-9) for r in runs])
+    exponent, log_a = np.polyfit(x, y, 1)
+    return {
+        "runs": runs,
+        "exponent": float(exponent),
+        "seconds": float(math.exp(log_a) * n**exponent),
+        "label": (
+            f"paper pairwise, {n} tiles (EXTRAPOLATED from "
             f"{'/'.join(str(m) for m in sizes)}, t ~ n^{exponent:.2f})"
+        ),
+        "extrapolated": True,
+    }
+
+
+def _case_rows(name: str, res: dict, paper: dict) -> list[tuple[str, str]]:
+    rows = []
+    for label, r in res.items():
+        rows.append(
+            (
+                f"[{name}] assign {label.replace('_', ' ')}",
+                f"{r['seconds']:.3f} s  (first run, cold caches: {r['seconds_first_run']:.3f} s; "
+                f"{r['assigned']} assigned, {r['correct_class']} right class, "
+                f"max rot err {r['rotation_error_deg_max']:.2f} deg)",
+            )
         )
+    rows += [
+        (
+            f"[{name}] paper pairwise, {r['size']} x {r['size']} (measured)",
+            f"{r['seconds']:.3f} s  ({r['matched']}/{r['tiles']} matched)",
+        )
+        for r in paper["runs"]
+    ]
+    rows.append((f"[{name}] {paper['label']}", f"{paper['seconds']:.2f} s"))
+    for label in ("greedy", "optimal"):
+        rows.append(
+            (
+                f"[{name}] speed-up, {label} vs paper",
+                f"{paper['seconds'] / res[label]['seconds']:.0f}x",
+            )
+        )
+    return rows
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """Run the benchmark; return the results written to ``out/bench_qshape.json``."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--tiles", type=int, default=10_000)
+    ap.add_argument("--classes", type=int, default=50, help="classes of the balanced mix")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--jitter", type=float, default=0.1, help="vertex jitter [mm], uniform")
+    ap.add_argument("--repeat", type=int, default=3, help="timed runs; the fastest is kept")
+    ap.add_argument(
+        "--mixes",
+        default=",".join(MIXES),
+        help=f"comma-separated class mixes (balanced is always run): {', '.join(MIXES)}",
+    )
+    ap.add_argument(
+        "--pairwise",
+        action="store_true",
+        help="also time assign's every-slot path (no slot classes: the previous algorithm)",
+    )
+    ap.add_argument(
+        "--paper-full",
+        action="store_true",
+        help="run the paper's loop on all tiles instead of extrapolating",
+    )
+    ap.add_argument("--out", type=Path, default=Path("out/bench_qshape.json"))
+    args = ap.parse_args(argv)
+    mixes = ["balanced", *(m for m in args.mixes.split(",") if m and m != "balanced")]
+    rng = np.random.default_rng(args.seed)
+    tol = Tolerances.load()
+
+    t0 = time.perf_counter()
+    classes, weights = mix_classes("balanced", rng, args.classes)
+    base = make_case(classes=classes, weights=weights, n=args.tiles, rng=rng, args=args, tol=tol)
+    t_build = time.perf_counter() - t0
+    tile_figs = base.tile_figs
+    t_describe, tile_desc = _best(args.repeat, lambda: [qshape.describe(f, tol) for f in tile_figs])
+    t_describe_many, tile_many = _best(args.repeat, lambda: describe_many(tile_figs, tol))
+    assert all(a == b for a, b in zip(tile_desc, tile_many, strict=True))
+
+    cases: dict = {}
+    rows = [
+        ("build figures and slot descriptions (not timed target)", f"{t_build:.3f} s"),
+        (f"describe {args.tiles} tiles, one by one", f"{t_describe:.3f} s"),
+        (f"describe {args.tiles} tiles, describe_many", f"{t_describe_many:.3f} s"),
+    ]
+    for mix in mixes:
+        if mix == "balanced":
+            case, descs = base, tile_desc
+        else:
+            classes, weights = mix_classes(mix, rng, args.classes)
+            case = make_case(
+                classes=classes, weights=weights, n=args.tiles, rng=rng, args=args, tol=tol
+            )
+            descs = describe_many(case.tile_figs, tol)
+        res = _assign_methods(case, descs, tol, args)
+        paper = _paper(case, descs, tol, args)
+        counts = np.bincount(case.slot_class, minlength=len(case.classes))
+        cases[mix] = {
+            "classes": len(case.classes),
+            "largest_class_fraction": float(counts.max() / args.tiles),
+            **{f"assign_{k}": v for k, v in res.items()},
+            "paper_pairwise_runs": paper["runs"],
+            "paper_pairwise_exponent": paper["exponent"],
+            "paper_pairwise_s": paper["seconds"],
+            "paper_pairwise_extrapolated": paper["extrapolated"],
+            "speedup_vs_paper_greedy": paper["seconds"] / res["greedy"]["seconds"],
+            "speedup_vs_paper_optimal": paper["seconds"] / res["optimal"]["seconds"],
+        }
+        rows += _case_rows(mix, res, paper)
+        print(f"... {mix} done", flush=True)
+    bal = cases["balanced"]
     out = {
         "repeat": args.repeat,
         "tiles": args.tiles,
         "slots": args.tiles,
-        "classes": len(classes),
+        "classes": bal["classes"],
         "jitter_mm": args.jitter,
         "mean_relevant_points": float(np.mean([len(f.points) for f in tile_figs])),
         "figure_construction_s": t_build,
         "describe_s": t_describe,
         "describe_many_s": t_describe_many,
-        "assign_optimal": results["optimal"],
-        "assign_greedy": results["greedy"],
-        "paper_pairwise_runs": paper_runs,
-        "paper_pairwise_exponent": None if math.isnan(exponent) else exponent,
-        "paper_pairwise_s": t_paper,
-        "paper_pairwise_extrapolated": not math.isnan(exponent),
-        "speedup_vs_paper_greedy": t_paper / results["greedy"]["seconds"],
-        "speedup_vs_paper_optimal": t_paper / results["optimal"]["seconds"],
+        **{k: v for k, v in bal.items() if k != "classes"},
+        "cases": cases,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
-    rows = [
-        ("build figures (not timed target)", f"{t_build:.3f} s"),
-        (f"describe {args.tiles} tiles, one by one", f"{t_describe:.3f} s"),
-        (f"describe {args.tiles} tiles, describe_many", f"{t_describe_many:.3f} s"),
-        (
-            "assign optimal",
-            f"{results['optimal']['seconds']:.3f} s  "
-            f"(first run, cold caches: {results['optimal']['seconds_first_run']:.3f} s; "
-            f"{results['optimal']['assigned']} assigned, "
-            f"{results['optimal']['correct_class']} right class, "
-            f"max rot err {results['optimal']['rotation_error_deg_max']:.2f} deg)",
-        ),
-        (
-            "assign greedy",
-            f"{results['greedy']['seconds']:.3f} s  "
-            f"(first run, cold caches: {results['greedy']['seconds_first_run']:.3f} s; "
-            f"{results['greedy']['assigned']} assigned, "
-            f"{results['greedy']['correct_class']} right class)",
-        ),
-        *(
-            (
-                f"paper pairwise, {r['size']} x {r['size']} (measured)",
-                f"{r['seconds']:.3f} s  ({r['matched']}/{r['tiles']} matched)",
-            )
-            for r in paper_runs
-        ),
-        (paper_label, f"{t_paper:.2f} s"),
-        ("speed-up, greedy vs paper", f"{out['speedup_vs_paper_greedy']:.0f}x"),
-        ("speed-up, optimal vs paper", f"{out['speedup_vs_paper_optimal']:.0f}x"),
-    ]
     width = max(len(r[0]) for r in rows)
     for name, value in rows:
         print(f"{name:<{width}}  {value}")

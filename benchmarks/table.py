@@ -148,6 +148,53 @@ def qshape_figures(d: dict[str, Any]) -> list[Figure]:
             1.0,
         ),
         fig(g, "speed-up vs paper's pairwise (greedy)", d.get("speedup_vs_paper_greedy"), "x"),
+        *_mix_figures(d),
+    ]
+
+
+QSHAPE_ONE_CLASS_S = 0.5
+"""Target [s]: assign 10,000 tiles to 10,000 slots of one class (greedy and optimal)."""
+
+
+def _mix_figures(d: dict[str, Any]) -> list[Figure]:
+    """Assignment on skewed class mixes (one class: targeted; the others reported)."""
+    n = d.get("tiles", "?")
+    out = []
+    for mix, case in (d.get("cases") or {}).items():
+        if mix == "balanced":
+            continue
+        for method in ("optimal", "greedy"):
+            target = QSHAPE_ONE_CLASS_S if mix == "one_class" else None
+            out.append(
+                fig(
+                    "qshape",
+                    f"assign {n} x {n} {mix.replace('_', ' ')} {method}",
+                    _get(case, f"assign_{method}", "seconds"),
+                    "s",
+                    "<=" if target else "",
+                    target,
+                )
+            )
+        out.append(
+            fig(
+                "qshape",
+                f"{mix.replace('_', ' ')}: speed-up vs paper's pairwise (optimal)",
+                case.get("speedup_vs_paper_optimal"),
+                "x",
+            )
+        )
+    return out
+
+
+def mural_figures(d: dict[str, Any]) -> list[Figure]:
+    """Figures of ``bench_mural.json``: the mural's meshes through the scripted cell."""
+    t = d.get("total") or {}
+    name = f"{d.get('mural', '?')}, {t.get('meshes', '?')} meshes, {t.get('tiles', '?')} tiles"
+    return [
+        fig("mural", f"{name} correct", t.get("correct_fraction"), "", ">=", 1.0),
+        fig("mural", f"{name} misplaced", t.get("misplaced"), "tiles", "==", 0),
+        fig("mural", f"{name} tiles/min (sim)", t.get("tiles_per_min"), "tiles/min"),
+        fig("mural", f"{name} wall", t.get("wall_s"), "s"),
     ]
 
 
@@ -431,6 +478,7 @@ BENCHES = (
         ("--seeds", "5"),
         perception_figures,
     ),
+    Bench("mural", "benchmarks.mural", "bench_mural.json", ("--meshes", "r0c0"), mural_figures),
     Bench(
         "scripted",
         "benchmarks.scripted",

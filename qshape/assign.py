@@ -45,6 +45,8 @@ from qshape.figure import Figure
 from qshape.geometry import FloatArray
 from qshape.keys import canonical_key, canonical_keys, coarse_key
 from qshape.matching import as_description, check_match_inputs
+from qshape.slot_classes import SlotClasses, transport
+from qshape.slot_classes import slot_classes as find_slot_classes
 from qshape.tolerances import Tolerances
 
 IntArray = NDArray[np.int64]
@@ -395,6 +397,8 @@ def assign(
     tolerances: Tolerances | None = None,
     method: str = "optimal",
     use_color: bool = True,
+    *,
+    slot_classes: bool = True,
 ) -> list[Assignment]:
     """Assign tiles to slots; unmatched tiles are left out.
 
@@ -406,6 +410,9 @@ def assign(
             that matches it). "optimal": as many matched tiles as possible, then the least total
             residual score (scipy's linear_sum_assignment per connected group of candidates).
         use_color: Compare colours.
+        slot_classes: Compare each tile with one slot per class of identical slots (see
+            `qshape.slot_classes`); False: with every slot it may match (slower on large
+            designs of few classes; among identical slots the choice may differ).
 
     Returns:
         Assignments sorted by tile index.
@@ -420,6 +427,158 @@ def assign(
     sd = _descriptions(slots, tol)
     if not td or not sd:
         return []
+    if not slot_classes:
+        return _assign_pairwise(td, sd, tol, method, use_color)
+    found = find_slot_classes(sd, tol, use_color)
+    classes = found.members
+    if len(classes) == len(sd):  # no two slots alike: compare with every slot
+        return _assign_pairwise(td, sd, tol, method, use_color)
+    reps = [sd[int(m[0])] for m in classes]
+    blocks = _blocks(td, reps, tol, use_color)
+    out: list[Assignment] = []
+    for group in _merged(blocks, len(td), len(reps)):
+        g_tiles = np.unique(np.concatenate([blocks[b].tiles for b in group]))
+        g_classes = np.unique(np.concatenate([blocks[b].slots for b in group]))
+        g_slots = np.sort(np.concatenate([classes[c] for c in g_classes.tolist()]))
+        if len(g_slots) == len(g_classes):  # only single slots: the pairwise path
+            out.extend(_subset(td, sd, g_tiles, g_slots, tol, method, use_color))
+            continue
+        parts = [_evaluate(blocks[b], tol, use_color) for b in group]
+        t, c, score, _ = _concat_parts(parts)
+        if len(t) == 0:
+            continue
+        if method == "greedy":
+            pt, pc = _greedy_classes(t, c, classes)
+        else:
+            pt, pc = _optimal_classes(t, c, score, classes, g_classes)
+        placed = _finish([blocks[b] for b in group], found, pt, pc, tol, use_color)
+        if placed is None:  # a member differs from its representative at a threshold
+            placed = _subset(td, sd, g_tiles, g_slots, tol, method, use_color)
+        out.extend(placed)
+    out.sort(key=lambda x: x.tile)
+    return out
+
+
+def _subset(  # noqa: PLR0913, PLR0917
+    td: Sequence[Description],
+    sd: Sequence[Description],
+    tiles: IntArray,
+    slots: IntArray,
+    tol: Tolerances,
+    method: str,
+    use_color: bool,
+) -> list[Assignment]:
+    """`_assign_pairwise` on some tiles and slots (ascending), in the full lists' indices."""
+    part = _assign_pairwise(
+        [td[i] for i in tiles.tolist()], [sd[i] for i in slots.tolist()], tol, method, use_color
+    )
+    return [Assignment(int(tiles[a.tile]), int(slots[a.slot]), a.rotation, a.score) for a in part]
+
+
+def _greedy_classes(
+    t: IntArray, c: IntArray, classes: Sequence[IntArray]
+) -> tuple[IntArray, IntArray]:
+    """The paper's loop over slot classes: each tile in order takes the first free slot.
+
+    A tile matching a class matches every slot of it, so the first free matching slot is the
+    least next-free member over the tile's classes (one pointer per class); classes fill in
+    member order.
+
+    Returns:
+        (tile, class) of the pairs made, tiles ascending.
+    """
+    order = np.lexsort((c, t))
+    tl, cl = t[order].tolist(), c[order].tolist()
+    taken: dict[int, int] = defaultdict(int)
+    members = {k: classes[k].tolist() for k in set(cl)}
+    out_t: list[int] = []
+    out_c: list[int] = []
+    i, n = 0, len(tl)
+    while i < n:
+        tile, best, best_slot = tl[i], -1, -1
+        while i < n and tl[i] == tile:
+            k = cl[i]
+            p = taken[k]
+            if p < len(members[k]) and (best < 0 or members[k][p] < best_slot):
+                best, best_slot = k, members[k][p]
+            i += 1
+        if best >= 0:
+            taken[best] += 1
+            out_t.append(tile)
+            out_c.append(best)
+    return np.asarray(out_t, dtype=np.int64), np.asarray(out_c, dtype=np.int64)
+
+
+def _optimal_classes(
+    t: IntArray,
+    c: IntArray,
+    score: FloatArray,
+    classes: Sequence[IntArray],
+    g_classes: IntArray,
+) -> tuple[IntArray, IntArray]:
+    """Most tiles, then least total residual, over slot classes (see `transport`).
+
+    Returns:
+        (tile, class) of the pairs made, tiles ascending.
+    """
+    local = np.searchsorted(g_classes, c)
+    capacity = np.array([len(classes[k]) for k in g_classes.tolist()], dtype=np.int64)
+    used = transport(t, local, score, capacity)
+    return t[used], c[used]
+
+
+def _finish(  # noqa: PLR0913, PLR0917
+    blocks: Sequence[_Block],
+    found: SlotClasses,
+    t: IntArray,
+    c: IntArray,
+    tol: Tolerances,
+    use_color: bool,
+) -> list[Assignment] | None:
+    """Assignments of (tile, class) pairs, each with its own rotation and residual.
+
+    Within a class, the tiles (ascending) take its slots in index order. Pairs are matched in
+    one vectorised pass per block and class, from the blocks' tile arrays and the classes' slot
+    arrays. None when some pair does not match after all (a slot told apart from its class's
+    representative only at a threshold).
+    """
+    order = np.lexsort((t, c))
+    t, c = t[order], c[order]
+    first = np.searchsorted(c, c, side="left")
+    rank = np.arange(len(t)) - first  # position of the pair within its class
+    done = np.zeros(len(t), dtype=bool)
+    out: list[Assignment] = []
+    for block in blocks:
+        sel = ~done & np.isin(c, block.slots) & np.isin(t, block.tiles)
+        done |= sel
+        for k in np.unique(c[sel]).tolist():
+            e = np.flatnonzero(sel & (c == k))
+            slots = found.members[k][rank[e]]
+            ok, score, rotation = evaluate_pairs(
+                take(found.packs[k], rank[e]),
+                take(block.tpack, np.searchsorted(block.tiles, t[e])),
+                tol,
+                use_color,
+            )
+            if not ok.all():
+                return None
+            out.extend(
+                Assignment(a, b, r, q)
+                for a, b, r, q in zip(
+                    t[e].tolist(), slots.tolist(), rotation.tolist(), score.tolist(), strict=True
+                )
+            )
+    return out
+
+
+def _assign_pairwise(
+    td: Sequence[Description],
+    sd: Sequence[Description],
+    tol: Tolerances,
+    method: str,
+    use_color: bool,
+) -> list[Assignment]:
+    """`assign` comparing each tile with every slot it may match (through canonical keys)."""
     blocks = _blocks(td, sd, tol, use_color)
     out: list[Assignment] = []
     for group in _merged(blocks, len(td), len(sd)):

@@ -205,3 +205,133 @@ def test_feasible_pairs_agree_with_pairwise_match_on_poor_fits():
                 c, d = found[(a, b)]
                 assert c == pytest.approx(m.score, rel=1e-9, abs=1e-12)
                 assert abs(math.remainder(d - m.rotation, 2 * math.pi)) < 1e-9
+
+
+# ------------------------------------------------------------------ slot classes (large mosaics)
+from qshape.slot_classes import slot_classes, transport  # noqa: E402
+
+
+def _posed(pts, color, rng, noise=0.0):
+    a = rng.uniform(-math.pi, math.pi)
+    c, s = math.cos(a), math.sin(a)
+    p = np.asarray(pts, float) @ np.array([[c, s], [-s, c]])
+    p = p + rng.uniform(-noise, noise, p.shape) + rng.uniform(-300, 300, 2)
+    return Figure.from_polygon(p, color=color)
+
+
+SQUARE = [[-10.0, -10], [10, -10], [10, 10], [-10, 10]]
+RECT = [[-10.0, -5], [10, -5], [10, 5], [-10, 5]]
+ELL = [[0.0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]]
+
+
+def test_slot_classes_group_posed_copies_and_split_colour_and_size():
+    rng = np.random.default_rng(SEED + 20)
+    red, blue = (0.8, 0.1, 0.1), (0.1, 0.2, 0.8)
+    kinds = [
+        (SQUARE, red),
+        (SQUARE, blue),
+        (RECT, red),
+        (ELL, red),
+        (np.multiply(SQUARE, 1.2), red),
+    ]
+    labels = rng.integers(0, len(kinds), 60)
+    slots = [describe(_posed(*kinds[k], rng)) for k in labels]
+    classes = slot_classes(slots, Tolerances()).members
+    got = sorted(sorted(labels[m].tolist()) for m in classes)
+    assert len(classes) == len(set(labels.tolist()))  # every rotation / start vertex together
+    assert all(len(set(g)) == 1 for g in got)
+    assert all(np.all(np.diff(m) > 0) for m in classes)
+    # shape only: the two colours of the square are one class
+    shape_only = slot_classes(slots, Tolerances(), use_color=False).members
+    assert len(shape_only) == len(classes) - int(0 in labels and 1 in labels)
+
+
+def _brute(tiles, slots, tol, use_color=True):
+    ok = np.zeros((len(tiles), len(slots)), bool)
+    score = np.full(ok.shape, np.inf)
+    for i, t in enumerate(tiles):
+        for j, s in enumerate(slots):
+            m = match(s, t, tol, use_color=use_color)
+            if m is not None:
+                ok[i, j], score[i, j] = True, m.score
+    return ok, score
+
+
+def _paper_loop(ok):
+    taken, out = set(), []
+    for t in range(ok.shape[0]):
+        for s in range(ok.shape[1]):
+            if s not in taken and ok[t, s]:
+                taken.add(s)
+                out.append((t, s))
+                break
+    return out
+
+
+@pytest.mark.parametrize("n_tiles", [30, 45])  # fewer tiles than slots, and more
+def test_class_assignment_equals_pairwise_on_a_mosaic_of_copies(n_tiles):
+    # Many copies of few classes, plus a tile colour between grey and blue that fits both
+    # classes of the grey/blue rectangle (a tile of several classes: the LP path).
+    rng = np.random.default_rng(SEED + 21 + n_tiles)
+    grey, blue, red = (0.5, 0.5, 0.5), (0.5, 0.5, 0.8), (0.8, 0.1, 0.1)
+    between = (0.5, 0.5, 0.65)
+    slot_kinds = [(RECT, grey), (RECT, blue), (SQUARE, red), (ELL, red)]
+    tile_kinds = [*slot_kinds, (RECT, between)]
+    tol = Tolerances()
+    slots = [describe(_posed(*slot_kinds[k], rng)) for k in rng.integers(0, 4, 36)]
+    tiles = [describe(_posed(*tile_kinds[k], rng, 0.05)) for k in rng.integers(0, 5, n_tiles)]
+    ok, score = _brute(tiles, slots, tol)
+    assert (ok.sum(axis=1) > 0).sum() > 10 and (ok.any(axis=0)).sum() > 10
+    greedy = assign(tiles, slots, tol, method="greedy")
+    assert [(a.tile, a.slot) for a in greedy] == _paper_loop(ok)
+    rows, cols = linear_sum_assignment(np.where(ok, score, 1e6))
+    keep = ok[rows, cols]
+    best_count, best_score = int(keep.sum()), float(score[rows[keep], cols[keep]].sum())
+    optimal = assign(tiles, slots, tol)
+    assert len(optimal) == best_count
+    assert len({a.slot for a in optimal}) == len(optimal)
+    assert all(ok[a.tile, a.slot] for a in optimal)
+    assert sum(a.score for a in optimal) == pytest.approx(best_score, rel=1e-9, abs=1e-12)
+    previous = assign(tiles, slots, tol, slot_classes=False)
+    assert sum(a.score for a in previous) == pytest.approx(best_score, rel=1e-9, abs=1e-12)
+    for a in optimal + greedy:  # each pair's own score and least rotation, as `match`
+        m = match(slots[a.slot], tiles[a.tile], tol)
+        assert a.score == pytest.approx(m.score, rel=1e-9, abs=1e-12)
+        assert abs(math.remainder(a.rotation - m.rotation, 2 * math.pi)) < 1e-9
+
+
+def test_one_class_more_tiles_than_slots_keeps_the_best_fits():
+    rng = np.random.default_rng(SEED + 30)
+    slots = [describe(_posed(SQUARE, (0.2, 0.6, 0.3), rng)) for _ in range(20)]
+    tiles = [
+        describe(_posed(SQUARE, (0.2, 0.6, 0.3), rng, noise)) for noise in rng.uniform(0, 0.8, 50)
+    ]
+    optimal = assign(tiles, slots)
+    assert len(optimal) == 20
+    residual = {a.tile: a.score for a in optimal}
+    others = [match(slots[0], t).score for i, t in enumerate(tiles) if i not in residual]
+    assert max(residual.values()) <= min(others) + 1e-9
+    # within the class, chosen tiles take the slots in index order
+    assert [a.slot for a in optimal] == list(range(20))
+
+
+def test_transport_lp_against_brute_force():
+    rng = np.random.default_rng(SEED + 31)
+    for _ in range(20):
+        n_t, n_c = 7, 3
+        fits = rng.random((n_t, n_c)) < 0.5
+        tile, cls = np.nonzero(fits)
+        score = rng.random(len(tile)).round(3)
+        capacity = rng.integers(1, 4, n_c)
+        used = transport(tile, cls, score, capacity)
+        assert np.bincount(tile[used], minlength=n_t).max(initial=0) <= 1
+        assert np.all(np.bincount(cls[used], minlength=n_c) <= capacity)
+        # brute force: expand each class into `capacity` columns
+        cols = np.repeat(np.arange(n_c), capacity)
+        cost = np.full((n_t, len(cols)), 1e6)
+        for t, c, q in zip(tile, cls, score, strict=True):
+            cost[t, cols == c] = q
+        r, k = linear_sum_assignment(cost)
+        good = cost[r, k] < 1e6
+        assert used.sum() == good.sum()
+        assert score[used].sum() == pytest.approx(cost[r, k][good].sum(), abs=1e-9)
