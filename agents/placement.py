@@ -28,13 +28,14 @@ from scipy.spatial import cKDTree
 import qshape
 from agents.config import PlacementConfig
 from agents.perception import PerceivedTile, SlotTarget
+from envs.task_spec import PickPlaceCommand
+from planners.angles import rotate_xy, wrap_angle
 from qshape.assign import feasible_pairs
 
 
 def wrap(angle: float) -> float:
-    """Angle wrapped to (-pi, pi] [rad]."""
-    w = math.remainder(angle, 2.0 * math.pi)
-    return math.pi if w == -math.pi else w
+    """Angle wrapped to [-pi, pi) [rad] (`planners.angles.wrap_angle` for one float)."""
+    return float(wrap_angle(angle))
 
 
 @dataclass(frozen=True)
@@ -67,6 +68,11 @@ class PickPlace:
     place_yaws: tuple[float, ...]
     symmetry: int
     score: float
+
+    @property
+    def command(self) -> PickPlaceCommand:
+        """The world pick-and-place command (pad points and the two yaws) for the env's codec."""
+        return PickPlaceCommand(self.grasp_pick, self.pick[2], self.grasp_place, self.place[2])
 
 
 @dataclass(frozen=True)
@@ -111,11 +117,6 @@ class PlacementPlan:
     use_color: bool
 
 
-def _rot(theta: float) -> np.ndarray:
-    c, s = math.cos(theta), math.sin(theta)
-    return np.array([[c, -s], [s, c]])
-
-
 def equivalent_yaws(slot_yaw: float, symmetry: int, continuous_steps: int) -> tuple[float, ...]:
     """Every place yaw equivalent under the slot shape's symmetry, ``slot_yaw`` first [rad].
 
@@ -136,7 +137,7 @@ def outline_residual(tile: qshape.Figure, slot: qshape.Figure, rotation: float) 
         slot: Slot figure in the same units.
         rotation: Rotation of the tile about its centroid [rad], CCW.
     """
-    a = (np.asarray(tile.outer.dense()) - tile.centroid) @ _rot(rotation).T
+    a = rotate_xy(np.asarray(tile.outer.dense()) - tile.centroid, rotation)
     b = np.asarray(slot.outer.dense()) - slot.centroid
     return float(np.mean(cKDTree(b).query(a)[0]))
 
@@ -167,7 +168,7 @@ def refine_rotation(
     tree = cKDTree(np.asarray(slot.outer.dense()) - slot.centroid)
 
     def cost(r: float) -> float:
-        return float(np.mean(tree.query(a @ _rot(r).T)[0]))
+        return float(np.mean(tree.query(rotate_xy(a, r))[0]))
 
     res = minimize_scalar(
         cost,
@@ -223,7 +224,7 @@ def plan_placements(
         )
         yaw_place = float(s.pose[2])
         yaw_pick = wrap(yaw_place - rot)
-        g_off = _rot(rot) @ (t.grasp - t.centre)
+        g_off = rotate_xy(t.grasp - t.centre, rot)
         g_place = s.pose[:2] + g_off
         commands.append(
             PickPlace(

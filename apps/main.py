@@ -9,9 +9,11 @@ the calibrated camera; one ``pick_place`` step per tile; a new picture; until th
 finished or nothing placeable remains). The cameras are calibrated from rendered checkerboard
 images first (``agents.calibration``).
 
-Decisions use only the observation images, the calibrated camera and the env's public layout
-facts (``env.unwrapped.bounds``); the env's ``evaluate()`` scores the run and the cell's ground
-truth is read only for the recognition figures of the report. Writes, under ``out/``:
+Decisions use only the observation images, the calibrated camera and the env's task
+description (``task_spec``: slots in the world, areas, the action codec); the env's evaluation
+scores the run, and its privileged ``ground_truth()`` is read only for the recognition figures
+of the report. Every env access goes through Gymnasium's public API (``get_wrapper_attr``); the
+arm goes home for the final picture with a planned move (``move_home``). Writes, under ``out/``:
 ``report.json`` and ``report.txt``; ``cell.mp4``: the cell overview beside the two camera
 views, the input view with the recognised relevant points (corners red, curve points cyan),
 centres and target slots of the latest picture, the output view with the design's slots
@@ -46,6 +48,9 @@ from agents.placement import PlacementPlan
 from agents.scripted import ScriptedAgent
 from configs import ConfigError
 from envs.errors import CellError
+from envs.task import GroundTruth
+from envs.task_spec import TaskSpec
+from planners.angles import yaw_error
 from qshape import QShapeError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -188,17 +193,20 @@ def _draw_figure(
 class CellVideo:
     """Frames of the cell overview beside the annotated camera views, written as an MP4.
 
+    The env renders each frame (``render_mode="rgb_array"``: the overview beside the input and
+    output camera panels); the camera panels are annotated here.
+
     Args:
-        env: The (unwrapped) env.
+        env: The env (wrapped or not), rendering ``rgb_array`` frames.
         agent: The scripted agent (its latest picture, plan and command are drawn).
         output_camera: Output camera model at full resolution (calibrated or true).
-        cfg: Frame size, rate and markers.
+        cfg: Frame rate and markers.
         mm_per_m: Design units per metre.
     """
 
     def __init__(
         self,
-        env: Any,
+        env: gym.Env[Any, Any],
         agent: ScriptedAgent,
         output_camera: CameraLike,
         cfg: RunConfig,
@@ -209,19 +217,21 @@ class CellVideo:
         self.output_camera = output_camera
         self.cfg = cfg
         self.mm_per_m = mm_per_m
-        h, w = cfg.video_size
-        cam = env.cell.cfg.input_camera
+        cell = agent.spec.cell
+        h = cell.render.overview_size[0]
+        cam = cell.input_camera
         self.panel = (h // 2, round(h // 2 * cam.width / cam.height))
         self.scale = self.panel[0] / cam.height
+        self.surface_z = agent.spec.place.surface_z
         self.frames: list[np.ndarray] = []
 
     def capture(self) -> None:
         """Render one frame of the current state."""
-        cell, agent, (ph, pw) = self.env.cell, self.agent, self.panel
-        h, w = self.cfg.video_size
-        overview = cell.render("overview", h, w)
+        agent, (ph, pw) = self.agent, self.panel
+        frame = np.asarray(self.env.render())
+        overview, right = frame[:, :-pw], frame[:, -pw:]
         cmd = agent.last_command
-        raw_in = cell.render("input_camera", ph, pw)
+        raw_in, raw_out = right[:ph], right[ph : 2 * ph]
         if agent.last_perception is not None:
             panel_in = draw_perception(
                 raw_in,
@@ -235,19 +245,19 @@ class CellVideo:
             panel_in = cv2.cvtColor(raw_in, cv2.COLOR_RGB2BGR)
         filled = set(agent.filled) - ({cmd.slot} if cmd else set())
         panel_out = draw_slots(
-            cell.render("output_camera", ph, pw),
+            raw_out,
             self.output_camera,
             agent.slots,
-            cell.geometry.mesh_top,
+            self.surface_z,
             self.cfg,
             filled=filled,
             target=cmd.slot if cmd else None,
             scale=self.scale,
             mm_per_m=self.mm_per_m,
         )
-        right = np.concatenate([panel_in, panel_out], axis=0)
-        frame = np.concatenate([cv2.cvtColor(overview, cv2.COLOR_RGB2BGR), right], axis=1)
-        self.frames.append(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB))
+        panels = np.concatenate([panel_in, panel_out], axis=0)
+        out = np.concatenate([cv2.cvtColor(overview, cv2.COLOR_RGB2BGR), panels], axis=1)
+        self.frames.append(cv2.cvtColor(out, cv2.COLOR_BGR2RGB))
 
     def write(self, path: Path) -> Path | None:
         """Encode the frames (ffmpeg H.264, else OpenCV mp4v); returns the file or None."""
@@ -275,8 +285,8 @@ class CellVideo:
 
 
 # ------------------------------------------------------------------------------ the run
-def make_env(rc: RunConfig) -> Any:
-    """The env of the main job: ``pick_place`` with full-resolution camera images.
+def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
+    """The env of the main job: ``pick_place``, full-resolution images, ``rgb_array`` frames.
 
     Raises:
         QShapeError: The design does not load or validate.
@@ -296,7 +306,7 @@ def make_env(rc: RunConfig) -> Any:
         "distractor_rate": rc.distractor_rate,
         "max_slots": rc.max_slots,
     }
-    return gym.make(ENV_ID, max_episode_steps=None, **over)
+    return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
 
 
 def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]:
@@ -313,35 +323,35 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
     t_wall = time.perf_counter()
     out_dir.mkdir(parents=True, exist_ok=True)
     env = make_env(rc)
-    u = env.unwrapped
-    bar = tqdm(total=len(u.cell.slots), desc="tiles placed", unit="tile", disable=quiet)
+    spec: TaskSpec = env.get_wrapper_attr("task_spec")
+    bar = tqdm(total=len(spec.slots), desc="tiles placed", unit="tile", disable=quiet)
     try:
         bar.set_postfix_str("calibrating the cameras")
-        agent = ScriptedAgent(env, cfg, calibrate=rc.calibrate)
-        report: dict[str, Any] = {"design": u.config.design, "seed": rc.seed}
+        agent = ScriptedAgent.from_env(env, cfg, calibrate=rc.calibrate)
+        report: dict[str, Any] = {"design": spec.design, "seed": rc.seed}
         if agent.calibration is not None:
             report["calibration_input_camera"] = agent.calibration.summary()
-            out_cal = calibrate_cell_camera(u.cell.cfg, "output_camera", cfg.calibration)
+            out_cal = calibrate_cell_camera(spec.cell, "output_camera", cfg.calibration)
             out_cam: CameraLike = out_cal.camera
             report["calibration_output_camera"] = out_cal.summary()
         else:
-            out_cam = u.camera_model("output", *_full_size(u))
-        video = CellVideo(u, agent, out_cam, rc, cfg.perception.mm_per_m) if rc.execute else None
+            out_cam = spec.camera("output_camera")
+        video = CellVideo(env, agent, out_cam, rc, cfg.perception.mm_per_m) if rc.execute else None
         obs, info = env.reset(seed=rc.seed)
         output_before = obs["output_camera"]
         if video is not None:
-            u.add_frame_listener(video.capture, rc.video_fps)
+            env.get_wrapper_attr("add_frame_listener")(video.capture, rc.video_fps)
             video.capture()
         bar.set_postfix_str("picking and placing")
         first: tuple[np.ndarray, Perception, PlacementPlan] | None = None
         steps = failed = 0
         failures: list[str] = []
-        limit = rc.max_steps_per_slot * max(1, len(u.cell.slots))
+        limit = rc.max_steps_per_slot * max(1, len(spec.slots))
         while steps < limit:
             action, _ = agent.predict(obs)
             if first is None and agent.last_perception is not None and agent.last_plan:
                 first = (obs["input_camera"], agent.last_perception, agent.last_plan)
-                report["recognition"] = recognition(u, agent)
+                report["recognition"] = recognition(env.get_wrapper_attr("ground_truth")(), agent)
             if agent.last_command is None or not rc.execute:
                 break  # nothing placeable is seen (or vision only)
             obs, _, terminated, truncated, info = env.step(action)
@@ -361,16 +371,16 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
                 output_before,
                 out_cam,
                 agent.slots,
-                u.cell.geometry.mesh_top,
+                spec.place.surface_z,
                 rc,
                 recognise=True,
                 mm_per_m=cfg.perception.mm_per_m,
             ),
         )
-        u.cell.set_qpos(np.asarray(u.cell.cfg.robot.home))  # out of the view, for the picture
+        home_obs = env.get_wrapper_attr("move_home")()  # the arm out of the view
         cv2.imwrite(
             str(out_dir / "output_camera_final.png"),
-            cv2.cvtColor(u.cell.render("output_camera"), cv2.COLOR_RGB2BGR),
+            cv2.cvtColor(home_obs["output_camera"], cv2.COLOR_RGB2BGR),
         )
         video_path = video.write(out_dir / "cell.mp4") if video is not None else None
         n = int(evaluation["slots"])
@@ -423,30 +433,21 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
         env.close()
 
 
-def _full_size(u: Any) -> tuple[int, int]:
-    cam = u.cell.cfg.output_camera
-    return int(cam.height), int(cam.width)
-
-
-def recognition(u: Any, agent: ScriptedAgent) -> list[dict[str, Any]]:
+def recognition(truth: GroundTruth, agent: ScriptedAgent) -> list[dict[str, Any]]:
     """Per command of a picture: class right?, pick and yaw errors (ground truth, report only)."""
-    from agents.cell_adapter import nearest_tile, yaw_error  # noqa: PLC0415
-
-    cell, plan = u.cell, agent.last_plan
-    poses = cell.tile_poses()
     rows = []
+    plan = agent.last_plan
     for c in plan.commands if plan else ():
-        i, d = nearest_tile(cell, np.array(c.pick[:2]))
-        t = cell.tiles[i]
+        i, d = truth.nearest(np.array(c.pick[:2]))
+        class_ok = truth.class_name[i] == truth.slot_class[c.slot] and not truth.distractor[i]
+        err = yaw_error(truth.yaw[i] + c.rotation, c.place[2], int(truth.symmetry[i]))
         rows.append(
             {
                 "slot": c.slot_name,
                 "tile": i,
-                "class_ok": t.shape.name == cell.slots[c.slot].shape.name and not t.distractor,
+                "class_ok": bool(class_ok),
                 "pick_error_mm": 1e3 * d,
-                "yaw_error_deg": math.degrees(
-                    yaw_error(poses.yaw[i] + c.rotation, c.place[2], t.shape.symmetry)
-                ),
+                "yaw_error_deg": math.degrees(float(err)),
             }
         )
     return rows

@@ -28,6 +28,7 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
+from planners.angles import wrap_angle
 from planners.config import N_JOINTS, IKConfig, JointLimits
 from planners.errors import InvalidTargetError, PlannerError, UnreachableError
 from planners.trajectory import as_joint_vector
@@ -69,11 +70,6 @@ def symmetric_yaws(yaw: float, order: int) -> Array:
     if order < 1:
         raise InvalidTargetError(f"symmetry order must be >= 1, got {order!r}")
     return yaw + _TWO_PI * np.arange(order) / order
-
-
-def wrap_angle(a: float | Array) -> float | Array:
-    """Angle(s) wrapped to [-pi, pi) [rad]."""
-    return (np.asarray(a) + math.pi) % _TWO_PI - math.pi
 
 
 @dataclass(frozen=True)
