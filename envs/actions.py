@@ -28,6 +28,7 @@ from envs.task_spec import RANGE_SLACK, ActionError, Area, PickPlaceCodec, PickP
 from planners.angles import rotate_xy, wrap_angle
 from planners.errors import PlannerError
 from planners.ik import IKSolver
+from planners.robot import joint_ranges
 
 N_JOINTS = 6
 
@@ -95,9 +96,8 @@ class JointActions(ActionAdapter):
     def __init__(self, cell: Cell, config: EnvConfig) -> None:
         super().__init__(cell, config)
         self.space = spaces.Box(-1.0, 1.0, (N_JOINTS + 1,), np.float32)
-        self.max_step = np.asarray(cell.cfg.robot.max_joint_speed) * self.substeps * self.dt
-        self._lo = cell.model.jnt_range[cell._arm_joints(), 0].copy()
-        self._hi = cell.model.jnt_range[cell._arm_joints(), 1].copy()
+        self.max_step = cell.max_joint_speed * self.substeps * self.dt
+        self._lo, self._hi = joint_ranges(cell.model)
         self.target = cell.qpos
 
     def reset(self) -> None:

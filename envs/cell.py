@@ -44,6 +44,7 @@ from envs.tiles import (
     make_tile_pool,
     sample_layout,
 )
+from planners.robot import joint_ranges, joint_speed_limits
 
 CAMERAS = ("input_camera", "output_camera")
 """Names of the observation cameras."""
@@ -117,17 +118,14 @@ class Cell:
         self._next_feed_time = 0.0
         self._feed_order = np.arange(n)
         self._batch_due = np.inf
-        self._speed_lo = -np.asarray(self.cfg.robot.max_joint_speed)
-        self._speed_hi = np.asarray(self.cfg.robot.max_joint_speed)
-        self._q_lo = self.model.jnt_range[self._arm_joints(), 0].copy()
-        self._q_hi = self.model.jnt_range[self._arm_joints(), 1].copy()
+        self.max_joint_speed = joint_speed_limits(self.model)
+        """Axis speed limits [rad/s], shape (6,), from the robot model's velocity actuators."""
+        self._speed_lo, self._speed_hi = -self.max_joint_speed, self.max_joint_speed
+        self._q_lo, self._q_hi = joint_ranges(self.model)
         self._closed = False
         self.reset()
 
     # ----------------------------------------------------------------- set-up
-    def _arm_joints(self) -> np.ndarray:
-        return np.searchsorted(self.model.jnt_qposadr, self.ids.arm_qpos)
-
     def _initial_count(self) -> int:
         feed = self.cfg.tiles.feed
         if feed == "all":

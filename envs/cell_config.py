@@ -60,33 +60,22 @@ class PhysicsConfig:
 
 @dataclass(frozen=True)
 class RobotConfig:
-    """The arm.
+    """The arm (joint ranges and axis speed limits are the model's: `planners.robot`).
 
     Attributes:
         model: Path of the robot MJCF, relative to the repository root or absolute.
         home: Joint angles of the start configuration, shape (6,) [rad].
-        max_joint_speed: Axis speed limits, shape (6,) [rad/s] (SPEC 4: 200, 200, 260, 360,
-            360, 450 deg/s); servo velocity targets are clipped to them.
         base_keepout: Radius about the base axis that no belt may enter [m] (the rotating
             base, 0.11 m, plus margin).
     """
 
     model: str = "assets/irb140/irb140.xml"
     home: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 1.5707963, 0.0)
-    max_joint_speed: tuple[float, ...] = (
-        3.4906585,
-        3.4906585,
-        4.5378561,
-        6.2831853,
-        6.2831853,
-        7.8539816,
-    )
     base_keepout: float = 0.15
 
     def __post_init__(self) -> None:
         _length(self, "home", 6)
-        _length(self, "max_joint_speed", 6)
-        _positive(self, "max_joint_speed", "base_keepout")
+        _positive(self, "base_keepout")
         if not self.model_path.is_file():
             raise CellError(f"RobotConfig.model: no file {self.model_path}")
 

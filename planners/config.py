@@ -25,6 +25,7 @@ from typing import Any
 
 from configs import check_positive, load_config
 from planners.errors import LimitError
+from planners.robot import robot_joint_lower, robot_joint_speeds, robot_joint_upper
 
 N_JOINTS = 6
 """Number of arm joints."""
@@ -54,21 +55,19 @@ class JointLimits:
     """Kinematic limits of the six axes.
 
     Attributes:
-        lower: Lower joint limits, shape (6,) [rad] (SPEC 4).
-        upper: Upper joint limits, shape (6,) [rad] (SPEC 4).
-        max_velocity: Axis speed limits, shape (6,) [rad/s] (SPEC 4: 200, 200, 260, 360, 360,
-            450 deg/s).
+        lower: Lower joint limits, shape (6,) [rad]. Default: the robot model's joint ranges
+            (``assets/irb140/irb140.xml``, their one home; `planners.robot`); set only to narrow
+            them (the IK solver never goes beyond the model's ranges).
+        upper: Upper joint limits, shape (6,) [rad]. Default: the robot model's.
+        max_velocity: Axis speed limits, shape (6,) [rad/s]. Default: the robot model's velocity
+            actuators' control ranges (datasheet: 200, 200, 260, 360, 360, 450 deg/s).
         max_acceleration: Axis acceleration limits, shape (6,) [rad/s^2] (assumption: 10 x speed).
         max_jerk: Axis jerk limits, shape (6,) [rad/s^3] (assumption: 10 x acceleration).
     """
 
-    lower: tuple[float, ...] = tuple(
-        d * _DEG for d in (-180.0, -90.0, -230.0, -200.0, -115.0, -400.0)
-    )
-    upper: tuple[float, ...] = tuple(d * _DEG for d in (180.0, 110.0, 50.0, 200.0, 115.0, 400.0))
-    max_velocity: tuple[float, ...] = tuple(
-        d * _DEG for d in (200.0, 200.0, 260.0, 360.0, 360.0, 450.0)
-    )
+    lower: tuple[float, ...] = field(default_factory=robot_joint_lower)
+    upper: tuple[float, ...] = field(default_factory=robot_joint_upper)
+    max_velocity: tuple[float, ...] = field(default_factory=robot_joint_speeds)
     max_acceleration: tuple[float, ...] = tuple(
         10.0 * d * _DEG for d in (200.0, 200.0, 260.0, 360.0, 360.0, 450.0)
     )

@@ -21,7 +21,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import mink
 import mujoco
@@ -31,12 +30,10 @@ import numpy.typing as npt
 from planners.angles import wrap_angle
 from planners.config import N_JOINTS, IKConfig, JointLimits
 from planners.errors import InvalidTargetError, PlannerError, UnreachableError
+from planners.robot import ROBOT_XML
 from planners.trajectory import as_joint_vector
 
 Array = npt.NDArray[np.float64]
-
-ROBOT_XML = Path(__file__).resolve().parents[1] / "assets" / "irb140" / "irb140.xml"
-"""The robot-only MJCF (the default IK model)."""
 
 _TWO_PI = 2.0 * math.pi
 _DOWN = np.diag([1.0, -1.0, -1.0])
