@@ -44,7 +44,7 @@ class TileVariants:
         self._body_rgba = np.array([*body_color, 1.0])
         self._color_jitter = color_jitter
 
-    def draw(self, rng: np.random.Generator) -> tuple[np.ndarray, list[PhysicalTile]] | None:
+    def draw(self, rng: np.random.Generator) -> tuple[np.ndarray, Sequence[PhysicalTile]] | None:
         """A random variant per tile with fresh colour noise; None with a single variant."""
         if self.count == 1:
             return None

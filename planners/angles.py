@@ -29,7 +29,8 @@ def rotate_xy(xy: npt.ArrayLike, yaw: float) -> Array:
     """Planar vector(s) turned by ``yaw`` [rad] counter-clockwise; shape (2,) or (n, 2)."""
     c, s = math.cos(yaw), math.sin(yaw)
     v = np.asarray(xy, dtype=float)
-    return v @ np.array([[c, s], [-s, c]])
+    out: Array = v @ np.array([[c, s], [-s, c]])
+    return out
 
 
 def yaw_error(yaw: float | Array, target: float | Array, symmetry: int | Array) -> float | Array:

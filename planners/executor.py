@@ -34,7 +34,7 @@ class TimedEvent:
     """
 
     time: float
-    fire: Callable[[], None]
+    fire: Callable[[], object]
 
 
 Actuate = Callable[[Array, Array, Array], None]
@@ -68,7 +68,7 @@ class TrajectoryExecutor:
         self,
         commands: ServoCommands,
         actuate: Actuate,
-        advance: Callable[[], None],
+        advance: Callable[[], object],
         *,
         events: Sequence[TimedEvent] = (),
         before_step: Callable[[int], None] | None = None,

@@ -207,7 +207,7 @@ class IKSolver:
         mujoco.mj_kinematics(self.model, d)
         dmax = self.config.collision_detection_distance
         return min(
-            mujoco.mj_geomDistance(self.model, d, int(a), int(b), dmax, None)
+            float(mujoco.mj_geomDistance(self.model, d, int(a), int(b), dmax, None))
             for a, b in self._pairs
         )
 
@@ -346,13 +346,15 @@ class IKSolver:
 
     def _in_range(self, q: Array) -> Array:
         """``q`` clipped to the joint ranges (`np.clip` costs ~3x more on 6 values)."""
-        return np.minimum(np.maximum(q, self.lower), self.upper)
+        out: Array = np.minimum(np.maximum(q, self.lower), self.upper)
+        return out
 
     def _feature_distance(self, feats: Array, feature: Array) -> Array:
         """Distance [m] of (x, y, z, yaw) features, yaw weighted by the tool length."""
         diff = feats - feature
         diff[:, 3] = ((diff[:, 3] + math.pi) % _TWO_PI - math.pi) * self._reach[3]
-        return np.sqrt(np.einsum("ij,ij->i", diff, diff))
+        dist: Array = np.sqrt(np.einsum("ij,ij->i", diff, diff))
+        return dist
 
     def _default_seed(self, feature: Array, elbow_up: bool = True) -> Array:
         """Geometric guess: elbow up (or down), wrist flat, tool down, facing the target.

@@ -19,7 +19,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import yaml
@@ -95,9 +95,15 @@ class DesignRules:
         return load_section(cls, "design", name_or_path, overrides)
 
 
+_Section = TypeVar("_Section")
+
+
 def load_section(
-    cls: type[Any], section: str, name_or_path: str | Path | None, overrides: Mapping[str, Any]
-) -> Any:
+    cls: type[_Section],
+    section: str,
+    name_or_path: str | Path | None,
+    overrides: Mapping[str, Any],
+) -> _Section:
     """Load one section of a vision YAML file (None: ``configs/vision.yaml``) strictly into cls.
 
     Raises:
@@ -192,7 +198,8 @@ class Loop:
         arc = centre + np.stack(
             [v0[:, 0] * cs - v0[:, 1] * sn, v0[:, 0] * sn + v0[:, 1] * cs], axis=1
         )
-        return np.where((b == 0.0)[:, None], straight, arc)
+        out: FloatArray = np.where((b == 0.0)[:, None], straight, arc)
+        return out
 
     def edge_lengths(self) -> FloatArray:
         """Length of each edge (arc length for arcs), shape (n,)."""

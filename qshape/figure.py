@@ -252,7 +252,8 @@ class Boundary:
     def points_yup(self) -> FloatArray:
         """Relevant points in the right-handed y-up frame, shape (n, 2)."""
         if self.y_down:
-            return self.points * np.array([1.0, -1.0])
+            flipped: FloatArray = self.points * np.array([1.0, -1.0])
+            return flipped
         return self.points
 
     def measures(self) -> tuple[float, FloatArray, float]:
@@ -274,7 +275,8 @@ def _pose(local: FloatArray, center: Sequence[float], angle: float, y_down: bool
     pts = local @ np.array([[c, s], [-s, c]])
     if y_down:
         pts = pts * np.array([1.0, -1.0])
-    return pts + np.asarray(center, dtype=np.float64)
+    out: FloatArray = pts + np.asarray(center, dtype=np.float64)
+    return out
 
 
 def _as_color(color: Iterable[float] | None) -> Color | None:

@@ -62,7 +62,8 @@ def _segment_pairs_cross(
         lo = np.minimum(q0, q1)
         hi = np.maximum(q0, q1)
         inside = np.all((p >= lo) & (p <= hi), axis=-1)
-        return (o == 0.0) & inside
+        out: BoolArray = (o == 0.0) & inside
+        return out
 
     touch = (
         on_seg(b0[None, :, :], a0[:, None, :], a1[:, None, :], o1)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from configs import ConfigError, from_dict, load_yaml, resolve_path
 from qshape.errors import ToleranceError
@@ -176,9 +176,15 @@ class Tolerances:
         return _load_section(cls, "tolerances", name_or_path, overrides)
 
 
+_Section = TypeVar("_Section")
+
+
 def _load_section(
-    cls: type[Any], section: str, name_or_path: str | Path | None, overrides: dict[str, Any]
-) -> Any:
+    cls: type[_Section],
+    section: str,
+    name_or_path: str | Path | None,
+    overrides: dict[str, Any],
+) -> _Section:
     """Load one section of a qshape YAML file strictly into ``cls``."""
     data = load_yaml("qshape" if name_or_path is None else name_or_path)
     source = str(resolve_path("qshape" if name_or_path is None else name_or_path))
