@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, cast
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
@@ -25,7 +25,7 @@ from envs.actions import (
 )
 from envs.cameras import CameraModel
 from envs.cell import CAMERAS, Cell
-from envs.cell_config import CellConfig, load_cell_config
+from envs.cell_config import CellConfig
 from envs.env_config import EnvConfig, load_env_config
 from envs.errors import CellError
 from envs.observations import Observer
@@ -172,7 +172,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.render_mode = cfg.render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt)}
         design, shapes, slots = _design(cfg)
-        self.cell = _build_cell(_cell_config(cfg), shapes, slots, cfg.layout_tries)
+        self.cell = _build_cell(cfg.cell, shapes, slots, cfg.layout_tries)
         self.task = MosaicTask(self.cell, cfg)
         self.observer = Observer(self.cell, self.task, cfg)
         pcfg = load_planner_config(cfg.planner)
@@ -428,23 +428,6 @@ def _design(cfg: EnvConfig) -> tuple[Design, tuple[TileShape, ...], tuple[SlotSp
     if cfg.max_slots:
         shapes, slots = shapes[: cfg.max_slots], slots[: cfg.max_slots]
     return design, shapes, slots
-
-
-def _cell_config(cfg: EnvConfig) -> CellConfig:
-    base = load_cell_config(cfg.cell)
-    tiles = replace(
-        base.tiles,
-        feed=cast(Literal["all", "stream", "batch"], cfg.feed),
-        stream_period=cfg.stream_period,
-        stream_initial=cfg.stream_initial,
-        batch_size=cfg.batch_size,
-        batch_index_time=cfg.batch_index_time,
-        distractor_rate=cfg.distractor_rate,
-        vertex_jitter=cfg.vertex_jitter,
-        color_jitter=cfg.tile_color_jitter,
-        variants=cfg.tile_variants,
-    )
-    return replace(base, tiles=tiles, input_belt=replace(base.input_belt, speed=cfg.belt_speed))
 
 
 def _build_cell(
