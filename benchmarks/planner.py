@@ -36,7 +36,7 @@ from envs.cell import Cell
 from envs.cell_config import CellConfig, load_cell_config
 from envs.errors import CellError
 from envs.scene import build_arm_model
-from envs.tiles import tile_shapes_from_design
+from envs.tile_shapes import tile_shapes_from_design
 from planners.config import PlannerConfig, load_planner_config
 from planners.errors import LimitError, PlannerError
 from planners.executor import TimedEvent, TrajectoryExecutor

@@ -3,7 +3,7 @@
 Typical use::
 
     from envs.cell import Cell
-    from envs.tiles import basic_shapes
+    from envs.tile_shapes import basic_shapes
 
     cell = Cell(load_cell_config(), basic_shapes(), seed=0)
     cell.set_servo(q_target, qd_target)   # joint targets [rad], feed-forward [rad/s]
@@ -34,13 +34,8 @@ from envs.scene import (
     yaw_quat,
 )
 from envs.suction import Suction, SuctionEvent
-from envs.tiles import (
-    PhysicalTile,
-    SlotSpec,
-    TileShape,
-    basic_shapes,
-    make_tile_pool,
-)
+from envs.tile_shapes import basic_shapes
+from envs.tiles import PhysicalTile, SlotSpec, TileShape, make_tile_pool
 from envs.variants import TileVariants
 from planners.robot import joint_ranges, joint_speed_limits
 

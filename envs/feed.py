@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 
 from envs.errors import CellError
-from envs.tiles import layout_capacity, sample_layout
+from envs.layout import layout_capacity, sample_layout
 
 if TYPE_CHECKING:
     from envs.cell import Cell

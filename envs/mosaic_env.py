@@ -40,7 +40,8 @@ from envs.task_spec import (
     build_task_spec,
     work_areas,
 )
-from envs.tiles import SlotSpec, TileShape, tile_shapes_from_design
+from envs.tile_shapes import tile_shapes_from_design
+from envs.tiles import SlotSpec, TileShape
 from planners.config import PlannerConfig, load_planner_config
 from planners.ik import IKSolver
 

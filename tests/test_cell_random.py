@@ -8,7 +8,7 @@ from cell_motion import ArmIK, tool_down
 
 from envs.cell import Cell
 from envs.cell_config import CellConfig, InputBeltConfig
-from envs.tiles import basic_shapes
+from envs.tile_shapes import basic_shapes
 
 CONTROL_STEPS = 5
 SIM_SECONDS = 60.0
