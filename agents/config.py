@@ -165,7 +165,7 @@ class RunConfig:
     design: str = "paper_mixed"
     seed: int = 0
     belt_speed: float = 0.0
-    feed: str = "all"
+    feed: Literal["all", "stream", "batch"] = "all"
     distractor_rate: float = 0.0
     max_slots: int = 0
     max_steps_per_slot: int = 2

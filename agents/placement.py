@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -75,6 +76,10 @@ class PickPlace:
         return PickPlaceCommand(self.grasp_pick, self.pick[2], self.grasp_place, self.place[2])
 
 
+UnplacedReason = Literal["shape_absent", "color_absent", "slots_taken"]
+"""Why a perceived tile is not placed (`REASONS` explains each)."""
+
+
 @dataclass(frozen=True)
 class Unplaced:
     """A perceived tile that will not be placed, and why.
@@ -86,11 +91,11 @@ class Unplaced:
     """
 
     tile: int
-    reason: str
+    reason: UnplacedReason
     detail: str
 
 
-REASONS = {
+REASONS: dict[UnplacedReason, str] = {
     "shape_absent": "no design slot has this shape",
     "color_absent": "slots of this shape exist, but none of this colour",
     "slots_taken": "every matching slot is taken by another tile",
@@ -113,7 +118,7 @@ class PlacementPlan:
     commands: tuple[PickPlace, ...]
     unplaced: tuple[Unplaced, ...]
     open_slots: tuple[int, ...]
-    method: str
+    method: Literal["optimal", "greedy"]
     use_color: bool
 
 
@@ -254,6 +259,7 @@ def plan_placements(
             else shape_ok
         )
         for j, k in enumerate(left):
+            reason: UnplacedReason
             if j not in shape_ok:
                 reason = "shape_absent"
             elif j not in color_ok:
@@ -277,6 +283,7 @@ __all__ = [
     "PickPlace",
     "PlacementPlan",
     "Unplaced",
+    "UnplacedReason",
     "equivalent_yaws",
     "outline_residual",
     "plan_placements",

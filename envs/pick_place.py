@@ -27,6 +27,9 @@ from planners.ik import IKSolver
 from planners.pick_place import PickPlacePlanner
 from planners.trajectory import JointState, chain
 
+AT_TARGET = 1e-6
+"""Joint distance [rad] below which `PickPlaceExecutor.move_to` has nothing to move."""
+
 
 @dataclass(frozen=True)
 class ActionResult:
@@ -176,6 +179,8 @@ class PickPlaceExecutor:
         """
         cell = self.cell
         cell.vacuum(False)
+        if np.max(np.abs(np.asarray(q, float) - cell.qpos)) < AT_TARGET:
+            return  # already there: no move to plan
         if self.cfg.execution == "kinematic":
             cell.set_qpos(np.asarray(q, float))
             return
