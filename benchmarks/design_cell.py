@@ -12,7 +12,6 @@ import numpy as np
 
 from envs.cell import Cell
 from envs.cell_config import CellConfig, load_cell_config
-from envs.errors import CellError
 from envs.tile_shapes import tile_shapes_from_design
 from qshape.design import Design
 
@@ -32,16 +31,11 @@ def build_design_cell(
         (cell, seed used).
 
     Raises:
-        CellError: No seed in ``[seed, seed + tries)`` fits the tiles on the belt.
+        LayoutError: No seed in ``[seed, seed + tries)`` fits the tiles on the belt.
     """
     shapes, slots = tile_shapes_from_design(design)
-    cfg = cfg or load_cell_config()
-    for k in range(tries):
-        try:
-            return Cell(cfg, shapes, slots, seed=seed + k), seed + k
-        except CellError:
-            continue
-    raise CellError(f"no layout seed in [{seed}, {seed + tries}) fits design {design.name!r}")
+    cell = Cell.first_fitting(cfg or load_cell_config(), shapes, slots, seed, tries)
+    return cell, seed if cell.layout_seed is None else cell.layout_seed
 
 
 def nearest_tile(cell: Cell, xy: np.ndarray) -> tuple[int, float]:

@@ -34,7 +34,6 @@ import numpy as np
 
 from envs.cell import Cell
 from envs.cell_config import CellConfig, load_cell_config
-from envs.errors import CellError
 from envs.scene import build_arm_model
 from envs.tile_shapes import tile_shapes_from_design
 from planners.config import PlannerConfig, load_planner_config
@@ -390,12 +389,7 @@ def run_design(
 
 def _build_cell(cfg: CellConfig, shapes: Any, slots: Any, seed: int) -> Cell:
     """The cell with the first layout seed from ``seed`` on that fits every tile on the belt."""
-    for k in range(LAYOUT_SEED_TRIES):
-        try:
-            return Cell(cfg, shapes, slots, seed=seed + k)
-        except CellError:
-            continue
-    raise CellError(f"no layout seed in [{seed}, {seed + LAYOUT_SEED_TRIES}) fits the design")
+    return Cell.first_fitting(cfg, shapes, slots, seed, LAYOUT_SEED_TRIES)
 
 
 def cell_config(layout: str, belt_speed: float, stream_period: float) -> CellConfig:

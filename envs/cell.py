@@ -24,7 +24,7 @@ import numpy as np
 from envs.belts import LostTracker, input_speed, set_input_speed
 from envs.cameras import CameraModel, CameraRig, camera_model
 from envs.cell_config import CameraConfig, CellConfig, load_cell_config
-from envs.errors import CellError
+from envs.errors import CellError, LayoutError
 from envs.feed import TileFeed
 from envs.scene import (
     WAKE_FORCE,
@@ -110,7 +110,38 @@ class Cell:
         self._speed_lo, self._speed_hi = -self.max_joint_speed, self.max_joint_speed
         self._q_lo, self._q_hi = joint_ranges(self.model)
         self._closed = False
+        self.layout_seed = seed if isinstance(seed, int) else None
+        """The seed the cell was built with (see `first_fitting`), when an int."""
         self.reset()
+
+    @classmethod
+    def first_fitting(
+        cls,
+        config: CellConfig | None,
+        shapes: Sequence[TileShape] | None,
+        slots: Sequence[SlotSpec] = (),
+        seed: int = 0,
+        tries: int = 20,
+    ) -> Cell:
+        """The cell built with the first seed from ``seed`` on whose layout fits the belt.
+
+        Random layouts of a crowded tile area fail now and then (`LayoutError`); other
+        errors are raised at once. The seed used is ``cell.layout_seed``.
+
+        Raises:
+            LayoutError: No seed in ``[seed, seed + tries)`` fits.
+            CellError: Any other bad input.
+        """
+        for k in range(tries):
+            try:
+                cell = cls(config, shapes, slots, seed=seed + k)
+            except LayoutError:
+                if k == tries - 1:
+                    raise
+                continue
+            cell.layout_seed = seed + k
+            return cell
+        raise LayoutError(f"tries must be >= 1, got {tries}")
 
     # ----------------------------------------------------------------- set-up
     def _select(self, variant: np.ndarray, tiles: Sequence[PhysicalTile]) -> None:

@@ -13,7 +13,7 @@ import shapely
 import shapely.ops
 from shapely.geometry import Polygon
 
-from envs.errors import CellError
+from envs.errors import CellError, LayoutError
 
 OUTLINE_FILL = 0.5
 """Largest fraction of a tile area random placement of outlines is asked to fill."""
@@ -170,7 +170,7 @@ def _layout_once(
                     placed.append(poly)
                 break
         if chosen < 0:
-            raise CellError(
+            raise LayoutError(
                 f"could not place {len(radii)} tiles without overlap in the tile area "
                 f"{area_size[0] * 1000:.0f} x {area_size[1] * 1000:.0f} mm after {attempts} "
                 "tries per tile; use fewer tiles, a larger area or feed='stream'"

@@ -25,9 +25,7 @@ from envs.actions import (
 )
 from envs.cameras import CameraModel
 from envs.cell import CAMERAS, Cell
-from envs.cell_config import CellConfig
 from envs.env_config import EnvConfig, load_env_config
-from envs.errors import CellError
 from envs.observations import Observer
 from envs.pick_place import PickPlaceExecutor
 from envs.scene import build_arm_model
@@ -173,7 +171,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.render_mode = cfg.render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt)}
         design, shapes, slots = _design(cfg)
-        self.cell = _build_cell(cfg.cell, shapes, slots, cfg.layout_tries)
+        self.cell = Cell.first_fitting(cfg.cell, shapes, slots, tries=cfg.layout_tries)
         self.task = MosaicTask(self.cell, cfg)
         self.observer = Observer(self.cell, self.task, cfg)
         pcfg = load_planner_config(cfg.planner)
@@ -429,19 +427,6 @@ def _design(cfg: EnvConfig) -> tuple[Design, tuple[TileShape, ...], tuple[SlotSp
     if cfg.max_slots:
         shapes, slots = shapes[: cfg.max_slots], slots[: cfg.max_slots]
     return design, shapes, slots
-
-
-def _build_cell(
-    cfg: CellConfig, shapes: tuple[TileShape, ...], slots: tuple[SlotSpec, ...], tries: int
-) -> Cell:
-    """A cell whose first layout fits (layout draws can fail on crowded belts)."""
-    for seed in range(tries):
-        try:
-            return Cell(cfg, shapes, slots, seed=seed)
-        except CellError as exc:
-            if "could not place" not in str(exc) or seed == tries - 1:
-                raise
-    raise AssertionError("unreachable")
 
 
 __all__ = ["ActionError", "MosaicAssemblyEnv", "MosaicEnvError"]

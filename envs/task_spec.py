@@ -183,6 +183,7 @@ class TaskSpec:
         pick: The pick area (input belt side).
         place: The place area (mesh side).
         tile_thickness: Tile thickness [m] (``place.tile_top_z - place.surface_z``).
+        mesh_centre: World (x, y) of the mesh centre [m], shape (2,).
         belt_speed: Input belt speed [m/s] along +x.
         feed: How tiles arrive: ``all`` at reset, a ``stream`` or ``batch``es.
         action_mode: The env's action mode.
@@ -197,6 +198,7 @@ class TaskSpec:
     pick: Area
     place: Area
     tile_thickness: float
+    mesh_centre: np.ndarray
     belt_speed: float
     feed: FeedMode
     action_mode: str
@@ -204,11 +206,6 @@ class TaskSpec:
     cameras: dict[str, CameraModel]
     codec: PickPlaceCodec | None
     cell: CellConfig
-
-    @property
-    def mesh_centre(self) -> np.ndarray:
-        """World (x, y) of the mesh centre [m], shape (2,)."""
-        return self.place.centre
 
     def camera(self, name: CameraName) -> CameraModel:
         """The camera model of ``name`` at the observation size.
@@ -284,6 +281,7 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
         pick=pick,
         place=place,
         tile_thickness=float(cell.cfg.tiles.thickness),
+        mesh_centre=cell.geometry.output_centre[:2].copy(),
         belt_speed=float(config.belt_speed),
         feed=feed,
         action_mode=config.action_mode,
