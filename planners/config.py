@@ -5,7 +5,8 @@ Every number is a field of a frozen dataclass with its unit; bundled defaults li
 ``__post_init__`` and raises `LimitError` naming the field and what is allowed.
 
 Facts and assumptions:
-    * Axis speed limits and joint ranges are the ABB IRB 140 datasheet values (SPEC section 4).
+    * Joint ranges and axis speed limits are read from the robot model (`planners.robot`: the
+      MJCF holds the ABB IRB 140 datasheet values).
     * ABB publishes no per-axis acceleration or jerk limits. The defaults assume each axis reaches
       its top speed in about 1/10 s (acceleration = 10 x speed per second) with jerk 10 x
       acceleration. At the 0.5-0.6 m radius of the work areas this is a tool acceleration of
@@ -30,7 +31,10 @@ from planners.robot import robot_joint_lower, robot_joint_speeds, robot_joint_up
 N_JOINTS = 6
 """Number of arm joints."""
 
-_DEG = math.pi / 180.0
+ACCEL_PER_SPEED = 10.0
+"""Default axis acceleration limit per unit of speed limit [1/s] (assumption, see above)."""
+JERK_PER_ACCEL = 10.0
+"""Default axis jerk limit per unit of acceleration limit [1/s] (assumption, see above)."""
 
 _check_positive = partial(check_positive, error=LimitError)
 _check_non_negative = partial(check_positive, error=LimitError, strict=False)
@@ -48,6 +52,11 @@ def _check_tuple(obj: object, name: str, *, positive: bool = True) -> None:
                 f"{type(obj).__name__}.{name}[{i}] (joint {i + 1}) must be "
                 f"{'positive and ' if positive else ''}finite, got {v!r}"
             )
+
+
+def _from_speeds(times_accel: float) -> tuple[float, ...]:
+    """The model's axis speeds x ``ACCEL_PER_SPEED`` x ``times_accel`` (default limits)."""
+    return tuple(times_accel * ACCEL_PER_SPEED * v for v in robot_joint_speeds())
 
 
 @dataclass(frozen=True)
@@ -68,11 +77,13 @@ class JointLimits:
     lower: tuple[float, ...] = field(default_factory=robot_joint_lower)
     upper: tuple[float, ...] = field(default_factory=robot_joint_upper)
     max_velocity: tuple[float, ...] = field(default_factory=robot_joint_speeds)
-    max_acceleration: tuple[float, ...] = tuple(
-        10.0 * d * _DEG for d in (200.0, 200.0, 260.0, 360.0, 360.0, 450.0)
+    max_acceleration: tuple[float, ...] = field(
+        default_factory=lambda: tuple(ACCEL_PER_SPEED * v for v in robot_joint_speeds())
     )
-    max_jerk: tuple[float, ...] = tuple(
-        100.0 * d * _DEG for d in (200.0, 200.0, 260.0, 360.0, 360.0, 450.0)
+    max_jerk: tuple[float, ...] = field(
+        default_factory=lambda: tuple(
+            JERK_PER_ACCEL * ACCEL_PER_SPEED * v for v in robot_joint_speeds()
+        )
     )
 
     def __post_init__(self) -> None:

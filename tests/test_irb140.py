@@ -1,4 +1,4 @@
-"""The IRB 140 model against the public DH/OPW facts (SPEC section 4)."""
+"""The IRB 140 model against the public DH/OPW facts (ABB product specification)."""
 
 from __future__ import annotations
 
