@@ -72,8 +72,8 @@ class PickPlace:
 
     @property
     def command(self) -> PickPlaceCommand:
-        """The world pick-and-place command (pad points and the two yaws) for the env's codec."""
-        return PickPlaceCommand(self.grasp_pick, self.pick[2], self.grasp_place, self.place[2])
+        """The world command for the env's codec: pad points, the tile's yaw, the rotation."""
+        return PickPlaceCommand(self.grasp_pick, self.pick[2], self.grasp_place, self.rotation)
 
 
 UnplacedReason = Literal["shape_absent", "color_absent", "slots_taken"]

@@ -169,7 +169,7 @@ class PickPlaceActions(ActionAdapter):
 
     x, y map linearly onto the codec's areas (pick: the input tile area; place: the mesh), yaw
     onto [-pi, pi]. The pad goes to the pick point, then to the place point; the tile turns by
-    place yaw minus pick yaw (pass the tile's yaw at the pick and the slot's yaw at the place).
+    the action's rotation (its last entry; the third is the tile's yaw at the pick).
     """
 
     def __init__(
@@ -248,7 +248,7 @@ def transfer_poses(cell: Cell, tile: int, slot: int, extra_yaw: float = 0.0) -> 
     place_yaw = float(syaw + extra_yaw)
     pick = poses.pos[tile, :2] + rotate_xy(g, yaw)
     place = np.array([sx, sy]) + rotate_xy(g, place_yaw)
-    return PickPlaceCommand(
+    return PickPlaceCommand.between_yaws(
         (float(pick[0]), float(pick[1])), yaw, (float(place[0]), float(place[1])), place_yaw
     )
 

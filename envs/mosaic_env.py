@@ -72,14 +72,16 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
       ``control_dt``, then vacuum (> 0: on). One step = ``control_dt`` of simulated time.
     - ``cartesian``: Box(5): tool dx, dy, dz (x ``tool_speed * control_dt``) and dyaw
       (x ``tool_yaw_rate * control_dt``), tool kept pointing down (planners' IK), then vacuum.
-    - ``pick_place``: Box(6): pick x, y, yaw and place x, y, yaw. x, y map linearly onto the
-      input tile area (pick) and the mesh (place), see ``task_spec.codec``; yaw onto
-      [-pi, pi]. The pad goes to the pick point and then to the place point; the tile turns by
-      place yaw - pick yaw. One step = one full time-optimal cycle planned by the planners;
+    - ``pick_place``: Box(6): pick x, y, the tile's yaw, place x, y, the rotation. x, y map
+      linearly onto the input tile area (pick) and the mesh (place), see
+      ``task_spec.codec``; angles onto [-pi, pi]. The pad goes to the pick point and then to
+      the place point; the tile turns by the rotation (the tile's yaw only picks among
+      symmetric wrist solutions). One step = one full time-optimal cycle planned by the planners;
       with ``chain_cycles`` (default) a dynamic cycle ends at rest at the place contact and
       the next one leaves it vertically, blended into its move (as a real cell chains them).
-      ``env.unwrapped.pick_place_action(pick_xy, pick_yaw, place_xy, place_yaw)`` normalises
-      world poses [m, rad].
+      ``task_spec.codec.encode(PickPlaceCommand(...))`` normalises a world command;
+      ``pick_place_action(pick_xy, pick_yaw, place_xy, place_yaw)`` one given as two
+      absolute yaws [m, rad].
     - ``pick_place_discrete``: MultiDiscrete([tiles, slots, rotation_bins]): move tile i
       (ground-truth grasp point) into slot j turned by r * 2 pi / rotation_bins.
 
@@ -151,6 +153,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     ## Version History
     - v0: initial version; manufacturing noise re-drawn per reset (``tile_variants``).
+      ``pick_place``'s last action entry is the tile's rotation (it was the place yaw, which
+      the env differenced with the pick yaw); ``info["evaluation"]`` has ``failure``.
     """
 
     metadata = {  # noqa: RUF012 - Gymnasium convention
@@ -314,13 +318,13 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def pick_place_action(
         self, pick_xy: np.ndarray, pick_yaw: float, place_xy: np.ndarray, place_yaw: float
     ) -> np.ndarray:
-        """Normalised ``pick_place`` action from world poses [m, rad] (``task_spec.codec``).
+        """Normalised ``pick_place`` action from world poses with absolute yaws [m, rad].
 
         Raises:
             ActionError: A position outside its area.
         """
         p, q = np.asarray(pick_xy, float), np.asarray(place_xy, float)
-        cmd = PickPlaceCommand((p[0], p[1]), pick_yaw, (q[0], q[1]), place_yaw)
+        cmd = PickPlaceCommand.between_yaws((p[0], p[1]), pick_yaw, (q[0], q[1]), place_yaw)
         return self.codec.encode(cmd)
 
     def expert_action(self, tile: int, slot: int) -> np.ndarray:

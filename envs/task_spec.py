@@ -100,36 +100,43 @@ class Area:
 
 @dataclass(frozen=True)
 class PickPlaceCommand:
-    """One pick-and-place in world terms.
+    """One pick-and-place in world terms: where to seal, where to release, how much to turn.
 
-    The pad seals at ``pick_xy`` with the tool at yaw ``pick_yaw`` and releases at
-    ``place_xy`` at ``place_yaw``: the tile turns by ``place_yaw - pick_yaw``. Pass the tile's
-    yaw at the pick and the slot's yaw at the place; the executor differences them once.
+    The rotation travels as one relative angle from the matcher to the executor (nobody turns
+    it into absolute yaws and back). ``pick_yaw``, the tile's yaw on the belt (the agent's
+    estimate), only lets the planner choose among the tile's symmetric wrist solutions.
 
     Attributes:
         pick_xy: Pad point at the pick, shape (2,) [m].
-        pick_yaw: Yaw at the pick [rad].
+        pick_yaw: The tile's yaw at the pick [rad].
         place_xy: Pad point at the place, shape (2,) [m].
-        place_yaw: Yaw at the place [rad].
+        rotation: The tile's turn from pick to place, counter-clockwise seen from above [rad].
     """
 
     pick_xy: tuple[float, float]
     pick_yaw: float
     place_xy: tuple[float, float]
-    place_yaw: float
+    rotation: float
 
-    @property
-    def rotation(self) -> float:
-        """The tile's turn ``place_yaw - pick_yaw``, wrapped to [-pi, pi) [rad]."""
-        return float(wrap_angle(self.place_yaw - self.pick_yaw))
+    @staticmethod
+    def between_yaws(
+        pick_xy: tuple[float, float],
+        pick_yaw: float,
+        place_xy: tuple[float, float],
+        place_yaw: float,
+    ) -> PickPlaceCommand:
+        """The command turning a tile at ``pick_yaw`` to ``place_yaw`` (absolute yaws) [rad]."""
+        return PickPlaceCommand(
+            pick_xy, pick_yaw, place_xy, float(wrap_angle(place_yaw - pick_yaw))
+        )
 
 
 @dataclass(frozen=True, eq=False)
 class PickPlaceCodec:
     """Normalised ``pick_place`` action (6,) in [-1, 1] <-> `PickPlaceCommand`.
 
-    Layout: pick (x, y) over ``pick`` (linear), pick yaw / pi, place (x, y) over ``place``,
-    place yaw / pi.
+    Layout: pick (x, y) over ``pick`` (linear), the tile's yaw / pi, place (x, y) over
+    ``place``, the rotation / pi.
 
     Attributes:
         pick: The pick area (input tile area grown by the pick margin; up to the belt's end
@@ -153,7 +160,7 @@ class PickPlaceCodec:
         )
 
     def encode(self, cmd: PickPlaceCommand) -> np.ndarray:
-        """World command -> the normalised (6,) float32 action (yaws wrapped).
+        """World command -> the normalised (6,) float32 action (angles wrapped).
 
         Raises:
             ActionError: A position outside its area.
@@ -167,9 +174,9 @@ class PickPlaceCodec:
                 f"{self.pick.lo.tolist()}..{self.pick.hi.tolist()}, place "
                 f"{self.place.lo.tolist()}..{self.place.hi.tolist()} [m]"
             )
-        yaw_a = float(wrap_angle(cmd.pick_yaw)) / math.pi
-        yaw_b = float(wrap_angle(cmd.place_yaw)) / math.pi
-        out = np.array([p[0], p[1], yaw_a, q[0], q[1], yaw_b])
+        yaw = float(wrap_angle(cmd.pick_yaw)) / math.pi
+        turn = float(wrap_angle(cmd.rotation)) / math.pi
+        out = np.array([p[0], p[1], yaw, q[0], q[1], turn])
         return np.clip(out, -1, 1).astype(np.float32)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -142,7 +143,7 @@ def test_nothing_placeable_terminates() -> None:
         cmd = transfer_poses(env.cell, 0, 0)
         off = np.asarray(cmd.place_xy) + [env.config.position_tolerance * 3, 0.0]  # too far
         _, r, term, _, info = env.step(
-            env.pick_place_action(np.asarray(cmd.pick_xy), cmd.pick_yaw, off, cmd.place_yaw)
+            env.task_spec.codec.encode(dataclasses.replace(cmd, place_xy=tuple(off)))
         )
         ev = info["evaluation"]
         assert ev["misplaced"] == 1 and ev["correct"] == 0 and ev["placeable"] == 0

@@ -62,6 +62,8 @@ def test_codec_round_trip_and_area_check(env) -> None:
         np.testing.assert_allclose(back.place_xy, cmd.place_xy, atol=1e-6)
         assert back.rotation == pytest.approx(cmd.rotation, abs=1e-5)
     outside = PickPlaceCommand((5.0, 5.0), 0.0, tuple(codec.place.centre), 0.0)
+    turned = PickPlaceCommand.between_yaws((0.0, 0.0), 3.0, (0.0, 0.0), -3.0)
+    assert turned.rotation == pytest.approx(2 * np.pi - 6.0)  # wrapped once
     with pytest.raises(ActionError, match="outside the areas"):
         codec.encode(outside)
 
