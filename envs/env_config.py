@@ -15,12 +15,17 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from configs import ConfigError, from_dict, load_yaml, resolve_path
 from envs.cell_config import CellConfig, load_cell_config, section_names
 from envs.errors import CellError
 
+ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
+ObsMode = Literal["rgb", "state", "rgb+state"]
+RewardMode = Literal["sparse", "dense"]
+Execution = Literal["dynamic", "kinematic"]
+RenderMode = Literal["rgb_array", "human"]
 ACTION_MODES = ("joint", "cartesian", "pick_place", "pick_place_discrete")
 """Allowed ``action_mode`` values."""
 OBS_MODES = ("rgb", "state", "rgb+state")
@@ -123,12 +128,12 @@ class EnvConfig:
     max_slots: int = 0
     cell: CellConfig = field(default_factory=lambda: _env_cell("cell", ENV_CELL_CHANGES))
     planner: str = "planner"
-    action_mode: str = "pick_place"
-    obs_mode: str = "rgb"
+    action_mode: ActionMode = "pick_place"
+    obs_mode: ObsMode = "rgb"
     image_size: tuple[int, int] = (72, 96)
     depth: bool = False
-    reward_mode: str = "sparse"
-    execution: str = "dynamic"
+    reward_mode: RewardMode = "sparse"
+    execution: Execution = "dynamic"
     chain_cycles: bool = True
     color_randomization: float = 0.0
     light_randomization: float = 0.0
@@ -159,7 +164,7 @@ class EnvConfig:
     dense_reach: float = 0.5
     dense_grasp: float = 0.2
     dense_carry: float = 0.5
-    render_mode: str | None = None
+    render_mode: RenderMode | None = None
 
     def __post_init__(self) -> None:
         raw: Any = self.image_size
@@ -333,6 +338,11 @@ def load_env_config(config: EnvConfig | str | Path | None = "env", **overrides: 
 
 
 __all__ = [
+    "ActionMode",
+    "Execution",
+    "ObsMode",
+    "RenderMode",
+    "RewardMode",
     "ACTION_MODES",
     "EXECUTIONS",
     "FEEDS",

@@ -24,7 +24,7 @@ from planners.angles import wrap_angle
 
 if TYPE_CHECKING:
     from envs.cell import Cell
-    from envs.env_config import EnvConfig
+    from envs.env_config import ActionMode, EnvConfig
     from qshape.design import Design
     from qshape.figure import Figure
 
@@ -208,7 +208,7 @@ class TaskSpec:
     mesh_centre: np.ndarray
     belt_speed: float
     feed: FeedMode
-    action_mode: str
+    action_mode: ActionMode
     image_size: tuple[int, int]
     cameras: dict[str, CameraModel]
     codec: PickPlaceCodec | None
