@@ -110,9 +110,12 @@ class Evaluation:
 
     def as_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (``slot_filled`` as a list), as ``info["evaluation"]``."""
-        d = dataclasses.asdict(self)
+        d = {f.name: getattr(self, f.name) for f in _EVALUATION_FIELDS}  # flat: no deep copy
         d["slot_filled"] = list(self.slot_filled)
         return d
+
+
+_EVALUATION_FIELDS = dataclasses.fields(Evaluation)
 
 
 @dataclass(frozen=True, eq=False)
