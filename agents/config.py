@@ -25,7 +25,6 @@ class PerceptionConfig:
 
     Attributes:
         mm_per_m: Unit of the world figures handed to qshape, [mm/m] (designs are in mm).
-        tile_thickness: Tile thickness: the seen top face lies this far above the belt, [m].
         pad_clearance: A tile is picked at its centroid when the centroid lies at least this
             far inside the tile material; otherwise at its pole of inaccessibility, [m] (half
             the 23 mm pad of the paper: the pad seals on material all round).
@@ -48,7 +47,6 @@ class PerceptionConfig:
     """
 
     mm_per_m: float = 1000.0
-    tile_thickness: float = 0.005
     pad_clearance: float = 0.0115
     polylabel_tolerance: float = 1e-4
     color_balance: bool = True
@@ -66,8 +64,6 @@ class PerceptionConfig:
                 "perception: color_history and color_min_samples must be >= 1, got "
                 f"{self.color_history}, {self.color_min_samples}"
             )
-        if self.tile_thickness < 0:
-            raise AgentError("perception: tile_thickness must be >= 0 [m]")
 
 
 @dataclass(frozen=True)
@@ -162,8 +158,6 @@ class RunConfig:
         execute: Run the pick-and-place cycles (False: one picture, perception and plan only).
         calibrate: Use the calibrated cameras instead of the simulator's true ones.
         video_fps: Frames per second of the cell video (simulated time), [1/s].
-        video_size: Overview part of the video frame (height, width), [px]; the two camera
-            views stack beside it at half its height each.
         marker_radius_px: Radius of drawn relevant points at full camera resolution, [px].
         out_dir: Output folder (relative to the repository root unless absolute).
     """
@@ -171,14 +165,13 @@ class RunConfig:
     design: str = "paper_mixed"
     seed: int = 0
     belt_speed: float = 0.0
-    feed: str = "all"
+    feed: Literal["all", "stream", "batch"] = "all"
     distractor_rate: float = 0.0
     max_slots: int = 0
     max_steps_per_slot: int = 2
     execute: bool = True
     calibrate: bool = True
     video_fps: float = 10.0
-    video_size: tuple[int, int] = (480, 640)
     marker_radius_px: int = 3
     out_dir: str = "out"
 

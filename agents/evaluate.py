@@ -218,7 +218,7 @@ def _scripted(base: dict[str, Any], image_size: tuple[int, int], calibrate: bool
     def factory(env: gym.Env) -> Predict:
         from agents.scripted import ScriptedAgent  # noqa: PLC0415 - vision stack
 
-        agent = ScriptedAgent(env, calibrate=calibrate)
+        agent = ScriptedAgent.from_env(env, calibrate=calibrate)
 
         def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
             return agent.predict(obs, episode_start=np.array([start]))[0]

@@ -8,9 +8,8 @@ directly a world yaw (counter-clockwise seen from above). A figure's world centr
 centroid on the plane (equal to the ray-plane intersection of the pixel centroid for a camera
 looking straight down; both are reported).
 
-Slots: each design slot's `qshape.Figure` (mesh millimetres, y up, origin at the mesh's lower-left
-corner) and its world pose, given the mesh centre's world position (the mesh's axes are the
-world's, as in `envs.scene`).
+Slots: the env's world slots (``TaskSpec.slots``: each design slot's figure in millimetres and
+its world pose, converted once by the env) described with qshape.
 
 Only the camera model (what a calibrated cell knows) and the image are used: no simulator state.
 """
@@ -18,7 +17,6 @@ Only the camera model (what a calibrated cell knows) and the image are used: no 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
@@ -30,8 +28,10 @@ from shapely.geometry import Point, Polygon
 import qshape
 from agents.config import PerceptionConfig
 from agents.errors import PerceptionError
+from envs.task_spec import WorldSlot
 from qshape import Description, Figure
 from qshape.figure import Boundary
+from qshape.geometry import signed_area
 
 
 class CameraLike(Protocol):
@@ -202,7 +202,7 @@ def grasp_point(fig_mm: Figure, centre: np.ndarray, cfg: PerceptionConfig) -> np
 def perceive_tiles(
     image: np.ndarray,
     camera: CameraLike,
-    belt_top_z: float,
+    tile_top_z: float,
     *,
     cfg: PerceptionConfig | None = None,
     extract_params: qshape.ExtractParams | None = None,
@@ -213,7 +213,8 @@ def perceive_tiles(
     Args:
         image: RGB uint8, shape (h, w, 3).
         camera: Calibrated camera model of that image.
-        belt_top_z: Height of the belt surface [m]; tiles' tops are ``tile_thickness`` above.
+        tile_top_z: Height of the tiles' top faces [m] (``TaskSpec.pick.tile_top_z``): the
+            plane every relevant point is cast onto.
         cfg: Perception settings (bundled defaults when None).
         extract_params: qshape extraction parameters (bundled ``configs/vision.yaml`` when
             None).
@@ -229,8 +230,12 @@ def perceive_tiles(
         PerceptionError: Plane not in front of the camera.
     """
     cfg = cfg or PerceptionConfig()
-    z = belt_top_z + cfg.tile_thickness
+    z = float(tile_top_z)
     try:
+        health = qshape.image_health(image)
+        if health.verdict in ("dark", "overexposed"):
+            # A uniform picture is an empty belt; a black or blown-out one is a camera fault.
+            return Perception((), (), (f"image not usable: {health.message}",), z)
         res = qshape.extract_detailed(image, extract_params)
     except qshape.ImageError as exc:
         arr = np.asarray(image)
@@ -369,8 +374,7 @@ def balance_colors(
 
 def _pixel_area_to_plane(camera: CameraLike, outline_px: np.ndarray, z: float) -> float:
     pts = unproject(camera, outline_px, z)[:, :2]
-    x, y = pts[:, 0], pts[:, 1]
-    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
+    return abs(signed_area(pts))
 
 
 @dataclass(frozen=True, eq=False)
@@ -397,41 +401,30 @@ class SlotTarget:
 
 
 def slot_targets(
-    design: qshape.Design,
-    mesh_centre_xy: Sequence[float] | np.ndarray,
-    tolerances: qshape.Tolerances | None = None,
-    mm_per_m: float = PerceptionConfig.mm_per_m,
+    slots: Sequence[WorldSlot], tolerances: qshape.Tolerances | None = None
 ) -> tuple[SlotTarget, ...]:
-    """Describe a design's slots and place them in the world.
+    """Describe the env's world slots (``TaskSpec.slots``) for matching.
 
     Args:
-        design: The design (millimetres, mesh origin at its lower-left corner, y up).
-        mesh_centre_xy: World x, y of the mesh centre, shape (2,) [m]; the mesh axes are the
-            world's (as the cell lays it out).
+        slots: The slots in the world (figures in design millimetres).
         tolerances: qshape tolerances (bundled when None).
-        mm_per_m: Design units per metre [mm/m].
 
     Returns:
-        One `SlotTarget` per design slot, in the design's order.
+        One `SlotTarget` per slot, in the given order.
     """
-    c = np.asarray(mesh_centre_xy, dtype=float)
-    if c.shape != (2,) or not np.all(np.isfinite(c)):
-        raise PerceptionError(f"mesh_centre_xy must be 2 finite numbers [m], got {c!r}")
-    w, h = design.mesh_size
-    figs = [s.figure() for s in design.slots]
-    descs = qshape.describe_many(figs, tolerances)
-    out = []
-    for k, (slot, fig, d) in enumerate(zip(design.slots, figs, descs, strict=True)):
-        pose = np.array(
-            [
-                c[0] + (slot.x - w / 2) / mm_per_m,
-                c[1] + (slot.y - h / 2) / mm_per_m,
-                math.radians(slot.angle),
-            ]
+    descs = qshape.describe_many([s.figure for s in slots], tolerances) if slots else []
+    return tuple(
+        SlotTarget(
+            s.index,
+            s.name,
+            s.figure,
+            d,
+            np.array([s.xy[0], s.xy[1], s.yaw]),
+            s.symmetry,
+            s.color,
         )
-        rgb = (float(slot.color[0]), float(slot.color[1]), float(slot.color[2]))
-        out.append(SlotTarget(k, slot.name, fig, d, pose, int(slot.symmetry), rgb))
-    return tuple(out)
+        for s, d in zip(slots, descs, strict=True)
+    )
 
 
 __all__ = [

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -28,13 +29,14 @@ from scipy.spatial import cKDTree
 import qshape
 from agents.config import PlacementConfig
 from agents.perception import PerceivedTile, SlotTarget
+from envs.task_spec import PickPlaceCommand
+from planners.angles import rotate_xy, wrap_angle
 from qshape.assign import feasible_pairs
 
 
 def wrap(angle: float) -> float:
-    """Angle wrapped to (-pi, pi] [rad]."""
-    w = math.remainder(angle, 2.0 * math.pi)
-    return math.pi if w == -math.pi else w
+    """Angle wrapped to [-pi, pi) [rad] (`planners.angles.wrap_angle` for one float)."""
+    return float(wrap_angle(angle))
 
 
 @dataclass(frozen=True)
@@ -68,6 +70,15 @@ class PickPlace:
     symmetry: int
     score: float
 
+    @property
+    def command(self) -> PickPlaceCommand:
+        """The world command for the env's codec: pad points, the tile's yaw, the rotation."""
+        return PickPlaceCommand(self.grasp_pick, self.pick[2], self.grasp_place, self.rotation)
+
+
+UnplacedReason = Literal["shape_absent", "color_absent", "slots_taken"]
+"""Why a perceived tile is not placed (`REASONS` explains each)."""
+
 
 @dataclass(frozen=True)
 class Unplaced:
@@ -80,11 +91,11 @@ class Unplaced:
     """
 
     tile: int
-    reason: str
+    reason: UnplacedReason
     detail: str
 
 
-REASONS = {
+REASONS: dict[UnplacedReason, str] = {
     "shape_absent": "no design slot has this shape",
     "color_absent": "slots of this shape exist, but none of this colour",
     "slots_taken": "every matching slot is taken by another tile",
@@ -107,13 +118,8 @@ class PlacementPlan:
     commands: tuple[PickPlace, ...]
     unplaced: tuple[Unplaced, ...]
     open_slots: tuple[int, ...]
-    method: str
+    method: Literal["optimal", "greedy"]
     use_color: bool
-
-
-def _rot(theta: float) -> np.ndarray:
-    c, s = math.cos(theta), math.sin(theta)
-    return np.array([[c, -s], [s, c]])
 
 
 def equivalent_yaws(slot_yaw: float, symmetry: int, continuous_steps: int) -> tuple[float, ...]:
@@ -136,7 +142,7 @@ def outline_residual(tile: qshape.Figure, slot: qshape.Figure, rotation: float) 
         slot: Slot figure in the same units.
         rotation: Rotation of the tile about its centroid [rad], CCW.
     """
-    a = (np.asarray(tile.outer.dense()) - tile.centroid) @ _rot(rotation).T
+    a = rotate_xy(np.asarray(tile.outer.dense()) - tile.centroid, rotation)
     b = np.asarray(slot.outer.dense()) - slot.centroid
     return float(np.mean(cKDTree(b).query(a)[0]))
 
@@ -167,7 +173,7 @@ def refine_rotation(
     tree = cKDTree(np.asarray(slot.outer.dense()) - slot.centroid)
 
     def cost(r: float) -> float:
-        return float(np.mean(tree.query(a @ _rot(r).T)[0]))
+        return float(np.mean(tree.query(rotate_xy(a, r))[0]))
 
     res = minimize_scalar(
         cost,
@@ -223,7 +229,7 @@ def plan_placements(
         )
         yaw_place = float(s.pose[2])
         yaw_pick = wrap(yaw_place - rot)
-        g_off = _rot(rot) @ (t.grasp - t.centre)
+        g_off = rotate_xy(t.grasp - t.centre, rot)
         g_place = s.pose[:2] + g_off
         commands.append(
             PickPlace(
@@ -253,6 +259,7 @@ def plan_placements(
             else shape_ok
         )
         for j, k in enumerate(left):
+            reason: UnplacedReason
             if j not in shape_ok:
                 reason = "shape_absent"
             elif j not in color_ok:
@@ -266,7 +273,7 @@ def plan_placements(
 
 
 def _tol(tolerances: qshape.Tolerances | None) -> qshape.Tolerances:
-    from qshape.description import default_tolerances  # noqa: PLC0415
+    from qshape.tolerances import default_tolerances  # noqa: PLC0415
 
     return default_tolerances() if tolerances is None else tolerances
 
@@ -276,6 +283,7 @@ __all__ = [
     "PickPlace",
     "PlacementPlan",
     "Unplaced",
+    "UnplacedReason",
     "equivalent_yaws",
     "outline_residual",
     "plan_placements",

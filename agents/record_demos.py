@@ -148,7 +148,7 @@ def record(
             gym.make(ENV_ID, max_episode_steps=STEPS_PER_SLOT * slots, **kwargs)
         )
         try:
-            agent = ScriptedAgent(env, calibrate=calibrate)
+            agent = ScriptedAgent.from_env(env, calibrate=calibrate)
             seeds = tuple(range(seed, seed + episodes))
             successes = steps = 0
             for s in seeds:

@@ -1,21 +1,21 @@
 """The scripted cell as a policy of `MosaicAssembly-v0` (``pick_place`` action mode).
 
-The paper's loop through the env's public API only: the design named in the env's config is
-described once; each picture (the ``input_camera`` observation) is perceived
-(`agents.perception`) and assigned to the open slots (`agents.placement`); the resulting
-commands are returned one per step as normalised ``pick_place`` actions
-(``env.unwrapped.pick_place_action``), and a new picture is taken once they are used up.
-Tiles matching no open slot are never placed; a tile still on the belt after its command
-(a failed pick) reopens its slot. The input camera is calibrated from rendered
-checkerboard images (`agents.calibration`) at the observation's image size, or the env's
-camera model is used (``calibrate=False``).
+The paper's loop through the env's public API only. The agent is built from the env's task
+description (`envs.task_spec.TaskSpec`, read once by `ScriptedAgent.from_env`): the design's
+slots in the world are described once; each picture (the ``input_camera`` observation) is
+perceived on the tiles' top plane (`agents.perception`) and assigned to the open slots
+(`agents.placement`); the resulting commands are encoded one per step by the spec's
+``pick_place`` codec, and a new picture is taken once they are used up. Tiles matching no open
+slot are never placed; a tile still on the belt after its command (a failed pick) reopens its
+slot. The input camera is calibrated from rendered checkerboard images (`agents.calibration`)
+at the observation's image size, or the spec's camera model is used (``calibrate=False``).
 
 `ScriptedAgent.predict` has stable-baselines3's signature, so ``evaluate_policy`` can run it
 like a learned policy (one env; a vectorised observation with a leading batch of 1 is
 accepted)::
 
     env = gym.make("envs:MosaicAssembly-v0", action_mode="pick_place", image_size=(492, 656))
-    agent = ScriptedAgent(env)
+    agent = ScriptedAgent.from_env(env)
     obs, _ = env.reset(seed=0)
     action, _ = agent.predict(obs)
 """
@@ -25,6 +25,7 @@ from __future__ import annotations
 from collections import deque
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from agents.calibration import calibrate_cell_camera
@@ -39,9 +40,9 @@ from agents.perception import (
     slot_targets,
 )
 from agents.placement import PickPlace, PlacementPlan, Unplaced, plan_placements
+from envs.task_spec import PickPlaceCodec, PickPlaceCommand, TaskSpec
 from qshape.assign import feasible_pairs
-from qshape.description import default_tolerances
-from qshape.design import Design
+from qshape.tolerances import default_tolerances
 
 IMAGE_DIMS = 3
 """An unbatched RGB observation has (height, width, 3)."""
@@ -55,58 +56,49 @@ class ScriptedAgent:
     """Vision + qualitative matching + planner cycles, as a policy.
 
     Args:
-        env: A `MosaicAssembly-v0` env (wrapped or not) in ``pick_place`` action mode with an
-            ``input_camera`` image observation (full resolution recommended: 492 x 656).
+        spec: The env's task description (``pick_place`` action mode).
         config: Agent settings (bundled ``configs/agents.yaml`` when None).
         calibrate: Calibrate the input camera from rendered checkerboard images (True) or use
-            the env's camera model.
+            the spec's camera model.
         replan_every_step: Take a new picture before every command (tiles move on a moving
             belt, new ones arrive with a stream feed) instead of once per batch of commands
             (the paper's static loop). None: every step when the belt moves or tiles stream.
 
     Raises:
-        AgentError: Wrong action mode or no input-camera observation.
+        AgentError: Wrong action mode.
     """
 
     def __init__(
         self,
-        env: Any,
+        spec: TaskSpec,
         config: AgentsConfig | None = None,
         calibrate: bool = True,
         replan_every_step: bool | None = None,
     ) -> None:
-        u = env.unwrapped
         self.cfg = config or load_agents_config()
-        ecfg = u.config
-        if ecfg.action_mode != "pick_place":
+        if spec.codec is None:
             raise AgentError(
-                f"the scripted agent needs action_mode 'pick_place', got {ecfg.action_mode!r}"
+                f"the scripted agent needs action_mode 'pick_place', got {spec.action_mode!r}"
             )
-        if "input_camera" not in u.observation_space.spaces:
-            raise AgentError("the scripted agent needs the input_camera observation (obs_mode rgb)")
-        self._env = u
-        self.belt_speed = float(ecfg.belt_speed)
+        self.spec = spec
+        self.codec: PickPlaceCodec = spec.codec
+        self.belt_speed = spec.belt_speed
         self.replan_every_step = (
-            bool(ecfg.belt_speed > 0 or ecfg.feed != "all")
+            bool(spec.belt_speed > 0 or spec.feed != "all")
             if replan_every_step is None
             else replan_every_step
         )
-        height, width = ecfg.image_size
         self.camera: CameraLike
         self.calibration = None
         if calibrate:
             self.calibration = calibrate_cell_camera(
-                u.cell.cfg, "input_camera", self.cfg.calibration, (height, width)
+                spec.cell, "input_camera", self.cfg.calibration, spec.image_size
             )
             self.camera = self.calibration.camera
         else:
-            self.camera = u.camera_model("input", height, width)
-        design = Design.load(ecfg.design)
-        bounds = u.bounds
-        mesh_centre = (np.asarray(bounds.place_lo) + np.asarray(bounds.place_hi)) / 2
-        slots = slot_targets(design, mesh_centre, mm_per_m=self.cfg.perception.mm_per_m)
-        self.slots = slots[: ecfg.max_slots] if ecfg.max_slots else slots
-        self.belt_top = float(bounds.pick_z) - self.cfg.perception.tile_thickness
+            self.camera = spec.camera("input_camera")
+        self.slots = slot_targets(spec.slots)
+        self.tile_top = spec.pick.tile_top_z
         self.palette = np.array([s.color for s in self.slots])
         self.queue: deque[PickPlace] = deque()
         self.filled: set[int] = set()
@@ -119,6 +111,28 @@ class ScriptedAgent:
         self.colors: deque[tuple[float, float, float]] = deque(
             maxlen=self.cfg.perception.color_history
         )
+
+    @classmethod
+    def from_env(
+        cls,
+        env: gym.Env[Any, Any],
+        config: AgentsConfig | None = None,
+        calibrate: bool = True,
+        replan_every_step: bool | None = None,
+    ) -> ScriptedAgent:
+        """The agent of a `MosaicAssembly-v0` env (wrapped or not), from its task description.
+
+        The one place an agent reads an env beyond its spaces: ``task_spec`` through
+        Gymnasium's ``get_wrapper_attr``.
+
+        Raises:
+            AgentError: Not a ``pick_place`` env with an ``input_camera`` observation.
+        """
+        obs_space = env.observation_space
+        if not isinstance(obs_space, gym.spaces.Dict) or "input_camera" not in obs_space.spaces:
+            raise AgentError("the scripted agent needs the input_camera observation (obs_mode rgb)")
+        spec: TaskSpec = env.get_wrapper_attr("task_spec")
+        return cls(spec, config, calibrate, replan_every_step)
 
     def reset(self) -> None:
         """Forget the episode (open slots, queued commands, measured colours)."""
@@ -140,7 +154,7 @@ class ScriptedAgent:
         commanded of those slots is reopened and the picture planned again.
         """
         pcfg = self.cfg.perception
-        per = perceive_tiles(image, self.camera, self.belt_top, cfg=pcfg)
+        per = perceive_tiles(image, self.camera, self.tile_top, cfg=pcfg)
         if pcfg.color_balance:
             self.colors.extend(t.color for t in per.tiles)
             many = len(self.colors) >= pcfg.color_min_samples
@@ -209,24 +223,22 @@ class ScriptedAgent:
         away from the upstream edge where streamed tiles appear; and it "places" at the mesh
         point farthest from every slot. Nothing seals, so nothing moves: a harmless wait.
         """
-        u = self._env
         if cmd is None:
             pick, place = self._idle_points()
-            return u.pick_place_action(pick, 0.0, place, 0.0)
-        return u.pick_place_action(
-            np.asarray(cmd.grasp_pick), cmd.pick[2], np.asarray(cmd.grasp_place), cmd.place[2]
-        )
+            idle = PickPlaceCommand((pick[0], pick[1]), 0.0, (place[0], place[1]), 0.0)
+            return self.codec.encode(idle)
+        return self.codec.encode(cmd.command)
 
     def _idle_points(self) -> tuple[np.ndarray, np.ndarray]:
-        b = self._env.bounds
+        pick_area, place_area = self.codec.pick, self.codec.place
         nx, ny = IDLE_GRID
 
         def grid(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
             gx, gy = np.meshgrid(np.linspace(lo[0], hi[0], nx), np.linspace(lo[1], hi[1], ny))
             return np.column_stack([gx.ravel(), gy.ravel()])
 
-        cand = grid(np.asarray(b.pick_lo, float), np.asarray(b.pick_hi, float))
-        clear = cand[:, 0] - float(b.pick_lo[0])  # streamed tiles enter at the upstream edge
+        cand = grid(pick_area.lo, pick_area.hi)
+        clear = cand[:, 0] - float(pick_area.lo[0])  # streamed tiles enter at the upstream edge
         per = self.last_perception
         regions = [(t.centre, t.area) for t in per.tiles] if per else []
         regions += [(r.centre, r.area) for r in per.partial] if per else []
@@ -238,7 +250,7 @@ class ScriptedAgent:
             gap = np.linalg.norm(d - s[:, None] * travel, axis=1) - np.sqrt(area / np.pi)
             clear = np.minimum(clear, gap)
         pick = cand[int(np.argmax(clear))]
-        spots = grid(np.asarray(b.place_lo, float), np.asarray(b.place_hi, float))
+        spots = grid(place_area.lo, place_area.hi)
         slots = np.array([s.pose[:2] for s in self.slots]).reshape(-1, 2)
         far = np.min(np.linalg.norm(spots[:, None] - slots[None], axis=2), axis=1)
         return pick, spots[int(np.argmax(far))]

@@ -9,9 +9,11 @@ the calibrated camera; one ``pick_place`` step per tile; a new picture; until th
 finished or nothing placeable remains). The cameras are calibrated from rendered checkerboard
 images first (``agents.calibration``).
 
-Decisions use only the observation images, the calibrated camera and the env's public layout
-facts (``env.unwrapped.bounds``); the env's ``evaluate()`` scores the run and the cell's ground
-truth is read only for the recognition figures of the report. Writes, under ``out/``:
+Decisions use only the observation images, the calibrated camera and the env's task
+description (``task_spec``: slots in the world, areas, the action codec); the env's evaluation
+scores the run, and its privileged ``ground_truth()`` is read only for the recognition figures
+of the report. Every env access goes through Gymnasium's public API (``get_wrapper_attr``); the
+arm goes home for the final picture with a planned move (``move_home``). Writes, under ``out/``:
 ``report.json`` and ``report.txt``; ``cell.mp4``: the cell overview beside the two camera
 views, the input view with the recognised relevant points (corners red, curve points cyan),
 centres and target slots of the latest picture, the output view with the design's slots
@@ -30,7 +32,7 @@ import shutil
 import subprocess
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -39,19 +41,21 @@ import gymnasium as gym
 import numpy as np
 
 from agents.calibration import calibrate_cell_camera
-from agents.config import AgentsConfig, RunConfig, load_agents_config
+from agents.config import AgentsConfig, PlacementConfig, RunConfig, load_agents_config
 from agents.errors import AgentError
 from agents.perception import CameraLike, Perception, SlotTarget, project
-from agents.placement import PlacementPlan
+from agents.placement import PlacementPlan, Unplaced
 from agents.scripted import ScriptedAgent
 from configs import ConfigError
 from envs.errors import CellError
+from envs.task import GroundTruth
+from envs.task_spec import FeedMode, TaskSpec
+from planners.angles import yaw_error
 from qshape import QShapeError
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV_ID = "envs:MosaicAssembly-v0"
 """Gymnasium id of the environment."""
-CAMERA_NAMES = ("input_camera", "output_camera")
 
 # Drawing colours (BGR for OpenCV).
 _CORNER = (0, 0, 255)
@@ -61,6 +65,107 @@ _CENTRE = (0, 255, 0)
 _TARGET = (255, 0, 255)
 _REJECT = (0, 165, 255)
 _FILLED = (0, 200, 0)
+
+
+# ------------------------------------------------------------------------------ report
+@dataclass(frozen=True)
+class RecognitionRow:
+    """One command of the first picture, scored against the ground truth (report only).
+
+    Attributes:
+        slot: Target slot name.
+        tile: Index of the real tile nearest to the pick point.
+        class_ok: That tile belongs in that slot (shape and colour class, not a distractor).
+        pick_error_mm: Pick point to that tile's centroid [mm].
+        yaw_error_deg: Place yaw error modulo the tile's symmetry [deg].
+    """
+
+    slot: str
+    tile: int
+    class_ok: bool
+    pick_error_mm: float
+    yaw_error_deg: float
+
+
+@dataclass(frozen=True)
+class RunReport:
+    """What one run of the main job did (``report.json`` is `as_dict`).
+
+    Attributes:
+        design: Design name or path.
+        seed: Episode seed.
+        tiles_total: Slots of the design (as run).
+        correct: Slots filled correctly.
+        misplaced: Real tiles on the mesh filling no slot.
+        dropped: Tiles the pad lost in transit.
+        lost: Tiles lost off the input belt.
+        distractors_placed: Distractors put on the mesh.
+        success: Every slot filled correctly.
+        tiles_per_min: Correct tiles per simulated minute.
+        sim_s: Simulated time of the episode [s].
+        wall_s: Wall-clock time of the run [s] (calibration, video and writing included).
+        executed: Commands were executed (False: vision and planning only).
+        belt_speed: Input belt speed [m/s].
+        feed: Tile feed.
+        steps: Env steps taken.
+        failed_actions: Steps whose action failed.
+        failures: Slot name and reason of each failed action.
+        pictures: Input-camera pictures perceived.
+        position_error_mm_max: Largest placement error of the tiles on the mesh [mm].
+        yaw_error_deg_max: Largest placement yaw error [deg].
+        recognition: The first picture's commands, scored.
+        recognised_tiles: Commands of the first picture.
+        recognised_correct_class: Of those, tiles sent to a slot of their class.
+        recognition_accuracy: ``recognised_correct_class / tiles_total``.
+        pick_error_max_mm: Largest pick error of the first picture [mm] (NaN: none).
+        yaw_error_max_deg: Largest place-yaw error of the first picture [deg] (NaN: none).
+        unplaced: Tiles the agent left out, and why.
+        unrecognised: Regions of the last picture not made into tiles.
+        open_slots: Slots not filled correctly at the end.
+        placement: The placement settings used.
+        video: Path of the video, if written.
+        calibration_input_camera: Calibration figures of the input camera (None: not run).
+        calibration_output_camera: Calibration figures of the output camera.
+    """
+
+    design: str
+    seed: int
+    tiles_total: int
+    correct: int
+    misplaced: int
+    dropped: int
+    lost: int
+    distractors_placed: int
+    success: bool
+    tiles_per_min: float
+    sim_s: float
+    wall_s: float
+    executed: bool
+    belt_speed: float
+    feed: FeedMode
+    steps: int
+    failed_actions: int
+    failures: tuple[str, ...]
+    pictures: int
+    position_error_mm_max: float | None
+    yaw_error_deg_max: float | None
+    recognition: tuple[RecognitionRow, ...]
+    recognised_tiles: int
+    recognised_correct_class: int
+    recognition_accuracy: float
+    pick_error_max_mm: float
+    yaw_error_max_deg: float
+    unplaced: tuple[Unplaced, ...]
+    unrecognised: tuple[str, ...]
+    open_slots: tuple[str, ...]
+    placement: PlacementConfig
+    video: str | None
+    calibration_input_camera: dict[str, float | int] | None = None
+    calibration_output_camera: dict[str, float | int] | None = None
+
+    def as_dict(self) -> dict[str, object]:
+        """JSON-ready dict (tuples as lists, nested values as dicts)."""
+        return asdict(self)
 
 
 # ------------------------------------------------------------------------------ drawing
@@ -188,17 +293,20 @@ def _draw_figure(
 class CellVideo:
     """Frames of the cell overview beside the annotated camera views, written as an MP4.
 
+    The env renders each frame (``render_mode="rgb_array"``: the overview beside the input and
+    output camera panels); the camera panels are annotated here.
+
     Args:
-        env: The (unwrapped) env.
+        env: The env (wrapped or not), rendering ``rgb_array`` frames.
         agent: The scripted agent (its latest picture, plan and command are drawn).
         output_camera: Output camera model at full resolution (calibrated or true).
-        cfg: Frame size, rate and markers.
+        cfg: Frame rate and markers.
         mm_per_m: Design units per metre.
     """
 
     def __init__(
         self,
-        env: Any,
+        env: gym.Env[Any, Any],
         agent: ScriptedAgent,
         output_camera: CameraLike,
         cfg: RunConfig,
@@ -209,19 +317,21 @@ class CellVideo:
         self.output_camera = output_camera
         self.cfg = cfg
         self.mm_per_m = mm_per_m
-        h, w = cfg.video_size
-        cam = env.cell.cfg.input_camera
+        cell = agent.spec.cell
+        h = cell.render.overview_size[0]
+        cam = cell.input_camera
         self.panel = (h // 2, round(h // 2 * cam.width / cam.height))
         self.scale = self.panel[0] / cam.height
+        self.surface_z = agent.spec.place.surface_z
         self.frames: list[np.ndarray] = []
 
     def capture(self) -> None:
         """Render one frame of the current state."""
-        cell, agent, (ph, pw) = self.env.cell, self.agent, self.panel
-        h, w = self.cfg.video_size
-        overview = cell.render("overview", h, w)
+        agent, (ph, pw) = self.agent, self.panel
+        frame = np.asarray(self.env.render())
+        overview, right = frame[:, :-pw], frame[:, -pw:]
         cmd = agent.last_command
-        raw_in = cell.render("input_camera", ph, pw)
+        raw_in, raw_out = right[:ph], right[ph : 2 * ph]
         if agent.last_perception is not None:
             panel_in = draw_perception(
                 raw_in,
@@ -235,19 +345,19 @@ class CellVideo:
             panel_in = cv2.cvtColor(raw_in, cv2.COLOR_RGB2BGR)
         filled = set(agent.filled) - ({cmd.slot} if cmd else set())
         panel_out = draw_slots(
-            cell.render("output_camera", ph, pw),
+            raw_out,
             self.output_camera,
             agent.slots,
-            cell.geometry.mesh_top,
+            self.surface_z,
             self.cfg,
             filled=filled,
             target=cmd.slot if cmd else None,
             scale=self.scale,
             mm_per_m=self.mm_per_m,
         )
-        right = np.concatenate([panel_in, panel_out], axis=0)
-        frame = np.concatenate([cv2.cvtColor(overview, cv2.COLOR_RGB2BGR), right], axis=1)
-        self.frames.append(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB))
+        panels = np.concatenate([panel_in, panel_out], axis=0)
+        out = np.concatenate([cv2.cvtColor(overview, cv2.COLOR_RGB2BGR), panels], axis=1)
+        self.frames.append(cv2.cvtColor(out, cv2.COLOR_BGR2RGB))
 
     def write(self, path: Path) -> Path | None:
         """Encode the frames (ffmpeg H.264, else OpenCV mp4v); returns the file or None."""
@@ -275,8 +385,8 @@ class CellVideo:
 
 
 # ------------------------------------------------------------------------------ the run
-def make_env(rc: RunConfig) -> Any:
-    """The env of the main job: ``pick_place`` with full-resolution camera images.
+def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
+    """The env of the main job: ``pick_place``, full-resolution images, ``rgb_array`` frames.
 
     Raises:
         QShapeError: The design does not load or validate.
@@ -296,10 +406,10 @@ def make_env(rc: RunConfig) -> Any:
         "distractor_rate": rc.distractor_rate,
         "max_slots": rc.max_slots,
     }
-    return gym.make(ENV_ID, max_episode_steps=None, **over)
+    return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
 
 
-def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]:
+def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
     """Run the scripted cell for one episode and write the report, images and video.
 
     Raises:
@@ -313,35 +423,36 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
     t_wall = time.perf_counter()
     out_dir.mkdir(parents=True, exist_ok=True)
     env = make_env(rc)
-    u = env.unwrapped
-    bar = tqdm(total=len(u.cell.slots), desc="tiles placed", unit="tile", disable=quiet)
+    spec: TaskSpec = env.get_wrapper_attr("task_spec")
+    bar = tqdm(total=len(spec.slots), desc="tiles placed", unit="tile", disable=quiet)
     try:
         bar.set_postfix_str("calibrating the cameras")
-        agent = ScriptedAgent(env, cfg, calibrate=rc.calibrate)
-        report: dict[str, Any] = {"design": u.config.design, "seed": rc.seed}
+        agent = ScriptedAgent.from_env(env, cfg, calibrate=rc.calibrate)
+        cal_in = cal_out = None
         if agent.calibration is not None:
-            report["calibration_input_camera"] = agent.calibration.summary()
-            out_cal = calibrate_cell_camera(u.cell.cfg, "output_camera", cfg.calibration)
+            cal_in = agent.calibration.summary()
+            out_cal = calibrate_cell_camera(spec.cell, "output_camera", cfg.calibration)
             out_cam: CameraLike = out_cal.camera
-            report["calibration_output_camera"] = out_cal.summary()
+            cal_out = out_cal.summary()
         else:
-            out_cam = u.camera_model("output", *_full_size(u))
-        video = CellVideo(u, agent, out_cam, rc, cfg.perception.mm_per_m) if rc.execute else None
+            out_cam = spec.camera("output_camera")
+        video = CellVideo(env, agent, out_cam, rc, cfg.perception.mm_per_m) if rc.execute else None
         obs, info = env.reset(seed=rc.seed)
         output_before = obs["output_camera"]
         if video is not None:
-            u.add_frame_listener(video.capture, rc.video_fps)
+            env.get_wrapper_attr("add_frame_listener")(video.capture, rc.video_fps)
             video.capture()
         bar.set_postfix_str("picking and placing")
         first: tuple[np.ndarray, Perception, PlacementPlan] | None = None
         steps = failed = 0
         failures: list[str] = []
-        limit = rc.max_steps_per_slot * max(1, len(u.cell.slots))
+        rec: list[RecognitionRow] = []
+        limit = rc.max_steps_per_slot * max(1, len(spec.slots))
         while steps < limit:
             action, _ = agent.predict(obs)
             if first is None and agent.last_perception is not None and agent.last_plan:
                 first = (obs["input_camera"], agent.last_perception, agent.last_plan)
-                report["recognition"] = recognition(u, agent)
+                rec = recognition(env.get_wrapper_attr("ground_truth")(), agent)
             if agent.last_command is None or not rc.execute:
                 break  # nothing placeable is seen (or vision only)
             obs, _, terminated, truncated, info = env.step(action)
@@ -361,61 +472,62 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
                 output_before,
                 out_cam,
                 agent.slots,
-                u.cell.geometry.mesh_top,
+                spec.place.surface_z,
                 rc,
                 recognise=True,
                 mm_per_m=cfg.perception.mm_per_m,
             ),
         )
-        u.cell.set_qpos(np.asarray(u.cell.cfg.robot.home))  # out of the view, for the picture
+        home_obs = env.get_wrapper_attr("move_home")()  # the arm out of the view
         cv2.imwrite(
             str(out_dir / "output_camera_final.png"),
-            cv2.cvtColor(u.cell.render("output_camera"), cv2.COLOR_RGB2BGR),
+            cv2.cvtColor(home_obs["output_camera"], cv2.COLOR_RGB2BGR),
         )
         video_path = video.write(out_dir / "cell.mp4") if video is not None else None
         n = int(evaluation["slots"])
-        rec = report.get("recognition", [])
-        rec_ok = sum(1 for r in rec if r["class_ok"])
-        report.update(
-            {
-                "tiles_total": n,
-                "correct": int(evaluation["correct"]),
-                "misplaced": int(evaluation["misplaced"]),
-                "dropped": int(evaluation["dropped"]),
-                "lost": int(evaluation["lost"]),
-                "distractors_placed": int(evaluation["distractors_placed"]),
-                "success": bool(evaluation["success"]),
-                "tiles_per_min": float(info["tiles_per_min"]),
-                "sim_s": float(info["sim_time"]),
-                "wall_s": time.perf_counter() - t_wall,
-                "executed": rc.execute,
-                "belt_speed": rc.belt_speed,
-                "feed": rc.feed,
-                "steps": steps,
-                "failed_actions": failed,
-                "failures": failures,
-                "pictures": agent.pictures,
-                "position_error_mm_max": evaluation["position_error_mm_max"],
-                "yaw_error_deg_max": evaluation["yaw_error_deg_max"],
-                "recognised_tiles": len(rec),
-                "recognised_correct_class": rec_ok,
-                "recognition_accuracy": rec_ok / n if n else 0.0,
-                "pick_error_max_mm": max((r["pick_error_mm"] for r in rec), default=math.nan),
-                "yaw_error_max_deg": max((r["yaw_error_deg"] for r in rec), default=math.nan),
-                "unplaced": [asdict(x) for x in agent.unplaced],
-                "unrecognised": list(agent.last_perception.unrecognised)
-                if agent.last_perception
-                else [],
-                "open_slots": [
-                    s.name
-                    for s, ok in zip(agent.slots, evaluation["slot_filled"], strict=True)
-                    if not ok
-                ],  # fmt: skip
-                "placement": asdict(cfg.placement),
-                "video": str(video_path) if video_path else None,
-            }
+        rec_ok = sum(1 for r in rec if r.class_ok)
+        last = agent.last_perception
+        report = RunReport(
+            design=spec.design,
+            seed=rc.seed,
+            tiles_total=n,
+            correct=int(evaluation["correct"]),
+            misplaced=int(evaluation["misplaced"]),
+            dropped=int(evaluation["dropped"]),
+            lost=int(evaluation["lost"]),
+            distractors_placed=int(evaluation["distractors_placed"]),
+            success=bool(evaluation["success"]),
+            tiles_per_min=float(info["tiles_per_min"]),
+            sim_s=float(info["sim_time"]),
+            wall_s=time.perf_counter() - t_wall,
+            executed=rc.execute,
+            belt_speed=rc.belt_speed,
+            feed=rc.feed,
+            steps=steps,
+            failed_actions=failed,
+            failures=tuple(failures),
+            pictures=agent.pictures,
+            position_error_mm_max=evaluation["position_error_mm_max"],
+            yaw_error_deg_max=evaluation["yaw_error_deg_max"],
+            recognition=tuple(rec),
+            recognised_tiles=len(rec),
+            recognised_correct_class=rec_ok,
+            recognition_accuracy=rec_ok / n if n else 0.0,
+            pick_error_max_mm=max((r.pick_error_mm for r in rec), default=math.nan),
+            yaw_error_max_deg=max((r.yaw_error_deg for r in rec), default=math.nan),
+            unplaced=agent.unplaced,
+            unrecognised=last.unrecognised if last else (),
+            open_slots=tuple(
+                s.name
+                for s, ok in zip(agent.slots, evaluation["slot_filled"], strict=True)
+                if not ok
+            ),
+            placement=cfg.placement,
+            video=str(video_path) if video_path else None,
+            calibration_input_camera=cal_in,
+            calibration_output_camera=cal_out,
         )
-        (out_dir / "report.json").write_text(json.dumps(report, indent=2, default=float))
+        (out_dir / "report.json").write_text(json.dumps(report.as_dict(), indent=2, default=float))
         (out_dir / "report.txt").write_text(report_text(report))
         return report
     finally:
@@ -423,54 +535,40 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> dict[str, Any]
         env.close()
 
 
-def _full_size(u: Any) -> tuple[int, int]:
-    cam = u.cell.cfg.output_camera
-    return int(cam.height), int(cam.width)
-
-
-def recognition(u: Any, agent: ScriptedAgent) -> list[dict[str, Any]]:
+def recognition(truth: GroundTruth, agent: ScriptedAgent) -> list[RecognitionRow]:
     """Per command of a picture: class right?, pick and yaw errors (ground truth, report only)."""
-    from agents.cell_adapter import nearest_tile, yaw_error  # noqa: PLC0415
-
-    cell, plan = u.cell, agent.last_plan
-    poses = cell.tile_poses()
     rows = []
+    plan = agent.last_plan
     for c in plan.commands if plan else ():
-        i, d = nearest_tile(cell, np.array(c.pick[:2]))
-        t = cell.tiles[i]
+        i, d = truth.nearest(np.array(c.pick[:2]))
+        class_ok = truth.class_name[i] == truth.slot_class[c.slot] and not truth.distractor[i]
+        err = yaw_error(truth.yaw[i] + c.rotation, c.place[2], int(truth.symmetry[i]))
         rows.append(
-            {
-                "slot": c.slot_name,
-                "tile": i,
-                "class_ok": t.shape.name == cell.slots[c.slot].shape.name and not t.distractor,
-                "pick_error_mm": 1e3 * d,
-                "yaw_error_deg": math.degrees(
-                    yaw_error(poses.yaw[i] + c.rotation, c.place[2], t.shape.symmetry)
-                ),
-            }
+            RecognitionRow(c.slot_name, i, bool(class_ok), 1e3 * d, math.degrees(float(err)))
         )
     return rows
 
 
-def report_text(r: dict[str, Any]) -> str:
+def report_text(r: RunReport) -> str:
     """Plain-text summary of a report."""
     lines = [
-        f"design {r['design']} (seed {r['seed']}), belt {r['belt_speed']} m/s, feed "
-        f"{r['feed']}, placement {r['placement']}",
-        f"tiles {r['tiles_total']}: correct {r['correct']}, misplaced {r['misplaced']}, "
-        f"dropped {r['dropped']}, lost {r['lost']}, distractors placed "
-        f"{r['distractors_placed']}, success {r['success']}",
-        f"tiles/min (simulated) {r['tiles_per_min']:.1f} over {r['sim_s']:.1f} s simulated; "
-        f"wall {r['wall_s']:.1f} s; steps {r['steps']} ({r['failed_actions']} failed), "
-        f"pictures {r['pictures']}",
-        f"placement error max {_num(r['position_error_mm_max'])} mm, "
-        f"{_num(r['yaw_error_deg_max'])} deg",
-        f"recognition (first picture): {r['recognised_correct_class']}/{r['tiles_total']} "
-        f"tiles to a slot of their class; pick error max {r['pick_error_max_mm']:.2f} mm; "
-        f"place-yaw error max {r['yaw_error_max_deg']:.2f} deg",
+        f"design {r.design} (seed {r.seed}), belt {r.belt_speed} m/s, feed "
+        f"{r.feed}, placement {asdict(r.placement)}",
+        f"tiles {r.tiles_total}: correct {r.correct}, misplaced {r.misplaced}, "
+        f"dropped {r.dropped}, lost {r.lost}, distractors placed "
+        f"{r.distractors_placed}, success {r.success}",
+        f"tiles/min (simulated) {r.tiles_per_min:.1f} over {r.sim_s:.1f} s simulated; "
+        f"wall {r.wall_s:.1f} s; steps {r.steps} ({r.failed_actions} failed), "
+        f"pictures {r.pictures}",
+        f"placement error max {_num(r.position_error_mm_max)} mm, {_num(r.yaw_error_deg_max)} deg",
+        f"recognition (first picture): {r.recognised_correct_class}/{r.tiles_total} "
+        f"tiles to a slot of their class; pick error max {r.pick_error_max_mm:.2f} mm; "
+        f"place-yaw error max {r.yaw_error_max_deg:.2f} deg",
     ]
-    for name in CAMERA_NAMES:
-        c = r.get(f"calibration_{name}")
+    for name, c in (
+        ("input_camera", r.calibration_input_camera),
+        ("output_camera", r.calibration_output_camera),
+    ):
         if c:
             lines.append(
                 f"calibration {name}: reprojection {c['reprojection_px']:.3f} px, focal "
@@ -478,14 +576,11 @@ def report_text(r: dict[str, Any]) -> str:
                 f"{c['principal_point_error_px']:.2f} px, position "
                 f"{c['position_error_mm']:.2f} mm, angle {c['angle_error_deg']:.3f} deg"
             )
-    for u in r["unplaced"]:
-        lines.append(f"not placed: tile {u['tile']}: {u['detail']}")
-    for msg in r.get("unrecognised", []):
-        lines.append(f"not recognised: {msg}")
-    if r.get("open_slots"):
-        lines.append(f"slots not filled correctly: {', '.join(r['open_slots'])}")
-    for s in r["failures"]:
-        lines.append(f"failed action: {s}")
+    lines += [f"not placed: tile {u.tile}: {u.detail}" for u in r.unplaced]
+    lines += [f"not recognised: {msg}" for msg in r.unrecognised]
+    if r.open_slots:
+        lines.append(f"slots not filled correctly: {', '.join(r.open_slots)}")
+    lines += [f"failed action: {s}" for s in r.failures]
     return "\n".join(lines) + "\n"
 
 
@@ -493,8 +588,8 @@ def _num(v: float | None) -> str:
     return "-" if v is None else f"{v:.2f}"
 
 
-def main(argv: list[str] | None = None) -> dict[str, Any]:
-    """Command line: run the scripted cell and print the report."""
+def main(argv: list[str] | None = None) -> dict[str, object]:
+    """Command line: run the scripted cell and print the report; returns ``report.json``'s dict."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--config", default="agents", help="bundled name or YAML path")
     parser.add_argument("--design", help="design name or path (default: config)")
@@ -545,7 +640,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         raise SystemExit(f"error: {exc}") from exc
     print(report_text(report), end="")
     print(f"wrote {out / 'report.json'}")
-    return report
+    return report.as_dict()
 
 
 if __name__ == "__main__":

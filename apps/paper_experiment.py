@@ -39,10 +39,10 @@ import numpy as np
 
 import qshape
 from qshape.assign import feasible_pairs
-from qshape.description import default_tolerances
 from qshape.design import Design, Slot
 from qshape.render import RenderParams, fill_tiles, mm_to_px, render_design
 from qshape.synth import place_path
+from qshape.tolerances import default_tolerances
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -19,7 +19,7 @@ import numpy as np
 
 from envs.cell import CAMERAS, Cell
 from envs.cell_config import CellConfig, InputBeltConfig, load_cell_config
-from envs.tiles import basic_shapes
+from envs.tile_shapes import basic_shapes
 
 N_TILES = 40
 PHYSICS_TARGET_RTF = 20.0

@@ -134,9 +134,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                 f"({time.perf_counter() - t0:.0f} s)"
             )
             sys.stdout.flush()
-    caught = sum(r["caught"] for r in results)
-    print(f"caught {caught}/{len(results)} mutants ({len(pool)} candidates)")
-    out = {"caught": caught, "total": len(results), "candidates": len(pool), "mutants": results}
+    n_caught = sum(1 for r in results if r["caught"])
+    print(f"caught {n_caught}/{len(results)} mutants ({len(pool)} candidates)")
+    out = {"caught": n_caught, "total": len(results), "candidates": len(pool), "mutants": results}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
     return out

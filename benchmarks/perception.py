@@ -19,11 +19,13 @@ from typing import Any
 import numpy as np
 
 from agents.calibration import calibrate_cell_camera
-from agents.cell_adapter import build_design_cell, nearest_tile, yaw_error
 from agents.config import load_agents_config
 from agents.perception import CameraLike, balance_colors, perceive_tiles, slot_targets
 from agents.placement import plan_placements
+from benchmarks.design_cell import build_design_cell, nearest_tile
 from envs.cell_config import load_cell_config
+from envs.task_spec import work_areas, world_slots
+from planners.angles import yaw_error
 from qshape.design import Design
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -60,10 +62,11 @@ def bench(
         try:
             cell.step(SETTLE_STEPS)
             cam = camera if camera is not None else cell.camera_model("input_camera")
-            slots = slot_targets(design, cell.geometry.output_centre[:2])
+            slots = slot_targets(world_slots(cell, design))
             image = cell.render("input_camera")
             t0 = time.perf_counter()
-            per = perceive_tiles(image, cam, cell.geometry.belt_top, cfg=cfg.perception)
+            tile_top = work_areas(cell)[0].tile_top_z
+            per = perceive_tiles(image, cam, tile_top, cfg=cfg.perception)
             per, _ = balance_colors(per, np.array([s.color for s in slots]), cfg.perception)
             plan = plan_placements(per.tiles, slots, cfg.placement)
             wall.append(time.perf_counter() - t0)
@@ -72,7 +75,7 @@ def bench(
             for c in plan.commands:
                 i, d = nearest_tile(cell, np.array(c.pick[:2]))
                 t = cell.tiles[i]
-                e = yaw_error(truth.yaw[i] + c.rotation, c.place[2], t.shape.symmetry)
+                e = float(yaw_error(truth.yaw[i] + c.rotation, c.place[2], t.shape.symmetry))
                 good = t.shape.name == design.slots[c.slot].class_key
                 ok += int(good)
                 pos.append(1e3 * d)

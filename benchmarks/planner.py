@@ -15,9 +15,10 @@ tolerance (issue 6) and within 3% of the bound with dwells (issue 14); tool trac
 <= 1 mm along full-speed cycles; placement within 1 mm and 1 degree. Also reported: compact
 layout (0.5 m) and a moving input belt at 0.1 and 0.2 m/s.
 
-The execution loop (`execute_cycle`) drives the cell's servo actuators with the planned
-positions (plus an inverse-dynamics feed-forward) and velocities every physics step, switching the
-vacuum at the plan's event times. Tile-to-slot assignment and pick poses come from the cell's
+Execution runs through `planners.executor.TrajectoryExecutor`, the same executor the env's
+``pick_place`` action uses: the cell's servo actuators get the planned positions (plus an
+inverse-dynamics feed-forward) and velocities every physics step, the vacuum switches at the
+plan's event times. Tile-to-slot assignment and pick poses come from the cell's
 ground truth (this benchmarks planning and execution, not vision).
 """
 
@@ -36,14 +37,13 @@ import numpy as np
 
 from envs.cell import Cell
 from envs.cell_config import CellConfig, load_cell_config
-from envs.errors import CellError
 from envs.scene import build_arm_model
-from envs.tiles import tile_shapes_from_design
+from envs.tile_shapes import tile_shapes_from_design
 from planners.config import PlannerConfig, load_planner_config
 from planners.errors import LimitError, PlannerError
+from planners.executor import TimedEvent, TrajectoryExecutor
 from planners.ik import IKSolver, wrap_angle
 from planners.pick_place import CyclePlan, PickPlacePlanner
-from planners.servo import ServoFeedForward
 from planners.trajectory import JointState, validate
 from qshape.design import Design
 
@@ -127,10 +127,10 @@ class CellRunner:
         arm = build_arm_model(cell.cfg, with_cell=False)
         self.ik = IKSolver(arm, planner_config.ik, planner_config.limits)
         self.planner = PickPlacePlanner(self.ik, planner_config)
-        self.servo = ServoFeedForward(arm)
-        self.limits = planner_config.limits
-        self.limit_tolerance = planner_config.trajectory.limit_tolerance
         self.dt = float(cell.model.opt.timestep)
+        self.executor = TrajectoryExecutor(arm, self.dt)
+        self.limits = self.ik.limits
+        self.limit_tolerance = planner_config.trajectory.limit_tolerance
         self.thickness = cell.cfg.tiles.thickness
         self.mesh_top = cell.geometry.mesh_top
         self.slots = cell.slot_poses_world()
@@ -162,16 +162,10 @@ class CellRunner:
         )
 
     def execute(self, plan: CyclePlan, tile: int) -> CycleRun:
-        """Run a planned cycle in the cell; returns its measurements."""
+        """Run a planned cycle in the cell through the planners' executor; its measurements."""
         cell = self.cell
-        cmds = self.servo.commands(plan.trajectory, self.dt)
+        cmds = self.executor.commands(plan.trajectory)
         n = len(cmds.times)
-        k_on = int(np.searchsorted(cmds.times, plan.vacuum_on - 1e-9))
-        k_off = int(np.searchsorted(cmds.times, plan.vacuum_off - 1e-9))
-        k_placed = min(
-            int(np.searchsorted(cmds.times, plan.piecewise.end_time("dwell_place") - 1e-9)), n - 1
-        )
-        placed_at = math.nan
         ref = np.array([self.ik.fk(cmds.q_ref[k])[0] for k in range(n)])
         speed = np.linalg.norm(np.diff(ref, axis=0), axis=1) / self.dt
         try:
@@ -180,22 +174,39 @@ class CellRunner:
         except LimitError:
             limits_ok = False
         err = np.zeros(n)
-        grasped = False
-        for k in range(n):
-            if k == k_on:
-                cell.vacuum(True)
-            if k == k_off:
-                grasped = grasped or cell.held_tile == tile
-                cell.vacuum(False)
-            if k == k_placed:
-                placed_at = cell.time
+        grasped = [False]
+        placed_at = [math.nan]
+
+        def release() -> None:
+            grasped[0] = grasped[0] or cell.held_tile == tile
+            cell.vacuum(False)
+
+        def placed() -> None:
+            placed_at[0] = cell.time
+
+        def actuate(q: np.ndarray, qd: np.ndarray, q_ref: np.ndarray) -> None:
             if self.dynamic:
-                cell.set_servo(cmds.q[k], cmds.qd[k])
+                cell.set_servo(q, qd)
             else:
-                cell.set_qpos(cmds.q_ref[k])
+                cell.set_qpos(q_ref)
+
+        def measure(k: int) -> None:
             # FK of the current joints (the cell's site poses lag one step after mj_step).
             err[k] = float(np.linalg.norm(self.ik.fk(cell.qpos)[0] - ref[k]))
-            cell.step(1)
+
+        t_placed = min(plan.piecewise.end_time("dwell_place"), float(cmds.times[-1]))
+        self.executor.run(
+            cmds,
+            actuate,
+            lambda: cell.step(1),
+            events=(
+                TimedEvent(plan.vacuum_on, lambda: cell.vacuum(True)),
+                TimedEvent(plan.vacuum_off, release),
+                TimedEvent(t_placed, placed),
+            ),
+            before_step=measure,
+        )
+        grasped_ok, placed_time = grasped[0], placed_at[0]
         return CycleRun(
             tile,
             plan.duration,
@@ -204,8 +215,8 @@ class CellRunner:
             plan.plan_ms,
             float(err.max()),
             float(np.sqrt(np.mean(err**2))),
-            grasped,
-            placed_at,
+            grasped_ok,
+            placed_time,
             float(speed.max()) if speed.size else 0.0,
             limits_ok,
         )
@@ -428,12 +439,7 @@ def run_design(
 
 def _build_cell(cfg: CellConfig, shapes: Any, slots: Any, seed: int) -> Cell:
     """The cell with the first layout seed from ``seed`` on that fits every tile on the belt."""
-    for k in range(LAYOUT_SEED_TRIES):
-        try:
-            return Cell(cfg, shapes, slots, seed=seed + k)
-        except CellError:
-            continue
-    raise CellError(f"no layout seed in [{seed}, {seed + LAYOUT_SEED_TRIES}) fits the design")
+    return Cell.first_fitting(cfg, shapes, slots, seed, LAYOUT_SEED_TRIES)
 
 
 def cell_config(layout: str, belt_speed: float, stream_period: float) -> CellConfig:

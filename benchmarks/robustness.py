@@ -31,6 +31,16 @@ TARGET_S = 1.0
 """Every entry point at its cap must run in under this many seconds."""
 
 
+def _fresh_keys(d: qshape.Description) -> Callable[[], object]:
+    """Canonical keys of ``d`` with the key caches cleared first (a cold lookup)."""
+
+    def run() -> object:
+        clear_key_caches()
+        return qshape.canonical_keys(d)
+
+    return run
+
+
 def _timed(fn: Callable[[], Any], repeat: int = 3) -> tuple[float, str]:
     """Best wall time [s] of ``repeat`` calls, and the outcome (result type or error class)."""
     best = math.inf
@@ -115,7 +125,7 @@ def run() -> list[dict[str, Any]]:
         (
             "canonical_keys",
             f"{n} points",
-            lambda: (clear_key_caches(), qshape.canonical_keys(d_cap))[1],
+            _fresh_keys(d_cap),
             "frozenset",
         ),
         ("assign 1 x 1", f"{n} points", lambda: qshape.assign([d_cap], [d_cap]), "list"),

@@ -105,7 +105,7 @@ def play(job: tuple[Scenario, int, tuple[int, int], int]) -> Episode:
             max_episode_steps=None,
             **{"action_mode": "pick_place", "image_size": image_size, **scenario.env},
         )
-        _ENVS[scenario.name] = (env, ScriptedAgent(env))
+        _ENVS[scenario.name] = (env, ScriptedAgent.from_env(env))
     env, agent = _ENVS[scenario.name]
     t0 = time.perf_counter()
     obs, info = env.reset(seed=seed)

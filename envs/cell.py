@@ -3,7 +3,7 @@
 Typical use::
 
     from envs.cell import Cell
-    from envs.tiles import basic_shapes
+    from envs.tile_shapes import basic_shapes
 
     cell = Cell(load_cell_config(), basic_shapes(), seed=0)
     cell.set_servo(q_target, qd_target)   # joint targets [rad], feed-forward [rad/s]
@@ -24,26 +24,20 @@ import numpy as np
 from envs.belts import LostTracker, input_speed, set_input_speed
 from envs.cameras import CameraModel, CameraRig, camera_model
 from envs.cell_config import CameraConfig, CellConfig, load_cell_config
-from envs.errors import CellError
+from envs.errors import CellError, LayoutError
+from envs.feed import TileFeed
 from envs.scene import (
     WAKE_FORCE,
     build_scene,
     cell_geometry,
     park_positions,
-    set_tile_rotation_lengths,
     yaw_quat,
 )
 from envs.suction import Suction, SuctionEvent
-from envs.tiles import (
-    PhysicalTile,
-    SlotSpec,
-    TileShape,
-    basic_shapes,
-    jitter_colors,
-    layout_capacity,
-    make_tile_pool,
-    sample_layout,
-)
+from envs.tile_shapes import basic_shapes
+from envs.tiles import PhysicalTile, SlotSpec, TileShape, make_tile_pool
+from envs.variants import TileVariants
+from planners.robot import joint_ranges, joint_speed_limits
 
 CAMERAS = ("input_camera", "output_camera")
 """Names of the observation cameras."""
@@ -98,13 +92,10 @@ class Cell:
         self.model, self.ids = build_scene(self.cfg, pool, self.slots, n_variants)
         self.data = mujoco.MjData(self.model)
         self._park = park_positions(n, self.cfg.tiles.thickness)
-        m = self.model
-        self._built = {  # a variant not shown gets 0 (massless, no contacts)
-            f: getattr(m, f).copy()
-            for f in ("body_mass", "body_inertia", "body_contype", "body_conaffinity")
-        }
-        self._built_geoms = (m.geom_contype.copy(), m.geom_conaffinity.copy())
-        self._body_rgba = np.array([*self.cfg.tiles.body_color, 1.0])
+        self.variants = TileVariants(
+            self.model, self.tile_pool, self.cfg.tiles.body_color, self.cfg.tiles.color_jitter
+        )
+        """The built variants and which one each tile shows (`envs.variants`)."""
         self.variant = np.zeros(n, int)
         """Variant of each tile in this episode, shape (n,)."""
         self._select(self.variant, self.tile_pool[0])
@@ -112,77 +103,61 @@ class Cell:
         self.cameras = CameraRig(self.model, self.cfg.render)  # renderers open lazily
         self.on_stage = np.zeros(n, bool)
         self._wake = np.zeros(n, bool)
-        self.retired = np.zeros(n, bool)
-        """Tiles the batch feed took off the belt with their batch (leftover distractors)."""
-        self._next_feed_time = 0.0
-        self._feed_order = np.arange(n)
-        self._batch_due = np.inf
-        self._speed_lo = -np.asarray(self.cfg.robot.max_joint_speed)
-        self._speed_hi = np.asarray(self.cfg.robot.max_joint_speed)
-        self._q_lo = self.model.jnt_range[self._arm_joints(), 0].copy()
-        self._q_hi = self.model.jnt_range[self._arm_joints(), 1].copy()
+        self.feed = TileFeed(self)
+        """When which tiles are on the input belt (`envs.feed`)."""
+        self.max_joint_speed = joint_speed_limits(self.model)
+        """Axis speed limits [rad/s], shape (6,), from the robot model's velocity actuators."""
+        self._speed_lo, self._speed_hi = -self.max_joint_speed, self.max_joint_speed
+        self._q_lo, self._q_hi = joint_ranges(self.model)
         self._closed = False
+        self.layout_seed = seed if isinstance(seed, int) else None
+        """The seed the cell was built with (see `first_fitting`), when an int."""
         self.reset()
 
+    @classmethod
+    def first_fitting(
+        cls,
+        config: CellConfig | None,
+        shapes: Sequence[TileShape] | None,
+        slots: Sequence[SlotSpec] = (),
+        seed: int = 0,
+        tries: int = 20,
+    ) -> Cell:
+        """The cell built with the first seed from ``seed`` on whose layout fits the belt.
+
+        Random layouts of a crowded tile area fail now and then (`LayoutError`); other
+        errors are raised at once. The seed used is ``cell.layout_seed``.
+
+        Raises:
+            LayoutError: No seed in ``[seed, seed + tries)`` fits.
+            CellError: Any other bad input.
+        """
+        for k in range(tries):
+            try:
+                cell = cls(config, shapes, slots, seed=seed + k)
+            except LayoutError:
+                if k == tries - 1:
+                    raise
+                continue
+            cell.layout_seed = seed + k
+            return cell
+        raise LayoutError(f"tries must be >= 1, got {tries}")
+
     # ----------------------------------------------------------------- set-up
-    def _arm_joints(self) -> np.ndarray:
-        return np.searchsorted(self.model.jnt_qposadr, self.ids.arm_qpos)
-
-    def _initial_count(self) -> int:
-        feed = self.cfg.tiles.feed
-        if feed == "all":
-            return len(self.tiles)
-        if feed == "batch":
-            return min(self.cfg.tiles.batch_size, len(self.tiles))
-        return min(self.cfg.tiles.stream_initial, len(self.tiles))
-
     def _select(self, variant: np.ndarray, tiles: Sequence[PhysicalTile]) -> None:
         """Make ``tiles`` (tile i is variant ``variant[i]``) the episode's tiles.
 
-        Each variant's geoms sit in a child body of its tile's free body (`envs.scene`): the
-        variants not shown get zero mass and inertia and no contacts (`_paint` hides them);
-        `tiles`, `ids` and the suction's seal check follow the shown ones.
+        `tiles`, `ids`, `radii` and the suction's seal check follow the shown variants; the
+        others are massless, out of contact and hidden (`TileVariants`).
         """
         m = self.model
         self.variant = variant
         self.tiles = tuple(tiles)
         self.ids = self.ids.with_variants(variant)
-        self._radii = np.array([t.radius for t in self.tiles])
+        self.radii = np.array([t.radius for t in self.tiles])
+        """Bounding radius of each tile about its centroid, shape (n,) [m]."""
         self.suction = Suction(m, self.ids, self.cfg.suction, self.tiles, self.cfg.tiles.thickness)
-        if len(self.tile_pool) == 1:
-            return  # as built
-        bodies = self.ids.variant_body
-        hidden = np.arange(len(bodies))[:, None] != variant[None, :]
-        for field, built in self._built.items():
-            value = getattr(m, field)
-            value[bodies] = built[bodies]
-            value[bodies[hidden]] = 0
-        off = np.zeros(m.nbody, bool)
-        off[bodies[hidden]] = True
-        contype, conaffinity = self._built_geoms
-        m.geom_contype[:] = np.where(off[m.geom_bodyid], 0, contype)
-        m.geom_conaffinity[:] = np.where(off[m.geom_bodyid], 0, conaffinity)
-        mujoco.mj_setConst(m, self.data)  # constants derived from the masses (solver weights)
-        set_tile_rotation_lengths(m, self.ids)  # mj_setConst measured them to the origin
-
-    def _paint(self) -> None:
-        """Visual colours as built: the episode's tiles in theirs, other variants hidden."""
-        if not len(self.tiles):
-            return
-        rgba = self.model.geom_rgba
-        rgba[self.ids.variant_visual, 3] = 0.0
-        rgba[self.ids.tile_visual[:, 0]] = self._body_rgba
-        rgba[self.ids.tile_visual[:, 1], :3] = [t.color for t in self.tiles]
-        rgba[self.ids.tile_visual[:, 1], 3] = 1.0
-
-    def _draw_variants(self) -> None:
-        """A random variant per tile with fresh colour noise (``tiles.variants`` > 1 only)."""
-        n_variants = len(self.tile_pool)
-        if n_variants == 1:
-            return
-        variant = self._rng.integers(n_variants, size=len(self.tiles))
-        tiles = [self.tile_pool[v][i] for i, v in enumerate(variant)]
-        self._select(variant, jitter_colors(tiles, self.cfg.tiles.color_jitter, self._rng))
+        self.variants.show(m, self.data, self.ids, variant)
 
     def reset(self, seed: int | np.random.Generator | None = None) -> None:
         """Arm at home, vacuum off, tiles laid out afresh on the input belt, counters cleared.
@@ -201,8 +176,10 @@ class Cell:
         self._check_open()
         if seed is not None:
             self._rng = np.random.default_rng(seed)
-        self._draw_variants()
-        self._paint()
+        drawn = self.variants.draw(self._rng)
+        if drawn is not None:
+            self._select(*drawn)
+        self.variants.paint(self.model, self.ids, self.tiles)
         m, d, ids = self.model, self.data, self.ids
         mujoco.mj_resetData(m, d)
         self._wake[:] = False
@@ -212,45 +189,10 @@ class Cell:
         d.qpos[ids.arm_qpos] = home
         d.ctrl[ids.pos_actuators] = home
         d.ctrl[ids.vel_actuators] = 0.0
-        n = len(self.tiles)
-        if n:
-            self._park_tiles(np.arange(n))
-            self.retired[:] = False
-            k = self._initial_count()
-            self._feed_order = self._rng.permutation(n) if k < n else np.arange(n)
-            if k:
-                self._lay_out(self._feed_order[:k])
-        self._batch_due = np.inf
-        feed = self.cfg.tiles.feed
-        self._next_feed_time = {"stream": self.cfg.tiles.stream_period, "batch": 0.0}.get(
-            feed, np.inf
-        )
+        self.feed.start_episode(self._rng)
         mujoco.mj_forward(m, d)
 
-    def _lay_out(self, order: np.ndarray) -> None:
-        """Lay tiles ``order`` out at random over the whole tile area, at rest.
-
-        In batch mode the batch ends early where the tile area would be too full.
-        """
-        if self.cfg.tiles.feed == "batch":
-            k = layout_capacity(
-                [self.tiles[i].outline for i in order],
-                tuple(self.cfg.input_belt.tile_area),
-                self.cfg.tiles.min_gap,
-            )
-            order = order[: max(k, 1)]
-        poses = sample_layout(
-            self._radii[order],
-            tuple(self.cfg.input_belt.tile_area),
-            self.cfg.tiles.min_gap,
-            self.cfg.tiles.placement_attempts,
-            self._rng,
-            outlines=[self.tiles[k].outline for k in order],
-            restarts=self.cfg.tiles.placement_restarts,
-        )
-        self._place(order, poses)
-
-    def _place(self, idx: np.ndarray, poses: np.ndarray) -> None:
+    def place_tiles(self, idx: np.ndarray, poses: np.ndarray) -> None:
         """Put tiles at (x, y, yaw) poses relative to the tile area's centre, at rest."""
         c = self.geometry.input_centre
         qadr = self.ids.tile_qpos_index[idx]
@@ -263,36 +205,7 @@ class Cell:
         self.on_stage[idx] = True
         self._wake[idx] = True
 
-    def _feed_stream(self) -> None:
-        """Spawn the next waiting tile at the upstream edge of the tile area, if there is room."""
-        waiting = np.flatnonzero(~self.on_stage)
-        if len(waiting) == 0:
-            self._next_feed_time = np.inf
-            return
-        i = int(waiting[0])
-        ta = self.cfg.input_belt.tile_area
-        r = self._radii[i]
-        c = self.geometry.input_centre
-        pos = self.data.xpos[self.ids.tile_body]
-        near = self.on_stage & (pos[:, 0] < c[0] - ta[0] / 2 + 3 * r + 0.05)
-        strip = (2 * r + 2 * self.cfg.tiles.min_gap, ta[1])
-        try:
-            pose = sample_layout(
-                self._radii[[i]],
-                strip,
-                self.cfg.tiles.min_gap,
-                self.cfg.tiles.placement_attempts,
-                self._rng,
-                occupied=pos[near, :2] - [c[0] - ta[0] / 2 + strip[0] / 2, c[1]],
-                occupied_radii=self._radii[near],
-            )
-        except CellError:
-            return  # no room yet; try again next step
-        pose[:, 0] += -ta[0] / 2 + strip[0] / 2
-        self._place(np.array([i]), pose)
-        self._next_feed_time += self.cfg.tiles.stream_period
-
-    def _park_tiles(self, idx: np.ndarray) -> None:
+    def park_tiles(self, idx: np.ndarray) -> None:
         """Tiles ``idx`` to their parking spots, at rest, off the stage."""
         qadr = self.ids.tile_qpos_index[idx]
         self.data.qpos[qadr[:, :3]] = self._park[idx]
@@ -300,42 +213,15 @@ class Cell:
         self.data.qvel[self.ids.tile_dof_index[idx]] = 0.0
         self.on_stage[idx] = False
 
-    def _input_side(self) -> np.ndarray:
+    def input_side(self) -> np.ndarray:
         """Tiles on the input belt (fed, not lost, not on the pad), shape (n,) bool."""
         pos = self.data.xpos[self.ids.tile_body]
-        half_w = self.cfg.input_belt.width / 2 + self._radii
+        half_w = self.cfg.input_belt.width / 2 + self.radii
         side = self.on_stage & ~self.lost_tracker.lost
         side &= np.abs(pos[:, 1] - self.geometry.input_y) < half_w
         if self.suction.held >= 0:
             side[self.suction.held] = False
         return side
-
-    def _feed_batch(self) -> None:
-        """Index the next batch in once the input side has held no real tile long enough.
-
-        Leftover tiles (distractors the agent rightly left) leave with the old batch: they
-        are parked and marked `retired`.
-        """
-        order = self._feed_order
-        waiting = order[~(self.on_stage | self.retired)[order]]
-        if len(waiting) == 0:
-            self._next_feed_time = np.inf
-            return
-        side = self._input_side()
-        if np.any(side & ~self.is_distractor):
-            self._batch_due = np.inf
-            return
-        if not np.isfinite(self._batch_due):
-            self._batch_due = self.data.time + self.cfg.tiles.batch_index_time
-            return
-        if self.data.time < self._batch_due:
-            return
-        left = np.flatnonzero(side)
-        self._park_tiles(left)
-        self.retired[left] = True
-        self._lay_out(waiting[: self.cfg.tiles.batch_size])
-        self._batch_due = np.inf
-        mujoco.mj_forward(self.model, self.data)
 
     # ------------------------------------------------------------- stepping
     def step(self, n: int = 1) -> list[SuctionEvent]:
@@ -362,12 +248,7 @@ class Cell:
         ev = self.suction.update(self.data)
         if ev is not None:
             events.append(ev)
-        if self.data.time >= self._next_feed_time:
-            if self.cfg.tiles.feed == "batch":
-                self._feed_batch()  # checked every call; forwards only when it lays out
-            else:
-                self._feed_stream()
-                mujoco.mj_forward(self.model, self.data)
+        self.feed.update(self._rng)
         self.lost_tracker.update(
             self.data.xpos[self.ids.tile_body], self.on_stage, self.suction.held
         )
@@ -476,6 +357,11 @@ class Cell:
             1 - 2 * (quat[:, 2] ** 2 + quat[:, 3] ** 2),
         )
         return TilePoses(q[:, :3].copy(), quat, yaw)
+
+    @property
+    def retired(self) -> np.ndarray:
+        """Tiles the batch feed took off the belt with their batch, shape (n,) bool."""
+        return self.feed.retired
 
     @property
     def vacuum_on(self) -> bool:

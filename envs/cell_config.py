@@ -60,33 +60,22 @@ class PhysicsConfig:
 
 @dataclass(frozen=True)
 class RobotConfig:
-    """The arm.
+    """The arm (joint ranges and axis speed limits are the model's: `planners.robot`).
 
     Attributes:
         model: Path of the robot MJCF, relative to the repository root or absolute.
         home: Joint angles of the start configuration, shape (6,) [rad].
-        max_joint_speed: Axis speed limits, shape (6,) [rad/s] (SPEC 4: 200, 200, 260, 360,
-            360, 450 deg/s); servo velocity targets are clipped to them.
         base_keepout: Radius about the base axis that no belt may enter [m] (the rotating
             base, 0.11 m, plus margin).
     """
 
     model: str = "assets/irb140/irb140.xml"
     home: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 1.5707963, 0.0)
-    max_joint_speed: tuple[float, ...] = (
-        3.4906585,
-        3.4906585,
-        4.5378561,
-        6.2831853,
-        6.2831853,
-        7.8539816,
-    )
     base_keepout: float = 0.15
 
     def __post_init__(self) -> None:
         _length(self, "home", 6)
-        _length(self, "max_joint_speed", 6)
-        _positive(self, "max_joint_speed", "base_keepout")
+        _positive(self, "base_keepout")
         if not self.model_path.is_file():
             raise CellError(f"RobotConfig.model: no file {self.model_path}")
 
@@ -384,6 +373,91 @@ class RenderConfig:
 
 
 @dataclass(frozen=True)
+class SceneryConfig:
+    """What the cell looks like around the working parts: floor, light, frames, bin, colours.
+
+    Attributes:
+        floor_half_size: Half side of the square floor plane [m].
+        floor_checker: The floor texture's two checker colours, RGB in [0, 1] each (2, 3).
+        floor_texture_px: Checker texture side [px].
+        floor_texture_repeat: Texture repeats across the floor.
+        light_pos: Position of the directional top light [m] (3,).
+        light_diffuse: Diffuse intensity of the top light (grey level, [0, 1]).
+        light_specular: Specular intensity of the top light.
+        belt_rgba: Belt colour, RGBA in [0, 1].
+        frame_rgba: Colour of rails and stands.
+        sheet_rgba: Colour of the mesh sheet.
+        bin_floor_rgba: Colour of the bin's floor.
+        bin_wall_rgba: Colour of the bin's walls.
+        slot_white: White mixed into each slot mark's tile colour, in [0, 1].
+        rail_gap: Gap between the input belt's edge and each side rail's centre [m].
+        rail_half_width: Half width of a side rail [m].
+        rail_height: Half height of a side rail [m].
+        stand_inset: How much narrower than its belt a stand is, (along, across) per side [m].
+        bin_gap: Gap between the input belt's end and the bin [m].
+        bin_side_margin: How much wider than the belt the bin is, per side [m].
+        bin_wall: Half thickness of the bin's floor and walls [m].
+        bin_stand_inset: How much smaller than the bin its stand is, per side [m].
+        overview_pos: Position of the overview camera [m] (3,).
+        overview_xyaxes: The overview camera's image x and y axes in the world (MuJoCo
+            ``xyaxes``) (6,).
+    """
+
+    floor_half_size: float = 4.0
+    floor_checker: tuple[tuple[float, ...], ...] = ((0.33, 0.35, 0.38), (0.28, 0.3, 0.33))
+    floor_texture_px: int = 256
+    floor_texture_repeat: int = 8
+    light_pos: tuple[float, ...] = (0.3, 0.0, 2.5)
+    light_diffuse: float = 0.45
+    light_specular: float = 0.1
+    belt_rgba: tuple[float, ...] = (0.12, 0.12, 0.13, 1.0)
+    frame_rgba: tuple[float, ...] = (0.55, 0.57, 0.6, 1.0)
+    sheet_rgba: tuple[float, ...] = (0.22, 0.22, 0.24, 1.0)
+    bin_floor_rgba: tuple[float, ...] = (0.35, 0.25, 0.15, 1.0)
+    bin_wall_rgba: tuple[float, ...] = (0.45, 0.33, 0.2, 1.0)
+    slot_white: float = 0.45
+    rail_gap: float = 0.01
+    rail_half_width: float = 0.01
+    rail_height: float = 0.01
+    stand_inset: tuple[float, ...] = (0.05, 0.03)
+    bin_gap: float = 0.005
+    bin_side_margin: float = 0.05
+    bin_wall: float = 0.005
+    bin_stand_inset: float = 0.02
+    overview_pos: tuple[float, ...] = (1.45, 0.0, 1.35)
+    overview_xyaxes: tuple[float, ...] = (0.0, 1.0, 0.0, -0.62, 0.0, 0.78)
+
+    def __post_init__(self) -> None:
+        for name, n in (
+            ("light_pos", 3),
+            ("belt_rgba", 4),
+            ("frame_rgba", 4),
+            ("sheet_rgba", 4),
+            ("bin_floor_rgba", 4),
+            ("bin_wall_rgba", 4),
+            ("stand_inset", 2),
+            ("overview_pos", 3),
+            ("overview_xyaxes", 6),
+        ):
+            _length(self, name, n)
+        if len(self.floor_checker) != 2 or any(len(c) != 3 for c in self.floor_checker):  # noqa: PLR2004
+            raise CellError(
+                f"SceneryConfig.floor_checker needs two RGB colours, got {self.floor_checker}"
+            )
+        _positive(
+            self,
+            "floor_half_size",
+            "floor_texture_px",
+            "floor_texture_repeat",
+            "rail_half_width",
+            "rail_height",
+            "bin_wall",
+        )
+        _non_negative(self, "light_diffuse", "light_specular", "slot_white", "rail_gap", "bin_gap")
+        _non_negative(self, "stand_inset", "bin_side_margin", "bin_stand_inset")
+
+
+@dataclass(frozen=True)
 class CellConfig:
     """Everything about the cell; see each part's docstring."""
 
@@ -397,6 +471,7 @@ class CellConfig:
     input_camera: CameraConfig = field(default_factory=CameraConfig)
     output_camera: CameraConfig = field(default_factory=CameraConfig)
     render: RenderConfig = field(default_factory=RenderConfig)
+    scenery: SceneryConfig = field(default_factory=SceneryConfig)
 
     def __post_init__(self) -> None:
         lay = self.layout

@@ -1,20 +1,31 @@
 """Configuration of the `MosaicAssembly-v0` environment (frozen, strict, with units).
 
-Defaults live in ``configs/env.yaml``. Every field can be overridden by keyword, flat::
+Defaults live in ``configs/env.yaml``; the cell's configuration is nested in it (``cell:``, the
+bundled ``configs/cell.yaml`` with the env's changes). Every field can be overridden by keyword,
+and the cell's most used keys by flat keywords (`CELL_KEYS`)::
 
     cfg = load_env_config(action_mode="joint", image_size=64, belt_speed=0.1)
+    cfg.cell.input_belt.speed  # 0.1
 
 Unknown keys and unknown mode names raise `EnvConfigError` listing what is allowed.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
-from configs import ConfigError, load_config
+from configs import ConfigError, from_dict, load_yaml, resolve_path
+from envs.cell_config import CellConfig, load_cell_config, section_names
+from envs.errors import CellError
 
+ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
+ObsMode = Literal["rgb", "state", "rgb+state"]
+RewardMode = Literal["sparse", "dense"]
+Execution = Literal["dynamic", "kinematic"]
+RenderMode = Literal["rgb_array", "human"]
 ACTION_MODES = ("joint", "cartesian", "pick_place", "pick_place_discrete")
 """Allowed ``action_mode`` values."""
 OBS_MODES = ("rgb", "state", "rgb+state")
@@ -29,6 +40,25 @@ RENDER_MODES = ("rgb_array", "human")
 """Allowed ``render_mode`` values (or None)."""
 
 
+CELL_KEYS: dict[str, tuple[str, str]] = {
+    "belt_speed": ("input_belt", "speed"),
+    "feed": ("tiles", "feed"),
+    "stream_period": ("tiles", "stream_period"),
+    "stream_initial": ("tiles", "stream_initial"),
+    "batch_size": ("tiles", "batch_size"),
+    "batch_index_time": ("tiles", "batch_index_time"),
+    "distractor_rate": ("tiles", "distractor_rate"),
+    "vertex_jitter": ("tiles", "vertex_jitter"),
+    "tile_color_jitter": ("tiles", "color_jitter"),
+    "tile_variants": ("tiles", "variants"),
+}
+"""Flat keyword overrides of the nested cell: keyword -> (cell section, key)."""
+ENV_CELL_CHANGES: dict[str, dict[str, Any]] = {
+    "tiles": {"variants": 8, "stream_period": 2.5, "stream_initial": 1},
+}
+"""The env's changes to the bundled cell (as ``configs/env.yaml`` states them)."""
+
+
 class EnvConfigError(ConfigError):
     """Bad environment configuration: unknown key or mode, or an invalid value."""
 
@@ -40,7 +70,12 @@ class EnvConfig:
     Attributes:
         design: Bundled design name (``configs/designs``) or path to a design YAML.
         max_slots: Use only the first ``max_slots`` slots (and their tiles); 0 uses all.
-        cell: Cell configuration: bundled name or path (``configs/cell.yaml``).
+        cell: The cell (`envs.cell_config.CellConfig`), nested: in YAML a bundled name or
+            path, or a mapping ``{config: <name or path>, <section>: {<key>: value}}`` that
+            changes sections of that cell file key by key. The input belt's speed, the tile
+            feed and the tiles' noise and variants live here (``cell.input_belt.speed``,
+            ``cell.tiles.feed``, ...); the flat keywords of `CELL_KEYS` (``belt_speed=0.1``,
+            ``feed="stream"``, ...) still set them.
         planner: Planner configuration: bundled name or path (``configs/planner.yaml``).
         action_mode: One of `ACTION_MODES`.
         obs_mode: One of `OBS_MODES` (``state`` = robot + privileged state, no images).
@@ -49,31 +84,12 @@ class EnvConfig:
             horizontal field (fixed vertical field of view) and crops the ends of the tile
             area.
         depth: Add depth images [m] to the observation.
-        belt_speed: Input belt speed [m/s].
         reward_mode: One of `REWARD_MODES`.
         execution: One of `EXECUTIONS` (pick_place modes only).
         chain_cycles: Dynamic pick_place: a step's cycle ends at rest at the place contact
             (vacuum off, pad 0.5 mm above the released tile) and the next step's cycle leaves
             it vertically, blended into its move to the pick, as a real cell chains its
             cycles; False ends every cycle at rest at the approach point above the place.
-        feed: ``all`` tiles at reset, a ``stream`` along the input belt, or ``batch``es of
-            ``batch_size`` over the whole tile area, the next one indexed in once the input
-            side holds no real tile (leftover distractors leave with their batch).
-        stream_period: Time between streamed tiles [s].
-        stream_initial: Tiles laid out at reset when streaming.
-        batch_size: Tiles per batch [count].
-        batch_index_time: From the last real tile of a batch picked to the next batch at rest
-            [s].
-        distractor_rate: Distractor tiles per real tile.
-        vertex_jitter: Std of tile outline (manufacturing) noise [m].
-        tile_color_jitter: Std of tile glaze colour noise per RGB channel [0..1 units].
-        tile_variants: Noisy variants built per tile [count]: each reset gives every tile one
-            of its variants at random (outline noise) and a fresh colour noise, so episodes
-            differ in manufacturing noise without rebuilding the model (each tile's body
-            holds V shapes; the ones not shown are massless, without contacts and invisible).
-            1: the noise is drawn once when the env is built and kept by every episode.
-            Build time and model size grow about linearly with it, a physics step by ~5 %
-            per variant (8: ~+35 %); reset and render time do not.
         color_randomization: Std of a per-reset multiplicative tile colour change (0: off).
         light_randomization: Std of a per-reset multiplicative light change (0: off).
         action_noise: Std of Gaussian noise added to continuous actions, in normalised units.
@@ -110,25 +126,15 @@ class EnvConfig:
 
     design: str = "paper_mixed"
     max_slots: int = 0
-    cell: str = "cell"
+    cell: CellConfig = field(default_factory=lambda: _env_cell("cell", ENV_CELL_CHANGES))
     planner: str = "planner"
-    action_mode: str = "pick_place"
-    obs_mode: str = "rgb"
+    action_mode: ActionMode = "pick_place"
+    obs_mode: ObsMode = "rgb"
     image_size: tuple[int, int] = (72, 96)
     depth: bool = False
-    belt_speed: float = 0.0
-    reward_mode: str = "sparse"
-    execution: str = "dynamic"
+    reward_mode: RewardMode = "sparse"
+    execution: Execution = "dynamic"
     chain_cycles: bool = True
-    feed: str = "all"
-    stream_period: float = 2.5
-    stream_initial: int = 1
-    batch_size: int = 16
-    batch_index_time: float = 0.5
-    distractor_rate: float = 0.0
-    vertex_jitter: float = 0.0002
-    tile_color_jitter: float = 0.02
-    tile_variants: int = 8
     color_randomization: float = 0.0
     light_randomization: float = 0.0
     action_noise: float = 0.0
@@ -158,7 +164,7 @@ class EnvConfig:
     dense_reach: float = 0.5
     dense_grasp: float = 0.2
     dense_carry: float = 0.5
-    render_mode: str | None = None
+    render_mode: RenderMode | None = None
 
     def __post_init__(self) -> None:
         raw: Any = self.image_size
@@ -173,7 +179,6 @@ class EnvConfig:
             ("obs_mode", OBS_MODES),
             ("reward_mode", REWARD_MODES),
             ("execution", EXECUTIONS),
-            ("feed", FEEDS),
         ):
             value = getattr(self, name)
             if value not in allowed:
@@ -190,17 +195,12 @@ class EnvConfig:
             "yaw_tolerance_deg",
             "kinematic_settle",
             "failed_action_time",
-            "batch_index_time",
         )
         for name in positive:
             if not getattr(self, name) > 0:
                 raise EnvConfigError(f"{name} must be > 0, got {getattr(self, name)!r}")
         nonneg = (
             "max_slots",
-            "belt_speed",
-            "distractor_rate",
-            "vertex_jitter",
-            "tile_color_jitter",
             "color_randomization",
             "light_randomization",
             "action_noise",
@@ -212,15 +212,91 @@ class EnvConfig:
         for name in nonneg:
             if not getattr(self, name) >= 0:
                 raise EnvConfigError(f"{name} must be >= 0, got {getattr(self, name)!r}")
-        for name in ("rotation_bins", "layout_tries", "tile_variants", "batch_size"):
+        for name in ("rotation_bins", "layout_tries"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise EnvConfigError(f"{name} must be an int >= 1, got {value!r}")
 
+    @property
+    def belt_speed(self) -> float:
+        """Input belt speed [m/s] (``cell.input_belt.speed``)."""
+        return self.cell.input_belt.speed
+
+    @property
+    def feed(self) -> str:
+        """Tile feed (``cell.tiles.feed``)."""
+        return self.cell.tiles.feed
+
 
 def allowed_keys() -> list[str]:
-    """Names of every `EnvConfig` field (the allowed keyword overrides)."""
-    return [f.name for f in fields(EnvConfig)]
+    """Every allowed keyword override: the `EnvConfig` fields and the flat `CELL_KEYS`."""
+    return sorted([f.name for f in fields(EnvConfig)] + list(CELL_KEYS))
+
+
+def _env_cell(
+    base: str | Path | CellConfig, changes: Mapping[str, Mapping[str, Any]]
+) -> CellConfig:
+    """The cell ``base`` (a `CellConfig`, bundled name or path) with sections changed key by key.
+
+    Raises:
+        EnvConfigError: Unknown section or key, or an invalid value (the message names it).
+    """
+    try:
+        cell = base if isinstance(base, CellConfig) else load_cell_config(base)
+        merged: dict[str, Any] = {}
+        for section, values in changes.items():
+            if section not in section_names():
+                raise EnvConfigError(
+                    f"unknown cell section {section!r}; allowed: {section_names()}"
+                )
+            if not isinstance(values, Mapping):
+                raise EnvConfigError(f"cell.{section} must be a mapping, got {values!r}")
+            merged[section] = {**asdict(getattr(cell, section)), **values}
+        return (
+            replace(
+                cell,
+                **{
+                    k: from_dict(type(getattr(cell, k)), v, source=f"cell.{k}")
+                    for k, v in merged.items()
+                },
+            )
+            if merged
+            else cell
+        )
+    except CellError as exc:
+        raise EnvConfigError(str(exc)) from exc
+    except ConfigError as exc:
+        raise EnvConfigError(f"cell: {exc}") from exc
+
+
+def _split_cell(raw: Any, flat: dict[str, Any]) -> CellConfig:
+    """The nested cell of a YAML/keyword ``cell`` value plus the flat `CELL_KEYS` in ``flat``."""
+    changes: dict[str, dict[str, Any]] = {}
+    if isinstance(raw, CellConfig):
+        base: str | Path | CellConfig = raw
+    elif raw is None or isinstance(raw, str | Path):
+        base = raw or "cell"
+    elif isinstance(raw, Mapping):
+        rest = dict(raw)
+        base = rest.pop("config", "cell")
+        changes = {k: dict(v) if isinstance(v, Mapping) else v for k, v in rest.items()}
+    else:
+        raise EnvConfigError(
+            f"cell must be a bundled name, a path or a mapping {{config: ..., <section>: ...}}, "
+            f"got {raw!r}"
+        )
+    given = {}
+    for key in [k for k in flat if k in CELL_KEYS]:
+        section, name = CELL_KEYS[key]
+        changes.setdefault(section, {})[name] = flat.pop(key)
+        given[key] = f"cell.{section}.{name}"
+    try:
+        return _env_cell(base, changes)
+    except EnvConfigError as exc:
+        if not given:
+            raise
+        keys = ", ".join(f"{k} = {v}" for k, v in given.items())
+        raise EnvConfigError(f"{exc} (flat keywords: {keys})") from exc
 
 
 def load_env_config(config: EnvConfig | str | Path | None = "env", **overrides: Any) -> EnvConfig:
@@ -235,22 +311,38 @@ def load_env_config(config: EnvConfig | str | Path | None = "env", **overrides: 
     """
     if isinstance(config, EnvConfig):
         base = {f.name: getattr(config, f.name) for f in fields(EnvConfig)}
-        unknown = sorted(set(overrides) - set(base))
+        unknown = sorted(set(overrides) - set(base) - set(CELL_KEYS))
         if unknown:
-            raise EnvConfigError(f"unknown key(s) {unknown} for EnvConfig; allowed: {sorted(base)}")
+            raise EnvConfigError(
+                f"unknown key(s) {unknown} for EnvConfig; allowed: {allowed_keys()}"
+            )
         base.update(overrides)
         config, overrides = None, base
     if "image_size" in overrides and isinstance(overrides["image_size"], int):
         overrides["image_size"] = (overrides["image_size"],) * 2
+    data: dict[str, Any] = {}
+    if config is not None:
+        data = load_yaml(config)
+    raw_cell = overrides.pop("cell", data.pop("cell", None))
+    flat = {**{k: data.pop(k) for k in list(data) if k in CELL_KEYS}, **overrides}
+    overrides = {k: v for k, v in flat.items() if k not in CELL_KEYS}
+    overrides["cell"] = _split_cell(raw_cell, flat)
+    source = "<defaults>" if config is None else str(resolve_path(config))
     try:
-        return load_config(EnvConfig, config, **overrides)
+        return from_dict(EnvConfig, {**data, **overrides}, source=source)
     except EnvConfigError:
         raise
     except ConfigError as exc:
-        raise EnvConfigError(str(exc)) from exc
+        hint = f"; flat cell keywords: {sorted(CELL_KEYS)}" if "unknown key" in str(exc) else ""
+        raise EnvConfigError(f"{exc}{hint}") from exc
 
 
 __all__ = [
+    "ActionMode",
+    "Execution",
+    "ObsMode",
+    "RenderMode",
+    "RewardMode",
     "ACTION_MODES",
     "EXECUTIONS",
     "FEEDS",

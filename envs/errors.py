@@ -15,4 +15,8 @@ class CellError(EnvError, ValueError):
     """
 
 
-__all__ = ["CellError", "EnvError"]
+class LayoutError(CellError):
+    """The tiles did not fit the tile area in one random layout draw (another draw may fit)."""
+
+
+__all__ = ["CellError", "EnvError", "LayoutError"]

@@ -8,40 +8,46 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal, cast
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
 
 from envs.actions import (
     ActionAdapter,
-    ActionError,
     CartesianActions,
     DiscretePickPlaceActions,
     JointActions,
     PickPlaceActions,
-    PickPlaceBounds,
-    PickPlaceExecutor,
     transfer_poses,
 )
 from envs.cameras import CameraModel
 from envs.cell import CAMERAS, Cell
-from envs.cell_config import CellConfig, load_cell_config
 from envs.env_config import EnvConfig, load_env_config
-from envs.errors import CellError
 from envs.observations import Observer
+from envs.pick_place import PickPlaceExecutor
 from envs.scene import build_arm_model
-from envs.task import REWARD_TERMS, MosaicTask
-from envs.tiles import SlotSpec, TileShape, tile_shapes_from_design
-from planners.config import load_planner_config
+from envs.task import REWARD_TERMS, Evaluation, GroundTruth, MosaicTask
+from envs.task_spec import (
+    ActionError,
+    PickPlaceCodec,
+    PickPlaceCommand,
+    TaskSpec,
+    build_task_spec,
+    work_areas,
+)
+from envs.tile_shapes import tile_shapes_from_design
+from envs.tiles import SlotSpec, TileShape
+from planners.config import PlannerConfig, load_planner_config
 from planners.ik import IKSolver
+
+if TYPE_CHECKING:
+    from qshape.design import Design
 
 DEFAULT_CONTROL_DT = 0.04
 """Default control period [s] (``configs/env.yaml``); the class's ``render_fps`` is 1 / it."""
-SEED_BOUND = 2**63
-"""Exclusive bound of the layout seeds drawn from ``np_random`` at each reset."""
 CAMERA_PANEL_DIVISOR = 2
 """Each camera panel of the ``rgb_array`` frame is the overview's height / this."""
 
@@ -66,14 +72,16 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
       ``control_dt``, then vacuum (> 0: on). One step = ``control_dt`` of simulated time.
     - ``cartesian``: Box(5): tool dx, dy, dz (x ``tool_speed * control_dt``) and dyaw
       (x ``tool_yaw_rate * control_dt``), tool kept pointing down (planners' IK), then vacuum.
-    - ``pick_place``: Box(6): pick x, y, yaw and place x, y, yaw. x, y map linearly onto the
-      input tile area (pick) and the mesh (place), see ``env.unwrapped.bounds``; yaw onto
-      [-pi, pi]. The pad goes to the pick point and then to the place point; the tile turns by
-      place yaw - pick yaw. One step = one full time-optimal cycle planned by the planners;
+    - ``pick_place``: Box(6): pick x, y, the tile's yaw, place x, y, the rotation. x, y map
+      linearly onto the input tile area (pick) and the mesh (place), see
+      ``task_spec.codec``; angles onto [-pi, pi]. The pad goes to the pick point and then to
+      the place point; the tile turns by the rotation (the tile's yaw only picks among
+      symmetric wrist solutions). One step = one full time-optimal cycle planned by the planners;
       with ``chain_cycles`` (default) a dynamic cycle ends at rest at the place contact and
       the next one leaves it vertically, blended into its move (as a real cell chains them).
-      ``env.unwrapped.pick_place_action(pick_xy, pick_yaw, place_xy, place_yaw)`` normalises
-      world poses [m, rad].
+      ``task_spec.codec.encode(PickPlaceCommand(...))`` normalises a world command;
+      ``pick_place_action(pick_xy, pick_yaw, place_xy, place_yaw)`` one given as two
+      absolute yaws [m, rad].
     - ``pick_place_discrete``: MultiDiscrete([tiles, slots, rotation_bins]): move tile i
       (ground-truth grasp point) into slot j turned by r * 2 pi / rotation_bins.
 
@@ -90,7 +98,14 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     (H, W, 3) at ``image_size`` (``rgb``/``rgb+state``; depth (H, W, 1) float32 [m] with
     ``depth``), ``robot`` float32 (19,) (joint pos/vel, tool pose, vacuum, held), and with
     ``state``/``rgb+state`` the privileged ``tiles`` (n * 7,) and ``slots`` (k * 6,). Camera
-    intrinsics/extrinsics: ``env.unwrapped.camera_model("input", height, width)``.
+    intrinsics/extrinsics at the observation size: ``task_spec.cameras``.
+
+    ## Task description
+    ``env.get_wrapper_attr("task_spec")`` is a frozen `envs.task_spec.TaskSpec`: the design's
+    slots in the world, the pick and place areas and heights, the tile thickness, the camera
+    models and the ``pick_place`` action codec. Agents are built from it alone
+    (``ScriptedAgent.from_env``). ``ground_truth()`` (privileged tile poses and classes) is
+    for scoring and reports, never for decisions.
 
     ## Rewards
     ``sparse``: +reward_correct per newly filled slot, +reward_success when complete,
@@ -138,6 +153,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     ## Version History
     - v0: initial version; manufacturing noise re-drawn per reset (``tile_variants``).
+      ``pick_place``'s last action entry is the tile's rotation (it was the place yaw, which
+      the env differenced with the pick yaw); ``info["evaluation"]`` has ``failure``.
     """
 
     metadata = {  # noqa: RUF012 - Gymnasium convention
@@ -157,33 +174,38 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         cfg = self.config
         self.render_mode = cfg.render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt)}
-        shapes, slots = _design(cfg)
-        self.cell = _build_cell(_cell_config(cfg), shapes, slots, cfg.layout_tries)
+        design, shapes, slots = _design(cfg)
+        self.cell = Cell.first_fitting(cfg.cell, shapes, slots, tries=cfg.layout_tries)
         self.task = MosaicTask(self.cell, cfg)
         self.observer = Observer(self.cell, self.task, cfg)
         pcfg = load_planner_config(cfg.planner)
         self.ik = IKSolver(build_arm_model(self.cell.cfg, with_cell=False), pcfg.ik, pcfg.limits)
-        self.bounds = PickPlaceBounds.of(self.cell, cfg)
+        self.pick_area, self.place_area = work_areas(self.cell, cfg)
+        self.codec = PickPlaceCodec(self.pick_area, self.place_area)
+        self.task_spec: TaskSpec = build_task_spec(self.cell, cfg, design)
+        """What agents may know besides the observations (see `envs.task_spec`)."""
+        self.executor: PickPlaceExecutor | None = None
         self.actions = self._adapter(pcfg)
         self.action_space = self.actions.space
         self.observation_space = self.observer.space
-        self._base_light = self.cell.model.light_diffuse.copy()
-        self._settle_steps = round(cfg.reset_settle / float(self.cell.model.opt.timestep))
         self._t0 = 0.0
         self._needs_reset = True
         self._closed = False
         self._viewer: Any = None
         self._listeners: list[_FrameListener] = []
 
-    def _adapter(self, pcfg: Any) -> ActionAdapter:
+    def _adapter(self, pcfg: PlannerConfig) -> ActionAdapter:
         cfg, cell = self.config, self.cell
         if cfg.action_mode == "joint":
             return JointActions(cell, cfg)
         if cfg.action_mode == "cartesian":
-            return CartesianActions(cell, cfg, self.ik)
-        executor = PickPlaceExecutor(cell, cfg, pcfg, self.ik)
+            return CartesianActions(cell, cfg, self.ik, self.pick_area, self.place_area)
+        executor = PickPlaceExecutor(
+            cell, cfg, pcfg, self.ik, pick=self.pick_area, place=self.place_area
+        )
+        self.executor = executor
         if cfg.action_mode == "pick_place":
-            return PickPlaceActions(cell, cfg, executor)
+            return PickPlaceActions(cell, cfg, executor, self.codec)
         return DiscretePickPlaceActions(cell, cfg, executor)
 
     # ------------------------------------------------------------------ Gymnasium API
@@ -194,19 +216,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._check_open()
         super().reset(seed=seed)
         cell, rng = self.cell, self.np_random
-        for attempt in range(self.config.layout_tries):
-            try:
-                cell.reset(seed=np.random.default_rng(rng.integers(SEED_BOUND)))
-                break
-            except CellError:
-                if attempt == self.config.layout_tries - 1:
-                    raise
-        self._randomize(rng)
-        cell.belt_speed = self.config.belt_speed
-        if self._settle_steps:
-            cell.step(self._settle_steps)
+        self.task.initialize_episode(rng)
         self._t0 = cell.time
-        self.task.reset()
         self.actions.reset()
         for f in self._listeners:
             f.next_time = cell.time
@@ -233,7 +244,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         evaluation = self.task.evaluate()
         terms = self.task.rewards(evaluation, result.failed)
         reward = float(sum(terms.values()))
-        terminated = bool(evaluation["success"] or evaluation["placeable"] == 0)
+        terminated = evaluation.success or evaluation.failure
         obs = self.observer.observe(self.np_random, evaluation)
         info = self._info(evaluation, terms, result.failed, result.reason)
         if self.render_mode == "human":
@@ -283,8 +294,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._closed = True
 
     # ------------------------------------------------------------------ extras
-    def evaluate(self) -> dict[str, Any]:
-        """The task's evaluation dict now (see `MosaicTask.evaluate`)."""
+    def evaluate(self) -> Evaluation:
+        """The task's evaluation now (see `envs.task.Evaluation`)."""
         return self.task.evaluate()
 
     def camera_model(
@@ -307,12 +318,14 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def pick_place_action(
         self, pick_xy: np.ndarray, pick_yaw: float, place_xy: np.ndarray, place_yaw: float
     ) -> np.ndarray:
-        """Normalised ``pick_place`` action from world poses [m, rad] (see `PickPlaceBounds`).
+        """Normalised ``pick_place`` action from world poses with absolute yaws [m, rad].
 
         Raises:
             ActionError: A position outside its area.
         """
-        return self.bounds.normalize(pick_xy, pick_yaw, place_xy, place_yaw)
+        p, q = np.asarray(pick_xy, float), np.asarray(place_xy, float)
+        cmd = PickPlaceCommand.between_yaws((p[0], p[1]), pick_yaw, (q[0], q[1]), place_yaw)
+        return self.codec.encode(cmd)
 
     def expert_action(self, tile: int, slot: int) -> np.ndarray:
         """Privileged action moving ``tile`` into ``slot`` exactly (pick_place modes only).
@@ -327,7 +340,32 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             return np.array([tile, slot, 0], dtype=np.int64)
         if mode != "pick_place":
             raise MosaicEnvError(f"expert_action needs a pick_place mode, not {mode!r}")
-        return self.pick_place_action(*transfer_poses(self.cell, tile, slot))
+        return self.codec.encode(transfer_poses(self.cell, tile, slot))
+
+    def ground_truth(self) -> GroundTruth:
+        """Privileged tile poses and classes now (scoring and reports only)."""
+        return self.task.ground_truth()
+
+    def move_home(self) -> dict[str, Any]:
+        """Move the arm to its home pose with one planned move; returns a fresh observation.
+
+        For a picture of the work after an episode (the arm out of the cameras' view):
+        ``dynamic`` execution tracks a time-optimal joint move with the servos (simulated
+        time advances); otherwise the arm is put at home. Nothing is evaluated or rewarded.
+
+        Raises:
+            MosaicEnvError: Called before `reset` or after `close`.
+        """
+        self._check_open()
+        if self._needs_reset:
+            raise MosaicEnvError("move_home() called before reset(): call env.reset() first")
+        home = np.asarray(self.cell.cfg.robot.home, float)
+        if self.executor is not None:
+            self.executor.move_to(home)
+        else:
+            self.cell.set_qpos(home)
+        self.actions.reset()
+        return self.observer.observe(self.np_random, self.task.evaluate())
 
     def add_frame_listener(self, listener: Callable[[], None], fps: float) -> None:
         """Call ``listener()`` every ``1 / fps`` s of simulated time, also inside a step.
@@ -343,9 +381,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         if not (np.isfinite(fps) and fps > 0):
             raise MosaicEnvError(f"fps must be a positive number of frames per second, got {fps}")
         self._listeners.append(_FrameListener(listener, 1.0 / fps, self.cell.time))
-        executor = getattr(self.actions, "executor", None)
-        if executor is not None:
-            executor.on_physics_step = self._tick
+        if self.executor is not None:
+            self.executor.on_physics_step = self._tick
 
     def _tick(self) -> None:
         t = self.cell.time + 1e-9
@@ -356,32 +393,21 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     # ------------------------------------------------------------------ helpers
     def _info(
-        self, evaluation: dict[str, Any], terms: dict[str, float], failed: bool, reason: str
+        self, evaluation: Evaluation, terms: dict[str, float], failed: bool, reason: str
     ) -> dict[str, Any]:
         t = self.cell.time - self._t0
-        placed = evaluation["correct"]
+        placed = evaluation.correct
         info: dict[str, Any] = {
             "sim_time": t,
             "tiles_placed": placed,
             "tiles_per_min": 60.0 * placed / t if t > 0 else 0.0,
-            "evaluation": evaluation,
-            "is_success": evaluation["success"],
+            "evaluation": evaluation.as_dict(),
+            "is_success": evaluation.success,
             "action_failed": failed,
             "action_error": reason,
         }
         info.update({f"reward_{k}": float(v) for k, v in terms.items()})
         return info
-
-    def _randomize(self, rng: np.random.Generator) -> None:
-        """Per-episode colour and light changes (the cell's reset restored the tile colours)."""
-        m, cfg = self.cell.model, self.config
-        visual = self.cell.ids.tile_visual.ravel()
-        if cfg.color_randomization > 0 and len(visual):
-            f = 1 + rng.normal(0.0, cfg.color_randomization, (len(visual), 3))
-            m.geom_rgba[visual, :3] = np.clip(m.geom_rgba[visual, :3] * f, 0.0, 1.0)
-        if cfg.light_randomization > 0 and m.nlight:
-            f = 1 + rng.normal(0.0, cfg.light_randomization, (m.nlight, 1))
-            m.light_diffuse[:] = np.clip(self._base_light * f, 0.0, 1.0)
 
     def _check_open(self) -> None:
         if self._closed:
@@ -397,43 +423,14 @@ class _FrameListener:
     next_time: float
 
 
-def _design(cfg: EnvConfig) -> tuple[tuple[TileShape, ...], tuple[SlotSpec, ...]]:
+def _design(cfg: EnvConfig) -> tuple[Design, tuple[TileShape, ...], tuple[SlotSpec, ...]]:
     from qshape.design import Design  # noqa: PLC0415 - keep `import envs` light
 
-    shapes, slots = tile_shapes_from_design(Design.load(cfg.design))
+    design = Design.load(cfg.design)
+    shapes, slots = tile_shapes_from_design(design)
     if cfg.max_slots:
         shapes, slots = shapes[: cfg.max_slots], slots[: cfg.max_slots]
-    return shapes, slots
-
-
-def _cell_config(cfg: EnvConfig) -> CellConfig:
-    base = load_cell_config(cfg.cell)
-    tiles = replace(
-        base.tiles,
-        feed=cast(Literal["all", "stream", "batch"], cfg.feed),
-        stream_period=cfg.stream_period,
-        stream_initial=cfg.stream_initial,
-        batch_size=cfg.batch_size,
-        batch_index_time=cfg.batch_index_time,
-        distractor_rate=cfg.distractor_rate,
-        vertex_jitter=cfg.vertex_jitter,
-        color_jitter=cfg.tile_color_jitter,
-        variants=cfg.tile_variants,
-    )
-    return replace(base, tiles=tiles, input_belt=replace(base.input_belt, speed=cfg.belt_speed))
-
-
-def _build_cell(
-    cfg: CellConfig, shapes: tuple[TileShape, ...], slots: tuple[SlotSpec, ...], tries: int
-) -> Cell:
-    """A cell whose first layout fits (layout draws can fail on crowded belts)."""
-    for seed in range(tries):
-        try:
-            return Cell(cfg, shapes, slots, seed=seed)
-        except CellError as exc:
-            if "could not place" not in str(exc) or seed == tries - 1:
-                raise
-    raise AssertionError("unreachable")
+    return design, shapes, slots
 
 
 __all__ = ["ActionError", "MosaicAssemblyEnv", "MosaicEnvError"]

@@ -22,7 +22,7 @@ from gymnasium import spaces
 
 from envs.cell import CAMERAS, Cell
 from envs.env_config import EnvConfig
-from envs.task import MosaicTask
+from envs.task import Evaluation, MosaicTask
 from planners.ik import IKSolver
 
 ROBOT_DIM = 19
@@ -66,12 +66,12 @@ class Observer:
             d["slots"] = spaces.Box(-BIG, BIG, (k * SLOT_DIM,), np.float32)
         self.space = spaces.Dict(d)
 
-    def observe(self, rng: np.random.Generator, evaluation: dict[str, Any]) -> dict[str, Any]:
+    def observe(self, rng: np.random.Generator, evaluation: Evaluation) -> dict[str, Any]:
         """The current observation (fresh arrays).
 
         Args:
             rng: Generator for observation noise.
-            evaluation: The task's current `evaluate()` dict (slot fill).
+            evaluation: The task's current `Evaluation` (slot fill).
         """
         cell, (h, w) = self.cell, self.cfg.image_size
         obs: dict[str, Any] = {}
@@ -100,7 +100,7 @@ class Observer:
         )
         return np.clip(v, -BIG, BIG).astype(np.float32)
 
-    def _state(self, evaluation: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    def _state(self, evaluation: Evaluation) -> tuple[np.ndarray, np.ndarray]:
         cell, task = self.cell, self.task
         poses = cell.tile_poses()
         present = cell.on_stage & ~cell.lost
@@ -114,7 +114,7 @@ class Observer:
                 np.cos(s[:, 2]),
                 np.sin(s[:, 2]),
                 task.slot_class,
-                np.asarray(evaluation["slot_filled"], float),
+                np.asarray(evaluation.slot_filled, float),
             ]
         ).reshape(len(cell.slots), SLOT_DIM)
         return (

@@ -39,12 +39,6 @@ timestep) so a tile crushed by the arm sinks at most a few mm into a belt (0.02 
 WELD_SOLREF = (0.004, 1.0)
 """Time constant [s] and damping ratio of the suction weld (stiff: 2x the default timestep)."""
 
-BELT_RGBA = (0.12, 0.12, 0.13, 1.0)
-FRAME_RGBA = (0.55, 0.57, 0.6, 1.0)
-SHEET_RGBA = (0.22, 0.22, 0.24, 1.0)
-SLOT_WHITE = 0.45
-"""Slot marks are this much white mixed with the expected tile colour."""
-
 
 @dataclass(frozen=True, eq=False)
 class SceneIds:
@@ -245,7 +239,7 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
     """Floor, light, belts, bin, mesh sheet with slot marks, cameras."""
     geo = cell_geometry(cfg)
     wb = spec.worldbody
-    ib, ob = cfg.input_belt, cfg.output_belt
+    ib, ob, look = cfg.input_belt, cfg.output_belt, cfg.scenery
     top = geo.belt_top
     friction = [cfg.tiles.friction, 0.005, 0.0001]
 
@@ -253,31 +247,35 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         name="floor_tex",
         type=mujoco.mjtTexture.mjTEXTURE_2D,
         builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
-        rgb1=[0.33, 0.35, 0.38],
-        rgb2=[0.28, 0.3, 0.33],
-        width=256,
-        height=256,
+        rgb1=list(look.floor_checker[0]),
+        rgb2=list(look.floor_checker[1]),
+        width=look.floor_texture_px,
+        height=look.floor_texture_px,
     )
+    repeat = look.floor_texture_repeat
     spec.add_material(
-        name="floor_mat", textures=["", "floor_tex"], texrepeat=[8, 8], texuniform=True
+        name="floor_mat", textures=["", "floor_tex"], texrepeat=[repeat, repeat], texuniform=True
     )
     # Rubber belts are matte: MuJoCo's default material (specular 0.5) puts the headlight's
     # highlight in the middle of each camera image, which the perception's illumination model
     # (fitted to the belt) would read as brighter light there and so over-correct the tiles
     # near the image corners.
-    spec.add_material(name="belt_mat", rgba=list(BELT_RGBA), specular=0.0, shininess=0.0)
-    floor = wb.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[4, 4, 0.05])
+    spec.add_material(name="belt_mat", rgba=list(look.belt_rgba), specular=0.0, shininess=0.0)
+    half_floor = look.floor_half_size
+    floor = wb.add_geom(
+        name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[half_floor, half_floor, 0.05]
+    )
     floor.material = "floor_mat"
     floor.contype, floor.conaffinity = WORLD_CONTYPE, WORLD_CONAFFINITY
     floor.solref = list(CONTACT_SOLREF)
     wb.add_light(
         name="top_light",
-        pos=[0.3, 0, 2.5],
+        pos=list(look.light_pos),
         dir=[0, 0, -1],
         type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
         castshadow=False,
-        diffuse=[0.45, 0.45, 0.45],
-        specular=[0.1, 0.1, 0.1],
+        diffuse=[look.light_diffuse] * 3,
+        specular=[look.light_specular] * 3,
     )
 
     # Input belt (carries tiles through surfacevel) with its frame and the bin at the end.
@@ -287,46 +285,46 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         "input_belt",
         [cx, geo.input_y, top - ib.thickness / 2],
         [ib.length / 2, ib.width / 2, ib.thickness / 2],
-        BELT_RGBA,
+        look.belt_rgba,
     )
     belt.material = "belt_mat"
     belt.friction = friction
     belt.surfacevel = [ib.speed, 0.0, 0.0, 0.0, 0.0, 0.0]
-    rail_h = 0.01
     for side, sign in (("left", 1), ("right", -1)):
         _box(
             wb,
             f"input_rail_{side}",
-            [cx, geo.input_y + sign * (ib.width / 2 + 0.01), top],
-            [ib.length / 2, 0.01, rail_h],
-            FRAME_RGBA,
+            [cx, geo.input_y + sign * (ib.width / 2 + look.rail_gap), top],
+            [ib.length / 2, look.rail_half_width, look.rail_height],
+            look.frame_rgba,
         )
     leg = top - ib.thickness
+    inset_x, inset_y = look.stand_inset
     _box(
         wb,
         "input_stand",
         [cx, geo.input_y, leg / 2],
-        [ib.length / 2 - 0.05, ib.width / 2 - 0.03, leg / 2],
-        FRAME_RGBA,
+        [ib.length / 2 - inset_x, ib.width / 2 - inset_y, leg / 2],
+        look.frame_rgba,
         collide=False,
     )
-    bx0 = geo.input_belt_end + 0.005
+    bx0 = geo.input_belt_end + look.bin_gap
     bin_floor = top - ib.bin_depth
-    bw = ib.width / 2 + 0.05
-    wall = 0.005
+    bw = ib.width / 2 + look.bin_side_margin
+    wall = look.bin_wall
     _box(
         wb,
         "bin_floor",
         [bx0 + ib.bin_length / 2, geo.input_y, bin_floor - wall],
         [ib.bin_length / 2, bw, wall],
-        (0.35, 0.25, 0.15, 1),
+        look.bin_floor_rgba,
     )
     _box(
         wb,
         "bin_far",
         [bx0 + ib.bin_length + wall, geo.input_y, bin_floor + ib.bin_depth / 2],
         [wall, bw, ib.bin_depth / 2],
-        (0.45, 0.33, 0.2, 1),
+        look.bin_wall_rgba,
     )
     for side, sign in (("left", 1), ("right", -1)):
         _box(
@@ -334,14 +332,18 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
             f"bin_{side}",
             [bx0 + ib.bin_length / 2, geo.input_y + sign * bw, bin_floor + ib.bin_depth / 2],
             [ib.bin_length / 2, wall, ib.bin_depth / 2],
-            (0.45, 0.33, 0.2, 1),
+            look.bin_wall_rgba,
         )
     _box(
         wb,
         "bin_stand",
         [bx0 + ib.bin_length / 2, geo.input_y, (bin_floor - 2 * wall) / 2],
-        [ib.bin_length / 2 - 0.02, bw - 0.02, (bin_floor - 2 * wall) / 2],
-        FRAME_RGBA,
+        [
+            ib.bin_length / 2 - look.bin_stand_inset,
+            bw - look.bin_stand_inset,
+            (bin_floor - 2 * wall) / 2,
+        ],
+        look.frame_rgba,
         collide=False,
     )
 
@@ -352,7 +354,7 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         "output_belt",
         [oc[0], oc[1], top - ob.thickness / 2],
         [ob.length / 2, ob.width / 2, ob.thickness / 2],
-        BELT_RGBA,
+        look.belt_rgba,
     )
     obelt.material = "belt_mat"
     obelt.friction = friction
@@ -360,8 +362,8 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         wb,
         "output_stand",
         [oc[0], oc[1], leg / 2],
-        [ob.length / 2 - 0.05, ob.width / 2 - 0.03, leg / 2],
-        FRAME_RGBA,
+        [ob.length / 2 - inset_x, ob.width / 2 - inset_y, leg / 2],
+        look.frame_rgba,
         collide=False,
     )
     sheet = _box(
@@ -369,7 +371,7 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         "mesh_sheet",
         [oc[0], oc[1], top + ob.mesh_thickness / 2],
         [ob.mesh_size[0] / 2, ob.mesh_size[1] / 2, ob.mesh_thickness / 2],
-        SHEET_RGBA,
+        look.sheet_rgba,
     )
     sheet.friction = friction
     half = np.asarray(ob.mesh_size) / 2
@@ -395,7 +397,7 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         g.pos = [oc[0] + x, oc[1] + y, geo.mesh_top]
         g.quat = yaw_quat(yaw)
         g.contype, g.conaffinity, g.group = 0, 0, 1
-        col = SLOT_WHITE + (1 - SLOT_WHITE) * np.asarray(slot.shape.color)
+        col = look.slot_white + (1 - look.slot_white) * np.asarray(slot.shape.color)
         g.rgba = [*col, 1.0]
 
     # Cameras looking straight down; image right = +x, image up = +y.
@@ -411,7 +413,7 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         ]
         c.quat = [1, 0, 0, 0]
         c.fovy = cam.fovy_deg
-    wb.add_camera(name="overview", pos=[1.45, 0.0, 1.35], xyaxes=[0, 1, 0, -0.62, 0, 0.78])
+    wb.add_camera(name="overview", pos=list(look.overview_pos), xyaxes=list(look.overview_xyaxes))
 
 
 def _configure(spec: mujoco.MjSpec, cfg: CellConfig) -> None:

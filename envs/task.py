@@ -1,6 +1,9 @@
 """The mosaic task: which tile belongs where, placement evaluation and rewards.
 
-`MosaicTask.evaluate` returns one dict the reward, the episode end and ``info`` all read.
+`MosaicTask.evaluate` returns one `Evaluation` the reward, the episode end and ``info`` all read
+(``info["evaluation"]`` is its `Evaluation.as_dict`). `MosaicTask.initialize_episode` is the
+episode set-up hook: layout (with retries), per-episode colour and light randomisation, belt
+speed and settling.
 Tiles and slots are matched by class name (the design's shape-and-colour class); distractors are
 never correct. A tile counts as placed when it lies over the mesh (not held, at any height: flat
 on the sheet, stacked on another tile or tilted); it fills the nearest slot when it lies flat on
@@ -10,6 +13,7 @@ other placed real tile is misplaced.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -18,6 +22,8 @@ import numpy as np
 
 from envs.cell import Cell
 from envs.env_config import EnvConfig
+from envs.errors import CellError
+from planners.angles import yaw_error
 
 REWARD_TERMS = (
     "correct",
@@ -35,6 +41,8 @@ REWARD_TERMS = (
 
 
 MM_PER_M = 1e3
+SEED_BOUND = 2**63
+"""Exclusive bound of the layout seeds drawn from the episode generator at each reset."""
 
 
 @dataclass(frozen=True)
@@ -62,6 +70,84 @@ class Placement:
     slot_filled: np.ndarray
 
 
+@dataclass(frozen=True)
+class Evaluation:
+    """The task's state at one instant.
+
+    Attributes:
+        success: Every slot is filled correctly.
+        failure: Not a success and no remaining real tile can fill an open slot (the episode
+            cannot succeed any more).
+        correct: Slots filled correctly.
+        misplaced: Real tiles on the mesh not filling a slot (wrong class, pose beyond
+            tolerance, stacked on another tile, e.g. put into a filled slot, or tilted).
+        dropped: Tiles the pad lost in transit.
+        lost: Tiles lost off the input belt.
+        distractors_placed: Distractor tiles on the mesh.
+        slots: Number of slots.
+        slot_filled: Per slot: filled correctly.
+        placeable: Open slots a remaining real tile of the right class could still fill.
+        position_error_mm: Mean position error of the tiles on the mesh [mm] (None: none).
+        position_error_mm_max: Largest of those [mm].
+        yaw_error_deg: Mean yaw error modulo symmetry of the tiles on the mesh [deg].
+        yaw_error_deg_max: Largest of those [deg].
+    """
+
+    success: bool
+    failure: bool
+    correct: int
+    misplaced: int
+    dropped: int
+    lost: int
+    distractors_placed: int
+    slots: int
+    slot_filled: tuple[bool, ...]
+    placeable: int
+    position_error_mm: float | None
+    position_error_mm_max: float | None
+    yaw_error_deg: float | None
+    yaw_error_deg_max: float | None
+
+    def as_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (``slot_filled`` as a list), as ``info["evaluation"]``."""
+        d = {f.name: getattr(self, f.name) for f in _EVALUATION_FIELDS}  # flat: no deep copy
+        d["slot_filled"] = list(self.slot_filled)
+        return d
+
+
+_EVALUATION_FIELDS = dataclasses.fields(Evaluation)
+
+
+@dataclass(frozen=True, eq=False)
+class GroundTruth:
+    """Privileged state of the tiles (scoring and reports only, never for decisions).
+
+    Attributes:
+        xy: Tile area-centroid positions, shape (n, 2) [m].
+        yaw: Tile yaws, shape (n,) [rad].
+        class_name: Each tile's shape-and-colour class.
+        distractor: Tiles the design lacks, shape (n,) bool.
+        symmetry: Rotational symmetry order of each tile, shape (n,) (0: continuous).
+        on_stage: Tiles fed into the cell (not parked), shape (n,) bool.
+        slot_class: Each slot's class.
+    """
+
+    xy: np.ndarray
+    yaw: np.ndarray
+    class_name: tuple[str, ...]
+    distractor: np.ndarray
+    symmetry: np.ndarray
+    on_stage: np.ndarray
+    slot_class: tuple[str, ...]
+
+    def nearest(self, xy: np.ndarray) -> tuple[int, float]:
+        """The fed tile nearest to a world point: (index, distance [m])."""
+        d = np.linalg.norm(self.xy - np.asarray(xy, float)[None], axis=1)
+        d[~self.on_stage] = np.inf
+        i = int(np.argmin(d))
+        return i, float(d[i])
+
+
 class MosaicTask:
     """Placement evaluation and rewards of one cell and design.
 
@@ -80,8 +166,7 @@ class MosaicTask:
         self.slot_class = np.array([index[n] for n in slot_names], dtype=int)
         self.tile_class = np.array([index[t.shape.name] for t in cell.tiles], dtype=int)
         self.distractor = cell.is_distractor.copy()
-        sym = np.array([t.shape.symmetry for t in cell.tiles], dtype=float)
-        self.period = np.where(sym > 0, 2 * np.pi / np.maximum(sym, 1), 0.0)
+        self.symmetry = np.array([t.shape.symmetry for t in cell.tiles], dtype=int)
         self.slot_xyyaw = cell.slot_poses_world()
         mesh = np.asarray(cell.cfg.output_belt.mesh_size) / 2
         self._mesh_lo = cell.geometry.output_centre[:2] - mesh
@@ -89,8 +174,46 @@ class MosaicTask:
         self._rest_z = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2
         self._yaw_tol = math.radians(config.yaw_tolerance_deg)
         self._flat = math.cos(math.radians(config.max_tilt_deg))
-        self._prev: dict[str, Any] = {}
+        self._base_light = cell.model.light_diffuse.copy()
+        self._settle_steps = round(config.reset_settle / float(cell.model.opt.timestep))
+        self._prev = self.evaluate()
+
+    def initialize_episode(self, rng: np.random.Generator) -> None:
+        """Set an episode up (the env's ``reset``): all randomness from ``rng``.
+
+        The cell is reset with a fresh layout (redrawn up to ``layout_tries`` times when the
+        tiles do not fit; its feed lays out the initial tiles and its variants are redrawn),
+        tile colours and lights are randomised (``color_randomization``,
+        ``light_randomization``), the input belt is set running and physics settles the tiles
+        for ``reset_settle``.
+
+        Raises:
+            CellError: No layout draw fits.
+        """
+        cell, cfg = self.cell, self.cfg
+        for attempt in range(cfg.layout_tries):
+            try:
+                cell.reset(seed=np.random.default_rng(rng.integers(SEED_BOUND)))
+                break
+            except CellError:
+                if attempt == cfg.layout_tries - 1:
+                    raise
+        self._randomize(rng)
+        cell.belt_speed = cfg.belt_speed
+        if self._settle_steps:
+            cell.step(self._settle_steps)
         self.reset()
+
+    def _randomize(self, rng: np.random.Generator) -> None:
+        """Per-episode colour and light changes (the cell's reset restored the tile colours)."""
+        m, cfg = self.cell.model, self.cfg
+        visual = self.cell.ids.tile_visual.ravel()
+        if cfg.color_randomization > 0 and len(visual):
+            f = 1 + rng.normal(0.0, cfg.color_randomization, (len(visual), 3))
+            m.geom_rgba[visual, :3] = np.clip(m.geom_rgba[visual, :3] * f, 0.0, 1.0)
+        if cfg.light_randomization > 0 and m.nlight:
+            f = 1 + rng.normal(0.0, cfg.light_randomization, (m.nlight, 1))
+            m.light_diffuse[:] = np.clip(self._base_light * f, 0.0, 1.0)
 
     def reset(self) -> None:
         """Forget the counts of the previous step (call after the cell's reset)."""
@@ -126,12 +249,7 @@ class MosaicTask:
             nearest = np.argmin(d, axis=1)
             slot[idx] = nearest
             perr[idx] = d[np.arange(len(idx)), nearest]
-            dyaw = poses.yaw[idx] - self.slot_xyyaw[nearest, 2]
-            per = self.period[idx]
-            wrapped = np.where(
-                per > 0, (dyaw + per / 2) % np.where(per > 0, per, 1.0) - per / 2, 0.0
-            )
-            yerr[idx] = np.abs(wrapped)
+            yerr[idx] = yaw_error(poses.yaw[idx], self.slot_xyyaw[nearest, 2], self.symmetry[idx])
             ok = (
                 flat[idx]
                 & (self.tile_class[idx] == self.slot_class[nearest])
@@ -148,18 +266,8 @@ class MosaicTask:
                     correct[idx[j]] = True
         return Placement(on_mesh, flat, slot, perr, yerr, correct, filled)
 
-    def evaluate(self) -> dict[str, Any]:
-        """The task's state as one dict (also ``info["evaluation"]``).
-
-        Keys: ``success`` (every slot filled correctly), ``correct`` (slots filled correctly),
-        ``misplaced`` (real tiles on the mesh not filling a slot: wrong class, pose beyond
-        tolerance, stacked on another tile (e.g. put into a filled slot) or tilted),
-        ``dropped`` (tiles the pad lost in transit), ``lost`` (tiles lost off the
-        input belt), ``distractors_placed``, ``slots`` (number of slots), ``slot_filled`` (bool
-        list), ``position_error_mm`` and ``yaw_error_deg`` (mean and max over tiles on the mesh,
-        None when no tile is on the mesh), ``placeable`` (open slots a remaining real tile of
-        the right class could still fill).
-        """
+    def evaluate(self) -> Evaluation:
+        """The task's state now (also ``info["evaluation"]``, as a dict)."""
         p = self.placement()
         cell = self.cell
         real = ~self.distractor
@@ -175,25 +283,41 @@ class MosaicTask:
         on = p.on_mesh
         pe = p.position_error[on] * MM_PER_M
         ye = np.degrees(p.yaw_error[on])
-        return {
-            "success": bool(p.slot_filled.all()) and len(p.slot_filled) > 0,
-            "correct": int(p.slot_filled.sum()),
-            "misplaced": misplaced,
-            "dropped": int(cell.n_dropped),
-            "lost": int(cell.n_lost),
-            "distractors_placed": distractors,
-            "slots": len(p.slot_filled),
-            "slot_filled": p.slot_filled.tolist(),
-            "placeable": placeable,
-            "position_error_mm": float(pe.mean()) if pe.size else None,
-            "position_error_mm_max": float(pe.max()) if pe.size else None,
-            "yaw_error_deg": float(ye.mean()) if ye.size else None,
-            "yaw_error_deg_max": float(ye.max()) if ye.size else None,
-        }
+        success = bool(p.slot_filled.all()) and len(p.slot_filled) > 0
+        return Evaluation(
+            success=success,
+            failure=not success and placeable == 0,
+            correct=int(p.slot_filled.sum()),
+            misplaced=misplaced,
+            dropped=int(cell.n_dropped),
+            lost=int(cell.n_lost),
+            distractors_placed=distractors,
+            slots=len(p.slot_filled),
+            slot_filled=tuple(bool(v) for v in p.slot_filled),
+            placeable=placeable,
+            position_error_mm=float(pe.mean()) if pe.size else None,
+            position_error_mm_max=float(pe.max()) if pe.size else None,
+            yaw_error_deg=float(ye.mean()) if ye.size else None,
+            yaw_error_deg_max=float(ye.max()) if ye.size else None,
+        )
 
-    def wanted_tiles(self, evaluation: dict[str, Any]) -> np.ndarray:
+    def ground_truth(self) -> GroundTruth:
+        """Privileged tile poses and classes now (scoring and reports only)."""
+        cell = self.cell
+        poses = cell.tile_poses()
+        return GroundTruth(
+            xy=poses.pos[:, :2],
+            yaw=poses.yaw,
+            class_name=tuple(t.shape.name for t in cell.tiles),
+            distractor=self.distractor.copy(),
+            symmetry=self.symmetry.copy(),
+            on_stage=cell.on_stage.copy(),
+            slot_class=tuple(s.shape.name for s in cell.slots),
+        )
+
+    def wanted_tiles(self, evaluation: Evaluation) -> np.ndarray:
         """Real tiles on the input side whose class fills an open slot, shape (n,) bool."""
-        filled = np.asarray(evaluation["slot_filled"], bool)
+        filled = np.asarray(evaluation.slot_filled, bool)
         open_classes = np.unique(self.slot_class[~filled])
         p_on = self.placement().on_mesh
         return (
@@ -204,7 +328,7 @@ class MosaicTask:
             & np.isin(self.tile_class, open_classes)
         )
 
-    def rewards(self, evaluation: dict[str, Any], failed_action: bool) -> dict[str, float]:
+    def rewards(self, evaluation: Evaluation, failed_action: bool) -> dict[str, float]:
         """Reward terms of a step, from the change since the previous call.
 
         Args:
@@ -217,15 +341,14 @@ class MosaicTask:
         """
         c, prev = self.cfg, self._prev
         terms = dict.fromkeys(REWARD_TERMS, 0.0)
-        terms["correct"] = c.reward_correct * (evaluation["correct"] - prev["correct"])
-        terms["success"] = c.reward_success * float(evaluation["success"] and not prev["success"])
-        terms["misplaced"] = -c.penalty_misplaced * max(
-            evaluation["misplaced"] - prev["misplaced"], 0
-        )
-        terms["dropped"] = -c.penalty_dropped * (evaluation["dropped"] - prev["dropped"])
-        terms["lost"] = -c.penalty_lost * (evaluation["lost"] - prev["lost"])
+        e = evaluation
+        terms["correct"] = c.reward_correct * (e.correct - prev.correct)
+        terms["success"] = c.reward_success * float(e.success and not prev.success)
+        terms["misplaced"] = -c.penalty_misplaced * max(e.misplaced - prev.misplaced, 0)
+        terms["dropped"] = -c.penalty_dropped * (e.dropped - prev.dropped)
+        terms["lost"] = -c.penalty_lost * (e.lost - prev.lost)
         terms["distractor"] = -c.penalty_distractor * max(
-            evaluation["distractors_placed"] - prev["distractors_placed"], 0
+            e.distractors_placed - prev.distractors_placed, 0
         )
         terms["failed_action"] = -c.penalty_failed_action * float(failed_action)
         if c.reward_mode == "dense":
@@ -233,13 +356,13 @@ class MosaicTask:
         self._prev = evaluation
         return terms
 
-    def _dense(self, evaluation: dict[str, Any]) -> dict[str, float]:
+    def _dense(self, evaluation: Evaluation) -> dict[str, float]:
         """Shaping toward picking a wanted tile and carrying it to a free slot of its class."""
         cell, c = self.cell, self.cfg
         tool = cell.tcp_pose()[0]
         held = cell.held_tile
         out = {"reach": 0.0, "grasp": 0.0, "carry": 0.0}
-        filled = np.asarray(evaluation["slot_filled"], bool)
+        filled = np.asarray(evaluation.slot_filled, bool)
         if held >= 0 and not self.distractor[held]:
             free = np.flatnonzero(~filled & (self.slot_class == self.tile_class[held]))
             if len(free):
@@ -255,4 +378,4 @@ class MosaicTask:
         return out
 
 
-__all__ = ["REWARD_TERMS", "MosaicTask", "Placement"]
+__all__ = ["REWARD_TERMS", "Evaluation", "GroundTruth", "MosaicTask", "Placement"]

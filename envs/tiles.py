@@ -1,8 +1,9 @@
-"""Tile shapes, physical tiles with manufacturing noise, convex decomposition and layout.
+"""Tiles: shapes, slots, and physical tiles made with manufacturing noise.
 
 Units: metres and radians throughout. Outlines are counter-clockwise polygons; curved outlines
 arrive densely sampled. Nothing here imports MuJoCo: `envs.scene` turns `PhysicalTile` values
-into bodies.
+into bodies (convex pieces from `envs.decompose`); layouts on the belt are `envs.layout`'s,
+shapes from designs and the built-in test shapes `envs.tile_shapes`'.
 """
 
 from __future__ import annotations
@@ -10,9 +11,7 @@ from __future__ import annotations
 import colorsys
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
-from functools import lru_cache
-from typing import Any
+from dataclasses import dataclass, replace
 
 import numpy as np
 import shapely
@@ -20,9 +19,9 @@ import shapely.ops
 from shapely.geometry import Polygon, box
 
 from envs.cell_config import TileConfig
+from envs.decompose import decompose
 from envs.errors import CellError
-
-_EPS = 1e-12
+from qshape.geometry import signed_area
 
 
 def _as_polygon_array(points: object, what: str) -> np.ndarray:
@@ -34,12 +33,6 @@ def _as_polygon_array(points: object, what: str) -> np.ndarray:
     if np.allclose(arr[0], arr[-1]):
         arr = arr[:-1]
     return arr
-
-
-def signed_area(poly: np.ndarray) -> float:
-    """Signed area of a polygon, shape (n, 2) [m^2]; positive when counter-clockwise."""
-    x, y = poly[:, 0], poly[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
 JITTER_TRIES = 8
@@ -161,97 +154,6 @@ class PhysicalTile:
     distractor: str = ""
 
 
-def _is_convex(poly: np.ndarray, tol: float = 1e-12) -> bool:
-    d1 = np.roll(poly, -1, axis=0) - poly
-    d2 = np.roll(d1, -1, axis=0)
-    cross = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
-    return bool(np.all(cross >= -tol))
-
-
-def _hertel_mehlhorn(points: np.ndarray, tris: list[list[int]]) -> list[list[int]]:
-    """Merge counter-clockwise triangles (vertex indices) into convex polygons."""
-    pieces: dict[int, list[int]] = dict(enumerate(tris))
-    changed = True
-    while changed:
-        changed = False
-        edge_owner = {}
-        for pid, poly in pieces.items():
-            for k in range(len(poly)):
-                edge_owner[(poly[k], poly[(k + 1) % len(poly)])] = pid
-        for pid in sorted(pieces):
-            poly = pieces[pid]
-            for k in range(len(poly)):
-                a, b = poly[k], poly[(k + 1) % len(poly)]
-                qid = edge_owner.get((b, a))
-                if qid is None or qid == pid:
-                    continue
-                q = pieces[qid]
-                ib = poly.index(b)
-                p_rot = poly[ib:] + poly[:ib]  # starts at b, ends at a
-                ia = q.index(a)
-                q_rot = q[ia:] + q[:ia]  # starts at a, ends at b
-                merged = p_rot + q_rot[1:-1]
-                if _is_convex(points[merged]):
-                    pieces[pid] = merged
-                    del pieces[qid]
-                    changed = True
-                    break
-            if changed:
-                break
-    return list(pieces.values())
-
-
-def convex_decomposition(
-    outline: np.ndarray, holes: Sequence[np.ndarray] = ()
-) -> tuple[np.ndarray, tuple[list[int], ...]]:
-    """Split a polygon (with holes) into convex pieces.
-
-    Constrained Delaunay triangulation (shapely) followed by Hertel-Mehlhorn merging, so the
-    pieces share the polygon's own vertices.
-
-    Args:
-        outline: Outer boundary, shape (n, 2), counter-clockwise.
-        holes: Holes, each shape (m, 2).
-
-    Returns:
-        ``(points, pieces)``: all vertices, shape (n + sum m, 2), outline first then holes in
-        order; and each convex piece as a counter-clockwise list of indices into ``points``.
-    """
-    points = np.vstack([outline, *holes]) if holes else np.asarray(outline)
-    if not holes and _is_convex(points):
-        return points, (list(range(len(points))),)
-    index = {(round(float(x), 12), round(float(y), 12)): i for i, (x, y) in enumerate(points)}
-    tris_geom = shapely.constrained_delaunay_triangles(Polygon(outline, list(holes)))
-    tris: list[list[int]] = []
-    for tri in tris_geom.geoms:
-        coords = np.asarray(tri.exterior.coords)[:3]
-        try:
-            ids = [index[(round(float(x), 12), round(float(y), 12))] for x, y in coords]
-        except KeyError as exc:  # pragma: no cover - shapely adds no Steiner points
-            raise CellError("convex decomposition produced a vertex not in the polygon") from exc
-        if signed_area(points[ids]) < 0:
-            ids = ids[::-1]
-        if abs(signed_area(points[ids])) > _EPS * 1e-3:
-            tris.append(ids)
-    return points, tuple(_hertel_mehlhorn(points, tris))
-
-
-@lru_cache(maxsize=256)
-def _decompose_cached(key: bytes, n_out: int, hole_sizes: tuple[int, ...]) -> tuple:
-    flat = np.frombuffer(key, dtype=float).reshape(-1, 2)
-    outline = flat[:n_out]
-    holes, start = [], n_out
-    for m in hole_sizes:
-        holes.append(flat[start : start + m])
-        start += m
-    return convex_decomposition(outline, holes)
-
-
-def _decompose(outline: np.ndarray, holes: Sequence[np.ndarray]) -> tuple:
-    flat = np.vstack([outline, *holes]).astype(float)
-    return _decompose_cached(flat.tobytes(), len(outline), tuple(len(h) for h in holes))
-
-
 def _centre(outline: np.ndarray, holes: Sequence[np.ndarray]) -> tuple[np.ndarray, list]:
     c = Polygon(outline, list(holes)).centroid
     off = np.array([c.x, c.y])
@@ -322,7 +224,7 @@ def make_tile(
         outline, holes = _centre(outline, holes)
     elif distractor != "":
         raise CellError(f"unknown distractor kind {distractor!r}; allowed: color, broken, shape")
-    points, piece_ids = _decompose(outline, holes)
+    points, piece_ids = decompose(outline, holes)
     n_out = len(outline)
     for _ in range(JITTER_TRIES):
         noisy = points + rng.normal(0.0, cfg.vertex_jitter, points.shape)
@@ -414,190 +316,6 @@ def jitter_colors(
     )
 
 
-OUTLINE_FILL = 0.5
-"""Largest fraction of a tile area random placement of outlines is asked to fill."""
-CIRCLE_FILL = 0.8
-"""The same for bounding circles (no outlines given)."""
-
-
-def layout_capacity(outlines: Sequence[np.ndarray], area_size: Sequence[float], gap: float) -> int:
-    """How many of ``outlines``, taken in order, `sample_layout` can be asked to lay out.
-
-    Args:
-        outlines: Tile outlines in their own frames, each shape (k, 2) [m].
-        area_size: (x, y) size of the rectangle [m].
-        gap: Minimum clearance between tiles [m].
-
-    Returns:
-        The longest prefix whose area (each outline grown by ``gap / 2``) is within
-        `OUTLINE_FILL` of the rectangle's.
-    """
-    need = np.cumsum([Polygon(o).buffer(gap / 2).area for o in outlines])
-    return int(np.searchsorted(need, OUTLINE_FILL * area_size[0] * area_size[1], side="right"))
-
-
-def sample_layout(
-    radii: np.ndarray,
-    area_size: tuple[float, ...],
-    gap: float,
-    attempts: int,
-    rng: np.random.Generator,
-    *,
-    outlines: Sequence[np.ndarray] | None = None,
-    occupied: np.ndarray | None = None,
-    occupied_radii: np.ndarray | None = None,
-    restarts: int = 1,
-) -> np.ndarray:
-    """Random non-overlapping poses for tiles in a rectangle.
-
-    Tiles are placed largest first at uniform random positions and yaws. Two tiles whose
-    bounding circles (plus ``gap``) do not overlap are accepted at once; with ``outlines``
-    given, closer pairs are accepted when the actual outlines keep ``gap`` apart.
-
-    Args:
-        radii: Bounding radii about each tile's origin, shape (n,) [m].
-        area_size: (length, width) of the rectangle centred at the origin [m].
-        gap: Clearance between tiles [m].
-        attempts: Tries per tile before giving up.
-        rng: Random generator.
-        outlines: Optional outline per tile in its own frame, each shape (k, 2) [m] (exact
-            test, denser packing).
-        occupied: Centres of circles already there, shape (k, 2) [m], optional.
-        occupied_radii: Their radii, shape (k,) [m].
-        restarts: Whole layouts tried before giving up (random sequential placement can jam
-            near 50 % fill even when a layout exists; a fresh draw usually succeeds).
-
-    Returns:
-        Poses (x, y, yaw), shape (n, 3), in the rectangle's frame [m, m, rad].
-
-    Raises:
-        CellError: A tile does not fit (too large, or the area is too full).
-    """
-    radii = np.asarray(radii, dtype=float)
-    half = np.asarray(area_size, dtype=float) / 2
-    if outlines is not None:
-        extent = np.array([_min_half_extent(o) for o in outlines])
-    else:
-        extent = radii
-    if np.any(extent + gap / 2 > half.min()):
-        k = int(np.argmax(extent))
-        raise CellError(
-            f"tile {k} (size {2 * extent[k] * 1000:.1f} mm) does not fit the tile area "
-            f"{area_size[0] * 1000:.0f} x {area_size[1] * 1000:.0f} mm"
-        )
-    if outlines is not None:
-        need = float(sum(Polygon(o).buffer(gap / 2).area for o in outlines))
-        fill = OUTLINE_FILL
-    else:
-        need = float(np.sum(np.pi * (radii + gap / 2) ** 2))
-        fill = CIRCLE_FILL
-    have = float(area_size[0] * area_size[1])
-    if need > fill * have:
-        raise CellError(
-            f"{len(radii)} tiles need about {need * 1e4:.0f} cm^2 of belt but the tile area is "
-            f"{have * 1e4:.0f} cm^2 (random placement fills at most ~{fill:.0%}); use fewer "
-            "tiles, a larger input_belt.tile_area, or feed='stream' or 'batch'"
-        )
-
-    def once() -> np.ndarray:
-        return _layout_once(
-            radii,
-            half,
-            gap,
-            attempts,
-            rng,
-            outlines=outlines,
-            occupied=occupied,
-            occupied_radii=occupied_radii,
-        )
-
-    for _ in range(max(restarts, 1) - 1):
-        try:
-            return once()
-        except CellError:
-            continue
-    return once()
-
-
-def _layout_once(
-    radii: np.ndarray,
-    half: np.ndarray,
-    gap: float,
-    attempts: int,
-    rng: np.random.Generator,
-    *,
-    outlines: Sequence[np.ndarray] | None,
-    occupied: np.ndarray | None,
-    occupied_radii: np.ndarray | None,
-) -> np.ndarray:
-    """One try of `sample_layout` (same arguments); raises CellError when it jams."""
-    area_size = 2 * half
-    centres = np.zeros((0, 2)) if occupied is None else np.asarray(occupied, float)
-    rads = np.zeros(0) if occupied_radii is None else np.asarray(occupied_radii, float)
-    n_fixed = len(centres)
-    placed: list[Polygon] = []
-    out = np.zeros((len(radii), 3))
-    for i in np.argsort(-radii):
-        lim = half - radii[i]
-        lim = np.where(lim > 0, lim, 0.0)
-        cand = rng.uniform(-lim, lim, size=(attempts, 2))
-        yaws = rng.uniform(-np.pi, np.pi, attempts)
-        if len(centres):
-            d = np.linalg.norm(cand[:, None, :] - centres[None, :, :], axis=2)
-            clear = d >= rads[None, :] + radii[i] + gap
-        else:
-            clear = np.ones((attempts, 0), bool)
-        chosen = -1
-        for c in range(attempts):
-            poly = None
-            if outlines is not None:
-                poly = _posed(outlines[i], cand[c], yaws[c])
-                if not _inside(poly, half):
-                    continue
-            if clear[c].all():
-                chosen = c
-            elif outlines is not None and not clear[c, :n_fixed].all():
-                continue
-            elif outlines is not None:
-                near = [placed[k - n_fixed] for k in np.flatnonzero(~clear[c])]
-                if np.all(shapely.distance(poly, near) >= gap):
-                    chosen = c
-            if chosen >= 0:
-                if poly is not None:
-                    placed.append(poly)
-                break
-        if chosen < 0:
-            raise CellError(
-                f"could not place {len(radii)} tiles without overlap in the tile area "
-                f"{area_size[0] * 1000:.0f} x {area_size[1] * 1000:.0f} mm after {attempts} "
-                "tries per tile; use fewer tiles, a larger area or feed='stream'"
-            )
-        out[i] = (cand[chosen, 0], cand[chosen, 1], yaws[chosen])
-        centres = np.vstack([centres, cand[chosen]])
-        rads = np.append(rads, radii[i])
-    return out
-
-
-def _posed(outline: np.ndarray, xy: np.ndarray, yaw: float) -> Polygon:
-    c, s = np.cos(yaw), np.sin(yaw)
-    return Polygon(outline @ np.array([[c, s], [-s, c]]) + xy)
-
-
-def _inside(poly: Polygon, half: np.ndarray) -> bool:
-    x0, y0, x1, y1 = poly.bounds
-    return bool(x0 >= -half[0] and x1 <= half[0] and y0 >= -half[1] and y1 <= half[1])
-
-
-def _min_half_extent(outline: np.ndarray) -> float:
-    """Half the smallest width of an outline over rotations (it must fit some way) [m]."""
-    hull = np.asarray(Polygon(outline).convex_hull.exterior.coords)[:-1]
-    edges = np.roll(hull, -1, axis=0) - hull
-    normals = np.stack([-edges[:, 1], edges[:, 0]], axis=1)
-    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-    proj = hull @ normals.T
-    return float(np.min(proj.max(axis=0) - proj.min(axis=0)) / 2)
-
-
 def grasp_point(outline: np.ndarray, holes: Sequence[np.ndarray] = ()) -> np.ndarray:
     """Point of a polygon farthest from its boundary (pole of inaccessibility), shape (2,) [m].
 
@@ -613,132 +331,13 @@ def grasp_point(outline: np.ndarray, holes: Sequence[np.ndarray] = ()) -> np.nda
     return np.array([best.x, best.y])
 
 
-def _loop_points(loop: Any, arc_step_mm: float) -> np.ndarray:
-    """Vertices of a `qshape.design.Loop`: straight edges kept, arcs sampled [mm]."""
-    n = len(loop.vertices)
-    lengths = loop.edge_lengths()
-    counts = np.where(loop.bulges == 0.0, 1, np.maximum(2, np.ceil(lengths / arc_step_mm)))
-    counts = counts.astype(int)
-    edge = np.repeat(np.arange(n), counts)
-    starts = np.cumsum(counts) - counts
-    t = (np.arange(counts.sum()) - np.repeat(starts, counts)) / np.repeat(counts, counts)
-    return np.asarray(loop.edge_points(t.astype(float), edge))
-
-
-def tile_shapes_from_design(
-    design: Any, arc_step_mm: float = 2.0
-) -> tuple[tuple[TileShape, ...], tuple[SlotSpec, ...]]:
-    """Tile shapes and slots of a `qshape.design.Design` (mm, mesh origin at a corner).
-
-    One tile per slot. Shapes are named by the slot's shape-and-colour class
-    (``Slot.class_key``), so tiles and slots of a class share a name. Slot poses are moved to
-    the mesh centre and converted to metres and radians.
-
-    Args:
-        design: A loaded design (``Design.load("paper_mixed")``).
-        arc_step_mm: Largest distance between samples along arcs [mm] (straight edges keep
-            only their vertices).
-
-    Returns:
-        ``(shapes, slots)``, in the design's slot order.
-    """
-    if not arc_step_mm > 0:
-        raise CellError(f"arc_step_mm must be positive, got {arc_step_mm}")
-    mm = 1e-3
-    width, height = design.mesh_size
-    shapes, slots = [], []
-    for slot in design.slots:
-        path = slot.local_path
-        shape = TileShape(
-            _loop_points(path.outer, arc_step_mm) * mm,
-            holes=tuple(_loop_points(h, arc_step_mm) * mm for h in path.holes),
-            color=tuple(slot.color),
-            name=slot.class_key,
-            symmetry=int(slot.symmetry),
-        )
-        pose = ((slot.x - width / 2) * mm, (slot.y - height / 2) * mm, math.radians(slot.angle))
-        shapes.append(shape)
-        slots.append(SlotSpec(shape, pose, slot.name))
-    return tuple(shapes), tuple(slots)
-
-
-def _circle(r: float, n: int, start: float = 0.0, stop: float = 2 * np.pi) -> np.ndarray:
-    t = np.linspace(start, stop, n, endpoint=False)
-    return np.stack([r * np.cos(t), r * np.sin(t)], axis=1)
-
-
-@dataclass(frozen=True)
-class BasicShapes:
-    """Sizes of the built-in test shapes [m]."""
-
-    size: float = 0.02
-    samples: int = 32
-    colors: dict[str, tuple[float, float, float]] = field(
-        default_factory=lambda: {
-            "square": (0.85, 0.15, 0.12),
-            "rectangle": (0.15, 0.45, 0.85),
-            "triangle": (0.95, 0.8, 0.1),
-            "l_shape": (0.2, 0.7, 0.3),
-            "circle": (0.95, 0.5, 0.1),
-            "semicircle": (0.6, 0.25, 0.7),
-            "ring": (0.1, 0.75, 0.8),
-        }
-    )
-
-
-def basic_shapes(spec: BasicShapes | None = None) -> tuple[TileShape, ...]:
-    """Square, rectangle, right triangle, L (concave), circle, semicircle, ring (with a hole).
-
-    Args:
-        spec: Sizes and colours; default 20 mm tiles.
-    """
-    spec = spec or BasicShapes()
-    s, n, c = spec.size, spec.samples, spec.colors
-    sq = np.array([[0, 0], [s, 0], [s, s], [0, s]])
-    return (
-        TileShape(sq, color=c["square"], name="square", symmetry=4),
-        TileShape(sq * [2, 1], color=c["rectangle"], name="rectangle", symmetry=2),
-        TileShape(np.array([[0, 0], [s, 0], [0, s]]), color=c["triangle"], name="triangle"),
-        TileShape(
-            np.array(
-                [[0, 0], [2 * s, 0], [2 * s, s / 2], [s / 2, s / 2], [s / 2, 2 * s], [0, 2 * s]]
-            )
-            * 0.75,
-            color=c["l_shape"],
-            name="l_shape",
-        ),
-        TileShape(_circle(s / 2, n), color=c["circle"], name="circle", symmetry=0),
-        TileShape(
-            np.vstack([_circle(s / 2, n // 2 + 1, 0.0, np.pi * (1 + 2 / n))[: n // 2 + 1]]),
-            color=c["semicircle"],
-            name="semicircle",
-        ),
-        TileShape(
-            _circle(s * 0.6, n),
-            holes=(_circle(s * 0.25, n // 2)[::-1],),
-            color=c["ring"],
-            name="ring",
-            symmetry=0,
-        ),
-    )
-
-
 __all__ = [
-    "CIRCLE_FILL",
-    "OUTLINE_FILL",
-    "BasicShapes",
     "PhysicalTile",
     "SlotSpec",
     "TileShape",
-    "basic_shapes",
-    "convex_decomposition",
     "grasp_point",
     "jitter_colors",
-    "layout_capacity",
     "make_tile",
     "make_tile_pool",
     "make_tiles",
-    "sample_layout",
-    "signed_area",
-    "tile_shapes_from_design",
 ]

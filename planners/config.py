@@ -5,7 +5,8 @@ Every number is a field of a frozen dataclass with its unit; bundled defaults li
 ``__post_init__`` and raises `LimitError` naming the field and what is allowed.
 
 Facts and assumptions:
-    * Axis speed limits and joint ranges are the ABB IRB 140 datasheet values (SPEC section 4).
+    * Joint ranges and axis speed limits are read from the robot model (`planners.robot`: the
+      MJCF holds the ABB IRB 140 datasheet values).
     * ABB publishes no per-axis acceleration or jerk limits. The defaults assume each axis reaches
       its top speed in 1/9 s (acceleration = 9 x speed per second) with jerk 10 x acceleration
       (about 15-19 m/s^2 at the tool at the 0.5-0.6 m radius of the work areas). Calibrated, not
@@ -26,11 +27,15 @@ from typing import Any
 
 from configs import check_positive, load_config
 from planners.errors import LimitError
+from planners.robot import robot_joint_lower, robot_joint_speeds, robot_joint_upper
 
 N_JOINTS = 6
 """Number of arm joints."""
 
-_DEG = math.pi / 180.0
+ACCEL_PER_SPEED = 9.0
+"""Default axis acceleration limit per unit of speed limit [1/s] (assumption, see above)."""
+JERK_PER_ACCEL = 10.0
+"""Default axis jerk limit per unit of acceleration limit [1/s] (assumption, see above)."""
 
 _check_positive = partial(check_positive, error=LimitError)
 _check_non_negative = partial(check_positive, error=LimitError, strict=False)
@@ -50,32 +55,37 @@ def _check_tuple(obj: object, name: str, *, positive: bool = True) -> None:
             )
 
 
+def _from_speeds(times_accel: float) -> tuple[float, ...]:
+    """The model's axis speeds x ``ACCEL_PER_SPEED`` x ``times_accel`` (default limits)."""
+    return tuple(times_accel * ACCEL_PER_SPEED * v for v in robot_joint_speeds())
+
+
 @dataclass(frozen=True)
 class JointLimits:
     """Kinematic limits of the six axes.
 
     Attributes:
-        lower: Lower joint limits, shape (6,) [rad] (SPEC 4).
-        upper: Upper joint limits, shape (6,) [rad] (SPEC 4).
-        max_velocity: Axis speed limits, shape (6,) [rad/s] (SPEC 4: 200, 200, 260, 360, 360,
-            450 deg/s).
+        lower: Lower joint limits, shape (6,) [rad]. Default: the robot model's joint ranges
+            (``assets/irb140/irb140.xml``, their one home; `planners.robot`); set only to narrow
+            them (the IK solver never goes beyond the model's ranges).
+        upper: Upper joint limits, shape (6,) [rad]. Default: the robot model's.
+        max_velocity: Axis speed limits, shape (6,) [rad/s]. Default: the robot model's velocity
+            actuators' control ranges (datasheet: 200, 200, 260, 360, 360, 450 deg/s).
         max_acceleration: Axis acceleration limits, shape (6,) [rad/s^2] (assumption: 9 x speed,
             calibrated on ABB's standard cycle time, see the module docstring).
         max_jerk: Axis jerk limits, shape (6,) [rad/s^3] (assumption: 10 x acceleration).
     """
 
-    lower: tuple[float, ...] = tuple(
-        d * _DEG for d in (-180.0, -90.0, -230.0, -200.0, -115.0, -400.0)
+    lower: tuple[float, ...] = field(default_factory=robot_joint_lower)
+    upper: tuple[float, ...] = field(default_factory=robot_joint_upper)
+    max_velocity: tuple[float, ...] = field(default_factory=robot_joint_speeds)
+    max_acceleration: tuple[float, ...] = field(
+        default_factory=lambda: tuple(ACCEL_PER_SPEED * v for v in robot_joint_speeds())
     )
-    upper: tuple[float, ...] = tuple(d * _DEG for d in (180.0, 110.0, 50.0, 200.0, 115.0, 400.0))
-    max_velocity: tuple[float, ...] = tuple(
-        d * _DEG for d in (200.0, 200.0, 260.0, 360.0, 360.0, 450.0)
-    )
-    max_acceleration: tuple[float, ...] = tuple(
-        9.0 * d * _DEG for d in (200.0, 200.0, 260.0, 360.0, 360.0, 450.0)
-    )
-    max_jerk: tuple[float, ...] = tuple(
-        90.0 * d * _DEG for d in (200.0, 200.0, 260.0, 360.0, 360.0, 450.0)
+    max_jerk: tuple[float, ...] = field(
+        default_factory=lambda: tuple(
+            JERK_PER_ACCEL * ACCEL_PER_SPEED * v for v in robot_joint_speeds()
+        )
     )
 
     def __post_init__(self) -> None:

@@ -21,21 +21,19 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import mink
 import mujoco
 import numpy as np
 import numpy.typing as npt
 
+from planners.angles import wrap_angle
 from planners.config import N_JOINTS, IKConfig, JointLimits
 from planners.errors import InvalidTargetError, PlannerError, UnreachableError
+from planners.robot import ROBOT_XML
 from planners.trajectory import as_joint_vector
 
 Array = npt.NDArray[np.float64]
-
-ROBOT_XML = Path(__file__).resolve().parents[1] / "assets" / "irb140" / "irb140.xml"
-"""The robot-only MJCF (the default IK model)."""
 
 _TWO_PI = 2.0 * math.pi
 _DOWN = np.diag([1.0, -1.0, -1.0])
@@ -69,11 +67,6 @@ def symmetric_yaws(yaw: float, order: int) -> Array:
     if order < 1:
         raise InvalidTargetError(f"symmetry order must be >= 1, got {order!r}")
     return yaw + _TWO_PI * np.arange(order) / order
-
-
-def wrap_angle(a: float | Array) -> float | Array:
-    """Angle(s) wrapped to [-pi, pi) [rad]."""
-    return (np.asarray(a) + math.pi) % _TWO_PI - math.pi
 
 
 @dataclass(frozen=True)

@@ -82,7 +82,7 @@ def move(cell: Cell, q_to: np.ndarray, speed_scale: float = 0.9, settle: float =
     """Quintic joint move at ``speed_scale`` of the axis speed limits; returns peak tcp speed."""
     q_from = cell.qpos
     dq = q_to - q_from
-    vmax = np.asarray(cell.cfg.robot.max_joint_speed) * speed_scale
+    vmax = cell.max_joint_speed * speed_scale
     duration = max(float(np.max(np.abs(dq) / vmax)) * 1.875, 0.05)
     dt = cell.model.opt.timestep * CONTROL_STEPS
     peak = 0.0

@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 
 from agents.calibration import board_corners, calibrate, find_corners, render_views
-from agents.cell_adapter import build_design_cell, nearest_tile
 from agents.config import CalibrationConfig, load_agents_config
 from agents.errors import CalibrationError
 from agents.perception import perceive_tiles
+from benchmarks.design_cell import build_design_cell, nearest_tile
 from envs.cell_config import load_cell_config
+from envs.task_spec import work_areas
 from qshape.design import Design
 
 
@@ -52,7 +53,9 @@ def test_calibrated_camera_locates_tiles_within_2mm(result):
     cell, _ = build_design_cell(design, seed=0)
     try:
         cell.step(100)
-        per = perceive_tiles(cell.render("input_camera"), result.camera, cell.geometry.belt_top)
+        per = perceive_tiles(
+            cell.render("input_camera"), result.camera, work_areas(cell)[0].tile_top_z
+        )
         assert len(per.tiles) == len(design.slots)
         for t in per.tiles:
             assert nearest_tile(cell, t.centre)[1] < 0.002

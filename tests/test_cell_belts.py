@@ -8,7 +8,7 @@ import pytest
 from envs.cell import Cell
 from envs.cell_config import CellConfig, InputBeltConfig, TileConfig, load_cell_config
 from envs.errors import CellError
-from envs.tiles import basic_shapes, tile_shapes_from_design
+from envs.tile_shapes import basic_shapes, tile_shapes_from_design
 from qshape.design import Design
 
 

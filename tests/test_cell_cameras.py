@@ -16,7 +16,7 @@ from envs.cell import Cell
 from envs.cell_config import CellConfig, RenderConfig
 from envs.errors import CellError
 from envs.scene import build_spec, cell_geometry
-from envs.tiles import basic_shapes
+from envs.tile_shapes import basic_shapes
 
 MARKER_RADIUS = 0.003
 

@@ -20,7 +20,8 @@ from envs.cell_config import (
     load_cell_config,
 )
 from envs.errors import CellError, EnvError
-from envs.tiles import SlotSpec, TileShape, basic_shapes
+from envs.tile_shapes import basic_shapes
+from envs.tiles import SlotSpec, TileShape
 
 
 def test_bundled_yaml_equals_defaults() -> None:

@@ -8,7 +8,7 @@ import pytest
 from envs.cell import Cell
 from envs.cell_config import load_cell_config
 from envs.errors import CellError
-from envs.tiles import tile_shapes_from_design
+from envs.tile_shapes import tile_shapes_from_design
 
 design_mod = pytest.importorskip("qshape.design")
 

@@ -7,7 +7,7 @@ import pytest
 from cell_motion import ArmIK, pick, place, tool_down, world_grasp
 
 from envs.cell import Cell
-from envs.tiles import basic_shapes
+from envs.tile_shapes import basic_shapes
 
 SHAPES = basic_shapes()
 

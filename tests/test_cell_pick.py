@@ -8,7 +8,7 @@ from cell_motion import ArmIK, pick, place
 
 from envs.cell import Cell
 from envs.cell_config import load_cell_config
-from envs.tiles import basic_shapes
+from envs.tile_shapes import basic_shapes
 
 SHAPES = basic_shapes()
 

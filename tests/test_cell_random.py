@@ -8,7 +8,7 @@ from cell_motion import ArmIK, tool_down
 
 from envs.cell import Cell
 from envs.cell_config import CellConfig, InputBeltConfig
-from envs.tiles import basic_shapes
+from envs.tile_shapes import basic_shapes
 
 CONTROL_STEPS = 5
 SIM_SECONDS = 60.0
@@ -48,7 +48,7 @@ def test_random_controls_for_a_minute(speed: float) -> None:
     cell = Cell(cfg, basic_shapes() * 3, seed=11)
     rng = np.random.default_rng(12)
     lo, hi = cell.model.jnt_range[:6, 0], cell.model.jnt_range[:6, 1]
-    vmax = np.asarray(cfg.robot.max_joint_speed)
+    vmax = cell.max_joint_speed
     ik = ArmIK(cell)
     # Half the targets scatter around a pose with the pad on the tiles, to stir them up.
     q_belt = ik.solve(cell.geometry.input_centre + [0, 0, 0.005], tool_down(0.0), cell.qpos)

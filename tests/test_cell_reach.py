@@ -11,7 +11,7 @@ from cell_motion import ArmIK, tool_down
 
 from envs.cell import Cell
 from envs.cell_config import CellConfig, InputBeltConfig, LayoutConfig
-from envs.tiles import basic_shapes
+from envs.tile_shapes import basic_shapes
 
 LAYOUTS = {
     "paper_1m": CellConfig(layout=LayoutConfig(belt_separation=1.0, work_x=0.0)),

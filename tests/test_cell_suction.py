@@ -8,7 +8,7 @@ from cell_motion import ArmIK, move, pick, tool_down, world_grasp
 
 from envs.cell import Cell
 from envs.cell_config import CellConfig, SuctionConfig
-from envs.tiles import basic_shapes
+from envs.tile_shapes import basic_shapes
 
 SHAPES = {s.name: s for s in basic_shapes()}
 

@@ -9,16 +9,11 @@ from shapely.geometry import Polygon
 
 from envs.cell import Cell
 from envs.cell_config import TileConfig, load_cell_config
+from envs.decompose import convex_decomposition
+from envs.layout import sample_layout
 from envs.scene import extrusion
-from envs.tiles import (
-    basic_shapes,
-    convex_decomposition,
-    jitter_colors,
-    make_tile,
-    make_tile_pool,
-    make_tiles,
-    sample_layout,
-)
+from envs.tile_shapes import basic_shapes
+from envs.tiles import jitter_colors, make_tile, make_tile_pool, make_tiles
 
 SHAPES = basic_shapes()
 

@@ -44,7 +44,7 @@ def _next_tile(env: MosaicAssemblyEnv) -> int:
     """The fed tile farthest downstream on the input belt (waiting, arm still, for a feed)."""
     cell = env.cell
     wait = round(env.config.control_dt / cell.model.opt.timestep)
-    for _ in range(round(env.config.stream_period / env.config.control_dt) + 1):
+    for _ in range(round(env.config.cell.tiles.stream_period / env.config.control_dt) + 1):
         on_input = cell.on_stage & ~cell.lost & ~env.task.placement().on_mesh
         candidates = np.flatnonzero(on_input)
         if len(candidates):

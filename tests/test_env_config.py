@@ -8,6 +8,7 @@ import gymnasium as gym
 import pytest
 
 import envs
+from envs.cell_config import load_cell_config
 from envs.env_config import EnvConfig, EnvConfigError, allowed_keys, load_env_config
 
 
@@ -44,7 +45,7 @@ def test_unknown_key_lists_allowed() -> None:
     ],
 )
 def test_unknown_modes_name_the_allowed_ones(key: str, value: str) -> None:
-    with pytest.raises(EnvConfigError, match=f"unknown {key}.*allowed"):
+    with pytest.raises(EnvConfigError, match=f"({key}|{value}).*allowed"):
         load_env_config(**{key: value})
 
 
@@ -68,3 +69,19 @@ def test_registration() -> None:
 def test_make_rejects_unknown_key() -> None:
     with pytest.raises(EnvConfigError, match="allowed"):
         gym.make("envs:MosaicAssembly-v0", not_a_key=1)
+
+
+def test_the_cell_is_nested_not_copied() -> None:
+    cfg = load_env_config("env")
+    assert cfg.cell.tiles.variants == 8 and cfg.cell.tiles.stream_period == 2.5  # env.yaml's
+    assert cfg.cell.tiles.thickness == load_cell_config().tiles.thickness  # the rest: cell.yaml
+    flat = load_env_config("env", belt_speed=0.1, feed="stream", tile_color_jitter=0.05)
+    assert flat.cell.input_belt.speed == flat.belt_speed == 0.1
+    assert flat.cell.tiles.feed == flat.feed == "stream"
+    assert flat.cell.tiles.color_jitter == 0.05 and flat.cell.tiles.variants == 8
+    nested = load_env_config("env", cell={"config": "cell", "input_belt": {"speed": 0.2}})
+    assert nested.belt_speed == 0.2 and nested.cell.tiles.variants == 1  # cell.yaml's own
+    with pytest.raises(EnvConfigError, match="unknown cell section 'belts'.*allowed"):
+        load_env_config(cell={"belts": {"speed": 0.2}})
+    with pytest.raises(EnvConfigError, match="varients.*allowed"):
+        load_env_config(cell={"tiles": {"varients": 2}})

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import envs
-from envs.actions import ActionError
 from envs.env_config import EnvConfigError
 from envs.mosaic_env import MosaicAssemblyEnv, MosaicEnvError
+from envs.task_spec import ActionError
 
 SMALL = {"max_slots": 3, "image_size": 48}
 

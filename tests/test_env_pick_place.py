@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -114,9 +115,9 @@ def test_empty_pick_fails_cleanly() -> None:
     env = MosaicAssemblyEnv(execution="kinematic", obs_mode="state", max_slots=N_SLOTS)
     try:
         env.reset(seed=0)
-        b = env.bounds
-        corner = b.pick_lo + 0.002  # the tile layout keeps clear of the area's edges
-        a = env.pick_place_action(corner, 0.0, (b.place_lo + b.place_hi) / 2, 0.0)
+        spec = env.task_spec
+        corner = spec.pick.lo + 0.002  # the tile layout keeps clear of the area's edges
+        a = env.pick_place_action(corner, 0.0, spec.place.centre, 0.0)
         _, r, term, _, info = env.step(a)
         assert info["action_failed"] and "no tile" in info["action_error"]
         assert r == pytest.approx(-env.config.penalty_failed_action) and not term
@@ -139,12 +140,14 @@ def test_nothing_placeable_terminates() -> None:
     env = MosaicAssemblyEnv(execution="kinematic", obs_mode="state", max_slots=1)
     try:
         env.reset(seed=0)
-        pick, yaw, place, place_yaw = transfer_poses(env.cell, 0, 0)
-        off = place + [env.config.position_tolerance * 3, 0.0]  # beyond the tolerance
-        _, r, term, _, info = env.step(env.pick_place_action(pick, yaw, off, place_yaw))
+        cmd = transfer_poses(env.cell, 0, 0)
+        off = np.asarray(cmd.place_xy) + [env.config.position_tolerance * 3, 0.0]  # too far
+        _, r, term, _, info = env.step(
+            env.task_spec.codec.encode(dataclasses.replace(cmd, place_xy=tuple(off)))
+        )
         ev = info["evaluation"]
         assert ev["misplaced"] == 1 and ev["correct"] == 0 and ev["placeable"] == 0
-        assert term and not ev["success"]
+        assert term and not ev["success"] and ev["failure"]
         assert ev["position_error_mm"] == pytest.approx(
             3 * 1e3 * env.config.position_tolerance, abs=0.3
         )
@@ -186,7 +189,7 @@ def test_stream_feed_large_design() -> None:
         for _ in range(int(2.5 / env.config.control_dt)):
             env.step(np.zeros(7, np.float32))
         assert env.cell.on_stage.sum() > 6  # streamed in
-        assert env.evaluate()["placeable"] == len(env.cell.slots)
+        assert env.evaluate().placeable == len(env.cell.slots)
     finally:
         env.close()
 
@@ -207,7 +210,7 @@ def test_info_keys_and_dense_terms() -> None:
         assert terms["correct"] == env.config.reward_correct and terms["reach"] < 0
         for key in ("success", "correct", "misplaced", "dropped", "lost", "distractors_placed"):
             assert key in info["evaluation"]
-        assert info["evaluation"] == env.evaluate()
+        assert info["evaluation"] == env.evaluate().as_dict()
     finally:
         env.close()
 

@@ -88,10 +88,10 @@ def test_hidden_variants_are_massless_without_contacts_and_invisible(
     cell = env.cell
     env.step(env.expert_action(0, 0))
     m, ids, n = cell.model, cell.ids, len(cell.tiles)
-    assert ids.variant_body.shape == (env.config.tile_variants, n)
+    assert ids.variant_body.shape == (env.config.cell.tiles.variants, n)
     shown = ids.variant_body[cell.variant, np.arange(n)]
     hidden = np.setdiff1d(ids.variant_body, shown)
-    assert len(hidden) == (env.config.tile_variants - 1) * n
+    assert len(hidden) == (env.config.cell.tiles.variants - 1) * n
     assert np.all(m.body_mass[hidden] == 0) and np.all(m.body_inertia[hidden] == 0)
     assert np.all(m.body_contype[hidden] == 0) and np.all(m.body_conaffinity[hidden] == 0)
     in_hidden = np.isin(m.geom_bodyid, hidden)

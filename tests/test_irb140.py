@@ -1,4 +1,4 @@
-"""The IRB 140 model against the public DH/OPW facts (SPEC section 4)."""
+"""The IRB 140 model against the public DH/OPW facts (ABB product specification)."""
 
 from __future__ import annotations
 
@@ -10,20 +10,22 @@ import pytest
 
 ASSET = Path(__file__).resolve().parents[1] / "assets" / "irb140"
 
-# Standard DH (SPEC section 4); theta_i = q_i + OFFSET_i.
+# Standard DH of the IRB 140 (public kinematic data); theta_i = q_i + OFFSET_i.
 DH_D = np.array([0.352, 0.0, 0.0, 0.380, 0.0, 0.065])
 DH_A = np.array([0.070, 0.360, 0.0, 0.0, 0.0, 0.0])
 DH_ALPHA = np.deg2rad([-90.0, 0.0, -90.0, 90.0, -90.0, 0.0])
 OFFSET = np.array([0.0, -np.pi / 2, 0.0, 0.0, 0.0, 0.0])
+ABB_OFFSET = OFFSET + [0.0, 0.0, 0.0, 0.0, 0.0, np.pi]
+"""ABB's own convention: theta6 + 180 deg, whose frame 6 is ABB's tool0."""
 RANGES_DEG = np.array([[-180, 180], [-90, 110], [-230, 50], [-200, 200], [-115, 115], [-400, 400]])
 SPEEDS_DEG = np.array([200, 200, 260, 360, 360, 450])
 
 
-def dh_fk(q: np.ndarray) -> np.ndarray:
-    """Flange pose (4x4) from the standard DH table."""
+def dh_fk(q: np.ndarray, offset: np.ndarray = OFFSET) -> np.ndarray:
+    """Frame 6 pose (4x4) from the standard DH table with joint offsets ``offset`` [rad]."""
     t = np.eye(4)
     for i in range(6):
-        th = q[i] + OFFSET[i]
+        th = q[i] + offset[i]
         ct, st = np.cos(th), np.sin(th)
         ca, sa = np.cos(DH_ALPHA[i]), np.sin(DH_ALPHA[i])
         t = t @ np.array(
@@ -65,6 +67,23 @@ def test_flange_fk_matches_dh(model: mujoco.MjModel, q: np.ndarray) -> None:
     want = dh_fk(q)
     assert np.linalg.norm(got[:3, 3] - want[:3, 3]) < 1e-4  # 0.1 mm
     assert np.allclose(got[:3, :3], want[:3, :3], atol=1e-5)
+
+
+@pytest.mark.parametrize("q", list(_configs()))
+def test_abb_tool0_matches_dh_with_the_theta6_offset(model: mujoco.MjModel, q: np.ndarray) -> None:
+    got = _site_pose(model, q, "abb_tool0")
+    want = dh_fk(q, ABB_OFFSET)
+    assert np.linalg.norm(got[:3, 3] - want[:3, 3]) < 1e-4  # 0.1 mm
+    assert np.allclose(got[:3, :3], want[:3, :3], atol=1e-5)
+    flange = _site_pose(model, q, "flange")
+    turned = flange[:3, :3] @ np.diag([-1.0, -1.0, 1.0])  # 180 deg about the tool axis
+    assert np.allclose(got[:3, :3], turned, atol=1e-6)
+
+
+def test_abb_tool0_at_zero_points_x_down_z_forward(model: mujoco.MjModel) -> None:
+    r = _site_pose(model, np.zeros(6), "abb_tool0")[:3, :3]
+    np.testing.assert_allclose(r[:, 0], [0.0, 0.0, -1.0], atol=1e-6)  # x down
+    np.testing.assert_allclose(r[:, 2], [1.0, 0.0, 0.0], atol=1e-6)  # z out of the flange
 
 
 def test_tcp_is_on_tool_axis(model: mujoco.MjModel) -> None:

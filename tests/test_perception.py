@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agents.cell_adapter import build_design_cell, nearest_tile
 from agents.config import PerceptionConfig
 from agents.errors import PerceptionError
 from agents.perception import (
@@ -16,7 +15,9 @@ from agents.perception import (
     slot_targets,
     unproject,
 )
+from benchmarks.design_cell import build_design_cell, nearest_tile
 from benchmarks.perception import bench
+from envs.task_spec import work_areas, world_slots
 from qshape.design import Design
 
 POS_TOL = 0.002  # m
@@ -29,8 +30,8 @@ def scene():
     cell.step(100)
     img = cell.render("input_camera")
     cam = cell.camera_model("input_camera")
-    slots = slot_targets(design, cell.geometry.output_centre[:2])
-    per = perceive_tiles(img, cam, cell.geometry.belt_top)
+    slots = slot_targets(world_slots(cell, design))
+    per = perceive_tiles(img, cam, work_areas(cell)[0].tile_top_z)
     per, gain = balance_colors(per, np.array([s.color for s in slots]))
     yield cell, design, cam, slots, per, gain
     cell.close()

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from benchmarks.planner import CellRunner, _build_cell, cell_config
-from envs.tiles import basic_shapes
+from envs.tile_shapes import basic_shapes
 from planners.config import load_planner_config
 from planners.errors import InvalidTargetError, UnreachableError
 from planners.ik import IKSolver

@@ -9,11 +9,13 @@ import numpy as np
 import pytest
 
 import qshape
-from agents.cell_adapter import build_design_cell, nearest_tile, yaw_error
 from agents.config import PlacementConfig
 from agents.perception import balance_colors, perceive_tiles, slot_targets
 from agents.placement import equivalent_yaws, plan_placements, wrap
+from benchmarks.design_cell import build_design_cell, nearest_tile
 from envs.cell_config import load_cell_config
+from envs.task_spec import work_areas, world_slots
+from planners.angles import yaw_error
 from qshape.design import Design
 
 YAW_TOL = math.radians(2.0)
@@ -25,8 +27,8 @@ def scene():
     cell, _ = build_design_cell(design, seed=3)
     cell.step(100)
     cam = cell.camera_model("input_camera")
-    slots = slot_targets(design, cell.geometry.output_centre[:2])
-    per = perceive_tiles(cell.render("input_camera"), cam, cell.geometry.belt_top)
+    slots = slot_targets(world_slots(cell, design))
+    per = perceive_tiles(cell.render("input_camera"), cam, work_areas(cell)[0].tile_top_z)
     per, _ = balance_colors(per, np.array([s.color for s in slots]))
     yield cell, design, slots, per
     cell.close()
@@ -102,9 +104,11 @@ def test_distractors_on_the_belt_are_never_placed():
     cell, _ = build_design_cell(design, replace(base, tiles=tiles), seed=0)
     try:
         cell.step(100)
-        slots = slot_targets(design, cell.geometry.output_centre[:2])
+        slots = slot_targets(world_slots(cell, design))
         per = perceive_tiles(
-            cell.render("input_camera"), cell.camera_model("input_camera"), cell.geometry.belt_top
+            cell.render("input_camera"),
+            cell.camera_model("input_camera"),
+            work_areas(cell)[0].tile_top_z,
         )
         per, _ = balance_colors(per, np.array([s.color for s in slots]))
         plan = plan_placements(per.tiles, slots)
@@ -125,7 +129,7 @@ def test_distractors_on_the_belt_are_never_placed():
 def test_a_camera_that_sees_nothing_places_nothing(scene):
     cell, _, slots, _ = scene
     dark = np.zeros((492, 656, 3), np.uint8)
-    per = perceive_tiles(dark, cell.camera_model("input_camera"), cell.geometry.belt_top)
+    per = perceive_tiles(dark, cell.camera_model("input_camera"), work_areas(cell)[0].tile_top_z)
     assert per.tiles == () and "not usable" in per.unrecognised[0]
     plan = plan_placements(per.tiles, slots)
     assert plan.commands == () and len(plan.open_slots) == len(slots)

@@ -26,7 +26,7 @@ def env():
 
 
 def test_scripted_agent_fills_the_design(env):
-    agent = ScriptedAgent(env)
+    agent = ScriptedAgent.from_env(env)
     assert agent.calibration is not None and agent.calibration.reprojection_px < 0.5
     obs, _ = env.reset(seed=0)
     info = {}
@@ -44,7 +44,7 @@ def test_scripted_agent_fills_the_design(env):
 def test_evaluate_policy_accepts_it(env):
     from stable_baselines3.common.evaluation import evaluate_policy  # noqa: PLC0415
 
-    agent = ScriptedAgent(env, calibrate=False)
+    agent = ScriptedAgent.from_env(env, calibrate=False)
     mean, _ = evaluate_policy(agent, env, n_eval_episodes=1, warn=False)
     assert mean > 0
 
@@ -53,14 +53,14 @@ def test_wrong_action_mode():
     e = gym.make("envs:MosaicAssembly-v0", action_mode="joint", max_slots=2)
     try:
         with pytest.raises(AgentError, match="pick_place"):
-            ScriptedAgent(e, calibrate=False)
+            ScriptedAgent.from_env(e, calibrate=False)
     finally:
         e.close()
 
 
 def test_a_tile_still_on_the_belt_reopens_its_slot(env):
     """Same picture twice (as after a failed pick): the same slot is commanded again."""
-    agent = ScriptedAgent(env, calibrate=False, replan_every_step=True)
+    agent = ScriptedAgent.from_env(env, calibrate=False, replan_every_step=True)
     obs, _ = env.reset(seed=1)
     first, _ = agent.predict(obs, episode_start=np.array([True]))
     slot = agent.order[-1]
@@ -70,7 +70,7 @@ def test_a_tile_still_on_the_belt_reopens_its_slot(env):
 
 
 def test_a_camera_that_sees_nothing_gives_a_harmless_rest_action(env):
-    agent = ScriptedAgent(env, calibrate=False)
+    agent = ScriptedAgent.from_env(env, calibrate=False)
     obs, _ = env.reset(seed=3)
     cell = env.unwrapped.cell
     before = cell.tile_poses().pos.copy()
@@ -85,7 +85,7 @@ def test_a_camera_that_sees_nothing_gives_a_harmless_rest_action(env):
 
 
 def test_rest_action_picks_away_from_every_tile_seen(env):
-    agent = ScriptedAgent(env, calibrate=False)
+    agent = ScriptedAgent.from_env(env, calibrate=False)
     obs, _ = env.reset(seed=4)
     agent.plan(obs["input_camera"])
     pick, place = agent._idle_points()
@@ -97,7 +97,7 @@ def test_rest_action_picks_away_from_every_tile_seen(env):
 
 
 def test_white_balance_history_is_the_episode_s(env):
-    agent = ScriptedAgent(env, calibrate=False)
+    agent = ScriptedAgent.from_env(env, calibrate=False)
     obs, _ = env.reset(seed=1)
     agent.plan(obs["input_camera"])
     seen = len(agent.last_perception.tiles)
