@@ -265,7 +265,8 @@ class Cell:
 
     def _feed_stream(self) -> None:
         """Spawn the next waiting tile at the upstream edge of the tile area, if there is room."""
-        waiting = np.flatnonzero(~self.on_stage)
+        order = self._feed_order  # drawn per reset: the stream does not follow the design
+        waiting = order[~self.on_stage[order]]
         if len(waiting) == 0:
             self._next_feed_time = np.inf
             return
@@ -504,7 +505,7 @@ class Cell:
 
     @property
     def n_dropped(self) -> int:
-        """Tiles dropped because the holding force was exceeded."""
+        """Drop events since reset (the holding force was exceeded; a tile can drop twice)."""
         return self.suction.dropped
 
     @property

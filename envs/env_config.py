@@ -19,7 +19,7 @@ ACTION_MODES = ("joint", "cartesian", "pick_place", "pick_place_discrete")
 """Allowed ``action_mode`` values."""
 OBS_MODES = ("rgb", "state", "rgb+state")
 """Allowed ``obs_mode`` values."""
-REWARD_MODES = ("sparse", "dense")
+REWARD_MODES = ("sparse", "dense", "staged")
 """Allowed ``reward_mode`` values."""
 EXECUTIONS = ("dynamic", "kinematic")
 """Allowed ``execution`` values (``pick_place`` modes)."""
@@ -27,6 +27,12 @@ FEEDS = ("all", "stream", "batch")
 """Allowed ``feed`` values."""
 RENDER_MODES = ("rgb_array", "human")
 """Allowed ``render_mode`` values (or None)."""
+TILE_ORDERS = ("belt", "shuffled", "design")
+"""Allowed ``tile_order`` values (see `envs.indexing`)."""
+SLOT_ORDERS = ("mesh", "shuffled", "design")
+"""Allowed ``slot_order`` values (see `envs.indexing`)."""
+ROTATION_FRAMES = ("tile", "slot")
+"""Allowed ``rotation_frame`` values (see `envs.indexing`)."""
 
 
 class EnvConfigError(ConfigError):
@@ -85,6 +91,12 @@ class EnvConfig:
         pick_margin: Margin added around the input tile area for pick poses [m].
         place_margin: Margin added around the mesh for place poses [m].
         rotation_bins: Rotation choices of ``pick_place_discrete`` (multiples of 2 pi / bins).
+        tile_order: What a tile index names (discrete actions, ``tiles`` rows): one of
+            `TILE_ORDERS`; ``belt``: rank on the input belt from its downstream end.
+        slot_order: What a slot index names: one of `SLOT_ORDERS`; ``mesh``: raster order on
+            the mesh.
+        rotation_frame: What a rotation index counts from: one of `ROTATION_FRAMES`;
+            ``tile``: the slot-aligned pose nearest to how the tile lies.
         kinematic_settle: Physics settling time after a kinematic place [s].
         failed_action_time: Simulated time charged for an action that cannot execute [s].
         reset_settle: Physics time simulated after reset so tiles rest [s].
@@ -140,6 +152,9 @@ class EnvConfig:
     pick_margin: float = 0.0
     place_margin: float = 0.0
     rotation_bins: int = 4
+    tile_order: str = "belt"
+    slot_order: str = "mesh"
+    rotation_frame: str = "tile"
     kinematic_settle: float = 0.01
     failed_action_time: float = 0.04
     reset_settle: float = 0.16
@@ -174,6 +189,9 @@ class EnvConfig:
             ("reward_mode", REWARD_MODES),
             ("execution", EXECUTIONS),
             ("feed", FEEDS),
+            ("tile_order", TILE_ORDERS),
+            ("slot_order", SLOT_ORDERS),
+            ("rotation_frame", ROTATION_FRAMES),
         ):
             value = getattr(self, name)
             if value not in allowed:
@@ -257,6 +275,9 @@ __all__ = [
     "OBS_MODES",
     "RENDER_MODES",
     "REWARD_MODES",
+    "ROTATION_FRAMES",
+    "SLOT_ORDERS",
+    "TILE_ORDERS",
     "EnvConfig",
     "EnvConfigError",
     "allowed_keys",

@@ -31,6 +31,7 @@ from envs.cell import CAMERAS, Cell
 from envs.cell_config import CellConfig, load_cell_config
 from envs.env_config import EnvConfig, load_env_config
 from envs.errors import CellError
+from envs.indexing import IndexMaps
 from envs.observations import Observer
 from envs.scene import build_arm_model
 from envs.task import REWARD_TERMS, MosaicTask
@@ -75,7 +76,11 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
       ``env.unwrapped.pick_place_action(pick_xy, pick_yaw, place_xy, place_yaw)`` normalises
       world poses [m, rad].
     - ``pick_place_discrete``: MultiDiscrete([tiles, slots, rotation_bins]): move tile i
-      (ground-truth grasp point) into slot j turned by r * 2 pi / rotation_bins.
+      (ground-truth grasp point) into slot j turned by r * 2 pi / rotation_bins. What the
+      indices name carries no answer (`envs.indexing`): by default tile i is the i-th tile on
+      the input belt from its downstream end (then the others), slot j the j-th slot in raster
+      order on the mesh, and r counts from the slot-aligned pose nearest to how the tile lies
+      (``tile_order``, ``slot_order``, ``rotation_frame``).
 
     ``execution`` (pick_place modes): ``dynamic`` tracks the planned trajectory with the
     servo actuators at every physics step (full physics, suction weld). ``kinematic`` puts the
@@ -89,7 +94,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     Dict (see `envs.observations`): ``input_camera``, ``output_camera`` RGB uint8
     (H, W, 3) at ``image_size`` (``rgb``/``rgb+state``; depth (H, W, 1) float32 [m] with
     ``depth``), ``robot`` float32 (19,) (joint pos/vel, tool pose, vacuum, held), and with
-    ``state``/``rgb+state`` the privileged ``tiles`` (n * 7,) and ``slots`` (k * 6,). Camera
+    ``state``/``rgb+state`` the privileged ``tiles`` (n * 7,) and ``slots`` (k * 6,), rows in
+    the same index order as the discrete actions. Camera
     intrinsics/extrinsics: ``env.unwrapped.camera_model("input", height, width)``.
 
     ## Rewards
@@ -97,7 +103,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     -penalty per newly misplaced tile, dropped tile, lost tile, placed distractor and failed
     action. ``dense`` adds: -dense_reach x distance tool-to-nearest wanted tile (not holding),
     +dense_grasp while holding a wanted tile, -dense_carry x distance of the held tile to its
-    nearest free slot. Every term is in ``info`` as ``reward_<term>``.
+    nearest free slot. ``staged`` (the one-tile low-level task) adds potential-based terms
+    for reach, seal, lift, transport, align and release (`envs.rewards`). Every term is in
+    ``info`` as ``reward_<term>``.
 
     ## Starting State
     Arm at home, vacuum off, tiles laid out at random (non-overlapping) on the input belt
@@ -138,6 +146,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     ## Version History
     - v0: initial version; manufacturing noise re-drawn per reset (``tile_variants``).
+      Decision-level indices carry no answer by default (``tile_order: belt``, ``slot_order:
+      mesh``, ``rotation_frame: tile``; ``design``/``design``/``slot`` restore the old,
+      leaking encoding). The task ladder (`envs.tasks`) registers frozen presets of it.
     """
 
     metadata = {  # noqa: RUF012 - Gymnasium convention
@@ -161,6 +172,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.cell = _build_cell(_cell_config(cfg), shapes, slots, cfg.layout_tries)
         self.task = MosaicTask(self.cell, cfg)
         self.observer = Observer(self.cell, self.task, cfg)
+        self.index = IndexMaps(self.cell, cfg)
         pcfg = load_planner_config(cfg.planner)
         self.ik = IKSolver(build_arm_model(self.cell.cfg, with_cell=False), pcfg.ik, pcfg.limits)
         self.bounds = PickPlaceBounds.of(self.cell, cfg)
@@ -208,11 +220,12 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._t0 = cell.time
         self.task.reset()
         self.actions.reset()
+        self.index.reset(rng)
         for f in self._listeners:
             f.next_time = cell.time
         self._needs_reset = False
         evaluation = self.task.evaluate()
-        obs = self.observer.observe(rng, evaluation)
+        obs = self._observe(evaluation)
         return obs, self._info(evaluation, dict.fromkeys(REWARD_TERMS, 0.0), False, "")
 
     def step(self, action: np.ndarray) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
@@ -227,6 +240,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             raise MosaicEnvError("step() called before reset(): call env.reset() first")
         a = self.actions.validate(action)
         a = self.actions.noisy(a, self.np_random)
+        if self.config.action_mode == "pick_place_discrete":
+            a = self.index.decode(a)
         result = self.actions.apply(a)
         if self._listeners:
             self._tick()
@@ -234,7 +249,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         terms = self.task.rewards(evaluation, result.failed)
         reward = float(sum(terms.values()))
         terminated = bool(evaluation["success"] or evaluation["placeable"] == 0)
-        obs = self.observer.observe(self.np_random, evaluation)
+        obs = self._observe(evaluation)
         info = self._info(evaluation, terms, result.failed, result.reason)
         if self.render_mode == "human":
             self.render()
@@ -317,14 +332,16 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def expert_action(self, tile: int, slot: int) -> np.ndarray:
         """Privileged action moving ``tile`` into ``slot`` exactly (pick_place modes only).
 
-        For baselines, tests and debugging: the ground-truth grasp point and yaws.
+        For baselines, tests and debugging: the ground-truth grasp point and yaws. ``tile`` and
+        ``slot`` are the cell's (design) indices; in ``pick_place_discrete`` the action is
+        encoded with the current index maps (``env.unwrapped.index``).
 
         Raises:
             MosaicEnvError: The action mode is not a pick_place mode.
         """
         mode = self.config.action_mode
         if mode == "pick_place_discrete":
-            return np.array([tile, slot, 0], dtype=np.int64)
+            return self.index.encode(tile, slot)
         if mode != "pick_place":
             raise MosaicEnvError(f"expert_action needs a pick_place mode, not {mode!r}")
         return self.pick_place_action(*transfer_poses(self.cell, tile, slot))
@@ -355,6 +372,14 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
                 f.next_time += f.period * (1 + int((t - f.next_time) / f.period))
 
     # ------------------------------------------------------------------ helpers
+    def _observe(self, evaluation: dict[str, Any]) -> dict[str, Any]:
+        """The observation, privileged rows in the agent's index order (`envs.indexing`)."""
+        self.index.update()
+        obs = self.observer.observe(self.np_random, evaluation)
+        if "tiles" in obs:
+            obs["tiles"], obs["slots"] = self.index.permute_state(obs["tiles"], obs["slots"])
+        return obs
+
     def _info(
         self, evaluation: dict[str, Any], terms: dict[str, float], failed: bool, reason: str
     ) -> dict[str, Any]:

@@ -18,6 +18,7 @@ import numpy as np
 
 from envs.cell import Cell
 from envs.env_config import EnvConfig
+from envs.rewards import STAGES, StagedReward, load_staged_config
 
 REWARD_TERMS = (
     "correct",
@@ -30,6 +31,7 @@ REWARD_TERMS = (
     "reach",
     "grasp",
     "carry",
+    *(f"stage_{s}" for s in STAGES),
 )
 """Names of the reward terms (each is reported in ``info`` as ``reward_<name>``)."""
 
@@ -90,11 +92,16 @@ class MosaicTask:
         self._yaw_tol = math.radians(config.yaw_tolerance_deg)
         self._flat = math.cos(math.radians(config.max_tilt_deg))
         self._prev: dict[str, Any] = {}
+        self.staged = (
+            StagedReward(self, load_staged_config()) if config.reward_mode == "staged" else None
+        )
         self.reset()
 
     def reset(self) -> None:
         """Forget the counts of the previous step (call after the cell's reset)."""
         self._prev = self.evaluate()
+        if self.staged is not None:
+            self.staged.reset(self._prev)
 
     def placement(self) -> Placement:
         """Where every tile lies relative to the slots now."""
@@ -154,7 +161,9 @@ class MosaicTask:
         Keys: ``success`` (every slot filled correctly), ``correct`` (slots filled correctly),
         ``misplaced`` (real tiles on the mesh not filling a slot: wrong class, pose beyond
         tolerance, stacked on another tile (e.g. put into a filled slot) or tilted),
-        ``dropped`` (tiles the pad lost in transit), ``lost`` (tiles lost off the
+        ``dropped`` (drop events: times the pad lost a tile in transit; a tile dropped, picked
+        up again and dropped again counts twice), ``stranded`` (real tiles left on the input
+        side: fed or waiting, not lost, not held, not on the mesh), ``lost`` (tiles lost off the
         input belt), ``distractors_placed``, ``slots`` (number of slots), ``slot_filled`` (bool
         list), ``position_error_mm`` and ``yaw_error_deg`` (mean and max over tiles on the mesh,
         None when no tile is on the mesh), ``placeable`` (open slots a remaining real tile of
@@ -180,6 +189,7 @@ class MosaicTask:
             "correct": int(p.slot_filled.sum()),
             "misplaced": misplaced,
             "dropped": int(cell.n_dropped),
+            "stranded": int(np.sum(avail) - (cell.held_tile >= 0 and bool(avail[cell.held_tile]))),
             "lost": int(cell.n_lost),
             "distractors_placed": distractors,
             "slots": len(p.slot_filled),
@@ -230,6 +240,8 @@ class MosaicTask:
         terms["failed_action"] = -c.penalty_failed_action * float(failed_action)
         if c.reward_mode == "dense":
             terms.update(self._dense(evaluation))
+        if self.staged is not None:
+            terms.update(self.staged.terms(evaluation))
         self._prev = evaluation
         return terms
 
