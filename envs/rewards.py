@@ -15,8 +15,9 @@ its target slot (the nearest open slot of its class):
 - ``transport``: lift x (1 - tanh(xy distance tile-to-slot / ``transport_scale``)).
 - ``align``: within ``align_distance`` of the slot, (1 - distance / align_distance) x
   (1 - yaw error / half the tile's symmetry period).
-- ``release``: fraction of the slots filled correctly; every other potential is 1 for a filled
-  slot's tile, so the final state is the most valuable one.
+- ``release``: fraction f of the slots filled correctly. Every other stage's potential is
+  f + (1 - f) x its progress on the current target, so filled slots count as completed stages
+  and the finished mosaic is the most valuable state.
 
 Weights and scales: `StagedRewardConfig` (``configs/rewards.yaml``).
 """
@@ -63,9 +64,9 @@ class StagedRewardConfig:
     transport: float = 2.0
     align: float = 1.0
     release: float = 4.0
-    reach_scale: float = 0.1
+    reach_scale: float = 0.3
     lift_height: float = 0.03
-    transport_scale: float = 0.2
+    transport_scale: float = 0.3
     align_distance: float = 0.02
 
     def __post_init__(self) -> None:
@@ -114,12 +115,18 @@ class StagedReward:
         return out
 
     def potentials(self, evaluation: dict[str, Any]) -> dict[str, float]:
-        """Progress of each stage in [0, 1] now."""
+        """Potential of each stage in [0, 1] now (see the module docstring)."""
+        done = float(evaluation["correct"]) / max(int(evaluation["slots"]), 1)
+        progress = self._progress(evaluation)
+        pot = {s: done + (1 - done) * progress[s] for s in STAGES}
+        pot["release"] = done
+        return pot
+
+    def _progress(self, evaluation: dict[str, Any]) -> dict[str, float]:
+        """Progress of each stage on the current target tile, in [0, 1]."""
         task, cfg = self.task, self.cfg
         cell = task.cell
-        slots = max(int(evaluation["slots"]), 1)
         pot = dict.fromkeys(STAGES, 0.0)
-        pot["release"] = float(evaluation["correct"]) / slots
         filled = np.asarray(evaluation["slot_filled"], bool)
         held = cell.held_tile
         poses = cell.tile_poses()
