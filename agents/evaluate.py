@@ -39,7 +39,6 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
 
 from agents.policies import (
     SCRIPTED_IMAGE_SIZE,
@@ -198,8 +197,7 @@ def parse_seeds(specs: Sequence[str]) -> list[int]:
 
 
 def load_env_overrides(path: str | Path | None, pairs: Sequence[str] = ()) -> dict[str, Any]:
-    """Base env overrides from a train preset name, a YAML (env keys or a train config's ``env``)
-    and KEY=VALUE pairs.
+    """Base env overrides from a train preset, a YAML (env keys or its ``env``) and KEY=VALUE.
 
     Raises:
         EvaluateError: Unknown preset or env key, or a malformed pair.
@@ -244,6 +242,7 @@ def run_episode(
     seed: int,
     max_steps: int,
     horizon_s: float,
+    *,
     label: str = "",
 ) -> EpisodeResult:
     """Play one episode from ``reset(seed=seed)`` for at most ``max_steps`` steps."""
@@ -323,8 +322,8 @@ def _read_done(path: Path | None) -> list[EpisodeResult]:
 def _bind(pol: Policy, designs: Sequence[str]) -> list[tuple[gym.Env, Predict]]:
     """Build the policy's env for each design and bind it (raises before any episode)."""
     bound = []
-    for design in designs or [None]:
-        kwargs = dict(pol.env_kwargs) if design is None else {**pol.env_kwargs, "design": design}
+    for design in designs or [""]:
+        kwargs = {**pol.env_kwargs, "design": design} if design else dict(pol.env_kwargs)
         try:
             env = gym.make(ENV_ID, **kwargs)
         except ConfigError as exc:
@@ -381,7 +380,7 @@ def evaluate_policy_set(
                 slots = len(env.unwrapped.task.slot_class)  # type: ignore[attr-defined]
                 limit = proto.max_steps or STEPS_PER_SLOT * slots
                 horizon = proto.horizon_s or HORIZON_S_PER_SLOT * slots
-                ep = run_episode(env, predict, seed, limit, horizon, pol.label)
+                ep = run_episode(env, predict, seed, limit, horizon, label=pol.label)
                 eps.append(ep)
                 if log is not None:
                     log.parent.mkdir(parents=True, exist_ok=True)

@@ -116,7 +116,7 @@ def _random(base: dict[str, Any]) -> Policy:
 
 
 def _need_discrete(env: gym.Env, name: str) -> Any:
-    u = env.unwrapped
+    u: Any = env.unwrapped
     if getattr(u, "config", None) is None or u.config.action_mode != "pick_place_discrete":
         raise PolicyError(f"policy {name!r} needs action_mode 'pick_place_discrete'")
     return u
@@ -223,7 +223,7 @@ def _user(base: dict[str, Any], spec: str) -> Policy:
         raise PolicyError(f"cannot import policy {spec!r}: {exc}") from exc
 
     def factory(env: gym.Env) -> Predict:
-        target = obj(env) if inspect.isclass(obj) else obj
+        target: Any = obj(env) if inspect.isclass(obj) else obj
         check_spaces(
             spec,
             env,

@@ -231,7 +231,9 @@ def make_vec(cfg: TrainConfig, monitor_dir: Path | None) -> Any:
         return build
 
     fns = [factory(i) for i in range(cfg.n_envs)]
-    venv = SubprocVecEnv(fns, start_method="spawn") if cfg.vec_env == "subproc" else DummyVecEnv(fns)
+    venv = (
+        SubprocVecEnv(fns, start_method="spawn") if cfg.vec_env == "subproc" else DummyVecEnv(fns)
+    )
     venv.seed(cfg.seed)
     return venv
 

@@ -100,7 +100,7 @@ class IndexMaps:
         return np.array([tile, slot, rot], dtype=np.int64)
 
     def encode(self, tile: int, slot: int, slot_steps: int = 0) -> np.ndarray:
-        """The agent action moving cell ``tile`` into cell ``slot`` turned ``slot_steps`` from its yaw.
+        """The agent action moving cell ``tile`` into ``slot``, ``slot_steps`` from its yaw.
 
         Inverse of `decode` for the current maps (the privileged expert's action).
         """

@@ -108,9 +108,7 @@ class StagedReward:
     def terms(self, evaluation: dict[str, Any]) -> dict[str, float]:
         """``stage_<name>`` reward terms: weight x change of each potential since the last call."""
         now = self.potentials(evaluation)
-        out = {
-            f"stage_{s}": float(getattr(self.cfg, s)) * (now[s] - self._prev[s]) for s in STAGES
-        }
+        out = {f"stage_{s}": float(getattr(self.cfg, s)) * (now[s] - self._prev[s]) for s in STAGES}
         self._prev = now
         return out
 
