@@ -10,6 +10,7 @@ its spaces need, an optional wrapper, and a factory that binds it to a built env
 - ``openloop``: the best open-loop sequence: the privileged expert's actions recorded on one
   training seed, replayed on every episode without looking (shows whether the encoding leaks).
 - ``identity``: the open-loop sequence ``(i, i, 0)`` (decision level).
+- a ``.pt`` path: a behaviour clone of `agents.bc`.
 - a path to an SB3 ``.zip``: loaded with the algorithm of its run's ``train_config.yaml``;
   its observation and action spaces must equal the env's, checked when it is bound.
 - ``module:attr``: a user's object. If ``attr`` has ``predict``, ``predict(obs)`` is called
@@ -215,6 +216,27 @@ def _trained(base: dict[str, Any], model_path: Path) -> Policy:
     return Policy(label, env_kwargs, factory, wrap)
 
 
+def _clone(base: dict[str, Any], path: Path) -> Policy:
+    """A behaviour clone (`agents.bc.BCPolicy`) saved as ``bc.pt``."""
+    if not path.is_file():
+        raise PolicyError(f"unknown policy {str(path)!r}: no such behaviour-clone file")
+    label = f"{path.parent.name}/{path.stem}"
+
+    def factory(env: gym.Env) -> Predict:
+        from agents.bc import BCPolicy  # noqa: PLC0415
+
+        clone = BCPolicy(path)
+        check_spaces(label, env, None, clone.action_space)
+
+        def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
+            del start
+            return clone.predict(obs)[0]
+
+        return predict
+
+    return Policy(label, dict(base), factory)
+
+
 def _user(base: dict[str, Any], spec: str) -> Policy:
     module_name, _, attr = spec.partition(":")
     try:
@@ -223,7 +245,9 @@ def _user(base: dict[str, Any], spec: str) -> Policy:
         raise PolicyError(f"cannot import policy {spec!r}: {exc}") from exc
 
     def factory(env: gym.Env) -> Predict:
-        target: Any = obj(env) if inspect.isclass(obj) else obj
+        is_class = inspect.isclass(obj)
+        make: Callable[[gym.Env], Any] = obj
+        target: Any = make(env) if is_class else obj
         check_spaces(
             spec,
             env,
@@ -265,6 +289,8 @@ def make_policy(
     }
     if name in builtins:
         pol = builtins[name]()
+    elif name.endswith(".pt"):
+        pol = _clone(base, Path(name))
     elif name.endswith(".zip") or Path(name).is_file():
         if not Path(name).is_file():
             raise PolicyError(

@@ -44,6 +44,8 @@ RESULTS_LOG = "results.jsonl"
 """One line per finished run, appended as runs finish."""
 DEFAULT_CPUS = 2
 """CPUs of the local Ray instance when no ``--address`` is given."""
+BC_SEED_STRIDE = 10_000
+"""Demonstration reset seeds of a clone run start at its seed x this."""
 WORKER_NICENESS = 0
 """Scheduling niceness of a run (Ray's default for workers, 15, starves them on a busy host)."""
 CURVE_BINS = 20
@@ -67,6 +69,9 @@ class SweepEntry:
         policy: A policy name of `agents.policies` ("" for a train entry).
         timesteps: Override of the preset's ``total_timesteps`` (0: keep).
         env: Extra env overrides of training and evaluation.
+        bc_episodes: Behaviour cloning: record this many privileged-expert episodes on the
+            task (reset seeds from seed x 10000, never the held-out ones) and clone them
+            (`agents.bc`); 0: not a clone entry.
     """
 
     name: str
@@ -75,10 +80,18 @@ class SweepEntry:
     policy: str = ""
     timesteps: int = 0
     env: Mapping[str, Any] = field(default_factory=dict)
+    bc_episodes: int = 0
 
     def __post_init__(self) -> None:
-        if bool(self.train) == bool(self.policy):
-            raise SweepError(f"sweep entry {self.name!r}: give exactly one of train or policy")
+        if bool(self.train) + bool(self.policy) + bool(self.bc_episodes) != 1:
+            raise SweepError(
+                f"sweep entry {self.name!r}: give exactly one of train, policy or bc_episodes"
+            )
+
+    @property
+    def learned(self) -> bool:
+        """The entry trains one run per seed."""
+        return bool(self.train or self.bc_episodes)
 
     @property
     def slug(self) -> str:
@@ -139,7 +152,7 @@ def plan(cfg: SweepConfig, out: Path) -> list[RunSpec]:
     runs = []
     for e in cfg.entries:
         base = out / e.task / e.slug
-        seeds = cfg.seeds if e.train else (-1,)
+        seeds = cfg.seeds if e.learned else (-1,)
         for s in seeds:
             folder = base / (f"seed_{s}" if s >= 0 else "eval")
             runs.append(RunSpec(e, s, str(folder.resolve()), cfg.eval_seeds))
@@ -185,6 +198,30 @@ def execute(spec: RunSpec) -> dict[str, Any]:
             "train_wall_s": result.wall_s,
             "steps_per_s": result.steps_per_s,
             "episodes": result.episodes,
+        }
+    elif e.bc_episodes:
+        from agents.bc import train_bc  # noqa: PLC0415
+        from agents.record_demos import load, record  # noqa: PLC0415
+
+        base = {**base, **dict(e.env)}
+        root, ds = folder / "demos", f"mosaic/{e.slug.lower()}-seed{spec.seed}-v0"
+        rec = record(
+            e.bc_episodes,
+            seed=spec.seed * BC_SEED_STRIDE,
+            root=root,
+            dataset_id=ds,
+            env_kwargs={**dict(e.env), "obs_mode": "state"},
+            expert=True,
+            task=e.task,
+            overwrite=True,
+        )
+        summary = train_bc(load(ds, root), folder, spec.seed)
+        policy_name = summary["model_path"]
+        train_info = {
+            "timesteps": rec.steps,
+            "train_wall_s": summary["wall_s"],
+            "episodes": rec.episodes,
+            "train_accuracy": summary["train_accuracy"],
         }
     else:
         base = {**base, **dict(e.env)}
@@ -354,7 +391,7 @@ def plot_curves(results: Sequence[dict[str, Any]], path: Path) -> None:
 
     learned: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for r in results:
-        if r.get("timesteps"):
+        if r.get("timesteps") and (Path(r["folder"]) / "monitor").is_dir():
             learned.setdefault((r["task"], r["entry"]), []).append(r)
     if not learned:
         return

@@ -12,7 +12,7 @@ from agents.sweep import SweepError, load_sweep, plan, run_sweep
 def test_sweep_files_are_strict(tmp_path) -> None:
     bad = tmp_path / "bad.yaml"
     bad.write_text("entries:\n  - {name: x, task: MosaicDecision6-v0}\n")
-    with pytest.raises(SweepError, match="exactly one of train or policy"):
+    with pytest.raises(SweepError, match="exactly one of train, policy or bc_episodes"):
         load_sweep(bad)
     cfg = load_sweep("baselines")
     runs = plan(cfg, tmp_path)
