@@ -71,10 +71,32 @@ class Policy:
     wrap: Callable[[gym.Env], gym.Env] | None = None
 
 
-def check_spaces(label: str, env: gym.Env, obs_space: Any, act_space: Any) -> None:
-    """Raise `PolicyError` unless a policy's spaces equal the env's (None: not checked)."""
+def sb3_observation_space(space: Any) -> Any:
+    """The observation space as an SB3 model stores it (channel-last images transposed)."""
+    from gymnasium import spaces  # noqa: PLC0415
+    from stable_baselines3.common.preprocessing import (  # noqa: PLC0415
+        is_image_space,
+        is_image_space_channels_first,
+    )
+    from stable_baselines3.common.vec_env import VecTransposeImage  # noqa: PLC0415
+
+    if isinstance(space, spaces.Dict):
+        return spaces.Dict({k: sb3_observation_space(v) for k, v in space.spaces.items()})
+    if is_image_space(space) and not is_image_space_channels_first(space):
+        return VecTransposeImage.transpose_space(space)
+    return space
+
+
+def check_spaces(
+    label: str, env: gym.Env, obs_space: Any, act_space: Any, *, sb3_view: bool = False
+) -> None:
+    """Raise `PolicyError` unless a policy's spaces equal the env's (None: not checked).
+
+    ``sb3_view``: compare with the env's observation space as SB3 stores it.
+    """
+    env_obs = sb3_observation_space(env.observation_space) if sb3_view else env.observation_space
     for what, mine, theirs in (
-        ("observation", obs_space, env.observation_space),
+        ("observation", obs_space, env_obs),
         ("action", act_space, env.action_space),
     ):
         if mine is not None and mine != theirs:
@@ -204,7 +226,7 @@ def _trained(base: dict[str, Any], model_path: Path) -> Policy:
 
     def factory(env: gym.Env) -> Predict:
         model = load_model(model_path, str(run.get("algo", "")))
-        check_spaces(label, env, model.observation_space, model.action_space)
+        check_spaces(label, env, model.observation_space, model.action_space, sb3_view=True)
 
         def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
             del start

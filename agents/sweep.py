@@ -190,7 +190,7 @@ def execute(spec: RunSpec) -> dict[str, Any]:
             from dataclasses import replace  # noqa: PLC0415
 
             cfg = replace(cfg, env={**dict(cfg.env), **dict(e.env)})
-        result = train(cfg, folder)
+        result = _trained(folder) or train(cfg, folder)
         base = {**base, **dict(cfg.env)}
         policy_name = str(result.model_path)
         train_info = {
@@ -243,6 +243,21 @@ def execute(spec: RunSpec) -> dict[str, Any]:
     }
     (folder / RESULT_FILE).write_text(json.dumps(out, indent=2), encoding="utf-8")
     return out
+
+
+def _trained(folder: Path) -> Any:
+    """The `TrainResult` of a run folder that finished training already (None otherwise).
+
+    A run whose evaluation failed after training is evaluated again without retraining.
+    """
+    from agents.train import TrainResult  # noqa: PLC0415
+
+    summary = folder / "summary.json"
+    if not (folder / "model.zip").is_file() or not summary.is_file():
+        return None
+    data = json.loads(summary.read_text(encoding="utf-8"))
+    data["out"], data["model_path"] = Path(data["out"]), Path(data["model_path"])
+    return TrainResult(**data)
 
 
 def _metric(ep: Any, name: str) -> float:

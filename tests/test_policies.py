@@ -108,3 +108,17 @@ def test_task_protocol_and_train_preset_names() -> None:
     assert proto.designs == ("hexagon", "trencadis") and proto.max_steps == 12
     assert proto.seeds[0] == 1000 and proto.horizon_s > 0
     assert load_env_overrides("tiny")["max_slots"] == 2  # a configs/train preset by name
+
+
+def test_image_checkpoint_spaces_are_compared_as_sb3_stores_them(tmp_path) -> None:
+    from stable_baselines3 import PPO  # noqa: PLC0415
+
+    kw = {**BASE, "obs_mode": "rgb", "image_size": [36, 48]}
+    env = gym.make("MosaicAssembly-v0", **kw)
+    PPO("MultiInputPolicy", env, n_steps=8, batch_size=8, device="cpu").save(tmp_path / "m.zip")
+    env.close()
+    (tmp_path / "train_config.yaml").write_text(
+        "algo: PPO\nenv: {obs_mode: rgb, image_size: [36, 48]}\n"
+    )
+    rows, _ = evaluate_policy_set(make_policies([str(tmp_path / "m.zip")], BASE), SEEDS)
+    assert rows[0].episodes == 2  # images transposed by SB3 still match
