@@ -196,9 +196,10 @@ def run_config(model_path: Path) -> dict[str, Any]:
 
 
 def checkpoint_label(model_path: Path) -> str:
-    """A short name of a checkpoint: the run folder (plus the file stem if not model.zip)."""
+    """A short name of a checkpoint: run folder (and its parent for ``seed_<k>``), file stem."""
     run = model_path.parent.parent if model_path.parent.name == "checkpoints" else model_path.parent
-    return run.name if model_path.name == "model.zip" else f"{run.name}/{model_path.stem}"
+    name = f"{run.parent.name}/{run.name}" if run.name.startswith("seed_") else run.name
+    return name if model_path.name == "model.zip" else f"{name}/{model_path.stem}"
 
 
 def load_model(model_path: Path, algo: str = "") -> Any:
@@ -242,7 +243,7 @@ def _clone(base: dict[str, Any], path: Path) -> Policy:
     """A behaviour clone (`agents.bc.BCPolicy`) saved as ``bc.pt``."""
     if not path.is_file():
         raise PolicyError(f"unknown policy {str(path)!r}: no such behaviour-clone file")
-    label = f"{path.parent.name}/{path.stem}"
+    label = checkpoint_label(path)
 
     def factory(env: gym.Env) -> Predict:
         from agents.bc import BCPolicy  # noqa: PLC0415
