@@ -1,22 +1,26 @@
-r"""Evaluate policies (scripted, trained checkpoints, random) on the same held-out seeds.
+r"""Evaluate policies (scripted, random, open-loop, checkpoints, your own) on held-out seeds.
 
 Run::
 
-    python -m agents.evaluate --policies scripted random runs/ppo/model.zip \\
-        --seeds 1000-1019 --env-config configs/eval/pick_place_kinematic.yaml [--out out]
+    python -m agents.evaluate --task MosaicDecision6-v0 \\
+        --policies scripted random openloop runs/ppo/model.zip mypkg.mypolicy:Policy [--out out]
+    python -m agents.evaluate --policies scripted random --seeds 1000-1019 \\
+        --env-config pick_place_flat        # a configs/train preset (its env) or an env YAML
 
-Every policy plays one episode per seed in an env built from the same base configuration
-(``--env-config``: an env YAML with `EnvConfig` keys, or a ``configs/train`` YAML whose ``env``
-is used; ``--env KEY=VALUE`` overrides). Only the keys that define a policy's spaces change per
-policy: the scripted agent gets ``action_mode: pick_place`` with camera images at
-``--scripted-image-size``; a trained model gets the action/observation keys of its
-``train_config.yaml``; ``random`` samples the base env's action space. Episodes end at success,
-when nothing is placeable, or after ``--max-steps`` (default 2 x slots) steps.
+With ``--task`` (a rung of `envs.tasks`) the protocol is the task's: its held-out seeds, its
+held-out designs (episodes alternate over them), its episode limit and throughput horizon.
+Otherwise ``--env-config`` (a preset name in ``configs/train/``, a train YAML whose ``env`` is
+used, or an env YAML) plus ``--env KEY=VALUE`` give the base env, ``--seeds`` the seeds.
+Policy names: `agents.policies`. Only the keys that define a policy's spaces change per policy.
 
-Prints one table and writes ``<out>/eval.json``, ``<out>/eval.md`` and ``<out>/eval.png``
-(matplotlib when installed, else drawn with OpenCV). Columns: success rate, tiles correctly
-placed, misplaced and dropped (means per episode), tiles/min (per simulated minute, from
-``info["sim_time"]``) and wall seconds per correctly placed tile (policy + simulation).
+Every policy is bound to its env before any episode is played: a checkpoint whose spaces do not
+match, or a name that does not resolve, fails at start-up. Each finished episode is appended
+to ``<out>/episodes.jsonl`` at once; a rerun with the same ``--out`` skips the (policy, seed)
+pairs already there, so results already computed are never lost or recomputed. At the end:
+one table, ``<out>/eval.json``, ``<out>/eval.md`` and ``<out>/eval.png``. Columns (protocol of
+`agents.protocol`): success rate, slots filled, misplaced, dropped (events), lost and stranded
+tiles per episode, tiles/min (correct tiles per simulated minute, to completion or over the
+horizon) and wall seconds per correct tile.
 """
 
 from __future__ import annotations
@@ -28,42 +32,50 @@ import os
 import platform
 import re
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
-import yaml
 
-from agents.wrappers import FlatDiscreteActions
+from agents.policies import (
+    SCRIPTED_IMAGE_SIZE,
+    Policy,
+    PolicyError,
+    Predict,
+    make_policies,
+    parse_pairs,
+)
+from agents.protocol import EpisodeMetrics
 from configs import ConfigError, load_yaml
 
 ENV_ID = "envs:MosaicAssembly-v0"
 """Gymnasium id of the environment."""
-SCRIPTED_IMAGE_SIZE = (492, 656)
-"""Default camera image size of the scripted agent (the camera's full resolution) [px]."""
-SPACE_KEYS = ("action_mode", "obs_mode", "image_size", "depth", "rotation_bins")
-"""Env keys that define a policy's action and observation spaces (taken from a model's run)."""
 STEPS_PER_SLOT = 2
-"""Default episode step limit per slot of the design."""
+"""Default episode step limit per slot of the design (without a task)."""
+HORIZON_S_PER_SLOT = 5.0
+"""Default throughput horizon per slot [s] (two 2.5 s cycles), without a task."""
+EPISODES_FILE = "episodes.jsonl"
+"""Per-episode results, appended as they finish."""
 COLUMNS = (
     ("policy", "policy", "{}"),
     ("success_rate", "success", "{:.0%}"),
+    ("filled", "slots filled", "{:.0%}"),
     ("correct", "correct/ep", "{:.2f}"),
     ("slots", "slots", "{:.0f}"),
     ("misplaced", "misplaced/ep", "{:.2f}"),
     ("dropped", "dropped/ep", "{:.2f}"),
+    ("lost", "lost/ep", "{:.2f}"),
+    ("stranded", "stranded/ep", "{:.2f}"),
     ("tiles_per_min", "tiles/min (sim)", "{:.1f}"),
     ("wall_s_per_tile", "wall s/tile", "{:.3f}"),
 )
 """(key, header, format) of the printed table."""
 
-
-class EvaluateError(ConfigError):
-    """A policy name, seed range or env configuration that cannot be evaluated."""
+EvaluateError = PolicyError
+"""A policy name, seed range, task or env configuration that cannot be evaluated."""
 
 
 @dataclass(frozen=True)
@@ -71,26 +83,36 @@ class EpisodeResult:
     """One episode of one policy.
 
     Attributes:
+        policy: Policy label.
         seed: Reset seed.
+        design: Design played.
         success: Every slot filled correctly.
         correct: Slots filled correctly.
         slots: Slots of the design.
         misplaced: Real tiles on the mesh filling no slot.
-        dropped: Tiles the pad lost in transit.
+        dropped: Drop events (the pad lost a tile in transit).
+        lost: Tiles lost off the input belt.
+        stranded: Real tiles left on the input side at the end.
         steps: Env steps.
         sim_s: Simulated time [s].
+        span_s: Time the throughput is measured over [s] (to completion, or the horizon).
         wall_s: Wall time of the policy and the env steps (reset excluded) [s].
         episode_return: Sum of rewards.
     """
 
+    policy: str
     seed: int
+    design: str
     success: bool
     correct: int
     slots: int
     misplaced: int
     dropped: int
+    lost: int
+    stranded: int
     steps: int
     sim_s: float
+    span_s: float
     wall_s: float
     episode_return: float
 
@@ -100,14 +122,18 @@ class PolicyRow:
     """Aggregate of one policy over the seeds (one table row).
 
     Attributes:
-        policy: Label (``scripted``, ``random`` or the run name).
+        policy: Label.
         episodes: Episodes played.
         success_rate: Fraction of successful episodes.
+        filled: Mean fraction of slots filled correctly.
         correct: Mean slots filled correctly per episode.
-        slots: Slots per episode.
+        slots: Mean slots per episode.
         misplaced: Mean misplaced tiles per episode.
-        dropped: Mean dropped tiles per episode.
-        tiles_per_min: Correct tiles per simulated minute over all episodes.
+        dropped: Mean drop events per episode.
+        lost: Mean lost tiles per episode.
+        stranded: Mean stranded tiles per episode.
+        tiles_per_min: Correct tiles per simulated minute over all episodes (each measured to
+            completion or over the horizon).
         wall_s_per_tile: Wall seconds per correct tile over all episodes (None: no tile).
         mean_return: Mean episode return.
         mean_steps: Mean episode length [steps].
@@ -117,15 +143,35 @@ class PolicyRow:
     policy: str
     episodes: int
     success_rate: float
+    filled: float
     correct: float
     slots: float
     misplaced: float
     dropped: float
+    lost: float
+    stranded: float
     tiles_per_min: float
     wall_s_per_tile: float | None
     mean_return: float
     mean_steps: float
     env: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """Where and how long policies are evaluated.
+
+    Attributes:
+        seeds: Reset seeds (the same for every policy).
+        designs: Designs, episodes alternating over them (empty: the base env's).
+        max_steps: Step limit per episode; 0: `STEPS_PER_SLOT` x slots.
+        horizon_s: Throughput horizon of a failed episode [s]; 0: `HORIZON_S_PER_SLOT` x slots.
+    """
+
+    seeds: tuple[int, ...]
+    designs: tuple[str, ...] = ()
+    max_steps: int = 0
+    horizon_s: float = 0.0
 
 
 def parse_seeds(specs: Sequence[str]) -> list[int]:
@@ -151,179 +197,54 @@ def parse_seeds(specs: Sequence[str]) -> list[int]:
 
 
 def load_env_overrides(path: str | Path | None, pairs: Sequence[str] = ()) -> dict[str, Any]:
-    """Base env overrides from a YAML (env keys, or a train config's ``env``) and KEY=VALUE.
+    """Base env overrides from a train preset, a YAML (env keys or its ``env``) and KEY=VALUE.
 
     Raises:
-        EvaluateError: Unknown env key or a malformed pair.
+        EvaluateError: Unknown preset or env key, or a malformed pair.
     """
     from envs.env_config import load_env_config  # noqa: PLC0415
 
     data: dict[str, Any] = {}
-    if path is not None:
-        raw = load_yaml(path)
-        data = dict(raw["env"]) if isinstance(raw.get("env"), dict) else raw
-    data.update(_pairs(pairs))
     try:
+        if path is not None:
+            raw = load_yaml(path, "train")
+            data = dict(raw["env"]) if isinstance(raw.get("env"), dict) else raw
+        data.update(parse_pairs(pairs))
         load_env_config(**data)
+    except EvaluateError:
+        raise
     except ConfigError as exc:
         raise EvaluateError(str(exc)) from exc
     return data
 
 
-def _run_config(model_path: Path) -> dict[str, Any]:
-    """The ``train_config.yaml`` of a run (beside the model or one folder up), or {}."""
-    for folder in (model_path.parent, model_path.parent.parent):
-        cfg = folder / "train_config.yaml"
-        if cfg.is_file():
-            data = yaml.safe_load(cfg.read_text(encoding="utf-8"))
-            return data if isinstance(data, dict) else {}
-    return {}
-
-
-def _label(model_path: Path) -> str:
-    """A short name of a checkpoint: the run folder (plus the file stem if not model.zip)."""
-    run = model_path.parent.parent if model_path.parent.name == "checkpoints" else model_path.parent
-    return run.name if model_path.name == "model.zip" else f"{run.name}/{model_path.stem}"
-
-
-Predict = Callable[[dict[str, Any], bool], np.ndarray]
-"""A policy step: (observation, episode start) -> action."""
-
-
-@dataclass
-class Policy:
-    """A policy bound to its env.
-
-    Attributes:
-        label: Table label.
-        env_kwargs: Env overrides of its env.
-        factory: Builds the per-env predict function (called once the env exists).
-        wrap: Wrapper applied to its env (a trained model's `FlatDiscreteActions`), or None.
-    """
-
-    label: str
-    env_kwargs: dict[str, Any]
-    factory: Callable[[gym.Env], Predict]
-    wrap: Callable[[gym.Env], gym.Env] | None = None
-
-
-def _scripted(base: dict[str, Any], image_size: tuple[int, int], calibrate: bool) -> Policy:
-    env_kwargs = {
-        **base,
-        "action_mode": "pick_place",
-        "obs_mode": "rgb",
-        "image_size": list(image_size),
-    }
-
-    def factory(env: gym.Env) -> Predict:
-        from agents.scripted import ScriptedAgent  # noqa: PLC0415 - vision stack
-
-        agent = ScriptedAgent.from_env(env, calibrate=calibrate)
-
-        def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
-            return agent.predict(obs, episode_start=np.array([start]))[0]
-
-        return predict
-
-    return Policy("scripted", env_kwargs, factory)
-
-
-def _random(base: dict[str, Any]) -> Policy:
-    def factory(env: gym.Env) -> Predict:
-        def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
-            del obs, start
-            return np.asarray(env.action_space.sample())
-
-        return predict
-
-    return Policy("random", dict(base), factory)
-
-
-def _trained(base: dict[str, Any], model_path: Path) -> Policy:
-    if not model_path.is_file():
-        raise EvaluateError(
-            f"unknown policy {str(model_path)!r}: use 'scripted', 'random' or a model .zip path"
-        )
-    run = _run_config(model_path)
-    run_env = dict(run.get("env") or {})
-    env_kwargs = {**base, **{k: run_env[k] for k in SPACE_KEYS if k in run_env}}
-    algo_name = str(run.get("algo", ""))
-
-    def factory(env: gym.Env) -> Predict:
-        from agents.train import algorithm_class  # noqa: PLC0415
-
-        names = [algo_name] if algo_name else ["PPO", "A2C", "DQN", "SAC", "TD3", "DDPG"]
-        model = None
-        for name in names:
-            try:
-                model = algorithm_class(name).load(str(model_path), device="cpu")
-                break
-            except (ValueError, KeyError, RuntimeError, AttributeError):
-                continue
-        if model is None:
-            raise EvaluateError(f"cannot load {model_path} with any of {names}")
-
-        def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
-            del start
-            return np.asarray(model.predict(obs, deterministic=True)[0])
-
-        return predict
-
-    wrap = FlatDiscreteActions if run.get("flatten_actions") else None
-    return Policy(_label(model_path), env_kwargs, factory, wrap)
-
-
-def make_policies(
-    names: Sequence[str],
-    base: dict[str, Any],
-    scripted_image_size: tuple[int, int] = SCRIPTED_IMAGE_SIZE,
-    calibrate: bool = True,
-) -> list[Policy]:
-    """`Policy` objects for ``scripted``, ``random`` and model paths.
-
-    A name may end with ``@KEY=VALUE[,KEY=VALUE]``: env overrides of that policy only (its
-    label keeps them), e.g. ``scripted@execution=dynamic``.
+def task_protocol(task_id: str) -> tuple[dict[str, Any], Protocol]:
+    """Base env overrides and the protocol of a rung of the task ladder (held-out split).
 
     Raises:
-        EvaluateError: A name that is none of those, or a malformed override.
+        EvaluateError: Unknown task (lists the ids).
     """
-    out = []
-    for spec in names:
-        name, _, extra = spec.partition("@")
-        overrides = _pairs(extra.split(",")) if extra else {}
-        if name == "scripted":
-            pol = _scripted(base, scripted_image_size, calibrate)
-        elif name == "random":
-            pol = _random(base)
-        else:
-            pol = _trained(base, Path(name))
-        if overrides:
-            pol = Policy(
-                spec if name in ("scripted", "random") else f"{pol.label}@{extra}",
-                {**pol.env_kwargs, **overrides},
-                pol.factory,
-                pol.wrap,
-            )
-        out.append(pol)
-    return out
+    from envs.tasks import TaskError, get_task  # noqa: PLC0415
+
+    try:
+        task = get_task(task_id)
+    except TaskError as exc:
+        raise EvaluateError(str(exc)) from exc
+    protocol = Protocol(
+        tuple(task.seeds), task.designs("eval"), task.max_episode_steps, task.horizon_s
+    )
+    return task.env_kwargs("eval"), protocol
 
 
-def _pairs(pairs: Sequence[str]) -> dict[str, Any]:
-    """``KEY=VALUE`` strings -> a dict (values parsed as YAML).
-
-    Raises:
-        EvaluateError: A string without ``=``.
-    """
-    out: dict[str, Any] = {}
-    for pair in pairs:
-        if "=" not in pair:
-            raise EvaluateError(f"env overrides want KEY=VALUE, got {pair!r}")
-        key, value = pair.split("=", 1)
-        out[key.strip()] = yaml.safe_load(value)
-    return out
-
-
-def run_episode(env: gym.Env, predict: Predict, seed: int, max_steps: int) -> EpisodeResult:
+def run_episode(
+    env: gym.Env,
+    predict: Predict,
+    seed: int,
+    max_steps: int,
+    horizon_s: float,
+    *,
+    label: str = "",
+) -> EpisodeResult:
     """Play one episode from ``reset(seed=seed)`` for at most ``max_steps`` steps."""
     obs, info = env.reset(seed=seed)
     env.action_space.seed(seed)
@@ -338,15 +259,21 @@ def run_episode(env: gym.Env, predict: Predict, seed: int, max_steps: int) -> Ep
         steps += 1
         done = terminated or truncated
     ev = info["evaluation"]
+    m = EpisodeMetrics.of(info, horizon_s)
     return EpisodeResult(
+        policy=label,
         seed=seed,
+        design=str(env.unwrapped.config.design),  # type: ignore[attr-defined]
         success=bool(ev["success"]),
         correct=int(ev["correct"]),
         slots=int(ev["slots"]),
         misplaced=int(ev["misplaced"]),
         dropped=int(ev["dropped"]),
+        lost=int(ev["lost"]),
+        stranded=int(ev.get("stranded", 0)),
         steps=steps,
-        sim_s=float(info["sim_time"]),
+        sim_s=m.sim_s,
+        span_s=m.sim_s if m.success else max(m.sim_s, horizon_s),
         wall_s=wall,
         episode_return=total,
     )
@@ -356,63 +283,122 @@ def aggregate(label: str, episodes: Sequence[EpisodeResult], env: dict[str, Any]
     """One table row from a policy's episodes."""
     n = max(len(episodes), 1)
     correct = sum(e.correct for e in episodes)
-    sim = sum(e.sim_s for e in episodes)
+    span = sum(e.span_s for e in episodes)
     wall = sum(e.wall_s for e in episodes)
+
+    def mean(key: str) -> float:
+        return sum(float(getattr(e, key)) for e in episodes) / n
+
     return PolicyRow(
         policy=label,
         episodes=len(episodes),
-        success_rate=sum(e.success for e in episodes) / n,
+        success_rate=mean("success"),
+        filled=sum(e.correct / max(e.slots, 1) for e in episodes) / n,
         correct=correct / n,
-        slots=sum(e.slots for e in episodes) / n,
-        misplaced=sum(e.misplaced for e in episodes) / n,
-        dropped=sum(e.dropped for e in episodes) / n,
-        tiles_per_min=60.0 * correct / sim if sim > 0 else 0.0,
+        slots=mean("slots"),
+        misplaced=mean("misplaced"),
+        dropped=mean("dropped"),
+        lost=mean("lost"),
+        stranded=mean("stranded"),
+        tiles_per_min=60.0 * correct / span if span > 0 else 0.0,
         wall_s_per_tile=wall / correct if correct else None,
-        mean_return=sum(e.episode_return for e in episodes) / n,
-        mean_steps=sum(e.steps for e in episodes) / n,
+        mean_return=mean("episode_return"),
+        mean_steps=mean("steps"),
         env=env,
     )
 
 
-def evaluate_policy_set(
-    policies: Sequence[Policy],
-    seeds: Sequence[int],
-    max_steps: int = 0,
-    progress: bool = False,
-) -> tuple[list[PolicyRow], dict[str, list[EpisodeResult]]]:
-    """Play every policy on every seed.
+def _read_done(path: Path | None) -> list[EpisodeResult]:
+    """Episodes already in a JSONL log (none if it does not exist)."""
+    if path is None or not path.is_file():
+        return []
+    out = []
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if line.strip():
+            out.append(EpisodeResult(**json.loads(line)))
+    return out
 
-    Args:
-        policies: From `make_policies`.
-        seeds: Reset seeds (the same for every policy).
-        max_steps: Step limit per episode; 0: `STEPS_PER_SLOT` x slots.
-        progress: Print one line per episode.
 
-    Returns:
-        (rows, episodes by policy label).
-    """
-    rows: list[PolicyRow] = []
-    per: dict[str, list[EpisodeResult]] = {}
-    for pol in policies:
-        env = gym.make(ENV_ID, **pol.env_kwargs)
+def _bind(pol: Policy, designs: Sequence[str]) -> list[tuple[gym.Env, Predict]]:
+    """Build the policy's env for each design and bind it (raises before any episode)."""
+    bound = []
+    for design in designs or [""]:
+        kwargs = {**pol.env_kwargs, "design": design} if design else dict(pol.env_kwargs)
+        try:
+            env = gym.make(ENV_ID, **kwargs)
+        except ConfigError as exc:
+            raise EvaluateError(f"policy {pol.label!r}: {exc}") from exc
         if pol.wrap is not None:
             env = pol.wrap(env)
         try:
-            predict = pol.factory(env)
-            limit = max_steps or STEPS_PER_SLOT * len(env.unwrapped.task.slot_class)  # type: ignore[attr-defined]
-            eps = []
-            for seed in seeds:
-                ep = run_episode(env, predict, seed, limit)
+            bound.append((env, pol.factory(env)))
+        except Exception:
+            env.close()
+            for e, _ in bound:
+                e.close()
+            raise
+    return bound
+
+
+def evaluate_policy_set(
+    policies: Sequence[Policy],
+    seeds: Sequence[int] | Protocol,
+    max_steps: int = 0,
+    progress: bool = False,
+    log: Path | None = None,
+) -> tuple[list[PolicyRow], dict[str, list[EpisodeResult]]]:
+    """Play every policy on every seed (see the module docstring).
+
+    Args:
+        policies: From `agents.policies.make_policies`.
+        seeds: Reset seeds, or a `Protocol` (seeds, designs, limits).
+        max_steps: Step limit per episode when ``seeds`` is a list; 0: 2 x slots.
+        progress: Print one line per episode.
+        log: JSONL file the episodes are appended to as they finish (and read back to skip
+            the ones already played); None: not written.
+
+    Returns:
+        (rows, episodes by policy label).
+
+    Raises:
+        EvaluateError: A policy that cannot be bound to its env (before any episode).
+    """
+    proto = seeds if isinstance(seeds, Protocol) else Protocol(tuple(seeds), (), max_steps)
+    done = _read_done(log)
+    envs = []
+    try:
+        for pol in policies:  # bind everything first: a bad policy fails before any episode
+            envs.append(_bind(pol, proto.designs))
+        per: dict[str, list[EpisodeResult]] = {}
+        for pol, bound in zip(policies, envs, strict=True):
+            eps = [e for e in done if e.policy == pol.label and e.seed in proto.seeds]
+            have = {e.seed for e in eps}
+            for i, seed in enumerate(proto.seeds):
+                if seed in have:
+                    continue
+                env, predict = bound[i % len(bound)]
+                slots = len(env.unwrapped.task.slot_class)  # type: ignore[attr-defined]
+                limit = proto.max_steps or STEPS_PER_SLOT * slots
+                horizon = proto.horizon_s or HORIZON_S_PER_SLOT * slots
+                ep = run_episode(env, predict, seed, limit, horizon, label=pol.label)
                 eps.append(ep)
+                if log is not None:
+                    log.parent.mkdir(parents=True, exist_ok=True)
+                    with log.open("a", encoding="utf-8") as fh:
+                        fh.write(json.dumps(asdict(ep)) + "\n")
                 if progress:
                     print(
-                        f"  {pol.label} seed {seed}: {ep.correct}/{ep.slots} correct, "
-                        f"{ep.misplaced} misplaced, {ep.steps} steps, {ep.wall_s:.2f} s"
+                        f"  {pol.label} seed {seed} ({ep.design}): {ep.correct}/{ep.slots} "
+                        f"correct, {ep.misplaced} misplaced, {ep.steps} steps, {ep.wall_s:.2f} s",
+                        flush=True,
                     )
-        finally:
-            env.close()
-        per[pol.label] = eps
-        rows.append(aggregate(pol.label, eps, pol.env_kwargs))
+            eps.sort(key=lambda e: proto.seeds.index(e.seed))
+            per[pol.label] = eps
+        rows = [aggregate(p.label, per[p.label], p.env_kwargs) for p in policies]
+    finally:
+        for bound in envs:
+            for env, _ in bound:
+                env.close()
     return rows, per
 
 
@@ -431,21 +417,18 @@ def markdown_table(rows: Sequence[PolicyRow]) -> str:
 
 
 def plot(rows: Sequence[PolicyRow], path: Path) -> None:
-    """Bar charts of success rate, correct tiles and tiles/min per policy (PNG)."""
+    """Bar charts of success rate, slots filled and tiles/min per policy (matplotlib PNG)."""
+    import matplotlib as mpl  # noqa: PLC0415
+
+    mpl.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
     labels = [r.policy for r in rows]
     panels = (
         ("success rate", [r.success_rate for r in rows]),
-        ("correct tiles / episode", [r.correct for r in rows]),
+        ("slots filled", [r.filled for r in rows]),
         ("tiles / min (simulated)", [r.tiles_per_min for r in rows]),
     )
-    try:
-        import matplotlib as mpl  # noqa: PLC0415 - optional
-
-        mpl.use("Agg")
-        import matplotlib.pyplot as plt  # noqa: PLC0415
-    except ImportError:
-        _plot_cv(labels, panels, path)
-        return
     height = 1.2 + 0.45 * len(labels)
     fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), height), sharey=True)
     colors = [f"C{i % 10}" for i in range(len(labels))]
@@ -456,36 +439,6 @@ def plot(rows: Sequence[PolicyRow], path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
-
-
-def _plot_cv(labels: list[str], panels: Any, path: Path) -> None:
-    """OpenCV fallback of `plot`."""
-    import cv2  # noqa: PLC0415
-
-    w, h, pad = 360, 300, 40
-    img = np.full((h, w * len(panels), 3), 255, np.uint8)
-    for p, (title, values) in enumerate(panels):
-        x0 = p * w
-        cv2.putText(img, title, (x0 + 10, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 1)
-        top = max(*values, 1e-9)
-        bw = (w - 2 * pad) // max(len(values), 1)
-        for i, (lab, v) in enumerate(zip(labels, values, strict=True)):
-            bh = int((h - 2 * pad - 20) * v / top)
-            x = x0 + pad + i * bw
-            cv2.rectangle(img, (x + 4, h - pad - bh), (x + bw - 4, h - pad), (180, 110, 40), -1)
-            cv2.putText(
-                img,
-                f"{v:.2f}",
-                (x + 4, h - pad - bh - 4),
-                cv2.FONT_HERSHEY_SIMPLEX,
-                0.4,
-                (0, 0, 0),
-                1,
-            )
-            cv2.putText(
-                img, lab[:12], (x + 2, h - pad + 15), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1
-            )
-    cv2.imwrite(str(path), img)
 
 
 def write_outputs(
@@ -529,17 +482,18 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "--policies",
         nargs="+",
         required=True,
-        help="'scripted', 'random' and/or model .zip paths, each optionally with "
-        "@KEY=VALUE[,KEY=VALUE] env overrides (scripted@execution=dynamic)",
+        help="scripted, random, openloop, identity, model .zip paths or module:callable, each "
+        "optionally with @KEY=VALUE[,KEY=VALUE] env overrides (scripted@execution=dynamic)",
     )
-    ap.add_argument("--seeds", nargs="+", default=["1000-1019"], help="e.g. 1000-1019 or 1,2")
+    ap.add_argument("--task", default=None, help="a ladder id (MosaicDecision6-v0): its protocol")
+    ap.add_argument("--seeds", nargs="+", default=None, help="e.g. 1000-1019 or 1,2")
     ap.add_argument(
         "--env-config",
         default=None,
-        help="env YAML (EnvConfig keys) or a configs/train YAML (its env)",
+        help="configs/train preset name or YAML (its env), or an env YAML",
     )
     ap.add_argument("--env", nargs="*", default=[], metavar="KEY=VALUE", help="env overrides")
-    ap.add_argument("--max-steps", type=int, default=0, help="0: 2 x slots")
+    ap.add_argument("--max-steps", type=int, default=0, help="0: the task's, else 2 x slots")
     ap.add_argument(
         "--scripted-image-size", type=int, nargs=2, default=SCRIPTED_IMAGE_SIZE, metavar=("H", "W")
     )
@@ -553,24 +507,37 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     import torch  # noqa: PLC0415
 
     torch.set_num_threads(1)
-    seeds = parse_seeds(args.seeds)
-    base = load_env_overrides(args.env_config, args.env)
+    if args.task:
+        base, proto = task_protocol(args.task)
+        base.update(load_env_overrides(args.env_config, args.env))
+        if args.seeds:
+            proto = Protocol(tuple(parse_seeds(args.seeds)), proto.designs, proto.max_steps)
+    else:
+        base = load_env_overrides(args.env_config, args.env)
+        proto = Protocol(tuple(parse_seeds(args.seeds or ["1000-1019"])))
+    if args.max_steps:
+        proto = Protocol(proto.seeds, proto.designs, args.max_steps, proto.horizon_s)
     policies = make_policies(
         args.policies, base, tuple(args.scripted_image_size), calibrate=not args.no_calibrate
     )
-    rows, episodes = evaluate_policy_set(policies, seeds, args.max_steps, not args.quiet)
-    report = write_outputs(rows, episodes, seeds, args.out, {"base_env": base})
+    rows, episodes = evaluate_policy_set(
+        policies, proto, progress=not args.quiet, log=args.out / EPISODES_FILE
+    )
+    extra = {"base_env": base, "task": args.task, "protocol": asdict(proto)}
+    report = write_outputs(rows, episodes, list(proto.seeds), args.out, extra)
     print(markdown_table(rows))
-    print(f"wrote {args.out / 'eval.json'}, eval.md, eval.png")
+    print(f"wrote {args.out / 'eval.json'}, eval.md, eval.png, {EPISODES_FILE}")
     return report
 
 
 __all__ = [
     "COLUMNS",
+    "EPISODES_FILE",
     "EpisodeResult",
     "EvaluateError",
     "Policy",
     "PolicyRow",
+    "Protocol",
     "aggregate",
     "evaluate_policy_set",
     "load_env_overrides",
@@ -580,6 +547,7 @@ __all__ = [
     "parse_seeds",
     "plot",
     "run_episode",
+    "task_protocol",
     "write_outputs",
 ]
 

@@ -5,12 +5,22 @@ Run::
     python -m agents.record_demos --episodes 20 --seed 0 [--root out/minari] \\
         [--dataset-id mosaic/scripted-kinematic-v0] [--env KEY=VALUE ...] [--replay]
 
+    python -m agents.record_demos --task MosaicDecision6-v0 --expert --lossless --episodes 50 \
+        --dataset-id mosaic/decision6-expert-v0    # discrete actions, 72 x 96 images, raw PNG-free
+
 Episodes are collected with Minari's `DataCollector` wrapper (``pick_place`` actions, the
 scripted agent's inputs: camera images, plus the privileged state so the dataset also serves
 state-based imitation) and written under ``--root`` (``MINARI_DATASETS_PATH`` is set to it for
 the call; nothing is downloaded). Each episode stores its reset seed, so `replay` rebuilds the
 env from the dataset's spec, resets with the seed, steps the recorded actions and compares
 rewards, end flags and the state observations.
+
+``--task``: record on a rung of the task ladder at its training image size (72 x 96 by
+default, what `agents.train` learns from) with ``rgb+state`` observations. ``--expert``: the
+privileged expert (`MosaicAssemblyEnv.expert_action`, every tile to its slot) instead of the
+scripted agent: the only demonstrator of ``pick_place_discrete`` (the scripted agent acts in
+``pick_place``). ``--lossless``: store images as raw arrays (Minari JPEG-encodes them by
+default, which changes pixels).
 """
 
 from __future__ import annotations
@@ -115,6 +125,25 @@ class ReplayResult:
     replayed_success: int
 
 
+class ExpertAgent:
+    """The privileged expert as a policy: moves the tiles of the design into their slots in turn.
+
+    Args:
+        env: A ``pick_place`` or ``pick_place_discrete`` env (any wrapper).
+    """
+
+    def __init__(self, env: gym.Env) -> None:
+        self.env = env.unwrapped
+        self.step = 0
+
+    def predict(self, obs: Any, episode_start: np.ndarray) -> tuple[np.ndarray, None]:
+        """The next expert action (the observation is not needed: the expert is privileged)."""
+        del obs
+        self.step = 0 if bool(np.asarray(episode_start).ravel()[0]) else self.step + 1
+        i = self.step % len(self.env.cell.slots)  # type: ignore[attr-defined]
+        return self.env.expert_action(i, i), None  # type: ignore[attr-defined]
+
+
 def record(
     episodes: int,
     *,
@@ -124,6 +153,9 @@ def record(
     env_kwargs: dict[str, Any] | None = None,
     calibrate: bool = True,
     overwrite: bool = False,
+    expert: bool = False,
+    lossless: bool = False,
+    task: str = "",
 ) -> RecordResult:
     """Record ``episodes`` scripted episodes (seeds ``seed``, ``seed + 1``...) as a dataset.
 
@@ -134,21 +166,30 @@ def record(
 
     from agents.scripted import ScriptedAgent  # noqa: PLC0415
 
+    env_id = ENV_ID
     kwargs = {**DEFAULT_ENV, **(env_kwargs or {})}
+    if task:
+        from envs.tasks import get_task  # noqa: PLC0415
+
+        env_id = f"envs:{get_task(task).id}"
+        kwargs = {"obs_mode": "rgb+state", **(env_kwargs or {})}
     with datasets_root(root):
         path = Path(os.environ["MINARI_DATASETS_PATH"]) / dataset_id
         if path.exists():
             if not overwrite:
                 raise DemoError(f"dataset {dataset_id} exists at {path}; pass --overwrite")
             shutil.rmtree(path)
-        base = gym.make(ENV_ID, **kwargs)
+        base = gym.make(env_id, **kwargs)
         slots = len(base.unwrapped.task.slot_class)  # type: ignore[attr-defined]
         base.close()
         env = minari.DataCollector(
-            gym.make(ENV_ID, max_episode_steps=STEPS_PER_SLOT * slots, **kwargs)
+            gym.make(env_id, max_episode_steps=STEPS_PER_SLOT * slots, **kwargs),
+            jpeg_encoding=not lossless,
         )
         try:
-            agent = ScriptedAgent.from_env(env, calibrate=calibrate)
+            agent: Any = (
+                ExpertAgent(env) if expert else ScriptedAgent.from_env(env, calibrate=calibrate)
+            )
             seeds = tuple(range(seed, seed + episodes))
             successes = steps = 0
             for s in seeds:
@@ -164,13 +205,18 @@ def record(
             dataset = env.create_dataset(
                 dataset_id=dataset_id,
                 eval_env=env.spec,
-                algorithm_name="ScriptedAgent (agents/scripted.py)",
+                algorithm_name=type(agent).__name__,
                 author="mosaic-cell project",
                 author_email="n/a",
                 code_permalink="agents/record_demos.py",
                 description=(
-                    "Scripted mosaic cell (perception + qualitative matching + planner cycles) "
-                    f"on MosaicAssembly-v0 with {json.dumps(kwargs)}; seeds "
+                    (
+                        "Privileged expert (every tile to its slot) "
+                        if expert
+                        else "Scripted mosaic cell (perception + qualitative matching + planner "
+                        "cycles) "
+                    )
+                    + f"on {env_id.removeprefix('envs:')} with {json.dumps(kwargs)}; seeds "
                     f"{seeds[0]}..{seeds[-1]}."
                 ),
             )
@@ -262,6 +308,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--no-calibrate", action="store_true", help="true camera model")
     ap.add_argument("--overwrite", action="store_true")
     ap.add_argument("--replay", action="store_true", help="load back and replay")
+    ap.add_argument("--task", default="", help="a ladder id (MosaicDecision6-v0)")
+    ap.add_argument("--expert", action="store_true", help="privileged expert (discrete modes)")
+    ap.add_argument("--lossless", action="store_true", help="raw images, no JPEG")
     args = ap.parse_args(argv)
     os.environ.setdefault("MUJOCO_GL", "egl")
     rec = record(
@@ -272,6 +321,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         env_kwargs=_pairs(args.env),
         calibrate=not args.no_calibrate,
         overwrite=args.overwrite,
+        expert=args.expert,
+        lossless=args.lossless,
+        task=args.task,
     )
     report: dict[str, Any] = {"record": {**asdict(rec), "path": str(rec.path)}}
     print(
@@ -292,6 +344,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
 __all__ = [
     "DemoError",
+    "ExpertAgent",
     "RecordResult",
     "ReplayResult",
     "datasets_root",

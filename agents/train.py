@@ -20,6 +20,7 @@ import argparse
 import dataclasses
 import json
 import os
+import sys
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -74,6 +75,11 @@ class TrainConfig:
             -> one Discrete over all combinations).
         max_wall_s: Stop ``learn`` after this wall time [s] even before ``total_timesteps``;
             0: no limit (the final model is saved either way).
+        task: A rung of the task ladder (``MosaicDecision6-v0``, `envs.tasks`): the envs are
+            made from its id (its preset and episode limit; env i trains on its training
+            design i mod count) and ``env`` overrides on top; "" uses `MosaicAssembly-v0`.
+        log_every_s: When output is not a terminal, print a progress line (steps, steps/s,
+            recent return and success) to the log this often [s] instead of a progress bar.
     """
 
     algo: str = "PPO"
@@ -94,6 +100,8 @@ class TrainConfig:
     verbose: int = 0
     flatten_actions: bool = False
     max_wall_s: float = 0.0
+    task: str = ""
+    log_every_s: float = 30.0
 
     def __post_init__(self) -> None:
         if self.vec_env not in VEC_ENVS:
@@ -108,6 +116,10 @@ class TrainConfig:
         from envs.env_config import load_env_config  # noqa: PLC0415 - validates env keys
 
         load_env_config(**dict(self.env))
+        if self.task:
+            from envs.tasks import get_task  # noqa: PLC0415
+
+            get_task(self.task)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain dict (YAML-serialisable) of every field."""
@@ -176,14 +188,24 @@ def pick_policy(policy: str, observation_space: spaces.Space) -> str:
     return "MlpPolicy"
 
 
-def make_env_fn(cfg: TrainConfig) -> Any:
-    """A zero-argument env factory (``gym.make`` with the config's env overrides)."""
+def make_env_fn(cfg: TrainConfig, index: int = 0) -> Any:
+    """A zero-argument factory of training env ``index`` (``gym.make`` with the overrides).
+
+    With a ``task``: the task's id, its training design ``index`` mod count, then ``env``.
+    """
     kwargs: dict[str, Any] = dict(cfg.env)
+    env_id = ENV_ID
+    if cfg.task:
+        from envs.tasks import get_task  # noqa: PLC0415
+
+        task = get_task(cfg.task)
+        env_id = f"envs:{task.id}"
+        kwargs = {"design": task.env_kwargs("train", index)["design"], **kwargs}
     if cfg.max_episode_steps:
         kwargs["max_episode_steps"] = cfg.max_episode_steps
 
     def make() -> gym.Env:
-        env = gym.make(ENV_ID, **kwargs)
+        env = gym.make(env_id, **kwargs)
         return FlatDiscreteActions(env) if cfg.flatten_actions else env
 
     return make
@@ -191,18 +213,29 @@ def make_env_fn(cfg: TrainConfig) -> Any:
 
 def make_vec(cfg: TrainConfig, monitor_dir: Path | None) -> Any:
     """The vectorised training envs (each wrapped in `Monitor` logging ``is_success``)."""
-    from stable_baselines3.common.env_util import make_vec_env  # noqa: PLC0415
+    from stable_baselines3.common.monitor import Monitor  # noqa: PLC0415
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv  # noqa: PLC0415
 
-    cls = SubprocVecEnv if cfg.vec_env == "subproc" else DummyVecEnv
-    return make_vec_env(
-        make_env_fn(cfg),
-        n_envs=cfg.n_envs,
-        seed=cfg.seed,
-        vec_env_cls=cls,
-        monitor_dir=str(monitor_dir) if monitor_dir else None,
-        monitor_kwargs={"info_keywords": ("is_success",)},
+    if monitor_dir is not None:
+        monitor_dir.mkdir(parents=True, exist_ok=True)
+
+    def factory(i: int) -> Any:
+        make = make_env_fn(cfg, i)
+
+        def build() -> gym.Env:
+            env = make()
+            env.action_space.seed(cfg.seed + i)
+            path = str(monitor_dir / str(i)) if monitor_dir is not None else None
+            return Monitor(env, path, info_keywords=("is_success",))
+
+        return build
+
+    fns = [factory(i) for i in range(cfg.n_envs)]
+    venv = (
+        SubprocVecEnv(fns, start_method="spawn") if cfg.vec_env == "subproc" else DummyVecEnv(fns)
     )
+    venv.seed(cfg.seed)
+    return venv
 
 
 @dataclass(frozen=True)
@@ -275,6 +308,32 @@ def _wall_clock_stop(limit_s: float) -> Any:
     return WallClockStop()
 
 
+def _log_progress(every_s: float, total: int) -> Any:
+    """A callback printing one progress line every ``every_s`` wall seconds (log files)."""
+    from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
+
+    class LogProgress(BaseCallback):
+        def _on_training_start(self) -> None:
+            self.t0 = self.last = time.perf_counter()
+
+        def _on_step(self) -> bool:
+            now = time.perf_counter()
+            if now - self.last >= every_s:
+                self.last = now
+                buf = list(self.model.ep_info_buffer or [])
+                ret = np.mean([e["r"] for e in buf]) if buf else float("nan")
+                ok = np.mean([float(e.get("is_success", 0)) for e in buf]) if buf else float("nan")
+                n = self.model.num_timesteps
+                print(
+                    f"[train] {n}/{total} steps, {n / (now - self.t0):.0f} steps/s, "
+                    f"return {ret:.2f}, success {ok:.2f} (last {len(buf)} episodes)",
+                    flush=True,
+                )
+            return True
+
+    return LogProgress()
+
+
 def train(cfg: TrainConfig, out: Path) -> TrainResult:
     """Train ``cfg`` and write the run folder ``out`` (see the module docstring)."""
     import torch  # noqa: PLC0415 - heavy import
@@ -302,6 +361,9 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             **kwargs,
         )
         callbacks = []
+        show_bar = cfg.progress_bar and sys.stdout.isatty()
+        if not show_bar and cfg.log_every_s > 0:
+            callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps))
         if cfg.max_wall_s:
             callbacks.append(_wall_clock_stop(cfg.max_wall_s))
         if cfg.checkpoint_freq:
@@ -316,7 +378,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
         model.learn(
             total_timesteps=cfg.total_timesteps,
             callback=callbacks or None,
-            progress_bar=cfg.progress_bar,
+            progress_bar=show_bar,
             tb_log_name=cfg.algo,
         )
         wall = time.perf_counter() - t0

@@ -1,5 +1,9 @@
 """Gymnasium wrappers the learned policies train and evaluate with (adapters, no env changes).
 
+`RecordCycleVideo` is Gymnasium's `RecordVideo` with the frames from inside each step: a
+decision-level step spans a whole pick-and-place cycle, and `RecordVideo` alone gets one frame
+per step (a 6-step episode: 0.24 s of video).
+
 `FlatDiscreteActions` turns ``pick_place_discrete``'s MultiDiscrete([tiles, slots, rotations])
 into one Discrete(tiles x slots x rotations): a single categorical over (tile, slot, rotation)
 triples. Factored heads sample the tile and the slot independently, so once the slot head
@@ -44,4 +48,32 @@ class FlatDiscreteActions(gym.ActionWrapper):
         return int(np.ravel_multi_index(tuple(int(a) for a in action), self.nvec))
 
 
-__all__ = ["FlatDiscreteActions"]
+class RecordCycleVideo(gym.wrappers.RecordVideo):
+    """`RecordVideo` that also records the frames rendered inside each step.
+
+    A frame listener of the env (``env.unwrapped.add_frame_listener``) renders every
+    ``1 / fps`` s of simulated time while a recording is on, also inside a dynamic
+    pick-and-place cycle; each step hands those frames to the video before its own.
+    Arguments: as `RecordVideo` (the env needs ``render_mode="rgb_array"``).
+    """
+
+    def __init__(self, env: gym.Env, *args: Any, **kwargs: Any) -> None:
+        super().__init__(env, *args, **kwargs)
+        self._inside: list[np.ndarray] = []
+        fps = float(env.metadata.get("render_fps", 25))
+        env.unwrapped.add_frame_listener(self._grab, fps)  # type: ignore[attr-defined]
+
+    def _grab(self) -> None:
+        if self.recording:
+            frame = self.env.render()
+            if isinstance(frame, np.ndarray):
+                self._inside.append(frame)
+
+    def _capture_frame(self) -> None:
+        if self.recording:
+            self.recorded_frames.extend(self._inside)
+        self._inside.clear()
+        super()._capture_frame()
+
+
+__all__ = ["FlatDiscreteActions", "RecordCycleVideo"]

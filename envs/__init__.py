@@ -4,6 +4,7 @@
 
     import gymnasium as gym
     env = gym.make("envs:MosaicAssembly-v0", action_mode="joint", obs_mode="state")
+    env = gym.make("envs:MosaicDecision6-v0")  # a rung of the task ladder (`envs.tasks`)
 
 Rendering is headless by default (``MUJOCO_GL=egl`` unless already set).
 """
@@ -28,4 +29,9 @@ if ENV_ID not in gym.registry:
         max_episode_steps=MAX_EPISODE_STEPS,
     )
 
-__all__ = ["ENV_ID", "MAX_EPISODE_STEPS"]
+from envs.tasks import register_tasks  # noqa: E402 - after MUJOCO_GL is set
+
+TASK_IDS = tuple(register_tasks())
+"""Registered ids of the task ladder (`envs.tasks`), easiest first."""
+
+__all__ = ["ENV_ID", "MAX_EPISODE_STEPS", "TASK_IDS"]

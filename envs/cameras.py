@@ -14,6 +14,7 @@ from __future__ import annotations
 import atexit
 import functools
 import math
+import os
 import weakref
 from dataclasses import dataclass
 
@@ -116,6 +117,26 @@ def _close_at_exit() -> None:
     atexit.register(_close_open_rigs)
 
 
+_GL_PID: list[int] = []
+"""Id of the process that created the first renderer (its GL state does not survive fork)."""
+
+
+def _check_not_forked() -> None:
+    """Raise `CellError` in a forked child of a process that rendered (EGL would hang there).
+
+    Records the current process the first time a renderer is made.
+    """
+    if not _GL_PID:
+        _GL_PID.append(os.getpid())
+    elif _GL_PID[0] != os.getpid():
+        raise CellError(
+            "this process was forked from one that had rendered already; its GL state does not "
+            "survive fork (EGL hangs): start workers with the 'spawn' method, e.g. "
+            "gym.make_vec(..., vectorization_mode='async', vector_kwargs={'context': 'spawn'}) "
+            "or SubprocVecEnv(..., start_method='spawn')"
+        )
+
+
 class CameraRig:
     """Renders named cameras with one `mujoco.Renderer` per image size (reused).
 
@@ -137,6 +158,7 @@ class CameraRig:
         pool = self._depth if depth else self._renderers
         key = (height, width)
         r = pool.get(key)
+        _check_not_forked()
         if r is None:
             r = mujoco.Renderer(self._model, height, width)
             r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self._cfg.shadows

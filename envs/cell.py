@@ -390,7 +390,7 @@ class Cell:
 
     @property
     def n_dropped(self) -> int:
-        """Tiles dropped because the holding force was exceeded."""
+        """Drop events since reset (the holding force was exceeded; a tile can drop twice)."""
         return self.suction.dropped
 
     @property

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 from configs import ConfigError, from_dict, load_yaml, resolve_path
 from envs.cell_config import CellConfig, load_cell_config, section_names
@@ -23,21 +23,30 @@ from envs.errors import CellError
 
 ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
 ObsMode = Literal["rgb", "state", "rgb+state"]
-RewardMode = Literal["sparse", "dense"]
+RewardMode = Literal["sparse", "dense", "staged"]
 Execution = Literal["dynamic", "kinematic"]
 RenderMode = Literal["rgb_array", "human"]
-ACTION_MODES = ("joint", "cartesian", "pick_place", "pick_place_discrete")
+TileOrder = Literal["belt", "shuffled", "design"]
+SlotOrder = Literal["mesh", "shuffled", "design"]
+RotationFrame = Literal["tile", "slot"]
+ACTION_MODES: tuple[str, ...] = get_args(ActionMode)
 """Allowed ``action_mode`` values."""
-OBS_MODES = ("rgb", "state", "rgb+state")
+OBS_MODES: tuple[str, ...] = get_args(ObsMode)
 """Allowed ``obs_mode`` values."""
-REWARD_MODES = ("sparse", "dense")
+REWARD_MODES: tuple[str, ...] = get_args(RewardMode)
 """Allowed ``reward_mode`` values."""
-EXECUTIONS = ("dynamic", "kinematic")
+EXECUTIONS: tuple[str, ...] = get_args(Execution)
 """Allowed ``execution`` values (``pick_place`` modes)."""
 FEEDS = ("all", "stream", "batch")
 """Allowed ``feed`` values."""
-RENDER_MODES = ("rgb_array", "human")
+RENDER_MODES: tuple[str, ...] = get_args(RenderMode)
 """Allowed ``render_mode`` values (or None)."""
+TILE_ORDERS: tuple[str, ...] = get_args(TileOrder)
+"""Allowed ``tile_order`` values (see `envs.indexing`)."""
+SLOT_ORDERS: tuple[str, ...] = get_args(SlotOrder)
+"""Allowed ``slot_order`` values (see `envs.indexing`)."""
+ROTATION_FRAMES: tuple[str, ...] = get_args(RotationFrame)
+"""Allowed ``rotation_frame`` values (see `envs.indexing`)."""
 
 
 CELL_KEYS: dict[str, tuple[str, str]] = {
@@ -101,6 +110,12 @@ class EnvConfig:
         pick_margin: Margin added around the input tile area for pick poses [m].
         place_margin: Margin added around the mesh for place poses [m].
         rotation_bins: Rotation choices of ``pick_place_discrete`` (multiples of 2 pi / bins).
+        tile_order: What a tile index names (discrete actions, ``tiles`` rows): one of
+            `TILE_ORDERS`; ``belt``: rank on the input belt from its downstream end.
+        slot_order: What a slot index names: one of `SLOT_ORDERS`; ``mesh``: raster order on
+            the mesh.
+        rotation_frame: What a rotation index counts from: one of `ROTATION_FRAMES`;
+            ``tile``: the slot-aligned pose nearest to how the tile lies.
         kinematic_settle: Physics settling time after a kinematic place [s].
         failed_action_time: Simulated time charged for an action that cannot execute [s].
         reset_settle: Physics time simulated after reset so tiles rest [s].
@@ -146,6 +161,9 @@ class EnvConfig:
     pick_margin: float = 0.0
     place_margin: float = 0.0
     rotation_bins: int = 4
+    tile_order: TileOrder = "belt"
+    slot_order: SlotOrder = "mesh"
+    rotation_frame: RotationFrame = "tile"
     kinematic_settle: float = 0.01
     failed_action_time: float = 0.04
     reset_settle: float = 0.16
@@ -179,6 +197,9 @@ class EnvConfig:
             ("obs_mode", OBS_MODES),
             ("reward_mode", REWARD_MODES),
             ("execution", EXECUTIONS),
+            ("tile_order", TILE_ORDERS),
+            ("slot_order", SLOT_ORDERS),
+            ("rotation_frame", ROTATION_FRAMES),
         ):
             value = getattr(self, name)
             if value not in allowed:
@@ -349,6 +370,9 @@ __all__ = [
     "OBS_MODES",
     "RENDER_MODES",
     "REWARD_MODES",
+    "ROTATION_FRAMES",
+    "SLOT_ORDERS",
+    "TILE_ORDERS",
     "EnvConfig",
     "EnvConfigError",
     "allowed_keys",

@@ -108,7 +108,7 @@ class TileFeed:
     def _feed_stream(self, rng: np.random.Generator) -> None:
         """Spawn the next waiting tile at the upstream edge of the tile area, if there is room."""
         cell, cfg = self.cell, self.cfg
-        waiting = np.flatnonzero(~cell.on_stage)
+        waiting = self.order[~cell.on_stage[self.order]]  # the per-reset order, not the design's
         if len(waiting) == 0:
             self.next_time = np.inf
             return

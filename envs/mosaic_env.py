@@ -26,6 +26,7 @@ from envs.actions import (
 from envs.cameras import CameraModel
 from envs.cell import CAMERAS, Cell
 from envs.env_config import EnvConfig, load_env_config
+from envs.indexing import IndexMaps
 from envs.observations import Observer
 from envs.pick_place import PickPlaceExecutor
 from envs.scene import build_arm_model
@@ -83,7 +84,11 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
       ``pick_place_action(pick_xy, pick_yaw, place_xy, place_yaw)`` one given as two
       absolute yaws [m, rad].
     - ``pick_place_discrete``: MultiDiscrete([tiles, slots, rotation_bins]): move tile i
-      (ground-truth grasp point) into slot j turned by r * 2 pi / rotation_bins.
+      (ground-truth grasp point) into slot j turned by r * 2 pi / rotation_bins. What the
+      indices name carries no answer (`envs.indexing`): by default tile i is the i-th tile on
+      the input belt from its downstream end (then the others), slot j the j-th slot in raster
+      order on the mesh, and r counts from the slot-aligned pose nearest to how the tile lies
+      (``tile_order``, ``slot_order``, ``rotation_frame``).
 
     ``execution`` (pick_place modes): ``dynamic`` tracks the planned trajectory with the
     servo actuators at every physics step (full physics, suction weld). ``kinematic`` puts the
@@ -97,7 +102,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     Dict (see `envs.observations`): ``input_camera``, ``output_camera`` RGB uint8
     (H, W, 3) at ``image_size`` (``rgb``/``rgb+state``; depth (H, W, 1) float32 [m] with
     ``depth``), ``robot`` float32 (19,) (joint pos/vel, tool pose, vacuum, held), and with
-    ``state``/``rgb+state`` the privileged ``tiles`` (n * 7,) and ``slots`` (k * 6,). Camera
+    ``state``/``rgb+state`` the privileged ``tiles`` (n * 7,) and ``slots`` (k * 6,), rows in the
+    same index order as the discrete actions. Camera
     intrinsics/extrinsics at the observation size: ``task_spec.cameras``.
 
     ## Task description
@@ -112,7 +118,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     -penalty per newly misplaced tile, dropped tile, lost tile, placed distractor and failed
     action. ``dense`` adds: -dense_reach x distance tool-to-nearest wanted tile (not holding),
     +dense_grasp while holding a wanted tile, -dense_carry x distance of the held tile to its
-    nearest free slot. Every term is in ``info`` as ``reward_<term>``.
+    nearest free slot. ``staged`` (the one-tile low-level task) adds potential-based terms
+    for reach, seal, lift, transport, align and release (`envs.rewards`). Every term is in
+    ``info`` as ``reward_<term>``.
 
     ## Starting State
     Arm at home, vacuum off, tiles laid out at random (non-overlapping) on the input belt
@@ -155,6 +163,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     - v0: initial version; manufacturing noise re-drawn per reset (``tile_variants``).
       ``pick_place``'s last action entry is the tile's rotation (it was the place yaw, which
       the env differenced with the pick yaw); ``info["evaluation"]`` has ``failure``.
+      Decision-level indices carry no answer by default (``tile_order: belt``, ``slot_order:
+      mesh``, ``rotation_frame: tile``; ``design``/``design``/``slot`` restore the old,
+      leaking encoding). The task ladder (`envs.tasks`) registers frozen presets of it.
     """
 
     metadata = {  # noqa: RUF012 - Gymnasium convention
@@ -178,6 +189,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.cell = Cell.first_fitting(cfg.cell, shapes, slots, tries=cfg.layout_tries)
         self.task = MosaicTask(self.cell, cfg)
         self.observer = Observer(self.cell, self.task, cfg)
+        self.index = IndexMaps(self.cell, cfg)
         pcfg = load_planner_config(cfg.planner)
         self.ik = IKSolver(build_arm_model(self.cell.cfg, with_cell=False), pcfg.ik, pcfg.limits)
         self.pick_area, self.place_area = work_areas(self.cell, cfg)
@@ -219,11 +231,12 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.task.initialize_episode(rng)
         self._t0 = cell.time
         self.actions.reset()
+        self.index.reset(rng)
         for f in self._listeners:
             f.next_time = cell.time
         self._needs_reset = False
         evaluation = self.task.evaluate()
-        obs = self.observer.observe(rng, evaluation)
+        obs = self._observe(evaluation)
         return obs, self._info(evaluation, dict.fromkeys(REWARD_TERMS, 0.0), False, "")
 
     def step(self, action: np.ndarray) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
@@ -238,6 +251,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             raise MosaicEnvError("step() called before reset(): call env.reset() first")
         a = self.actions.validate(action)
         a = self.actions.noisy(a, self.np_random)
+        if self.config.action_mode == "pick_place_discrete":
+            a = self.index.decode(a)
         result = self.actions.apply(a)
         if self._listeners:
             self._tick()
@@ -245,7 +260,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         terms = self.task.rewards(evaluation, result.failed)
         reward = float(sum(terms.values()))
         terminated = evaluation.success or evaluation.failure
-        obs = self.observer.observe(self.np_random, evaluation)
+        obs = self._observe(evaluation)
         info = self._info(evaluation, terms, result.failed, result.reason)
         if self.render_mode == "human":
             self.render()
@@ -330,14 +345,16 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def expert_action(self, tile: int, slot: int) -> np.ndarray:
         """Privileged action moving ``tile`` into ``slot`` exactly (pick_place modes only).
 
-        For baselines, tests and debugging: the ground-truth grasp point and yaws.
+        For baselines, tests and debugging: the ground-truth grasp point and yaws. ``tile`` and
+        ``slot`` are the cell's (design) indices; in ``pick_place_discrete`` the action is
+        encoded with the current index maps (``env.unwrapped.index``).
 
         Raises:
             MosaicEnvError: The action mode is not a pick_place mode.
         """
         mode = self.config.action_mode
         if mode == "pick_place_discrete":
-            return np.array([tile, slot, 0], dtype=np.int64)
+            return self.index.encode(tile, slot)
         if mode != "pick_place":
             raise MosaicEnvError(f"expert_action needs a pick_place mode, not {mode!r}")
         return self.codec.encode(transfer_poses(self.cell, tile, slot))
@@ -392,6 +409,14 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
                 f.next_time += f.period * (1 + int((t - f.next_time) / f.period))
 
     # ------------------------------------------------------------------ helpers
+    def _observe(self, evaluation: Evaluation) -> dict[str, Any]:
+        """The observation, privileged rows in the agent's index order (`envs.indexing`)."""
+        self.index.update()
+        obs = self.observer.observe(self.np_random, evaluation)
+        if "tiles" in obs:
+            obs["tiles"], obs["slots"] = self.index.permute_state(obs["tiles"], obs["slots"])
+        return obs
+
     def _info(
         self, evaluation: Evaluation, terms: dict[str, float], failed: bool, reason: str
     ) -> dict[str, Any]:

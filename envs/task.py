@@ -23,6 +23,7 @@ import numpy as np
 from envs.cell import Cell
 from envs.env_config import EnvConfig
 from envs.errors import CellError
+from envs.rewards import STAGES, StagedReward, load_staged_config
 from planners.angles import yaw_error
 
 REWARD_TERMS = (
@@ -36,6 +37,7 @@ REWARD_TERMS = (
     "reach",
     "grasp",
     "carry",
+    *(f"stage_{s}" for s in STAGES),
 )
 """Names of the reward terms (each is reported in ``info`` as ``reward_<name>``)."""
 
@@ -81,7 +83,10 @@ class Evaluation:
         correct: Slots filled correctly.
         misplaced: Real tiles on the mesh not filling a slot (wrong class, pose beyond
             tolerance, stacked on another tile, e.g. put into a filled slot, or tilted).
-        dropped: Tiles the pad lost in transit.
+        dropped: Drop events: times the pad lost a tile in transit (a tile dropped, picked up
+            again and dropped again counts twice).
+        stranded: Real tiles left on the input side: fed or waiting, not lost, not held, not
+            on the mesh.
         lost: Tiles lost off the input belt.
         distractors_placed: Distractor tiles on the mesh.
         slots: Number of slots.
@@ -98,6 +103,7 @@ class Evaluation:
     correct: int
     misplaced: int
     dropped: int
+    stranded: int
     lost: int
     distractors_placed: int
     slots: int
@@ -176,6 +182,9 @@ class MosaicTask:
         self._flat = math.cos(math.radians(config.max_tilt_deg))
         self._base_light = cell.model.light_diffuse.copy()
         self._settle_steps = round(config.reset_settle / float(cell.model.opt.timestep))
+        self.staged = (
+            StagedReward(self, load_staged_config()) if config.reward_mode == "staged" else None
+        )
         self._prev = self.evaluate()
 
     def initialize_episode(self, rng: np.random.Generator) -> None:
@@ -218,6 +227,8 @@ class MosaicTask:
     def reset(self) -> None:
         """Forget the counts of the previous step (call after the cell's reset)."""
         self._prev = self.evaluate()
+        if self.staged is not None:
+            self.staged.reset(self._prev)
 
     def placement(self) -> Placement:
         """Where every tile lies relative to the slots now."""
@@ -290,6 +301,7 @@ class MosaicTask:
             correct=int(p.slot_filled.sum()),
             misplaced=misplaced,
             dropped=int(cell.n_dropped),
+            stranded=int(np.sum(avail) - (cell.held_tile >= 0 and bool(avail[cell.held_tile]))),
             lost=int(cell.n_lost),
             distractors_placed=distractors,
             slots=len(p.slot_filled),
@@ -353,6 +365,8 @@ class MosaicTask:
         terms["failed_action"] = -c.penalty_failed_action * float(failed_action)
         if c.reward_mode == "dense":
             terms.update(self._dense(evaluation))
+        if self.staged is not None:
+            terms.update(self.staged.terms(evaluation))
         self._prev = evaluation
         return terms
 

@@ -30,3 +30,30 @@ def test_record_load_replay(tmp_path):
     assert rep.max_state_error == 0.0 and rep.max_reward_error == 0.0
     with pytest.raises(DemoError, match="exists"):
         record(1, root=tmp_path, dataset_id="mosaic/test-v0", env_kwargs=ENV, calibrate=False)
+
+
+def test_discrete_expert_demos_at_training_size_lossless(tmp_path):
+    import gymnasium as gym  # noqa: PLC0415
+    import numpy as np  # noqa: PLC0415
+
+    rec = record(
+        2,
+        seed=3,
+        root=tmp_path,
+        dataset_id="mosaic/expert-v0",
+        expert=True,
+        lossless=True,
+        task="MosaicDecision6-v0",
+    )
+    assert rec.success_rate == 1.0 and rec.steps == 12
+    ds = load("mosaic/expert-v0", tmp_path)
+    ep = next(iter(ds.iterate_episodes()))
+    assert ep.actions.shape == (6, 3)  # (tile, slot, rotation) per step
+    assert ep.observations["input_camera"].shape[1:] == (72, 96, 3)
+    # Lossless: the stored first image is exactly what the env renders at that reset.
+    env = gym.make("MosaicDecision6-v0", obs_mode="rgb+state")
+    obs, _ = env.reset(seed=3)
+    env.close()
+    assert np.array_equal(ep.observations["input_camera"][0], obs["input_camera"])
+    rep = replay(ds)
+    assert rep.matching_episodes == 2 and rep.replayed_success == 2

@@ -101,11 +101,11 @@ def test_wrong_slot_is_misplaced_and_penalised() -> None:
         env.reset(seed=0)
         classes = env.task.slot_class
         wrong = int(np.flatnonzero(classes != env.task.tile_class[0])[0])
-        _, r, _, _, info = env.step(np.array([0, wrong, 0]))
+        _, r, _, _, info = env.step(env.index.encode(0, wrong))  # cell indices -> agent's
         assert info["evaluation"]["misplaced"] == 1 and info["evaluation"]["correct"] == 0
         assert r == pytest.approx(-env.config.penalty_misplaced)
         # Picking the already placed tile again is a failed action, not a crash.
-        _, r, _, _, info = env.step(np.array([0, 0, 0]))
+        _, r, _, _, info = env.step(env.index.encode(0, 0))
         assert info["action_failed"] and r < 0
     finally:
         env.close()
@@ -167,7 +167,7 @@ def test_distractor_placed_is_counted() -> None:
         env.reset(seed=0)
         d = int(np.flatnonzero(env.cell.is_distractor)[0])
         assert env.action_space.nvec[0] == len(env.cell.tiles) > 3
-        _, r, _, _, info = env.step(np.array([d, 0, 0]))
+        _, r, _, _, info = env.step(env.index.encode(d, 0))
         assert not info["action_failed"], info["action_error"]
         assert info["evaluation"]["distractors_placed"] == 1
         assert info["reward_distractor"] == -env.config.penalty_distractor

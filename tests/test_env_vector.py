@@ -116,3 +116,19 @@ def test_record_video(tmp_path: Path) -> None:
         env.close()
     videos = list((tmp_path / "videos").glob("*.mp4"))
     assert videos and videos[0].stat().st_size > 1000
+
+
+def test_forked_child_of_a_rendering_process_fails_clearly_instead_of_hanging() -> None:
+    code = (
+        "import multiprocessing as mp, gymnasium as gym, envs\n"
+        "e = gym.make(envs.ENV_ID, max_slots=2, image_size=32); e.reset(seed=0)\n"
+        "def child(q):\n"
+        "    try:\n"
+        "        e.reset(seed=1); q.put('rendered')\n"
+        "    except Exception as exc:\n"
+        "        q.put(type(exc).__name__ + ': ' + str(exc)[:60])\n"
+        "q = mp.get_context('fork').Queue()\n"
+        "p = mp.get_context('fork').Process(target=child, args=(q,)); p.start()\n"
+        "print(q.get(timeout=60)); p.join(); e.close()\n"
+    )
+    assert _python(code).startswith("CellError: this process was forked")

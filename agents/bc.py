@@ -1,0 +1,197 @@
+r"""Behaviour cloning from Minari demonstrations of the decision-level tasks.
+
+Run::
+
+    python -m agents.record_demos --task MosaicDecision6-v0 --expert --episodes 50 \\
+        --dataset-id mosaic/decision6-expert-v0
+    python -m agents.bc --dataset-id mosaic/decision6-expert-v0 --out runs/bc [--seed 0]
+    python -m agents.evaluate --task MosaicDecision6-v0 --policies runs/bc/bc.pt
+
+A multilayer perceptron maps the state observation (``robot``, ``tiles``, ``slots``
+concatenated) to one categorical over the flat ``(tile, slot, rotation)`` actions, trained
+with cross-entropy on every recorded step (`BCConfig`, ``configs/bc.yaml``). The file
+``bc.pt`` holds the weights, the spaces' sizes and the configuration; `BCPolicy` plays it
+(a ``.pt`` path is a policy name of `agents.evaluate`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.errors import AgentError
+from configs import load_config
+
+STATE_KEYS = ("robot", "tiles", "slots")
+"""Observation keys the clone reads, in order."""
+BC_CONFIG = "bc"
+"""Bundled config name (``configs/bc.yaml``)."""
+
+
+@dataclass(frozen=True)
+class BCConfig:
+    """Behaviour-cloning settings.
+
+    Attributes:
+        hidden: Width of each hidden layer [units].
+        layers: Hidden layers.
+        epochs: Passes over the demonstrations.
+        batch_size: Steps per gradient step.
+        learning_rate: Adam step size.
+        weight_decay: Adam L2 penalty.
+    """
+
+    hidden: int = 256
+    layers: int = 2
+    epochs: int = 300
+    batch_size: int = 64
+    learning_rate: float = 1e-3
+    weight_decay: float = 1e-4
+
+
+def load_bc_config(name_or_path: str | Path = BC_CONFIG, **overrides: Any) -> BCConfig:
+    """Load a `BCConfig` strictly from ``configs/`` (by name) or a path."""
+    return load_config(BCConfig, name_or_path, **overrides)
+
+
+def _features(obs: dict[str, Any]) -> np.ndarray:
+    """State observation(s) -> feature rows (one per step), float32."""
+    parts = [np.asarray(obs[k], np.float32) for k in STATE_KEYS]
+    if parts[0].ndim == 1:
+        parts = [p[None] for p in parts]
+    return np.concatenate(parts, axis=1)
+
+
+def _network(n_in: int, n_out: int, cfg: BCConfig) -> Any:
+    import torch  # noqa: PLC0415
+
+    layers: list[Any] = []
+    width = n_in
+    for _ in range(cfg.layers):
+        layers += [torch.nn.Linear(width, cfg.hidden), torch.nn.ReLU()]
+        width = cfg.hidden
+    layers.append(torch.nn.Linear(width, n_out))
+    return torch.nn.Sequential(*layers)
+
+
+def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None) -> dict[str, Any]:
+    """Train a clone on every step of a Minari dataset; writes ``out/bc.pt`` and a summary.
+
+    Raises:
+        AgentError: The dataset is not a decision-level (MultiDiscrete) dataset with state.
+    """
+    import torch  # noqa: PLC0415
+
+    cfg = cfg or load_bc_config()
+    xs, ys = [], []
+    nvec: np.ndarray | None = None
+    for ep in dataset.iterate_episodes():
+        obs = ep.observations
+        if not all(k in obs for k in STATE_KEYS) or np.asarray(ep.actions).ndim != 2:
+            raise AgentError("behaviour cloning needs rgb+state/state obs and discrete actions")
+        xs.append(_features({k: obs[k][:-1] for k in STATE_KEYS}))
+        ys.append(np.asarray(ep.actions, np.int64))
+    space = dataset.spec.action_space
+    nvec = np.asarray(getattr(space, "nvec", []), np.int64)
+    if nvec.size == 0:
+        raise AgentError(f"behaviour cloning needs a MultiDiscrete action space, got {space}")
+    x = torch.as_tensor(np.concatenate(xs))
+    y = torch.as_tensor(np.ravel_multi_index(np.concatenate(ys).T, nvec))
+    torch.manual_seed(seed)
+    net = _network(x.shape[1], int(np.prod(nvec)), cfg)
+    opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
+    gen = torch.Generator().manual_seed(seed)
+    t0 = time.perf_counter()
+    loss = torch.tensor(0.0)
+    for _ in range(cfg.epochs):
+        perm = torch.randperm(len(x), generator=gen)
+        for i in range(0, len(x), cfg.batch_size):
+            idx = perm[i : i + cfg.batch_size]
+            loss = torch.nn.functional.cross_entropy(net(x[idx]), y[idx])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+    with torch.no_grad():
+        acc = float((net(x).argmax(1) == y).float().mean())
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "bc.pt"
+    torch.save(
+        {
+            "state_dict": net.state_dict(),
+            "nvec": nvec.tolist(),
+            "n_in": int(x.shape[1]),
+            "config": asdict(cfg),
+        },
+        path,
+    )
+    summary = {
+        "model_path": str(path),
+        "samples": len(x),
+        "train_accuracy": acc,
+        "final_loss": float(loss.detach()),
+        "wall_s": time.perf_counter() - t0,
+        "seed": seed,
+    }
+    (out / "bc_summary.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
+    return summary
+
+
+class BCPolicy:
+    """A trained clone as a policy (``predict(obs) -> (action, None)``).
+
+    Args:
+        path: A ``bc.pt`` file from `train_bc`.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        import torch  # noqa: PLC0415
+        from gymnasium import spaces  # noqa: PLC0415
+
+        blob = torch.load(str(path), map_location="cpu", weights_only=True)
+        self.nvec = np.asarray(blob["nvec"], np.int64)
+        self.net = _network(int(blob["n_in"]), int(np.prod(self.nvec)), BCConfig(**blob["config"]))
+        self.net.load_state_dict(blob["state_dict"])
+        self.net.eval()
+        self.action_space = spaces.MultiDiscrete(self.nvec)
+        self.n_in = int(blob["n_in"])
+
+    def predict(self, obs: dict[str, Any]) -> tuple[np.ndarray, None]:
+        """The most likely (tile, slot, rotation) for a state observation."""
+        import torch  # noqa: PLC0415
+
+        x = _features(obs)
+        if x.shape[1] != self.n_in:
+            raise AgentError(f"clone expects {self.n_in} state features, got {x.shape[1]}")
+        with torch.no_grad():
+            k = int(self.net(torch.as_tensor(x)).argmax(1)[0])
+        return np.array(np.unravel_index(k, self.nvec), np.int64), None
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    """Command line (see the module docstring)."""
+    from agents.record_demos import DEFAULT_ROOT, load  # noqa: PLC0415
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dataset-id", required=True)
+    ap.add_argument("--root", type=Path, default=DEFAULT_ROOT)
+    ap.add_argument("--out", type=Path, default=Path("runs/bc"))
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--config", default=BC_CONFIG, help="name in configs/ or a YAML path")
+    args = ap.parse_args(argv)
+    summary = train_bc(
+        load(args.dataset_id, args.root), args.out, args.seed, load_bc_config(args.config)
+    )
+    print(json.dumps(summary, indent=2))
+    return summary
+
+
+__all__ = ["BCConfig", "BCPolicy", "load_bc_config", "main", "train_bc"]
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,163 @@
+"""The evaluation protocol: per-episode metrics and their aggregation over training seeds.
+
+Per episode (`EpisodeMetrics.of`, from the env's final ``info``):
+
+- ``success``: every slot filled correctly;
+- ``filled``: fraction of the slots filled correctly;
+- ``misplaced``, ``dropped`` (drop events), ``lost``, ``stranded`` (real tiles left on the
+  input side at the end), counts;
+- ``tiles_per_min``: correct tiles per simulated minute, measured to completion for a
+  successful episode and over ``max(episode time, horizon)`` otherwise, so stopping early
+  after a few tiles cannot look as fast as finishing (the horizon is the task's
+  ``horizon_s``).
+
+Aggregation (`aggregate_runs`): each training run (seed) is scored by its mean over the held-out
+episodes; a result over runs is the interquartile mean (IQM) with a 95 % stratified-bootstrap
+confidence interval (``rliable``).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from agents.errors import AgentError
+
+SECONDS_PER_MINUTE = 60.0
+METRICS = ("success", "filled", "misplaced", "dropped", "lost", "stranded", "tiles_per_min")
+"""Metric names of `EpisodeMetrics` aggregated over runs."""
+BOOTSTRAP_REPS = 2000
+"""Bootstrap resamples of the confidence intervals."""
+CONFIDENCE = 0.95
+"""Confidence level of the intervals."""
+
+
+@dataclass(frozen=True)
+class EpisodeMetrics:
+    """The protocol's metrics of one episode.
+
+    Attributes:
+        success: 1.0 when every slot was filled correctly, else 0.0.
+        filled: Fraction of slots filled correctly, in [0, 1].
+        misplaced: Real tiles on the mesh filling no slot [count].
+        dropped: Drop events (the pad lost a tile in transit) [count].
+        lost: Tiles lost off the input belt [count].
+        stranded: Real tiles left on the input side at the end [count].
+        tiles_per_min: Correct tiles per simulated minute (see the module docstring).
+        sim_s: Simulated episode time [s].
+    """
+
+    success: float
+    filled: float
+    misplaced: float
+    dropped: float
+    lost: float
+    stranded: float
+    tiles_per_min: float
+    sim_s: float
+
+    @staticmethod
+    def of(info: Mapping[str, Any], horizon_s: float) -> EpisodeMetrics:
+        """Metrics from an episode's final ``info`` (``evaluation`` and ``sim_time``).
+
+        Args:
+            info: The last step's info dict.
+            horizon_s: Throughput horizon of a failed episode [s].
+        """
+        ev = info["evaluation"]
+        sim = float(info["sim_time"])
+        ok = bool(ev["success"])
+        span = sim if ok else max(sim, horizon_s)
+        slots = max(int(ev["slots"]), 1)
+        return EpisodeMetrics(
+            success=float(ok),
+            filled=int(ev["correct"]) / slots,
+            misplaced=float(ev["misplaced"]),
+            dropped=float(ev["dropped"]),
+            lost=float(ev["lost"]),
+            stranded=float(ev.get("stranded", 0)),
+            tiles_per_min=SECONDS_PER_MINUTE * int(ev["correct"]) / span if span > 0 else 0.0,
+            sim_s=sim,
+        )
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A point estimate over runs with its confidence interval.
+
+    Attributes:
+        iqm: Interquartile mean over runs.
+        lo: Lower bound of the 95 % stratified-bootstrap interval.
+        hi: Upper bound.
+        runs: Number of runs.
+    """
+
+    iqm: float
+    lo: float
+    hi: float
+    runs: int
+
+    def text(self, fmt: str = "{:.2f}") -> str:
+        """``iqm [lo, hi]`` (a single run: just the value)."""
+        if self.runs < 2 or self.lo == self.hi:
+            return fmt.format(self.iqm)
+        return f"{fmt.format(self.iqm)} [{fmt.format(self.lo)}, {fmt.format(self.hi)}]"
+
+
+def run_score(episodes: Sequence[EpisodeMetrics]) -> dict[str, float]:
+    """Mean of every metric over one run's held-out episodes.
+
+    Raises:
+        AgentError: No episodes.
+    """
+    if not episodes:
+        raise AgentError("a run needs at least one evaluated episode")
+    return {m: float(np.mean([getattr(e, m) for e in episodes])) for m in METRICS}
+
+
+def iqm_ci(values: Sequence[float], seed: int = 0) -> Estimate:
+    """IQM of per-run values with a 95 % stratified-bootstrap CI (``rliable``).
+
+    Args:
+        values: One value per run (training seed).
+        seed: Seed of the bootstrap.
+    """
+    x = np.asarray(values, float).reshape(-1, 1)
+    if len(x) == 0:
+        raise AgentError("no runs to aggregate")
+    from rliable import library as rly  # noqa: PLC0415 - heavy import
+    from rliable import metrics  # noqa: PLC0415
+
+    point = float(metrics.aggregate_iqm(x))
+    if len(x) < 2:
+        return Estimate(point, point, point, 1)
+    with warnings.catch_warnings():  # arch: RandomState is deprecated (still supported)
+        warnings.simplefilter("ignore", FutureWarning)
+        _, cis = rly.get_interval_estimates(
+            {"r": x},
+            lambda s: np.array([metrics.aggregate_iqm(s)]),
+            reps=BOOTSTRAP_REPS,
+            confidence_interval_size=CONFIDENCE,
+            random_state=np.random.RandomState(seed),
+        )
+    lo, hi = (float(v) for v in np.asarray(cis["r"]).ravel()[:2])
+    return Estimate(point, lo, hi, len(x))
+
+
+def aggregate_runs(runs: Sequence[Mapping[str, float]]) -> dict[str, Estimate]:
+    """IQM and CI of every metric over runs (each a `run_score` dict)."""
+    return {m: iqm_ci([r[m] for r in runs]) for m in METRICS}
+
+
+__all__ = [
+    "METRICS",
+    "EpisodeMetrics",
+    "Estimate",
+    "aggregate_runs",
+    "iqm_ci",
+    "run_score",
+]

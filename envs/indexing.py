@@ -1,0 +1,140 @@
+"""Index maps of the decision-level encoding: which tile, slot and rotation an index names.
+
+A decision-level action ``(tile, slot, rotation)`` and the privileged ``tiles``/``slots``
+observation refer to tiles and slots by index. If tile ``i`` were always built from design slot
+``i`` and rotation 0 were always right, the open-loop sequence ``(i, i, 0)`` would solve every
+episode without looking. The maps here remove that answer from the encoding:
+
+- ``tile_order``: ``belt`` (default): agent tile ``i`` is the ``i``-th tile on the input belt,
+  counted from the downstream end (largest x first, then y), recomputed at every observation,
+  so an index names what the input camera shows; tiles not on the input belt follow in an order
+  shuffled per reset. ``shuffled``: one random permutation per reset. ``design``: the design
+  order (leaks the answer; kept for comparisons).
+- ``slot_order``: ``mesh`` (default): slots in raster order of their position on the mesh (top
+  row first, left to right), what the output camera shows, independent of the design's list
+  order. ``shuffled``: one random permutation per reset. ``design``: the design order.
+- ``rotation_frame``: ``tile`` (default): rotation ``r`` turns the tile by ``r`` steps of
+  ``2 pi / rotation_bins`` from the slot-aligned pose nearest to how the tile lies now (r = 0:
+  the smallest turn), so the right index depends on the tile's yaw as the camera sees it.
+  ``slot``: ``r`` steps from the slot's own yaw (0 always right).
+
+All randomness comes from the generator passed to `IndexMaps.reset` (the env's
+``np_random``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from envs.cell import Cell
+from envs.env_config import EnvConfig
+
+ROW_DECIMALS = 3
+"""Slot rows: y positions rounded to this many decimals of a metre group slots into one row."""
+
+
+class IndexMaps:
+    """Per-reset and per-observation maps between agent indices and the cell's indices.
+
+    Args:
+        cell: The cell (tiles, slots, poses).
+        config: Environment configuration (``tile_order``, ``slot_order``,
+            ``rotation_frame``, ``rotation_bins``).
+
+    Attributes:
+        tiles: Agent tile index -> cell tile index, shape (n,) int.
+        slots: Agent slot index -> cell slot index, shape (k,) int.
+    """
+
+    def __init__(self, cell: Cell, config: EnvConfig) -> None:
+        self.cell = cell
+        self.cfg = config
+        n, k = len(cell.tiles), len(cell.slots)
+        self.tiles = np.arange(n)
+        self.slots = np.arange(k)
+        self._rest = np.arange(n)
+        self._mesh_order = _raster_order(cell.slot_poses_world()[:, :2]) if k else self.slots
+        self._step = 2 * math.pi / config.rotation_bins
+        self._mid_y = float(cell.geometry.output_centre[1] + cell.geometry.input_centre[1]) / 2
+
+    def reset(self, rng: np.random.Generator) -> None:
+        """Draw the per-reset permutations, then compute the tile order of the first observation."""
+        n, k = len(self.cell.tiles), len(self.cell.slots)
+        self._rest = rng.permutation(n)
+        order = self.cfg.slot_order
+        if order == "mesh":
+            self.slots = self._mesh_order.copy()
+        elif order == "shuffled":
+            self.slots = rng.permutation(k)
+        else:
+            self.slots = np.arange(k)
+        if self.cfg.tile_order == "design":
+            self.tiles = np.arange(n)
+        elif self.cfg.tile_order == "shuffled":
+            self.tiles = self._rest.copy()
+        self.update()
+
+    def update(self) -> None:
+        """Recompute the ``belt`` tile order from where the tiles lie now (before observing)."""
+        if self.cfg.tile_order != "belt" or not len(self.cell.tiles):
+            return
+        cell = self.cell
+        pos = cell.tile_poses().pos
+        on_input = cell.on_stage & ~cell.lost & (pos[:, 1] > self._mid_y)
+        if cell.held_tile >= 0:
+            on_input[cell.held_tile] = False
+        idx = np.flatnonzero(on_input)
+        first = idx[np.lexsort((pos[idx, 1], -pos[idx, 0]))]
+        rest = self._rest[~on_input[self._rest]]
+        self.tiles = np.concatenate([first, rest]).astype(int)
+
+    def decode(self, action: np.ndarray) -> np.ndarray:
+        """Agent ``(tile, slot, rotation)`` -> the cell's ``(tile, slot, steps from slot yaw)``."""
+        tile = int(self.tiles[int(action[0])])
+        slot = int(self.slots[int(action[1])])
+        rot = int(action[2])
+        if self.cfg.rotation_frame == "tile":
+            rot = (rot + self._base(tile, slot)) % self.cfg.rotation_bins
+        return np.array([tile, slot, rot], dtype=np.int64)
+
+    def encode(self, tile: int, slot: int, slot_steps: int = 0) -> np.ndarray:
+        """The agent action moving cell ``tile`` into ``slot``, ``slot_steps`` from its yaw.
+
+        Inverse of `decode` for the current maps (the privileged expert's action).
+        """
+        rot = slot_steps
+        if self.cfg.rotation_frame == "tile":
+            rot = (slot_steps - self._base(tile, slot)) % self.cfg.rotation_bins
+        return np.array(
+            [
+                int(np.flatnonzero(self.tiles == tile)[0]),
+                int(np.flatnonzero(self.slots == slot)[0]),
+                rot,
+            ],
+            dtype=np.int64,
+        )
+
+    def permute_state(self, tiles: np.ndarray, slots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Flat privileged ``tiles`` (n * d,) and ``slots`` (k * e,) rows in agent order."""
+        n, k = len(self.tiles), len(self.slots)
+        t = tiles.reshape(n, -1)[self.tiles].reshape(-1) if n else tiles
+        s = slots.reshape(k, -1)[self.slots].reshape(-1) if k else slots
+        return t, s
+
+    def _base(self, tile: int, slot: int) -> int:
+        """Steps from the slot's yaw to the slot-aligned pose nearest the tile's yaw now."""
+        tile_yaw = float(self.cell.tile_poses().yaw[tile])
+        slot_yaw = float(self.cell.slot_poses_world()[slot, 2])
+        d = math.remainder(tile_yaw - slot_yaw, 2 * math.pi)
+        return round(d / self._step) % self.cfg.rotation_bins
+
+
+def _raster_order(xy: np.ndarray) -> np.ndarray:
+    """Indices of points in raster order: rows by y descending, each row by x ascending."""
+    rows = -np.round(xy[:, 1], ROW_DECIMALS)
+    return np.lexsort((xy[:, 0], rows)).astype(int)
+
+
+__all__ = ["IndexMaps"]

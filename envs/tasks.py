@@ -1,0 +1,167 @@
+"""The task ladder: registered, versioned Gymnasium ids, each a frozen bundled configuration.
+
+Every rung is a YAML file in ``configs/tasks/`` (`BenchmarkTask` documents the keys): the env
+overrides of `MosaicAssembly-v0`, the episode limit, the held-out evaluation seeds (and designs)
+and the horizon of the throughput metric. ``import envs`` registers them all::
+
+    env = gym.make("MosaicDecision6-v0")                  # the bundled preset
+    env = gym.make("MosaicDecision6-v0", obs_mode="rgb")  # keyword overrides still apply
+
+From easy to the full cell: `MosaicOneTile-v0` (and ``...Joint-v0``), `MosaicDecision6-v0`,
+`MosaicDecision16-v0`, `MosaicStream-v0`, `MosaicDistractors-v0`, `MosaicHeldOutDesigns-v0`.
+`MosaicAssembly-v0` stays the fully configurable id.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+
+from configs import CONFIG_DIR, ConfigError, from_dict, load_yaml
+
+TASKS_DIR = CONFIG_DIR / "tasks"
+"""Folder of the bundled task configurations."""
+ENTRY_POINT = "envs.mosaic_env:MosaicAssemblyEnv"
+"""Every rung is the one environment class with its preset."""
+SPLITS = ("train", "eval")
+"""Allowed ``split`` values of `BenchmarkTask.env_kwargs`."""
+
+
+class TaskError(ConfigError):
+    """An unknown task id, split or design index, or a malformed task file."""
+
+
+@dataclass(frozen=True)
+class BenchmarkTask:
+    """One rung of the ladder.
+
+    Attributes:
+        id: Registered Gymnasium id (``Name-v0``).
+        description: One line saying what the rung tests.
+        max_episode_steps: `TimeLimit` of the registered id [steps].
+        horizon_s: Simulated time over which a failed episode's throughput is measured [s]
+            (a successful one is measured to its completion).
+        eval_seeds: Held-out reset seeds, inclusive range (lo, hi); training never resets
+            with an explicit seed in it.
+        env: `EnvConfig` overrides (flat keys of ``configs/env.yaml``).
+        train_designs: Designs to train on (env i of a vector uses design i mod len); empty:
+            ``env["design"]``.
+        eval_designs: Held-out designs to evaluate on; empty: the training designs.
+    """
+
+    id: str
+    description: str
+    max_episode_steps: int
+    horizon_s: float
+    eval_seeds: tuple[int, int]
+    env: Mapping[str, Any] = field(default_factory=dict)
+    train_designs: tuple[str, ...] = ()
+    eval_designs: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.max_episode_steps < 1 or not self.horizon_s > 0:
+            raise TaskError(f"{self.id}: max_episode_steps >= 1 and horizon_s > 0 are required")
+        lo, hi = self.eval_seeds
+        if not 0 <= lo <= hi:
+            raise TaskError(f"{self.id}: eval_seeds must be a range lo <= hi of seeds >= 0")
+        from envs.env_config import load_env_config  # noqa: PLC0415 - validates the keys
+
+        load_env_config(**dict(self.env))
+
+    @property
+    def seeds(self) -> list[int]:
+        """The held-out evaluation seeds."""
+        return list(range(self.eval_seeds[0], self.eval_seeds[1] + 1))
+
+    def designs(self, split: str = "train") -> tuple[str, ...]:
+        """Designs of a split (``train`` or ``eval``).
+
+        Raises:
+            TaskError: Unknown split.
+        """
+        if split not in SPLITS:
+            raise TaskError(f"unknown split {split!r}; allowed: {list(SPLITS)}")
+        train = self.train_designs or (str(self.env.get("design", "paper_mixed")),)
+        return train if split == "train" else (self.eval_designs or train)
+
+    def env_kwargs(self, split: str = "train", design_index: int = 0) -> dict[str, Any]:
+        """`MosaicAssembly-v0` overrides of this rung for one design of a split."""
+        designs = self.designs(split)
+        return {**dict(self.env), "design": designs[design_index % len(designs)]}
+
+
+def load_task(name_or_path: str | Path) -> BenchmarkTask:
+    """A task from a file in ``configs/tasks/`` (by stem) or a path, loaded strictly.
+
+    Raises:
+        ConfigError: Unknown key or bad value (names the file).
+    """
+    data = load_yaml(name_or_path, "tasks")
+    for key in ("eval_seeds", "train_designs", "eval_designs"):
+        if key in data:
+            data[key] = tuple(data[key])
+    return from_dict(BenchmarkTask, data, source=str(name_or_path))
+
+
+def bundled_tasks() -> dict[str, BenchmarkTask]:
+    """Every bundled rung by id, easiest first (file order of the ladder)."""
+    out: dict[str, BenchmarkTask] = {}
+    for path in sorted(TASKS_DIR.glob("*.yaml"), key=lambda p: LADDER.index(p.stem)):
+        task = load_task(path)
+        out[task.id] = task
+    return out
+
+
+LADDER = (
+    "one_tile",
+    "one_tile_joint",
+    "decision6",
+    "decision16",
+    "stream",
+    "distractors",
+    "held_out_designs",
+)
+"""File stems of the bundled rungs, easiest first."""
+
+
+def get_task(task_id: str) -> BenchmarkTask:
+    """The bundled rung with id ``task_id`` (``envs:`` prefix allowed).
+
+    Raises:
+        TaskError: No such rung (lists the ids).
+    """
+    tasks = bundled_tasks()
+    key = task_id.removeprefix("envs:")
+    if key not in tasks:
+        raise TaskError(f"unknown task {task_id!r}; bundled: {list(tasks)}")
+    return tasks[key]
+
+
+def register_tasks() -> list[str]:
+    """Register every bundled rung with Gymnasium (idempotent); returns the ids."""
+    ids = []
+    for task in bundled_tasks().values():
+        if task.id not in gym.registry:
+            gym.register(
+                id=task.id,
+                entry_point=ENTRY_POINT,
+                max_episode_steps=task.max_episode_steps,
+                kwargs=task.env_kwargs("train"),
+            )
+        ids.append(task.id)
+    return ids
+
+
+__all__ = [
+    "LADDER",
+    "BenchmarkTask",
+    "TaskError",
+    "bundled_tasks",
+    "get_task",
+    "load_task",
+    "register_tasks",
+]

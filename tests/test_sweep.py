@@ -1,0 +1,38 @@
+"""agents.sweep: a tiny sweep (2 training seeds + 1 policy) as Ray tasks on a local 2-CPU Ray."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from agents.sweep import SweepError, load_sweep, plan, run_sweep
+
+
+def test_sweep_files_are_strict(tmp_path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("entries:\n  - {name: x, task: MosaicDecision6-v0}\n")
+    with pytest.raises(SweepError, match="exactly one of train, policy or bc_episodes"):
+        load_sweep(bad)
+    cfg = load_sweep("baselines")
+    runs = plan(cfg, tmp_path)
+    learned = [r for r in runs if r.entry.train]
+    assert learned and all(len(cfg.seeds) >= 3 for _ in learned)
+
+
+@pytest.mark.slow
+def test_tiny_sweep_on_local_ray(tmp_path) -> None:
+    cfg = load_sweep("tiny")
+    results = run_sweep(cfg, tmp_path, num_cpus=2, progress=False)
+    assert len(results) == 3  # 2 seeds of PPO + the random policy
+    ppo = [r for r in results if r["entry"] == "PPO tiny"]
+    assert sorted(r["seed"] for r in ppo) == [0, 1] and all(r["timesteps"] >= 128 for r in ppo)
+    lines = (tmp_path / "results.jsonl").read_text().splitlines()
+    assert len(lines) == 3 and "metrics" in json.loads(lines[0])
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    row = next(s for s in summary if s["entry"] == "PPO tiny")
+    assert row["runs"] == 2 and set(row["estimates"]["success"]) == {"iqm", "lo", "hi", "runs"}
+    assert (tmp_path / "curves.png").stat().st_size > 0
+    # A rerun finds every result on disk and starts no Ray task.
+    again = run_sweep(cfg, tmp_path, num_cpus=2, progress=False)
+    assert len(again) == 3 and len((tmp_path / "results.jsonl").read_text().splitlines()) == 3

@@ -1,0 +1,107 @@
+"""The task ladder: registered ids, frozen presets, splits and the staged reward."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import envs
+from envs.actions import transfer_poses
+from envs.rewards import STAGES
+from envs.task import REWARD_TERMS
+from envs.tasks import TaskError, bundled_tasks, get_task
+
+
+def test_every_rung_is_registered_with_its_limit() -> None:
+    tasks = bundled_tasks()
+    assert list(tasks) == list(envs.TASK_IDS)
+    assert {
+        "MosaicOneTile-v0",
+        "MosaicDecision6-v0",
+        "MosaicDecision16-v0",
+        "MosaicStream-v0",
+        "MosaicDistractors-v0",
+        "MosaicHeldOutDesigns-v0",
+    } <= set(tasks)
+    for task in tasks.values():
+        spec = gym.spec(task.id)
+        assert spec.max_episode_steps == task.max_episode_steps
+        assert len(task.seeds) >= 20 and min(task.seeds) >= 1000
+
+
+def test_held_out_designs_are_disjoint() -> None:
+    t = get_task("MosaicHeldOutDesigns-v0")
+    assert not set(t.designs("train")) & set(t.designs("eval"))
+    assert t.env_kwargs("train", 1)["design"] == t.designs("train")[1]
+    with pytest.raises(TaskError, match="split"):
+        t.designs("test")
+    with pytest.raises(TaskError, match="bundled"):
+        get_task("MosaicNope-v0")
+
+
+@pytest.mark.parametrize(
+    ("task_id", "n_tiles"),
+    [("MosaicDecision6-v0", 6), ("MosaicDistractors-v0", 9), ("MosaicDecision16-v0", 16)],
+)
+def test_decision_rungs_build_with_their_spaces(task_id: str, n_tiles: int) -> None:
+    env = gym.make(task_id)
+    try:
+        env.reset(seed=0)
+        assert env.action_space.nvec[0] == n_tiles
+        obs, *_ = env.step(env.action_space.sample())
+        assert obs["tiles"].shape == (n_tiles * 7,)
+    finally:
+        env.close()
+
+
+def test_stream_rung_feeds_in_a_drawn_order() -> None:
+    env = gym.make("MosaicStream-v0")
+    try:
+        firsts = set()
+        for seed in range(4):
+            env.reset(seed=seed)
+            cell = env.unwrapped.cell
+            firsts.add(tuple(np.flatnonzero(cell.on_stage)))
+        assert len(firsts) > 1  # the first tiles on the belt differ between episodes
+    finally:
+        env.close()
+
+
+def test_staged_reward_telescopes_to_the_stage_weights() -> None:
+    env = gym.make(
+        "MosaicOneTile-v0", action_mode="pick_place", execution="kinematic"
+    )  # the same task, one privileged cycle
+    try:
+        u = env.unwrapped
+        env.reset(seed=3)
+        start = dict(u.task.staged._prev)
+        _, r, term, _, info = env.step(u.expert_action(0, 0))
+        cfg = u.task.staged.cfg
+        assert term and info["is_success"]
+        for s in STAGES:
+            w = getattr(cfg, s)
+            assert info[f"reward_stage_{s}"] == pytest.approx(w * (1 - start[s]))
+        assert r == pytest.approx(sum(info[f"reward_{t}"] for t in REWARD_TERMS))
+    finally:
+        env.close()
+
+
+def test_staged_potentials_rise_through_reach_and_seal() -> None:
+    env = gym.make("MosaicOneTile-v0")
+    try:
+        u = env.unwrapped
+        env.reset(seed=1)
+        st = u.task.staged
+        far = st.potentials(u.evaluate())["reach"]
+        # Put the pad on the tile (kinematic, through the privileged pose) and seal.
+        cmd = transfer_poses(u.cell, 0, 0)
+        q = u.ik.solve(np.array([*cmd.pick_xy, u.pick_area.tile_top_z]), cmd.pick_yaw).q
+        u.cell.set_qpos(q)
+        near = st.potentials(u.evaluate())
+        assert near["reach"] > 0.95 > far and near["seal"] == 0.0
+        u.cell.vacuum(True)
+        held = st.potentials(u.evaluate())
+        assert u.cell.held_tile == 0 and held["seal"] == 1.0 and held["reach"] == 1.0
+    finally:
+        env.close()
