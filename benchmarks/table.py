@@ -36,7 +36,11 @@ OUT_DIR = Path("out")
 TIMEOUT_S = 900.0
 """Wall-clock limit of one benchmark script [s]."""
 EVAL_SEEDS = "1000-1019"
-"""Held-out seeds of the learned-vs-scripted evaluation."""
+"""Held-out seeds of the learned-vs-scripted evaluation (the ladder's protocol seeds)."""
+LEARNED_TASK = "MosaicDecision6-v0"
+"""Ladder rung of the learned-vs-scripted rows (its protocol: seeds, episode limit)."""
+SHIPPED_MODEL = Path("checkpoints") / LEARNED_TASK / "PPO_state" / "seed_0" / "model.zip"
+"""The shipped baseline checkpoint, used when no newer ``runs/*/model.zip`` exists."""
 
 # Targets of the issues (numbers a user may want to see in one place).
 QSHAPE_DESCRIBE_S = 1.0
@@ -493,9 +497,11 @@ BENCHES = (
 
 
 def _latest_model(runs: Path = Path("runs")) -> Path | None:
-    """The newest ``runs/*/model.zip``, or None."""
+    """The newest ``runs/*/model.zip``, else the shipped checkpoint, or None."""
     models = sorted(runs.glob("*/model.zip"), key=lambda p: p.stat().st_mtime)
-    return models[-1] if models else None
+    if models:
+        return models[-1]
+    return SHIPPED_MODEL if SHIPPED_MODEL.is_file() else None
 
 
 def command(bench: Bench, out_dir: Path, quick: bool, model: Path | None) -> list[str] | None:
@@ -504,9 +510,11 @@ def command(bench: Bench, out_dir: Path, quick: bool, model: Path | None) -> lis
         return None
     cmd = [sys.executable, "-m", bench.module]
     if bench.module == "agents.evaluate":
-        policies = ["scripted", "scripted@execution=dynamic", "random"]
+        policies = ["scripted", "scripted@execution=dynamic", "random", "openloop"]
         policies += [str(model)] if model else []
         cmd += [
+            "--task",
+            LEARNED_TASK,
             "--policies",
             *policies,
             "--seeds",
@@ -515,8 +523,6 @@ def command(bench: Bench, out_dir: Path, quick: bool, model: Path | None) -> lis
             str(out_dir),
             "--quiet",
         ]
-        if model is not None:
-            cmd += ["--env-config", str(model.parent / "train_config.yaml")]
         return cmd
     if bench.takes_out:
         cmd += ["--out", str(out_dir / bench.json_name)]
@@ -625,7 +631,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "--model",
         type=Path,
         default=None,
-        help="trained model for the learned row (default: newest runs/*/model.zip)",
+        help="trained model for the learned row (default: newest runs/*/model.zip, else checkpoints/)",
     )
     ap.add_argument("--out-dir", type=Path, default=OUT_DIR, help="folder of the JSON files")
     ap.add_argument("--out", type=Path, default=None, help="bench.json path (default out-dir)")
