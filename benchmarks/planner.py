@@ -39,6 +39,7 @@ from envs.cell import Cell
 from envs.cell_config import CellConfig, load_cell_config
 from envs.scene import build_arm_model
 from envs.tile_shapes import tile_shapes_from_design
+from planners.angles import yaw_error
 from planners.config import PlannerConfig, load_planner_config
 from planners.errors import LimitError, PlannerError
 from planners.executor import TimedEvent, TrajectoryExecutor
@@ -226,12 +227,8 @@ class CellRunner:
         poses = self.cell.tile_poses()
         sx, sy, syaw = self.slots[slot]
         d = float(np.hypot(poses.pos[tile, 0] - sx, poses.pos[tile, 1] - sy))
-        order = self.cell.tiles[tile].shape.symmetry
-        if order == 0:
-            return d, 0.0
-        period = 2 * math.pi / order
-        e = (poses.yaw[tile] - syaw + period / 2) % period - period / 2
-        return d, abs(math.degrees(e))
+        e = yaw_error(float(poses.yaw[tile]), syaw, self.cell.tiles[tile].shape.symmetry)
+        return d, math.degrees(float(e))
 
 
 STANDARD_CYCLE = (0.025, 0.300, 0.025)
