@@ -374,7 +374,7 @@ def learned_figures(d: dict[str, Any]) -> list[Figure]:
                     SCRIPTED_TILES_PER_MIN,
                 )
             )
-        elif kind == "random":
+        elif kind in ("random", "openloop", "identity"):  # references, no target
             out.append(fig(g, f"{p} success rate", r["success_rate"]))
         else:
             out.append(fig(g, f"{p} success rate", r["success_rate"]))
@@ -631,7 +631,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "--model",
         type=Path,
         default=None,
-        help="trained model for the learned row (default: newest runs/*/model.zip, else checkpoints/)",
+        help="model of the learned row (default: newest runs/*/model.zip, else the shipped one)",
     )
     ap.add_argument("--out-dir", type=Path, default=OUT_DIR, help="folder of the JSON files")
     ap.add_argument("--out", type=Path, default=None, help="bench.json path (default out-dir)")
