@@ -107,7 +107,8 @@ class RunReport:
         executed: Commands were executed (False: vision and planning only).
         belt_speed: Input belt speed [m/s].
         feed: Tile feed.
-        steps: Env steps taken.
+        steps: Pick-and-place steps taken.
+        waits: Waiting steps taken (nothing to place in the picture; a new one follows).
         failed_actions: Steps whose action failed.
         failures: Slot name and reason of each failed action.
         pictures: Input-camera pictures perceived.
@@ -144,6 +145,7 @@ class RunReport:
     belt_speed: float
     feed: FeedMode
     steps: int
+    waits: int
     failed_actions: int
     failures: tuple[str, ...]
     pictures: int
@@ -444,7 +446,7 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             video.capture()
         bar.set_postfix_str("picking and placing")
         first: tuple[np.ndarray, Perception, PlacementPlan] | None = None
-        steps = failed = 0
+        steps = failed = waits = idle = 0
         failures: list[str] = []
         rec: list[RecognitionRow] = []
         limit = rc.max_steps_per_slot * max(1, len(spec.slots))
@@ -453,9 +455,23 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             if first is None and agent.last_perception is not None and agent.last_plan:
                 first = (obs["input_camera"], agent.last_perception, agent.last_plan)
                 rec = recognition(env.get_wrapper_attr("ground_truth")(), agent)
-            if agent.last_command is None or not rc.execute:
-                break  # nothing placeable is seen (or vision only)
+            if not rc.execute:
+                break  # vision only
+            if agent.last_command is None:
+                # Nothing to place in this picture: an empty belt before the next streamed
+                # tile, or a picture not usable. Wait one cycle and look again; the env ends
+                # the episode once nothing placeable is left.
+                idle += 1
+                if idle > rc.max_idle_steps:
+                    break
+            else:
+                idle = 0
             obs, _, terminated, truncated, info = env.step(action)
+            if agent.last_command is None:
+                waits += 1
+                if terminated or truncated:
+                    break
+                continue
             steps += 1
             if info["action_failed"]:
                 failed += 1
@@ -504,6 +520,7 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             belt_speed=rc.belt_speed,
             feed=rc.feed,
             steps=steps,
+            waits=waits,
             failed_actions=failed,
             failures=tuple(failures),
             pictures=agent.pictures,
@@ -558,7 +575,7 @@ def report_text(r: RunReport) -> str:
         f"dropped {r.dropped}, lost {r.lost}, distractors placed "
         f"{r.distractors_placed}, success {r.success}",
         f"tiles/min (simulated) {r.tiles_per_min:.1f} over {r.sim_s:.1f} s simulated; "
-        f"wall {r.wall_s:.1f} s; steps {r.steps} ({r.failed_actions} failed), "
+        f"wall {r.wall_s:.1f} s; steps {r.steps} ({r.failed_actions} failed), waits {r.waits}, "
         f"pictures {r.pictures}",
         f"placement error max {_num(r.position_error_mm_max)} mm, {_num(r.yaw_error_deg_max)} deg",
         f"recognition (first picture): {r.recognised_correct_class}/{r.tiles_total} "

@@ -318,7 +318,13 @@ class Cell:
         if on:  # the seal check reads the pad and tile poses
             mujoco.mj_kinematics(self.model, self.data)
         self.suction.set_vacuum(self.data, on)
-        return self.suction.events[-1] if len(self.suction.events) > before else None
+        if len(self.suction.events) == before:
+            return None
+        event = self.suction.events[-1]
+        if event.kind == "release":
+            pos = self.data.xpos[self.ids.tile_body[event.tile]]
+            self.lost_tracker.reject_if_over_bin(event.tile, pos)
+        return event
 
     @staticmethod
     def _vec6(v: np.ndarray, name: str) -> np.ndarray:
@@ -387,6 +393,16 @@ class Cell:
     def n_lost(self) -> int:
         """Number of tiles lost."""
         return self.lost_tracker.count
+
+    @property
+    def rejected(self) -> np.ndarray:
+        """Tiles the pad released over the reject bin, shape (n,) bool (copy)."""
+        return self.lost_tracker.rejected.copy()
+
+    @property
+    def was_dropped(self) -> np.ndarray:
+        """Tiles the pad last let go of by a drop, shape (n,) bool (copy)."""
+        return self.suction.was_dropped.copy()
 
     @property
     def n_dropped(self) -> int:

@@ -19,7 +19,7 @@ from typing import Any, Literal, get_args
 
 from configs import ConfigError, from_dict, load_yaml, resolve_path
 from envs.cell_config import CellConfig, load_cell_config, section_names
-from envs.errors import CellError
+from envs.errors import CellError, EnvError
 
 ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
 ObsMode = Literal["rgb", "state", "rgb+state"]
@@ -68,7 +68,7 @@ ENV_CELL_CHANGES: dict[str, dict[str, Any]] = {
 """The env's changes to the bundled cell (as ``configs/env.yaml`` states them)."""
 
 
-class EnvConfigError(ConfigError):
+class EnvConfigError(ConfigError, EnvError):
     """Bad environment configuration: unknown key or mode, or an invalid value."""
 
 

@@ -26,6 +26,7 @@ from envs.actions import (
 from envs.cameras import CameraModel
 from envs.cell import CAMERAS, Cell
 from envs.env_config import EnvConfig, load_env_config
+from envs.errors import EnvError
 from envs.indexing import IndexMaps
 from envs.observations import Observer
 from envs.pick_place import PickPlaceExecutor
@@ -53,7 +54,7 @@ CAMERA_PANEL_DIVISOR = 2
 """Each camera panel of the ``rgb_array`` frame is the overview's height / this."""
 
 
-class MosaicEnvError(RuntimeError):
+class MosaicEnvError(EnvError, RuntimeError):
     """The environment is used in a wrong state (step before reset, after close, no display)."""
 
 
