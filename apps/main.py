@@ -390,6 +390,9 @@ class CellVideo:
 def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
     """The env of the main job: ``pick_place``, full-resolution images, ``rgb_array`` frames.
 
+    With the ``all`` feed, tiles that do not fit the input belt at once (many distractors)
+    are fed in batches instead (the env's ``batch`` feed); the report names the feed used.
+
     Raises:
         QShapeError: The design does not load or validate.
         CellError: The design's tiles do not fit the input belt.
@@ -408,7 +411,13 @@ def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
         "distractor_rate": rc.distractor_rate,
         "max_slots": rc.max_slots,
     }
-    return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
+    try:
+        return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
+    except CellError:
+        if rc.feed != "all":
+            raise
+        over["feed"] = "batch"
+        return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
 
 
 def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
@@ -518,7 +527,7 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             wall_s=time.perf_counter() - t_wall,
             executed=rc.execute,
             belt_speed=rc.belt_speed,
-            feed=rc.feed,
+            feed=env.get_wrapper_attr("config").cell.tiles.feed,
             steps=steps,
             waits=waits,
             failed_actions=failed,
@@ -612,7 +621,7 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     parser.add_argument("--design", help="design name or path (default: config)")
     parser.add_argument("--seed", type=int, help="episode seed (default: config)")
     parser.add_argument("--belt-speed", type=float, help="input belt speed [m/s]")
-    parser.add_argument("--feed", choices=("all", "stream"), help="tile feed")
+    parser.add_argument("--feed", choices=("all", "stream", "batch"), help="tile feed")
     parser.add_argument("--distractor-rate", type=float, help="distractor tiles per real tile")
     parser.add_argument("--max-slots", type=int, help="first k slots of the design only")
     parser.add_argument("--greedy", action="store_true", help="the paper's greedy assignment")

@@ -109,6 +109,14 @@ class Cell:
         """Axis speed limits [rad/s], shape (6,), from the robot model's velocity actuators."""
         self._speed_lo, self._speed_hi = -self.max_joint_speed, self.max_joint_speed
         self._q_lo, self._q_hi = joint_ranges(self.model)
+        home = np.asarray(self.cfg.robot.home, float)
+        outside = np.flatnonzero((home < self._q_lo) | (home > self._q_hi))
+        if len(outside):
+            i = int(outside[0])
+            raise CellError(
+                f"robot.home[{i}] = {float(home[i])!r} rad is outside joint {i + 1}'s range "
+                f"[{self._q_lo[i]:.4f}, {self._q_hi[i]:.4f}] rad (the robot model's limits)"
+            )
         self._closed = False
         self.layout_seed = seed if isinstance(seed, int) else None
         """The seed the cell was built with (see `first_fitting`), when an int."""

@@ -233,6 +233,11 @@ class EnvConfig:
         for name in nonneg:
             if not getattr(self, name) >= 0:
                 raise EnvConfigError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+        lo_hi = tuple(self.tool_z_range)
+        if len(lo_hi) != 2 or not 0 <= lo_hi[0] < lo_hi[1]:  # noqa: PLR2004 - (low, high)
+            raise EnvConfigError(
+                f"tool_z_range must be (low, high) [m] with 0 <= low < high, got {lo_hi!r}"
+            )
         for name in ("rotation_bins", "layout_tries"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:

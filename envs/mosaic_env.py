@@ -25,7 +25,7 @@ from envs.actions import (
 )
 from envs.cameras import CameraModel
 from envs.cell import CAMERAS, Cell
-from envs.env_config import EnvConfig, load_env_config
+from envs.env_config import EnvConfig, EnvConfigError, load_env_config
 from envs.errors import EnvError
 from envs.indexing import IndexMaps
 from envs.observations import Observer
@@ -188,6 +188,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt)}
         design, shapes, slots = _design(cfg)
         self.cell = Cell.first_fitting(cfg.cell, shapes, slots, tries=cfg.layout_tries)
+        _check_image_size(cfg, self.cell)
         self.task = MosaicTask(self.cell, cfg)
         self.observer = Observer(self.cell, self.task, cfg)
         self.index = IndexMaps(self.cell, cfg)
@@ -457,6 +458,19 @@ def _design(cfg: EnvConfig) -> tuple[Design, tuple[TileShape, ...], tuple[SlotSp
     if cfg.max_slots:
         shapes, slots = shapes[: cfg.max_slots], slots[: cfg.max_slots]
     return design, shapes, slots
+
+
+def _check_image_size(cfg: EnvConfig, cell: Cell) -> None:
+    """Refuse an observation image larger than the model's offscreen render buffer."""
+    if cfg.obs_mode == "state":
+        return
+    vis = cell.model.vis.global_
+    h, w = cfg.image_size
+    if h > vis.offheight or w > vis.offwidth:
+        raise EnvConfigError(
+            f"image_size {(h, w)} exceeds the offscreen render buffer "
+            f"({vis.offheight}, {vis.offwidth}) px (height, width); allowed: up to that size"
+        )
 
 
 __all__ = ["ActionError", "MosaicAssemblyEnv", "MosaicEnvError"]
