@@ -1,12 +1,13 @@
 """Soak benchmark: thousands of episodes, no exception, flat memory, every tile accounted.
 
 A seeded random policy (every ``adversarial_every``-th episode an adversarial one that repeats
-its first action for ``adversarial_steps`` steps, piling tiles up and misplacing them) plays ``episodes`` episodes of `MosaicAssembly-v0` in a cheap
-mode (``configs/bench_soak.yaml``: kinematic ``pick_place_discrete`` on state). After every step
-the tile accounting is checked (the states of the real tiles sum to the tiles fed). Reported:
-episodes, steps, exceptions (by type), accounting violations, episodes ended by success, by
-nothing placeable left and by the step limit, and of those truncated, how many still had
-placeable tiles; the resident memory (RSS) after the warm-up and at the end.
+its first action for ``adversarial_steps`` steps, piling tiles up and misplacing them) plays
+``episodes`` episodes of `MosaicAssembly-v0` in a cheap mode (``configs/bench_soak.yaml``:
+kinematic ``pick_place_discrete`` on state). After every step the tile accounting is checked
+(the states of the real tiles sum to the tiles fed). Reported: episodes, steps, exceptions (by
+type), accounting violations, episodes ended by success, by nothing placeable left and by the
+step limit, and of those truncated, how many still had placeable tiles; the resident memory
+(RSS) after the warm-up and at the end.
 
     python -m benchmarks.soak                     # ~10 min on one core; out/bench_soak.json
     python -m benchmarks.soak --episodes 200      # a shorter run
@@ -26,7 +27,6 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
 
 import envs  # noqa: F401 - registers the env
 from configs import load_config

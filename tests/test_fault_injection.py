@@ -1,4 +1,4 @@
-"""Faults injected into the cell: in each, every real tile fed is accounted for and the episode ends.
+"""Faults injected into the cell: every real tile fed stays accounted for; the episode ends.
 
 Weak vacuum (tiles dropped in transit), a tile stranded beside the mesh, a tile moved after
 placing, a tile released over the reject bin, a tile carried into the bin by the belt,
