@@ -43,10 +43,11 @@ import numpy as np
 from agents.calibration import calibrate_cell_camera
 from agents.config import AgentsConfig, PlacementConfig, RunConfig, load_agents_config
 from agents.errors import AgentError
-from agents.perception import CameraLike, Perception, SlotTarget, project
+from agents.perception import CameraLike, PerceivedTile, Perception, SlotTarget, project
 from agents.placement import PlacementPlan, Unplaced
 from agents.scripted import ScriptedAgent
 from configs import ConfigError
+from envs.accounting import TILE_STATES
 from envs.errors import CellError
 from envs.task import GroundTruth
 from envs.task_spec import FeedMode, TaskSpec
@@ -109,6 +110,9 @@ class RunReport:
         feed: Tile feed.
         steps: Pick-and-place steps taken.
         waits: Waiting steps taken (nothing to place in the picture; a new one follows).
+        rejects: Tiles put into the reject bin (position and outcome).
+        tile_states: Where the real tiles fed ended, per state (`envs.accounting`; the
+            counts sum to the tiles fed).
         failed_actions: Steps whose action failed.
         failures: Slot name and reason of each failed action.
         pictures: Input-camera pictures perceived.
@@ -146,6 +150,8 @@ class RunReport:
     feed: FeedMode
     steps: int
     waits: int
+    rejects: tuple[str, ...]
+    tile_states: dict[str, int]
     failed_actions: int
     failures: tuple[str, ...]
     pictures: int
@@ -456,6 +462,8 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
         bar.set_postfix_str("picking and placing")
         first: tuple[np.ndarray, Perception, PlacementPlan] | None = None
         steps = failed = waits = idle = 0
+        rejects: list[str] = []
+        feed: FeedMode = env.get_wrapper_attr("config").cell.tiles.feed
         failures: list[str] = []
         rec: list[RecognitionRow] = []
         limit = rc.max_steps_per_slot * max(1, len(spec.slots))
@@ -475,6 +483,17 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
                     break
             else:
                 idle = 0
+            stuck = _tile_to_reject(agent, feed, idle, rc.reject_after_idle)
+            if stuck is not None:
+                obs, _, terminated, truncated, info = env.get_wrapper_attr("reject")(stuck.grasp)
+                rejects.append(
+                    f"tile at ({stuck.centre[0]:.3f}, {stuck.centre[1]:.3f}) m: "
+                    + ("rejected" if not info["action_failed"] else info["action_error"])
+                )
+                idle = 0
+                if terminated or truncated:
+                    break
+                continue
             obs, _, terminated, truncated, info = env.step(action)
             if agent.last_command is None:
                 waits += 1
@@ -527,9 +546,11 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             wall_s=time.perf_counter() - t_wall,
             executed=rc.execute,
             belt_speed=rc.belt_speed,
-            feed=env.get_wrapper_attr("config").cell.tiles.feed,
+            feed=feed,
             steps=steps,
             waits=waits,
+            rejects=tuple(rejects),
+            tile_states={s: int(evaluation[s]) for s in TILE_STATES},
             failed_actions=failed,
             failures=tuple(failures),
             pictures=agent.pictures,
@@ -559,6 +580,20 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
     finally:
         bar.close()
         env.close()
+
+
+def _tile_to_reject(agent: ScriptedAgent, feed: str, idle: int, after: int) -> PerceivedTile | None:
+    """The tile to put into the reject bin now, or None.
+
+    With the batch feed, after ``after`` waits in a row: the most downstream tile of the last
+    picture that fits no open slot (it would hold the next batch back).
+    """
+    per, plan = agent.last_perception, agent.last_plan
+    if feed != "batch" or after <= 0 or idle < after or per is None or plan is None:
+        return None
+    by_index = {t.index: t for t in per.tiles}
+    unusable = [by_index[u.tile] for u in plan.unplaced if u.reason != "slots_taken"]
+    return max(unusable, key=lambda t: float(t.centre[0]), default=None)
 
 
 def recognition(truth: GroundTruth, agent: ScriptedAgent) -> list[RecognitionRow]:
@@ -607,6 +642,8 @@ def report_text(r: RunReport) -> str:
     if r.open_slots:
         lines.append(f"slots not filled correctly: {', '.join(r.open_slots)}")
     lines += [f"failed action: {s}" for s in r.failures]
+    lines += [f"reject bin: {s}" for s in r.rejects]
+    lines.append("tiles fed: " + ", ".join(f"{k} {v}" for k, v in r.tile_states.items() if v))
     return "\n".join(lines) + "\n"
 
 

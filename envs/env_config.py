@@ -118,6 +118,9 @@ class EnvConfig:
             ``tile``: the slot-aligned pose nearest to how the tile lies.
         kinematic_settle: Physics settling time after a kinematic place [s].
         failed_action_time: Simulated time charged for an action that cannot execute [s].
+        reject_past_belt_end: How far past the input belt's end `MosaicAssemblyEnv.reject`
+            releases a tile over the reject bin [m].
+        reject_release_height: Height above the belt top of that release [m].
         reset_settle: Physics time simulated after reset so tiles rest [s].
         layout_tries: Layout draws tried at reset until the tiles fit the belt.
         position_tolerance: Placement position tolerance [m].
@@ -166,6 +169,8 @@ class EnvConfig:
     rotation_frame: RotationFrame = "tile"
     kinematic_settle: float = 0.01
     failed_action_time: float = 0.04
+    reject_past_belt_end: float = 0.08
+    reject_release_height: float = 0.03
     reset_settle: float = 0.16
     layout_tries: int = 20
     position_tolerance: float = 0.0015
@@ -216,6 +221,8 @@ class EnvConfig:
             "yaw_tolerance_deg",
             "kinematic_settle",
             "failed_action_time",
+            "reject_past_belt_end",
+            "reject_release_height",
         )
         for name in positive:
             if not getattr(self, name) > 0:

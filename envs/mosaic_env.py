@@ -365,6 +365,38 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         """Privileged tile poses and classes now (scoring and reports only)."""
         return self.task.ground_truth()
 
+    def reject(
+        self, pick_xy: tuple[float, float], pick_yaw: float = 0.0
+    ) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
+        """Pick the tile at ``pick_xy`` [m] and drop it into the reject bin (pick_place modes).
+
+        A step outside the action space, for a cell that clears tiles it cannot use (a
+        defective or unrecognised tile holding the next batch back): one planned cycle from the
+        pick point to ``reject_past_belt_end`` past the input belt's end, released
+        ``reject_release_height`` above the belt. The tile counts as ``rejected``, not lost.
+        Returns what `step` returns.
+
+        Raises:
+            MosaicEnvError: Not a pick_place mode, before `reset` or after `close`.
+        """
+        self._check_open()
+        if self._needs_reset:
+            raise MosaicEnvError("reject() called before reset(): call env.reset() first")
+        if self.executor is None:
+            raise MosaicEnvError(f"reject needs a pick_place mode, not {self.config.action_mode!r}")
+        cfg, geo = self.config, self.cell.geometry
+        drop = (geo.input_belt_end + cfg.reject_past_belt_end, geo.input_y)
+        cmd = PickPlaceCommand((float(pick_xy[0]), float(pick_xy[1])), float(pick_yaw), drop, 0.0)
+        result = self.executor.run(cmd, place_z=geo.belt_top + cfg.reject_release_height)
+        if self._listeners:
+            self._tick()
+        evaluation = self.task.evaluate()
+        terms = self.task.rewards(evaluation, result.failed)
+        terminated = evaluation.success or evaluation.failure
+        info = self._info(evaluation, terms, result.failed, result.reason)
+        obs = self._observe(evaluation)
+        return obs, float(sum(terms.values())), terminated, False, info
+
     def move_home(self) -> dict[str, Any]:
         """Move the arm to its home pose with one planned move; returns a fresh observation.
 

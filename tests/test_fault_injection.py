@@ -193,3 +193,21 @@ def test_the_scripted_agent_waits_on_a_black_or_noisy_picture_then_picks():
     assert agent.last_command is None
     agent.predict(obs)  # the camera is back: the next picture is planned
     assert agent.last_command is not None
+
+
+@pytest.mark.parametrize("execution", ["kinematic", "dynamic"])
+def test_env_reject_puts_a_tile_into_the_bin_and_the_line_goes_on(execution):
+    env = _make(execution=execution, feed="batch", batch_size=2, max_slots=3)
+    _, info = env.reset(seed=0)
+    u = env.unwrapped
+    on_belt = np.flatnonzero(u.cell.input_side() & ~u.cell.is_distractor)
+    tile = int(on_belt[0])
+    _, reward, terminated, _, info = u.reject(u.ground_truth().xy[tile])
+    ev = info["evaluation"]
+    assert not info["action_failed"], info["action_error"]
+    assert ev["rejected"] == 1
+    assert ev["lost"] == 0
+    assert reward == pytest.approx(0.0)  # rejecting is neither a loss nor a drop
+    assert u.cell.rejected[tile]
+    _accounted(ev)
+    assert not terminated  # the other tiles can still fill their slots
