@@ -168,3 +168,13 @@ def test_dropped_beside_the_belts_distractors_and_waiting_tiles():
     assert sum(state_counts(s).values()) == 2
     g = _flags(2, rejected=[0], on_input=[1])
     assert tile_states(g).tolist() == [REJECTED, ON_INPUT]
+
+
+@settings(max_examples=6, deadline=None, derandomize=True)
+@given(
+    seed=st.integers(0, 2**16),
+    actions=st.lists(st.lists(_UNIT, min_size=6, max_size=6), min_size=1, max_size=8),
+)
+def test_short_pick_place_sequences_keep_every_tile_accounted(seed, actions):
+    # The default run's share of the slow property test above.
+    test_pick_place_sequences_keep_every_tile_accounted.hypothesis.inner_test(seed, actions)
