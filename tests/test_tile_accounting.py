@@ -178,3 +178,22 @@ def test_dropped_beside_the_belts_distractors_and_waiting_tiles():
 def test_short_pick_place_sequences_keep_every_tile_accounted(seed, actions):
     # The default run's share of the slow property test above.
     test_pick_place_sequences_keep_every_tile_accounted.hypothesis.inner_test(seed, actions)
+
+
+@settings(max_examples=10, deadline=None, derandomize=True)
+@given(
+    seed=st.integers(0, 2**16),
+    actions=st.lists(
+        st.tuples(st.integers(0, 3), st.integers(0, 3), st.integers(0, 3)), max_size=12
+    ),
+)
+def test_discrete_sequences_that_always_grasp_keep_every_tile_accounted(seed, actions):
+    # Every discrete action grasps a tile: stacks, misplaced tiles and refills happen.
+    env = _env("pick_place_discrete")
+    _, info = env.reset(seed=seed)
+    n_real = info["evaluation"]["fed"] + info["evaluation"]["waiting"]
+    for a in actions:
+        _, _, terminated, truncated, info = env.step(np.array(a))
+        check_accounting(info, n_real, terminated)
+        if terminated or truncated:
+            break
