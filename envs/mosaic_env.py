@@ -136,8 +136,10 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     with ``color_randomization``/``light_randomization``.
 
     ## Episode End
-    ``terminated`` when every slot is filled correctly or no remaining real tile can fill an
-    open slot; truncation by ``TimeLimit`` (``max_episode_steps`` at registration: 1000).
+    ``terminated`` when every slot is filled correctly or no real tile on the input belt, held
+    or still to be fed can fill an open slot (stranded, dropped, lost and rejected tiles are out
+    of reach; ``info["evaluation"]`` counts every real tile fed in one state, `envs.accounting`);
+    truncation by ``TimeLimit`` (``max_episode_steps`` at registration: 1000).
 
     ## Arguments
     ``gym.make("MosaicAssembly-v0", config=None, render_mode=None, **overrides)``; ``config``
