@@ -155,6 +155,11 @@ class RunConfig:
         distractor_rate: Distractor tiles (absent from the design) per real tile.
         max_slots: Use only the design's first ``max_slots`` slots and their tiles (0: all).
         max_steps_per_slot: Episode step limit per design slot (failed picks retry).
+        max_idle_steps: Consecutive waiting steps (pictures with nothing to place: an empty
+            belt between streamed tiles, an unusable picture retried) before the job stops.
+        reject_after_idle: With the batch feed, after this many waits in a row a tile the
+            design has no slot for (a defective tile or a distractor) still on the belt is
+            put into the reject bin, so the next batch can come (0: never).
         execute: Run the pick-and-place cycles (False: one picture, perception and plan only).
         calibrate: Use the calibrated cameras instead of the simulator's true ones.
         video_fps: Frames per second of the cell video (simulated time), [1/s].
@@ -169,6 +174,8 @@ class RunConfig:
     distractor_rate: float = 0.0
     max_slots: int = 0
     max_steps_per_slot: int = 2
+    max_idle_steps: int = 8
+    reject_after_idle: int = 2
     execute: bool = True
     calibrate: bool = True
     video_fps: float = 10.0
@@ -177,8 +184,12 @@ class RunConfig:
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on bad values."""
-        if self.video_fps <= 0 or self.max_steps_per_slot < 1:
-            raise AgentError("run: video_fps must be > 0 and max_steps_per_slot >= 1")
+        if self.video_fps <= 0 or self.max_steps_per_slot < 1 or self.max_idle_steps < 0:
+            raise AgentError(
+                "run: video_fps must be > 0, max_steps_per_slot >= 1 and max_idle_steps >= 0"
+            )
+        if self.reject_after_idle < 0:
+            raise AgentError(f"run: reject_after_idle must be >= 0, got {self.reject_after_idle}")
         if self.belt_speed < 0 or self.distractor_rate < 0 or self.max_slots < 0:
             raise AgentError("run: belt_speed, distractor_rate and max_slots must be >= 0")
 

@@ -3,3 +3,8 @@
 The main job (``apps.main``), the paper's experiment (``apps.paper_experiment``) and the
 bundled-design generator (``apps.make_designs``).
 """
+
+import os
+
+# Headless rendering by default, as `import envs` does: set before anything imports mujoco.
+os.environ.setdefault("MUJOCO_GL", "egl")

@@ -43,10 +43,11 @@ import numpy as np
 from agents.calibration import calibrate_cell_camera
 from agents.config import AgentsConfig, PlacementConfig, RunConfig, load_agents_config
 from agents.errors import AgentError
-from agents.perception import CameraLike, Perception, SlotTarget, project
+from agents.perception import CameraLike, PerceivedTile, Perception, SlotTarget, project
 from agents.placement import PlacementPlan, Unplaced
 from agents.scripted import ScriptedAgent
 from configs import ConfigError
+from envs.accounting import TILE_STATES
 from envs.errors import CellError
 from envs.task import GroundTruth
 from envs.task_spec import FeedMode, TaskSpec
@@ -107,7 +108,11 @@ class RunReport:
         executed: Commands were executed (False: vision and planning only).
         belt_speed: Input belt speed [m/s].
         feed: Tile feed.
-        steps: Env steps taken.
+        steps: Pick-and-place steps taken.
+        waits: Waiting steps taken (nothing to place in the picture; a new one follows).
+        rejects: Tiles put into the reject bin (position and outcome).
+        tile_states: Where the real tiles fed ended, per state (`envs.accounting`; the
+            counts sum to the tiles fed).
         failed_actions: Steps whose action failed.
         failures: Slot name and reason of each failed action.
         pictures: Input-camera pictures perceived.
@@ -144,6 +149,9 @@ class RunReport:
     belt_speed: float
     feed: FeedMode
     steps: int
+    waits: int
+    rejects: tuple[str, ...]
+    tile_states: dict[str, int]
     failed_actions: int
     failures: tuple[str, ...]
     pictures: int
@@ -388,6 +396,9 @@ class CellVideo:
 def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
     """The env of the main job: ``pick_place``, full-resolution images, ``rgb_array`` frames.
 
+    With the ``all`` feed, tiles that do not fit the input belt at once (many distractors)
+    are fed in batches instead (the env's ``batch`` feed); the report names the feed used.
+
     Raises:
         QShapeError: The design does not load or validate.
         CellError: The design's tiles do not fit the input belt.
@@ -406,7 +417,13 @@ def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
         "distractor_rate": rc.distractor_rate,
         "max_slots": rc.max_slots,
     }
-    return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
+    try:
+        return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
+    except CellError:
+        if rc.feed != "all":
+            raise
+        over["feed"] = "batch"
+        return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
 
 
 def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
@@ -444,7 +461,9 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             video.capture()
         bar.set_postfix_str("picking and placing")
         first: tuple[np.ndarray, Perception, PlacementPlan] | None = None
-        steps = failed = 0
+        steps = failed = waits = idle = 0
+        rejects: list[str] = []
+        feed: FeedMode = env.get_wrapper_attr("config").cell.tiles.feed
         failures: list[str] = []
         rec: list[RecognitionRow] = []
         limit = rc.max_steps_per_slot * max(1, len(spec.slots))
@@ -453,9 +472,34 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             if first is None and agent.last_perception is not None and agent.last_plan:
                 first = (obs["input_camera"], agent.last_perception, agent.last_plan)
                 rec = recognition(env.get_wrapper_attr("ground_truth")(), agent)
-            if agent.last_command is None or not rc.execute:
-                break  # nothing placeable is seen (or vision only)
+            if not rc.execute:
+                break  # vision only
+            if agent.last_command is None:
+                # Nothing to place in this picture: an empty belt before the next streamed
+                # tile, or a picture not usable. Wait one cycle and look again; the env ends
+                # the episode once nothing placeable is left.
+                idle += 1
+                if idle > rc.max_idle_steps:
+                    break
+            else:
+                idle = 0
+            stuck = _tile_to_reject(agent, feed, idle, rc.reject_after_idle)
+            if stuck is not None:
+                obs, _, terminated, truncated, info = env.get_wrapper_attr("reject")(stuck.grasp)
+                rejects.append(
+                    f"tile at ({stuck.centre[0]:.3f}, {stuck.centre[1]:.3f}) m: "
+                    + ("rejected" if not info["action_failed"] else info["action_error"])
+                )
+                idle = 0
+                if terminated or truncated:
+                    break
+                continue
             obs, _, terminated, truncated, info = env.step(action)
+            if agent.last_command is None:
+                waits += 1
+                if terminated or truncated:
+                    break
+                continue
             steps += 1
             if info["action_failed"]:
                 failed += 1
@@ -502,8 +546,11 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             wall_s=time.perf_counter() - t_wall,
             executed=rc.execute,
             belt_speed=rc.belt_speed,
-            feed=rc.feed,
+            feed=feed,
             steps=steps,
+            waits=waits,
+            rejects=tuple(rejects),
+            tile_states={s: int(evaluation[s]) for s in TILE_STATES},
             failed_actions=failed,
             failures=tuple(failures),
             pictures=agent.pictures,
@@ -535,6 +582,20 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
         env.close()
 
 
+def _tile_to_reject(agent: ScriptedAgent, feed: str, idle: int, after: int) -> PerceivedTile | None:
+    """The tile to put into the reject bin now, or None.
+
+    With the batch feed, after ``after`` waits in a row: the most downstream tile of the last
+    picture that fits no open slot (it would hold the next batch back).
+    """
+    per, plan = agent.last_perception, agent.last_plan
+    if feed != "batch" or after <= 0 or idle < after or per is None or plan is None:
+        return None
+    by_index = {t.index: t for t in per.tiles}
+    unusable = [by_index[u.tile] for u in plan.unplaced if u.reason != "slots_taken"]
+    return max(unusable, key=lambda t: float(t.centre[0]), default=None)
+
+
 def recognition(truth: GroundTruth, agent: ScriptedAgent) -> list[RecognitionRow]:
     """Per command of a picture: class right?, pick and yaw errors (ground truth, report only)."""
     rows = []
@@ -558,7 +619,7 @@ def report_text(r: RunReport) -> str:
         f"dropped {r.dropped}, lost {r.lost}, distractors placed "
         f"{r.distractors_placed}, success {r.success}",
         f"tiles/min (simulated) {r.tiles_per_min:.1f} over {r.sim_s:.1f} s simulated; "
-        f"wall {r.wall_s:.1f} s; steps {r.steps} ({r.failed_actions} failed), "
+        f"wall {r.wall_s:.1f} s; steps {r.steps} ({r.failed_actions} failed), waits {r.waits}, "
         f"pictures {r.pictures}",
         f"placement error max {_num(r.position_error_mm_max)} mm, {_num(r.yaw_error_deg_max)} deg",
         f"recognition (first picture): {r.recognised_correct_class}/{r.tiles_total} "
@@ -581,6 +642,8 @@ def report_text(r: RunReport) -> str:
     if r.open_slots:
         lines.append(f"slots not filled correctly: {', '.join(r.open_slots)}")
     lines += [f"failed action: {s}" for s in r.failures]
+    lines += [f"reject bin: {s}" for s in r.rejects]
+    lines.append("tiles fed: " + ", ".join(f"{k} {v}" for k, v in r.tile_states.items() if v))
     return "\n".join(lines) + "\n"
 
 
@@ -595,7 +658,7 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     parser.add_argument("--design", help="design name or path (default: config)")
     parser.add_argument("--seed", type=int, help="episode seed (default: config)")
     parser.add_argument("--belt-speed", type=float, help="input belt speed [m/s]")
-    parser.add_argument("--feed", choices=("all", "stream"), help="tile feed")
+    parser.add_argument("--feed", choices=("all", "stream", "batch"), help="tile feed")
     parser.add_argument("--distractor-rate", type=float, help="distractor tiles per real tile")
     parser.add_argument("--max-slots", type=int, help="first k slots of the design only")
     parser.add_argument("--greedy", action="store_true", help="the paper's greedy assignment")

@@ -3,3 +3,8 @@
 ``python -m benchmarks`` runs them all and prints one table against the targets
 (``benchmarks.table``); ``python -m benchmarks.<name>`` runs one.
 """
+
+import os
+
+# Headless rendering by default, as `import envs` does: set before anything imports mujoco.
+os.environ.setdefault("MUJOCO_GL", "egl")

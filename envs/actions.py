@@ -59,8 +59,10 @@ class ActionAdapter(ABC):
             raise ActionError(
                 f"action has shape {a.shape}; {type(self).__name__} expects {space.shape} ({space})"
             )
-        if not np.issubdtype(a.dtype, np.number):
-            raise ActionError(f"action must be numeric, got dtype {a.dtype}")
+        if not np.issubdtype(a.dtype, np.number) or np.iscomplexobj(a):
+            raise ActionError(
+                f"action must be real numeric values (not complex), got dtype {a.dtype}"
+            )
         if not np.all(np.isfinite(a)):
             raise ActionError(f"action must be finite (no NaN/inf), got {a.tolist()}")
         if isinstance(space, spaces.Box):

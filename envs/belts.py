@@ -35,6 +35,8 @@ def input_speed(model: mujoco.MjModel, ids: SceneIds) -> float:
 class LostTracker:
     """Counts tiles lost: past the input belt's end (into the bin) or fallen below belt level.
 
+    A tile the pad releases over the bin is rejected on purpose (`reject_if_over_bin`), not lost.
+
     Args:
         cfg: Cell configuration.
         n_tiles: Number of tiles.
@@ -47,10 +49,24 @@ class LostTracker:
         self._half_w = cfg.input_belt.width / 2 + 0.05
         self._z_min = geo.belt_top - cfg.input_belt.lost_margin
         self.lost = np.zeros(n_tiles, bool)
+        self.rejected = np.zeros(n_tiles, bool)
+        """Tiles released by the pad over the reject bin, shape (n,) bool."""
 
     def reset(self) -> None:
-        """No tile lost."""
+        """No tile lost or rejected."""
         self.lost[:] = False
+        self.rejected[:] = False
+
+    def over_bin(self, pos: np.ndarray) -> np.ndarray:
+        """Points over the bin past the input belt's end, for positions of shape (..., 3) [m]."""
+        return (pos[..., 0] > self._x_end) & (np.abs(pos[..., 1] - self._y) < self._half_w)
+
+    def reject_if_over_bin(self, tile: int, pos: np.ndarray) -> bool:
+        """Count a tile the pad just released at ``pos`` (3,) [m] as rejected if over the bin."""
+        if tile >= 0 and bool(self.over_bin(pos)) and not self.lost[tile]:
+            self.rejected[tile] = True
+            return True
+        return False
 
     @property
     def count(self) -> int:
@@ -68,9 +84,8 @@ class LostTracker:
         Returns:
             Indices of tiles lost in this update.
         """
-        in_bin = (pos[:, 0] > self._x_end) & (np.abs(pos[:, 1] - self._y) < self._half_w)
         fell = pos[:, 2] < self._z_min
-        now = on_stage & (in_bin | fell) & ~self.lost
+        now = on_stage & (self.over_bin(pos) | fell) & ~self.lost & ~self.rejected
         if held >= 0:
             now[held] = False
         self.lost |= now

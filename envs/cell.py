@@ -109,6 +109,14 @@ class Cell:
         """Axis speed limits [rad/s], shape (6,), from the robot model's velocity actuators."""
         self._speed_lo, self._speed_hi = -self.max_joint_speed, self.max_joint_speed
         self._q_lo, self._q_hi = joint_ranges(self.model)
+        home = np.asarray(self.cfg.robot.home, float)
+        outside = np.flatnonzero((home < self._q_lo) | (home > self._q_hi))
+        if len(outside):
+            i = int(outside[0])
+            raise CellError(
+                f"robot.home[{i}] = {float(home[i])!r} rad is outside joint {i + 1}'s range "
+                f"[{self._q_lo[i]:.4f}, {self._q_hi[i]:.4f}] rad (the robot model's limits)"
+            )
         self._closed = False
         self.layout_seed = seed if isinstance(seed, int) else None
         """The seed the cell was built with (see `first_fitting`), when an int."""
@@ -318,7 +326,13 @@ class Cell:
         if on:  # the seal check reads the pad and tile poses
             mujoco.mj_kinematics(self.model, self.data)
         self.suction.set_vacuum(self.data, on)
-        return self.suction.events[-1] if len(self.suction.events) > before else None
+        if len(self.suction.events) == before:
+            return None
+        event = self.suction.events[-1]
+        if event.kind == "release":
+            pos = self.data.xpos[self.ids.tile_body[event.tile]]
+            self.lost_tracker.reject_if_over_bin(event.tile, pos)
+        return event
 
     @staticmethod
     def _vec6(v: np.ndarray, name: str) -> np.ndarray:
@@ -387,6 +401,16 @@ class Cell:
     def n_lost(self) -> int:
         """Number of tiles lost."""
         return self.lost_tracker.count
+
+    @property
+    def rejected(self) -> np.ndarray:
+        """Tiles the pad released over the reject bin, shape (n,) bool (copy)."""
+        return self.lost_tracker.rejected.copy()
+
+    @property
+    def was_dropped(self) -> np.ndarray:
+        """Tiles the pad last let go of by a drop, shape (n,) bool (copy)."""
+        return self.suction.was_dropped.copy()
 
     @property
     def n_dropped(self) -> int:

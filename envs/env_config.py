@@ -19,7 +19,7 @@ from typing import Any, Literal, get_args
 
 from configs import ConfigError, from_dict, load_yaml, resolve_path
 from envs.cell_config import CellConfig, load_cell_config, section_names
-from envs.errors import CellError
+from envs.errors import CellError, EnvError
 
 ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
 ObsMode = Literal["rgb", "state", "rgb+state"]
@@ -68,7 +68,7 @@ ENV_CELL_CHANGES: dict[str, dict[str, Any]] = {
 """The env's changes to the bundled cell (as ``configs/env.yaml`` states them)."""
 
 
-class EnvConfigError(ConfigError):
+class EnvConfigError(ConfigError, EnvError):
     """Bad environment configuration: unknown key or mode, or an invalid value."""
 
 
@@ -118,6 +118,9 @@ class EnvConfig:
             ``tile``: the slot-aligned pose nearest to how the tile lies.
         kinematic_settle: Physics settling time after a kinematic place [s].
         failed_action_time: Simulated time charged for an action that cannot execute [s].
+        reject_past_belt_end: How far past the input belt's end `MosaicAssemblyEnv.reject`
+            releases a tile over the reject bin [m].
+        reject_release_height: Height above the belt top of that release [m].
         reset_settle: Physics time simulated after reset so tiles rest [s].
         layout_tries: Layout draws tried at reset until the tiles fit the belt.
         position_tolerance: Placement position tolerance [m].
@@ -166,6 +169,8 @@ class EnvConfig:
     rotation_frame: RotationFrame = "tile"
     kinematic_settle: float = 0.01
     failed_action_time: float = 0.04
+    reject_past_belt_end: float = 0.08
+    reject_release_height: float = 0.03
     reset_settle: float = 0.16
     layout_tries: int = 20
     position_tolerance: float = 0.0015
@@ -216,6 +221,8 @@ class EnvConfig:
             "yaw_tolerance_deg",
             "kinematic_settle",
             "failed_action_time",
+            "reject_past_belt_end",
+            "reject_release_height",
         )
         for name in positive:
             if not getattr(self, name) > 0:
@@ -233,6 +240,11 @@ class EnvConfig:
         for name in nonneg:
             if not getattr(self, name) >= 0:
                 raise EnvConfigError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+        lo_hi = tuple(self.tool_z_range)
+        if len(lo_hi) != 2 or not 0 <= lo_hi[0] < lo_hi[1]:  # noqa: PLR2004 - (low, high)
+            raise EnvConfigError(
+                f"tool_z_range must be (low, high) [m] with 0 <= low < high, got {lo_hi!r}"
+            )
         for name in ("rotation_bins", "layout_tries"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:

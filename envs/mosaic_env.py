@@ -25,7 +25,8 @@ from envs.actions import (
 )
 from envs.cameras import CameraModel
 from envs.cell import CAMERAS, Cell
-from envs.env_config import EnvConfig, load_env_config
+from envs.env_config import EnvConfig, EnvConfigError, load_env_config
+from envs.errors import EnvError
 from envs.indexing import IndexMaps
 from envs.observations import Observer
 from envs.pick_place import PickPlaceExecutor
@@ -53,7 +54,7 @@ CAMERA_PANEL_DIVISOR = 2
 """Each camera panel of the ``rgb_array`` frame is the overview's height / this."""
 
 
-class MosaicEnvError(RuntimeError):
+class MosaicEnvError(EnvError, RuntimeError):
     """The environment is used in a wrong state (step before reset, after close, no display)."""
 
 
@@ -135,8 +136,10 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     with ``color_randomization``/``light_randomization``.
 
     ## Episode End
-    ``terminated`` when every slot is filled correctly or no remaining real tile can fill an
-    open slot; truncation by ``TimeLimit`` (``max_episode_steps`` at registration: 1000).
+    ``terminated`` when every slot is filled correctly or no real tile on the input belt, held
+    or still to be fed can fill an open slot (stranded, dropped, lost and rejected tiles are out
+    of reach; ``info["evaluation"]`` counts every real tile fed in one state, `envs.accounting`);
+    truncation by ``TimeLimit`` (``max_episode_steps`` at registration: 1000).
 
     ## Arguments
     ``gym.make("MosaicAssembly-v0", config=None, render_mode=None, **overrides)``; ``config``
@@ -187,6 +190,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt)}
         design, shapes, slots = _design(cfg)
         self.cell = Cell.first_fitting(cfg.cell, shapes, slots, tries=cfg.layout_tries)
+        _check_image_size(cfg, self.cell)
         self.task = MosaicTask(self.cell, cfg)
         self.observer = Observer(self.cell, self.task, cfg)
         self.index = IndexMaps(self.cell, cfg)
@@ -363,6 +367,38 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         """Privileged tile poses and classes now (scoring and reports only)."""
         return self.task.ground_truth()
 
+    def reject(
+        self, pick_xy: tuple[float, float], pick_yaw: float = 0.0
+    ) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
+        """Pick the tile at ``pick_xy`` [m] and drop it into the reject bin (pick_place modes).
+
+        A step outside the action space, for a cell that clears tiles it cannot use (a
+        defective or unrecognised tile holding the next batch back): one planned cycle from the
+        pick point to ``reject_past_belt_end`` past the input belt's end, released
+        ``reject_release_height`` above the belt. The tile counts as ``rejected``, not lost.
+        Returns what `step` returns.
+
+        Raises:
+            MosaicEnvError: Not a pick_place mode, before `reset` or after `close`.
+        """
+        self._check_open()
+        if self._needs_reset:
+            raise MosaicEnvError("reject() called before reset(): call env.reset() first")
+        if self.executor is None:
+            raise MosaicEnvError(f"reject needs a pick_place mode, not {self.config.action_mode!r}")
+        cfg, geo = self.config, self.cell.geometry
+        drop = (geo.input_belt_end + cfg.reject_past_belt_end, geo.input_y)
+        cmd = PickPlaceCommand((float(pick_xy[0]), float(pick_xy[1])), float(pick_yaw), drop, 0.0)
+        result = self.executor.run(cmd, place_z=geo.belt_top + cfg.reject_release_height)
+        if self._listeners:
+            self._tick()
+        evaluation = self.task.evaluate()
+        terms = self.task.rewards(evaluation, result.failed)
+        terminated = evaluation.success or evaluation.failure
+        info = self._info(evaluation, terms, result.failed, result.reason)
+        obs = self._observe(evaluation)
+        return obs, float(sum(terms.values())), terminated, False, info
+
     def move_home(self) -> dict[str, Any]:
         """Move the arm to its home pose with one planned move; returns a fresh observation.
 
@@ -456,6 +492,19 @@ def _design(cfg: EnvConfig) -> tuple[Design, tuple[TileShape, ...], tuple[SlotSp
     if cfg.max_slots:
         shapes, slots = shapes[: cfg.max_slots], slots[: cfg.max_slots]
     return design, shapes, slots
+
+
+def _check_image_size(cfg: EnvConfig, cell: Cell) -> None:
+    """Refuse an observation image larger than the model's offscreen render buffer."""
+    if cfg.obs_mode == "state":
+        return
+    vis = cell.model.vis.global_
+    h, w = cfg.image_size
+    if h > vis.offheight or w > vis.offwidth:
+        raise EnvConfigError(
+            f"image_size {(h, w)} exceeds the offscreen render buffer "
+            f"({vis.offheight}, {vis.offwidth}) px (height, width); allowed: up to that size"
+        )
 
 
 __all__ = ["ActionError", "MosaicAssemblyEnv", "MosaicEnvError"]

@@ -89,14 +89,15 @@ class PickPlaceExecutor:
         """Episode start: the arm is at home, not at a contact."""
         self.at_contact = False
 
-    def run(self, cmd: PickPlaceCommand) -> ActionResult:
+    def run(self, cmd: PickPlaceCommand, place_z: float | None = None) -> ActionResult:
         """Pick at ``cmd.pick_xy``, place at ``cmd.place_xy``, the tile turned by ``cmd.rotation``.
 
         A planner or cell error (unreachable pose, joint limit) is a failed action charged
-        ``failed_action_time``.
+        ``failed_action_time``. ``place_z`` [m] replaces the mesh's tile-top height (a release
+        over the reject bin).
         """
         pick = np.array([*cmd.pick_xy, self.pick_z])
-        place = np.array([*cmd.place_xy, self.place_z])
+        place = np.array([*cmd.place_xy, self.place_z if place_z is None else place_z])
         try:
             if self.cfg.execution == "kinematic":
                 return self._kinematic(pick, place, cmd.rotation)

@@ -91,6 +91,8 @@ class Suction:
         self.shear = 0.0
         self.events: list[SuctionEvent] = []
         self.dropped = 0
+        self.was_dropped = np.zeros(len(tiles), bool)
+        """Tiles the pad last let go of by a drop (cleared when sealed again), shape (n,)."""
         rows = np.zeros(0, int)
         self._rows = rows
 
@@ -109,6 +111,7 @@ class Suction:
         self.pull = self.shear = 0.0
         self.events.clear()
         self.dropped = 0
+        self.was_dropped[:] = False
 
     def set_vacuum(self, data: mujoco.MjData, on: bool) -> None:
         """Switch the vacuum; on tries to seal at once, off releases any held tile."""
@@ -164,6 +167,7 @@ class Suction:
         model.eq_data[ids.weld, WELD_RELQUAT] = rel
         data.eq_active[ids.weld] = 1
         self.held = i
+        self.was_dropped[i] = False
         self.pull = self.shear = 0.0
         self.events.append(SuctionEvent(float(data.time), "grasp", i))
         return i
@@ -173,6 +177,7 @@ class Suction:
         self.events.append(SuctionEvent(float(data.time), kind, self.held, self.pull, self.shear))
         if kind == "drop":
             self.dropped += 1
+            self.was_dropped[self.held] = True
             self._armed = False
         self.held = -1
 

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from envs.accounting import ON_INPUT, WAITING, TileFlags, state_counts, tile_states
 from envs.cell import Cell
 from envs.env_config import EnvConfig
 from envs.errors import CellError
@@ -85,13 +86,26 @@ class Evaluation:
             tolerance, stacked on another tile, e.g. put into a filled slot, or tilted).
         dropped: Drop events: times the pad lost a tile in transit (a tile dropped, picked up
             again and dropped again counts twice).
-        stranded: Real tiles left on the input side: fed or waiting, not lost, not held, not
-            on the mesh.
-        lost: Tiles lost off the input belt.
+        stranded: Real tiles fed that lie out of every other state: beside the mesh on the
+            output belt, tilted over its edge, on a frame (out of the pick area: not placeable).
+        lost: Tiles lost off the input belt (distractors included; the ``lost`` reward term).
+        fed: Real tiles fed into the cell so far; the sum of ``on_input``, ``held``,
+            ``correct``, ``misplaced``, ``stranded``, ``dropped_tiles``, ``lost_tiles`` and
+            ``rejected`` (`envs.accounting`: each real tile fed is in exactly one state).
+        waiting: Real tiles not fed yet.
+        on_input: Real tiles on the input belt, not held.
+        held: Real tiles on the pad (0 or 1).
+        dropped_tiles: Real tiles the pad let go of in transit, lying off the input belt and
+            the mesh (on the floor included).
+        lost_tiles: Real tiles lost off the input belt (past its end or onto the floor).
+        rejected: Real tiles put into the reject bin (released there by the pad, or taken
+            off the belt with their batch).
         distractors_placed: Distractor tiles on the mesh.
         slots: Number of slots.
         slot_filled: Per slot: filled correctly.
-        placeable: Open slots a remaining real tile of the right class could still fill.
+        placeable: Open slots a real tile of the right class on the input belt, held or
+            waiting to be fed could still fill (stranded, dropped, lost and rejected tiles
+            cannot: the pick area covers the input belt only).
         position_error_mm: Mean position error of the tiles on the mesh [mm] (None: none).
         position_error_mm_max: Largest of those [mm].
         yaw_error_deg: Mean yaw error modulo symmetry of the tiles on the mesh [deg].
@@ -105,6 +119,13 @@ class Evaluation:
     dropped: int
     stranded: int
     lost: int
+    fed: int
+    waiting: int
+    on_input: int
+    held: int
+    dropped_tiles: int
+    lost_tiles: int
+    rejected: int
     distractors_placed: int
     slots: int
     slot_filled: tuple[bool, ...]
@@ -282,11 +303,14 @@ class MosaicTask:
         p = self.placement()
         cell = self.cell
         real = ~self.distractor
-        misplaced = int(np.sum(p.on_mesh & real & ~p.correct))
+        states = self.tile_states(p)
+        counts_by_state = state_counts(states)
         distractors = int(np.sum(p.on_mesh & self.distractor))
-        # Tiles still available: real, not lost, not on the mesh (pick areas cover the input
-        # belt only), waiting ones included.
-        avail = real & ~cell.lost & ~p.on_mesh
+        # Tiles still available: real tiles on the input belt, held or waiting to be fed
+        # (pick areas cover the input belt only).
+        avail = (states == ON_INPUT) | (states == WAITING)
+        if cell.held_tile >= 0 and real[cell.held_tile]:
+            avail[cell.held_tile] = True
         open_classes = self.slot_class[~p.slot_filled]
         counts = np.bincount(self.tile_class[avail], minlength=len(self.class_names))
         need = np.bincount(open_classes, minlength=len(self.class_names))
@@ -299,10 +323,17 @@ class MosaicTask:
             success=success,
             failure=not success and placeable == 0,
             correct=int(p.slot_filled.sum()),
-            misplaced=misplaced,
+            misplaced=counts_by_state["misplaced"],
             dropped=int(cell.n_dropped),
-            stranded=int(np.sum(avail) - (cell.held_tile >= 0 and bool(avail[cell.held_tile]))),
+            stranded=counts_by_state["stranded"],
             lost=int(cell.n_lost),
+            fed=int(np.sum(states >= 0)),
+            waiting=int(np.sum(states == WAITING)),
+            on_input=counts_by_state["on_input"],
+            held=counts_by_state["held"],
+            dropped_tiles=counts_by_state["dropped_tiles"],
+            lost_tiles=counts_by_state["lost_tiles"],
+            rejected=counts_by_state["rejected"],
             distractors_placed=distractors,
             slots=len(p.slot_filled),
             slot_filled=tuple(bool(v) for v in p.slot_filled),
@@ -311,6 +342,30 @@ class MosaicTask:
             position_error_mm_max=float(pe.max()) if pe.size else None,
             yaw_error_deg=float(ye.mean()) if ye.size else None,
             yaw_error_deg_max=float(ye.max()) if ye.size else None,
+        )
+
+    def tile_states(self, placement: Placement | None = None) -> np.ndarray:
+        """State code of every tile now (`envs.accounting.tile_states`), shape (n,) int8."""
+        p = placement if placement is not None else self.placement()
+        cell = self.cell
+        n = len(cell.tiles)
+        held = np.zeros(n, bool)
+        if cell.held_tile >= 0:
+            held[cell.held_tile] = True
+        retired = cell.retired
+        rejected = cell.lost_tracker.rejected
+        return tile_states(
+            TileFlags(
+                real=~self.distractor,
+                fed=cell.on_stage | retired,
+                held=held,
+                rejected=rejected | retired,
+                lost=cell.lost_tracker.lost,
+                was_dropped=cell.suction.was_dropped,
+                on_mesh=p.on_mesh,
+                correct=p.correct,
+                on_input=cell.input_side(),
+            )
         )
 
     def ground_truth(self) -> GroundTruth:

@@ -20,6 +20,7 @@ import numpy as np
 
 from envs.cameras import CameraModel
 from envs.cell_config import CellConfig
+from envs.errors import EnvError
 from planners.angles import wrap_angle
 
 if TYPE_CHECKING:
@@ -37,7 +38,7 @@ CameraName = Literal["input_camera", "output_camera"]
 FeedMode = Literal["all", "stream", "batch"]
 
 
-class ActionError(ValueError):
+class ActionError(EnvError, ValueError):
     """An action the space does not allow (wrong shape, dtype, NaN/inf, out of range)."""
 
 

@@ -22,6 +22,7 @@ from typing import Any
 import gymnasium as gym
 
 from configs import CONFIG_DIR, ConfigError, from_dict, load_yaml
+from envs.errors import EnvError
 
 TASKS_DIR = CONFIG_DIR / "tasks"
 """Folder of the bundled task configurations."""
@@ -31,7 +32,7 @@ SPLITS = ("train", "eval")
 """Allowed ``split`` values of `BenchmarkTask.env_kwargs`."""
 
 
-class TaskError(ConfigError):
+class TaskError(ConfigError, EnvError):
     """An unknown task id, split or design index, or a malformed task file."""
 
 

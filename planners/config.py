@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from configs import check_positive, load_config
-from planners.errors import LimitError
+from planners.errors import LimitError, PlannerError
 from planners.robot import robot_joint_lower, robot_joint_speeds, robot_joint_upper
 
 N_JOINTS = 6
@@ -183,6 +183,13 @@ class IKConfig:
             "collision_min_distance",
             "limit_margin",
         )
+        import qpsolvers  # noqa: PLC0415 - mink's QP back end, only needed to check the name
+
+        if self.solver not in qpsolvers.available_solvers:
+            raise PlannerError(
+                f"ik.solver {self.solver!r} is not an installed QP solver; allowed: "
+                f"{sorted(qpsolvers.available_solvers)}"
+            )
         if len(self.joint_names) != N_JOINTS:
             raise LimitError(f"IKConfig.joint_names needs {N_JOINTS} names, got {self.joint_names}")
 

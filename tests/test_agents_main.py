@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 
 from apps.main import main
+
+ROOT = Path(__file__).resolve().parents[1]
 
 KEYS = {"tiles_total", "correct", "misplaced", "dropped", "success", "tiles_per_min", "wall_s"}
 
@@ -92,3 +96,36 @@ def test_command_line_reports_a_bad_setting_in_one_line(tmp_path):
     )
     assert proc.returncode != 0
     assert proc.stderr.strip().splitlines()[-1].startswith("error: run: belt_speed")
+
+
+@pytest.mark.slow
+def test_the_main_job_waits_through_an_empty_stream_belt_to_the_end(tmp_path):
+    # Between streamed tiles the belt is empty (a uniform picture): the job waits and goes on.
+    args = ["--feed", "stream", "--belt-speed", "0.1", "--max-slots", "4", "--true-camera"]
+    report = main([*args, "--quiet", "--out", str(tmp_path)])
+    assert report["correct"] == 4
+    assert report["success"]
+    assert report["feed"] == "stream"
+
+
+DOCUMENTED = [
+    [],
+    ["--belt-speed", "0.1", "--feed", "stream"],
+    ["--distractor-rate", "0.3"],
+]
+"""The README's main-job commands (``python -m apps.main ...``)."""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("args", DOCUMENTED, ids=lambda a: " ".join(a) or "default")
+def test_documented_commands_run_headless_as_written(tmp_path, args):
+    # No MUJOCO_GL and no display, as on a fresh headless machine.
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    env.pop("DISPLAY", None)
+    env["PYTHONPATH"] = str(ROOT)
+    cmd = [sys.executable, "-m", "apps.main", *args, "--quiet", "--out", str(tmp_path)]
+    done = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert report["correct"] >= report["tiles_total"] - 1
+    assert report["distractors_placed"] == 0
