@@ -48,7 +48,7 @@ from agents.policies import (
     make_policies,
     parse_pairs,
 )
-from agents.protocol import EpisodeMetrics
+from agents.protocol import EpisodeMetrics, tiles_left
 from configs import ConfigError, load_yaml
 
 ENV_ID = "envs:MosaicAssembly-v0"
@@ -69,6 +69,7 @@ COLUMNS = (
     ("dropped", "dropped/ep", "{:.2f}"),
     ("lost", "lost/ep", "{:.2f}"),
     ("stranded", "stranded/ep", "{:.2f}"),
+    ("left", "left/ep", "{:.2f}"),
     ("tiles_per_min", "tiles/min (sim)", "{:.1f}"),
     ("wall_s_per_tile", "wall s/tile", "{:.3f}"),
 )
@@ -92,12 +93,14 @@ class EpisodeResult:
         misplaced: Real tiles on the mesh filling no slot.
         dropped: Drop events (the pad lost a tile in transit).
         lost: Tiles lost off the input belt.
-        stranded: Real tiles left on the input side at the end.
+        stranded: Real tiles out of every other state (beside the mesh, tilted).
+        left: Real tiles never placed (on the input belt, held or waiting at the end).
         steps: Env steps.
         sim_s: Simulated time [s].
         span_s: Time the throughput is measured over [s] (to completion, or the horizon).
         wall_s: Wall time of the policy and the env steps (reset excluded) [s].
         episode_return: Sum of rewards.
+        left: Real tiles never placed (on the input belt, held or waiting at the end).
     """
 
     policy: str
@@ -115,6 +118,7 @@ class EpisodeResult:
     span_s: float
     wall_s: float
     episode_return: float
+    left: int = 0
 
 
 @dataclass(frozen=True)
@@ -132,6 +136,7 @@ class PolicyRow:
         dropped: Mean drop events per episode.
         lost: Mean lost tiles per episode.
         stranded: Mean stranded tiles per episode.
+        left: Mean tiles never placed per episode.
         tiles_per_min: Correct tiles per simulated minute over all episodes (each measured to
             completion or over the horizon).
         wall_s_per_tile: Wall seconds per correct tile over all episodes (None: no tile).
@@ -150,6 +155,7 @@ class PolicyRow:
     dropped: float
     lost: float
     stranded: float
+    left: float
     tiles_per_min: float
     wall_s_per_tile: float | None
     mean_return: float
@@ -271,6 +277,7 @@ def run_episode(
         dropped=int(ev["dropped"]),
         lost=int(ev["lost"]),
         stranded=int(ev.get("stranded", 0)),
+        left=tiles_left(ev),
         steps=steps,
         sim_s=m.sim_s,
         span_s=m.sim_s if m.success else max(m.sim_s, horizon_s),
@@ -300,6 +307,7 @@ def aggregate(label: str, episodes: Sequence[EpisodeResult], env: dict[str, Any]
         dropped=mean("dropped"),
         lost=mean("lost"),
         stranded=mean("stranded"),
+        left=mean("left"),
         tiles_per_min=60.0 * correct / span if span > 0 else 0.0,
         wall_s_per_tile=wall / correct if correct else None,
         mean_return=mean("episode_return"),

@@ -4,8 +4,9 @@ Per episode (`EpisodeMetrics.of`, from the env's final ``info``):
 
 - ``success``: every slot filled correctly;
 - ``filled``: fraction of the slots filled correctly;
-- ``misplaced``, ``dropped`` (drop events), ``lost``, ``stranded`` (real tiles left on the
-  input side at the end), counts;
+- ``misplaced``, ``dropped`` (drop events), ``lost``, ``stranded`` (real tiles fed that lie
+  out of every other state: beside the mesh, tilted over its edge), ``left`` (real tiles never
+  placed: still on the input belt, held or waiting to be fed at the end), counts;
 - ``tiles_per_min``: correct tiles per simulated minute, measured to completion for a
   successful episode and over ``max(episode time, horizon)`` otherwise, so stopping early
   after a few tiles cannot look as fast as finishing (the horizon is the task's
@@ -28,12 +29,26 @@ import numpy as np
 from agents.errors import AgentError
 
 SECONDS_PER_MINUTE = 60.0
-METRICS = ("success", "filled", "misplaced", "dropped", "lost", "stranded", "tiles_per_min")
+METRICS = (
+    "success",
+    "filled",
+    "misplaced",
+    "dropped",
+    "lost",
+    "stranded",
+    "left",
+    "tiles_per_min",
+)
 """Metric names of `EpisodeMetrics` aggregated over runs."""
 BOOTSTRAP_REPS = 2000
 """Bootstrap resamples of the confidence intervals."""
 CONFIDENCE = 0.95
 """Confidence level of the intervals."""
+
+
+def tiles_left(evaluation: Mapping[str, Any]) -> int:
+    """Real tiles never placed: on the input belt, held or waiting to be fed [count]."""
+    return sum(int(evaluation.get(k, 0)) for k in ("on_input", "held", "waiting"))
 
 
 @dataclass(frozen=True)
@@ -46,7 +61,8 @@ class EpisodeMetrics:
         misplaced: Real tiles on the mesh filling no slot [count].
         dropped: Drop events (the pad lost a tile in transit) [count].
         lost: Tiles lost off the input belt [count].
-        stranded: Real tiles left on the input side at the end [count].
+        stranded: Real tiles out of every other state (beside the mesh, tilted) [count].
+        left: Real tiles never placed: on the input belt, held or waiting at the end [count].
         tiles_per_min: Correct tiles per simulated minute (see the module docstring).
         sim_s: Simulated episode time [s].
     """
@@ -57,6 +73,7 @@ class EpisodeMetrics:
     dropped: float
     lost: float
     stranded: float
+    left: float
     tiles_per_min: float
     sim_s: float
 
@@ -80,6 +97,7 @@ class EpisodeMetrics:
             dropped=float(ev["dropped"]),
             lost=float(ev["lost"]),
             stranded=float(ev.get("stranded", 0)),
+            left=float(tiles_left(ev)),
             tiles_per_min=SECONDS_PER_MINUTE * int(ev["correct"]) / span if span > 0 else 0.0,
             sim_s=sim,
         )
@@ -150,10 +168,12 @@ def iqm_ci(values: Sequence[float], seed: int = 0) -> Estimate:
 
 def aggregate_runs(runs: Sequence[Mapping[str, float]]) -> dict[str, Estimate]:
     """IQM and CI of every metric over runs (each a `run_score` dict)."""
-    return {m: iqm_ci([r[m] for r in runs]) for m in METRICS}
+    # Results written before a metric existed count it as 0 (``left`` came after ``stranded``).
+    return {m: iqm_ci([r.get(m, 0.0) for r in runs]) for m in METRICS}
 
 
 __all__ = [
+    "tiles_left",
     "METRICS",
     "EpisodeMetrics",
     "Estimate",

@@ -336,8 +336,8 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
     summary = []
     lines = [
         "| task | policy | runs | success | slots filled | misplaced/ep | dropped/ep | "
-        "stranded/ep | tiles/min (sim) | training steps | train wall s (per run) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "stranded/ep | left/ep | tiles/min (sim) | training steps | train wall s (per run) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for (task, entry), rs in groups.items():
         est = aggregate_runs([r["metrics"] for r in rs])
@@ -357,7 +357,7 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
             f"| {task} | {entry} | {len(rs)} | {est['success'].text('{:.2f}')} | "
             f"{est['filled'].text('{:.2f}')} | {est['misplaced'].text('{:.2f}')} | "
             f"{est['dropped'].text('{:.2f}')} | {est['stranded'].text('{:.2f}')} | "
-            f"{est['tiles_per_min'].text('{:.1f}')} | "
+            f"{est['left'].text('{:.2f}')} | {est['tiles_per_min'].text('{:.1f}')} | "
             f"{int(np.mean(steps)) if any(steps) else '-'} | "
             f"{f'{np.mean(walls):.0f}' if any(walls) else '-'} |"
         )
