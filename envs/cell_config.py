@@ -361,11 +361,14 @@ class RenderConfig:
         shadows: Render shadows (slow in software rendering; off for observations).
         reflections: Render reflections.
         overview_size: Overview image (height, width) [px].
+        cull: Leave geoms a model camera cannot see out of its scene (same image, faster in
+            software rendering; `envs.view_culling`).
     """
 
     shadows: bool = False
     reflections: bool = False
     overview_size: tuple[int, ...] = (480, 640)
+    cull: bool = True
 
     def __post_init__(self) -> None:
         _length(self, "overview_size", 2)
