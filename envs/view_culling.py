@@ -9,7 +9,8 @@ what the camera sees. For a fixed model camera (`ViewCuller.hidden`):
 - a static geom (welded to the world) that shows in no pixel of a segmentation image at
   `PROBE_SCALE` times the image size with every moving body removed is left out: only moving
   bodies could uncover it and they are rendered in front, never removed from between. The probe
-  is redone when the camera's pose changes.
+  is redone when the camera's pose changes. Images too large for such a probe (beyond the
+  offscreen buffer) get the frustum test only.
 
 The image is the same, pixel for pixel (tested), at a fraction of the rendering time.
 """
@@ -91,6 +92,8 @@ class ViewCuller:
         """Static geoms in no pixel of a fine segmentation image without moving bodies."""
         m = self._model
         size = (PROBE_SCALE * height, PROBE_SCALE * width)
+        if size[0] > m.vis.global_.offheight or size[1] > m.vis.global_.offwidth:
+            return np.zeros(m.ngeom, bool)  # no probe finer than the image: frustum only
         r = self._probe_renderers.get(size)
         if r is None:
             r = mujoco.Renderer(m, *size)

@@ -9,7 +9,7 @@ import pytest
 import envs
 from envs.cell import CAMERAS
 
-SIZES = ((72, 96), (120, 160))
+SIZES = ((72, 96), (120, 160), (492, 656))  # the last: frustum test only
 
 
 @pytest.fixture(scope="module")
