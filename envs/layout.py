@@ -160,8 +160,13 @@ def _layout_once(
             ok = clear.all(axis=1)
             first = int(np.argmax(ok)) if ok.any() else attempts
         else:
-            todo = np.flatnonzero(clear[:, :n_fixed].all(axis=1))
-            first = placed.first_clear(todo, shapes[i], cand, yaws, clear[:, n_fixed:])
+            ok = clear[:, :n_fixed].all(axis=1)
+            if placed.inner:  # inscribed circles closer than the gap: sure overlaps
+                reach = shapes[i].inner + np.array(placed.inner) + gap - SURE
+                ok &= ~np.any(d[:, n_fixed:] < reach[None, :], axis=1)
+            first = placed.first_clear(
+                np.flatnonzero(ok), shapes[i], cand, yaws, clear[:, n_fixed:]
+            )
         if first >= attempts:
             raise LayoutError(
                 f"could not place {len(radii)} tiles without overlap in the tile area "
