@@ -205,7 +205,7 @@ class CameraRig:
         rgba = self._model.geom_rgba
         alpha = rgba[:, 3].copy()
         try:  # geoms it cannot see are left out of the scene (`envs.view_culling`)
-            rgba[self._culler.hidden(data, cam, height, width), 3] = 0.0
+            rgba[self._culler.hidden(r, data, cam), 3] = 0.0
             r.update_scene(data, camera=camera)
         finally:
             rgba[:, 3] = alpha
@@ -229,7 +229,6 @@ class CameraRig:
             for r in pool.values():
                 r.close()
             pool.clear()
-        self._culler.close()
         _OPEN_RIGS.discard(self)
         self._closed = True
 

@@ -26,6 +26,8 @@ PROBE_SCALE = 4
 """Segmentation probe resolution / image resolution (finer than the 4x multisampling grid)."""
 MARGIN = 1e-3
 """Extra radius [m] given to every bounding sphere (rounding in the frustum test)."""
+SCENE_SPARE = 100
+"""Scene slots beyond the model's geoms (decorations) in the probe's scene."""
 
 
 @dataclass(frozen=True)
@@ -53,23 +55,23 @@ class ViewCuller:
         body_static = model.body_weldid == 0
         self._static = body_static[model.geom_bodyid]
         self._probes: dict[tuple[int, int, int], _Probe] = {}
-        self._probe_renderers: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._scene: mujoco.MjvScene | None = None
 
-    def hidden(self, data: mujoco.MjData, camera: int, height: int, width: int) -> np.ndarray:
-        """Geoms that cannot show in ``camera``'s (height x width) image now, shape (ngeom,).
+    def hidden(self, renderer: mujoco.Renderer, data: mujoco.MjData, camera: int) -> np.ndarray:
+        """Geoms that cannot show in ``camera``'s image by ``renderer`` now, shape (ngeom,).
 
         Args:
+            renderer: The renderer of the image (its size; it draws the probes).
             data: The state to render (positions up to date, as for rendering).
             camera: Model camera id.
-            height: Image height [px].
-            width: Image width [px].
         """
+        height, width = renderer.height, renderer.width
         out = self._outside(data, camera, width / height)
         pose = np.concatenate([data.cam_xpos[camera], data.cam_xmat[camera]])
         key = (camera, height, width)
         probe = self._probes.get(key)
         if probe is None or not np.array_equal(probe.pose, pose):
-            probe = _Probe(pose, self._probe(data, camera, height, width))
+            probe = _Probe(pose, self._probe(renderer, data, camera, height, width))
             self._probes[key] = probe
         return out | probe.hidden
 
@@ -88,35 +90,50 @@ class ViewCuller:
         outside |= depth < -r
         return outside & (m.geom_rbound > 0)  # planes (radius 0) are unbounded
 
-    def _probe(self, data: mujoco.MjData, camera: int, height: int, width: int) -> np.ndarray:
-        """Static geoms in no pixel of a fine segmentation image without moving bodies."""
+    def _probe(
+        self, renderer: mujoco.Renderer, data: mujoco.MjData, camera: int, height: int, width: int
+    ) -> np.ndarray:
+        """Static geoms in no pixel of a fine segmentation image without moving bodies.
+
+        Drawn with ``renderer``'s own GL context into its offscreen buffer (no second context,
+        no extra memory); its next `render` draws its whole image afresh.
+        """
         m = self._model
         size = (PROBE_SCALE * height, PROBE_SCALE * width)
         if size[0] > m.vis.global_.offheight or size[1] > m.vis.global_.offwidth:
             return np.zeros(m.ngeom, bool)  # no probe finer than the image: frustum only
-        r = self._probe_renderers.get(size)
-        if r is None:
-            r = mujoco.Renderer(m, *size)
-            r.enable_segmentation_rendering()
-            self._probe_renderers[size] = r
+        if self._scene is None:
+            self._scene = mujoco.MjvScene(m, maxgeom=m.ngeom + SCENE_SPARE)
+        scene, view = self._scene, mujoco.MjvCamera()
+        view.type = mujoco.mjtCamera.mjCAMERA_FIXED
+        view.fixedcamid = camera
         alpha = m.geom_rgba[:, 3].copy()
         see_through = (alpha > 0) & (alpha < 1)  # they hide nothing behind them
         try:
             m.geom_rgba[~self._static | see_through, 3] = 0.0
-            r.update_scene(data, camera=camera)
+            mujoco.mjv_updateScene(
+                m, data, mujoco.MjvOption(), None, view, mujoco.mjtCatBit.mjCAT_ALL, scene
+            )
         finally:
             m.geom_rgba[:, 3] = alpha
-        seg = r.render()
-        geoms = seg[..., 0][seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM]
+        scene.flags[mujoco.mjtRndFlag.mjRND_SEGMENT] = True
+        scene.flags[mujoco.mjtRndFlag.mjRND_IDCOLOR] = True
+        rect = mujoco.MjrRect(0, 0, size[1], size[0])
+        context = renderer._mjr_context  # noqa: SLF001 - draw with the renderer's context
+        if renderer._gl_context:  # noqa: SLF001
+            renderer._gl_context.make_current()  # noqa: SLF001
+        mujoco.mjr_render(rect, scene, context)
+        rgb = np.empty((*size, 3), np.uint8)
+        mujoco.mjr_readPixels(rgb, None, rect, context)
+        segid = (
+            rgb[..., 0] + (rgb[..., 1].astype(np.int64) << 8) + (rgb[..., 2].astype(np.int64) << 16)
+        )
+        shown = set(np.unique(segid).tolist())  # segment id + 1; 0 is the background
         seen = see_through.copy()
-        seen[geoms[geoms >= 0]] = True
+        for g in scene.geoms[: scene.ngeom]:
+            if g.segid + 1 in shown and g.objtype == mujoco.mjtObj.mjOBJ_GEOM:
+                seen[g.objid] = True
         return self._static & ~seen
-
-    def close(self) -> None:
-        """Free the probe renderers (safe to call twice)."""
-        for r in self._probe_renderers.values():
-            r.close()
-        self._probe_renderers.clear()
 
 
 __all__ = ["ViewCuller"]

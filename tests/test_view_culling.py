@@ -59,7 +59,7 @@ def test_culling_leaves_geoms_out(pair) -> None:
     cell = env.unwrapped.cell
     rig = cell.cameras
     cam = cell.model.camera("input_camera").id
-    hidden = rig._culler.hidden(cell.data, cam, 72, 96)
+    hidden = rig._culler.hidden(rig._renderer(72, 96, False), cell.data, cam)
     assert hidden[cell.model.geom("floor").id]
     assert hidden[cell.model.geom("output_belt").id]
     assert not hidden[cell.model.geom("input_belt").id]
