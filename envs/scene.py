@@ -434,6 +434,7 @@ def _configure(spec: mujoco.MjSpec, cfg: CellConfig) -> None:
         spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
         spec.option.sleep_tolerance = ph.sleep_tolerance
     spec.visual.quality.shadowsize = 0 if not cfg.render.shadows else 4096
+    spec.visual.quality.offsamples = cfg.render.samples
     spec.visual.headlight.ambient = [0.3, 0.3, 0.3]
     spec.visual.headlight.diffuse = [0.35, 0.35, 0.35]
     spec.visual.headlight.specular = [0.0, 0.0, 0.0]
