@@ -17,7 +17,8 @@ Run ``python -m benchmarks.env`` (``--quick`` for shorter runs); prints the figu
 - ``async``: env steps per second of ``gym.make_vec(..., "async")`` with 1 and 2 workers
   (joint mode, images), and the speed-up.
 - ``decision``: the decision level (``pick_place_discrete``, kinematic) with its two 72 x 96
-  camera images, the scripted correct decision every step (episodes of 16 steps).
+  camera images, the scripted correct decision every step (episodes of 16 steps); again
+  without multisampling (``cell.render.samples: 0``, stair-stepped edges).
 - ``reset``: `reset` time [ms] of the 16-tile design and of its first 6 slots (mean and
   worst over seeds 0..``RESET_SEEDS`` - 1, CPU and wall), decision level with images (the
   reset renders its observation).
@@ -48,6 +49,8 @@ TARGET_DECISION_RGB = 150.0
 TARGET_RESET_MS = 20.0
 RESET_SEEDS = 20
 DECISION_IMAGE = (72, 96)
+DEFAULT_SAMPLES = 4
+"""``cell.render.samples`` of ``configs/cell.yaml`` (the decision row is also run with 0)."""
 DESIGN = "paper_mixed"
 CASES = (
     ("joint", "dynamic"),
@@ -121,8 +124,11 @@ def _measure(mode: str, execution: str, obs_mode: str, seconds: float, queue: mp
     )
 
 
-def _decision(seconds: float, queue: mp.Queue) -> None:
-    """Child process: decision level with two 72 x 96 images, scripted correct decisions."""
+def _decision(seconds: float, samples: int, queue: mp.Queue) -> None:
+    """Child process: decision level with two 72 x 96 images, scripted correct decisions.
+
+    ``samples``: multisamples per pixel of the renders (``cell.render.samples``; 4 default).
+    """
     os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
     import gymnasium as gym  # noqa: PLC0415
 
@@ -135,6 +141,7 @@ def _decision(seconds: float, queue: mp.Queue) -> None:
         execution="kinematic",
         obs_mode="rgb",
         image_size=DECISION_IMAGE,
+        cell={"render": {"samples": samples}},
     )
     env.reset(seed=0)
     steps, busy, cpu, k = 0, 0.0, 0.0, 0
@@ -249,12 +256,14 @@ def main() -> None:
                 f"peak RSS {r['peak_rss_mb']:.0f} MB (env +{r['env_rss_mb']:.0f} MB)",
                 flush=True,
             )
-    decision = _child(_decision, seconds)
-    print(
-        f"decision level, two {DECISION_IMAGE[0]}x{DECISION_IMAGE[1]} images: "
-        f"{decision['steps_per_s']:.1f} steps/s [{decision['steps_per_cpu_s']:.1f} per CPU-s]",
-        flush=True,
-    )
+    decision = _child(_decision, seconds, DEFAULT_SAMPLES)
+    aliased = _child(_decision, seconds, 0)
+    for label, r in (("", decision), (", no multisampling", aliased)):
+        print(
+            f"decision level, two {DECISION_IMAGE[0]}x{DECISION_IMAGE[1]} images{label}: "
+            f"{r['steps_per_s']:.1f} steps/s [{r['steps_per_cpu_s']:.1f} per CPU-s]",
+            flush=True,
+        )
     resets = {k: _child(_resets, k) for k in (0, 6)}
     for r in resets.values():
         print(
@@ -341,6 +350,7 @@ def main() -> None:
         "cases": rows,
         "async": {"workers_1": one, "workers_2": two, "speedup": two / one},
         "decision_rgb": decision,
+        "decision_rgb_no_multisampling": aliased,
         "reset": {f"{r['tiles']}_tiles": r for r in resets.values()},
         "targets": targets,
     }
