@@ -2,15 +2,15 @@
 
 A software (Mesa llvmpipe) renderer pays for every geom it is given, seen or not: the floor
 plane under the belts, the other belt, the bin and the arm out of view cost about as much as
-what the camera sees. For a fixed model camera (`ViewCuller.hidden`):
+what the camera sees. For a model camera (`ViewCuller.hidden`):
 
 - a geom whose bounding sphere lies wholly outside the view frustum is left out (every
   sample of the image, multisampled or not, lies inside the frustum);
 - a static geom (welded to the world) that shows in no pixel of a segmentation image at
-  `PROBE_SCALE` times the image size with every moving body removed is left out: only moving
-  bodies could uncover it and they are rendered in front, never removed from between. The probe
-  is redone when the camera's pose changes. Images too large for such a probe (beyond the
-  offscreen buffer) get the frustum test only.
+  `PROBE_SCALE` times the image size, drawn without the moving bodies, is left out: other
+  static geoms hide it, and moving bodies can only hide more of it. The probe is redone when
+  the camera's pose changes; cameras on moving bodies, and images too large for a probe
+  (beyond the offscreen buffer), get the frustum test only.
 
 The image is the same, pixel for pixel (tested), at a fraction of the rendering time.
 """
@@ -67,6 +67,8 @@ class ViewCuller:
         """
         height, width = renderer.height, renderer.width
         out = self._outside(data, camera, width / height)
+        if self._model.body_weldid[self._model.cam_bodyid[camera]] != 0:
+            return out  # a camera on a moving body: no probe (it would be redone every frame)
         pose = np.concatenate([data.cam_xpos[camera], data.cam_xmat[camera]])
         key = (camera, height, width)
         probe = self._probes.get(key)
