@@ -16,9 +16,16 @@ Run ``python -m benchmarks.env`` (``--quick`` for shorter runs); prints the figu
   over the same process before the env was made.
 - ``async``: env steps per second of ``gym.make_vec(..., "async")`` with 1 and 2 workers
   (joint mode, images), and the speed-up.
+- ``decision``: the decision level (``pick_place_discrete``, kinematic) with its two 72 x 96
+  camera images, the scripted correct decision every step (episodes of 16 steps); again
+  without multisampling (``cell.render.samples: 0``, stair-stepped edges).
+- ``reset``: `reset` time [ms] of the 16-tile design and of its first 6 slots (mean and
+  worst over seeds 0..``RESET_SEEDS`` - 1, CPU and wall), decision level with images (the
+  reset renders its observation).
 
-Targets (issue 5): kinematic pick_place >= 500 steps/s; joint with images >= 60 steps/s on one
-core; <= 600 MB per env.
+Targets (issues 5, 13, 14): kinematic pick_place >= 1,000 steps/s (was 500); joint with images
+>= 60 steps/s on one core; <= 600 MB per env; decision level with two 72 x 96 images >= 150
+steps/s; reset of the 16-tile design <= 20 ms.
 """
 
 from __future__ import annotations
@@ -35,9 +42,15 @@ from pathlib import Path
 from typing import Any
 
 OUT = Path(__file__).resolve().parents[1] / "out" / "bench_env.json"
-TARGET_KINEMATIC = 500.0
+TARGET_KINEMATIC = 1000.0
 TARGET_JOINT_RGB = 60.0
 TARGET_RSS_MB = 600.0
+TARGET_DECISION_RGB = 150.0
+TARGET_RESET_MS = 20.0
+RESET_SEEDS = 20
+DECISION_IMAGE = (72, 96)
+DEFAULT_SAMPLES = 4
+"""``cell.render.samples`` of ``configs/cell.yaml`` (the decision row is also run with 0)."""
 DESIGN = "paper_mixed"
 CASES = (
     ("joint", "dynamic"),
@@ -111,6 +124,77 @@ def _measure(mode: str, execution: str, obs_mode: str, seconds: float, queue: mp
     )
 
 
+def _decision(seconds: float, samples: int, queue: mp.Queue) -> None:
+    """Child process: decision level with two 72 x 96 images, scripted correct decisions.
+
+    ``samples``: multisamples per pixel of the renders (``cell.render.samples``; 4 default).
+    """
+    os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: PLC0415
+
+    env = gym.make(
+        envs.ENV_ID,
+        design=DESIGN,
+        action_mode="pick_place_discrete",
+        execution="kinematic",
+        obs_mode="rgb",
+        image_size=DECISION_IMAGE,
+        cell={"render": {"samples": samples}},
+    )
+    env.reset(seed=0)
+    steps, busy, cpu, k = 0, 0.0, 0.0, 0
+    while busy < seconds:
+        action = _scripted(env, k)
+        t, c = time.perf_counter(), time.process_time()
+        _, _, term, trunc, _ = env.step(action)
+        busy += time.perf_counter() - t
+        cpu += time.process_time() - c
+        steps += 1
+        k += 1
+        if term or trunc:
+            env.reset()
+            k = 0
+    env.close()
+    queue.put({"steps_per_s": steps / busy, "steps_per_cpu_s": steps / cpu, "steps": steps})
+
+
+def _resets(max_slots: int, queue: mp.Queue) -> None:
+    """Child process: reset times [ms] over seeds, decision level with images."""
+    os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: PLC0415
+
+    env = gym.make(
+        envs.ENV_ID,
+        design=DESIGN,
+        max_slots=max_slots,
+        action_mode="pick_place_discrete",
+        execution="kinematic",
+        obs_mode="rgb",
+        image_size=DECISION_IMAGE,
+    )
+    env.reset(seed=RESET_SEEDS)  # first renders, probes
+    wall, cpu = [], []
+    for seed in range(RESET_SEEDS):
+        t, c = time.perf_counter(), time.process_time()
+        env.reset(seed=seed)
+        wall.append(1e3 * (time.perf_counter() - t))
+        cpu.append(1e3 * (time.process_time() - c))
+    tiles = len(env.unwrapped.cell.tiles)
+    env.close()
+    queue.put(
+        {
+            "tiles": tiles,
+            "reset_ms": sum(wall) / len(wall),
+            "reset_cpu_ms": sum(cpu) / len(cpu),
+            "reset_cpu_ms_max": max(cpu),
+        }
+    )
+
+
 def _child(target: Any, *args: Any) -> Any:
     ctx = mp.get_context("spawn")
     q: mp.Queue = ctx.Queue()
@@ -172,6 +256,21 @@ def main() -> None:
                 f"peak RSS {r['peak_rss_mb']:.0f} MB (env +{r['env_rss_mb']:.0f} MB)",
                 flush=True,
             )
+    decision = _child(_decision, seconds, DEFAULT_SAMPLES)
+    aliased = _child(_decision, seconds, 0)
+    for label, r in (("", decision), (", no multisampling", aliased)):
+        print(
+            f"decision level, two {DECISION_IMAGE[0]}x{DECISION_IMAGE[1]} images{label}: "
+            f"{r['steps_per_s']:.1f} steps/s [{r['steps_per_cpu_s']:.1f} per CPU-s]",
+            flush=True,
+        )
+    resets = {k: _child(_resets, k) for k in (0, 6)}
+    for r in resets.values():
+        print(
+            f"reset, {r['tiles']} tiles: {r['reset_ms']:.1f} ms [CPU {r['reset_cpu_ms']:.1f} ms, "
+            f"worst {r['reset_cpu_ms_max']:.1f} ms]",
+            flush=True,
+        )
     one = _child(_async, 1, seconds * 2)
     two = _child(_async, 2, seconds * 2)
     print(
@@ -214,6 +313,26 @@ def main() -> None:
             "met": joint_rgb_cpu >= TARGET_JOINT_RGB,
         },
         "peak_rss_mb": {"value": peak, "target": TARGET_RSS_MB, "met": peak <= TARGET_RSS_MB},
+        "decision_rgb_steps_per_s": {
+            "value": decision["steps_per_s"],
+            "target": TARGET_DECISION_RGB,
+            "met": decision["steps_per_s"] >= TARGET_DECISION_RGB,
+        },
+        "decision_rgb_steps_per_cpu_s": {
+            "value": decision["steps_per_cpu_s"],
+            "target": TARGET_DECISION_RGB,
+            "met": decision["steps_per_cpu_s"] >= TARGET_DECISION_RGB,
+        },
+        "reset_16_tiles_ms": {
+            "value": resets[0]["reset_ms"],
+            "target": TARGET_RESET_MS,
+            "met": resets[0]["reset_ms"] <= TARGET_RESET_MS,
+        },
+        "reset_16_tiles_cpu_ms": {
+            "value": resets[0]["reset_cpu_ms"],
+            "target": TARGET_RESET_MS,
+            "met": resets[0]["reset_cpu_ms"] <= TARGET_RESET_MS,
+        },
     }
     for k, v in targets.items():
         print(f"{k}: {v['value']:.1f} (target {v['target']}) {'MET' if v['met'] else 'NOT MET'}")
@@ -230,6 +349,9 @@ def main() -> None:
         "seconds_per_case": seconds,
         "cases": rows,
         "async": {"workers_1": one, "workers_2": two, "speedup": two / one},
+        "decision_rgb": decision,
+        "decision_rgb_no_multisampling": aliased,
+        "reset": {f"{r['tiles']}_tiles": r for r in resets.values()},
         "targets": targets,
     }
     OUT.parent.mkdir(exist_ok=True)

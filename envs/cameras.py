@@ -23,6 +23,7 @@ import numpy as np
 
 from envs.cell_config import RenderConfig
 from envs.errors import CellError
+from envs.view_culling import ViewCuller
 
 # MuJoCo cameras look along their -z with +y up; OpenCV's look along +z with +y down.
 _MJ_TO_CV = np.diag([1.0, -1.0, -1.0])
@@ -150,6 +151,8 @@ class CameraRig:
         self._cfg = cfg
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
         self._depth: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._culler = ViewCuller(model)
+        self._camera_ids: dict[str, int] = {}
         self._closed = False
 
     def _renderer(self, height: int, width: int, depth: bool) -> mujoco.Renderer:
@@ -195,8 +198,30 @@ class CameraRig:
             RGB uint8 (height, width, 3) or depth float32 (height, width) [m].
         """
         r = self._renderer(height, width, depth)
-        r.update_scene(data, camera=camera)
+        cam = self._camera_id(camera)
+        if cam is None or not self._cfg.cull:
+            r.update_scene(data, camera=camera)
+            return r.render(out=out)
+        rgba = self._model.geom_rgba
+        alpha = rgba[:, 3].copy()
+        try:  # geoms it cannot see are left out of the scene (`envs.view_culling`)
+            rgba[self._culler.hidden(r, data, cam), 3] = 0.0
+            r.update_scene(data, camera=camera)
+        finally:
+            rgba[:, 3] = alpha
         return r.render(out=out)
+
+    def _camera_id(self, camera: int | str | mujoco.MjvCamera) -> int | None:
+        """Model camera id of a name or id; None for a free camera."""
+        if isinstance(camera, mujoco.MjvCamera):
+            return None
+        if isinstance(camera, str):
+            cam = self._camera_ids.get(camera)
+            if cam is None:
+                cam = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_CAMERA, camera)
+                self._camera_ids[camera] = cam
+            return cam if cam >= 0 else None
+        return int(camera)
 
     def close(self) -> None:
         """Free every renderer (safe to call twice)."""

@@ -361,15 +361,24 @@ class RenderConfig:
         shadows: Render shadows (slow in software rendering; off for observations).
         reflections: Render reflections.
         overview_size: Overview image (height, width) [px].
+        cull: Leave geoms a model camera cannot see out of its scene (same image, faster in
+            software rendering; `envs.view_culling`).
+        samples: Multisamples per pixel of every rendered image (anti-aliasing; MuJoCo's
+            ``offsamples``). 0 renders small images about 40 % faster in software rendering,
+            with stair-stepped edges.
     """
 
     shadows: bool = False
     reflections: bool = False
     overview_size: tuple[int, ...] = (480, 640)
+    cull: bool = True
+    samples: int = 4
 
     def __post_init__(self) -> None:
         _length(self, "overview_size", 2)
         _positive(self, "overview_size")
+        if self.samples < 0:
+            raise CellError(f"RenderConfig.samples must be >= 0, got {self.samples}")
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ minimum gap between their outlines (or bounding circles).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import shapely
@@ -102,6 +103,8 @@ def sample_layout(
             "tiles, a larger input_belt.tile_area, or feed='stream' or 'batch'"
         )
 
+    shapes = None if outlines is None else [_Footprint.of(o) for o in outlines]
+
     def once() -> np.ndarray:
         return _layout_once(
             radii,
@@ -109,7 +112,7 @@ def sample_layout(
             gap,
             attempts,
             rng,
-            outlines=outlines,
+            shapes=shapes,
             occupied=occupied,
             occupied_radii=occupied_radii,
         )
@@ -129,66 +132,180 @@ def _layout_once(
     attempts: int,
     rng: np.random.Generator,
     *,
-    outlines: Sequence[np.ndarray] | None,
+    shapes: Sequence[_Footprint] | None,
     occupied: np.ndarray | None,
     occupied_radii: np.ndarray | None,
 ) -> np.ndarray:
-    """One try of `sample_layout` (same arguments); raises CellError when it jams."""
+    """One try of `sample_layout` (outlines as ``shapes``); raises CellError when it jams.
+
+    Each tile draws all its candidate poses at once and takes the first acceptable one in
+    draw order. The cheap tests (bounding circles clear) run on every candidate at once; the
+    outline tests (inside the area, clearance) only on the candidates before the first one
+    that passes them all (`_Placed.first_clear`).
+    """
     area_size = 2 * half
     centres = np.zeros((0, 2)) if occupied is None else np.asarray(occupied, float)
     rads = np.zeros(0) if occupied_radii is None else np.asarray(occupied_radii, float)
     n_fixed = len(centres)
-    placed: list[Polygon] = []
+    placed = _Placed(gap, half)
     out = np.zeros((len(radii), 3))
     for i in np.argsort(-radii):
         lim = half - radii[i]
         lim = np.where(lim > 0, lim, 0.0)
         cand = rng.uniform(-lim, lim, size=(attempts, 2))
         yaws = rng.uniform(-np.pi, np.pi, attempts)
-        if len(centres):
-            d = np.linalg.norm(cand[:, None, :] - centres[None, :, :], axis=2)
-            clear = d >= rads[None, :] + radii[i] + gap
+        d = np.linalg.norm(cand[:, None, :] - centres[None, :, :], axis=2)
+        clear = d >= rads[None, :] + radii[i] + gap
+        if shapes is None:
+            ok = clear.all(axis=1)
+            first = int(np.argmax(ok)) if ok.any() else attempts
         else:
-            clear = np.ones((attempts, 0), bool)
-        chosen = -1
-        for c in range(attempts):
-            poly = None
-            if outlines is not None:
-                poly = _posed(outlines[i], cand[c], yaws[c])
-                if not _inside(poly, half):
-                    continue
-            if clear[c].all():
-                chosen = c
-            elif outlines is not None and not clear[c, :n_fixed].all():
-                continue
-            elif outlines is not None:
-                near = [placed[k - n_fixed] for k in np.flatnonzero(~clear[c])]
-                if np.all(shapely.distance(poly, near) >= gap):
-                    chosen = c
-            if chosen >= 0:
-                if poly is not None:
-                    placed.append(poly)
-                break
-        if chosen < 0:
+            ok = clear[:, :n_fixed].all(axis=1)
+            if placed.inner:  # inscribed circles closer than the gap: sure overlaps
+                reach = shapes[i].inner + np.array(placed.inner) + gap - SURE
+                ok &= ~np.any(d[:, n_fixed:] < reach[None, :], axis=1)
+            first = placed.first_clear(
+                np.flatnonzero(ok), shapes[i], cand, yaws, clear[:, n_fixed:]
+            )
+        if first >= attempts:
             raise LayoutError(
                 f"could not place {len(radii)} tiles without overlap in the tile area "
                 f"{area_size[0] * 1000:.0f} x {area_size[1] * 1000:.0f} mm after {attempts} "
                 "tries per tile; use fewer tiles, a larger area or feed='stream'"
             )
-        out[i] = (cand[chosen, 0], cand[chosen, 1], yaws[chosen])
-        centres = np.vstack([centres, cand[chosen]])
+        out[i] = (cand[first, 0], cand[first, 1], yaws[first])
+        centres = np.concatenate([centres, cand[first : first + 1]])
         rads = np.append(rads, radii[i])
     return out
 
 
-def _posed(outline: np.ndarray, xy: np.ndarray, yaw: float) -> Polygon:
-    c, s = np.cos(yaw), np.sin(yaw)
-    return Polygon(outline @ np.array([[c, s], [-s, c]]) + xy)
+EXACT_CHUNKS = (8, 32, 128)
+"""Candidates per clearance batch, growing (then all the rest): few when an early one passes,
+few calls when many fail."""
+SURE = 1e-9
+"""Margin [m] by which a bound must clear the gap to decide a pair without the exact distance
+(far above rounding, so every decision equals the exact test's)."""
 
 
-def _inside(poly: Polygon, half: np.ndarray) -> bool:
-    x0, y0, x1, y1 = poly.bounds
-    return bool(x0 >= -half[0] and x1 <= half[0] and y0 >= -half[1] and y1 <= half[1])
+@dataclass(frozen=True)
+class _Footprint:
+    """A tile outline and the bounds the clearance tests use.
+
+    Attributes:
+        outline: Outline in the tile's own frame, shape (k, 2) [m].
+        reach: Largest vertex distance from the frame's origin [m].
+        inner: Radius of the largest circle about the origin inside the outline (0 when the
+            origin is outside) [m].
+    """
+
+    outline: np.ndarray
+    reach: float
+    inner: float
+
+    @staticmethod
+    def of(outline: np.ndarray) -> _Footprint:
+        """Footprint of an outline, shape (k, 2) [m]."""
+        o = np.asarray(outline, float)
+        poly, origin = Polygon(o), shapely.Point(0.0, 0.0)
+        inner = float(poly.exterior.distance(origin)) if poly.contains(origin) else 0.0
+        return _Footprint(o, float(np.max(np.linalg.norm(o, axis=1))), inner)
+
+
+class _Placed:
+    """Outlines placed so far in one layout, and the tests of a new one against them.
+
+    Args:
+        gap: Clearance between outlines [m].
+        half: Half size of the area, shape (2,) [m].
+    """
+
+    def __init__(self, gap: float, half: np.ndarray) -> None:
+        self.gap = gap
+        self.half = half
+        self.polys: list[Polygon] = []
+        self.centre: list[np.ndarray] = []
+        self.inner: list[float] = []
+        self.box: list[np.ndarray] = []
+
+    def first_clear(
+        self,
+        todo: np.ndarray,
+        shape: _Footprint,
+        xy: np.ndarray,
+        yaw: np.ndarray,
+        clear: np.ndarray,
+    ) -> int:
+        """First candidate of ``todo`` inside the area and ``gap`` from every placed outline.
+
+        Taken in draw order, in chunks of growing size (`EXACT_CHUNKS`). Inside: sure when the
+        outline's bounding circle is, else by its vertices. Against a placed outline whose
+        bounding circle is near, a pair is decided by bounds where they are sure (inscribed
+        circles closer than the gap: too close; bounding boxes farther apart: clear), else by
+        the exact outline distance (GEOS). The chosen outline is placed.
+
+        Args:
+            todo: Candidate indices in draw order, shape (m,).
+            shape: The tile's footprint.
+            xy: Candidate origins, shape (attempts, 2) [m].
+            yaw: Candidate yaws, shape (attempts,) [rad].
+            clear: Bounding circles clear of each placed outline, shape (attempts, placed).
+
+        Returns:
+            The candidate index, or ``attempts`` when none passes.
+        """
+        gap, half, n = self.gap, self.half, len(xy)
+        inner = shape.inner
+        centre, inners, box = np.array(self.centre), np.array(self.inner), np.array(self.box)
+        others = np.empty(len(self.polys), dtype=object)
+        others[:] = self.polys
+        start = 0
+        for size in (*EXACT_CHUNKS, len(todo)):
+            chunk = todo[start : start + size]
+            start += len(chunk)
+            if len(chunk) == 0:
+                break
+            verts = _posed_all(shape.outline, xy[chunk], yaw[chunk])
+            lo_all, hi_all = _boxes(verts)
+            bad = np.any(np.abs(xy[chunk]) > half - shape.reach - SURE, axis=1)
+            bad[bad] = np.any((lo_all[bad] < -half) | (hi_all[bad] > half), axis=1)
+            rows, cols = np.nonzero(~clear[chunk])
+            if len(rows):
+                dist = np.linalg.norm(xy[chunk[rows]] - centre[cols], axis=1)
+                near = dist < inner + inners[cols] + gap - SURE
+                lo, hi = lo_all[rows], hi_all[rows]
+                apart = np.maximum(np.maximum(lo - box[cols, 2:], box[cols, :2] - hi), 0.0)
+                far = np.hypot(apart[:, 0], apart[:, 1]) >= gap + SURE
+                bad[rows[near]] = True
+                exact = np.flatnonzero(~near & ~far & ~bad[rows])
+                if len(exact):
+                    polys = shapely.polygons(verts[rows[exact]])
+                    close = shapely.distance(polys, others[cols[exact]]) < gap
+                    bad[rows[exact[close]]] = True
+            if not bad.all():
+                k = int(np.argmin(bad))
+                self.polys.append(Polygon(verts[k]))
+                self.centre.append(xy[chunk[k]])
+                self.inner.append(inner)
+                self.box.append(np.concatenate([lo_all[k], hi_all[k]]))
+                return int(chunk[k])
+        return n
+
+
+def _boxes(verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bounding boxes of outlines (m, k, 2): lower and upper corners, each (m, 2) [m]."""
+    x, y = verts[:, :, 0], verts[:, :, 1]
+    lo = np.stack([x.min(axis=1), y.min(axis=1)], axis=1)
+    hi = np.stack([x.max(axis=1), y.max(axis=1)], axis=1)
+    return lo, hi
+
+
+def _posed_all(outline: np.ndarray, xy: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    """An outline at every pose: shape (n, k, 2) [m] for ``xy`` (n, 2) and ``yaw`` (n,)."""
+    rot = np.empty((len(yaw), 2, 2))
+    rot[:, 0, 0] = rot[:, 1, 1] = np.cos(yaw)
+    rot[:, 0, 1] = np.sin(yaw)
+    rot[:, 1, 0] = -rot[:, 0, 1]
+    return outline[None] @ rot + xy[:, None, :]
 
 
 def _min_half_extent(outline: np.ndarray) -> float:

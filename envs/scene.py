@@ -10,6 +10,7 @@ the working areas are centred at x = work_x.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -107,15 +108,21 @@ class SceneIds:
             tile_visual=self.variant_visual[shown],
         )
 
-    @property
+    @functools.cached_property
     def tile_qpos_index(self) -> np.ndarray:
-        """Qpos indices of all tiles' free joints, shape (n, 7)."""
-        return self.tile_qpos[:, None] + np.arange(7)[None, :]
+        """Qpos indices of all tiles' free joints, shape (n, 7) (computed once, read-only)."""
+        return _frozen(self.tile_qpos[:, None] + np.arange(7)[None, :])
 
-    @property
+    @functools.cached_property
     def tile_dof_index(self) -> np.ndarray:
-        """Dof indices of all tiles' free joints, shape (n, 6)."""
-        return self.tile_dof[:, None] + np.arange(6)[None, :]
+        """Dof indices of all tiles' free joints, shape (n, 6) (computed once, read-only)."""
+        return _frozen(self.tile_dof[:, None] + np.arange(6)[None, :])
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    """``a`` made read-only (a cached index array must not change under its users)."""
+    a.setflags(write=False)
+    return a
 
 
 @dataclass(frozen=True)
@@ -427,6 +434,7 @@ def _configure(spec: mujoco.MjSpec, cfg: CellConfig) -> None:
         spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
         spec.option.sleep_tolerance = ph.sleep_tolerance
     spec.visual.quality.shadowsize = 0 if not cfg.render.shadows else 4096
+    spec.visual.quality.offsamples = cfg.render.samples
     spec.visual.headlight.ambient = [0.3, 0.3, 0.3]
     spec.visual.headlight.diffuse = [0.35, 0.35, 0.35]
     spec.visual.headlight.specular = [0.0, 0.0, 0.0]
