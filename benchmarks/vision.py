@@ -32,7 +32,8 @@ from qshape import Boundary, Figure, Tolerances, match
 from qshape.design import Design, Slot
 from qshape.extract import ExtractParams, extract_detailed
 from qshape.figure import figures_from_outlines
-from qshape.synth import SynthParams, generate, wrap_angle
+from qshape.geometry import wrap_angle
+from qshape.synth import SynthParams, generate
 
 
 @dataclass(frozen=True)

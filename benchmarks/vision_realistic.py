@@ -32,7 +32,8 @@ from qshape import Description, Tolerances, describe, match
 from qshape.design import Design
 from qshape.effects import CameraEffects
 from qshape.extract import ExtractParams, extract_detailed
-from qshape.synth import SynthParams, generate, wrap_angle
+from qshape.geometry import wrap_angle
+from qshape.synth import SynthParams, generate
 
 from .vision import _Refs, _rot_error_deg
 

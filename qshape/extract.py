@@ -41,6 +41,10 @@ from qshape.geometry import FloatArray
 from qshape.simplify import OutlineParams
 
 
+_GAIN_SCALE = 32.0
+"""Fixed-point scale of the shading gain image (uint8): gains up to 255 / 32 ~ 8."""
+
+
 class ImageError(QShapeError):
     """The image cannot be processed (wrong type, shape or size)."""
 
@@ -66,7 +70,26 @@ class ExtractParams:
             or one object filling the view), so no figures, in [0, 1].
         illumination_cell_px: Cell size of the downsampled image the illumination model is
             fitted on, in [px].
-        illumination_degree: Degree of the per-channel polynomial illumination model (0: flat).
+        illumination_degree: Degree of the per-channel polynomial illumination model (0: flat);
+            the fallback where no background cell is near.
+        illumination_local_sigma_cells: Width (Gaussian sigma) over which the background
+            colour is averaged from the background cells near each cell, in [cells] (0: the
+            polynomial alone). It follows a shadow band or a steep light gradient that a
+            low-order polynomial cannot.
+        illumination_min_weight: Cells whose Gaussian weight of background cells is below this
+            keep the polynomial model (dimensionless, in (0, 1]).
+        illumination_min_cells: Fewer trusted background cells than this (cells whose
+            neighbours are all background): every background cell is used, in [cells].
+        background_chroma_tolerance: A cell of the illumination grid is belt when its colour
+            is within this distance (max over channels) of the dominant colour scaled to the
+            cell's brightness, in [levels]: a shadow changes the belt's brightness, a tile its
+            hue.
+        belt_gain_min: ...and its brightness is at least this fraction of the dominant's.
+        belt_gain_max: ...and at most this multiple of it.
+        normalize_shading: Multiply colour distances by the shading gain (belt as fully lit /
+            belt as modelled here), so a tile in a shadow stands out as much as in full light.
+        lit_percentile: "The belt as lit" is this percentile of the modelled brightness over
+            the background cells, in [%].
         background_tolerance: A cell is background for the model fit when its colour is within
             this distance (max over channels) of the dominant colour, in [levels].
         threshold_min: Lowest foreground threshold on the colour distance, in [levels].
@@ -81,6 +104,8 @@ class ExtractParams:
         min_hole_area_px: Holes smaller than this are ignored, in [px^2].
         min_hole_width_px: Holes thinner than this (2 x area / perimeter) are ignored (slits
             left by noise), in [px].
+        hole_belt_fraction: A hole is kept only when the mean colour distance inside it is at
+            most this fraction of the threshold (it shows the belt), dimensionless.
         border_margin_px: Regions reaching this close to the image border are partial tiles,
             in [px].
         boundary_offset_px: Outlines are moved outwards by this much (traced contours run
@@ -101,6 +126,14 @@ class ExtractParams:
     min_background_fraction: float = 0.25
     illumination_cell_px: int = 16
     illumination_degree: int = 2
+    illumination_local_sigma_cells: float = 1.5
+    illumination_min_weight: float = 0.05
+    illumination_min_cells: int = 12
+    background_chroma_tolerance: float = 12.0
+    belt_gain_min: float = 0.3
+    belt_gain_max: float = 2.0
+    normalize_shading: bool = True
+    lit_percentile: float = 90.0
     background_tolerance: float = 40.0
     threshold_min: float = 20.0
     threshold_max: float = 60.0
@@ -112,6 +145,7 @@ class ExtractParams:
     min_area_px: float = 150.0
     min_hole_area_px: float = 40.0
     min_hole_width_px: float = 3.0
+    hole_belt_fraction: float = 0.5
     border_margin_px: int = 1
     boundary_offset_px: float = 0.5
     color_erode_px: int = 3
@@ -129,6 +163,14 @@ class ExtractParams:
             raise ImageError("min_background_fraction must be in [0, 1]")
         if self.illumination_cell_px < 1 or not 0 <= self.illumination_degree <= 3:
             raise ImageError("illumination_cell_px must be >= 1, illumination_degree in 0..3")
+        if not 0.0 < self.belt_gain_min <= 1.0 <= self.belt_gain_max:
+            raise ImageError("need 0 < belt_gain_min <= 1 <= belt_gain_max")
+        if not 0.0 <= self.lit_percentile <= 100.0:
+            raise ImageError("lit_percentile must be in [0, 100]")
+        if self.illumination_local_sigma_cells < 0.0 or not 0.0 < self.illumination_min_weight <= 1.0:
+            raise ImageError(
+                "illumination_local_sigma_cells must be >= 0, illumination_min_weight in (0, 1]"
+            )
         if not 0.0 < self.threshold_min <= self.threshold_max:
             raise ImageError("need 0 < threshold_min <= threshold_max")
         sizes = (self.open_px, self.restore_iterations, self.color_erode_px, self.border_margin_px)
@@ -255,32 +297,86 @@ def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, floa
     return dominant, float(near.mean())
 
 
+def _polynomial_fit(small: np.ndarray, keep: np.ndarray, degree: int) -> np.ndarray | None:
+    """Per-channel polynomial of the cell grid (gh, gw, 3) fitted on ``keep`` cells, or None."""
+    gh, gw = keep.shape
+    terms = (degree + 1) * (degree + 2) // 2
+    if degree <= 0 or int(keep.sum()) < 2 * terms:
+        return None
+    yy, xx = np.mgrid[0:gh, 0:gw]
+    u, v = (xx.ravel() + 0.5) / gw - 0.5, (yy.ravel() + 0.5) / gh - 0.5
+    basis = np.stack(
+        [u**i * v**j for i in range(degree + 1) for j in range(degree + 1 - i)], axis=1
+    )
+    flat = keep.ravel()
+    coef, *_ = np.linalg.lstsq(basis[flat], small.reshape(-1, 3)[flat], rcond=None)
+    return np.asarray((basis @ coef).reshape(gh, gw, 3))
+
+
+def _local_fill(
+    small: np.ndarray, keep: np.ndarray, base: np.ndarray, p: ExtractParams
+) -> np.ndarray:
+    """Background colour of every cell from the ``keep`` cells near it (normalised convolution).
+
+    A Gaussian-weighted mean of the background cells around each cell, so a shadow band or a
+    steep gradient is followed at the scale of ``illumination_local_sigma_cells``; where no
+    background cell is near (weight below ``illumination_min_weight``) ``base`` is kept.
+    """
+    sigma = p.illumination_local_sigma_cells
+    weight = cv2.GaussianBlur(keep.astype(np.float32), (0, 0), sigma)
+    acc = cv2.GaussianBlur(small * keep[..., None].astype(np.float32), (0, 0), sigma)
+    ok = weight >= p.illumination_min_weight
+    out = base.astype(np.float32).copy()
+    out[ok] = acc[ok] / weight[ok, None]
+    return out
+
+
 def _illumination(
     img: np.ndarray, dominant: np.ndarray, p: ExtractParams
-) -> tuple[np.ndarray, np.ndarray]:
-    """Background model: image (H, W, 3) uint8 and its mean colour (3,) in levels."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Background model of the belt under the cell's light.
+
+    Returns:
+        The model image (H, W, 3) uint8; its mean colour (3,) in levels (tile colours are
+        corrected to it); and the shading gain (H, W) uint8 in units of
+        1 / ``_GAIN_SCALE`` (the belt's brightness where it is lit, over the modelled
+        brightness; saturating), by which
+        colour distances are multiplied so that a tile in shadow stands out as much as in light.
+    """
     h, w = img.shape[:2]
     gh, gw = max(2, h // p.illumination_cell_px), max(2, w // p.illumination_cell_px)
-    small = cv2.resize(img, (gw, gh), interpolation=cv2.INTER_AREA).astype(np.float64)
-    dist = np.abs(small - dominant).max(axis=2)
-    is_bg = dist <= p.background_tolerance
-    terms = (p.illumination_degree + 1) * (p.illumination_degree + 2) // 2
-    model = np.broadcast_to(dominant, small.shape).copy()
-    if p.illumination_degree > 0 and int(is_bg.sum()) >= 2 * terms:
-        yy, xx = np.mgrid[0:gh, 0:gw]
-        u, v = (xx.ravel() + 0.5) / gw - 0.5, (yy.ravel() + 0.5) / gh - 0.5
-        cols = [
-            u**i * v**j
-            for i in range(p.illumination_degree + 1)
-            for j in range(p.illumination_degree + 1 - i)
-        ]
-        basis = np.stack(cols, axis=1)
-        keep = is_bg.ravel()
-        coef, *_ = np.linalg.lstsq(basis[keep], small.reshape(-1, 3)[keep], rcond=None)
-        model = (basis @ coef).reshape(gh, gw, 3)
+    small = cv2.resize(img, (gw, gh), interpolation=cv2.INTER_AREA).astype(np.float32)
+    dom = dominant.astype(np.float32)
+    # The belt under any light is the dominant colour times a gain: compare each cell with
+    # the dominant colour brought to the cell's brightness (a tile differs in hue, a shadow
+    # only in brightness).
+    ratio = small.sum(axis=2) / max(float(dom.sum()), 1.0)
+    shaded = np.abs(small - ratio[..., None] * dom).max(axis=2)
+    is_bg = (
+        (shaded <= p.background_chroma_tolerance)
+        & (ratio >= p.belt_gain_min)
+        & (ratio <= p.belt_gain_max)
+    ).astype(np.uint8)
+    # Cells beside a non-background cell are partly tile (mixed colours): not trusted.
+    core = cv2.erode(is_bg, np.ones((3, 3), np.uint8), borderType=cv2.BORDER_REPLICATE)
+    keep = core.view(bool) if int(core.sum()) >= p.illumination_min_cells else is_bg.view(bool)
+    poly = _polynomial_fit(small, keep, p.illumination_degree)
+    model = np.broadcast_to(dominant, small.shape) if poly is None else poly
+    if p.illumination_local_sigma_cells > 0.0 and keep.any():
+        model = _local_fill(small, keep, model, p)
+    model = np.asarray(model, dtype=np.float32)
+    light = model.sum(axis=2)
+    lit = float(np.percentile(light[keep], p.lit_percentile)) if keep.any() else float(light.max())
+    gain = lit / np.maximum(light, 1.0)
+    if not p.normalize_shading:
+        gain[:] = 1.0
+    gain8 = np.clip(gain * _GAIN_SCALE + 0.5, 0, 255).astype(np.uint8)
     model8 = np.clip(model + 0.5, 0, 255).astype(np.uint8)
-    mean = model.reshape(-1, 3).mean(axis=0)
-    return cv2.resize(model8, (w, h), interpolation=cv2.INTER_LINEAR), mean
+    return (
+        cv2.resize(model8, (w, h), interpolation=cv2.INTER_LINEAR),
+        model.reshape(-1, 3).mean(axis=0).astype(np.float64),
+        cv2.resize(gain8, (w, h), interpolation=cv2.INTER_LINEAR),
+    )
 
 
 def _median_colors(
@@ -314,6 +410,18 @@ def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
     cv2.bitwise_or(edges, cv2.Canny(g, p.canny_low, p.canny_high), dst=edges)
     cv2.bitwise_or(edges, cv2.Canny(b, p.canny_low, p.canny_high), dst=edges)
     return edges
+
+
+def _shows_belt(dist: np.ndarray, hole: np.ndarray, limit: float) -> bool:
+    """True when the mean colour distance inside a traced hole (k, 1, 2) is at most ``limit``.
+
+    A real hole shows the belt (distance near 0); a dip of a dark or shaded glaze below the
+    threshold is tile material (distance just under the threshold) and is not a hole.
+    """
+    x, y, bw, bh = cv2.boundingRect(hole)
+    inside = np.zeros((bh, bw), np.uint8)
+    cv2.fillPoly(inside, [hole - np.array([x, y], np.int32)], 255)
+    return float(cv2.mean(dist[y : y + bh, x : x + bw], mask=inside)[0]) <= limit
 
 
 def _offset_outline(contour: FloatArray, offset: float, outward_sign: float) -> FloatArray:
@@ -365,10 +473,10 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
             "segmented"
         )
         return ExtractResult([], [], [], [why], col, 0.0)
-    model, mean_light = _illumination(img, dominant, p)
+    model, mean_light, gain = _illumination(img, dominant, p)
     diff = cv2.absdiff(img, model)
     r, g, b = cv2.split(diff)
-    dist = cv2.max(cv2.max(r, g), b)
+    dist = cv2.multiply(cv2.max(cv2.max(r, g), b), gain, scale=1.0 / _GAIN_SCALE)
     otsu, _ = cv2.threshold(dist, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
     thr = float(np.clip(otsu, p.threshold_min, p.threshold_max))
     _, mask = cv2.threshold(dist, thr, 255, cv2.THRESH_BINARY)
@@ -457,7 +565,11 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
             hole = contours[child]
             h_area = cv2.contourArea(hole)
             h_len = cv2.arcLength(hole, True)
-            if h_area >= p.min_hole_area_px and 2.0 * h_area >= p.min_hole_width_px * h_len:
+            if (
+                h_area >= p.min_hole_area_px
+                and 2.0 * h_area >= p.min_hole_width_px * h_len
+                and _shows_belt(dist, hole, thr * p.hole_belt_fraction)
+            ):
                 hp = hole[:, 0, :].astype(np.float64)
                 # A hole's outward (away from the tile material) is into the hole.
                 sign = 1.0 if _signed_area(hp) > 0 else -1.0
