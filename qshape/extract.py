@@ -40,7 +40,6 @@ from qshape.figure import Color, Figure, figures_from_outlines
 from qshape.geometry import FloatArray
 from qshape.simplify import OutlineParams
 
-
 _GAIN_SCALE = 32.0
 """Fixed-point scale of the shading gain image (uint8): gains up to 255 / 32 ~ 8."""
 
@@ -167,7 +166,8 @@ class ExtractParams:
             raise ImageError("need 0 < belt_gain_min <= 1 <= belt_gain_max")
         if not 0.0 <= self.lit_percentile <= 100.0:
             raise ImageError("lit_percentile must be in [0, 100]")
-        if self.illumination_local_sigma_cells < 0.0 or not 0.0 < self.illumination_min_weight <= 1.0:
+        weight = self.illumination_min_weight
+        if self.illumination_local_sigma_cells < 0.0 or not 0.0 < weight <= 1.0:
             raise ImageError(
                 "illumination_local_sigma_cells must be >= 0, illumination_min_weight in (0, 1]"
             )
