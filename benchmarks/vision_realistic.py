@@ -30,9 +30,9 @@ import numpy as np
 from configs import load_config
 from qshape import Description, Tolerances, describe, match
 from qshape.design import Design
-from qshape.effects import CameraEffects
+from qshape.effects import CameraEffects, undistort, undistort_points
 from qshape.extract import ExtractParams, extract_detailed
-from qshape.geometry import wrap_angle
+from qshape.geometry import FloatArray, wrap_angle
 from qshape.synth import SynthParams, generate
 
 from .vision import _Refs, _rot_error_deg
@@ -73,6 +73,8 @@ class RealisticBench:
         target_level: Effect name of the level the targets are judged on.
         target_images: Pictures per design at that level.
         plot: Path of the plot (PNG).
+        undistort: Undistort pictures taken through a distorting lens with the known lens
+            model before extraction (what a calibrated cell does); truth centres likewise.
         levels: The sweep.
     """
 
@@ -85,6 +87,7 @@ class RealisticBench:
     target_level: str = "realistic"
     target_images: int = 60
     plot: str = "out/bench_vision_realistic.png"
+    undistort: bool = True
     levels: tuple[Level, ...] = ()
 
 
@@ -107,6 +110,15 @@ class _Classes:
             if m is not None and (best is None or m.score < best[0]):
                 best = (m.score, key, m)
         return (None, None) if best is None else (best[1], best[2])
+
+
+def _seen(img: Any, e: CameraEffects, bench: RealisticBench) -> tuple[np.ndarray, FloatArray]:
+    """The picture extraction gets and the truth centres (k, 2) [px] in it."""
+    centres = np.array([t.center_px for t in img.tiles], dtype=np.float64).reshape(-1, 2)
+    if not bench.undistort or (e.lens_k1 == 0.0 and e.lens_k2 == 0.0):
+        return img.image, centres
+    h, w = img.image.shape[:2]
+    return undistort(img.image, e), undistort_points(centres, e, w, h)
 
 
 def _synth_for(level: Level, sp: SynthParams, rng: np.random.Generator) -> SynthParams:
@@ -134,13 +146,15 @@ def run_level(  # noqa: PLR0914, PLR0915, PLR0917
         tol = Tolerances.load(joint_width=design.joint * s)
         classes = _Classes(design, s, tol)
         for _ in range(images):
-            img = generate(design, bench.tiles_per_image, rng, _synth_for(level, sp, rng))
-            res = extract_detailed(img.image, ep)
+            params = _synth_for(level, sp, rng)
+            img = generate(design, bench.tiles_per_image, rng, params)
+            picture, centres = _seen(img, params.effects, bench)
+            res = extract_detailed(picture, ep)
             descs = [describe(f, tol) for f in res.figures]
             cents = np.array([f.centroid for f in res.figures]).reshape(-1, 2)
             used = np.zeros(len(res.figures), bool)
-            for t in img.tiles:
-                near = np.hypot(*(cents - t.center_px).T) if len(cents) else np.zeros(0)
+            for t, centre in zip(img.tiles, centres, strict=True):
+                near = np.hypot(*(cents - centre).T) if len(cents) else np.zeros(0)
                 limit = bench.associate_fraction * math.sqrt(t.slot.area) * s
                 k = int(np.argmin(near)) if len(near) else -1
                 hit = k >= 0 and near[k] <= limit and not used[k]

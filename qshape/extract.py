@@ -87,8 +87,9 @@ class ExtractParams:
         belt_gain_max: ...and at most this multiple of it.
         normalize_shading: Multiply colour distances by the shading gain (belt as fully lit /
             belt as modelled here), so a tile in a shadow stands out as much as in full light.
-        lit_percentile: "The belt as lit" is this percentile of the modelled brightness over
-            the background cells, in [%].
+        lit_percentile: The reference light (shading gain 1, and the light tile colours are
+            corrected to) is this percentile of the modelled brightness over the background
+            cells, in [%] (50: the belt's usual light, whatever a shadow or a gradient does).
         background_tolerance: A cell is background for the model fit when its colour is within
             this distance (max over channels) of the dominant colour, in [levels].
         threshold_min: Lowest foreground threshold on the colour distance, in [levels].
@@ -105,6 +106,10 @@ class ExtractParams:
             left by noise), in [px].
         hole_belt_fraction: A hole is kept only when the mean colour distance inside it is at
             most this fraction of the threshold (it shows the belt), dimensionless.
+        max_outline_excess: A region whose traced outline is longer than this multiple of its
+            figure's perimeter is mostly noise (a ragged splash, not a tile edge) and gives no
+            figure, dimensionless (the pixel staircase alone gives up to ~1.08; edges rough by
+            0.6 mm at 2.5 px/mm ~1.16).
         border_margin_px: Regions reaching this close to the image border are partial tiles,
             in [px].
         boundary_offset_px: Outlines are moved outwards by this much (traced contours run
@@ -132,7 +137,7 @@ class ExtractParams:
     belt_gain_min: float = 0.3
     belt_gain_max: float = 2.0
     normalize_shading: bool = True
-    lit_percentile: float = 90.0
+    lit_percentile: float = 50.0
     background_tolerance: float = 40.0
     threshold_min: float = 20.0
     threshold_max: float = 60.0
@@ -145,6 +150,7 @@ class ExtractParams:
     min_hole_area_px: float = 40.0
     min_hole_width_px: float = 3.0
     hole_belt_fraction: float = 0.5
+    max_outline_excess: float = 1.3
     border_margin_px: int = 1
     boundary_offset_px: float = 0.5
     color_erode_px: int = 3
@@ -164,6 +170,8 @@ class ExtractParams:
             raise ImageError("illumination_cell_px must be >= 1, illumination_degree in 0..3")
         if not 0.0 < self.belt_gain_min <= 1.0 <= self.belt_gain_max:
             raise ImageError("need 0 < belt_gain_min <= 1 <= belt_gain_max")
+        if self.max_outline_excess < 1.0:
+            raise ImageError("max_outline_excess must be >= 1")
         if not 0.0 <= self.lit_percentile <= 100.0:
             raise ImageError("lit_percentile must be in [0, 100]")
         weight = self.illumination_min_weight
@@ -337,10 +345,10 @@ def _illumination(
     """Background model of the belt under the cell's light.
 
     Returns:
-        The model image (H, W, 3) uint8; its mean colour (3,) in levels (tile colours are
-        corrected to it); and the shading gain (H, W) uint8 in units of
-        1 / ``_GAIN_SCALE`` (the belt's brightness where it is lit, over the modelled
-        brightness; saturating), by which
+        The model image (H, W, 3) uint8; the belt's colour under the reference light (3,) in
+        levels (tile colours are corrected to that light); and the shading gain (H, W) uint8 in units of
+        1 / ``_GAIN_SCALE`` (the reference brightness over the modelled brightness;
+        saturating), by which
         colour distances are multiplied so that a tile in shadow stands out as much as in light.
     """
     h, w = img.shape[:2]
@@ -374,28 +382,32 @@ def _illumination(
     model8 = np.clip(model + 0.5, 0, 255).astype(np.uint8)
     return (
         cv2.resize(model8, (w, h), interpolation=cv2.INTER_LINEAR),
-        model.reshape(-1, 3).mean(axis=0).astype(np.float64),
+        dominant.astype(np.float64) * lit / max(float(dominant.sum()), 1.0),
         cv2.resize(gain8, (w, h), interpolation=cv2.INTER_LINEAR),
     )
 
 
 def _median_colors(
     img: np.ndarray, labels: np.ndarray, region: np.ndarray, count: int
-) -> np.ndarray:
-    """Median RGB per label 1..count-1 over pixels where ``region`` is set -> (count, 3) levels.
+) -> tuple[np.ndarray, np.ndarray]:
+    """Median RGB per label over pixels where ``region`` is set.
 
     One bincount per channel over (label, value) pairs: linear in the number of pixels.
+
+    Returns:
+        The medians (count, 3) in levels, and which labels had a pixel (count,) bool.
     """
     idx = np.flatnonzero(region.ravel())
-    lab = labels.ravel()[idx].astype(np.int64)
+    lab = labels.ravel()[idx].astype(np.int64) * 256
     out = np.zeros((count, 3))
+    flat = img.reshape(-1, 3)[idx]
+    hist = np.zeros((count, 256))
     for ch in range(3):
-        val = img[..., ch].ravel()[idx].astype(np.int64)
-        hist = np.bincount(lab * 256 + val, minlength=count * 256).reshape(count, 256)
+        hist = np.bincount(lab + flat[:, ch], minlength=count * 256).reshape(count, 256)
         cum = np.cumsum(hist, axis=1)
         half = (cum[:, -1:] + 1) // 2
         out[:, ch] = np.argmax(cum >= np.maximum(half, 1), axis=1)
-    return out
+    return out, hist.sum(axis=1) > 0
 
 
 def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
@@ -490,10 +502,13 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         edges = _color_edges(img, p)
         cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
         count, labels = cv2.connectedComponents(cut, connectivity=4)
-        areas = np.bincount(labels.ravel(), minlength=count)
-        lut = np.where(areas >= p.min_area_px, np.arange(count), 0).astype(np.float32)
-        lut[0] = 0.0
-        labf = np.take(lut, np.asarray(labels, dtype=np.intp))
+        present = np.bincount(labels.ravel(), minlength=count) >= p.min_area_px
+        present[0] = False
+        if present[1:].all():
+            labf = labels.astype(np.float32)  # no crumbs: the labels as they are
+        else:
+            lut = np.where(present, np.arange(count), 0).astype(np.float32)
+            labf = np.take(lut, np.asarray(labels, dtype=np.intp))
         kernel3 = np.ones((3, 3), np.uint8)
         zero = np.zeros(1, np.float32)
         lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
@@ -508,6 +523,8 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     else:
         count, labels = cv2.connectedComponents(mask, connectivity=8)
         pieces = mask
+        present = np.ones(count, bool)
+        present[0] = False
     background = (
         float(dominant[0]) / 255.0,
         float(dominant[1]) / 255.0,
@@ -525,19 +542,17 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     else:
         region = pieces
     st = max(1, p.color_sample_step)
-    colors = _median_colors(img[::st, ::st], labels[::st, ::st], region[::st, ::st], count)
+    colors, seen = _median_colors(img[::st, ::st], labels[::st, ::st], region[::st, ::st], count)
     # Tiles eroded away entirely fall back to their whole region.
-    sub = labels[::st, ::st].ravel()[np.flatnonzero(region[::st, ::st].ravel())]
-    seen = np.bincount(sub, minlength=count)[:count] > 0
-    if not seen[1:].all():
-        colors[~seen] = _median_colors(img, labels, pieces, count)[~seen]
+    if (present & ~seen).any():
+        colors[~seen] = _median_colors(img, labels, pieces, count)[0][~seen]
     reference = mean_light if p.correct_illumination else None
     figures: list[Figure] = []
     outlines: list[FloatArray] = []
     partial: list[PartialTile] = []
     rejected: list[str] = []
     m = p.border_margin_px
-    todo: list[tuple[FloatArray, list[FloatArray], Color, str]] = []
+    todo: list[tuple[FloatArray, list[FloatArray], Color, str, float]] = []
     for i, cnt in enumerate(contours):
         if hier[i][3] != -1:
             continue  # a hole; handled with its parent
@@ -578,14 +593,21 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         if p.boundary_offset_px != 0.0:
             sign = 1.0 if _signed_area(pts) > 0 else -1.0
             pts = _offset_outline(pts, p.boundary_offset_px, sign)
-        todo.append((pts, holes, color3, f"region at ({x0}, {y0}) px, area {area:.0f} px^2"))
+        where = f"region at ({x0}, {y0}) px, area {area:.0f} px^2"
+        todo.append((pts, holes, color3, where, cv2.arcLength(cnt, True)))
     # Every outline of the image simplified at once.
     made = figures_from_outlines(
         [t[0] for t in todo], [t[1] for t in todo], [t[2] for t in todo], p.outline, y_down=True
     )
-    for (outline, _, _, where), fig in zip(todo, made, strict=True):
+    for (outline, _, _, where, traced), fig in zip(todo, made, strict=True):
         if isinstance(fig, InvalidFigureError):
             rejected.append(f"{where}: {fig}")
+            continue
+        if traced > p.max_outline_excess * fig.perimeter:
+            rejected.append(
+                f"{where}: outline mostly noise (traced length {traced / fig.perimeter:.2f} x the "
+                f"perimeter of its relevant points; at most {p.max_outline_excess:g} allowed)"
+            )
             continue
         figures.append(fig)
         outlines.append(outline)
