@@ -346,10 +346,10 @@ def _illumination(
 
     Returns:
         The model image (H, W, 3) uint8; the belt's colour under the reference light (3,) in
-        levels (tile colours are corrected to that light); and the shading gain (H, W) uint8 in units of
-        1 / ``_GAIN_SCALE`` (the reference brightness over the modelled brightness;
-        saturating), by which
-        colour distances are multiplied so that a tile in shadow stands out as much as in light.
+        levels (tile colours are corrected to that light); and the shading gain (H, W) uint8
+        in units of 1 / ``_GAIN_SCALE`` (the reference brightness over the modelled one,
+        saturating), by which colour distances are multiplied so that a tile in a shadow
+        stands out as much as in full light.
     """
     h, w = img.shape[:2]
     gh, gw = max(2, h // p.illumination_cell_px), max(2, w // p.illumination_cell_px)
