@@ -104,8 +104,9 @@ class ExtractParams:
         min_hole_area_px: Holes smaller than this are ignored, in [px^2].
         min_hole_width_px: Holes thinner than this (2 x area / perimeter) are ignored (slits
             left by noise), in [px].
-        hole_belt_fraction: A hole is kept only when the mean colour distance inside it is at
-            most this fraction of the threshold (it shows the belt), dimensionless.
+        hole_belt_fraction: A hole is kept only when the colour distance inside it reaches
+            down to this fraction of the threshold (it shows the belt), dimensionless.
+        hole_belt_percentile: ...at this percentile of the hole's pixels, in [%].
         max_outline_excess: A region whose traced outline is longer than this multiple of its
             figure's perimeter is mostly noise (a ragged splash, not a tile edge) and gives no
             figure, dimensionless (the pixel staircase alone gives up to ~1.08; edges rough by
@@ -150,6 +151,7 @@ class ExtractParams:
     min_hole_area_px: float = 40.0
     min_hole_width_px: float = 3.0
     hole_belt_fraction: float = 0.5
+    hole_belt_percentile: float = 10.0
     max_outline_excess: float = 1.3
     border_margin_px: int = 1
     boundary_offset_px: float = 0.5
@@ -424,16 +426,18 @@ def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
     return edges
 
 
-def _shows_belt(dist: np.ndarray, hole: np.ndarray, limit: float) -> bool:
-    """True when the mean colour distance inside a traced hole (k, 1, 2) is at most ``limit``.
+def _shows_belt(dist: np.ndarray, hole: np.ndarray, limit: float, percentile: float) -> bool:
+    """True when the colour distance inside a traced hole (k, 1, 2) reaches down to the belt.
 
-    A real hole shows the belt (distance near 0); a dip of a dark or shaded glaze below the
-    threshold is tile material (distance just under the threshold) and is not a hole.
+    A real hole shows the belt: its core is at distance near 0 (``percentile`` of the inside
+    at most ``limit``) however thin the hole and blurred its rim. A dip of a dark or shaded
+    glaze below the threshold is tile material, its distances just under the threshold.
     """
     x, y, bw, bh = cv2.boundingRect(hole)
     inside = np.zeros((bh, bw), np.uint8)
     cv2.fillPoly(inside, [hole - np.array([x, y], np.int32)], 255)
-    return float(cv2.mean(dist[y : y + bh, x : x + bw], mask=inside)[0]) <= limit
+    values = dist[y : y + bh, x : x + bw][inside > 0]
+    return values.size > 0 and float(np.percentile(values, percentile)) <= limit
 
 
 def _offset_outline(contour: FloatArray, offset: float, outward_sign: float) -> FloatArray:
@@ -583,7 +587,7 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
             if (
                 h_area >= p.min_hole_area_px
                 and 2.0 * h_area >= p.min_hole_width_px * h_len
-                and _shows_belt(dist, hole, thr * p.hole_belt_fraction)
+                and _shows_belt(dist, hole, thr * p.hole_belt_fraction, p.hole_belt_percentile)
             ):
                 hp = hole[:, 0, :].astype(np.float64)
                 # A hole's outward (away from the tile material) is into the hole.
