@@ -83,8 +83,9 @@ class ExtractParams:
             is within this distance (max over channels) of the dominant colour scaled to the
             cell's brightness, in [levels]: a shadow changes the belt's brightness, a tile its
             hue.
-        belt_gain_min: ...and its brightness is at least this fraction of the dominant's.
-        belt_gain_max: ...and at most this multiple of it.
+        belt_gain_min: ...and its brightness is at least this fraction of the dominant's (a
+            cell brighter than the dominant colour must also be within
+            ``background_tolerance`` of it: a grey tile has the belt's hue).
         normalize_shading: Multiply colour distances by the shading gain (belt as fully lit /
             belt as modelled here), so a tile in a shadow stands out as much as in full light.
         lit_percentile: The reference light (shading gain 1, and the light tile colours are
@@ -135,8 +136,7 @@ class ExtractParams:
     illumination_min_weight: float = 0.05
     illumination_min_cells: int = 12
     background_chroma_tolerance: float = 12.0
-    belt_gain_min: float = 0.3
-    belt_gain_max: float = 2.0
+    belt_gain_min: float = 0.25
     normalize_shading: bool = True
     lit_percentile: float = 50.0
     background_tolerance: float = 40.0
@@ -170,8 +170,8 @@ class ExtractParams:
             raise ImageError("min_background_fraction must be in [0, 1]")
         if self.illumination_cell_px < 1 or not 0 <= self.illumination_degree <= 3:
             raise ImageError("illumination_cell_px must be >= 1, illumination_degree in 0..3")
-        if not 0.0 < self.belt_gain_min <= 1.0 <= self.belt_gain_max:
-            raise ImageError("need 0 < belt_gain_min <= 1 <= belt_gain_max")
+        if not 0.0 < self.belt_gain_min <= 1.0:
+            raise ImageError(f"belt_gain_min must be in (0, 1], got {self.belt_gain_min}")
         if self.max_outline_excess < 1.0:
             raise ImageError("max_outline_excess must be >= 1")
         if not 0.0 <= self.lit_percentile <= 100.0:
@@ -362,10 +362,13 @@ def _illumination(
     # only in brightness).
     ratio = small.sum(axis=2) / max(float(dom.sum()), 1.0)
     shaded = np.abs(small - ratio[..., None] * dom).max(axis=2)
+    # Darker than the dominant colour: any shadow down to belt_gain_min; brighter: only
+    # within background_tolerance (a grey tile is the belt's hue, but much brighter).
+    brighter_ok = np.abs(small - dom).max(axis=2) <= p.background_tolerance
     is_bg = (
         (shaded <= p.background_chroma_tolerance)
         & (ratio >= p.belt_gain_min)
-        & (ratio <= p.belt_gain_max)
+        & ((ratio <= 1.0) | brighter_ok)
     ).astype(np.uint8)
     # Cells beside a non-background cell are partly tile (mixed colours): not trusted.
     core = cv2.erode(is_bg, np.ones((3, 3), np.uint8), borderType=cv2.BORDER_REPLICATE)
