@@ -89,13 +89,19 @@ class ExtractParams:
         normalize_shading: Multiply colour distances by the shading gain (belt as fully lit /
             belt as modelled here), so a tile in a shadow stands out as much as in full light.
         lit_percentile: The reference light (shading gain 1, and the light tile colours are
-            corrected to) is this percentile of the modelled brightness over the background
-            cells, in [%] (50: the belt's usual light, whatever a shadow or a gradient does).
+            corrected to) is this percentile of the modelled brightness over the picture, in
+            [%] (50: the light in the middle of a gradient, and outside a shadow band
+            covering less than half the picture).
         background_tolerance: A cell is background for the model fit when its colour is within
             this distance (max over channels) of the dominant colour, in [levels].
         threshold_min: Lowest foreground threshold on the colour distance, in [levels].
         threshold_max: Highest foreground threshold (Otsu's value is clamped to the range).
         open_px: Size of the square opening that removes specks from the mask, in [px] (0: none).
+        edge_fraction: Each region's outline is traced where the colour distance is this
+            fraction of the region's median distance (its contrast; 0.5: the middle of a
+            blurred edge), dimensionless; 0: at the global threshold.
+        edge_threshold_max: Upper clamp of that per-region level, in [levels] (the global
+            threshold is the lower one).
         split_touching: Remove Canny edges found inside the foreground (splits touching tiles).
         canny_low: Canny hysteresis low threshold, on the blurred RGB image.
         canny_high: Canny hysteresis high threshold.
@@ -143,6 +149,8 @@ class ExtractParams:
     threshold_min: float = 20.0
     threshold_max: float = 60.0
     open_px: int = 3
+    edge_fraction: float = 0.5
+    edge_threshold_max: float = 60.0
     split_touching: bool = True
     canny_low: float = 60.0
     canny_high: float = 150.0
@@ -379,7 +387,7 @@ def _illumination(
         model = _local_fill(small, keep, model, p)
     model = np.asarray(model, dtype=np.float32)
     light = model.sum(axis=2)
-    lit = float(np.percentile(light[keep], p.lit_percentile)) if keep.any() else float(light.max())
+    lit = float(np.percentile(light, p.lit_percentile))
     gain = lit / np.maximum(light, 1.0)
     if not p.normalize_shading:
         gain[:] = 1.0
@@ -387,9 +395,55 @@ def _illumination(
     model8 = np.clip(model + 0.5, 0, 255).astype(np.uint8)
     return (
         cv2.resize(model8, (w, h), interpolation=cv2.INTER_LINEAR),
-        dominant.astype(np.float64) * lit / max(float(dominant.sum()), 1.0),
+        model.reshape(-1, 3).mean(axis=0).astype(np.float64) * lit / max(float(light.mean()), 1.0),
         cv2.resize(gain8, (w, h), interpolation=cv2.INTER_LINEAR),
     )
+
+
+def _at_half_contrast(
+    pieces: np.ndarray,
+    labels: np.ndarray,
+    dist: np.ndarray,
+    count: int,
+    *,
+    thr: float,
+    p: ExtractParams,
+) -> np.ndarray:
+    """Each region's pixels (uint8 mask) at or above its own edge level of the colour distance.
+
+    The global threshold finds every tile, a dark glaze in a shadow too; but a blurred edge
+    lies where the distance is at half the tile's own contrast. Each region keeps the pixels
+    whose distance reaches ``edge_fraction`` x its median distance, clamped to
+    [``thr``, ``edge_threshold_max``], so a bright tile's outline is where it was with a
+    high global threshold and a faint tile's where its own contrast puts it.
+    """
+    st = max(1, p.color_sample_step)
+    sub = pieces[::st, ::st]
+    idx = np.flatnonzero(sub.ravel())
+    lab = labels[::st, ::st].ravel()[idx].astype(np.int64)
+    val = dist[::st, ::st].ravel()[idx].astype(np.int64)
+    hist = np.bincount(lab * 256 + val, minlength=count * 256).reshape(count, 256)
+    cum = np.cumsum(hist, axis=1)
+    median = np.argmax(cum >= np.maximum((cum[:, -1:] + 1) // 2, 1), axis=1)
+    level = np.clip(p.edge_fraction * median, thr, max(thr, p.edge_threshold_max))
+    if not (level > thr).any():
+        return pieces
+    per_pixel = np.take(level.astype(np.float32), np.asarray(labels, dtype=np.intp))
+    keep = cv2.compare(dist.astype(np.float32), per_pixel, cv2.CMP_GE)
+    return cv2.bitwise_and(pieces, keep)
+
+
+def _relit(
+    img: np.ndarray, model: np.ndarray, reference: np.ndarray, p: ExtractParams
+) -> np.ndarray:
+    """The picture (H, W, 3) uint8 as under the reference light: each pixel x reference / model.
+
+    Per pixel, so a tile across a shadow's edge is corrected on both sides of it.
+    """
+    if not p.correct_illumination:
+        return img
+    gain = reference.astype(np.float32) / np.maximum(model.astype(np.float32), 1.0)
+    return np.asarray(np.clip(img * gain + 0.5, 0, 255), dtype=np.uint8)
 
 
 def _median_colors(
@@ -537,6 +591,8 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         float(dominant[1]) / 255.0,
         float(dominant[2]) / 255.0,
     )
+    if p.edge_fraction > 0.0:
+        pieces = _at_half_contrast(pieces, labels, dist, count, thr=thr, p=p)
     contours, hierarchy = cv2.findContours(pieces, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
     if count <= 1 or hierarchy is None:
         return ExtractResult([], [], [], [], background, thr)
@@ -549,11 +605,12 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     else:
         region = pieces
     st = max(1, p.color_sample_step)
-    colors, seen = _median_colors(img[::st, ::st], labels[::st, ::st], region[::st, ::st], count)
+    lit = _relit(img[::st, ::st], model[::st, ::st], mean_light, p)
+    colors, seen = _median_colors(lit, labels[::st, ::st], region[::st, ::st], count)
     # Tiles eroded away entirely fall back to their whole region.
     if (present & ~seen).any():
-        colors[~seen] = _median_colors(img, labels, pieces, count)[0][~seen]
-    reference = mean_light if p.correct_illumination else None
+        whole = _relit(img, model, mean_light, p)
+        colors[~seen] = _median_colors(whole, labels, pieces, count)[0][~seen]
     figures: list[Figure] = []
     outlines: list[FloatArray] = []
     partial: list[PartialTile] = []
@@ -570,10 +627,6 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         x0, y0 = int(cnt[0, 0, 0]), int(cnt[0, 0, 1])
         rgb = colors[int(labels[y0, x0])]
         bx, by, bw, bh = cv2.boundingRect(cnt)
-        if reference is not None:
-            cy = int(np.clip(by + bh // 2, 0, h - 1))
-            cx = int(np.clip(bx + bw // 2, 0, w - 1))
-            rgb = rgb * reference / np.maximum(model[cy, cx].astype(np.float64), 1.0)
         c = np.clip(rgb / 255.0, 0.0, 1.0)
         color3 = (float(c[0]), float(c[1]), float(c[2]))
         if bx <= m or by <= m or bx + bw >= w - m or by + bh >= h - m:
