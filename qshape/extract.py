@@ -433,35 +433,29 @@ def _at_half_contrast(
     return cv2.bitwise_and(pieces, keep)
 
 
-def _relit(
-    img: np.ndarray, model: np.ndarray, reference: np.ndarray, p: ExtractParams
-) -> np.ndarray:
-    """The picture (H, W, 3) uint8 as under the reference light: each pixel x reference / model.
-
-    Per pixel, so a tile across a shadow's edge is corrected on both sides of it.
-    """
-    if not p.correct_illumination:
-        return img
-    gain = reference.astype(np.float32) / np.maximum(model.astype(np.float32), 1.0)
-    return np.asarray(np.clip(img * gain + 0.5, 0, 255), dtype=np.uint8)
-
-
 def _median_colors(
     img: np.ndarray, labels: np.ndarray, region: np.ndarray, count: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Median RGB per label over pixels where ``region`` is set.
+    """Median of each channel per label over pixels where ``region`` is set.
 
     One bincount per channel over (label, value) pairs: linear in the number of pixels.
 
+    Args:
+        img: uint8 (H, W, C) (the picture, and the belt model beside it).
+        labels: int (H, W) labels below ``count``.
+        region: uint8 (H, W) mask.
+        count: Number of labels.
+
     Returns:
-        The medians (count, 3) in levels, and which labels had a pixel (count,) bool.
+        The medians (count, C) in levels, and which labels had a pixel (count,) bool.
     """
+    channels = img.shape[2]
     idx = np.flatnonzero(region.ravel())
     lab = labels.ravel()[idx].astype(np.int64) * 256
-    out = np.zeros((count, 3))
-    flat = img.reshape(-1, 3)[idx]
+    out = np.zeros((count, channels))
+    flat = img.reshape(-1, channels)[idx]
     hist = np.zeros((count, 256))
-    for ch in range(3):
+    for ch in range(channels):
         hist = np.bincount(lab + flat[:, ch], minlength=count * 256).reshape(count, 256)
         cum = np.cumsum(hist, axis=1)
         half = (cum[:, -1:] + 1) // 2
@@ -605,12 +599,15 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     else:
         region = pieces
     st = max(1, p.color_sample_step)
-    lit = _relit(img[::st, ::st], model[::st, ::st], mean_light, p)
-    colors, seen = _median_colors(lit, labels[::st, ::st], region[::st, ::st], count)
+    both = np.concatenate([img[::st, ::st], model[::st, ::st]], axis=2)
+    medians, seen = _median_colors(both, labels[::st, ::st], region[::st, ::st], count)
     # Tiles eroded away entirely fall back to their whole region.
     if (present & ~seen).any():
-        whole = _relit(img, model, mean_light, p)
-        colors[~seen] = _median_colors(whole, labels, pieces, count)[0][~seen]
+        full = np.concatenate([img, model], axis=2)
+        medians[~seen] = _median_colors(full, labels, pieces, count)[0][~seen]
+    colors = medians[:, :3]
+    if p.correct_illumination:  # each tile's median colour under its median light
+        colors = colors * mean_light / np.maximum(medians[:, 3:], 1.0)
     figures: list[Figure] = []
     outlines: list[FloatArray] = []
     partial: list[PartialTile] = []
