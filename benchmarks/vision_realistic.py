@@ -139,6 +139,7 @@ def run_level(  # noqa: PLR0914, PLR0915, PLR0917
     s = sp.px_per_mm
     c: dict[str, float] = defaultdict(float)
     per_shape: dict[str, list[int]] = defaultdict(lambda: [0, 0])
+    shape_names: dict[str, str] = {}
     rot_errs: list[float] = []
     failures: list[str] = []
     for name in bench.designs:
@@ -168,6 +169,7 @@ def run_level(  # noqa: PLR0914, PLR0915, PLR0917
                     continue
                 c["tiles"] += 1
                 per_shape[t.slot.shape_key][0] += 1
+                shape_names.setdefault(t.slot.shape_key, f"{name}/{t.slot.shape['kind']}")
                 if not hit:
                     c["missed"] += 1
                     failures.append(f"{name}: {t.slot.shape_key} missed (no figure)")
@@ -199,7 +201,9 @@ def run_level(  # noqa: PLR0914, PLR0915, PLR0917
                     failures.append(f"{name}: a figure where no tile is matched a class")
     n = max(c["tiles"], 1)
     rot = np.array(rot_errs) if rot_errs else np.zeros(1)
-    shapes = {k: v[1] / max(v[0], 1) for k, v in sorted(per_shape.items())}
+    shapes = {
+        f"{shape_names[k]} ({k[:6]})": v[1] / max(v[0], 1) for k, v in sorted(per_shape.items())
+    }
     worst = min(shapes, key=shapes.__getitem__) if shapes else ""
     false = c["false_class"] + c["false_full"] + c["false_spurious"] + c["false_partial"]
     return {

@@ -428,8 +428,14 @@ def _at_half_contrast(
     level = np.clip(p.edge_fraction * median, thr, max(thr, p.edge_threshold_max))
     if not (level > thr).any():
         return pieces
-    per_pixel = np.take(level.astype(np.float32), np.asarray(labels, dtype=np.intp))
-    keep = cv2.compare(dist.astype(np.float32), per_pixel, cv2.CMP_GE)
+    if count <= 256:  # noqa: PLR2004 (labels fit a byte: one table look-up per pixel)
+        table = np.zeros(256, np.uint8)
+        table[:count] = np.ceil(level)
+        per_pixel = cv2.LUT(labels.astype(np.uint8), table)
+        keep = cv2.compare(dist, per_pixel, cv2.CMP_GE)
+    else:
+        per_pixel = np.take(level.astype(np.float32), np.asarray(labels, dtype=np.intp))
+        keep = cv2.compare(dist.astype(np.float32), per_pixel, cv2.CMP_GE)
     return cv2.bitwise_and(pieces, keep)
 
 
