@@ -395,12 +395,18 @@ def _worn_edges(  # noqa: PLR0917
 
 
 def _distorted_truth(t: TileTruth, e: fx.CameraEffects, w: int, h: int) -> TileTruth:
-    """Truth with every point where the distorting lens shows it."""
+    """Truth with every point where the distorting lens shows it.
+
+    A tile the lens pushes across the border (a pincushion lens shows less than the pinhole
+    view) is partial.
+    """
+    points = fx.distort_points(t.points_px, e, w, h)
     return replace(
         t,
         center_px=fx.distort_points(t.center_px[None, :], e, w, h)[0],
-        points_px=fx.distort_points(t.points_px, e, w, h),
+        points_px=points,
         hole_points_px=tuple(fx.distort_points(hp, e, w, h) for hp in t.hole_points_px),
+        partial=t.partial or _cut_by_border(points, w, h),
     )
 
 
