@@ -9,7 +9,9 @@ realistic ones at once and everything strong. Per effect and level it reports th
 accuracy (shape only, and shape + colour) over the whole tiles drawn, the rotation error of
 correctly classed tiles, the fraction right in class *and* rotation, the worst shape's
 accuracy, missed tiles and false matches: a wrong class, a figure where no tile is, or a tile
-cut by the border taken for a whole one. Written to ``out/bench_vision_realistic.{json,md}``
+cut by the border taken for a whole one. Pictures through a distorting lens are undistorted
+with the known lens model before extraction, as a calibrated cell does (``undistort`` in the
+config). Written to ``out/bench_vision_realistic.{json,md}``
 and plotted to ``out/bench_vision_realistic.png``.
 """
 

@@ -4,19 +4,27 @@ Pipeline, all O(height x width) image operations in OpenCV plus linear work per 
 
 1. Validate the RGB uint8 image; light Gaussian blur. A single-colour image (an empty belt, or
    a covered camera: `image_health` tells them apart for the caller) has no figures.
-2. Background: the most frequent colour (coarse histogram), then a smooth illumination model
-   (a low-order polynomial per channel fitted to background cells of a downsampled image).
-   Without a dominant background colour (noise, or a picture filled by one object) there is
-   nothing to segment against: no figures, and the reason in ``ExtractResult.rejected``.
-3. Segmentation: per-pixel colour distance to the modelled background, thresholded (Otsu,
-   clamped), cleaned by a morphological opening. Canny edges inside the foreground split tiles
-   of different colours that touch.
+2. Background: the most frequent colour of the border band, then a model of the belt under
+   the cell's light on a grid of cells: cells whose colour is the dominant colour brought to
+   their own brightness (a shadow changes brightness, a tile hue) are belt; each cell's belt
+   colour is averaged from the belt cells near it (so a shadow band or a steep gradient is
+   followed), with a low-order polynomial where none is near. Without a dominant background
+   colour (noise, or a picture filled by one object) there is nothing to segment against: no
+   figures, and the reason in ``ExtractResult.rejected``.
+3. Segmentation: per-pixel colour distance to the belt model, times the shading gain (so a
+   tile in a shadow stands out as much as in the light), thresholded (Otsu, clamped), cleaned
+   by a morphological opening. Canny edges inside the foreground split tiles of different
+   colours that touch. Each region's outline is then taken where the distance reaches half
+   of the region's own contrast (the middle of a blurred edge, faint or bright tile alike).
 4. Contour tracing with hierarchy (``cv2.findContours``), so holes are the children of outer
-   contours. Outlines touching the image border are partial tiles, reported apart.
+   contours; a hole counts only if it shows the belt (a dark spot of glaze is no hole).
+   Outlines touching the image border are partial tiles, reported apart.
 5. Slope-comparison simplification of each outline to relevant points, with curve detection
-   (`qshape.Figure.from_outline` with pixel-tuned `qshape.OutlineParams`).
+   (`qshape.Figure.from_outline` with pixel-tuned `qshape.OutlineParams`). A region whose
+   traced outline is much longer than its figure's perimeter is mostly noise: no figure, and
+   the reason in ``ExtractResult.rejected``.
 6. Colour: per-tile median inside the eroded region (one histogram pass for all tiles),
-   corrected for the modelled illumination.
+   divided by the median belt model under the tile, times the reference light.
 
 Figures are in pixel coordinates with ``y_down=True``.
 
