@@ -468,7 +468,7 @@ def _median_colors(
     lab = labels.ravel()[idx].astype(np.int64) * 256
     out = np.zeros((count, channels))
     flat = img.reshape(-1, channels)[idx]
-    hist = np.zeros((count, 256))
+    hist = np.zeros((count, 256), np.int64)
     for ch in range(channels):
         hist = np.bincount(lab + flat[:, ch], minlength=count * 256).reshape(count, 256)
         cum = np.cumsum(hist, axis=1)
