@@ -339,7 +339,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             f"{r['effect']:22s} {r['label']:22s} {r['tiles']:5d} "
             f"{100 * r['class_accuracy']:6.1f} {100 * r['class_color_accuracy']:6.1f} "
             f"{100 * r['class_and_rotation']:7.1f} {r['rotation_err_deg_p99']:6.2f} "
-            f"{r['rotation_err_deg_max']:6.2f} {r['missed']:4d} {r['false_shape']:3d}/{r['false_color']:<3d}  "
+            f"{r['rotation_err_deg_max']:6.2f} {r['missed']:4d} "
+            f"{r['false_shape']:3d}/{r['false_color']:<3d}  "
             f"{r['worst_shape']} {100 * r['worst_shape_accuracy']:.1f}%",
             flush=True,
         )
