@@ -328,6 +328,44 @@ def lens_distort(image: np.ndarray, e: CameraEffects) -> np.ndarray:
     return np.asarray(cv2.remap(image, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE))
 
 
+@functools.lru_cache(maxsize=8)
+def _distort_maps(
+    width: int, height: int, k1: float, k2: float, focal_px: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """For each ideal pixel, the seen (distorted) pixel showing it: two float32 (H, W) maps."""
+    e = CameraEffects(lens_k1=k1, lens_k2=k2, focal_px=focal_px)
+    yy, xx = np.mgrid[0:height, 0:width].astype(np.float64)
+    seen = distort_points(np.stack([xx.ravel(), yy.ravel()], axis=1), e, width, height)
+    seen = seen.reshape(height, width, 2)
+    return seen[..., 0].astype(np.float32), seen[..., 1].astype(np.float32)
+
+
+def undistort(image: np.ndarray, e: CameraEffects) -> np.ndarray:
+    """A picture through the distorting lens brought back to the pinhole camera (same size).
+
+    What a calibrated cell does before extraction, with the lens model calibration found.
+    """
+    if e.lens_k1 == 0.0 and e.lens_k2 == 0.0:
+        return image
+    h, w = image.shape[:2]
+    mx, my = _distort_maps(w, h, e.lens_k1, e.lens_k2, e.focal_px)
+    return np.asarray(cv2.remap(image, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE))
+
+
+def undistort_points(
+    points_px: FloatArray, e: CameraEffects, width: int, height: int
+) -> FloatArray:
+    """Ideal pinhole pixels (k, 2) of pixels (k, 2) seen through the distorting lens, [px]."""
+    pts = np.asarray(points_px, dtype=np.float64).reshape(-1, 2)
+    if e.lens_k1 == 0.0 and e.lens_k2 == 0.0:
+        return pts
+    k = camera_matrix(width, height, e.focal_px)
+    dist = np.array([e.lens_k1, e.lens_k2, 0.0, 0.0, 0.0])
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 1e-4)
+    out = cv2.undistortPoints(pts.reshape(-1, 1, 2), k, dist, R=None, P=k, criteria=criteria)
+    return np.asarray(out.reshape(-1, 2), dtype=np.float64)
+
+
 def jpeg(image: np.ndarray, quality: int) -> np.ndarray:
     """An RGB uint8 picture after JPEG compression at ``quality`` (0: unchanged)."""
     if quality <= 0:
@@ -355,4 +393,6 @@ __all__ = [
     "motion_kernel",
     "roughen",
     "soft_shadow",
+    "undistort",
+    "undistort_points",
 ]

@@ -4,19 +4,27 @@ Pipeline, all O(height x width) image operations in OpenCV plus linear work per 
 
 1. Validate the RGB uint8 image; light Gaussian blur. A single-colour image (an empty belt, or
    a covered camera: `image_health` tells them apart for the caller) has no figures.
-2. Background: the most frequent colour (coarse histogram), then a smooth illumination model
-   (a low-order polynomial per channel fitted to background cells of a downsampled image).
-   Without a dominant background colour (noise, or a picture filled by one object) there is
-   nothing to segment against: no figures, and the reason in ``ExtractResult.rejected``.
-3. Segmentation: per-pixel colour distance to the modelled background, thresholded (Otsu,
-   clamped), cleaned by a morphological opening. Canny edges inside the foreground split tiles
-   of different colours that touch.
+2. Background: the most frequent colour of the border band, then a model of the belt under
+   the cell's light on a grid of cells: cells whose colour is the dominant colour brought to
+   their own brightness (a shadow changes brightness, a tile hue) are belt; each cell's belt
+   colour is averaged from the belt cells near it (so a shadow band or a steep gradient is
+   followed), with a low-order polynomial where none is near. Without a dominant background
+   colour (noise, or a picture filled by one object) there is nothing to segment against: no
+   figures, and the reason in ``ExtractResult.rejected``.
+3. Segmentation: per-pixel colour distance to the belt model, times the shading gain (so a
+   tile in a shadow stands out as much as in the light), thresholded (Otsu, clamped), cleaned
+   by a morphological opening. Canny edges inside the foreground split tiles of different
+   colours that touch. Each region's outline is then taken where the distance reaches half
+   of the region's own contrast (the middle of a blurred edge, faint or bright tile alike).
 4. Contour tracing with hierarchy (``cv2.findContours``), so holes are the children of outer
-   contours. Outlines touching the image border are partial tiles, reported apart.
+   contours; a hole counts only if it shows the belt (a dark spot of glaze is no hole).
+   Outlines touching the image border are partial tiles, reported apart.
 5. Slope-comparison simplification of each outline to relevant points, with curve detection
-   (`qshape.Figure.from_outline` with pixel-tuned `qshape.OutlineParams`).
+   (`qshape.Figure.from_outline` with pixel-tuned `qshape.OutlineParams`). A region whose
+   traced outline is much longer than its figure's perimeter is mostly noise: no figure, and
+   the reason in ``ExtractResult.rejected``.
 6. Colour: per-tile median inside the eroded region (one histogram pass for all tiles),
-   corrected for the modelled illumination.
+   divided by the median belt model under the tile, times the reference light.
 
 Figures are in pixel coordinates with ``y_down=True``.
 
@@ -39,6 +47,9 @@ from qshape.errors import InvalidFigureError, QShapeError
 from qshape.figure import Color, Figure, figures_from_outlines
 from qshape.geometry import FloatArray
 from qshape.simplify import OutlineParams
+
+_GAIN_SCALE = 32.0
+"""Fixed-point scale of the shading gain image (uint8): gains up to 255 / 32 ~ 8."""
 
 
 class ImageError(QShapeError):
@@ -66,12 +77,39 @@ class ExtractParams:
             or one object filling the view), so no figures, in [0, 1].
         illumination_cell_px: Cell size of the downsampled image the illumination model is
             fitted on, in [px].
-        illumination_degree: Degree of the per-channel polynomial illumination model (0: flat).
+        illumination_degree: Degree of the per-channel polynomial illumination model (0: flat);
+            the fallback where no background cell is near.
+        illumination_local_sigma_cells: Width (Gaussian sigma) over which the background
+            colour is averaged from the background cells near each cell, in [cells] (0: the
+            polynomial alone). It follows a shadow band or a steep light gradient that a
+            low-order polynomial cannot.
+        illumination_min_weight: Cells whose Gaussian weight of background cells is below this
+            keep the polynomial model (dimensionless, in (0, 1]).
+        illumination_min_cells: Fewer trusted background cells than this (cells whose
+            neighbours are all background): every background cell is used, in [cells].
+        background_chroma_tolerance: A cell of the illumination grid is belt when its colour
+            is within this distance (max over channels) of the dominant colour scaled to the
+            cell's brightness, in [levels]: a shadow changes the belt's brightness, a tile its
+            hue.
+        belt_gain_min: ...and its brightness is at least this fraction of the dominant's (a
+            cell brighter than the dominant colour must also be within
+            ``background_tolerance`` of it: a grey tile has the belt's hue).
+        normalize_shading: Multiply colour distances by the shading gain (belt as fully lit /
+            belt as modelled here), so a tile in a shadow stands out as much as in full light.
+        lit_percentile: The reference light (shading gain 1, and the light tile colours are
+            corrected to) is this percentile of the modelled brightness over the picture, in
+            [%] (50: the light in the middle of a gradient, and outside a shadow band
+            covering less than half the picture).
         background_tolerance: A cell is background for the model fit when its colour is within
             this distance (max over channels) of the dominant colour, in [levels].
         threshold_min: Lowest foreground threshold on the colour distance, in [levels].
         threshold_max: Highest foreground threshold (Otsu's value is clamped to the range).
         open_px: Size of the square opening that removes specks from the mask, in [px] (0: none).
+        edge_fraction: Each region's outline is traced where the colour distance is this
+            fraction of the region's median distance (its contrast; 0.5: the middle of a
+            blurred edge), dimensionless; 0: at the global threshold.
+        edge_threshold_max: Upper clamp of that per-region level, in [levels] (the global
+            threshold is the lower one).
         split_touching: Remove Canny edges found inside the foreground (splits touching tiles).
         canny_low: Canny hysteresis low threshold, on the blurred RGB image.
         canny_high: Canny hysteresis high threshold.
@@ -81,6 +119,13 @@ class ExtractParams:
         min_hole_area_px: Holes smaller than this are ignored, in [px^2].
         min_hole_width_px: Holes thinner than this (2 x area / perimeter) are ignored (slits
             left by noise), in [px].
+        hole_belt_fraction: A hole is kept only when the colour distance inside it reaches
+            down to this fraction of the threshold (it shows the belt), dimensionless.
+        hole_belt_percentile: ...at this percentile of the hole's pixels, in [%].
+        max_outline_excess: A region whose traced outline is longer than this multiple of its
+            figure's perimeter is mostly noise (a ragged splash, not a tile edge) and gives no
+            figure, dimensionless (the pixel staircase alone gives up to ~1.08; edges rough by
+            0.6 mm at 2.5 px/mm ~1.16).
         border_margin_px: Regions reaching this close to the image border are partial tiles,
             in [px].
         boundary_offset_px: Outlines are moved outwards by this much (traced contours run
@@ -101,10 +146,19 @@ class ExtractParams:
     min_background_fraction: float = 0.25
     illumination_cell_px: int = 16
     illumination_degree: int = 2
+    illumination_local_sigma_cells: float = 1.5
+    illumination_min_weight: float = 0.05
+    illumination_min_cells: int = 12
+    background_chroma_tolerance: float = 12.0
+    belt_gain_min: float = 0.25
+    normalize_shading: bool = True
+    lit_percentile: float = 50.0
     background_tolerance: float = 40.0
     threshold_min: float = 20.0
     threshold_max: float = 60.0
     open_px: int = 3
+    edge_fraction: float = 0.5
+    edge_threshold_max: float = 60.0
     split_touching: bool = True
     canny_low: float = 60.0
     canny_high: float = 150.0
@@ -112,6 +166,9 @@ class ExtractParams:
     min_area_px: float = 150.0
     min_hole_area_px: float = 40.0
     min_hole_width_px: float = 3.0
+    hole_belt_fraction: float = 0.5
+    hole_belt_percentile: float = 10.0
+    max_outline_excess: float = 1.3
     border_margin_px: int = 1
     boundary_offset_px: float = 0.5
     color_erode_px: int = 3
@@ -129,6 +186,17 @@ class ExtractParams:
             raise ImageError("min_background_fraction must be in [0, 1]")
         if self.illumination_cell_px < 1 or not 0 <= self.illumination_degree <= 3:
             raise ImageError("illumination_cell_px must be >= 1, illumination_degree in 0..3")
+        if not 0.0 < self.belt_gain_min <= 1.0:
+            raise ImageError(f"belt_gain_min must be in (0, 1], got {self.belt_gain_min}")
+        if self.max_outline_excess < 1.0:
+            raise ImageError("max_outline_excess must be >= 1")
+        if not 0.0 <= self.lit_percentile <= 100.0:
+            raise ImageError("lit_percentile must be in [0, 100]")
+        weight = self.illumination_min_weight
+        if self.illumination_local_sigma_cells < 0.0 or not 0.0 < weight <= 1.0:
+            raise ImageError(
+                "illumination_local_sigma_cells must be >= 0, illumination_min_weight in (0, 1]"
+            )
         if not 0.0 < self.threshold_min <= self.threshold_max:
             raise ImageError("need 0 < threshold_min <= threshold_max")
         sizes = (self.open_px, self.restore_iterations, self.color_erode_px, self.border_margin_px)
@@ -255,51 +323,158 @@ def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, floa
     return dominant, float(near.mean())
 
 
+def _polynomial_fit(small: np.ndarray, keep: np.ndarray, degree: int) -> np.ndarray | None:
+    """Per-channel polynomial of the cell grid (gh, gw, 3) fitted on ``keep`` cells, or None."""
+    gh, gw = keep.shape
+    terms = (degree + 1) * (degree + 2) // 2
+    if degree <= 0 or int(keep.sum()) < 2 * terms:
+        return None
+    yy, xx = np.mgrid[0:gh, 0:gw]
+    u, v = (xx.ravel() + 0.5) / gw - 0.5, (yy.ravel() + 0.5) / gh - 0.5
+    basis = np.stack(
+        [u**i * v**j for i in range(degree + 1) for j in range(degree + 1 - i)], axis=1
+    )
+    flat = keep.ravel()
+    coef, *_ = np.linalg.lstsq(basis[flat], small.reshape(-1, 3)[flat], rcond=None)
+    return np.asarray((basis @ coef).reshape(gh, gw, 3))
+
+
+def _local_fill(
+    small: np.ndarray, keep: np.ndarray, base: np.ndarray, p: ExtractParams
+) -> np.ndarray:
+    """Background colour of every cell from the ``keep`` cells near it (normalised convolution).
+
+    A Gaussian-weighted mean of the background cells around each cell, so a shadow band or a
+    steep gradient is followed at the scale of ``illumination_local_sigma_cells``; where no
+    background cell is near (weight below ``illumination_min_weight``) ``base`` is kept.
+    """
+    sigma = p.illumination_local_sigma_cells
+    weight = cv2.GaussianBlur(keep.astype(np.float32), (0, 0), sigma)
+    acc = cv2.GaussianBlur(small * keep[..., None].astype(np.float32), (0, 0), sigma)
+    ok = weight >= p.illumination_min_weight
+    out = base.astype(np.float32).copy()
+    out[ok] = acc[ok] / weight[ok, None]
+    return out
+
+
 def _illumination(
     img: np.ndarray, dominant: np.ndarray, p: ExtractParams
-) -> tuple[np.ndarray, np.ndarray]:
-    """Background model: image (H, W, 3) uint8 and its mean colour (3,) in levels."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Background model of the belt under the cell's light.
+
+    Returns:
+        The model image (H, W, 3) uint8; the belt's colour under the reference light (3,) in
+        levels (tile colours are corrected to that light); and the shading gain (H, W) uint8
+        in units of 1 / ``_GAIN_SCALE`` (the reference brightness over the modelled one,
+        saturating), by which colour distances are multiplied so that a tile in a shadow
+        stands out as much as in full light.
+    """
     h, w = img.shape[:2]
     gh, gw = max(2, h // p.illumination_cell_px), max(2, w // p.illumination_cell_px)
-    small = cv2.resize(img, (gw, gh), interpolation=cv2.INTER_AREA).astype(np.float64)
-    dist = np.abs(small - dominant).max(axis=2)
-    is_bg = dist <= p.background_tolerance
-    terms = (p.illumination_degree + 1) * (p.illumination_degree + 2) // 2
-    model = np.broadcast_to(dominant, small.shape).copy()
-    if p.illumination_degree > 0 and int(is_bg.sum()) >= 2 * terms:
-        yy, xx = np.mgrid[0:gh, 0:gw]
-        u, v = (xx.ravel() + 0.5) / gw - 0.5, (yy.ravel() + 0.5) / gh - 0.5
-        cols = [
-            u**i * v**j
-            for i in range(p.illumination_degree + 1)
-            for j in range(p.illumination_degree + 1 - i)
-        ]
-        basis = np.stack(cols, axis=1)
-        keep = is_bg.ravel()
-        coef, *_ = np.linalg.lstsq(basis[keep], small.reshape(-1, 3)[keep], rcond=None)
-        model = (basis @ coef).reshape(gh, gw, 3)
+    small = cv2.resize(img, (gw, gh), interpolation=cv2.INTER_AREA).astype(np.float32)
+    dom = dominant.astype(np.float32)
+    # The belt under any light is the dominant colour times a gain: compare each cell with
+    # the dominant colour brought to the cell's brightness (a tile differs in hue, a shadow
+    # only in brightness).
+    ratio = small.sum(axis=2) / max(float(dom.sum()), 1.0)
+    shaded = np.abs(small - ratio[..., None] * dom).max(axis=2)
+    # Darker than the dominant colour: any shadow down to belt_gain_min; brighter: only
+    # within background_tolerance (a grey tile is the belt's hue, but much brighter).
+    brighter_ok = np.abs(small - dom).max(axis=2) <= p.background_tolerance
+    is_bg = (
+        (shaded <= p.background_chroma_tolerance)
+        & (ratio >= p.belt_gain_min)
+        & ((ratio <= 1.0) | brighter_ok)
+    ).astype(np.uint8)
+    # Cells beside a non-background cell are partly tile (mixed colours): not trusted.
+    core = cv2.erode(is_bg, np.ones((3, 3), np.uint8), borderType=cv2.BORDER_REPLICATE)
+    keep = core.view(bool) if int(core.sum()) >= p.illumination_min_cells else is_bg.view(bool)
+    poly = _polynomial_fit(small, keep, p.illumination_degree)
+    model = np.broadcast_to(dominant, small.shape) if poly is None else poly
+    if p.illumination_local_sigma_cells > 0.0 and keep.any():
+        model = _local_fill(small, keep, model, p)
+    model = np.asarray(model, dtype=np.float32)
+    light = model.sum(axis=2)
+    lit = float(np.percentile(light, p.lit_percentile))
+    gain = lit / np.maximum(light, 1.0)
+    if not p.normalize_shading:
+        gain[:] = 1.0
+    gain8 = np.clip(gain * _GAIN_SCALE + 0.5, 0, 255).astype(np.uint8)
     model8 = np.clip(model + 0.5, 0, 255).astype(np.uint8)
-    mean = model.reshape(-1, 3).mean(axis=0)
-    return cv2.resize(model8, (w, h), interpolation=cv2.INTER_LINEAR), mean
+    return (
+        cv2.resize(model8, (w, h), interpolation=cv2.INTER_LINEAR),
+        model.reshape(-1, 3).mean(axis=0).astype(np.float64) * lit / max(float(light.mean()), 1.0),
+        cv2.resize(gain8, (w, h), interpolation=cv2.INTER_LINEAR),
+    )
+
+
+def _at_half_contrast(
+    pieces: np.ndarray,
+    labels: np.ndarray,
+    dist: np.ndarray,
+    count: int,
+    *,
+    thr: float,
+    p: ExtractParams,
+) -> np.ndarray:
+    """Each region's pixels (uint8 mask) at or above its own edge level of the colour distance.
+
+    The global threshold finds every tile, a dark glaze in a shadow too; but a blurred edge
+    lies where the distance is at half the tile's own contrast. Each region keeps the pixels
+    whose distance reaches ``edge_fraction`` x its median distance, clamped to
+    [``thr``, ``edge_threshold_max``], so a bright tile's outline is where it was with a
+    high global threshold and a faint tile's where its own contrast puts it.
+    """
+    st = max(1, p.color_sample_step)
+    sub = pieces[::st, ::st]
+    idx = np.flatnonzero(sub.ravel())
+    lab = labels[::st, ::st].ravel()[idx].astype(np.int64)
+    val = dist[::st, ::st].ravel()[idx].astype(np.int64)
+    hist = np.bincount(lab * 256 + val, minlength=count * 256).reshape(count, 256)
+    cum = np.cumsum(hist, axis=1)
+    median = np.argmax(cum >= np.maximum((cum[:, -1:] + 1) // 2, 1), axis=1)
+    level = np.clip(p.edge_fraction * median, thr, max(thr, p.edge_threshold_max))
+    if not (level > thr).any():
+        return pieces
+    if count <= 256:  # noqa: PLR2004 (labels fit a byte: one table look-up per pixel)
+        table = np.zeros(256, np.uint8)
+        table[:count] = np.ceil(level)
+        per_pixel = cv2.LUT(labels.astype(np.uint8), table)
+        keep = cv2.compare(dist, per_pixel, cv2.CMP_GE)
+    else:
+        per_pixel = np.take(level.astype(np.float32), np.asarray(labels, dtype=np.intp))
+        keep = cv2.compare(dist.astype(np.float32), per_pixel, cv2.CMP_GE)
+    return cv2.bitwise_and(pieces, keep)
 
 
 def _median_colors(
     img: np.ndarray, labels: np.ndarray, region: np.ndarray, count: int
-) -> np.ndarray:
-    """Median RGB per label 1..count-1 over pixels where ``region`` is set -> (count, 3) levels.
+) -> tuple[np.ndarray, np.ndarray]:
+    """Median of each channel per label over pixels where ``region`` is set.
 
     One bincount per channel over (label, value) pairs: linear in the number of pixels.
+
+    Args:
+        img: uint8 (H, W, C) (the picture, and the belt model beside it).
+        labels: int (H, W) labels below ``count``.
+        region: uint8 (H, W) mask.
+        count: Number of labels.
+
+    Returns:
+        The medians (count, C) in levels, and which labels had a pixel (count,) bool.
     """
+    channels = img.shape[2]
     idx = np.flatnonzero(region.ravel())
-    lab = labels.ravel()[idx].astype(np.int64)
-    out = np.zeros((count, 3))
-    for ch in range(3):
-        val = img[..., ch].ravel()[idx].astype(np.int64)
-        hist = np.bincount(lab * 256 + val, minlength=count * 256).reshape(count, 256)
+    lab = labels.ravel()[idx].astype(np.int64) * 256
+    out = np.zeros((count, channels))
+    flat = img.reshape(-1, channels)[idx]
+    hist = np.zeros((count, 256), np.int64)
+    for ch in range(channels):
+        hist = np.bincount(lab + flat[:, ch], minlength=count * 256).reshape(count, 256)
         cum = np.cumsum(hist, axis=1)
         half = (cum[:, -1:] + 1) // 2
         out[:, ch] = np.argmax(cum >= np.maximum(half, 1), axis=1)
-    return out
+    return out, hist.sum(axis=1) > 0
 
 
 def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
@@ -314,6 +489,20 @@ def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
     cv2.bitwise_or(edges, cv2.Canny(g, p.canny_low, p.canny_high), dst=edges)
     cv2.bitwise_or(edges, cv2.Canny(b, p.canny_low, p.canny_high), dst=edges)
     return edges
+
+
+def _shows_belt(dist: np.ndarray, hole: np.ndarray, limit: float, percentile: float) -> bool:
+    """True when the colour distance inside a traced hole (k, 1, 2) reaches down to the belt.
+
+    A real hole shows the belt: its core is at distance near 0 (``percentile`` of the inside
+    at most ``limit``) however thin the hole and blurred its rim. A dip of a dark or shaded
+    glaze below the threshold is tile material, its distances just under the threshold.
+    """
+    x, y, bw, bh = cv2.boundingRect(hole)
+    inside = np.zeros((bh, bw), np.uint8)
+    cv2.fillPoly(inside, [hole - np.array([x, y], np.int32)], 255)
+    values = dist[y : y + bh, x : x + bw][inside > 0]
+    return values.size > 0 and float(np.percentile(values, percentile)) <= limit
 
 
 def _offset_outline(contour: FloatArray, offset: float, outward_sign: float) -> FloatArray:
@@ -365,10 +554,10 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
             "segmented"
         )
         return ExtractResult([], [], [], [why], col, 0.0)
-    model, mean_light = _illumination(img, dominant, p)
+    model, mean_light, gain = _illumination(img, dominant, p)
     diff = cv2.absdiff(img, model)
     r, g, b = cv2.split(diff)
-    dist = cv2.max(cv2.max(r, g), b)
+    dist = cv2.multiply(cv2.max(cv2.max(r, g), b), gain, scale=1.0 / _GAIN_SCALE)
     otsu, _ = cv2.threshold(dist, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
     thr = float(np.clip(otsu, p.threshold_min, p.threshold_max))
     _, mask = cv2.threshold(dist, thr, 255, cv2.THRESH_BINARY)
@@ -382,10 +571,13 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         edges = _color_edges(img, p)
         cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
         count, labels = cv2.connectedComponents(cut, connectivity=4)
-        areas = np.bincount(labels.ravel(), minlength=count)
-        lut = np.where(areas >= p.min_area_px, np.arange(count), 0).astype(np.float32)
-        lut[0] = 0.0
-        labf = np.take(lut, np.asarray(labels, dtype=np.intp))
+        present = np.bincount(labels.ravel(), minlength=count) >= p.min_area_px
+        present[0] = False
+        if present[1:].all():
+            labf = labels.astype(np.float32)  # no crumbs: the labels as they are
+        else:
+            lut = np.where(present, np.arange(count), 0).astype(np.float32)
+            labf = np.take(lut, np.asarray(labels, dtype=np.intp))
         kernel3 = np.ones((3, 3), np.uint8)
         zero = np.zeros(1, np.float32)
         lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
@@ -400,11 +592,15 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     else:
         count, labels = cv2.connectedComponents(mask, connectivity=8)
         pieces = mask
+        present = np.ones(count, bool)
+        present[0] = False
     background = (
         float(dominant[0]) / 255.0,
         float(dominant[1]) / 255.0,
         float(dominant[2]) / 255.0,
     )
+    if p.edge_fraction > 0.0:
+        pieces = _at_half_contrast(pieces, labels, dist, count, thr=thr, p=p)
     contours, hierarchy = cv2.findContours(pieces, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
     if count <= 1 or hierarchy is None:
         return ExtractResult([], [], [], [], background, thr)
@@ -417,19 +613,21 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     else:
         region = pieces
     st = max(1, p.color_sample_step)
-    colors = _median_colors(img[::st, ::st], labels[::st, ::st], region[::st, ::st], count)
+    both = np.concatenate([img[::st, ::st], model[::st, ::st]], axis=2)
+    medians, seen = _median_colors(both, labels[::st, ::st], region[::st, ::st], count)
     # Tiles eroded away entirely fall back to their whole region.
-    sub = labels[::st, ::st].ravel()[np.flatnonzero(region[::st, ::st].ravel())]
-    seen = np.bincount(sub, minlength=count)[:count] > 0
-    if not seen[1:].all():
-        colors[~seen] = _median_colors(img, labels, pieces, count)[~seen]
-    reference = mean_light if p.correct_illumination else None
+    if (present & ~seen).any():
+        full = np.concatenate([img, model], axis=2)
+        medians[~seen] = _median_colors(full, labels, pieces, count)[0][~seen]
+    colors = medians[:, :3]
+    if p.correct_illumination:  # each tile's median colour under its median light
+        colors = colors * mean_light / np.maximum(medians[:, 3:], 1.0)
     figures: list[Figure] = []
     outlines: list[FloatArray] = []
     partial: list[PartialTile] = []
     rejected: list[str] = []
     m = p.border_margin_px
-    todo: list[tuple[FloatArray, list[FloatArray], Color, str]] = []
+    todo: list[tuple[FloatArray, list[FloatArray], Color, str, float]] = []
     for i, cnt in enumerate(contours):
         if hier[i][3] != -1:
             continue  # a hole; handled with its parent
@@ -440,10 +638,6 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         x0, y0 = int(cnt[0, 0, 0]), int(cnt[0, 0, 1])
         rgb = colors[int(labels[y0, x0])]
         bx, by, bw, bh = cv2.boundingRect(cnt)
-        if reference is not None:
-            cy = int(np.clip(by + bh // 2, 0, h - 1))
-            cx = int(np.clip(bx + bw // 2, 0, w - 1))
-            rgb = rgb * reference / np.maximum(model[cy, cx].astype(np.float64), 1.0)
         c = np.clip(rgb / 255.0, 0.0, 1.0)
         color3 = (float(c[0]), float(c[1]), float(c[2]))
         if bx <= m or by <= m or bx + bw >= w - m or by + bh >= h - m:
@@ -457,7 +651,11 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
             hole = contours[child]
             h_area = cv2.contourArea(hole)
             h_len = cv2.arcLength(hole, True)
-            if h_area >= p.min_hole_area_px and 2.0 * h_area >= p.min_hole_width_px * h_len:
+            if (
+                h_area >= p.min_hole_area_px
+                and 2.0 * h_area >= p.min_hole_width_px * h_len
+                and _shows_belt(dist, hole, thr * p.hole_belt_fraction, p.hole_belt_percentile)
+            ):
                 hp = hole[:, 0, :].astype(np.float64)
                 # A hole's outward (away from the tile material) is into the hole.
                 sign = 1.0 if _signed_area(hp) > 0 else -1.0
@@ -466,14 +664,21 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         if p.boundary_offset_px != 0.0:
             sign = 1.0 if _signed_area(pts) > 0 else -1.0
             pts = _offset_outline(pts, p.boundary_offset_px, sign)
-        todo.append((pts, holes, color3, f"region at ({x0}, {y0}) px, area {area:.0f} px^2"))
+        where = f"region at ({x0}, {y0}) px, area {area:.0f} px^2"
+        todo.append((pts, holes, color3, where, cv2.arcLength(cnt, True)))
     # Every outline of the image simplified at once.
     made = figures_from_outlines(
         [t[0] for t in todo], [t[1] for t in todo], [t[2] for t in todo], p.outline, y_down=True
     )
-    for (outline, _, _, where), fig in zip(todo, made, strict=True):
+    for (outline, _, _, where, traced), fig in zip(todo, made, strict=True):
         if isinstance(fig, InvalidFigureError):
             rejected.append(f"{where}: {fig}")
+            continue
+        if traced > p.max_outline_excess * fig.perimeter:
+            rejected.append(
+                f"{where}: outline mostly noise (traced length {traced / fig.perimeter:.2f} x the "
+                f"perimeter of its relevant points; at most {p.max_outline_excess:g} allowed)"
+            )
             continue
         figures.append(fig)
         outlines.append(outline)

@@ -23,7 +23,7 @@ import numpy as np
 from qshape import effects as fx
 from qshape.design import Design, Slot, TilePath, load_section
 from qshape.errors import QShapeError
-from qshape.geometry import BoolArray, FloatArray
+from qshape.geometry import BoolArray, FloatArray, wrap_angle
 from qshape.render import RenderParams, fill_tiles
 
 
@@ -148,12 +148,6 @@ class SynthImage:
     image: np.ndarray
     tiles: list[TileTruth]
     px_per_mm: float
-
-
-def wrap_angle(a: float) -> float:
-    """Angle wrapped to (-pi, pi]."""
-    w = math.remainder(a, 2.0 * math.pi)
-    return math.pi if w == -math.pi else w
 
 
 def place_path(path: TilePath, angle: float, center_px: Any, px_per_mm: float) -> TilePath:
@@ -401,12 +395,18 @@ def _worn_edges(  # noqa: PLR0917
 
 
 def _distorted_truth(t: TileTruth, e: fx.CameraEffects, w: int, h: int) -> TileTruth:
-    """Truth with every point where the distorting lens shows it."""
+    """Truth with every point where the distorting lens shows it.
+
+    A tile the lens pushes across the border (a pincushion lens shows less than the pinhole
+    view) is partial.
+    """
+    points = fx.distort_points(t.points_px, e, w, h)
     return replace(
         t,
         center_px=fx.distort_points(t.center_px[None, :], e, w, h)[0],
-        points_px=fx.distort_points(t.points_px, e, w, h),
+        points_px=points,
         hole_points_px=tuple(fx.distort_points(hp, e, w, h) for hp in t.hole_points_px),
+        partial=t.partial or _cut_by_border(points, w, h),
     )
 
 
@@ -440,4 +440,4 @@ def _camera(  # noqa: PLR0913, PLR0917
     return fx.jpeg(np.clip(out + 0.5, 0, 255).astype(np.uint8), e.jpeg_quality)
 
 
-__all__ = ["SynthImage", "SynthParams", "TileTruth", "generate", "place_path", "wrap_angle"]
+__all__ = ["SynthImage", "SynthParams", "TileTruth", "generate", "place_path"]

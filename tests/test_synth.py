@@ -11,8 +11,8 @@ from qshape import Boundary, Figure, Tolerances, match
 from qshape.design import Design
 from qshape.errors import QShapeError
 from qshape.extract import extract_detailed
-from qshape.geometry import points_in_polygon
-from qshape.synth import SynthParams, generate, place_path, wrap_angle
+from qshape.geometry import points_in_polygon, wrap_angle
+from qshape.synth import SynthParams, generate, place_path
 
 
 @pytest.fixture(scope="module")
