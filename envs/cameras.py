@@ -16,12 +16,14 @@ import functools
 import math
 import os
 import weakref
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 
+import cv2
 import mujoco
 import numpy as np
 
-from envs.cell_config import RenderConfig
+from envs.cell_config import CameraConfig, RenderConfig
 from envs.errors import CellError
 
 # MuJoCo cameras look along their -z with +y up; OpenCV's look along +z with +y down.
@@ -38,6 +40,8 @@ class CameraModel:
         height: Image height [px].
         K: Intrinsic matrix, shape (3, 3) [px].
         world_to_camera: Extrinsic transform, shape (4, 4): camera = T @ world (OpenCV frame).
+        distortion: Lens distortion (k1, k2, p1, p2, k3), OpenCV's model, shape (5,); zeros:
+            an ideal pinhole.
     """
 
     name: str
@@ -45,6 +49,7 @@ class CameraModel:
     height: int
     K: np.ndarray
     world_to_camera: np.ndarray
+    distortion: np.ndarray = field(default_factory=lambda: np.zeros(5))
 
     def project(self, points_world: np.ndarray) -> np.ndarray:
         """Project world points to pixels.
@@ -59,8 +64,8 @@ class CameraModel:
         single = pts.ndim == 1
         pts = np.atleast_2d(pts)
         cam = pts @ self.world_to_camera[:3, :3].T + self.world_to_camera[:3, 3]
-        uvw = cam @ self.K.T
-        uv = uvw[:, :2] / uvw[:, 2:3]
+        xy = distort_normalised(cam[:, :2] / cam[:, 2:3], self.distortion)
+        uv = xy @ self.K[:2, :2].T + self.K[:2, 2]
         return uv[0] if single else uv
 
     def unproject_to_plane(self, uv: np.ndarray, z: float) -> np.ndarray:
@@ -74,6 +79,9 @@ class CameraModel:
             World points, shape (n, 3) [m].
         """
         uv = np.atleast_2d(np.asarray(uv, dtype=float))
+        if np.any(self.distortion):
+            uv = cv2.undistortPoints(uv.reshape(-1, 1, 2), self.K, self.distortion, P=self.K)
+            uv = uv.reshape(-1, 2).astype(float)
         rays_cam = np.column_stack([uv, np.ones(len(uv))]) @ np.linalg.inv(self.K).T
         r = self.world_to_camera[:3, :3]
         origin = -r.T @ self.world_to_camera[:3, 3]
@@ -82,19 +90,149 @@ class CameraModel:
         return origin + s[:, None] * rays
 
 
+def distort_normalised(xy: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
+    """OpenCV's lens model applied to ideal normalised image points.
+
+    Args:
+        xy: Undistorted normalised coordinates (x / z, y / z), shape (n, 2).
+        coefficients: (k1, k2, p1, p2, k3), shape (5,).
+
+    Returns:
+        Distorted normalised coordinates, shape (n, 2).
+    """
+    k1, k2, p1, p2, k3 = (float(c) for c in np.asarray(coefficients, dtype=float).ravel()[:5])
+    x, y = xy[:, 0], xy[:, 1]
+    r2 = x * x + y * y
+    radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+    xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x)
+    yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y
+    return np.column_stack([xd, yd])
+
+
+def intrinsics(fovy_deg: float, width: int, height: int) -> np.ndarray:
+    """Intrinsic matrix of a MuJoCo camera's render (square pixels, centred), (3, 3) [px]."""
+    fy = (height / 2) / math.tan(math.radians(fovy_deg) / 2)
+    return np.array([[fy, 0.0, width / 2 - 0.5], [0.0, fy, height / 2 - 0.5], [0.0, 0.0, 1.0]])
+
+
 def camera_model(
-    model: mujoco.MjModel, data: mujoco.MjData, camera: int, width: int, height: int
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    camera: int,
+    width: int,
+    height: int,
+    *,
+    distortion: tuple[float, ...] | np.ndarray = (0.0, 0.0, 0.0, 0.0, 0.0),
 ) -> CameraModel:
-    """Pinhole model of a MuJoCo camera at an image size (square pixels, centred)."""
-    fy = (height / 2) / math.tan(math.radians(model.cam_fovy[camera]) / 2)
-    k = np.array([[fy, 0.0, width / 2 - 0.5], [0.0, fy, height / 2 - 0.5], [0.0, 0.0, 1.0]])
+    """Model of a MuJoCo camera at an image size, with the lens distortion its images carry."""
+    k = intrinsics(float(model.cam_fovy[camera]), width, height)
     r_wc = data.cam_xmat[camera].reshape(3, 3)  # camera axes in world (MuJoCo convention)
     r = _MJ_TO_CV @ r_wc.T
     t = np.eye(4)
     t[:3, :3] = r
     t[:3, 3] = -r @ data.cam_xpos[camera]
     name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_CAMERA, camera) or str(camera)
-    return CameraModel(name, width, height, k, t)
+    return CameraModel(name, width, height, k, t, np.asarray(distortion, dtype=float).copy())
+
+
+class LensWarp:
+    """Lens distortion of rendered images: one `cv2.remap` with maps built once per size.
+
+    MuJoCo renders an ideal pinhole image; a real lens bends it. Every pixel of the distorted
+    picture looks up where its ray lands in the ideal render: the inverse of OpenCV's model,
+    solved once per image size with `cv2.undistortPoints` (iterative). Rays that leave the rendered
+    field (the corners of a barrel lens) repeat the border pixel.
+
+    Args:
+        fovy_deg: The camera's vertical field of view [deg].
+        coefficients: (k1, k2, p1, p2, k3), OpenCV's model.
+        criteria: (iterations, epsilon [px]) of the inverse's solver.
+    """
+
+    def __init__(
+        self, fovy_deg: float, coefficients: tuple[float, ...], criteria: tuple[int, float]
+    ) -> None:
+        self.fovy_deg = fovy_deg
+        self.coefficients = np.asarray(coefficients, dtype=float)
+        self._criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, *criteria)
+        self._maps: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
+
+    def maps(self, height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+        """The fixed-point remap tables for an image size (built on first use)."""
+        key = (height, width)
+        if key not in self._maps:
+            k = intrinsics(self.fovy_deg, width, height)
+            v, u = np.mgrid[0:height, 0:width].astype(np.float64)
+            pts = np.stack([u.ravel(), v.ravel()], axis=1).reshape(-1, 1, 2)
+            src = cv2.undistortPoints(pts, k, self.coefficients, None, None, k, self._criteria)
+            src = src.reshape(height, width, 2).astype(np.float32)
+            self._maps[key] = cv2.convertMaps(src[..., 0], src[..., 1], cv2.CV_16SC2)
+        return self._maps[key]
+
+    def apply(self, image: np.ndarray) -> np.ndarray:
+        """The distorted picture of an ideal render, same shape and dtype."""
+        m1, m2 = self.maps(image.shape[0], image.shape[1])
+        return cv2.remap(image, m1, m2, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
+class BeltBlur:
+    """Motion blur of a moving belt: a directional blur of the belt's region of the picture.
+
+    Every tile resting on the belt moves at exactly the belt speed (the belt carries it through
+    ``geom_surfacevel``), and the belt, its rails and the tiles' shading do not change along
+    the belt, so over an exposure the picture of the belt region is the render smeared along
+    the belt's image direction by speed x exposure time: one `cv2.filter2D` with a line kernel
+    instead of a dozen sub-frame renders (each ~10 ms at 656 x 492 in software rendering).
+    The exposure is centred on the render time, so a blurred tile keeps its centroid. What
+    is not on the belt (the arm passing through the view) is left sharp: it does not move
+    with the belt.
+
+    Args:
+        model: Camera model of the ideal render (pinhole, at the image size).
+        belt_corners: The belt's top face in the world, shape (4, 3) [m], in order around it.
+        direction: The belt's direction of travel in the world, shape (3,).
+    """
+
+    def __init__(self, model: CameraModel, belt_corners: np.ndarray, direction: np.ndarray) -> None:
+        pinhole = CameraModel(model.name, model.width, model.height, model.K, model.world_to_camera)
+        corners = pinhole.project(belt_corners)
+        mask = np.zeros((model.height, model.width), np.uint8)
+        cv2.fillPoly(mask, [np.round(corners).astype(np.int32)], 1)
+        self.mask = mask.astype(bool)
+        """Pixels showing the belt's top, shape (height, width)."""
+        centre = belt_corners.mean(axis=0)
+        a, b = pinhole.project(np.stack([centre, centre + np.asarray(direction, float)]))
+        self.px_per_m = float(np.linalg.norm(b - a))
+        """Image displacement per metre of belt travel near the belt's centre [px/m]."""
+        self.unit = (b - a) / self.px_per_m
+
+    def kernel(self, length_px: float) -> np.ndarray:
+        """Line kernel of ``length_px`` along the belt's image direction (sums to 1)."""
+        half = int(math.ceil(length_px / 2)) + 1
+        size = 2 * half + 1
+        ker = np.zeros((size, size), np.float32)
+        steps = max(int(math.ceil(length_px * 4)), 1) + 1
+        for s in np.linspace(-length_px / 2, length_px / 2, steps):
+            x, y = half + s * self.unit[0], half + s * self.unit[1]
+            x0, y0 = int(math.floor(x)), int(math.floor(y))
+            fx, fy = x - x0, y - y0
+            ker[y0, x0] += (1 - fx) * (1 - fy)
+            ker[y0, x0 + 1] += fx * (1 - fy)
+            ker[y0 + 1, x0] += (1 - fx) * fy
+            ker[y0 + 1, x0 + 1] += fx * fy
+        return ker / ker.sum()
+
+    def apply(self, image: np.ndarray, speed: float, exposure_time: float) -> np.ndarray:
+        """The picture taken over ``exposure_time`` [s] with the belt at ``speed`` [m/s]."""
+        length = abs(speed) * exposure_time * self.px_per_m
+        if length < _MIN_BLUR_PX:
+            return image
+        blurred = cv2.filter2D(image, -1, self.kernel(length), borderType=cv2.BORDER_REPLICATE)
+        return np.where(self.mask[..., None], blurred, image)
+
+
+_MIN_BLUR_PX = 0.05
+"""Blur lengths below this [px] change no pixel level of a uint8 picture: skipped."""
 
 
 _OPEN_RIGS: weakref.WeakSet[CameraRig] = weakref.WeakSet()
@@ -142,12 +280,30 @@ class CameraRig:
 
     Args:
         model: The compiled cell.
-        cfg: Render options (shadows, reflections).
+        cfg: Render options (shadows, reflections, lens solver).
+        cameras: The configurations of named cameras; those with a lens distortion have their
+            RGB and depth images warped by it (`LensWarp`).
+
+    Raises:
+        CellError: A camera in ``cameras`` that the model lacks.
     """
 
-    def __init__(self, model: mujoco.MjModel, cfg: RenderConfig) -> None:
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        cfg: RenderConfig,
+        cameras: Mapping[str, CameraConfig] | None = None,
+    ) -> None:
         self._model = model
         self._cfg = cfg
+        self._lenses: dict[int, LensWarp] = {}
+        for name, cam_cfg in (cameras or {}).items():
+            cid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, name)
+            if cid < 0:
+                raise CellError(f"camera {name!r} is not in the model")
+            if any(cam_cfg.distortion):
+                crit = (cfg.lens_max_iterations, cfg.lens_tolerance)
+                self._lenses[cid] = LensWarp(float(model.cam_fovy[cid]), cam_cfg.distortion, crit)
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
         self._depth: dict[tuple[int, int], mujoco.Renderer] = {}
         self._closed = False
@@ -179,8 +335,9 @@ class CameraRig:
         *,
         depth: bool = False,
         out: np.ndarray | None = None,
+        effect: Callable[[np.ndarray], np.ndarray] | None = None,
     ) -> np.ndarray:
-        """Render one view.
+        """Render one view (through the camera's lens, when it has a distortion).
 
         Args:
             data: State to render.
@@ -190,13 +347,32 @@ class CameraRig:
             depth: Depth image [m] instead of RGB.
             out: Optional preallocated output, shape (height, width, 3) uint8 or
                 (height, width) float32 for depth.
+            effect: Applied to the ideal RGB render before the lens (motion blur).
 
         Returns:
             RGB uint8 (height, width, 3) or depth float32 (height, width) [m].
         """
         r = self._renderer(height, width, depth)
         r.update_scene(data, camera=camera)
-        return r.render(out=out)
+        lens = self._lens(camera)
+        if lens is None and effect is None:
+            return r.render(out=out)
+        image = r.render()
+        if effect is not None and not depth:
+            image = effect(image)
+        if lens is not None:
+            image = lens.apply(image)
+        if out is None:
+            return image
+        out[...] = image
+        return out
+
+    def _lens(self, camera: int | str | mujoco.MjvCamera) -> LensWarp | None:
+        if not self._lenses or isinstance(camera, mujoco.MjvCamera):
+            return None
+        if isinstance(camera, str):
+            camera = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_CAMERA, camera)
+        return self._lenses.get(int(camera))
 
     def close(self) -> None:
         """Free every renderer (safe to call twice)."""
@@ -208,4 +384,12 @@ class CameraRig:
         self._closed = True
 
 
-__all__ = ["CameraModel", "CameraRig", "camera_model"]
+__all__ = [
+    "BeltBlur",
+    "CameraModel",
+    "CameraRig",
+    "LensWarp",
+    "camera_model",
+    "distort_normalised",
+    "intrinsics",
+]

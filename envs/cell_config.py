@@ -372,15 +372,21 @@ class RenderConfig:
         shadows: Render shadows (slow in software rendering; off for observations).
         reflections: Render reflections.
         overview_size: Overview image (height, width) [px].
+        lens_max_iterations: Iterations of the solver inverting a lens distortion (once per
+            camera and image size).
+        lens_tolerance: Its convergence tolerance, in normalised image units (1 px ~ 1 / the
+            focal length in px).
     """
 
     shadows: bool = False
     reflections: bool = False
     overview_size: tuple[int, ...] = (480, 640)
+    lens_max_iterations: int = 40
+    lens_tolerance: float = 1e-9
 
     def __post_init__(self) -> None:
         _length(self, "overview_size", 2)
-        _positive(self, "overview_size")
+        _positive(self, "overview_size", "lens_max_iterations", "lens_tolerance")
 
 
 @dataclass(frozen=True)
