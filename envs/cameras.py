@@ -16,7 +16,7 @@ import functools
 import math
 import os
 import weakref
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import cv2
@@ -231,6 +231,72 @@ class BeltBlur:
         return np.where(self.mask[..., None], blurred, image)
 
 
+class CameraJitter:
+    """Camera poses drawn per episode about the built ones (domain randomisation).
+
+    Each camera is shifted by a uniform draw in [-position_bound, position_bound] per world
+    axis and turned by a rotation vector drawn uniformly in [-angle_bound, angle_bound] per
+    axis of its own frame. Images move with the camera; camera models published at build
+    time keep the nominal pose (what a policy trained for robustness must not rely on).
+
+    Args:
+        model: The compiled cell (its ``cam_pos``, ``cam_quat`` are changed in place).
+        cameras: Camera ids to move.
+    """
+
+    def __init__(self, model: mujoco.MjModel, cameras: Sequence[int]) -> None:
+        self._model = model
+        self.cameras = np.asarray(cameras, dtype=int)
+        self.nominal_pos = model.cam_pos[self.cameras].copy()
+        """Built positions, shape (k, 3) [m] (in each camera's parent frame)."""
+        self.nominal_quat = model.cam_quat[self.cameras].copy()
+        """Built orientations, shape (k, 4) (w, x, y, z)."""
+
+    def draw(
+        self,
+        data: mujoco.MjData,
+        rng: np.random.Generator,
+        position_bound: float,
+        angle_bound_deg: float,
+    ) -> None:
+        """Move every camera to a fresh pose within the bounds ([m], [deg]).
+
+        The cameras' world poses in ``data`` are updated at once from their parent bodies:
+        neither stepping nor `mujoco.mj_camlight` recomputes a camera fixed to a sleeping or
+        static body.
+        """
+        k = len(self.cameras)
+        shift = rng.uniform(-position_bound, position_bound, (k, 3))
+        turn = np.radians(rng.uniform(-angle_bound_deg, angle_bound_deg, (k, 3)))
+        for i, cam in enumerate(self.cameras):
+            dq = np.zeros(4)
+            mujoco.mju_axisAngle2Quat(
+                dq, turn[i] / max(np.linalg.norm(turn[i]), 1e-300), float(np.linalg.norm(turn[i]))
+            )
+            q = np.zeros(4)
+            mujoco.mju_mulQuat(q, self.nominal_quat[i], dq)
+            self._model.cam_quat[cam] = q
+            self._model.cam_pos[cam] = self.nominal_pos[i] + shift[i]
+        self._update(data)
+
+    def _update(self, data: mujoco.MjData) -> None:
+        """World poses of the cameras (fixed to their parent bodies) into ``data``."""
+        m = self._model
+        for cam in self.cameras:
+            body = int(m.cam_bodyid[cam])
+            r_body = data.xmat[body].reshape(3, 3)
+            r_cam = np.zeros(9)
+            mujoco.mju_quat2Mat(r_cam, m.cam_quat[cam])
+            data.cam_xpos[cam] = data.xpos[body] + r_body @ m.cam_pos[cam]
+            data.cam_xmat[cam] = (r_body @ r_cam.reshape(3, 3)).ravel()
+
+    def restore(self, data: mujoco.MjData) -> None:
+        """Put every camera back at its built pose (in the model and in ``data``)."""
+        self._model.cam_pos[self.cameras] = self.nominal_pos
+        self._model.cam_quat[self.cameras] = self.nominal_quat
+        self._update(data)
+
+
 _MIN_BLUR_PX = 0.05
 """Blur lengths below this [px] change no pixel level of a uint8 picture: skipped."""
 
@@ -386,6 +452,7 @@ class CameraRig:
 
 __all__ = [
     "BeltBlur",
+    "CameraJitter",
     "CameraModel",
     "CameraRig",
     "LensWarp",
