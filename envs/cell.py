@@ -447,8 +447,10 @@ class Cell:
     def _belt_blur(self, height: int, width: int) -> Callable[[np.ndarray], np.ndarray] | None:
         """The input camera's motion blur at the belt's current speed (None: a still picture)."""
         exposure = self.cfg.input_camera.exposure_time
+        if exposure <= 0.0:
+            return None
         speed = input_speed(self.model, self.ids)
-        if exposure <= 0.0 or speed <= 0.0:
+        if speed <= 0.0:
             return None
         cid = self.ids.input_camera
         key = (height, width, *self.model.cam_pos[cid], *self.model.cam_quat[cid])
