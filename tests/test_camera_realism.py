@@ -16,7 +16,14 @@ from agents.perception import perceive_tiles, project, unproject
 from benchmarks.design_cell import build_design_cell, nearest_tile
 from envs.cameras import CameraModel, CameraRig, camera_model, distort_normalised
 from envs.cell import Cell
-from envs.cell_config import CameraConfig, CellConfig, RenderConfig, load_cell_config
+from envs.cell_config import (
+    CameraConfig,
+    CellConfig,
+    RenderConfig,
+    SceneryConfig,
+    load_cell_config,
+)
+from envs.errors import CellError
 from envs.scene import build_spec, cell_geometry
 from envs.task_spec import work_areas
 from envs.tile_shapes import basic_shapes
@@ -234,3 +241,19 @@ def test_camera_pose_jitter_is_seeded_and_bounded() -> None:
     finally:
         env.close()
         plain.close()
+
+
+@pytest.mark.parametrize(
+    ("section", "values"),
+    [
+        (CameraConfig, {"distortion": (0.1, 0.0)}),
+        (CameraConfig, {"distortion": (float("nan"), 0.0, 0.0, 0.0, 0.0)}),
+        (CameraConfig, {"exposure_time": -0.001}),
+        (SceneryConfig, {"exposure": 0.0}),
+        (SceneryConfig, {"exposure": 1.2}),
+        (SceneryConfig, {"light_diffuse": 0.0, "headlight_ambient": 0.0, "headlight_diffuse": 0.0}),
+    ],
+)
+def test_bad_camera_settings_are_named(section, values) -> None:
+    with pytest.raises(CellError, match=next(iter(values))):
+        section(**values)
