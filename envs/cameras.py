@@ -183,9 +183,10 @@ class BeltBlur:
     the belt, so over an exposure the picture of the belt region is the render smeared along
     the belt's image direction by speed x exposure time: one `cv2.filter2D` with a line kernel
     instead of a dozen sub-frame renders (each ~10 ms at 656 x 492 in software rendering).
-    The exposure is centred on the render time, so a blurred tile keeps its centroid. What
-    is not on the belt (the arm passing through the view) is left sharp: it does not move
-    with the belt.
+    The exposure is centred on the render time, so a blurred tile keeps its centroid. The
+    belt's surroundings stay sharp; whatever is seen over the belt's region is smeared, so an
+    arm passing through the view would be blurred as if it moved with the belt (the scripted
+    cell takes its pictures with the arm out of the view).
 
     Args:
         model: Camera model of the ideal render (pinhole, at the image size).
