@@ -4,7 +4,8 @@ A checkerboard target (a white plate with black square tiles, one mocap body) is
 cell's own scene (`envs.scene.build_spec`, so the camera's configuration and pose are exactly the
 cell's) and rendered by that camera at several tilted, lifted and shifted poses. OpenCV finds the
 inner corners (`cv2.findChessboardCorners` + `cv2.cornerSubPix`) and estimates the intrinsics
-(`cv2.calibrateCamera`: one focal length, principal point, radial distortion k1, k2). A last
+(`cv2.calibrateCamera`: one focal length, principal point, OpenCV's lens distortion k1, k2,
+p1, p2; k3 as configured: a camera with a lens distortion renders through it). A last
 view of the board lying flat on the belt at its known fixture position gives the extrinsics
 (`cv2.solvePnP` with the board's world corner coordinates): the pose of the belt plane.
 
@@ -12,8 +13,10 @@ The board has an even by odd count of squares so its colour pattern is not symme
 half turn: the corner order is made unique by the colour of the square beyond the first corner
 and by handedness (see `_orient`).
 
-The estimated `envs.cameras.CameraModel` is what perception uses; the simulator's true model is
-read only to report the differences (focal %, principal point px, position mm, angle deg).
+The estimated `envs.cameras.CameraModel` (with the estimated distortion, which perception
+removes from every point it unprojects) is what perception uses; the simulator's true model is
+read only to report the differences (focal %, principal point px, position mm, angle deg, and
+the worst pixel displacement between the true and the estimated lens over the image).
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ import numpy as np
 
 from agents.config import CalibrationConfig
 from agents.errors import CalibrationError
-from envs.cameras import CameraModel, CameraRig, camera_model
+from envs.cameras import CameraModel, CameraRig, camera_model, distort_normalised
 from envs.cell_config import CellConfig
 from envs.scene import build_spec, cell_geometry
 
@@ -56,6 +59,8 @@ class CalibrationResult:
         principal_point_error_px: Distance between estimated and true principal points [px].
         position_error_mm: Distance between estimated and true camera centres [mm].
         angle_error_deg: Angle of the rotation between estimated and true orientations [deg].
+        lens_error_px: Largest distance, over a grid of image points, between where the true
+            and the estimated lens put the same ray [px] (0 for two ideal pinholes).
     """
 
     camera: CameraModel
@@ -69,6 +74,7 @@ class CalibrationResult:
     principal_point_error_px: float
     position_error_mm: float
     angle_error_deg: float
+    lens_error_px: float = 0.0
 
     def summary(self) -> dict[str, float | int]:
         """The scalar figures as a dict (for reports)."""
@@ -81,6 +87,7 @@ class CalibrationResult:
             "principal_point_error_px": self.principal_point_error_px,
             "position_error_mm": self.position_error_mm,
             "angle_error_deg": self.angle_error_deg,
+            "lens_error_px": self.lens_error_px,
         }
 
 
@@ -200,7 +207,7 @@ def render_views(
     body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, BOARD)
     mocap = int(model.body_mocapid[body])
     cam_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera)
-    rig = CameraRig(model, cell_cfg.render)
+    rig = CameraRig(model, cell_cfg.render, {camera: cam_cfg})  # through the camera's lens
     try:
 
         def shot(pos: np.ndarray, quat: np.ndarray) -> np.ndarray:
@@ -222,7 +229,7 @@ def render_views(
         flat_pose = centre + [0.0, 0.0, top]
         flat = shot(flat_pose, np.array([1.0, 0.0, 0.0, 0.0]))
         mujoco.mj_forward(model, data)
-        true_cam = camera_model(model, data, cam_id, width, height)
+        true_cam = camera_model(model, data, cam_id, width, height, distortion=cam_cfg.distortion)
     finally:
         rig.close()
     return CalibrationViews(tuple(views), flat, flat_pose, true_cam)
@@ -324,14 +331,15 @@ def calibrate(views: CalibrationViews, cfg: CalibrationConfig | None = None) -> 
     t = np.eye(4)
     t[:3, :3] = r
     t[:3, 3] = tvec.ravel()
-    est = CameraModel(true.name, true.width, true.height, np.asarray(k, dtype=float), t)
+    dist_est = np.asarray(dist, dtype=float).ravel()
+    est = CameraModel(true.name, true.width, true.height, np.asarray(k, dtype=float), t, dist_est)
     centre_est = -r.T @ tvec.ravel()
     r_true = true.world_to_camera[:3, :3]
     centre_true = -r_true.T @ true.world_to_camera[:3, 3]
     return CalibrationResult(
         camera=est,
         true_camera=true,
-        distortion=np.asarray(dist, dtype=float).ravel(),
+        distortion=dist_est,
         reprojection_px=float(rms),
         pnp_reprojection_px=pnp_rms,
         views_used=len(img_pts),
@@ -340,7 +348,21 @@ def calibrate(views: CalibrationViews, cfg: CalibrationConfig | None = None) -> 
         principal_point_error_px=float(np.linalg.norm(k[:2, 2] - true.K[:2, 2])),
         position_error_mm=1e3 * float(np.linalg.norm(centre_est - centre_true)),
         angle_error_deg=_rotation_angle_deg(r @ r_true.T),
+        lens_error_px=_lens_error_px(true, est, cfg.lens_grid),
     )
+
+
+def _lens_error_px(true: CameraModel, est: CameraModel, grid: int) -> float:
+    """Largest pixel gap between two lenses over a grid x grid of image points [px].
+
+    Each grid pixel of the true camera is taken back to its ray (through the true lens) and
+    projected again through the estimated intrinsics and lens.
+    """
+    u, v = np.meshgrid(np.linspace(0, true.width - 1, grid), np.linspace(0, true.height - 1, grid))
+    uv = np.column_stack([u.ravel(), v.ravel()]).reshape(-1, 1, 2)
+    rays = cv2.undistortPoints(uv, true.K, true.distortion).reshape(-1, 2)
+    again = distort_normalised(rays, est.distortion) @ est.K[:2, :2].T + est.K[:2, 2]
+    return float(np.max(np.linalg.norm(again - uv.reshape(-1, 2), axis=1)))
 
 
 def calibrate_cell_camera(

@@ -116,6 +116,7 @@ class CalibrationConfig:
         fix_aspect_ratio: Estimate one focal length (square pixels).
         zero_tangential: Assume no tangential distortion.
         fix_k3: Do not estimate the third radial coefficient.
+        lens_grid: Points per side of the image grid the estimated lens is checked on.
     """
 
     squares: tuple[int, int] = (10, 7)
@@ -134,6 +135,7 @@ class CalibrationConfig:
     fix_aspect_ratio: bool = True
     zero_tangential: bool = True
     fix_k3: bool = True
+    lens_grid: int = 9
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on bad values."""

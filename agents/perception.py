@@ -21,6 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
+import cv2
 import numpy as np
 import shapely
 from shapely.geometry import Point, Polygon
@@ -28,6 +29,7 @@ from shapely.geometry import Point, Polygon
 import qshape
 from agents.config import PerceptionConfig
 from agents.errors import PerceptionError
+from envs.cameras import distort_normalised
 from envs.task_spec import WorldSlot
 from qshape import Description, Figure
 from qshape.figure import Boundary
@@ -35,13 +37,19 @@ from qshape.geometry import signed_area
 
 
 class CameraLike(Protocol):
-    """What perception needs of a camera: pinhole intrinsics and world-to-camera extrinsics.
+    """What perception needs of a camera: intrinsics, lens distortion and extrinsics.
 
     Attributes:
         K: Intrinsic matrix, shape (3, 3) [px] (OpenCV convention: u right, v down).
         world_to_camera: Rigid transform, shape (4, 4): camera point = T @ world point (OpenCV
             camera frame: x right, y down, z forward).
+        distortion: OpenCV lens distortion (k1, k2, p1, p2, k3), shape (5,) (zeros: pinhole).
     """
+
+    @property
+    def distortion(self) -> np.ndarray:
+        """Lens distortion coefficients, shape (5,)."""
+        ...
 
     @property
     def K(self) -> np.ndarray:  # noqa: N802 (the usual name of the intrinsic matrix)
@@ -69,6 +77,9 @@ def unproject(camera: CameraLike, uv: np.ndarray, z: float) -> np.ndarray:
         PerceptionError: A ray parallel to the plane or the plane behind the camera.
     """
     uv = np.atleast_2d(np.asarray(uv, dtype=float))
+    if np.any(camera.distortion):  # pixels through the lens -> ideal pinhole pixels
+        ideal = cv2.undistortPoints(uv.reshape(-1, 1, 2), camera.K, camera.distortion, P=camera.K)
+        uv = ideal.reshape(-1, 2).astype(float)
     rays_cam = np.column_stack([uv, np.ones(len(uv))]) @ np.linalg.inv(camera.K).T
     r = camera.world_to_camera[:3, :3]
     origin = -r.T @ camera.world_to_camera[:3, 3]
@@ -81,11 +92,11 @@ def unproject(camera: CameraLike, uv: np.ndarray, z: float) -> np.ndarray:
 
 
 def project(camera: CameraLike, points: np.ndarray) -> np.ndarray:
-    """Pixels of world points, shape (n, 3) [m] -> (n, 2) [px]."""
+    """Pixels of world points (through the lens), shape (n, 3) [m] -> (n, 2) [px]."""
     pts = np.atleast_2d(np.asarray(points, dtype=float))
     cam = pts @ camera.world_to_camera[:3, :3].T + camera.world_to_camera[:3, 3]
-    uvw = cam @ camera.K.T
-    return uvw[:, :2] / uvw[:, 2:3]
+    xy = distort_normalised(cam[:, :2] / cam[:, 2:3], camera.distortion)
+    return xy @ camera.K[:2, :2].T + camera.K[:2, 2]
 
 
 @dataclass(frozen=True, eq=False)

@@ -183,7 +183,7 @@ def _resets(max_slots: int, queue: mp.Queue) -> None:
         env.reset(seed=seed)
         wall.append(1e3 * (time.perf_counter() - t))
         cpu.append(1e3 * (time.process_time() - c))
-    tiles = len(env.unwrapped.cell.tiles)
+    tiles = len(env.get_wrapper_attr("cell").tiles)
     env.close()
     queue.put(
         {

@@ -15,14 +15,15 @@ Typical use::
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import functools
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
 from envs.belts import LostTracker, input_speed, set_input_speed
-from envs.cameras import CameraModel, CameraRig, camera_model
+from envs.cameras import BeltBlur, CameraModel, CameraRig, camera_model
 from envs.cell_config import CameraConfig, CellConfig, load_cell_config
 from envs.errors import CellError, LayoutError
 from envs.feed import TileFeed
@@ -100,7 +101,12 @@ class Cell:
         """Variant of each tile in this episode, shape (n,)."""
         self._select(self.variant, self.tile_pool[0])
         self.lost_tracker = LostTracker(self.cfg, n)
-        self.cameras = CameraRig(self.model, self.cfg.render)  # renderers open lazily
+        self.cameras = CameraRig(  # renderers open lazily; lenses from the camera configs
+            self.model,
+            self.cfg.render,
+            {CAMERAS[0]: self.cfg.input_camera, CAMERAS[1]: self.cfg.output_camera},
+        )
+        self._blurs: dict[tuple[object, ...], BeltBlur] = {}
         self.on_stage = np.zeros(n, bool)
         self._wake = np.zeros(n, bool)
         self.feed = TileFeed(self)
@@ -454,8 +460,41 @@ class Cell:
         cam_cfg = self._camera_cfg(name)
         cid = self.ids.input_camera if name == CAMERAS[0] else self.ids.output_camera
         return camera_model(
-            self.model, self.data, cid, width or cam_cfg.width, height or cam_cfg.height
+            self.model,
+            self.data,
+            cid,
+            width or cam_cfg.width,
+            height or cam_cfg.height,
+            distortion=cam_cfg.distortion,
         )
+
+    def _belt_blur(self, height: int, width: int) -> Callable[[np.ndarray], np.ndarray] | None:
+        """The input camera's motion blur at the belt's current speed (None: a still picture)."""
+        exposure = self.cfg.input_camera.exposure_time
+        if exposure <= 0.0:
+            return None
+        speed = input_speed(self.model, self.ids)
+        if speed <= 0.0:
+            return None
+        cid = self.ids.input_camera
+        key = (height, width, *self.model.cam_pos[cid], *self.model.cam_quat[cid])
+        blur = self._blurs.get(key)
+        if blur is None:
+            g, belt = self.geometry, self.cfg.input_belt
+            x0, x1 = g.input_belt_end - belt.length, g.input_belt_end
+            y0, y1 = g.input_y - belt.width / 2, g.input_y + belt.width / 2
+            corners = np.array(
+                [
+                    [x0, y0, g.belt_top],
+                    [x1, y0, g.belt_top],
+                    [x1, y1, g.belt_top],
+                    [x0, y1, g.belt_top],
+                ]
+            )
+            pinhole = camera_model(self.model, self.data, cid, width, height)
+            blur = BeltBlur(pinhole, corners, np.array([1.0, 0.0, 0.0]))
+            self._blurs = {key: blur}  # one pose at a time (a jittered camera moves per reset)
+        return functools.partial(blur.apply, speed=speed, exposure_time=exposure)
 
     def _camera_cfg(self, name: str) -> CameraConfig:
         if name == CAMERAS[0]:
@@ -491,9 +530,9 @@ class Cell:
                 self.data, "overview", height or h, width or w, depth=depth, out=out
             )
         cam_cfg = self._camera_cfg(name)
-        return self.cameras.render(
-            self.data, name, height or cam_cfg.height, width or cam_cfg.width, depth=depth, out=out
-        )
+        h, w = height or cam_cfg.height, width or cam_cfg.width
+        blur = self._belt_blur(h, w) if name == CAMERAS[0] and not depth else None
+        return self.cameras.render(self.data, name, h, w, depth=depth, out=out, effect=blur)
 
     def close(self) -> None:
         """Free renderers; the cell cannot be stepped afterwards (safe to call twice)."""

@@ -332,6 +332,11 @@ class CameraConfig:
         height_above_belt: Camera height above the belt top [m].
         fovy_deg: Vertical field of view [deg].
         offset: Camera position offset (x, y) from the working-area centre [m].
+        distortion: Lens distortion in OpenCV's model, (k1, k2, p1, p2, k3) on normalised
+            image coordinates (dimensionless); all zero: an ideal pinhole. The rendered image
+            is warped by it (`envs.cameras.LensWarp`).
+        exposure_time: Shutter time [s]: tiles on a moving belt blur over belt speed x this
+            (`envs.cameras.BeltBlur`); 0: a still picture.
     """
 
     width: int = 656
@@ -339,9 +344,15 @@ class CameraConfig:
     height_above_belt: float = 0.5
     fovy_deg: float = 27.0
     offset: tuple[float, ...] = (0.0, 0.0)
+    distortion: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0)
+    exposure_time: float = 0.0
 
     def __post_init__(self) -> None:
         _length(self, "offset", 2)
+        _length(self, "distortion", 5)
+        _non_negative(self, "exposure_time")
+        if not all(math.isfinite(c) for c in self.distortion):
+            raise CellError(f"CameraConfig.distortion {self.distortion}; allowed: finite numbers")
         _positive(self, "width", "height", "height_above_belt", "fovy_deg")
         if self.fovy_deg >= 170:
             raise CellError(f"CameraConfig.fovy_deg {self.fovy_deg}; allowed: (0, 170)")
@@ -366,6 +377,10 @@ class RenderConfig:
         samples: Multisamples per pixel of every rendered image (anti-aliasing; MuJoCo's
             ``offsamples``). 0 renders small images about 40 % faster in software rendering,
             with stair-stepped edges.
+        lens_max_iterations: Iterations of the solver inverting a lens distortion (once per
+            camera and image size).
+        lens_tolerance: Its convergence tolerance, in normalised image units (1 px ~ 1 / the
+            focal length in px).
     """
 
     shadows: bool = False
@@ -373,10 +388,12 @@ class RenderConfig:
     overview_size: tuple[int, ...] = (480, 640)
     cull: bool = True
     samples: int = 4
+    lens_max_iterations: int = 40
+    lens_tolerance: float = 1e-9
 
     def __post_init__(self) -> None:
         _length(self, "overview_size", 2)
-        _positive(self, "overview_size")
+        _positive(self, "overview_size", "lens_max_iterations", "lens_tolerance")
         if self.samples < 0:
             raise CellError(f"RenderConfig.samples must be >= 0, got {self.samples}")
 
@@ -391,8 +408,15 @@ class SceneryConfig:
         floor_texture_px: Checker texture side [px].
         floor_texture_repeat: Texture repeats across the floor.
         light_pos: Position of the directional top light [m] (3,).
-        light_diffuse: Diffuse intensity of the top light (grey level, [0, 1]).
-        light_specular: Specular intensity of the top light.
+        light_diffuse: Diffuse weight of the top light (relative; see ``exposure``).
+        light_specular: Specular intensity of the top light (0: diffuse lighting, as a vision
+            cell's dome gives; > 0 puts a glaze highlight on every tile).
+        headlight_ambient: Ambient weight of the viewer's headlight (relative).
+        headlight_diffuse: Diffuse weight of the headlight (relative).
+        exposure: Grey level, in (0, 1], at which a white matte face looking up renders: the
+            ambient and diffuse intensities above are scaled so that they sum to it, so a
+            glaze renders at its own colour times ``exposure`` (1: the glaze colour itself)
+            instead of over-brightened or saturated.
         belt_rgba: Belt colour, RGBA in [0, 1].
         frame_rgba: Colour of rails and stands.
         sheet_rgba: Colour of the mesh sheet.
@@ -418,7 +442,10 @@ class SceneryConfig:
     floor_texture_repeat: int = 8
     light_pos: tuple[float, ...] = (0.3, 0.0, 2.5)
     light_diffuse: float = 0.45
-    light_specular: float = 0.1
+    light_specular: float = 0.0
+    headlight_ambient: float = 0.3
+    headlight_diffuse: float = 0.35
+    exposure: float = 1.0
     belt_rgba: tuple[float, ...] = (0.12, 0.12, 0.13, 1.0)
     frame_rgba: tuple[float, ...] = (0.55, 0.57, 0.6, 1.0)
     sheet_rgba: tuple[float, ...] = (0.22, 0.22, 0.24, 1.0)
@@ -463,6 +490,22 @@ class SceneryConfig:
             "bin_wall",
         )
         _non_negative(self, "light_diffuse", "light_specular", "slot_white", "rail_gap", "bin_gap")
+        _non_negative(self, "headlight_ambient", "headlight_diffuse")
+        if not 0.0 < self.exposure <= 1.0 or self.light_weight_sum <= 0.0:
+            raise CellError(
+                f"SceneryConfig.exposure {self.exposure}; allowed: (0, 1], with a positive sum "
+                "of light_diffuse, headlight_ambient and headlight_diffuse"
+            )
+
+    @property
+    def light_weight_sum(self) -> float:
+        """Sum of the ambient and diffuse light weights (what ``exposure`` rescales to)."""
+        return self.light_diffuse + self.headlight_ambient + self.headlight_diffuse
+
+    @property
+    def light_scale(self) -> float:
+        """Factor applied to every configured ambient and diffuse intensity."""
+        return self.exposure / self.light_weight_sum
         _non_negative(self, "stand_inset", "bin_side_margin", "bin_stand_inset")
 
 

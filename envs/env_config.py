@@ -101,6 +101,10 @@ class EnvConfig:
             cycles; False ends every cycle at rest at the approach point above the place.
         color_randomization: Std of a per-reset multiplicative tile colour change (0: off).
         light_randomization: Std of a per-reset multiplicative light change (0: off).
+        camera_position_jitter: Per-reset camera shift, uniform in +- this per axis [m]
+            (0: off); both cameras. ``task_spec.cameras`` keep the built poses.
+        camera_angle_jitter_deg: Per-reset camera turn, uniform in +- this about each axis
+            of the camera's frame [deg] (0: off).
         action_noise: Std of Gaussian noise added to continuous actions, in normalised units.
         obs_noise: Std of Gaussian noise on joint position observations [rad].
         control_dt: Control period of the joint and cartesian modes [s].
@@ -155,6 +159,8 @@ class EnvConfig:
     chain_cycles: bool = True
     color_randomization: float = 0.0
     light_randomization: float = 0.0
+    camera_position_jitter: float = 0.0
+    camera_angle_jitter_deg: float = 0.0
     action_noise: float = 0.0
     obs_noise: float = 0.0
     control_dt: float = 0.04
@@ -231,6 +237,8 @@ class EnvConfig:
             "max_slots",
             "color_randomization",
             "light_randomization",
+            "camera_position_jitter",
+            "camera_angle_jitter_deg",
             "action_noise",
             "obs_noise",
             "reset_settle",

@@ -133,7 +133,10 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     rebuild) and a fresh glaze colour noise (``tile_color_jitter``); with ``tile_variants=1``
     both are drawn once when the env is built. ``env.unwrapped.cell.tiles`` holds the
     episode's tiles (outline, grasp point, colour). Further per-reset colour and light changes
-    with ``color_randomization``/``light_randomization``.
+    with ``color_randomization``/``light_randomization``, and camera poses with
+    ``camera_position_jitter``/``camera_angle_jitter_deg`` (``task_spec.cameras`` keep the
+    built poses). A realistic camera (lens distortion, exposure time blurring the moving
+    belt) is set in the cell's camera sections (``cell={"input_camera": {...}}``).
 
     ## Episode End
     ``terminated`` when every slot is filled correctly or no real tile on the input belt, held

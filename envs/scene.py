@@ -281,7 +281,7 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         dir=[0, 0, -1],
         type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
         castshadow=False,
-        diffuse=[look.light_diffuse] * 3,
+        diffuse=[look.light_diffuse * look.light_scale] * 3,
         specular=[look.light_specular] * 3,
     )
 
@@ -435,8 +435,9 @@ def _configure(spec: mujoco.MjSpec, cfg: CellConfig) -> None:
         spec.option.sleep_tolerance = ph.sleep_tolerance
     spec.visual.quality.shadowsize = 0 if not cfg.render.shadows else 4096
     spec.visual.quality.offsamples = cfg.render.samples
-    spec.visual.headlight.ambient = [0.3, 0.3, 0.3]
-    spec.visual.headlight.diffuse = [0.35, 0.35, 0.35]
+    look = cfg.scenery  # exposure: ambient + diffuse scaled so a white face renders at it
+    spec.visual.headlight.ambient = [look.headlight_ambient * look.light_scale] * 3
+    spec.visual.headlight.diffuse = [look.headlight_diffuse * look.light_scale] * 3
     spec.visual.headlight.specular = [0.0, 0.0, 0.0]
     spec.visual.global_.offwidth = max(cfg.input_camera.width, cfg.output_camera.width, 1280)
     spec.visual.global_.offheight = max(cfg.input_camera.height, cfg.output_camera.height, 960)

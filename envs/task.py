@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from envs.accounting import ON_INPUT, WAITING, TileFlags, state_counts, tile_states
+from envs.cameras import CameraJitter
 from envs.cell import Cell
 from envs.env_config import EnvConfig
 from envs.errors import CellError
@@ -202,6 +203,9 @@ class MosaicTask:
         self._yaw_tol = math.radians(config.yaw_tolerance_deg)
         self._flat = math.cos(math.radians(config.max_tilt_deg))
         self._base_light = cell.model.light_diffuse.copy()
+        self._camera_jitter = CameraJitter(
+            cell.model, [cell.ids.input_camera, cell.ids.output_camera]
+        )
         self._settle_steps = round(config.reset_settle / float(cell.model.opt.timestep))
         self.staged = (
             StagedReward(self, load_staged_config()) if config.reward_mode == "staged" else None
@@ -213,8 +217,9 @@ class MosaicTask:
 
         The cell is reset with a fresh layout (redrawn up to ``layout_tries`` times when the
         tiles do not fit; its feed lays out the initial tiles and its variants are redrawn),
-        tile colours and lights are randomised (``color_randomization``,
-        ``light_randomization``), the input belt is set running and physics settles the tiles
+        tile colours, lights and camera poses are randomised (``color_randomization``,
+        ``light_randomization``, ``camera_position_jitter``, ``camera_angle_jitter_deg``),
+        the input belt is set running and physics settles the tiles
         for ``reset_settle``.
 
         Raises:
@@ -235,7 +240,11 @@ class MosaicTask:
         self.reset()
 
     def _randomize(self, rng: np.random.Generator) -> None:
-        """Per-episode colour and light changes (the cell's reset restored the tile colours)."""
+        """Per-episode colour, light and camera changes (the cell's reset restored the colours).
+
+        Each randomisation draws from ``rng`` only when it is on, so turning one on leaves
+        the episodes of the others unchanged.
+        """
         m, cfg = self.cell.model, self.cfg
         visual = self.cell.ids.tile_visual.ravel()
         if cfg.color_randomization > 0 and len(visual):
@@ -244,6 +253,10 @@ class MosaicTask:
         if cfg.light_randomization > 0 and m.nlight:
             f = 1 + rng.normal(0.0, cfg.light_randomization, (m.nlight, 1))
             m.light_diffuse[:] = np.clip(self._base_light * f, 0.0, 1.0)
+        if cfg.camera_position_jitter > 0 or cfg.camera_angle_jitter_deg > 0:
+            self._camera_jitter.draw(
+                self.cell.data, rng, cfg.camera_position_jitter, cfg.camera_angle_jitter_deg
+            )
 
     def reset(self) -> None:
         """Forget the counts of the previous step (call after the cell's reset)."""
