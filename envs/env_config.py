@@ -310,6 +310,28 @@ def _env_cell(
         raise EnvConfigError(f"cell: {exc}") from exc
 
 
+def _merge_cell(file_cell: Any, given: Any) -> Any:
+    """A ``cell`` keyword applied to the env file's ``cell`` section.
+
+    A mapping without a ``config`` key changes the file's mapping section by section, key by
+    key (so passing only a camera section keeps the env's tile settings); one that names its
+    ``config``, a name, a path or a `CellConfig` starts afresh from that cell file.
+    """
+    if given is None:
+        return file_cell
+    if not (isinstance(given, Mapping) and isinstance(file_cell, Mapping)) or "config" in given:
+        return given
+    merged: dict[str, Any] = {
+        k: dict(v) if isinstance(v, Mapping) else v for k, v in file_cell.items()
+    }
+    for key, value in given.items():
+        if isinstance(value, Mapping) and isinstance(merged.get(key), Mapping):
+            merged[key] = {**merged[key], **value}
+        else:
+            merged[key] = value
+    return merged
+
+
 def _split_cell(raw: Any, flat: dict[str, Any]) -> CellConfig:
     """The nested cell of a YAML/keyword ``cell`` value plus the flat `CELL_KEYS` in ``flat``."""
     changes: dict[str, dict[str, Any]] = {}
@@ -364,7 +386,10 @@ def load_env_config(config: EnvConfig | str | Path | None = "env", **overrides: 
     data: dict[str, Any] = {}
     if config is not None:
         data = load_yaml(config)
-    raw_cell = overrides.pop("cell", data.pop("cell", None))
+    file_cell = data.pop("cell", None) if config is not None else None
+    if config is None and not isinstance(overrides.get("cell"), CellConfig):
+        file_cell = {"config": "cell", **ENV_CELL_CHANGES}  # the env's own defaults
+    raw_cell = _merge_cell(file_cell, overrides.pop("cell", None))
     flat = {**{k: data.pop(k) for k in list(data) if k in CELL_KEYS}, **overrides}
     overrides = {k: v for k, v in flat.items() if k not in CELL_KEYS}
     overrides["cell"] = _split_cell(raw_cell, flat)

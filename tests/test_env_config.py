@@ -85,3 +85,15 @@ def test_the_cell_is_nested_not_copied() -> None:
         load_env_config(cell={"belts": {"speed": 0.2}})
     with pytest.raises(EnvConfigError, match="varients.*allowed"):
         load_env_config(cell={"tiles": {"varients": 2}})
+
+
+def test_a_cell_mapping_changes_the_env_cell_key_by_key() -> None:
+    # Passing one cell section keeps the env's own tile settings (stream period, variants);
+    # naming the cell file (config: cell) starts from that file alone (see the test above).
+    for source in ("env", None):
+        cfg = load_env_config(source, cell={"input_belt": {"speed": 0.1}})
+        assert cfg.cell.input_belt.speed == 0.1
+        assert cfg.cell.tiles.stream_period == 2.5
+        assert cfg.cell.tiles.variants == 8
+    cfg = load_env_config("env", cell={"tiles": {"stream_period": 3.0}})
+    assert cfg.cell.tiles.stream_period == 3.0 and cfg.cell.tiles.variants == 8
