@@ -29,7 +29,7 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
   echo "[setup] installing Python dependencies (first run takes a few minutes)"
   .venv/bin/python -m pip install -q --upgrade pip
   # The CPU wheel of torch 2.13.0 lies on this machine's local wheel folder; pinning it first
-  # keeps stable-baselines3 from pulling a multi-GB CUDA build (see shared/NOTES.md).
+  # keeps stable-baselines3 from pulling a multi-GB CUDA build of torch.
   .venv/bin/python -m pip install -q torch==2.13.0
   .venv/bin/python -m pip install -q -e ".[dev]"
   echo "$want" > "$stamp"
