@@ -18,7 +18,7 @@ from agents.scripted import ScriptedAgent
 from envs.accounting import TILE_STATES
 
 FAULT_FORCE = 0.01
-"""Holding force during the fault [N]: far less than a tile's weight (~0.3 N)."""
+"""Holding force during the fault [N]: far less than a tile's weight (~0.19 N)."""
 
 
 def _accounted(ev: dict) -> None:
@@ -50,6 +50,9 @@ def test_a_tile_dropped_over_the_input_belt_is_picked_again_and_placed():
         tile = cell.events[0].tile
         assert info["action_failed"]
         assert cell.input_side()[tile] and not cell.tile_held  # it lies on the input belt
+        pick = env.unwrapped.pick_area
+        rest_z = (pick.surface_z + pick.tile_top_z) / 2
+        assert abs(cell.tile_poses().pos[tile][2] - rest_z) < 1e-3  # flat, at rest on it
         ev = info["evaluation"]
         assert (ev["on_input"], ev["dropped_tiles"], ev["dropped"]) == (slots, 0, 1)
         assert ev["placeable"] == slots and not terminated
