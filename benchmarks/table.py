@@ -50,7 +50,7 @@ VISION_CANNY_RATIO = 5.0
 CELL_REALTIME = 20.0
 CELL_RENDER_FPS = 100.0
 PLANNER_TILES_PER_MIN = 24.0
-PLANNER_RATIO = 1.15
+PLANNER_RATIO = 1.03
 PLANNER_TRACKING_MM = 1.0
 PLANNER_PLACE_MM = 1.0
 PLANNER_PLACE_DEG = 1.0
@@ -286,7 +286,9 @@ def planner_figures(d: dict[str, Any]) -> list[Figure]:
             ">=",
             PLANNER_TILES_PER_MIN,
         ),
-        fig(g, "cycle / lower bound", paper.get("ratio"), "", "<=", PLANNER_RATIO),
+        fig(
+            g, "cycle / lower bound (dwells included)", paper.get("ratio"), "", "<=", PLANNER_RATIO
+        ),
         fig(g, "cycle time", paper.get("cycle_s"), "s"),
         fig(
             g,
@@ -307,7 +309,18 @@ def planner_figures(d: dict[str, Any]) -> list[Figure]:
             PLANNER_PLACE_DEG,
         ),
         fig(g, "planning per cycle (median)", paper.get("plan_ms"), "ms"),
-        fig(g, "ABB standard cycle 25/300/25 mm", d.get("standard_cycle_s"), "s"),
+        fig(
+            g,
+            "ABB standard cycle 25/300/25 mm, blended (ABB: about 0.85 s)",
+            d.get("standard_cycle_blended_s"),
+            "s",
+        ),
+        fig(
+            g,
+            "ABB standard cycle 25/300/25 mm, stop at every corner",
+            d.get("standard_cycle_s"),
+            "s",
+        ),
     ]
     for r in results[1:]:
         label = f"{r.get('layout', '?')} layout, belt {r.get('belt_speed_m_s', '?')} m/s"
