@@ -56,8 +56,16 @@ def _cell_config(lens: tuple[float, ...], exposure_time: float) -> CellConfig:
     return dataclasses.replace(base, input_camera=cam, tiles=tiles)
 
 
+GLAZE_MIN_PIXELS = 50
+"""Fewest inner pixels of a tile whose rendered colour is measured (slivers are left out) [px]."""
+
+
 def glaze_colours(cell: Cell) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(rendered, glaze) colours of every visible tile, (n, 3) each in [0, 1], and the image."""
+    """(rendered, glaze) colours of every visible tile, (n, 3) each in [0, 1], and the image.
+
+    The rendered colour is the median inside the tile's segmentation mask eroded by one pixel
+    (edges blend with the belt), over tiles with at least `GLAZE_MIN_PIXELS` such pixels.
+    """
     h, w = cell.cfg.input_camera.height, cell.cfg.input_camera.width
     image = cell.render("input_camera")
     r = mujoco.Renderer(cell.model, h, w)
@@ -71,7 +79,7 @@ def glaze_colours(cell: Cell) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     kernel = np.ones((3, 3), np.uint8)
     for glaze in cell.ids.tile_visual[:, 1]:
         inner = cv2.erode((seg == glaze).astype(np.uint8), kernel).astype(bool)
-        if inner.sum() > 0:
+        if inner.sum() >= GLAZE_MIN_PIXELS:
             got.append(np.median(image[inner], axis=0) / 255.0)
             want.append(cell.model.geom_rgba[glaze, :3].astype(float))
     return np.array(got), np.array(want), image

@@ -13,6 +13,7 @@ import envs  # noqa: F401  (registers MosaicAssembly-v0)
 from agents.calibration import calibrate, render_views
 from agents.config import load_agents_config
 from agents.perception import perceive_tiles, project, unproject
+from benchmarks.camera import glaze_colours
 from benchmarks.design_cell import build_design_cell, nearest_tile
 from envs.cameras import CameraModel, CameraRig, camera_model, distort_normalised
 from envs.cell import Cell
@@ -133,34 +134,13 @@ def test_calibration_estimates_the_lens_and_perception_removes_it() -> None:
         cell.close()
 
 
-def _glaze_colours(cell: Cell) -> tuple[np.ndarray, np.ndarray]:
-    """(rendered median, glaze) colours of every visible tile, each (n, 3) in [0, 1]."""
-    h, w = SIZE
-    img = cell.render("input_camera", h, w)
-    r = mujoco.Renderer(cell.model, h, w)
-    try:
-        r.enable_segmentation_rendering()
-        r.update_scene(cell.data, camera="input_camera")
-        seg = r.render()[..., 0]
-    finally:
-        r.close()
-    got, want = [], []
-    for glaze in cell.ids.tile_visual[:, 1]:
-        inner = seg == glaze
-        inner[1:-1, 1:-1] &= inner[:-2, 1:-1] & inner[2:, 1:-1] & inner[1:-1, :-2] & inner[1:-1, 2:]
-        if inner.sum() > 50:
-            got.append(np.median(img[inner], axis=0) / 255.0)
-            want.append(cell.model.geom_rgba[glaze, :3])
-    return np.array(got), np.array(want)
-
-
 @pytest.mark.parametrize("exposure", [1.0, 0.8])
 def test_exposure_renders_glazes_at_their_colour(exposure) -> None:
     base = load_cell_config()
     cfg = dataclasses.replace(base, scenery=dataclasses.replace(base.scenery, exposure=exposure))
     cell = Cell(cfg, basic_shapes(), seed=0)
     try:
-        got, want = _glaze_colours(cell)
+        got, want, _ = glaze_colours(cell)
         assert len(got) >= 4
         np.testing.assert_allclose(got, exposure * want, atol=2.5 / 255)
     finally:
