@@ -408,11 +408,70 @@ def _illumination(
     )
 
 
+def _label_medians(
+    lab: np.ndarray, values: list[np.ndarray], k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Median of each channel per label: one histogram of (label, channel, level) triples.
+
+    Args:
+        lab: int (N,) labels below ``k``.
+        values: uint8 samples, each (N, c_i); their channels side by side make the C channels.
+        k: Number of labels.
+
+    Returns:
+        The medians (k, C) in levels (0 for a label without samples), and which labels had
+        a sample (k,) bool.
+    """
+    channels = sum(v.shape[1] for v in values)
+    code = np.empty((len(lab), channels), np.int64)
+    base = lab[:, None] * channels
+    at = 0
+    for v in values:
+        c = v.shape[1]
+        code[:, at : at + c] = (base + np.arange(at, at + c)) * 256 + v
+        at += c
+    hist = np.bincount(code.ravel(), minlength=k * channels * 256).reshape(k * channels, 256)
+    cum = np.cumsum(hist, axis=1)
+    median = np.argmax(cum >= np.maximum((cum[:, -1:] + 1) // 2, 1), axis=1)
+    return median.reshape(k, channels), cum[::channels, -1] > 0
+
+
+def _samples(
+    region: np.ndarray, labels: np.ndarray, lut: np.ndarray, step: int, *images: np.ndarray
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Compact labels (N,) and values of every ``step``-th pixel (each axis) set in ``region``.
+
+    Args:
+        region: uint8 (H, W) mask.
+        labels: int (H, W) labels.
+        lut: Map of a label to its compact index.
+        step: Sampling step, in [px].
+        images: uint8 (H, W) or (H, W, c) images sampled.
+
+    Returns:
+        The compact labels (N,) and, per image, its values (N, c).
+    """
+    h, w = region.shape
+    found = cv2.findNonZero(np.ascontiguousarray(region[::step, ::step]))
+    xy = np.zeros((0, 2), np.intp) if found is None else found.reshape(-1, 2).astype(np.intp)
+    at = (xy[:, 1] * (step * w)) + xy[:, 0] * step
+    values = [np.take(im.reshape(h * w, -1), at, axis=0) for im in images]
+    return lut[np.take(labels.ravel(), at)], values
+
+
+def _compact(present: np.ndarray) -> tuple[np.ndarray, int]:
+    """Map of labels to compact indices (1.. for present labels, 0 for the rest), and the count."""
+    lut = np.zeros(len(present), np.int64)
+    k = int(np.count_nonzero(present))
+    lut[present] = np.arange(1, k + 1)
+    return lut, k + 1
+
+
 def _at_half_contrast(
     pieces: np.ndarray,
     labels: np.ndarray,
     dist: np.ndarray,
-    count: int,
+    present: np.ndarray,
     *,
     thr: float,
     p: ExtractParams,
@@ -425,14 +484,11 @@ def _at_half_contrast(
     [``thr``, ``edge_threshold_max``], so a bright tile's outline is where it was with a
     high global threshold and a faint tile's where its own contrast puts it.
     """
-    st = max(1, p.color_sample_step)
-    sub = pieces[::st, ::st]
-    idx = np.flatnonzero(sub.ravel())
-    lab = labels[::st, ::st].ravel()[idx].astype(np.int64)
-    val = dist[::st, ::st].ravel()[idx].astype(np.int64)
-    hist = np.bincount(lab * 256 + val, minlength=count * 256).reshape(count, 256)
-    cum = np.cumsum(hist, axis=1)
-    median = np.argmax(cum >= np.maximum((cum[:, -1:] + 1) // 2, 1), axis=1)
+    count = len(present)
+    lut, k = _compact(present)
+    lab, val = _samples(pieces, labels, lut, max(1, p.color_sample_step), dist)
+    median = np.zeros(count)
+    median[present] = _label_medians(lab, val, k)[0][1:, 0]
     level = np.clip(p.edge_fraction * median, thr, max(thr, p.edge_threshold_max))
     if not (level > thr).any():
         return pieces
@@ -445,36 +501,6 @@ def _at_half_contrast(
         per_pixel = np.take(level.astype(np.float32), np.asarray(labels, dtype=np.intp))
         keep = cv2.compare(dist.astype(np.float32), per_pixel, cv2.CMP_GE)
     return cv2.bitwise_and(pieces, keep)
-
-
-def _median_colors(
-    img: np.ndarray, labels: np.ndarray, region: np.ndarray, count: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """Median of each channel per label over pixels where ``region`` is set.
-
-    One bincount per channel over (label, value) pairs: linear in the number of pixels.
-
-    Args:
-        img: uint8 (H, W, C) (the picture, and the belt model beside it).
-        labels: int (H, W) labels below ``count``.
-        region: uint8 (H, W) mask.
-        count: Number of labels.
-
-    Returns:
-        The medians (count, C) in levels, and which labels had a pixel (count,) bool.
-    """
-    channels = img.shape[2]
-    idx = np.flatnonzero(region.ravel())
-    lab = labels.ravel()[idx].astype(np.int64) * 256
-    out = np.zeros((count, channels))
-    flat = img.reshape(-1, channels)[idx]
-    hist = np.zeros((count, 256), np.int64)
-    for ch in range(channels):
-        hist = np.bincount(lab + flat[:, ch], minlength=count * 256).reshape(count, 256)
-        cum = np.cumsum(hist, axis=1)
-        half = (cum[:, -1:] + 1) // 2
-        out[:, ch] = np.argmax(cum >= np.maximum(half, 1), axis=1)
-    return out, hist.sum(axis=1) > 0
 
 
 def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
@@ -605,7 +631,7 @@ def _segment(
     dist, thr, mask = _colour_distance(img, model, gain, p)
     count, labels, present, pieces = _split_regions(img, mask, p)
     if p.edge_fraction > 0.0:
-        pieces = _at_half_contrast(pieces, labels, dist, count, thr=thr, p=p)
+        pieces = _at_half_contrast(pieces, labels, dist, present, thr=thr, p=p)
     return _Segmentation(dist, thr, labels, count, present, pieces)
 
 
@@ -613,7 +639,7 @@ def _tile_colours(
     img: np.ndarray, model: np.ndarray, mean_light: np.ndarray, seg: _Segmentation, p: ExtractParams
 ) -> np.ndarray:
     """Median colour of every label (count, 3) [levels], under the reference light."""
-    count, labels, pieces = seg.count, seg.labels, seg.pieces
+    labels, pieces = seg.labels, seg.pieces
     if p.color_erode_px > 0:
         ek = cv2.getStructuringElement(
             cv2.MORPH_RECT, (2 * p.color_erode_px + 1, 2 * p.color_erode_px + 1)
@@ -621,16 +647,18 @@ def _tile_colours(
         region = cv2.erode(pieces, ek)
     else:
         region = pieces
+    lut, k = _compact(seg.present)
     st = max(1, p.color_sample_step)
-    both = np.concatenate([img[::st, ::st], model[::st, ::st]], axis=2)
-    medians, seen = _median_colors(both, labels[::st, ::st], region[::st, ::st], count)
+    medians, seen = _label_medians(*_samples(region, labels, lut, st, img, model), k)
     # Tiles eroded away entirely fall back to their whole region.
-    if (seg.present & ~seen).any():
-        full = np.concatenate([img, model], axis=2)
-        medians[~seen] = _median_colors(full, labels, pieces, count)[0][~seen]
-    colors = medians[:, :3]
+    if not seen[1:].all():
+        again = _label_medians(*_samples(pieces, labels, lut, 1, img, model), k)[0]
+        medians[~seen] = again[~seen]
+    compact = medians[:, :3].astype(np.float64)
     if p.correct_illumination:  # each tile's median colour under its median light
-        colors = colors * mean_light / np.maximum(medians[:, 3:], 1.0)
+        compact = compact * mean_light / np.maximum(medians[:, 3:], 1.0)
+    colors = np.zeros((seg.count, 3))
+    colors[seg.present] = compact[1:]
     return colors
 
 

@@ -385,13 +385,22 @@ class Figure:
         limits.check_count(total, "max_points", "figure: relevant points", FigureLimitError)
         self._derive(outer, holes, _as_color(self.color))
 
-    def _derive(self, outer: Boundary, holes: tuple[Boundary, ...], color: Color | None) -> None:
-        """Set the boundaries and colour, check the holes, derive area and centroid."""
+    def _derive(
+        self,
+        outer: Boundary,
+        holes: tuple[Boundary, ...],
+        color: Color | None,
+        measured: tuple[float, FloatArray, float] | None = None,
+    ) -> None:
+        """Set the boundaries and colour, check the holes, derive area and centroid.
+
+        ``measured`` is ``outer.measures()`` when already known (`figures_from_outlines`).
+        """
         object.__setattr__(self, "points", outer.points)
         object.__setattr__(self, "curve_mask", outer.curve_mask)
         object.__setattr__(self, "holes", holes)
         object.__setattr__(self, "color", color)
-        area, centroid, perim = outer.measures()
+        area, centroid, perim = outer.measures() if measured is None else measured
         object.__setattr__(self, "outer_centroid", _frozen(centroid))
         object.__setattr__(self, "perimeter", perim)
         if holes:
@@ -407,12 +416,16 @@ class Figure:
 
     @classmethod
     def _from_boundaries(
-        cls, outer: Boundary, holes: tuple[Boundary, ...], color: Iterable[float] | None
+        cls,
+        outer: Boundary,
+        holes: tuple[Boundary, ...],
+        color: Iterable[float] | None,
+        measured: tuple[float, FloatArray, float] | None = None,
     ) -> Figure:
         """Figure from boundaries already validated (`Boundary.make`): no second validation."""
         fig = object.__new__(cls)
         object.__setattr__(fig, "y_down", outer.y_down)
-        fig._derive(outer, holes, _as_color(color))
+        fig._derive(outer, holes, _as_color(color), measured)
         return fig
 
     def __eq__(self, other: object) -> bool:
@@ -616,16 +629,20 @@ def figures_from_outlines(
     bounds: list[Boundary | InvalidFigureError] = list(simple)  # type: ignore[arg-type]
     for k, b in zip(good, made, strict=True):
         bounds[k] = b
+    outers = [b for b in bounds[: len(outlines)] if isinstance(b, Boundary)]
+    measured = iter(_measures_many(outers))
     out: list[Figure | InvalidFigureError] = []
     at = len(outlines)
     for i, h in enumerate(holes):
         mine = bounds[at : at + len(h)]
         at += len(h)
+        outer = bounds[i]
+        m = next(measured) if isinstance(outer, Boundary) else None
         try:
-            for b in (bounds[i], *mine):
+            for b in (outer, *mine):
                 if isinstance(b, InvalidFigureError):
                     raise b
-            out.append(Figure._from_boundaries(bounds[i], tuple(mine), colors[i]))  # type: ignore[arg-type]
+            out.append(Figure._from_boundaries(outer, tuple(mine), colors[i], m))  # type: ignore[arg-type]
         except InvalidFigureError as exc:
             out.append(exc)
     return out
@@ -706,6 +723,40 @@ def _boundaries_many(
             except InvalidFigureError as exc:
                 out[i] = exc
     return [b for b in out if b is not None]
+
+
+def _measures_many(bounds: Sequence[Boundary]) -> list[tuple[float, FloatArray, float]]:
+    """`Boundary.measures` of many boundaries, polygons without arcs in one numpy pass.
+
+    Boundaries with arcs, far from the origin (see `qshape.geometry.reference_point`) or
+    without area are measured one by one.
+    """
+    out: list[tuple[float, FloatArray, float] | None] = [None] * len(bounds)
+    fast = [k for k, b in enumerate(bounds) if not b.curve_mask.any()]
+    if fast:
+        # Counter-clockwise in the y-up frame, as Boundary.measures walks it.
+        pts = np.concatenate([bounds[k].points_yup()[::-1] for k in fast])
+        n = np.array([len(bounds[k].points) for k in fast], dtype=np.intp)
+        start = np.zeros(len(fast), dtype=np.intp)
+        np.cumsum(n[:-1], out=start[1:])
+        nxt = np.arange(1, len(pts) + 1)
+        nxt[start + n - 1] = start
+        size = (np.maximum.reduceat(pts, start) - np.minimum.reduceat(pts, start)).max(axis=1)
+        near = np.maximum.reduceat(np.abs(pts).max(axis=1), start) <= geo._FAR_RATIO * size
+        after = pts[nxt]
+        w = pts[:, 0] * after[:, 1] - pts[:, 1] * after[:, 0]
+        area = 0.5 * np.add.reduceat(w, start)
+        moment = np.add.reduceat((pts + after) * w[:, None], start, axis=0) / 6.0
+        step = after - pts
+        perimeter = np.add.reduceat(np.hypot(step[:, 0], step[:, 1]), start)
+        ok = near & (size > 0.0) & (area != 0.0)
+        centroid = moment / np.where(ok, area, 1.0)[:, None]
+        down = np.array([bounds[k].y_down for k in fast])
+        centroid[down, 1] *= -1.0
+        areas, perimeters = area.tolist(), perimeter.tolist()
+        for j in np.flatnonzero(ok).tolist():
+            out[fast[j]] = (areas[j], centroid[j].copy(), perimeters[j])
+    return [b.measures() if m is None else m for b, m in zip(bounds, out, strict=True)]
 
 
 def _circle_local(r: float) -> tuple[FloatArray, BoolArray]:
