@@ -323,20 +323,40 @@ def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, floa
     return dominant, float(near.mean())
 
 
+@functools.cache
+def _polynomial_basis(gh: int, gw: int, degree: int) -> np.ndarray:
+    """Monomials u^i v^j (i + j <= degree) of the cell centres of a (gh, gw) grid, (gh*gw, terms).
+
+    u, v are the centres' positions in [-0.5, 0.5]; depends only on the grid and the degree,
+    so it is computed once per camera size (read-only).
+    """
+    yy, xx = np.mgrid[0:gh, 0:gw]
+    u, v = (xx.ravel() + 0.5) / gw - 0.5, (yy.ravel() + 0.5) / gh - 0.5
+    basis = np.stack(
+        [u**i * v**j for i in range(degree + 1) for j in range(degree + 1 - i)], axis=1
+    )
+    basis.setflags(write=False)
+    return basis
+
+
 def _polynomial_fit(small: np.ndarray, keep: np.ndarray, degree: int) -> np.ndarray | None:
     """Per-channel polynomial of the cell grid (gh, gw, 3) fitted on ``keep`` cells, or None."""
     gh, gw = keep.shape
     terms = (degree + 1) * (degree + 2) // 2
     if degree <= 0 or int(keep.sum()) < 2 * terms:
         return None
-    yy, xx = np.mgrid[0:gh, 0:gw]
-    u, v = (xx.ravel() + 0.5) / gw - 0.5, (yy.ravel() + 0.5) / gh - 0.5
-    basis = np.stack(
-        [u**i * v**j for i in range(degree + 1) for j in range(degree + 1 - i)], axis=1
-    )
+    basis = _polynomial_basis(gh, gw, degree)
     flat = keep.ravel()
     coef, *_ = np.linalg.lstsq(basis[flat], small.reshape(-1, 3)[flat], rcond=None)
     return np.asarray((basis @ coef).reshape(gh, gw, 3))
+
+
+@functools.cache
+def _box(size: int) -> np.ndarray:
+    """Square structuring element of ``size`` x ``size`` px (uint8 ones), made once."""
+    kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (size, size))
+    kernel.setflags(write=False)
+    return kernel
 
 
 def _local_fill(
@@ -387,7 +407,7 @@ def _illumination(
         & ((ratio <= 1.0) | brighter_ok)
     ).astype(np.uint8)
     # Cells beside a non-background cell are partly tile (mixed colours): not trusted.
-    core = cv2.erode(is_bg, np.ones((3, 3), np.uint8), borderType=cv2.BORDER_REPLICATE)
+    core = cv2.erode(is_bg, _box(3), borderType=cv2.BORDER_REPLICATE)
     keep = core.view(bool) if int(core.sum()) >= p.illumination_min_cells else is_bg.view(bool)
     poly = _polynomial_fit(small, keep, p.illumination_degree)
     model = np.broadcast_to(dominant, small.shape) if poly is None else poly
@@ -579,8 +599,7 @@ def _colour_distance(
     thr = float(np.clip(otsu, p.threshold_min, p.threshold_max))
     _, mask = cv2.threshold(dist, thr, 255, cv2.THRESH_BINARY)
     if p.open_px > 1:
-        kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (p.open_px, p.open_px))
-        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel)
+        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, _box(p.open_px))
     return dist, thr, mask
 
 
@@ -604,20 +623,30 @@ def _split_regions(
     edges = _color_edges(img, p)
     cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
     count, labels = cv2.connectedComponents(cut, connectivity=4)
-    present = np.bincount(labels.ravel(), minlength=count) >= p.min_area_px
+    small = count <= 256  # noqa: PLR2004 (labels fit a byte: histogram and look-up in OpenCV)
+    labels8 = labels.astype(np.uint8) if small else None
+    if labels8 is not None:
+        sizes = cv2.calcHist([labels8], [0], None, [256], [0, 256]).ravel()[:count]
+    else:
+        sizes = np.bincount(labels.ravel(), minlength=count)
+    present = sizes >= p.min_area_px
     present[0] = False
+    labf: np.ndarray
     if present[1:].all():
         labf = labels.astype(np.float32)  # no crumbs: the labels as they are
-    else:
+    else:  # crumbs (pieces smaller than a tile) to label 0
         lut = np.where(present, np.arange(count), 0).astype(np.float32)
-        labf = np.take(lut, np.asarray(labels, dtype=np.intp))
-    kernel3 = np.ones((3, 3), np.uint8)
+        if labels8 is not None:
+            labf = cv2.LUT(labels8, np.pad(lut, (0, 256 - count)))
+        else:
+            labf = np.take(lut, np.asarray(labels, dtype=np.intp))
+    kernel3 = _box(3)
     zero = np.zeros(1, np.float32)
     lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
     for _ in range(p.restore_iterations):
         if cv2.countNonZero(lost) == 0:
             break
-        np.copyto(labf, cv2.dilate(labf, kernel3), where=lost.view(bool))
+        labf = cv2.copyTo(cv2.dilate(labf, kernel3), lost, labf)
         lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
     border = cv2.compare(cv2.dilate(labf, kernel3), labf, cv2.CMP_GT)
     pieces = cv2.bitwise_and(cv2.compare(labf, zero, cv2.CMP_GT), cv2.bitwise_not(border))
@@ -641,10 +670,7 @@ def _tile_colours(
     """Median colour of every label (count, 3) [levels], under the reference light."""
     labels, pieces = seg.labels, seg.pieces
     if p.color_erode_px > 0:
-        ek = cv2.getStructuringElement(
-            cv2.MORPH_RECT, (2 * p.color_erode_px + 1, 2 * p.color_erode_px + 1)
-        )
-        region = cv2.erode(pieces, ek)
+        region = cv2.erode(pieces, _box(2 * p.color_erode_px + 1))
     else:
         region = pieces
     lut, k = _compact(seg.present)
