@@ -444,12 +444,11 @@ def _label_medians(
     """
     channels = sum(v.shape[1] for v in values)
     code = np.empty((len(lab), channels), np.int64)
-    base = lab[:, None] * channels
     at = 0
     for v in values:
-        c = v.shape[1]
-        code[:, at : at + c] = (base + np.arange(at, at + c)) * 256 + v
-        at += c
+        code[:, at : at + v.shape[1]] = v
+        at += v.shape[1]
+    code += (lab * (channels * 256))[:, None] + np.arange(0, channels * 256, 256)
     hist = np.bincount(code.ravel(), minlength=k * channels * 256).reshape(k * channels, 256)
     cum = np.cumsum(hist, axis=1)
     median = np.argmax(cum >= np.maximum((cum[:, -1:] + 1) // 2, 1), axis=1)
