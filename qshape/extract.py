@@ -323,20 +323,40 @@ def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, floa
     return dominant, float(near.mean())
 
 
+@functools.cache
+def _polynomial_basis(gh: int, gw: int, degree: int) -> np.ndarray:
+    """Monomials u^i v^j (i + j <= degree) of the cell centres of a (gh, gw) grid, (gh*gw, terms).
+
+    u, v are the centres' positions in [-0.5, 0.5]; depends only on the grid and the degree,
+    so it is computed once per camera size (read-only).
+    """
+    yy, xx = np.mgrid[0:gh, 0:gw]
+    u, v = (xx.ravel() + 0.5) / gw - 0.5, (yy.ravel() + 0.5) / gh - 0.5
+    basis = np.stack(
+        [u**i * v**j for i in range(degree + 1) for j in range(degree + 1 - i)], axis=1
+    )
+    basis.setflags(write=False)
+    return basis
+
+
 def _polynomial_fit(small: np.ndarray, keep: np.ndarray, degree: int) -> np.ndarray | None:
     """Per-channel polynomial of the cell grid (gh, gw, 3) fitted on ``keep`` cells, or None."""
     gh, gw = keep.shape
     terms = (degree + 1) * (degree + 2) // 2
     if degree <= 0 or int(keep.sum()) < 2 * terms:
         return None
-    yy, xx = np.mgrid[0:gh, 0:gw]
-    u, v = (xx.ravel() + 0.5) / gw - 0.5, (yy.ravel() + 0.5) / gh - 0.5
-    basis = np.stack(
-        [u**i * v**j for i in range(degree + 1) for j in range(degree + 1 - i)], axis=1
-    )
+    basis = _polynomial_basis(gh, gw, degree)
     flat = keep.ravel()
     coef, *_ = np.linalg.lstsq(basis[flat], small.reshape(-1, 3)[flat], rcond=None)
     return np.asarray((basis @ coef).reshape(gh, gw, 3))
+
+
+@functools.cache
+def _box(size: int) -> np.ndarray:
+    """Square structuring element of ``size`` x ``size`` px (uint8 ones), made once."""
+    kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (size, size))
+    kernel.setflags(write=False)
+    return kernel
 
 
 def _local_fill(
@@ -387,7 +407,7 @@ def _illumination(
         & ((ratio <= 1.0) | brighter_ok)
     ).astype(np.uint8)
     # Cells beside a non-background cell are partly tile (mixed colours): not trusted.
-    core = cv2.erode(is_bg, np.ones((3, 3), np.uint8), borderType=cv2.BORDER_REPLICATE)
+    core = cv2.erode(is_bg, _box(3), borderType=cv2.BORDER_REPLICATE)
     keep = core.view(bool) if int(core.sum()) >= p.illumination_min_cells else is_bg.view(bool)
     poly = _polynomial_fit(small, keep, p.illumination_degree)
     model = np.broadcast_to(dominant, small.shape) if poly is None else poly
@@ -408,11 +428,69 @@ def _illumination(
     )
 
 
+def _label_medians(
+    lab: np.ndarray, values: list[np.ndarray], k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Median of each channel per label: one histogram of (label, channel, level) triples.
+
+    Args:
+        lab: int (N,) labels below ``k``.
+        values: uint8 samples, each (N, c_i); their channels side by side make the C channels.
+        k: Number of labels.
+
+    Returns:
+        The medians (k, C) in levels (0 for a label without samples), and which labels had
+        a sample (k,) bool.
+    """
+    channels = sum(v.shape[1] for v in values)
+    code = np.empty((len(lab), channels), np.int64)
+    at = 0
+    for v in values:
+        code[:, at : at + v.shape[1]] = v
+        at += v.shape[1]
+    code += (lab * (channels * 256))[:, None] + np.arange(0, channels * 256, 256)
+    hist = np.bincount(code.ravel(), minlength=k * channels * 256).reshape(k * channels, 256)
+    cum = np.cumsum(hist, axis=1)
+    median = np.argmax(cum >= np.maximum((cum[:, -1:] + 1) // 2, 1), axis=1)
+    return median.reshape(k, channels), cum[::channels, -1] > 0
+
+
+def _samples(
+    region: np.ndarray, labels: np.ndarray, lut: np.ndarray, step: int, *images: np.ndarray
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Compact labels (N,) and values of every ``step``-th pixel (each axis) set in ``region``.
+
+    Args:
+        region: uint8 (H, W) mask.
+        labels: int (H, W) labels.
+        lut: Map of a label to its compact index.
+        step: Sampling step, in [px].
+        images: uint8 (H, W) or (H, W, c) images sampled.
+
+    Returns:
+        The compact labels (N,) and, per image, its values (N, c).
+    """
+    h, w = region.shape
+    found = cv2.findNonZero(np.ascontiguousarray(region[::step, ::step]))
+    xy = np.zeros((0, 2), np.intp) if found is None else found.reshape(-1, 2).astype(np.intp)
+    at = (xy[:, 1] * (step * w)) + xy[:, 0] * step
+    values = [np.take(im.reshape(h * w, -1), at, axis=0) for im in images]
+    return lut[np.take(labels.ravel(), at)], values
+
+
+def _compact(present: np.ndarray) -> tuple[np.ndarray, int]:
+    """Map of labels to compact indices (1.. for present labels, 0 for the rest), and the count."""
+    lut = np.zeros(len(present), np.int64)
+    k = int(np.count_nonzero(present))
+    lut[present] = np.arange(1, k + 1)
+    return lut, k + 1
+
+
 def _at_half_contrast(
     pieces: np.ndarray,
     labels: np.ndarray,
     dist: np.ndarray,
-    count: int,
+    present: np.ndarray,
     *,
     thr: float,
     p: ExtractParams,
@@ -425,14 +503,11 @@ def _at_half_contrast(
     [``thr``, ``edge_threshold_max``], so a bright tile's outline is where it was with a
     high global threshold and a faint tile's where its own contrast puts it.
     """
-    st = max(1, p.color_sample_step)
-    sub = pieces[::st, ::st]
-    idx = np.flatnonzero(sub.ravel())
-    lab = labels[::st, ::st].ravel()[idx].astype(np.int64)
-    val = dist[::st, ::st].ravel()[idx].astype(np.int64)
-    hist = np.bincount(lab * 256 + val, minlength=count * 256).reshape(count, 256)
-    cum = np.cumsum(hist, axis=1)
-    median = np.argmax(cum >= np.maximum((cum[:, -1:] + 1) // 2, 1), axis=1)
+    count = len(present)
+    lut, k = _compact(present)
+    lab, val = _samples(pieces, labels, lut, max(1, p.color_sample_step), dist)
+    median = np.zeros(count)
+    median[present] = _label_medians(lab, val, k)[0][1:, 0]
     level = np.clip(p.edge_fraction * median, thr, max(thr, p.edge_threshold_max))
     if not (level > thr).any():
         return pieces
@@ -445,36 +520,6 @@ def _at_half_contrast(
         per_pixel = np.take(level.astype(np.float32), np.asarray(labels, dtype=np.intp))
         keep = cv2.compare(dist.astype(np.float32), per_pixel, cv2.CMP_GE)
     return cv2.bitwise_and(pieces, keep)
-
-
-def _median_colors(
-    img: np.ndarray, labels: np.ndarray, region: np.ndarray, count: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """Median of each channel per label over pixels where ``region`` is set.
-
-    One bincount per channel over (label, value) pairs: linear in the number of pixels.
-
-    Args:
-        img: uint8 (H, W, C) (the picture, and the belt model beside it).
-        labels: int (H, W) labels below ``count``.
-        region: uint8 (H, W) mask.
-        count: Number of labels.
-
-    Returns:
-        The medians (count, C) in levels, and which labels had a pixel (count,) bool.
-    """
-    channels = img.shape[2]
-    idx = np.flatnonzero(region.ravel())
-    lab = labels.ravel()[idx].astype(np.int64) * 256
-    out = np.zeros((count, channels))
-    flat = img.reshape(-1, channels)[idx]
-    hist = np.zeros((count, 256), np.int64)
-    for ch in range(channels):
-        hist = np.bincount(lab + flat[:, ch], minlength=count * 256).reshape(count, 256)
-        cum = np.cumsum(hist, axis=1)
-        half = (cum[:, -1:] + 1) // 2
-        out[:, ch] = np.argmax(cum >= np.maximum(half, 1), axis=1)
-    return out, hist.sum(axis=1) > 0
 
 
 def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
@@ -521,6 +566,222 @@ def _signed_area(c: FloatArray) -> float:
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
+@dataclass(frozen=True, eq=False)
+class _Segmentation:
+    """What the image stages hand to outline tracing (internal).
+
+    Attributes:
+        dist: Colour distance to the belt model times the shading gain, (H, W) uint8 [levels].
+        threshold: Foreground threshold on ``dist``, in [levels].
+        labels: Region label of every pixel (0: none), (H, W) int32.
+        count: Number of labels (background included).
+        present: Which labels are regions (not background, not a crumb), (count,) bool.
+        pieces: Region pixels, each region apart from its neighbours, (H, W) uint8 0/255.
+    """
+
+    dist: np.ndarray
+    threshold: float
+    labels: np.ndarray
+    count: int
+    present: np.ndarray
+    pieces: np.ndarray
+
+
+def _colour_distance(
+    img: np.ndarray, model: np.ndarray, gain: np.ndarray, p: ExtractParams
+) -> tuple[np.ndarray, float, np.ndarray]:
+    """Colour distance to the belt model (uint8), its threshold, and the opened foreground mask."""
+    diff = cv2.absdiff(img, model)
+    r, g, b = cv2.split(diff)
+    dist = cv2.multiply(cv2.max(cv2.max(r, g), b), gain, scale=1.0 / _GAIN_SCALE)
+    otsu, _ = cv2.threshold(dist, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    thr = float(np.clip(otsu, p.threshold_min, p.threshold_max))
+    _, mask = cv2.threshold(dist, thr, 255, cv2.THRESH_BINARY)
+    if p.open_px > 1:
+        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, _box(p.open_px))
+    return dist, thr, mask
+
+
+def _split_regions(
+    img: np.ndarray, mask: np.ndarray, p: ExtractParams
+) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    """Label the foreground, touching tiles of different colours apart.
+
+    Cut the foreground along Canny edges, label the pieces, give the cut pixels (and crumbs
+    smaller than a tile) back to a neighbouring piece, then separate touching pieces by
+    dropping the pixels that border a piece with a higher label.
+
+    Returns:
+        (count, labels (H, W) int32, present (count,) bool, pieces (H, W) uint8).
+    """
+    if not p.split_touching:
+        count, labels = cv2.connectedComponents(mask, connectivity=8)
+        present = np.ones(count, bool)
+        present[0] = False
+        return count, labels, present, mask
+    edges = _color_edges(img, p)
+    cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
+    count, labels = cv2.connectedComponents(cut, connectivity=4)
+    small = count <= 256  # noqa: PLR2004 (labels fit a byte: histogram and look-up in OpenCV)
+    labels8 = labels.astype(np.uint8) if small else None
+    if labels8 is not None:
+        sizes = cv2.calcHist([labels8], [0], None, [256], [0, 256]).ravel()[:count]
+    else:
+        sizes = np.bincount(labels.ravel(), minlength=count)
+    present = sizes >= p.min_area_px
+    present[0] = False
+    labf: np.ndarray
+    if present[1:].all():
+        labf = labels.astype(np.float32)  # no crumbs: the labels as they are
+    else:  # crumbs (pieces smaller than a tile) to label 0
+        lut = np.where(present, np.arange(count), 0).astype(np.float32)
+        if labels8 is not None:
+            labf = cv2.LUT(labels8, np.pad(lut, (0, 256 - count)))
+        else:
+            labf = np.take(lut, np.asarray(labels, dtype=np.intp))
+    kernel3 = _box(3)
+    zero = np.zeros(1, np.float32)
+    lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
+    for _ in range(p.restore_iterations):
+        if cv2.countNonZero(lost) == 0:
+            break
+        labf = cv2.copyTo(cv2.dilate(labf, kernel3), lost, labf)
+        lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
+    border = cv2.compare(cv2.dilate(labf, kernel3), labf, cv2.CMP_GT)
+    pieces = cv2.bitwise_and(cv2.compare(labf, zero, cv2.CMP_GT), cv2.bitwise_not(border))
+    return count, labf.astype(np.int32), present, pieces
+
+
+def _segment(
+    img: np.ndarray, model: np.ndarray, gain: np.ndarray, p: ExtractParams
+) -> _Segmentation:
+    """Image stages after the belt model: distance, threshold, regions, per-region edge level."""
+    dist, thr, mask = _colour_distance(img, model, gain, p)
+    count, labels, present, pieces = _split_regions(img, mask, p)
+    if p.edge_fraction > 0.0:
+        pieces = _at_half_contrast(pieces, labels, dist, present, thr=thr, p=p)
+    return _Segmentation(dist, thr, labels, count, present, pieces)
+
+
+def _tile_colours(
+    img: np.ndarray, model: np.ndarray, mean_light: np.ndarray, seg: _Segmentation, p: ExtractParams
+) -> np.ndarray:
+    """Median colour of every label (count, 3) [levels], under the reference light."""
+    labels, pieces = seg.labels, seg.pieces
+    if p.color_erode_px > 0:
+        region = cv2.erode(pieces, _box(2 * p.color_erode_px + 1))
+    else:
+        region = pieces
+    lut, k = _compact(seg.present)
+    st = max(1, p.color_sample_step)
+    medians, seen = _label_medians(*_samples(region, labels, lut, st, img, model), k)
+    # Tiles eroded away entirely fall back to their whole region.
+    if not seen[1:].all():
+        again = _label_medians(*_samples(pieces, labels, lut, 1, img, model), k)[0]
+        medians[~seen] = again[~seen]
+    compact = medians[:, :3].astype(np.float64)
+    if p.correct_illumination:  # each tile's median colour under its median light
+        compact = compact * mean_light / np.maximum(medians[:, 3:], 1.0)
+    colors = np.zeros((seg.count, 3))
+    colors[seg.present] = compact[1:]
+    return colors
+
+
+def _trace(pieces: np.ndarray) -> tuple[Any, np.ndarray | None]:
+    """Outer contours and holes (two-level hierarchy) of the region mask."""
+    return cv2.findContours(pieces, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+
+
+_Todo = tuple[FloatArray, list[FloatArray], Color, str, float]
+
+
+def _outlines(
+    contours: Any,
+    hier: np.ndarray,
+    colors: np.ndarray,
+    seg: _Segmentation,
+    *,
+    shape: tuple[int, int],
+    p: ExtractParams,
+) -> tuple[list[_Todo], list[PartialTile]]:
+    """Whole regions' outlines with their holes and colours, and the partial tiles.
+
+    Returns:
+        Per whole region (outline (k, 2), holes, colour, where, traced length [px]), and the
+        regions touching the border.
+    """
+    h, w = shape
+    m = p.border_margin_px
+    partial: list[PartialTile] = []
+    todo: list[_Todo] = []
+    for i, cnt in enumerate(contours):
+        if hier[i][3] != -1:
+            continue  # a hole; handled with its parent
+        area = cv2.contourArea(cnt)
+        if area < p.min_area_px:
+            continue
+        pts = cnt[:, 0, :].astype(np.float64)
+        x0, y0 = int(cnt[0, 0, 0]), int(cnt[0, 0, 1])
+        rgb = colors[int(seg.labels[y0, x0])]
+        bx, by, bw, bh = cv2.boundingRect(cnt)
+        c = np.clip(rgb / 255.0, 0.0, 1.0)
+        color3 = (float(c[0]), float(c[1]), float(c[2]))
+        if bx <= m or by <= m or bx + bw >= w - m or by + bh >= h - m:
+            mom = cv2.moments(cnt)
+            cen = np.array([mom["m10"], mom["m01"]]) / max(mom["m00"], 1e-9)
+            partial.append(PartialTile(pts, float(area), cen, color3))
+            continue
+        holes = []
+        child = hier[i][2]
+        while child != -1:
+            hole = contours[child]
+            h_area = cv2.contourArea(hole)
+            h_len = cv2.arcLength(hole, True)
+            if (
+                h_area >= p.min_hole_area_px
+                and 2.0 * h_area >= p.min_hole_width_px * h_len
+                and _shows_belt(
+                    seg.dist, hole, seg.threshold * p.hole_belt_fraction, p.hole_belt_percentile
+                )
+            ):
+                hp = hole[:, 0, :].astype(np.float64)
+                # A hole's outward (away from the tile material) is into the hole.
+                sign = 1.0 if _signed_area(hp) > 0 else -1.0
+                holes.append(_offset_outline(hp, p.boundary_offset_px, -sign))
+            child = hier[child][0]
+        if p.boundary_offset_px != 0.0:
+            sign = 1.0 if _signed_area(pts) > 0 else -1.0
+            pts = _offset_outline(pts, p.boundary_offset_px, sign)
+        where = f"region at ({x0}, {y0}) px, area {area:.0f} px^2"
+        todo.append((pts, holes, color3, where, cv2.arcLength(cnt, True)))
+    return todo, partial
+
+
+def _figures(
+    todo: list[_Todo], p: ExtractParams
+) -> tuple[list[Figure], list[FloatArray], list[str]]:
+    """Every outline simplified at once into figures; noise-like outlines rejected."""
+    made = figures_from_outlines(
+        [t[0] for t in todo], [t[1] for t in todo], [t[2] for t in todo], p.outline, y_down=True
+    )
+    figures: list[Figure] = []
+    outlines: list[FloatArray] = []
+    rejected: list[str] = []
+    for (outline, _, _, where, traced), fig in zip(todo, made, strict=True):
+        if isinstance(fig, InvalidFigureError):
+            rejected.append(f"{where}: {fig}")
+            continue
+        if traced > p.max_outline_excess * fig.perimeter:
+            rejected.append(
+                f"{where}: outline mostly noise (traced length {traced / fig.perimeter:.2f} x the "
+                f"perimeter of its relevant points; at most {p.max_outline_excess:g} allowed)"
+            )
+            continue
+        figures.append(fig)
+        outlines.append(outline)
+    return figures, outlines, rejected
+
+
 def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> ExtractResult:
     """Tiles in an image: whole tiles as figures, border-touching ones as partial tiles.
 
@@ -539,150 +800,33 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     """
     p = default_params() if params is None else params
     img = check_image(image, p)
-    h, w = img.shape[:2]
     if _channel_span(img) <= p.uniform_range:
         level = img[0, 0].astype(np.float64) / 255.0
         return ExtractResult([], [], [], [], (level[0], level[1], level[2]), 0.0)
     if p.blur_sigma_px > 0.0:
         img = cv2.GaussianBlur(img, (0, 0), p.blur_sigma_px)
     dominant, share = _dominant_color(img, p)
-    if share < p.min_background_fraction:
-        col = (float(dominant[0]) / 255.0, float(dominant[1]) / 255.0, float(dominant[2]) / 255.0)
-        why = (
-            f"no dominant background: {100 * share:.0f}% of the border is near its commonest "
-            f"colour (at least {100 * p.min_background_fraction:.0f}% needed); nothing is "
-            "segmented"
-        )
-        return ExtractResult([], [], [], [why], col, 0.0)
-    model, mean_light, gain = _illumination(img, dominant, p)
-    diff = cv2.absdiff(img, model)
-    r, g, b = cv2.split(diff)
-    dist = cv2.multiply(cv2.max(cv2.max(r, g), b), gain, scale=1.0 / _GAIN_SCALE)
-    otsu, _ = cv2.threshold(dist, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
-    thr = float(np.clip(otsu, p.threshold_min, p.threshold_max))
-    _, mask = cv2.threshold(dist, thr, 255, cv2.THRESH_BINARY)
-    if p.open_px > 1:
-        kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (p.open_px, p.open_px))
-        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel)
-    if p.split_touching:
-        # Cut the foreground along Canny edges, label the pieces, give the cut pixels (and
-        # crumbs smaller than a tile) back to a neighbouring piece, then separate touching
-        # pieces by dropping the pixels that border a piece with a higher label.
-        edges = _color_edges(img, p)
-        cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
-        count, labels = cv2.connectedComponents(cut, connectivity=4)
-        present = np.bincount(labels.ravel(), minlength=count) >= p.min_area_px
-        present[0] = False
-        if present[1:].all():
-            labf = labels.astype(np.float32)  # no crumbs: the labels as they are
-        else:
-            lut = np.where(present, np.arange(count), 0).astype(np.float32)
-            labf = np.take(lut, np.asarray(labels, dtype=np.intp))
-        kernel3 = np.ones((3, 3), np.uint8)
-        zero = np.zeros(1, np.float32)
-        lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
-        for _ in range(p.restore_iterations):
-            if cv2.countNonZero(lost) == 0:
-                break
-            np.copyto(labf, cv2.dilate(labf, kernel3), where=lost.view(bool))
-            lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
-        border = cv2.compare(cv2.dilate(labf, kernel3), labf, cv2.CMP_GT)
-        pieces = cv2.bitwise_and(cv2.compare(labf, zero, cv2.CMP_GT), cv2.bitwise_not(border))
-        labels = labf.astype(np.int32)
-    else:
-        count, labels = cv2.connectedComponents(mask, connectivity=8)
-        pieces = mask
-        present = np.ones(count, bool)
-        present[0] = False
     background = (
         float(dominant[0]) / 255.0,
         float(dominant[1]) / 255.0,
         float(dominant[2]) / 255.0,
     )
-    if p.edge_fraction > 0.0:
-        pieces = _at_half_contrast(pieces, labels, dist, count, thr=thr, p=p)
-    contours, hierarchy = cv2.findContours(pieces, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
-    if count <= 1 or hierarchy is None:
-        return ExtractResult([], [], [], [], background, thr)
-    hier = hierarchy[0]
-    if p.color_erode_px > 0:
-        ek = cv2.getStructuringElement(
-            cv2.MORPH_RECT, (2 * p.color_erode_px + 1, 2 * p.color_erode_px + 1)
+    if share < p.min_background_fraction:
+        why = (
+            f"no dominant background: {100 * share:.0f}% of the border is near its commonest "
+            f"colour (at least {100 * p.min_background_fraction:.0f}% needed); nothing is "
+            "segmented"
         )
-        region = cv2.erode(pieces, ek)
-    else:
-        region = pieces
-    st = max(1, p.color_sample_step)
-    both = np.concatenate([img[::st, ::st], model[::st, ::st]], axis=2)
-    medians, seen = _median_colors(both, labels[::st, ::st], region[::st, ::st], count)
-    # Tiles eroded away entirely fall back to their whole region.
-    if (present & ~seen).any():
-        full = np.concatenate([img, model], axis=2)
-        medians[~seen] = _median_colors(full, labels, pieces, count)[0][~seen]
-    colors = medians[:, :3]
-    if p.correct_illumination:  # each tile's median colour under its median light
-        colors = colors * mean_light / np.maximum(medians[:, 3:], 1.0)
-    figures: list[Figure] = []
-    outlines: list[FloatArray] = []
-    partial: list[PartialTile] = []
-    rejected: list[str] = []
-    m = p.border_margin_px
-    todo: list[tuple[FloatArray, list[FloatArray], Color, str, float]] = []
-    for i, cnt in enumerate(contours):
-        if hier[i][3] != -1:
-            continue  # a hole; handled with its parent
-        area = cv2.contourArea(cnt)
-        if area < p.min_area_px:
-            continue
-        pts = cnt[:, 0, :].astype(np.float64)
-        x0, y0 = int(cnt[0, 0, 0]), int(cnt[0, 0, 1])
-        rgb = colors[int(labels[y0, x0])]
-        bx, by, bw, bh = cv2.boundingRect(cnt)
-        c = np.clip(rgb / 255.0, 0.0, 1.0)
-        color3 = (float(c[0]), float(c[1]), float(c[2]))
-        if bx <= m or by <= m or bx + bw >= w - m or by + bh >= h - m:
-            mom = cv2.moments(cnt)
-            cen = np.array([mom["m10"], mom["m01"]]) / max(mom["m00"], 1e-9)
-            partial.append(PartialTile(pts, float(area), cen, color3))
-            continue
-        holes = []
-        child = hier[i][2]
-        while child != -1:
-            hole = contours[child]
-            h_area = cv2.contourArea(hole)
-            h_len = cv2.arcLength(hole, True)
-            if (
-                h_area >= p.min_hole_area_px
-                and 2.0 * h_area >= p.min_hole_width_px * h_len
-                and _shows_belt(dist, hole, thr * p.hole_belt_fraction, p.hole_belt_percentile)
-            ):
-                hp = hole[:, 0, :].astype(np.float64)
-                # A hole's outward (away from the tile material) is into the hole.
-                sign = 1.0 if _signed_area(hp) > 0 else -1.0
-                holes.append(_offset_outline(hp, p.boundary_offset_px, -sign))
-            child = hier[child][0]
-        if p.boundary_offset_px != 0.0:
-            sign = 1.0 if _signed_area(pts) > 0 else -1.0
-            pts = _offset_outline(pts, p.boundary_offset_px, sign)
-        where = f"region at ({x0}, {y0}) px, area {area:.0f} px^2"
-        todo.append((pts, holes, color3, where, cv2.arcLength(cnt, True)))
-    # Every outline of the image simplified at once.
-    made = figures_from_outlines(
-        [t[0] for t in todo], [t[1] for t in todo], [t[2] for t in todo], p.outline, y_down=True
-    )
-    for (outline, _, _, where, traced), fig in zip(todo, made, strict=True):
-        if isinstance(fig, InvalidFigureError):
-            rejected.append(f"{where}: {fig}")
-            continue
-        if traced > p.max_outline_excess * fig.perimeter:
-            rejected.append(
-                f"{where}: outline mostly noise (traced length {traced / fig.perimeter:.2f} x the "
-                f"perimeter of its relevant points; at most {p.max_outline_excess:g} allowed)"
-            )
-            continue
-        figures.append(fig)
-        outlines.append(outline)
-    return ExtractResult(figures, outlines, partial, rejected, background, thr)
+        return ExtractResult([], [], [], [why], background, 0.0)
+    model, mean_light, gain = _illumination(img, dominant, p)
+    seg = _segment(img, model, gain, p)
+    contours, hierarchy = _trace(seg.pieces)
+    if seg.count <= 1 or hierarchy is None:
+        return ExtractResult([], [], [], [], background, seg.threshold)
+    colors = _tile_colours(img, model, mean_light, seg, p)
+    todo, partial = _outlines(contours, hierarchy[0], colors, seg, shape=img.shape[:2], p=p)
+    figures, outlines, rejected = _figures(todo, p)
+    return ExtractResult(figures, outlines, partial, rejected, background, seg.threshold)
 
 
 def extract(image: np.ndarray, params: ExtractParams | None = None) -> list[Figure]:

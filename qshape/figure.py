@@ -385,13 +385,22 @@ class Figure:
         limits.check_count(total, "max_points", "figure: relevant points", FigureLimitError)
         self._derive(outer, holes, _as_color(self.color))
 
-    def _derive(self, outer: Boundary, holes: tuple[Boundary, ...], color: Color | None) -> None:
-        """Set the boundaries and colour, check the holes, derive area and centroid."""
+    def _derive(
+        self,
+        outer: Boundary,
+        holes: tuple[Boundary, ...],
+        color: Color | None,
+        measured: tuple[float, FloatArray, float] | None = None,
+    ) -> None:
+        """Set the boundaries and colour, check the holes, derive area and centroid.
+
+        ``measured`` is ``outer.measures()`` when already known (`figures_from_outlines`).
+        """
         object.__setattr__(self, "points", outer.points)
         object.__setattr__(self, "curve_mask", outer.curve_mask)
         object.__setattr__(self, "holes", holes)
         object.__setattr__(self, "color", color)
-        area, centroid, perim = outer.measures()
+        area, centroid, perim = outer.measures() if measured is None else measured
         object.__setattr__(self, "outer_centroid", _frozen(centroid))
         object.__setattr__(self, "perimeter", perim)
         if holes:
@@ -407,12 +416,16 @@ class Figure:
 
     @classmethod
     def _from_boundaries(
-        cls, outer: Boundary, holes: tuple[Boundary, ...], color: Iterable[float] | None
+        cls,
+        outer: Boundary,
+        holes: tuple[Boundary, ...],
+        color: Iterable[float] | None,
+        measured: tuple[float, FloatArray, float] | None = None,
     ) -> Figure:
         """Figure from boundaries already validated (`Boundary.make`): no second validation."""
         fig = object.__new__(cls)
         object.__setattr__(fig, "y_down", outer.y_down)
-        fig._derive(outer, holes, _as_color(color))
+        fig._derive(outer, holes, _as_color(color), measured)
         return fig
 
     def __eq__(self, other: object) -> bool:
@@ -604,27 +617,146 @@ def figures_from_outlines(
         count = len(d) if isinstance(d, Sized) else 0
         limits.check_count(count, "max_dense_points", f"{what}: points", FigureLimitError)
     simple = simplify_outlines(dense, params, whats=whats)
+    good = [k for k, x in enumerate(simple) if not isinstance(x, InvalidFigureError)]
+    names = ["figure"] * len(outlines) + [
+        w.removesuffix(" outline") for w in whats[len(outlines) :]
+    ]
+    made = _boundaries_many(
+        [simple[k] for k in good],  # type: ignore[misc]
+        y_down=y_down,
+        whats=[names[k] for k in good],
+    )
+    bounds: list[Boundary | InvalidFigureError] = list(simple)  # type: ignore[arg-type]
+    for k, b in zip(good, made, strict=True):
+        bounds[k] = b
+    outers = [b for b in bounds[: len(outlines)] if isinstance(b, Boundary)]
+    measured = iter(_measures_many(outers))
     out: list[Figure | InvalidFigureError] = []
     at = len(outlines)
     for i, h in enumerate(holes):
-        outer = simple[i]
-        mine = simple[at : at + len(h)]
+        mine = bounds[at : at + len(h)]
         at += len(h)
+        outer = bounds[i]
+        m = next(measured) if isinstance(outer, Boundary) else None
         try:
-            if isinstance(outer, InvalidFigureError):
-                raise outer
-            bound = Boundary.from_simplified(outer[0], outer[1], y_down=y_down, what="figure")
-            hole_bounds = []
-            for k, hs in enumerate(mine):
-                if isinstance(hs, InvalidFigureError):
-                    raise hs
-                hole_bounds.append(
-                    Boundary.from_simplified(hs[0], hs[1], y_down=y_down, what=f"hole {k}")
-                )
-            out.append(Figure._from_boundaries(bound, tuple(hole_bounds), colors[i]))
+            for b in (outer, *mine):
+                if isinstance(b, InvalidFigureError):
+                    raise b
+            out.append(Figure._from_boundaries(outer, tuple(mine), colors[i], m))  # type: ignore[arg-type]
         except InvalidFigureError as exc:
             out.append(exc)
     return out
+
+
+_AREA_MARGIN = 1e-10
+"""A boundary takes the one-pass check only when its area is above this fraction of its size
+squared (100 x the zero-area precision), so a near-degenerate one gets the exact checks."""
+
+
+def _boundaries_many(
+    simple: Sequence[tuple[FloatArray, BoolArray]], *, y_down: bool, whats: Sequence[str]
+) -> list[Boundary | InvalidFigureError]:
+    """`Boundary.from_simplified` of many boundaries, the common case checked in one pass.
+
+    Strictly convex boundaries with an area and coordinates in range (nearly every tile) are
+    validated and oriented with numpy over all their points at once; every other boundary
+    (concave, degenerate, out of range, a malformed curve mask) goes through
+    `Boundary.from_simplified`, which checks it exactly and names what is wrong.
+
+    Args:
+        simple: Per boundary, (points (n_i, 2) float64, curve_mask (n_i,) bool) as
+            `qshape.simplify.simplify_outlines` gives them.
+        y_down: Coordinates are image pixels with y pointing down.
+        whats: Names used in error messages, one per boundary.
+
+    Returns:
+        Per boundary, the `Boundary` or the `InvalidFigureError` it raised.
+    """
+    out: list[Boundary | InvalidFigureError | None] = [None] * len(simple)
+    lens = np.array([len(s[0]) for s in simple], dtype=np.intp)
+    same = np.array([len(s[1]) == len(s[0]) for s in simple], dtype=bool)
+    fast = np.flatnonzero((lens >= 3) & same)  # noqa: PLR2004 (a closed boundary has 3 points)
+    if len(fast):
+        n = lens[fast]
+        pts = np.concatenate([simple[int(i)][0] for i in fast])
+        mask = np.concatenate([simple[int(i)][1] for i in fast])
+        start = np.zeros(len(fast), dtype=np.intp)
+        np.cumsum(n[:-1], out=start[1:])
+        last = start + n - 1
+        nxt = np.arange(1, len(pts) + 1)
+        nxt[last] = start
+        e = pts[nxt] - pts
+        en = e[nxt]
+        cr = e[:, 0] * en[:, 1] - e[:, 1] * en[:, 0]
+        turn = np.add.reduceat(np.arctan2(cr, e[:, 0] * en[:, 0] + e[:, 1] * en[:, 1]), start)
+        ccw = np.logical_and.reduceat(cr > 0.0, start)
+        convex = (ccw | np.logical_and.reduceat(cr < 0.0, start)) & (
+            np.abs(np.abs(turn) - 2.0 * math.pi) < 1e-6  # noqa: PLR2004 (as _strictly_convex)
+        )
+        lo = np.minimum.reduceat(pts, start)
+        size = (np.maximum.reduceat(pts, start) - lo).max(axis=1)
+        magnitude = np.maximum.reduceat(np.abs(pts).max(axis=1), start)
+        limits = default_limits()
+        rel = pts - pts[np.repeat(start, n)]
+        area = 0.5 * np.add.reduceat(rel[:, 0] * rel[nxt, 1] - rel[:, 1] * rel[nxt, 0], start)
+        ok = (
+            convex
+            & ~np.all(pts[start] == pts[last], axis=1)
+            & (size > 0.0)
+            & (magnitude <= limits.max_coordinate)
+            & (np.spacing(magnitude) <= limits.coordinate_resolution * size)
+            & (np.abs(area) > _AREA_MARGIN * size * size)
+            & ~np.logical_or.reduceat(mask & mask[nxt], start)
+        )
+        for k in np.flatnonzero(ok):
+            i = int(fast[k])
+            points, curve_mask = simple[i]
+            # Clockwise as seen: counter-clockwise in y-down coordinates (see Boundary.make).
+            if bool(ccw[k]) != y_down:
+                points = points[::-1].copy()
+                curve_mask = curve_mask[::-1].copy()
+            out[i] = Boundary(_frozen(points), _frozen(curve_mask), y_down)
+    for i, s in enumerate(simple):
+        if out[i] is None:
+            try:
+                out[i] = Boundary.from_simplified(s[0], s[1], y_down=y_down, what=whats[i])
+            except InvalidFigureError as exc:
+                out[i] = exc
+    return [b for b in out if b is not None]
+
+
+def _measures_many(bounds: Sequence[Boundary]) -> list[tuple[float, FloatArray, float]]:
+    """`Boundary.measures` of many boundaries, polygons without arcs in one numpy pass.
+
+    Boundaries with arcs, far from the origin (see `qshape.geometry.reference_point`) or
+    without area are measured one by one.
+    """
+    out: list[tuple[float, FloatArray, float] | None] = [None] * len(bounds)
+    fast = [k for k, b in enumerate(bounds) if not b.curve_mask.any()]
+    if fast:
+        # Counter-clockwise in the y-up frame, as Boundary.measures walks it.
+        pts = np.concatenate([bounds[k].points_yup()[::-1] for k in fast])
+        n = np.array([len(bounds[k].points) for k in fast], dtype=np.intp)
+        start = np.zeros(len(fast), dtype=np.intp)
+        np.cumsum(n[:-1], out=start[1:])
+        nxt = np.arange(1, len(pts) + 1)
+        nxt[start + n - 1] = start
+        size = (np.maximum.reduceat(pts, start) - np.minimum.reduceat(pts, start)).max(axis=1)
+        near = np.maximum.reduceat(np.abs(pts).max(axis=1), start) <= geo._FAR_RATIO * size
+        after = pts[nxt]
+        w = pts[:, 0] * after[:, 1] - pts[:, 1] * after[:, 0]
+        area = 0.5 * np.add.reduceat(w, start)
+        moment = np.add.reduceat((pts + after) * w[:, None], start, axis=0) / 6.0
+        step = after - pts
+        perimeter = np.add.reduceat(np.hypot(step[:, 0], step[:, 1]), start)
+        ok = near & (size > 0.0) & (area != 0.0)
+        centroid = moment / np.where(ok, area, 1.0)[:, None]
+        down = np.array([bounds[k].y_down for k in fast])
+        centroid[down, 1] *= -1.0
+        areas, perimeters = area.tolist(), perimeter.tolist()
+        for j in np.flatnonzero(ok).tolist():
+            out[fast[j]] = (areas[j], centroid[j].copy(), perimeters[j])
+    return [b.measures() if m is None else m for b, m in zip(bounds, out, strict=True)]
 
 
 def _circle_local(r: float) -> tuple[FloatArray, BoolArray]:

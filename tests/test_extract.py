@@ -401,3 +401,39 @@ def test_square_hole_corners_are_single_vertices(px_per_mm: float) -> None:
     for fig in figs:
         assert len(fig.points) == 4 and len(fig.holes) == 1
         assert len(fig.holes[0].points) == 4 and not fig.holes[0].curve_mask.any()
+
+
+def test_label_medians_are_lower_medians() -> None:
+    """The one-histogram medians equal sorted lower medians, per label and channel."""
+    from qshape.extract import _label_medians  # noqa: PLC0415
+
+    rng = np.random.default_rng(11)
+    lab = rng.integers(0, 7, 5000)
+    values = [rng.integers(0, 256, (5000, 3), dtype=np.uint8), rng.integers(0, 9, (5000, 1))]
+    medians, seen = _label_medians(lab, [v.astype(np.uint8) for v in values], 8)
+    both = np.concatenate(values, axis=1)
+    for k in range(8):
+        rows = np.sort(both[lab == k], axis=0)
+        assert seen[k] == (len(rows) > 0)
+        want = rows[(len(rows) - 1) // 2] if len(rows) else np.zeros(4)
+        np.testing.assert_array_equal(medians[k], want)
+
+
+def test_crumbs_beyond_a_byte_of_labels_leave_pieces_unchanged() -> None:
+    """Regions are the same whether the labels fit a byte (OpenCV look-up) or not (numpy)."""
+    from qshape.extract import _split_regions  # noqa: PLC0415
+
+    p = ExtractParams.load()
+    img = np.full((200, 300, 3), 60, np.uint8)
+    mask = np.zeros((200, 300), np.uint8)
+    cv2.rectangle(img, (20, 20), (80, 90), (200, 40, 40), -1)
+    cv2.rectangle(img, (81, 20), (140, 90), (40, 200, 40), -1)  # touching, other colour
+    cv2.rectangle(mask, (20, 20), (140, 90), 255, -1)
+    count, labels, present, pieces = _split_regions(img, mask, p)
+    assert count <= 256 and present.sum() == 2
+    crumbs = mask.copy()
+    crumbs[120::3, ::3] = 255  # 700 one-pixel crumbs below the tiles
+    many, labels2, present2, pieces2 = _split_regions(img, crumbs, p)
+    assert many > 256 and present2.sum() == 2
+    np.testing.assert_array_equal(pieces2, pieces)
+    np.testing.assert_array_equal(labels2[:100] > 0, labels[:100] > 0)

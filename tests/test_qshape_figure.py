@@ -151,3 +151,61 @@ def test_huge_coordinates_are_rejected_not_overflowed():
         Figure.from_polygon([[1e308, 1e308], [-1e308, 1e308], [0, -1e308]])
     with pytest.raises(InvalidFigureError, match="magnitude"):
         Figure.from_outline([[1e308, 1e308], [-1e308, 1e308], [0, -1e308]])
+
+
+def _batch_cases() -> list[tuple[np.ndarray, np.ndarray]]:
+    """Simplified boundaries of every kind: convex either way round, concave, invalid."""
+    rng = np.random.default_rng(3)
+    cases = []
+    for n in (3, 4, 6, 9):
+        t = np.sort(rng.uniform(0.0, 2.0 * math.pi, n))
+        ring = np.stack([40.0 + 20.0 * np.cos(t), 30.0 + 15.0 * np.sin(t)], axis=1)
+        cases += [(ring, np.zeros(n, bool)), (ring[::-1].copy(), np.zeros(n, bool))]
+    arrow = np.array([[0.0, 0.0], [10.0, 5.0], [0.0, 10.0], [4.0, 5.0]])
+    cases.append((arrow, np.zeros(4, bool)))  # concave
+    cases.append((np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]]), np.zeros(4, bool)))
+    cases.append((np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 0.0], [0.0, 3.0]]), np.zeros(4, bool)))
+    bow = np.array([[0.0, 0.0], [4.0, 4.0], [4.0, 0.0], [0.0, 4.0]])
+    cases.append((bow, np.zeros(4, bool)))  # crosses itself
+    square = np.array(SQ)
+    cases.append((square, np.array([True, True, False, False])))  # adjacent curve points
+    cases.append((square + 1e9, np.zeros(4, bool)))  # far from the origin, small
+    return cases
+
+
+@pytest.mark.parametrize("y_down", [False, True])
+def test_boundaries_validated_in_one_pass_as_one_by_one(y_down: bool) -> None:
+    """The one-pass check keeps, orients and refuses exactly as `Boundary.from_simplified`."""
+    from qshape.figure import _boundaries_many  # noqa: PLC0415
+
+    cases = _batch_cases()
+    whats = [f"figure {k}" for k in range(len(cases))]
+    batch = _boundaries_many(cases, y_down=y_down, whats=whats)
+    for (pts, mask), what, got in zip(cases, whats, batch, strict=True):
+        try:
+            want = Boundary.from_simplified(pts, mask, y_down=y_down, what=what)
+        except InvalidFigureError as exc:
+            assert isinstance(got, InvalidFigureError)
+            assert str(got) == str(exc)
+            continue
+        assert isinstance(got, Boundary)
+        assert got == want
+
+
+def test_measures_in_one_pass_as_one_by_one() -> None:
+    """Areas, centroids and perimeters of the batch equal the per-boundary ones."""
+    from qshape.figure import _measures_many  # noqa: PLC0415
+
+    bounds = []
+    for (pts, mask), y_down in zip(_batch_cases(), [False, True] * 20, strict=False):
+        try:
+            bounds.append(Boundary.from_simplified(pts, mask, y_down=y_down, what="b"))
+        except InvalidFigureError:
+            continue
+    bounds.append(Figure.circle(5.0, center=(3.0, 4.0)).outer)  # an arc: measured alone
+    assert len(bounds) >= 10
+    for b, (area, centroid, perimeter) in zip(bounds, _measures_many(bounds), strict=True):
+        a, c, p = b.measures()
+        assert area == pytest.approx(a, rel=1e-12)
+        assert perimeter == pytest.approx(p, rel=1e-12)
+        np.testing.assert_allclose(centroid, c, rtol=1e-12, atol=1e-12 * max(abs(a), 1.0))
