@@ -238,6 +238,14 @@ class CycleConfig:
             base and the wrist rotations, which the vertical moves barely use.
         lead_share: Fraction of the lead joints' acceleration and jerk given to the lead; the
             vertical moves keep the rest (the sum respects every limit), in (0, 1).
+        counter_swing: Counter-swing lengths tried where the drift at the clearance crossing
+            limits a lead [s]: the ``counter_swing_joints`` first turn away from their target at
+            full jerk for that long (reaching a contact: they overshoot and come back), so at
+            the crossing they already move faster within the same drift, and the transfer can
+            start earlier (end later). The fastest valid variant, or the plain lead, is used.
+            Empty: plain leads only. Each length costs one more lead search.
+        counter_swing_joints: Joints (0-based, among ``lead_joints``) that counter-swing: the
+            base, whose turn is the sideways drift.
         lateral_clearance_height: Below this height above a contact pose the tool carrying a
             tile (lift off the pick, descent to the place) may drift at most
             `max_lateral_drift` sideways (the held tile's underside clear of its neighbours'
@@ -264,11 +272,13 @@ class CycleConfig:
         max_tilt_deg: Largest tool tilt from straight down accepted at a contact pose [deg].
     """
 
-    approach_height: float = 0.015
+    approach_height: float = 0.04
     approach_speed: float = 0.25
-    lead_bisections: int = 6
+    lead_bisections: int = 8
     lead_joints: tuple[int, ...] = (0, 3, 5)
     lead_share: float = 0.99
+    counter_swing: tuple[float, ...] = (0.008, 0.010, 0.012)
+    counter_swing_joints: tuple[int, ...] = (0,)
     lateral_clearance_height: float = 0.006
     empty_clearance_height: float = 0.002
     max_lateral_drift: float = 0.001
@@ -306,8 +316,18 @@ class CycleConfig:
             "place_dwell",
             "belt_match_time",
         )
+        if not all(math.isfinite(p) and p > 0.0 for p in self.counter_swing):
+            raise LimitError(
+                f"CycleConfig.counter_swing: lengths must be finite and > 0 s, got "
+                f"{self.counter_swing}"
+            )
         if not 0.0 < self.lead_share < 1.0:
             raise LimitError(f"CycleConfig.lead_share must be in (0, 1), got {self.lead_share}")
+        if not set(self.counter_swing_joints) <= set(self.lead_joints):
+            raise LimitError(
+                f"CycleConfig.counter_swing_joints {self.counter_swing_joints} must be among "
+                f"lead_joints {self.lead_joints}"
+            )
         if not all(0 <= j < N_JOINTS for j in self.lead_joints):
             raise LimitError(
                 f"CycleConfig.lead_joints: {self.lead_joints} are not joint indices 0..5"

@@ -46,6 +46,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -61,6 +62,7 @@ from planners.trajectory import (
     Segment,
     as_joint_vector,
     hold_segment,
+    join,
     plan_segment,
     segment_within_limits,
     superpose,
@@ -75,16 +77,25 @@ _CHECK_SAMPLES = 40
 _CROSSING_BISECTIONS = 12
 """Bisection steps locating where the tool crosses a clearance height between two check samples
 (the drift grows fastest there; resolution, not a tunable)."""
+_COST_TIE = 1e-6
+"""A counter-swung lead must gain more than this over the plain one to be used [s]."""
 _MIN_SHARE = 0.05
 """Smallest fraction of a limit left to the lead's bridge (keeps ruckig's input valid)."""
 
 
-def _share(limits: JointLimits, share: Array) -> JointLimits:
-    """``limits`` with acceleration and jerk scaled per joint by ``share`` (6,)."""
+def _share(limits: JointLimits, share: Array, frame_qd: Array | None = None) -> JointLimits:
+    """``limits`` with acceleration and jerk scaled per joint by ``share`` (6,).
+
+    With ``frame_qd`` (6,) [rad/s], the joint velocity of a moving frame the motion is
+    superposed on (a belt), the velocity limits leave room for it (at least ``_MIN_SHARE``).
+    """
+    vmax = np.asarray(limits.max_velocity)
+    if frame_qd is not None:
+        vmax = np.maximum(vmax - np.abs(frame_qd), _MIN_SHARE * vmax)
     return JointLimits(
         lower=limits.lower,
         upper=limits.upper,
-        max_velocity=limits.max_velocity,
+        max_velocity=tuple(vmax),
         max_acceleration=tuple(np.asarray(limits.max_acceleration) * share),
         max_jerk=tuple(np.asarray(limits.max_jerk) * share),
     )
@@ -191,7 +202,7 @@ class PickPlacePlanner:
         self._wrap = self.config.trajectory.wrap_joints
         share = np.ones(6)
         share[list(self.config.cycle.lead_joints)] = self.config.cycle.lead_share
-        self._bridge_limits = _share(self.limits, share)
+        self._share = share
         self._vertical_limits = _share(self.limits, np.where(share < 1.0, 1.0 - share, 1.0))
 
     # ------------------------------------------------------------------ helpers
@@ -353,21 +364,19 @@ class PickPlacePlanner:
         duration: float,
         contact: _Contact,
         leaving: bool,
-        has_bridge: bool,
+        floor: float = 0.0,
     ) -> tuple[list[Segment], float] | None:
-        """Largest lead tau in [0, duration] whose segments pass the checks (bisection).
+        """Largest lead tau in [floor, duration] whose segments pass the checks (bisection).
 
-        Returns None when even the pure vertical move (tau = 0) fails.
+        Returns None when even tau = ``floor`` fails.
         """
-        zero = build(0.0)
-        if not self._ok(zero, contact, leaving):
+        low = build(floor)
+        if not self._ok(low, contact, leaving):
             return None
-        if not has_bridge:
-            return zero, 0.0
         full = build(duration)
         if self._ok(full, contact, leaving):
             return full, duration
-        best, lo, hi = (zero, 0.0), 0.0, duration
+        best, lo, hi = (low, floor), floor, duration
         for _ in range(self.config.cycle.lead_bisections):
             mid = 0.5 * (lo + hi)
             segs = build(mid)
@@ -377,30 +386,112 @@ class PickPlacePlanner:
                 hi = mid
         return best
 
+    def _best_lead(
+        self,
+        build: Callable[[Segment | None, float], list[Segment]],
+        base: Segment,
+        contact: _Contact,
+        bridge: Segment | None,
+        leaving: bool,
+    ) -> tuple[list[Segment], float] | None:
+        """The fastest of the largest plain lead and the counter-swung ones.
+
+        Plain: the bridge starts ``tau`` before the vertical move ends (leaving; reaching: ends
+        ``tau`` after it starts), the largest ``tau`` that keeps the drift (`_largest_lead`).
+        When that is shorter than the vertical move, the drift at the clearance crossing is
+        what stopped it: then each ``counter_swing`` length is tried (`_swung`), with the
+        largest lead from the plain one's up. With a lead ``tau`` and a bridge of duration
+        ``T`` the lead joints come to rest at their target ``T - tau`` after the vertical
+        move's start plus its duration: the smallest wins.
+        """
+        if bridge is None:
+            zero = build(None, 0.0)
+            return (zero, 0.0) if self._ok(zero, contact, leaving) else None
+        plain = self._largest_lead(partial(build, bridge), base.duration, contact, leaving)
+        if plain is None or plain[1] >= base.duration:
+            return plain
+        best, cost = plain, base.duration - plain[1] + bridge.duration
+        for pulse in self.config.cycle.counter_swing:
+            swung = self._swung(bridge, pulse, leaving, contact.qd)
+            if swung is None:
+                continue
+            found = self._largest_lead(
+                partial(build, swung), base.duration, contact, leaving, plain[1]
+            )
+            if found is not None and base.duration - found[1] + swung.duration < cost - _COST_TIE:
+                best, cost = found, base.duration - found[1] + swung.duration
+        return best
+
+    def _swung(
+        self, bridge: Segment, pulse: float, leaving: bool, frame_qd: Array
+    ) -> Segment | None:
+        """The bridge with a counter-swing of ``pulse`` [s] at its start (leaving) or end.
+
+        Leaving: the ``counter_swing_joints`` first turn away from their target at full jerk
+        for ``pulse`` seconds, then the time-optimal move from that state to rest at the
+        target. Reaching: the time reverse, overshooting the target and coming back to it.
+        The swing ends at the clearance crossing already moving, where the plain bridge,
+        started later to keep the same drift there, would be slower (a jerk-limited start
+        moves as t^3: starting early and backwards gains speed for the same offset).
+        ``frame_qd`` (6,) [rad/s]: joint velocity of the belt the contact moves with.
+        None when ruckig rejects it (e.g. a joint without travel).
+        """
+        a, b = bridge.start.q, bridge.end.q
+        lim = _share(self.limits, self._share, frame_qd)
+        idx = list(self.config.cycle.counter_swing_joints)
+        jerk = np.zeros(6)
+        jerk[idx] = np.sign(b - a)[idx] * np.asarray(lim.max_jerk)[idx]
+        if pulse <= 0.0 or not np.any(jerk):
+            return None
+        try:
+            if leaving:
+                j = -jerk
+                first = plan_segment(
+                    JointState.at_rest(a),
+                    a + j * pulse**3 / 6.0,
+                    lim,
+                    j * pulse**2 / 2.0,
+                    target_qdd=j * pulse,
+                    label="swing",
+                )
+                second = plan_segment(first.end, b, lim, label="bridge")
+            else:
+                j = jerk
+                first = plan_segment(
+                    JointState.at_rest(a),
+                    b + j * pulse**3 / 6.0,
+                    lim,
+                    -j * pulse**2 / 2.0,
+                    target_qdd=j * pulse,
+                    label="bridge",
+                )
+                second = plan_segment(first.end, b, lim, label="swing")
+        except PlannerError:
+            return None
+        return join([first, second], "bridge")
+
     def _leave(
         self, start: JointState, contact: _Contact, bridge: Segment | None, label: str
     ) -> tuple[list[Segment], float]:
         """Vertical move off a contact to its approach point, with the largest valid lead.
 
         With lead tau, the move follows the pure vertical move, and during its last tau seconds
-        the first tau seconds of the bridge (the transfer starting) are superposed.
+        the first tau seconds of the bridge (the transfer starting) are superposed; the bridge
+        may start with a counter-swing (`_swung`), whichever gets the lead joints there first.
 
         Returns the segments and the lead time used (NaN when it had to stop).
         """
         if self.config.trajectory.blend:
             base = self._vertical(contact, True, start)
 
-            def build(tau: float) -> list[Segment]:
-                if bridge is None or tau <= 0.0:
+            def build(br: Segment | None, tau: float) -> list[Segment]:
+                if br is None or tau <= 0.0:
                     return [window(base, 0.0, base.duration, label)]
                 t_split = base.duration - tau
                 segs = [] if t_split <= 0.0 else [window(base, 0.0, t_split, label)]
-                return [
-                    *segs,
-                    superpose([(base, t_split), (bridge, 0.0)], tau, bridge.start.q, label),
-                ]
+                return [*segs, superpose([(base, t_split), (br, 0.0)], tau, br.start.q, label)]
 
-            found = self._largest_lead(build, base.duration, contact, True, bridge is not None)
+            found = self._best_lead(build, base, contact, bridge, True)
             if found is not None:
                 return found
         q_stop = contact.approach_q
@@ -412,8 +503,9 @@ class PickPlacePlanner:
     ) -> tuple[JointState, list[Segment], float]:
         """Approach-point state (with the largest valid lead) and the vertical move to contact.
 
-        With lead tau, the last tau seconds of the bridge (the transfer ending) are superposed
-        on the first tau seconds of the pure vertical descent.
+        With lead tau, the last tau seconds of the bridge (the transfer ending, possibly with a
+        counter-swing, `_swung`) are superposed on the first tau seconds of the pure vertical
+        descent.
 
         Returns the approach-point state, the descent segments and the lead time (NaN when it
         has to stop at the approach point).
@@ -421,16 +513,14 @@ class PickPlacePlanner:
         if self.config.trajectory.blend:
             base = self._vertical(contact, False)
 
-            def build(tau: float) -> list[Segment]:
-                if bridge is None or tau <= 0.0:
+            def build(br: Segment | None, tau: float) -> list[Segment]:
+                if br is None or tau <= 0.0:
                     return [window(base, 0.0, base.duration, label)]
-                first = superpose(
-                    [(base, 0.0), (bridge, bridge.duration - tau)], tau, bridge.end.q, label
-                )
+                first = superpose([(base, 0.0), (br, br.duration - tau)], tau, br.end.q, label)
                 rest = [window(base, tau, base.duration, label)] if tau < base.duration else []
                 return [first, *rest]
 
-            found = self._largest_lead(build, base.duration, contact, False, bridge is not None)
+            found = self._best_lead(build, base, contact, bridge, False)
             if found is not None:
                 return found[0][0].start, found[0], found[1]
         stop = JointState(contact.approach_q, self.joint_velocity(contact.approach_q, contact.belt))
@@ -444,17 +534,19 @@ class PickPlacePlanner:
         except PlannerError:
             return None
 
-    def _bridge(self, a: Array, b: Array) -> Segment:
+    def _bridge(self, a: Array, b: Array, frame_qd: Array) -> Segment:
         """Rest-to-rest time-optimal move of the lead joints between approach points.
 
         The lead's source: only ``lead_joints`` (base and wrist rotations) move, with
         ``lead_share`` of their acceleration and jerk; the vertical moves get the rest, so the
-        superposition keeps every limit.
+        superposition keeps every limit. Its velocity limits leave room for ``frame_qd`` (6,)
+        [rad/s], the joint velocity of a moving belt superposed at an end (zero if static).
         """
         target = a.copy()
         idx = list(self.config.cycle.lead_joints)
         target[idx] = unwrap_target(a, b, self.limits, self._wrap)[idx]
-        return plan_segment(JointState.at_rest(a), target, self._bridge_limits, label="bridge")
+        lim = _share(self.limits, self._share, frame_qd)
+        return plan_segment(JointState.at_rest(a), target, lim, label="bridge")
 
     def _link(
         self, leave: Segment, reach: JointState, floor_z: float, label: str
@@ -464,7 +556,18 @@ class PickPlacePlanner:
             seg = self._segment(leave.end, reach.q, reach.qd, label, reach.qdd)
         except PlannerError:
             return None
-        return seg if self._clearance_ok(seg, floor_z) else None
+        return seg if self._link_ok(seg, floor_z) else None
+
+    def _link_ok(self, seg: Segment, floor_z: float) -> bool:
+        """Whether a move between two leads keeps its clearance and every limit.
+
+        Ruckig exceeds a limit when its start state cannot brake in time (a fast lead plus a
+        belt's velocity, say).
+        """
+        tr = self.config.trajectory
+        return self._clearance_ok(seg, floor_z) and segment_within_limits(
+            seg, self.limits, tr.sample_dt, tr.limit_tolerance
+        )
 
     # ------------------------------------------------------------------ planning
 
@@ -642,17 +745,17 @@ class PickPlacePlanner:
             p_start = self.ik.fk(start.q)[0]
             start_up_q = self._solve(p_start + up, pick_yaw, start.q)
             start_out = _Contact(p_start, zero, start.q, np.zeros(6), start_up_q, empty)
-            bridge = self._bridge(start_up_q, pick_in_q)
+            bridge = self._bridge(start_up_q, pick_in_q, belt_qd)
             s_ret, lead_start = self._leave(start, start_out, bridge, "retreat")
             floor_z = min(p_start[2], pick_c[2])
         else:
-            bridge = self._bridge(start.q, pick_in_q)
+            bridge = self._bridge(start.q, pick_in_q, belt_qd)
             s_ret = []
             floor_z = -math.inf
         via_in, s_desc, lead_pick_in = self._reach_state(pick_in, bridge, "descend_pick")
         from_state = s_ret[-1].end if s_ret else start
         s_to = self._segment(from_state, via_in.q, via_in.qd, "to_pick", via_in.qdd)
-        if s_ret and not self._clearance_ok(s_to, floor_z):
+        if s_ret and not self._link_ok(s_to, floor_z):
             s_ret, lead_start = self._leave(start, start_out, None, "retreat")
             via_in, s_desc, lead_pick_in = self._reach_state(pick_in, None, "descend_pick")
             s_to = self._segment(s_ret[-1].end, via_in.q, via_in.qd, "to_pick", via_in.qdd)
@@ -666,7 +769,7 @@ class PickPlacePlanner:
         )
 
         # Lift, transfer, descend to the place.
-        bridge = self._bridge(lift_q, place_in_q)
+        bridge = self._bridge(lift_q, place_in_q, belt_qd)
         floor_z = min(pick_c[2], place_c[2])
         s_lift, lead_out = self._leave(segs[-1].end, pick_out, bridge, "lift")
         via_pl, s_down, lead_in = self._reach_state(place_in, bridge, "descend_place")

@@ -29,6 +29,8 @@ Array = npt.NDArray[np.float64]
 
 _TWO_PI = 2.0 * math.pi
 _OK_RESULTS = (Result.Working, Result.Finished)
+_JOIN_TOLERANCE = 1e-9
+"""Largest position [rad] or velocity [rad/s] jump accepted between joined pieces (rounding)."""
 
 
 def as_joint_vector(value: npt.ArrayLike, name: str) -> Array:
@@ -166,8 +168,9 @@ class Segment:
     """One piece of a chained trajectory.
 
     A ruckig segment (``ruckig`` set), a superposition of time windows of other segments
-    (``parts`` set, see `superpose`), or a constant-velocity segment from ``start.q`` with
-    velocity ``start.qd`` (a hold at rest when that velocity is zero).
+    (``parts`` set, see `superpose`), segments played one after the other (``pieces`` set, see
+    `join`), or a constant-velocity segment from ``start.q`` with velocity ``start.qd`` (a hold
+    at rest when that velocity is zero).
 
     Attributes:
         start: State at the segment's start.
@@ -177,6 +180,7 @@ class Segment:
         ruckig: Ruckig's trajectory, or None.
         parts: (segment, time offset [s]) pairs summed by a superposed segment.
         offset: Subtracted from the parts' summed positions, shape (6,) [rad].
+        pieces: Segments played in order, each starting where the previous one ends.
     """
 
     start: JointState
@@ -186,10 +190,17 @@ class Segment:
     ruckig: Trajectory | None = None
     parts: tuple[tuple[Segment, float], ...] = ()
     offset: Array | None = None
+    pieces: tuple[Segment, ...] = ()
 
     def state(self, tau: float) -> tuple[Array, Array, Array]:
         """State at ``tau`` [s] after the segment's start, each shape (6,)."""
         tau = min(max(tau, 0.0), self.duration)
+        if self.pieces:
+            for piece in self.pieces[:-1]:
+                if tau <= piece.duration:
+                    return piece.state(tau)
+                tau -= piece.duration
+            return self.pieces[-1].state(tau)
         if self.parts:
             q, qd, qdd = np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros(N_JOINTS)
             for seg, t0 in self.parts:
@@ -324,6 +335,33 @@ def superpose(
         label,
         parts=tuple(parts),
         offset=offset,
+    )
+
+
+def join(pieces: Sequence[Segment], label: str) -> Segment:
+    """Segments played one after the other as one segment (each starts where the last ended).
+
+    Raises:
+        TrajectoryError: No pieces, or a piece does not start where the previous one ended.
+    """
+    if not pieces:
+        raise TrajectoryError(f"segment {label!r}: join needs at least one piece")
+    for a, b in zip(pieces[:-1], pieces[1:], strict=True):
+        gap = max(
+            float(np.max(np.abs(a.end.q - b.start.q))),
+            float(np.max(np.abs(a.end.qd - b.start.qd))),
+        )
+        if gap > _JOIN_TOLERANCE:
+            raise TrajectoryError(
+                f"segment {label!r}: piece {b.label!r} starts {gap:.2e} (rad or rad/s) away "
+                f"from where {a.label!r} ends"
+            )
+    return Segment(
+        pieces[0].start,
+        pieces[-1].end,
+        float(sum(p.duration for p in pieces)),
+        label,
+        pieces=tuple(pieces),
     )
 
 
@@ -545,6 +583,7 @@ __all__ = [
     "chain",
     "check_in_range",
     "hold_segment",
+    "join",
     "segment_within_limits",
     "superpose",
     "window",
