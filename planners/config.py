@@ -238,12 +238,13 @@ class CycleConfig:
             base and the wrist rotations, which the vertical moves barely use.
         lead_share: Fraction of the lead joints' acceleration and jerk given to the lead; the
             vertical moves keep the rest (the sum respects every limit), in (0, 1).
-        counter_swing: Counter-swing lengths tried where the drift at the clearance crossing
-            limits a lead [s]: the ``counter_swing_joints`` first turn away from their target at
-            full jerk for that long (reaching a contact: they overshoot and come back), so at
-            the crossing they already move faster within the same drift, and the transfer can
-            start earlier (end later). The fastest valid variant, or the plain lead, is used.
-            Empty: plain leads only. Each length costs one more lead search.
+        counter_swing: Counter-swing lengths tried in this order where even a lead over the
+            whole vertical move breaks the drift at the clearance crossing [s]: the
+            ``counter_swing_joints`` first turn away from their target at full jerk for that
+            long (reaching a contact: they overshoot and come back), so at the crossing they
+            already move faster within the same drift, and the transfer can start with the
+            vertical move (end with it). The first valid length is used if it is faster than
+            the plain lead. Ascending; empty: plain leads only.
         counter_swing_joints: Joints (0-based, among ``lead_joints``) that counter-swing: the
             base, whose turn is the sideways drift.
         lateral_clearance_height: Below this height above a contact pose the tool carrying a
@@ -277,7 +278,7 @@ class CycleConfig:
     lead_bisections: int = 8
     lead_joints: tuple[int, ...] = (0, 3, 5)
     lead_share: float = 0.99
-    counter_swing: tuple[float, ...] = (0.008, 0.010, 0.012)
+    counter_swing: tuple[float, ...] = (0.006, 0.007, 0.008, 0.009, 0.010, 0.011, 0.012)
     counter_swing_joints: tuple[int, ...] = (0,)
     lateral_clearance_height: float = 0.006
     empty_clearance_height: float = 0.002
@@ -316,10 +317,11 @@ class CycleConfig:
             "place_dwell",
             "belt_match_time",
         )
-        if not all(math.isfinite(p) and p > 0.0 for p in self.counter_swing):
+        swings = self.counter_swing
+        if not all(math.isfinite(p) and p > 0.0 for p in swings) or list(swings) != sorted(swings):
             raise LimitError(
-                f"CycleConfig.counter_swing: lengths must be finite and > 0 s, got "
-                f"{self.counter_swing}"
+                f"CycleConfig.counter_swing: lengths must be finite, > 0 s and ascending, got "
+                f"{swings}"
             )
         if not 0.0 < self.lead_share < 1.0:
             raise LimitError(f"CycleConfig.lead_share must be in (0, 1), got {self.lead_share}")

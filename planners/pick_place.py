@@ -33,7 +33,9 @@ with it.
 Lower bound of a cycle (`PickPlacePlanner.cycle_bound`): time-optimal moves at the same limits
 from the bound's start configuration to the pick contact (matching the belt), the pick dwell,
 the time-optimal move from the end of the dwell to the place contact, and the place dwell; no
-approach points and no clearance zones. Every cycle that holds the pad on the tile for the
+approach points and no clearance zones; a cycle ending with ``retreat_end`` adds the
+time-optimal move from rest at the place contact to rest where the retreat ends (both sides of
+the ratio then cover the same phases). Every cycle that holds the pad on the tile for the
 vacuum dwells takes at least this long: the dwells are process time no motion can overlap. The
 motion-only bound (`PickPlacePlanner.lower_bound`, no dwell) is kept as ``motion_bound``.
 
@@ -112,9 +114,10 @@ class CyclePlan:
         vacuum_off: Time the vacuum switches off (tile at the place contact) [s].
         lift_off: Time the tool starts lifting the tile [s].
         duration: Total duration [s].
-        bound: Lower bound of the cycle, vacuum dwells included [s] (see the module docstring).
-        motion_bound: Lower bound of the motion alone: start -> pick contact -> place contact,
-            time-optimal, no dwell [s].
+        bound: Lower bound of the cycle, vacuum dwells included [s] (see the module docstring;
+            with ``retreat_end``, the time-optimal retreat included).
+        motion_bound: Lower bound of the motion alone: start -> pick contact -> place contact
+            (-> retreat end), time-optimal, no dwell [s].
         pick_q: Configuration at the pick contact, shape (6,) [rad].
         place_q: Configuration at the place contact, shape (6,) [rad].
         pick_position: Predicted tile top centre at contact, shape (3,) [m].
@@ -229,13 +232,15 @@ class PickPlacePlanner:
 
     def _positions(self, segs: list[Segment]) -> tuple[Array, Array]:
         """Sample times (from the first segment's start) [s] and TCP positions (n, 3) [m]."""
-        times, pos, t0 = [], [], 0.0
+        times: list[Array] = []
+        pos: list[Array] = []
+        t0 = 0.0
         for seg in segs:
-            for t in np.linspace(0.0, seg.duration, _CHECK_SAMPLES):
-                times.append(t0 + t)
-                pos.append(self.ik.fk(seg.state(float(t))[0])[0])
+            taus = np.linspace(0.0, seg.duration, _CHECK_SAMPLES)
+            times.append(t0 + taus)
+            pos.extend(self.ik.fk(q)[0] for q in seg.states(taus)[0])
             t0 += seg.duration
-        return np.asarray(times), np.asarray(pos)
+        return np.concatenate(times), np.asarray(pos)
 
     def _drift_ok(self, segs: list[Segment], contact: _Contact, leaving: bool) -> bool:
         """Below the clearance height the tool stays over the (belt-moving) contact point.
@@ -394,33 +399,37 @@ class PickPlacePlanner:
         bridge: Segment | None,
         leaving: bool,
     ) -> tuple[list[Segment], float] | None:
-        """The fastest of the largest plain lead and the counter-swung ones.
+        """The faster of the largest plain lead and the shortest counter-swung full lead.
 
         Plain: the bridge starts ``tau`` before the vertical move ends (leaving; reaching: ends
         ``tau`` after it starts), the largest ``tau`` that keeps the drift (`_largest_lead`).
-        When that is shorter than the vertical move, the drift at the clearance crossing is
-        what stopped it: then each ``counter_swing`` length is tried (`_swung`), with the
-        largest lead from the plain one's up. With a lead ``tau`` and a bridge of duration
-        ``T`` the lead joints come to rest at their target ``T - tau`` after the vertical
-        move's start plus its duration: the smallest wins.
+        When the whole vertical move (``tau = D``) breaks the drift at the clearance crossing,
+        the bridge is tried over the whole move with each ``counter_swing`` length in turn
+        (`_swung`), the shortest valid one kept. With a bridge of duration ``T`` the lead
+        joints come to rest at their target ``T - tau`` after the vertical move's start plus
+        ``D``: a swung bridge (``T_s``) wins unless the plain lead exceeds
+        ``D - (T_s - T)``, which one more check decides.
         """
         if bridge is None:
             zero = build(None, 0.0)
             return (zero, 0.0) if self._ok(zero, contact, leaving) else None
-        plain = self._largest_lead(partial(build, bridge), base.duration, contact, leaving)
-        if plain is None or plain[1] >= base.duration:
-            return plain
-        best, cost = plain, base.duration - plain[1] + bridge.duration
+        dur = base.duration
+        full = build(bridge, dur)
+        if self._ok(full, contact, leaving):
+            return full, dur
         for pulse in self.config.cycle.counter_swing:
             swung = self._swung(bridge, pulse, leaving, contact.qd)
             if swung is None:
                 continue
-            found = self._largest_lead(
-                partial(build, swung), base.duration, contact, leaving, plain[1]
-            )
-            if found is not None and base.duration - found[1] + swung.duration < cost - _COST_TIE:
-                best, cost = found, base.duration - found[1] + swung.duration
-        return best
+            segs = build(swung, dur)
+            if not self._ok(segs, contact, leaving):
+                continue
+            # Equal finish for the plain bridge at this lead: it must do better to win.
+            tau_eq = dur - (swung.duration - bridge.duration)
+            if tau_eq <= 0.0 or not self._ok(build(bridge, tau_eq), contact, leaving):
+                return segs, dur
+            return self._largest_lead(partial(build, bridge), dur, contact, leaving, tau_eq)
+        return self._largest_lead(partial(build, bridge), dur, contact, leaving)
 
     def _swung(
         self, bridge: Segment, pulse: float, leaving: bool, frame_qd: Array
@@ -683,8 +692,9 @@ class PickPlacePlanner:
         traj = pw.sample(self.config.trajectory.sample_dt)
         bound_q = start.q if bound_from is None else as_joint_vector(bound_from, "bound_from")
         belt_qd = self.joint_velocity(pick_q, belt)
-        motion_bound = self.lower_bound(bound_q, pick_q, place_q, belt_qd)
-        bound = self.cycle_bound(bound_q, pick_q, belt_qd, dwell.duration, place_q)
+        end_q = pw.end.q if end_retreat else None
+        motion_bound = self.lower_bound(bound_q, pick_q, place_q, belt_qd, end_q)
+        bound = self.cycle_bound(bound_q, pick_q, belt_qd, dwell.duration, place_q, end_q)
         return CyclePlan(
             trajectory=traj,
             piecewise=pw,
@@ -786,7 +796,12 @@ class PickPlacePlanner:
         return Piecewise(tuple(segs)), pick_q, place_q, place_yaw, leads
 
     def lower_bound(
-        self, start_q: npt.ArrayLike, pick_q: Array, place_q: Array, pick_qd: Array | None = None
+        self,
+        start_q: npt.ArrayLike,
+        pick_q: Array,
+        place_q: Array,
+        pick_qd: Array | None = None,
+        end_q: Array | None = None,
     ) -> float:
         """Lower bound [s]: time-optimal start -> pick contact -> place contact, no dwell.
 
@@ -795,24 +810,28 @@ class PickPlacePlanner:
             pick_q: Pick contact configuration, shape (6,) [rad].
             place_q: Place contact configuration, shape (6,) [rad].
             pick_qd: Joint velocity at the pick contact (belt matching), shape (6,) [rad/s].
+            end_q: Where the cycle ends at rest after the place (a retreat), shape (6,) [rad];
+                None: it ends at the place contact.
         """
         s0 = JointState.at_rest(as_joint_vector(start_q, "start_q"))
         a = self._segment(s0, pick_q, pick_qd, "bound_pick")
         b = self._segment(a.end, place_q, None, "bound_place")
-        return a.duration + b.duration
+        return a.duration + b.duration + self._end_bound(place_q, end_q)
 
-    def cycle_bound(
+    def cycle_bound(  # noqa: PLR0917
         self,
         start_q: npt.ArrayLike,
         pick_q: Array,
         pick_qd: Array,
         pick_dwell: float,
         place_q: Array,
+        end_q: Array | None = None,
     ) -> float:
         """Lower bound [s] of a cycle with vacuum dwells (see the module docstring).
 
         Time-optimal start -> pick contact (arriving with ``pick_qd``), the pick dwell travelling
-        at ``pick_qd``, time-optimal from there to rest at the place contact, the place dwell.
+        at ``pick_qd``, time-optimal from there to rest at the place contact, the place dwell
+        (and, with ``end_q``, time-optimal from there to rest at ``end_q``).
 
         Args:
             start_q: Start configuration (at rest), shape (6,) [rad].
@@ -820,12 +839,21 @@ class PickPlacePlanner:
             pick_qd: Joint velocity at the pick contact (belt matching), shape (6,) [rad/s].
             pick_dwell: Time at the pick contact (vacuum build-up, belt matching) [s].
             place_q: Place contact configuration, shape (6,) [rad].
+            end_q: Where the cycle ends at rest after the place dwell (a retreat), shape (6,)
+                [rad]; None: it ends at the place contact.
         """
         s0 = JointState.at_rest(as_joint_vector(start_q, "start_q"))
         a = self._segment(s0, pick_q, pick_qd, "bound_pick")
         held = hold_segment(a.end, pick_dwell, "bound_dwell")
         b = self._segment(held.end, place_q, None, "bound_place")
-        return a.duration + pick_dwell + b.duration + self.config.cycle.place_dwell
+        dwells = pick_dwell + self.config.cycle.place_dwell
+        return a.duration + b.duration + dwells + self._end_bound(place_q, end_q)
+
+    def _end_bound(self, place_q: Array, end_q: Array | None) -> float:
+        """Time-optimal rest-to-rest move from the place contact to ``end_q`` [s] (0 if None)."""
+        if end_q is None:
+            return 0.0
+        return self._segment(JointState.at_rest(place_q), end_q, None, "bound_end").duration
 
     def plan_move(self, start: JointState, q: npt.ArrayLike, label: str = "move") -> Piecewise:
         """Time-optimal move from ``start`` to rest at ``q`` (6,) [rad] (e.g. back home).

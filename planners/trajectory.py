@@ -213,6 +213,38 @@ class Segment:
         p, v, a = self.ruckig.at_time(tau)
         return np.asarray(p), np.asarray(v), np.asarray(a)
 
+    def states(self, taus: npt.ArrayLike) -> tuple[Array, Array, Array]:
+        """States at times ``taus`` (n,) [s] after the segment's start, each shape (n, 6).
+
+        The same values as `state` at each time, evaluated a whole array at once.
+        """
+        t = np.clip(np.asarray(taus, dtype=np.float64), 0.0, self.duration)
+        if self.pieces:
+            q, qd, qdd = (np.empty((t.size, N_JOINTS)) for _ in range(3))
+            starts = np.cumsum([0.0] + [p.duration for p in self.pieces[:-1]])
+            which = np.clip(np.searchsorted(starts, t, side="left") - 1, 0, len(self.pieces) - 1)
+            for k, piece in enumerate(self.pieces):
+                sel = which == k
+                if sel.any():
+                    q[sel], qd[sel], qdd[sel] = piece.states(t[sel] - starts[k])
+            return q, qd, qdd
+        if self.parts:
+            q, qd, qdd = (np.zeros((t.size, N_JOINTS)) for _ in range(3))
+            for seg, t0 in self.parts:
+                pq, pqd, pqdd = seg.states(t0 + t)
+                q, qd, qdd = q + pq, qd + pqd, qdd + pqdd
+            assert self.offset is not None
+            return q - self.offset, qd, qdd
+        if self.ruckig is None:
+            q = self.start.q[None, :] + self.start.qd[None, :] * t[:, None]
+            return q, np.repeat(self.start.qd[None, :], t.size, 0), np.zeros((t.size, N_JOINTS))
+        rows = [self.ruckig.at_time(float(x)) for x in t]
+        return (
+            np.array([r[0] for r in rows]).reshape(t.size, N_JOINTS),
+            np.array([r[1] for r in rows]).reshape(t.size, N_JOINTS),
+            np.array([r[2] for r in rows]).reshape(t.size, N_JOINTS),
+        )
+
 
 def _ruckig_input(
     start: JointState, target_q: Array, target_qd: Array, target_qdd: Array, limits: JointLimits
@@ -391,13 +423,7 @@ def segment_within_limits(seg: Segment, limits: JointLimits, dt: float, toleranc
     """Whether a segment sampled every ``dt`` [s] stays within every limit (relative slack)."""
     n = max(2, int(math.ceil(seg.duration / dt)) + 1)
     times = np.linspace(0.0, seg.duration, n)
-    states = [seg.state(float(t)) for t in times]
-    traj = JointTrajectory(
-        times,
-        np.array([s[0] for s in states]),
-        np.array([s[1] for s in states]),
-        np.array([s[2] for s in states]),
-    )
+    traj = JointTrajectory(times, *seg.states(times))
     rep = limit_report(traj, limits)
     worst = max(rep.velocity.max(), rep.acceleration.max(), rep.jerk.max())
     return bool(rep.in_range and worst <= 1.0 + tolerance)
