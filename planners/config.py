@@ -230,6 +230,11 @@ class CycleConfig:
         approach_height: Height of the approach points above the pick and place contact
             poses [m]; motion below them is vertical.
         approach_speed: Vertical tool speed when passing an approach point with blending [m/s].
+        approach_alternatives: Other approach heights each cycle is also planned with [m]; the
+            fastest plan is kept (a higher approach lets the vertical moves rise at full jerk
+            through the clearance height, which pays when the base's turn limits the cycle;
+            where the arm's other joints limit it, the lower one is faster). Each one costs a
+            whole plan.
         lead_bisections: Bisection steps searching the largest lead at each approach point (the
             transfer's motion started during the lift and finished during the descent, up to
             the vertical move's duration) whose lateral drift below `lateral_clearance_height`
@@ -273,8 +278,9 @@ class CycleConfig:
         max_tilt_deg: Largest tool tilt from straight down accepted at a contact pose [deg].
     """
 
-    approach_height: float = 0.04
+    approach_height: float = 0.015
     approach_speed: float = 0.25
+    approach_alternatives: tuple[float, ...] = (0.025,)
     lead_bisections: int = 8
     lead_joints: tuple[int, ...] = (0, 3, 5)
     lead_share: float = 0.99
@@ -334,6 +340,12 @@ class CycleConfig:
             raise LimitError(
                 f"CycleConfig.lead_joints: {self.lead_joints} are not joint indices 0..5"
             )
+        for height in self.approach_alternatives:
+            if not (math.isfinite(height) and height >= self.lateral_clearance_height):
+                raise LimitError(
+                    f"CycleConfig.approach_alternatives: {height!r} m must be finite and at "
+                    f"least lateral_clearance_height {self.lateral_clearance_height} m"
+                )
         if self.lateral_clearance_height > self.approach_height:
             raise LimitError(
                 "CycleConfig.lateral_clearance_height "

@@ -79,6 +79,13 @@ _CHECK_SAMPLES = 40
 _CROSSING_BISECTIONS = 12
 """Bisection steps locating where the tool crosses a clearance height between two check samples
 (the drift grows fastest there; resolution, not a tunable)."""
+_LEAD_CAPS = (0.5, 0.25)
+"""Fractions of the vertical moves the leads are capped at when a link between them fails (then
+no lead at all)."""
+_STRETCHES = 2
+"""Tries stretching a bridge when synchronisation holds up the link between two leads."""
+_SYNC_SLACK = 1e-3
+"""A link taking this much longer than its slowest joint alone is held up by synchronisation [s]."""
 _COST_TIE = 1e-6
 """A counter-swung lead must gain more than this over the plain one to be used [s]."""
 _MIN_SHARE = 0.05
@@ -391,13 +398,14 @@ class PickPlacePlanner:
                 hi = mid
         return best
 
-    def _best_lead(
+    def _best_lead(  # noqa: PLR0917
         self,
         build: Callable[[Segment | None, float], list[Segment]],
         base: Segment,
         contact: _Contact,
         bridge: Segment | None,
         leaving: bool,
+        cap: float = 1.0,
     ) -> tuple[list[Segment], float] | None:
         """The faster of the largest plain lead and the shortest counter-swung full lead.
 
@@ -413,7 +421,7 @@ class PickPlacePlanner:
         if bridge is None:
             zero = build(None, 0.0)
             return (zero, 0.0) if self._ok(zero, contact, leaving) else None
-        dur = base.duration
+        dur = base.duration * cap  # the longest lead allowed ("whole" below)
         full = build(bridge, dur)
         if self._ok(full, contact, leaving):
             return full, dur
@@ -447,6 +455,7 @@ class PickPlacePlanner:
         """
         a, b = bridge.start.q, bridge.end.q
         lim = _share(self.limits, self._share, frame_qd)
+        rest = bridge.duration - pulse  # a stretched bridge (`_legs`) stays stretched
         idx = list(self.config.cycle.counter_swing_joints)
         jerk = np.zeros(6)
         jerk[idx] = np.sign(b - a)[idx] * np.asarray(lim.max_jerk)[idx]
@@ -463,7 +472,7 @@ class PickPlacePlanner:
                     target_qdd=j * pulse,
                     label="swing",
                 )
-                second = plan_segment(first.end, b, lim, label="bridge")
+                second = plan_segment(first.end, b, lim, label="bridge", min_duration=rest)
             else:
                 j = jerk
                 first = plan_segment(
@@ -473,6 +482,7 @@ class PickPlacePlanner:
                     -j * pulse**2 / 2.0,
                     target_qdd=j * pulse,
                     label="bridge",
+                    min_duration=rest,
                 )
                 second = plan_segment(first.end, b, lim, label="swing")
         except PlannerError:
@@ -480,7 +490,13 @@ class PickPlacePlanner:
         return join([first, second], "bridge")
 
     def _leave(
-        self, start: JointState, contact: _Contact, bridge: Segment | None, label: str
+        self,
+        start: JointState,
+        contact: _Contact,
+        bridge: Segment | None,
+        cap: float = 1.0,
+        *,
+        label: str,
     ) -> tuple[list[Segment], float]:
         """Vertical move off a contact to its approach point, with the largest valid lead.
 
@@ -500,7 +516,7 @@ class PickPlacePlanner:
                 segs = [] if t_split <= 0.0 else [window(base, 0.0, t_split, label)]
                 return [*segs, superpose([(base, t_split), (br, 0.0)], tau, br.start.q, label)]
 
-            found = self._best_lead(build, base, contact, bridge, True)
+            found = self._best_lead(build, base, contact, bridge, True, cap)
             if found is not None:
                 return found
         q_stop = contact.approach_q
@@ -508,7 +524,7 @@ class PickPlacePlanner:
         return [seg], math.nan
 
     def _reach_state(
-        self, contact: _Contact, bridge: Segment | None, label: str
+        self, contact: _Contact, bridge: Segment | None, cap: float = 1.0, *, label: str
     ) -> tuple[JointState, list[Segment], float]:
         """Approach-point state (with the largest valid lead) and the vertical move to contact.
 
@@ -529,7 +545,7 @@ class PickPlacePlanner:
                 rest = [window(base, tau, base.duration, label)] if tau < base.duration else []
                 return [first, *rest]
 
-            found = self._best_lead(build, base, contact, bridge, False)
+            found = self._best_lead(build, base, contact, bridge, False, cap)
             if found is not None:
                 return found[0][0].start, found[0], found[1]
         stop = JointState(contact.approach_q, self.joint_velocity(contact.approach_q, contact.belt))
@@ -543,29 +559,86 @@ class PickPlacePlanner:
         except PlannerError:
             return None
 
-    def _bridge(self, a: Array, b: Array, frame_qd: Array) -> Segment:
+    def _bridge(self, a: Array, b: Array, frame_qd: Array, min_duration: float = 0.0) -> Segment:
         """Rest-to-rest time-optimal move of the lead joints between approach points.
 
         The lead's source: only ``lead_joints`` (base and wrist rotations) move, with
         ``lead_share`` of their acceleration and jerk; the vertical moves get the rest, so the
         superposition keeps every limit. Its velocity limits leave room for ``frame_qd`` (6,)
-        [rad/s], the joint velocity of a moving belt superposed at an end (zero if static).
+        [rad/s], the joint velocity of a moving belt superposed at an end (zero if static). It
+        lasts at least ``min_duration`` [s] (see `_legs`).
         """
         target = a.copy()
         idx = list(self.config.cycle.lead_joints)
         target[idx] = unwrap_target(a, b, self.limits, self._wrap)[idx]
         lim = _share(self.limits, self._share, frame_qd)
-        return plan_segment(JointState.at_rest(a), target, lim, label="bridge")
+        return plan_segment(
+            JointState.at_rest(a), target, lim, label="bridge", min_duration=min_duration
+        )
+
+    def _legs(  # noqa: PLR0917
+        self,
+        start: JointState,
+        leave: Callable[[Segment | None, float], tuple[list[Segment], float]] | None,
+        reach: Callable[[Segment | None, float], tuple[JointState, list[Segment], float]],
+        bridge: Callable[[float], Segment],
+        floor_z: float,
+        label: str,
+    ) -> tuple[list[Segment], float, Segment, list[Segment], float]:
+        """Leave a contact (or ``start``, when ``leave`` is None), link, reach the next one.
+
+        The link must keep its clearance and limits and not be held up by ruckig's
+        synchronisation: a joint arriving with a velocity cannot take every duration, so a
+        link whose joints each need less time than it takes has hit such a gap (long leads on
+        a short base turn: the base would finish its part of the link sooner than the arm's
+        other joints can reverse the vertical motion). Then the bridge (``bridge(T)``: the
+        lead joints' move stretched to at least ``T`` [s]) is stretched until the base's part
+        of the link lasts as long as the slowest joint needs (``_STRETCHES`` tries); failing
+        that, the leads are capped at ``_LEAD_CAPS`` of the vertical moves, then dropped.
+
+        Returns the leave segments and lead (NaN without ``leave``), the link, the reach
+        segments and lead.
+        """
+        br = bridge(0.0)
+        tries = [(1.0, True)] * (_STRETCHES + 1) + [(cap, False) for cap in (*_LEAD_CAPS, 0.0)]
+        stretching = True
+        for cap, stretch in tries:
+            if stretch and not stretching:
+                continue
+            b = br if cap > 0.0 else None
+            s_out, lead_out = leave(b, cap) if leave is not None else ([], 0.0)
+            via, s_in, lead_in = reach(b, cap)
+            from_state = s_out[-1].end if s_out else start
+            link, need = self._link(from_state, via, floor_z, label)
+            if link is not None:
+                lead = lead_out if leave is not None else math.nan
+                return s_out, lead, link, s_in, lead_in
+            if stretch and need is not None:
+                middle = br.duration - np.nan_to_num(lead_out) - np.nan_to_num(lead_in)
+                br = bridge(br.duration + max(need - middle, 0.0) + _SYNC_SLACK)
+            elif stretch:  # not a synchronisation gap: stretching will not help
+                stretching = False
+                br = bridge(0.0)
+        link = self._segment(from_state, via.q, via.qd, label, via.qdd)
+        return s_out, lead_out if leave is not None else math.nan, link, s_in, lead_in
 
     def _link(
-        self, leave: Segment, reach: JointState, floor_z: float, label: str
-    ) -> Segment | None:
-        """The move from a leave segment's end to a reach state, if it keeps its clearance."""
+        self, leave: JointState, reach: JointState, floor_z: float, label: str
+    ) -> tuple[Segment | None, float | None]:
+        """The move from a leave state to a reach state, if usable (see `_legs`).
+
+        Returns the move or None, and when synchronisation held it up, the longest time a
+        joint alone needs for it [s] (else None).
+        """
         try:
-            seg = self._segment(leave.end, reach.q, reach.qd, label, reach.qdd)
+            seg = self._segment(leave, reach.q, reach.qd, label, reach.qdd)
         except PlannerError:
-            return None
-        return seg if self._link_ok(seg, floor_z) else None
+            return None, None
+        if seg.ruckig is not None:
+            alone = float(np.max(seg.ruckig.independent_min_durations))
+            if seg.duration > alone + _SYNC_SLACK:
+                return None, alone
+        return (seg, None) if self._link_ok(seg, floor_z) else (None, None)
 
     def _link_ok(self, seg: Segment, floor_z: float) -> bool:
         """Whether a move between two leads keeps its clearance and every limit.
@@ -656,9 +729,15 @@ class PickPlacePlanner:
         def plan_for(t: float) -> tuple[Any, float]:
             """The cycle meeting the tile where it is at time t, and its own contact time."""
             pick_c = pick0 + belt * t - np.array([0.0, 0.0, c.pick_press])
-            res = self._plan(
-                start, start_at_contact, end_retreat, pick_c, place, pick_yaw, rotations, belt
-            )
+            args = (start, start_at_contact, end_retreat, pick_c, place, pick_yaw, rotations, belt)
+            res = self._plan(*args, c.approach_height)
+            for height in c.approach_alternatives:
+                try:
+                    alt = self._plan(*args, height)
+                except PlannerError:
+                    continue
+                if alt[0].duration < res[0].duration:
+                    res = alt
             return res, res[0].end_time("descend_pick")
 
         # Fixed point t = T(t): the contact time of the plan aimed at the tile's position then.
@@ -725,9 +804,10 @@ class PickPlacePlanner:
         pick_yaw: float,
         rotations: list[tuple[float, Array, float]],
         belt: Array,
+        approach_height: float,
     ) -> tuple[Piecewise, Array, Array, float, tuple[float, float, float, float]]:
         c = self.config.cycle
-        up = np.array([0.0, 0.0, c.approach_height])
+        up = np.array([0.0, 0.0, approach_height])
         zero = np.zeros(3)
         moving = bool(np.any(belt))
         dwell_pick = max(c.pick_dwell, c.belt_match_time) if moving else c.pick_dwell
@@ -751,24 +831,21 @@ class PickPlacePlanner:
         lead_start = math.nan
 
         # Leaving the start (previous place) and reaching the pick.
+        leave_start: Callable[[Segment | None, float], tuple[list[Segment], float]] | None = None
         if start_at_contact:
             p_start = self.ik.fk(start.q)[0]
             start_up_q = self._solve(p_start + up, pick_yaw, start.q)
             start_out = _Contact(p_start, zero, start.q, np.zeros(6), start_up_q, empty)
-            bridge = self._bridge(start_up_q, pick_in_q, belt_qd)
-            s_ret, lead_start = self._leave(start, start_out, bridge, "retreat")
+            bridge = partial(self._bridge, start_up_q, pick_in_q, belt_qd)
+            leave_start = partial(self._leave, start, start_out, label="retreat")
             floor_z = min(p_start[2], pick_c[2])
         else:
-            bridge = self._bridge(start.q, pick_in_q, belt_qd)
-            s_ret = []
+            bridge = partial(self._bridge, start.q, pick_in_q, belt_qd)
             floor_z = -math.inf
-        via_in, s_desc, lead_pick_in = self._reach_state(pick_in, bridge, "descend_pick")
-        from_state = s_ret[-1].end if s_ret else start
-        s_to = self._segment(from_state, via_in.q, via_in.qd, "to_pick", via_in.qdd)
-        if s_ret and not self._link_ok(s_to, floor_z):
-            s_ret, lead_start = self._leave(start, start_out, None, "retreat")
-            via_in, s_desc, lead_pick_in = self._reach_state(pick_in, None, "descend_pick")
-            s_to = self._segment(s_ret[-1].end, via_in.q, via_in.qd, "to_pick", via_in.qdd)
+        reach_pick = partial(self._reach_state, pick_in, label="descend_pick")
+        s_ret, lead_start, s_to, s_desc, lead_pick_in = self._legs(
+            start, leave_start, reach_pick, bridge, floor_z, "to_pick"
+        )
         segs += [*s_ret, s_to, *s_desc]
         segs.append(
             hold_segment(
@@ -779,15 +856,16 @@ class PickPlacePlanner:
         )
 
         # Lift, transfer, descend to the place.
-        bridge = self._bridge(lift_q, place_in_q, belt_qd)
+        bridge = partial(self._bridge, lift_q, place_in_q, belt_qd)
         floor_z = min(pick_c[2], place_c[2])
-        s_lift, lead_out = self._leave(segs[-1].end, pick_out, bridge, "lift")
-        via_pl, s_down, lead_in = self._reach_state(place_in, bridge, "descend_place")
-        s_tr = self._link(s_lift[-1], via_pl, floor_z, "transfer")
-        if s_tr is None:
-            s_lift, lead_out = self._leave(segs[-1].end, pick_out, None, "lift")
-            via_pl, s_down, lead_in = self._reach_state(place_in, None, "descend_place")
-            s_tr = self._segment(s_lift[-1].end, via_pl.q, via_pl.qd, "transfer", via_pl.qdd)
+        s_lift, lead_out, s_tr, s_down, lead_in = self._legs(
+            segs[-1].end,
+            partial(self._leave, segs[-1].end, pick_out, label="lift"),
+            partial(self._reach_state, place_in, label="descend_place"),
+            bridge,
+            floor_z,
+            "transfer",
+        )
         segs += [*s_lift, s_tr, *s_down]
         segs.append(hold_segment(JointState(place_q), c.place_dwell, "dwell_place"))
         if end_retreat:

@@ -192,14 +192,21 @@ def test_counter_swing_shortens_the_cycle_within_the_drift(
 
 
 def test_bound_covers_the_final_retreat(planner: PickPlacePlanner, start: JointState) -> None:
-    # A cycle ending with a retreat is held against a bound that ends there too.
+    # A cycle ending with a retreat is held against a bound that ends there too: the bound
+    # without the retreat plus the time-optimal retreat (which the plan's retreat is).
     end = planner.plan_cycle(start, PICK, PLACE, 0.6, start_at_contact=True, end_retreat=True)
-    chained = planner.plan_cycle(start, PICK, PLACE, 0.6, start_at_contact=True, end_retreat=False)
     retreat = end.piecewise.segments[-1]
     assert retreat.label == "retreat_end"
-    assert end.bound - chained.bound == pytest.approx(retreat.duration, abs=1e-9)
-    assert end.duration - chained.duration == pytest.approx(retreat.duration, abs=1e-9)
-    assert chained.bound < chained.duration and end.bound < end.duration
+    zero = np.zeros(6)
+    without = planner.cycle_bound(start.q, end.pick_q, zero, CFG.cycle.pick_dwell, end.place_q)
+    assert end.bound - without == pytest.approx(retreat.duration, abs=1e-9)
+    assert end.bound == pytest.approx(
+        planner.cycle_bound(
+            start.q, end.pick_q, zero, CFG.cycle.pick_dwell, end.place_q, end.end.q
+        ),
+        abs=1e-12,
+    )
+    assert without < end.duration - retreat.duration and end.bound < end.duration
 
 
 def test_moving_belt_pick_matches_the_belt(planner: PickPlacePlanner, start: JointState) -> None:
