@@ -22,8 +22,14 @@ the tool stays within ``max_lateral_drift`` of vertical (in the belt's frame) be
 height: ``lateral_clearance_height`` while it carries a tile (lift, place descent: the tile's
 underside must clear its neighbours' tops), ``empty_clearance_height`` for the empty pad (pick
 descent, retreat from the place: its face only clears tile tops level with the contact). The
-transfer must stay ``transfer_clearance`` above the lower contact. Otherwise the planner falls
-back to stopping at the approach point.
+transfer must stay ``transfer_clearance`` above the lower contact. Where even a lead over the
+whole vertical move breaks the drift, the base may first turn away from its target at full jerk
+for a few milliseconds (``counter_swing``; reaching a contact it overshoots and comes back): it
+then crosses the clearance height at the allowed drift already moving faster, and the transfer
+starts with the lift (ends with the descent). A link between two leads that ruckig's
+synchronisation holds up (a joint arriving with a velocity cannot take every duration) gets a
+stretched bridge, then capped leads, and finally none. Each cycle is planned with
+``approach_height`` and each of ``approach_alternatives``; the fastest plan is kept.
 
 Moving belt: the tile at ``pick_position`` (at the cycle's start) moves with ``belt_velocity``.
 The planner predicts where it is at contact (fixed-point iteration on the contact time), arrives
