@@ -6,7 +6,8 @@ simulated time), ``cycle_s`` (simulated seconds per tile), ``bound_s`` (the plan
 per cycle, same limits, no dwell, no approach points), ``ratio`` (cycle over bound),
 ``placed_within_tolerance`` (tiles within the position and yaw tolerances), ``tiles``, ``plan_ms``
 (median wall-clock planning per cycle: IK + trajectories), plus tracking and placement errors.
-``bound_s`` includes the two vacuum dwells (process time no motion can overlap);
+``bound_s`` includes the two vacuum dwells (process time no motion can overlap) and, for the
+last cycle, the time-optimal final retreat its plan ends with;
 ``motion_bound_s`` and ``ratio_motion`` are the same without them. ``standard_cycle_s`` and
 ``standard_cycle_blended_s`` check the acceleration assumption against ABB's catalogue cycle.
 

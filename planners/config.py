@@ -230,6 +230,11 @@ class CycleConfig:
         approach_height: Height of the approach points above the pick and place contact
             poses [m]; motion below them is vertical.
         approach_speed: Vertical tool speed when passing an approach point with blending [m/s].
+        approach_alternatives: Other approach heights each cycle is also planned with [m]; the
+            fastest plan is kept (a higher approach lets the vertical moves rise at full jerk
+            through the clearance height, which pays when the base's turn limits the cycle;
+            where the arm's other joints limit it, the lower one is faster). Each one costs a
+            whole plan.
         lead_bisections: Bisection steps searching the largest lead at each approach point (the
             transfer's motion started during the lift and finished during the descent, up to
             the vertical move's duration) whose lateral drift below `lateral_clearance_height`
@@ -238,6 +243,15 @@ class CycleConfig:
             base and the wrist rotations, which the vertical moves barely use.
         lead_share: Fraction of the lead joints' acceleration and jerk given to the lead; the
             vertical moves keep the rest (the sum respects every limit), in (0, 1).
+        counter_swing: Counter-swing lengths tried in this order where even a lead over the
+            whole vertical move breaks the drift at the clearance crossing [s]: the
+            ``counter_swing_joints`` first turn away from their target at full jerk for that
+            long (reaching a contact: they overshoot and come back), so at the crossing they
+            already move faster within the same drift, and the transfer can start with the
+            vertical move (end with it). The first valid length is used if it is faster than
+            the plain lead. Ascending; empty: plain leads only.
+        counter_swing_joints: Joints (0-based, among ``lead_joints``) that counter-swing: the
+            base, whose turn is the sideways drift.
         lateral_clearance_height: Below this height above a contact pose the tool carrying a
             tile (lift off the pick, descent to the place) may drift at most
             `max_lateral_drift` sideways (the held tile's underside clear of its neighbours'
@@ -266,9 +280,12 @@ class CycleConfig:
 
     approach_height: float = 0.015
     approach_speed: float = 0.25
-    lead_bisections: int = 6
+    approach_alternatives: tuple[float, ...] = (0.025,)
+    lead_bisections: int = 8
     lead_joints: tuple[int, ...] = (0, 3, 5)
     lead_share: float = 0.99
+    counter_swing: tuple[float, ...] = (0.006, 0.007, 0.008, 0.009, 0.010, 0.011, 0.012)
+    counter_swing_joints: tuple[int, ...] = (0,)
     lateral_clearance_height: float = 0.006
     empty_clearance_height: float = 0.002
     max_lateral_drift: float = 0.001
@@ -306,12 +323,29 @@ class CycleConfig:
             "place_dwell",
             "belt_match_time",
         )
+        swings = self.counter_swing
+        if not all(math.isfinite(p) and p > 0.0 for p in swings) or list(swings) != sorted(swings):
+            raise LimitError(
+                f"CycleConfig.counter_swing: lengths must be finite, > 0 s and ascending, got "
+                f"{swings}"
+            )
         if not 0.0 < self.lead_share < 1.0:
             raise LimitError(f"CycleConfig.lead_share must be in (0, 1), got {self.lead_share}")
+        if not set(self.counter_swing_joints) <= set(self.lead_joints):
+            raise LimitError(
+                f"CycleConfig.counter_swing_joints {self.counter_swing_joints} must be among "
+                f"lead_joints {self.lead_joints}"
+            )
         if not all(0 <= j < N_JOINTS for j in self.lead_joints):
             raise LimitError(
                 f"CycleConfig.lead_joints: {self.lead_joints} are not joint indices 0..5"
             )
+        for height in self.approach_alternatives:
+            if not (math.isfinite(height) and height >= self.lateral_clearance_height):
+                raise LimitError(
+                    f"CycleConfig.approach_alternatives: {height!r} m must be finite and at "
+                    f"least lateral_clearance_height {self.lateral_clearance_height} m"
+                )
         if self.lateral_clearance_height > self.approach_height:
             raise LimitError(
                 "CycleConfig.lateral_clearance_height "

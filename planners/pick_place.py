@@ -22,8 +22,14 @@ the tool stays within ``max_lateral_drift`` of vertical (in the belt's frame) be
 height: ``lateral_clearance_height`` while it carries a tile (lift, place descent: the tile's
 underside must clear its neighbours' tops), ``empty_clearance_height`` for the empty pad (pick
 descent, retreat from the place: its face only clears tile tops level with the contact). The
-transfer must stay ``transfer_clearance`` above the lower contact. Otherwise the planner falls
-back to stopping at the approach point.
+transfer must stay ``transfer_clearance`` above the lower contact. Where even a lead over the
+whole vertical move breaks the drift, the base may first turn away from its target at full jerk
+for a few milliseconds (``counter_swing``; reaching a contact it overshoots and comes back): it
+then crosses the clearance height at the allowed drift already moving faster, and the transfer
+starts with the lift (ends with the descent). A link between two leads that ruckig's
+synchronisation holds up (a joint arriving with a velocity cannot take every duration) gets a
+stretched bridge, then capped leads, and finally none. Each cycle is planned with
+``approach_height`` and each of ``approach_alternatives``; the fastest plan is kept.
 
 Moving belt: the tile at ``pick_position`` (at the cycle's start) moves with ``belt_velocity``.
 The planner predicts where it is at contact (fixed-point iteration on the contact time), arrives
@@ -33,7 +39,9 @@ with it.
 Lower bound of a cycle (`PickPlacePlanner.cycle_bound`): time-optimal moves at the same limits
 from the bound's start configuration to the pick contact (matching the belt), the pick dwell,
 the time-optimal move from the end of the dwell to the place contact, and the place dwell; no
-approach points and no clearance zones. Every cycle that holds the pad on the tile for the
+approach points and no clearance zones; a cycle ending with ``retreat_end`` adds the
+time-optimal move from rest at the place contact to rest where the retreat ends (both sides of
+the ratio then cover the same phases). Every cycle that holds the pad on the tile for the
 vacuum dwells takes at least this long: the dwells are process time no motion can overlap. The
 motion-only bound (`PickPlacePlanner.lower_bound`, no dwell) is kept as ``motion_bound``.
 
@@ -46,6 +54,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -61,6 +70,7 @@ from planners.trajectory import (
     Segment,
     as_joint_vector,
     hold_segment,
+    join,
     plan_segment,
     segment_within_limits,
     superpose,
@@ -75,16 +85,32 @@ _CHECK_SAMPLES = 40
 _CROSSING_BISECTIONS = 12
 """Bisection steps locating where the tool crosses a clearance height between two check samples
 (the drift grows fastest there; resolution, not a tunable)."""
+_LEAD_CAPS = (0.5, 0.25)
+"""Fractions of the vertical moves the leads are capped at when a link between them fails (then
+no lead at all)."""
+_STRETCHES = 2
+"""Tries stretching a bridge when synchronisation holds up the link between two leads."""
+_SYNC_SLACK = 1e-3
+"""A link taking this much longer than its slowest joint alone is held up by synchronisation [s]."""
+_COST_TIE = 1e-6
+"""A counter-swung lead must gain more than this over the plain one to be used [s]."""
 _MIN_SHARE = 0.05
 """Smallest fraction of a limit left to the lead's bridge (keeps ruckig's input valid)."""
 
 
-def _share(limits: JointLimits, share: Array) -> JointLimits:
-    """``limits`` with acceleration and jerk scaled per joint by ``share`` (6,)."""
+def _share(limits: JointLimits, share: Array, frame_qd: Array | None = None) -> JointLimits:
+    """``limits`` with acceleration and jerk scaled per joint by ``share`` (6,).
+
+    With ``frame_qd`` (6,) [rad/s], the joint velocity of a moving frame the motion is
+    superposed on (a belt), the velocity limits leave room for it (at least ``_MIN_SHARE``).
+    """
+    vmax = np.asarray(limits.max_velocity)
+    if frame_qd is not None:
+        vmax = np.maximum(vmax - np.abs(frame_qd), _MIN_SHARE * vmax)
     return JointLimits(
         lower=limits.lower,
         upper=limits.upper,
-        max_velocity=limits.max_velocity,
+        max_velocity=tuple(vmax),
         max_acceleration=tuple(np.asarray(limits.max_acceleration) * share),
         max_jerk=tuple(np.asarray(limits.max_jerk) * share),
     )
@@ -101,9 +127,10 @@ class CyclePlan:
         vacuum_off: Time the vacuum switches off (tile at the place contact) [s].
         lift_off: Time the tool starts lifting the tile [s].
         duration: Total duration [s].
-        bound: Lower bound of the cycle, vacuum dwells included [s] (see the module docstring).
-        motion_bound: Lower bound of the motion alone: start -> pick contact -> place contact,
-            time-optimal, no dwell [s].
+        bound: Lower bound of the cycle, vacuum dwells included [s] (see the module docstring;
+            with ``retreat_end``, the time-optimal retreat included).
+        motion_bound: Lower bound of the motion alone: start -> pick contact -> place contact
+            (-> retreat end), time-optimal, no dwell [s].
         pick_q: Configuration at the pick contact, shape (6,) [rad].
         place_q: Configuration at the place contact, shape (6,) [rad].
         pick_position: Predicted tile top centre at contact, shape (3,) [m].
@@ -191,7 +218,7 @@ class PickPlacePlanner:
         self._wrap = self.config.trajectory.wrap_joints
         share = np.ones(6)
         share[list(self.config.cycle.lead_joints)] = self.config.cycle.lead_share
-        self._bridge_limits = _share(self.limits, share)
+        self._share = share
         self._vertical_limits = _share(self.limits, np.where(share < 1.0, 1.0 - share, 1.0))
 
     # ------------------------------------------------------------------ helpers
@@ -218,13 +245,15 @@ class PickPlacePlanner:
 
     def _positions(self, segs: list[Segment]) -> tuple[Array, Array]:
         """Sample times (from the first segment's start) [s] and TCP positions (n, 3) [m]."""
-        times, pos, t0 = [], [], 0.0
+        times: list[Array] = []
+        pos: list[Array] = []
+        t0 = 0.0
         for seg in segs:
-            for t in np.linspace(0.0, seg.duration, _CHECK_SAMPLES):
-                times.append(t0 + t)
-                pos.append(self.ik.fk(seg.state(float(t))[0])[0])
+            taus = np.linspace(0.0, seg.duration, _CHECK_SAMPLES)
+            times.append(t0 + taus)
+            pos.extend(self.ik.fk(q)[0] for q in seg.states(taus)[0])
             t0 += seg.duration
-        return np.asarray(times), np.asarray(pos)
+        return np.concatenate(times), np.asarray(pos)
 
     def _drift_ok(self, segs: list[Segment], contact: _Contact, leaving: bool) -> bool:
         """Below the clearance height the tool stays over the (belt-moving) contact point.
@@ -353,21 +382,19 @@ class PickPlacePlanner:
         duration: float,
         contact: _Contact,
         leaving: bool,
-        has_bridge: bool,
+        floor: float = 0.0,
     ) -> tuple[list[Segment], float] | None:
-        """Largest lead tau in [0, duration] whose segments pass the checks (bisection).
+        """Largest lead tau in [floor, duration] whose segments pass the checks (bisection).
 
-        Returns None when even the pure vertical move (tau = 0) fails.
+        Returns None when even tau = ``floor`` fails.
         """
-        zero = build(0.0)
-        if not self._ok(zero, contact, leaving):
+        low = build(floor)
+        if not self._ok(low, contact, leaving):
             return None
-        if not has_bridge:
-            return zero, 0.0
         full = build(duration)
         if self._ok(full, contact, leaving):
             return full, duration
-        best, lo, hi = (zero, 0.0), 0.0, duration
+        best, lo, hi = (low, floor), floor, duration
         for _ in range(self.config.cycle.lead_bisections):
             mid = 0.5 * (lo + hi)
             segs = build(mid)
@@ -377,30 +404,125 @@ class PickPlacePlanner:
                 hi = mid
         return best
 
+    def _best_lead(  # noqa: PLR0917
+        self,
+        build: Callable[[Segment | None, float], list[Segment]],
+        base: Segment,
+        contact: _Contact,
+        bridge: Segment | None,
+        leaving: bool,
+        cap: float = 1.0,
+    ) -> tuple[list[Segment], float] | None:
+        """The faster of the largest plain lead and the shortest counter-swung full lead.
+
+        Plain: the bridge starts ``tau`` before the vertical move ends (leaving; reaching: ends
+        ``tau`` after it starts), the largest ``tau`` that keeps the drift (`_largest_lead`).
+        When the whole vertical move (``tau = D``) breaks the drift at the clearance crossing,
+        the bridge is tried over the whole move with each ``counter_swing`` length in turn
+        (`_swung`), the shortest valid one kept. With a bridge of duration ``T`` the lead
+        joints come to rest at their target ``T - tau`` after the vertical move's start plus
+        ``D``: a swung bridge (``T_s``) wins unless the plain lead exceeds
+        ``D - (T_s - T)``, which one more check decides.
+        """
+        if bridge is None:
+            zero = build(None, 0.0)
+            return (zero, 0.0) if self._ok(zero, contact, leaving) else None
+        dur = base.duration * cap  # the longest lead allowed ("whole" below)
+        full = build(bridge, dur)
+        if self._ok(full, contact, leaving):
+            return full, dur
+        for pulse in self.config.cycle.counter_swing:
+            swung = self._swung(bridge, pulse, leaving, contact.qd)
+            if swung is None:
+                continue
+            segs = build(swung, dur)
+            if not self._ok(segs, contact, leaving):
+                continue
+            # Equal finish for the plain bridge at this lead: it must do better to win.
+            tau_eq = dur - (swung.duration - bridge.duration)
+            if tau_eq <= 0.0 or not self._ok(build(bridge, tau_eq), contact, leaving):
+                return segs, dur
+            return self._largest_lead(partial(build, bridge), dur, contact, leaving, tau_eq)
+        return self._largest_lead(partial(build, bridge), dur, contact, leaving)
+
+    def _swung(
+        self, bridge: Segment, pulse: float, leaving: bool, frame_qd: Array
+    ) -> Segment | None:
+        """The bridge with a counter-swing of ``pulse`` [s] at its start (leaving) or end.
+
+        Leaving: the ``counter_swing_joints`` first turn away from their target at full jerk
+        for ``pulse`` seconds, then the time-optimal move from that state to rest at the
+        target. Reaching: the time reverse, overshooting the target and coming back to it.
+        The swing ends at the clearance crossing already moving, where the plain bridge,
+        started later to keep the same drift there, would be slower (a jerk-limited start
+        moves as t^3: starting early and backwards gains speed for the same offset).
+        ``frame_qd`` (6,) [rad/s]: joint velocity of the belt the contact moves with.
+        None when ruckig rejects it (e.g. a joint without travel).
+        """
+        a, b = bridge.start.q, bridge.end.q
+        lim = _share(self.limits, self._share, frame_qd)
+        rest = bridge.duration - pulse  # a stretched bridge (`_legs`) stays stretched
+        idx = list(self.config.cycle.counter_swing_joints)
+        jerk = np.zeros(6)
+        jerk[idx] = np.sign(b - a)[idx] * np.asarray(lim.max_jerk)[idx]
+        if pulse <= 0.0 or not np.any(jerk):
+            return None
+        try:
+            if leaving:
+                j = -jerk
+                first = plan_segment(
+                    JointState.at_rest(a),
+                    a + j * pulse**3 / 6.0,
+                    lim,
+                    j * pulse**2 / 2.0,
+                    target_qdd=j * pulse,
+                    label="swing",
+                )
+                second = plan_segment(first.end, b, lim, label="bridge", min_duration=rest)
+            else:
+                j = jerk
+                first = plan_segment(
+                    JointState.at_rest(a),
+                    b + j * pulse**3 / 6.0,
+                    lim,
+                    -j * pulse**2 / 2.0,
+                    target_qdd=j * pulse,
+                    label="bridge",
+                    min_duration=rest,
+                )
+                second = plan_segment(first.end, b, lim, label="swing")
+        except PlannerError:
+            return None
+        return join([first, second], "bridge")
+
     def _leave(
-        self, start: JointState, contact: _Contact, bridge: Segment | None, label: str
+        self,
+        start: JointState,
+        contact: _Contact,
+        bridge: Segment | None,
+        cap: float = 1.0,
+        *,
+        label: str,
     ) -> tuple[list[Segment], float]:
         """Vertical move off a contact to its approach point, with the largest valid lead.
 
         With lead tau, the move follows the pure vertical move, and during its last tau seconds
-        the first tau seconds of the bridge (the transfer starting) are superposed.
+        the first tau seconds of the bridge (the transfer starting) are superposed; the bridge
+        may start with a counter-swing (`_swung`), whichever gets the lead joints there first.
 
         Returns the segments and the lead time used (NaN when it had to stop).
         """
         if self.config.trajectory.blend:
             base = self._vertical(contact, True, start)
 
-            def build(tau: float) -> list[Segment]:
-                if bridge is None or tau <= 0.0:
+            def build(br: Segment | None, tau: float) -> list[Segment]:
+                if br is None or tau <= 0.0:
                     return [window(base, 0.0, base.duration, label)]
                 t_split = base.duration - tau
                 segs = [] if t_split <= 0.0 else [window(base, 0.0, t_split, label)]
-                return [
-                    *segs,
-                    superpose([(base, t_split), (bridge, 0.0)], tau, bridge.start.q, label),
-                ]
+                return [*segs, superpose([(base, t_split), (br, 0.0)], tau, br.start.q, label)]
 
-            found = self._largest_lead(build, base.duration, contact, True, bridge is not None)
+            found = self._best_lead(build, base, contact, bridge, True, cap)
             if found is not None:
                 return found
         q_stop = contact.approach_q
@@ -408,12 +530,13 @@ class PickPlacePlanner:
         return [seg], math.nan
 
     def _reach_state(
-        self, contact: _Contact, bridge: Segment | None, label: str
+        self, contact: _Contact, bridge: Segment | None, cap: float = 1.0, *, label: str
     ) -> tuple[JointState, list[Segment], float]:
         """Approach-point state (with the largest valid lead) and the vertical move to contact.
 
-        With lead tau, the last tau seconds of the bridge (the transfer ending) are superposed
-        on the first tau seconds of the pure vertical descent.
+        With lead tau, the last tau seconds of the bridge (the transfer ending, possibly with a
+        counter-swing, `_swung`) are superposed on the first tau seconds of the pure vertical
+        descent.
 
         Returns the approach-point state, the descent segments and the lead time (NaN when it
         has to stop at the approach point).
@@ -421,16 +544,14 @@ class PickPlacePlanner:
         if self.config.trajectory.blend:
             base = self._vertical(contact, False)
 
-            def build(tau: float) -> list[Segment]:
-                if bridge is None or tau <= 0.0:
+            def build(br: Segment | None, tau: float) -> list[Segment]:
+                if br is None or tau <= 0.0:
                     return [window(base, 0.0, base.duration, label)]
-                first = superpose(
-                    [(base, 0.0), (bridge, bridge.duration - tau)], tau, bridge.end.q, label
-                )
+                first = superpose([(base, 0.0), (br, br.duration - tau)], tau, br.end.q, label)
                 rest = [window(base, tau, base.duration, label)] if tau < base.duration else []
                 return [first, *rest]
 
-            found = self._largest_lead(build, base.duration, contact, False, bridge is not None)
+            found = self._best_lead(build, base, contact, bridge, False, cap)
             if found is not None:
                 return found[0][0].start, found[0], found[1]
         stop = JointState(contact.approach_q, self.joint_velocity(contact.approach_q, contact.belt))
@@ -444,27 +565,97 @@ class PickPlacePlanner:
         except PlannerError:
             return None
 
-    def _bridge(self, a: Array, b: Array) -> Segment:
+    def _bridge(self, a: Array, b: Array, frame_qd: Array, min_duration: float = 0.0) -> Segment:
         """Rest-to-rest time-optimal move of the lead joints between approach points.
 
         The lead's source: only ``lead_joints`` (base and wrist rotations) move, with
         ``lead_share`` of their acceleration and jerk; the vertical moves get the rest, so the
-        superposition keeps every limit.
+        superposition keeps every limit. Its velocity limits leave room for ``frame_qd`` (6,)
+        [rad/s], the joint velocity of a moving belt superposed at an end (zero if static). It
+        lasts at least ``min_duration`` [s] (see `_legs`).
         """
         target = a.copy()
         idx = list(self.config.cycle.lead_joints)
         target[idx] = unwrap_target(a, b, self.limits, self._wrap)[idx]
-        return plan_segment(JointState.at_rest(a), target, self._bridge_limits, label="bridge")
+        lim = _share(self.limits, self._share, frame_qd)
+        return plan_segment(
+            JointState.at_rest(a), target, lim, label="bridge", min_duration=min_duration
+        )
+
+    def _legs(  # noqa: PLR0917
+        self,
+        start: JointState,
+        leave: Callable[[Segment | None, float], tuple[list[Segment], float]] | None,
+        reach: Callable[[Segment | None, float], tuple[JointState, list[Segment], float]],
+        bridge: Callable[[float], Segment],
+        floor_z: float,
+        label: str,
+    ) -> tuple[list[Segment], float, Segment, list[Segment], float]:
+        """Leave a contact (or ``start``, when ``leave`` is None), link, reach the next one.
+
+        The link must keep its clearance and limits and not be held up by ruckig's
+        synchronisation: a joint arriving with a velocity cannot take every duration, so a
+        link whose joints each need less time than it takes has hit such a gap (long leads on
+        a short base turn: the base would finish its part of the link sooner than the arm's
+        other joints can reverse the vertical motion). Then the bridge (``bridge(T)``: the
+        lead joints' move stretched to at least ``T`` [s]) is stretched until the base's part
+        of the link lasts as long as the slowest joint needs (``_STRETCHES`` tries); failing
+        that, the leads are capped at ``_LEAD_CAPS`` of the vertical moves, then dropped.
+
+        Returns the leave segments and lead (NaN without ``leave``), the link, the reach
+        segments and lead.
+        """
+        br = bridge(0.0)
+        tries = [(1.0, True)] * (_STRETCHES + 1) + [(cap, False) for cap in (*_LEAD_CAPS, 0.0)]
+        stretching = True
+        for cap, stretch in tries:
+            if stretch and not stretching:
+                continue
+            b = br if cap > 0.0 else None
+            s_out, lead_out = leave(b, cap) if leave is not None else ([], 0.0)
+            via, s_in, lead_in = reach(b, cap)
+            from_state = s_out[-1].end if s_out else start
+            link, need = self._link(from_state, via, floor_z, label)
+            if link is not None:
+                lead = lead_out if leave is not None else math.nan
+                return s_out, lead, link, s_in, lead_in
+            if stretch and need is not None:
+                middle = br.duration - np.nan_to_num(lead_out) - np.nan_to_num(lead_in)
+                br = bridge(br.duration + max(need - middle, 0.0) + _SYNC_SLACK)
+            elif stretch:  # not a synchronisation gap: stretching will not help
+                stretching = False
+                br = bridge(0.0)
+        link = self._segment(from_state, via.q, via.qd, label, via.qdd)
+        return s_out, lead_out if leave is not None else math.nan, link, s_in, lead_in
 
     def _link(
-        self, leave: Segment, reach: JointState, floor_z: float, label: str
-    ) -> Segment | None:
-        """The move from a leave segment's end to a reach state, if it keeps its clearance."""
+        self, leave: JointState, reach: JointState, floor_z: float, label: str
+    ) -> tuple[Segment | None, float | None]:
+        """The move from a leave state to a reach state, if usable (see `_legs`).
+
+        Returns the move or None, and when synchronisation held it up, the longest time a
+        joint alone needs for it [s] (else None).
+        """
         try:
-            seg = self._segment(leave.end, reach.q, reach.qd, label, reach.qdd)
+            seg = self._segment(leave, reach.q, reach.qd, label, reach.qdd)
         except PlannerError:
-            return None
-        return seg if self._clearance_ok(seg, floor_z) else None
+            return None, None
+        if seg.ruckig is not None:
+            alone = float(np.max(seg.ruckig.independent_min_durations))
+            if seg.duration > alone + _SYNC_SLACK:
+                return None, alone
+        return (seg, None) if self._link_ok(seg, floor_z) else (None, None)
+
+    def _link_ok(self, seg: Segment, floor_z: float) -> bool:
+        """Whether a move between two leads keeps its clearance and every limit.
+
+        Ruckig exceeds a limit when its start state cannot brake in time (a fast lead plus a
+        belt's velocity, say).
+        """
+        tr = self.config.trajectory
+        return self._clearance_ok(seg, floor_z) and segment_within_limits(
+            seg, self.limits, tr.sample_dt, tr.limit_tolerance
+        )
 
     # ------------------------------------------------------------------ planning
 
@@ -544,9 +735,15 @@ class PickPlacePlanner:
         def plan_for(t: float) -> tuple[Any, float]:
             """The cycle meeting the tile where it is at time t, and its own contact time."""
             pick_c = pick0 + belt * t - np.array([0.0, 0.0, c.pick_press])
-            res = self._plan(
-                start, start_at_contact, end_retreat, pick_c, place, pick_yaw, rotations, belt
-            )
+            args = (start, start_at_contact, end_retreat, pick_c, place, pick_yaw, rotations, belt)
+            res = self._plan(*args, c.approach_height)
+            for height in c.approach_alternatives:
+                try:
+                    alt = self._plan(*args, height)
+                except PlannerError:
+                    continue
+                if alt[0].duration < res[0].duration:
+                    res = alt
             return res, res[0].end_time("descend_pick")
 
         # Fixed point t = T(t): the contact time of the plan aimed at the tile's position then.
@@ -580,8 +777,9 @@ class PickPlacePlanner:
         traj = pw.sample(self.config.trajectory.sample_dt)
         bound_q = start.q if bound_from is None else as_joint_vector(bound_from, "bound_from")
         belt_qd = self.joint_velocity(pick_q, belt)
-        motion_bound = self.lower_bound(bound_q, pick_q, place_q, belt_qd)
-        bound = self.cycle_bound(bound_q, pick_q, belt_qd, dwell.duration, place_q)
+        end_q = pw.end.q if end_retreat else None
+        motion_bound = self.lower_bound(bound_q, pick_q, place_q, belt_qd, end_q)
+        bound = self.cycle_bound(bound_q, pick_q, belt_qd, dwell.duration, place_q, end_q)
         return CyclePlan(
             trajectory=traj,
             piecewise=pw,
@@ -612,9 +810,10 @@ class PickPlacePlanner:
         pick_yaw: float,
         rotations: list[tuple[float, Array, float]],
         belt: Array,
+        approach_height: float,
     ) -> tuple[Piecewise, Array, Array, float, tuple[float, float, float, float]]:
         c = self.config.cycle
-        up = np.array([0.0, 0.0, c.approach_height])
+        up = np.array([0.0, 0.0, approach_height])
         zero = np.zeros(3)
         moving = bool(np.any(belt))
         dwell_pick = max(c.pick_dwell, c.belt_match_time) if moving else c.pick_dwell
@@ -638,24 +837,21 @@ class PickPlacePlanner:
         lead_start = math.nan
 
         # Leaving the start (previous place) and reaching the pick.
+        leave_start: Callable[[Segment | None, float], tuple[list[Segment], float]] | None = None
         if start_at_contact:
             p_start = self.ik.fk(start.q)[0]
             start_up_q = self._solve(p_start + up, pick_yaw, start.q)
             start_out = _Contact(p_start, zero, start.q, np.zeros(6), start_up_q, empty)
-            bridge = self._bridge(start_up_q, pick_in_q)
-            s_ret, lead_start = self._leave(start, start_out, bridge, "retreat")
+            bridge = partial(self._bridge, start_up_q, pick_in_q, belt_qd)
+            leave_start = partial(self._leave, start, start_out, label="retreat")
             floor_z = min(p_start[2], pick_c[2])
         else:
-            bridge = self._bridge(start.q, pick_in_q)
-            s_ret = []
+            bridge = partial(self._bridge, start.q, pick_in_q, belt_qd)
             floor_z = -math.inf
-        via_in, s_desc, lead_pick_in = self._reach_state(pick_in, bridge, "descend_pick")
-        from_state = s_ret[-1].end if s_ret else start
-        s_to = self._segment(from_state, via_in.q, via_in.qd, "to_pick", via_in.qdd)
-        if s_ret and not self._clearance_ok(s_to, floor_z):
-            s_ret, lead_start = self._leave(start, start_out, None, "retreat")
-            via_in, s_desc, lead_pick_in = self._reach_state(pick_in, None, "descend_pick")
-            s_to = self._segment(s_ret[-1].end, via_in.q, via_in.qd, "to_pick", via_in.qdd)
+        reach_pick = partial(self._reach_state, pick_in, label="descend_pick")
+        s_ret, lead_start, s_to, s_desc, lead_pick_in = self._legs(
+            start, leave_start, reach_pick, bridge, floor_z, "to_pick"
+        )
         segs += [*s_ret, s_to, *s_desc]
         segs.append(
             hold_segment(
@@ -666,15 +862,16 @@ class PickPlacePlanner:
         )
 
         # Lift, transfer, descend to the place.
-        bridge = self._bridge(lift_q, place_in_q)
+        bridge = partial(self._bridge, lift_q, place_in_q, belt_qd)
         floor_z = min(pick_c[2], place_c[2])
-        s_lift, lead_out = self._leave(segs[-1].end, pick_out, bridge, "lift")
-        via_pl, s_down, lead_in = self._reach_state(place_in, bridge, "descend_place")
-        s_tr = self._link(s_lift[-1], via_pl, floor_z, "transfer")
-        if s_tr is None:
-            s_lift, lead_out = self._leave(segs[-1].end, pick_out, None, "lift")
-            via_pl, s_down, lead_in = self._reach_state(place_in, None, "descend_place")
-            s_tr = self._segment(s_lift[-1].end, via_pl.q, via_pl.qd, "transfer", via_pl.qdd)
+        s_lift, lead_out, s_tr, s_down, lead_in = self._legs(
+            segs[-1].end,
+            partial(self._leave, segs[-1].end, pick_out, label="lift"),
+            partial(self._reach_state, place_in, label="descend_place"),
+            bridge,
+            floor_z,
+            "transfer",
+        )
         segs += [*s_lift, s_tr, *s_down]
         segs.append(hold_segment(JointState(place_q), c.place_dwell, "dwell_place"))
         if end_retreat:
@@ -683,7 +880,12 @@ class PickPlacePlanner:
         return Piecewise(tuple(segs)), pick_q, place_q, place_yaw, leads
 
     def lower_bound(
-        self, start_q: npt.ArrayLike, pick_q: Array, place_q: Array, pick_qd: Array | None = None
+        self,
+        start_q: npt.ArrayLike,
+        pick_q: Array,
+        place_q: Array,
+        pick_qd: Array | None = None,
+        end_q: Array | None = None,
     ) -> float:
         """Lower bound [s]: time-optimal start -> pick contact -> place contact, no dwell.
 
@@ -692,24 +894,28 @@ class PickPlacePlanner:
             pick_q: Pick contact configuration, shape (6,) [rad].
             place_q: Place contact configuration, shape (6,) [rad].
             pick_qd: Joint velocity at the pick contact (belt matching), shape (6,) [rad/s].
+            end_q: Where the cycle ends at rest after the place (a retreat), shape (6,) [rad];
+                None: it ends at the place contact.
         """
         s0 = JointState.at_rest(as_joint_vector(start_q, "start_q"))
         a = self._segment(s0, pick_q, pick_qd, "bound_pick")
         b = self._segment(a.end, place_q, None, "bound_place")
-        return a.duration + b.duration
+        return a.duration + b.duration + self._end_bound(place_q, end_q)
 
-    def cycle_bound(
+    def cycle_bound(  # noqa: PLR0917
         self,
         start_q: npt.ArrayLike,
         pick_q: Array,
         pick_qd: Array,
         pick_dwell: float,
         place_q: Array,
+        end_q: Array | None = None,
     ) -> float:
         """Lower bound [s] of a cycle with vacuum dwells (see the module docstring).
 
         Time-optimal start -> pick contact (arriving with ``pick_qd``), the pick dwell travelling
-        at ``pick_qd``, time-optimal from there to rest at the place contact, the place dwell.
+        at ``pick_qd``, time-optimal from there to rest at the place contact, the place dwell
+        (and, with ``end_q``, time-optimal from there to rest at ``end_q``).
 
         Args:
             start_q: Start configuration (at rest), shape (6,) [rad].
@@ -717,12 +923,21 @@ class PickPlacePlanner:
             pick_qd: Joint velocity at the pick contact (belt matching), shape (6,) [rad/s].
             pick_dwell: Time at the pick contact (vacuum build-up, belt matching) [s].
             place_q: Place contact configuration, shape (6,) [rad].
+            end_q: Where the cycle ends at rest after the place dwell (a retreat), shape (6,)
+                [rad]; None: it ends at the place contact.
         """
         s0 = JointState.at_rest(as_joint_vector(start_q, "start_q"))
         a = self._segment(s0, pick_q, pick_qd, "bound_pick")
         held = hold_segment(a.end, pick_dwell, "bound_dwell")
         b = self._segment(held.end, place_q, None, "bound_place")
-        return a.duration + pick_dwell + b.duration + self.config.cycle.place_dwell
+        dwells = pick_dwell + self.config.cycle.place_dwell
+        return a.duration + b.duration + dwells + self._end_bound(place_q, end_q)
+
+    def _end_bound(self, place_q: Array, end_q: Array | None) -> float:
+        """Time-optimal rest-to-rest move from the place contact to ``end_q`` [s] (0 if None)."""
+        if end_q is None:
+            return 0.0
+        return self._segment(JointState.at_rest(place_q), end_q, None, "bound_end").duration
 
     def plan_move(self, start: JointState, q: npt.ArrayLike, label: str = "move") -> Piecewise:
         """Time-optimal move from ``start`` to rest at ``q`` (6,) [rad] (e.g. back home).

@@ -29,6 +29,8 @@ Array = npt.NDArray[np.float64]
 
 _TWO_PI = 2.0 * math.pi
 _OK_RESULTS = (Result.Working, Result.Finished)
+_JOIN_TOLERANCE = 1e-9
+"""Largest position [rad] or velocity [rad/s] jump accepted between joined pieces (rounding)."""
 
 
 def as_joint_vector(value: npt.ArrayLike, name: str) -> Array:
@@ -166,8 +168,9 @@ class Segment:
     """One piece of a chained trajectory.
 
     A ruckig segment (``ruckig`` set), a superposition of time windows of other segments
-    (``parts`` set, see `superpose`), or a constant-velocity segment from ``start.q`` with
-    velocity ``start.qd`` (a hold at rest when that velocity is zero).
+    (``parts`` set, see `superpose`), segments played one after the other (``pieces`` set, see
+    `join`), or a constant-velocity segment from ``start.q`` with velocity ``start.qd`` (a hold
+    at rest when that velocity is zero).
 
     Attributes:
         start: State at the segment's start.
@@ -177,6 +180,7 @@ class Segment:
         ruckig: Ruckig's trajectory, or None.
         parts: (segment, time offset [s]) pairs summed by a superposed segment.
         offset: Subtracted from the parts' summed positions, shape (6,) [rad].
+        pieces: Segments played in order, each starting where the previous one ends.
     """
 
     start: JointState
@@ -186,10 +190,17 @@ class Segment:
     ruckig: Trajectory | None = None
     parts: tuple[tuple[Segment, float], ...] = ()
     offset: Array | None = None
+    pieces: tuple[Segment, ...] = ()
 
     def state(self, tau: float) -> tuple[Array, Array, Array]:
         """State at ``tau`` [s] after the segment's start, each shape (6,)."""
         tau = min(max(tau, 0.0), self.duration)
+        if self.pieces:
+            for piece in self.pieces[:-1]:
+                if tau <= piece.duration:
+                    return piece.state(tau)
+                tau -= piece.duration
+            return self.pieces[-1].state(tau)
         if self.parts:
             q, qd, qdd = np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros(N_JOINTS)
             for seg, t0 in self.parts:
@@ -201,6 +212,38 @@ class Segment:
             return self.start.q + self.start.qd * tau, self.start.qd, np.zeros(N_JOINTS)
         p, v, a = self.ruckig.at_time(tau)
         return np.asarray(p), np.asarray(v), np.asarray(a)
+
+    def states(self, taus: npt.ArrayLike) -> tuple[Array, Array, Array]:
+        """States at times ``taus`` (n,) [s] after the segment's start, each shape (n, 6).
+
+        The same values as `state` at each time, evaluated a whole array at once.
+        """
+        t = np.clip(np.asarray(taus, dtype=np.float64), 0.0, self.duration)
+        if self.pieces:
+            q, qd, qdd = (np.empty((t.size, N_JOINTS)) for _ in range(3))
+            starts = np.cumsum([0.0] + [p.duration for p in self.pieces[:-1]])
+            which = np.clip(np.searchsorted(starts, t, side="left") - 1, 0, len(self.pieces) - 1)
+            for k, piece in enumerate(self.pieces):
+                sel = which == k
+                if sel.any():
+                    q[sel], qd[sel], qdd[sel] = piece.states(t[sel] - starts[k])
+            return q, qd, qdd
+        if self.parts:
+            q, qd, qdd = (np.zeros((t.size, N_JOINTS)) for _ in range(3))
+            for seg, t0 in self.parts:
+                pq, pqd, pqdd = seg.states(t0 + t)
+                q, qd, qdd = q + pq, qd + pqd, qdd + pqdd
+            assert self.offset is not None
+            return q - self.offset, qd, qdd
+        if self.ruckig is None:
+            q = self.start.q[None, :] + self.start.qd[None, :] * t[:, None]
+            return q, np.repeat(self.start.qd[None, :], t.size, 0), np.zeros((t.size, N_JOINTS))
+        rows = [self.ruckig.at_time(float(x)) for x in t]
+        return (
+            np.array([r[0] for r in rows]).reshape(t.size, N_JOINTS),
+            np.array([r[1] for r in rows]).reshape(t.size, N_JOINTS),
+            np.array([r[2] for r in rows]).reshape(t.size, N_JOINTS),
+        )
 
 
 def _ruckig_input(
@@ -327,6 +370,33 @@ def superpose(
     )
 
 
+def join(pieces: Sequence[Segment], label: str) -> Segment:
+    """Segments played one after the other as one segment (each starts where the last ended).
+
+    Raises:
+        TrajectoryError: No pieces, or a piece does not start where the previous one ended.
+    """
+    if not pieces:
+        raise TrajectoryError(f"segment {label!r}: join needs at least one piece")
+    for a, b in zip(pieces[:-1], pieces[1:], strict=True):
+        gap = max(
+            float(np.max(np.abs(a.end.q - b.start.q))),
+            float(np.max(np.abs(a.end.qd - b.start.qd))),
+        )
+        if gap > _JOIN_TOLERANCE:
+            raise TrajectoryError(
+                f"segment {label!r}: piece {b.label!r} starts {gap:.2e} (rad or rad/s) away "
+                f"from where {a.label!r} ends"
+            )
+    return Segment(
+        pieces[0].start,
+        pieces[-1].end,
+        float(sum(p.duration for p in pieces)),
+        label,
+        pieces=tuple(pieces),
+    )
+
+
 def peak_usage(seg: Segment, limits: JointLimits) -> tuple[Array, Array]:
     """Exact peak |acceleration| and |jerk| of a ruckig segment per joint, as limit fractions.
 
@@ -353,13 +423,7 @@ def segment_within_limits(seg: Segment, limits: JointLimits, dt: float, toleranc
     """Whether a segment sampled every ``dt`` [s] stays within every limit (relative slack)."""
     n = max(2, int(math.ceil(seg.duration / dt)) + 1)
     times = np.linspace(0.0, seg.duration, n)
-    states = [seg.state(float(t)) for t in times]
-    traj = JointTrajectory(
-        times,
-        np.array([s[0] for s in states]),
-        np.array([s[1] for s in states]),
-        np.array([s[2] for s in states]),
-    )
+    traj = JointTrajectory(times, *seg.states(times))
     rep = limit_report(traj, limits)
     worst = max(rep.velocity.max(), rep.acceleration.max(), rep.jerk.max())
     return bool(rep.in_range and worst <= 1.0 + tolerance)
@@ -545,6 +609,7 @@ __all__ = [
     "chain",
     "check_in_range",
     "hold_segment",
+    "join",
     "segment_within_limits",
     "superpose",
     "window",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ from envs.tile_shapes import basic_shapes
 from planners.config import load_planner_config
 from planners.errors import InvalidTargetError, UnreachableError
 from planners.ik import IKSolver
-from planners.pick_place import PickPlacePlanner, relative_rotation
+from planners.pick_place import CyclePlan, PickPlacePlanner, relative_rotation
 from planners.trajectory import JointState, validate
 
 CFG = load_planner_config()
@@ -77,6 +78,135 @@ def test_tool_moves_vertically_near_the_contacts(
         assert np.hypot(rel[low, 0], rel[low, 1]).max() <= c.max_lateral_drift + 1e-4
     # Blending: no stop at the approach points (the lead overlaps the transfer).
     assert all(lead > 0 for lead in plan.leads)
+
+
+def _drift_below_clearance(
+    planner: PickPlacePlanner, plan: CyclePlan, belt: np.ndarray, dt: float = 2.5e-4
+) -> tuple[float, float]:
+    """Largest sideways drift [m] of the tool from each contact while below its clearance height.
+
+    Samples the exact segments every ``dt`` [s] by forward kinematics, independently of the
+    planner's own check: in the belt's frame near the pick (the contact travels with the belt
+    from the vacuum switching on). Returns the largest drift with a held tile (lift, place
+    descent; ``lateral_clearance_height``) and with the empty pad (pick descent, retreat from
+    the start; ``empty_clearance_height``).
+    """
+    c = planner.config.cycle
+    q_all = []
+    times = []
+    t0 = 0.0
+    for seg in plan.piecewise.segments:
+        taus = np.arange(0.0, seg.duration, dt)
+        times.append(t0 + taus)
+        q_all.append(seg.states(taus)[0])
+        t0 += seg.duration
+    t = np.concatenate(times)
+    pos = np.array([planner.ik.fk(q)[0] for q in np.concatenate(q_all)])
+    on, off = plan.vacuum_on, plan.vacuum_off
+    pick_c = _tcp(planner, plan.pick_q)
+    place_c = _tcp(planner, plan.place_q)
+    start_c = pos[0]
+    # Each contact with the stretch of the cycle around it and whether a tile is held there.
+    checks = [
+        (start_c, np.zeros(3), 0.0, t < plan.piecewise.start_time("to_pick"), False),
+        (
+            pick_c,
+            belt,
+            on,
+            (t < on) | ((t >= on) & (t <= plan.piecewise.start_time("transfer"))),
+            True,
+        ),
+        (place_c, np.zeros(3), off, t >= plan.piecewise.end_time("transfer"), True),
+    ]
+    worst = {True: 0.0, False: 0.0}
+    for point, vel, t_ref, stretch, _ in checks:
+        rel = pos - (point[None, :] + vel[None, :] * (t - t_ref)[:, None])
+        loaded = (t > on) & (t < off)
+        height = np.where(loaded, c.lateral_clearance_height, c.empty_clearance_height)
+        low = stretch & (rel[:, 2] < height)
+        lateral = np.hypot(rel[:, 0], rel[:, 1])
+        for held in (True, False):
+            sel = low & (loaded == held)
+            if sel.any():
+                worst[held] = max(worst[held], float(lateral[sel].max()))
+    return worst[True], worst[False]
+
+
+@pytest.mark.parametrize("belt_speed", [0.0, 0.2], ids=["static", "belt_0.2"])
+def test_drift_below_the_clearance_heights_sampled_by_fk(
+    planner: PickPlacePlanner, start: JointState, belt_speed: float
+) -> None:
+    # Every lead here is as large as the drift allows (or over the whole vertical move with a
+    # counter-swing): the limit is reached, and sampling the exact path every 0.25 ms by forward
+    # kinematics must find it held to within 5 micrometres (the planner checks 40 samples per
+    # segment plus the exact clearance crossing).
+    c = CFG.cycle
+    belt = np.array([belt_speed, 0.0, 0.0])
+    pick0 = PICK - [0.15 if belt_speed else 0.0, 0.0, 0.0]
+    for rotation in (0.0, 0.6, 2.5):
+        plan = planner.plan_cycle(
+            start, pick0, PLACE, rotation, belt_velocity=belt, start_at_contact=True
+        )
+        loaded, empty = _drift_below_clearance(planner, plan, belt)
+        assert loaded <= c.max_lateral_drift + 5e-6
+        assert empty <= c.max_lateral_drift + 5e-6
+        # The constraint is active, not slack (counter-swings come on a 1 ms grid of lengths).
+        assert loaded > 0.6 * c.max_lateral_drift
+
+
+def test_drift_measure_fails_a_plan_allowed_to_drift(start: JointState) -> None:
+    # The same measurement on a planner allowed 4 mm of drift finds more than 1 mm: the drift
+    # test above can fail.
+    loose = replace(CFG, cycle=replace(CFG.cycle, max_lateral_drift=0.004))
+    planner = PickPlacePlanner(IKSolver(config=loose.ik, limits=loose.limits), loose)
+    plan = planner.plan_cycle(start, PICK, PLACE, 0.6, start_at_contact=True)
+    loaded, empty = _drift_below_clearance(planner, plan, np.zeros(3))
+    assert loaded > 1.5 * CFG.cycle.max_lateral_drift
+    assert empty > CFG.cycle.max_lateral_drift
+
+
+def test_counter_swing_shortens_the_cycle_within_the_drift(
+    planner: PickPlacePlanner, start: JointState
+) -> None:
+    # Without the counter-swing the transfer starts after the lift's start and ends before the
+    # place descent ends; with it the base first turns away from its target (then overshoots
+    # the place and comes back), the lead covers the whole vertical move and the cycle is
+    # shorter, the drift held all the same.
+    plain_cfg = replace(CFG, cycle=replace(CFG.cycle, counter_swing=()))
+    plain = PickPlacePlanner(IKSolver(config=plain_cfg.ik, limits=plain_cfg.limits), plain_cfg)
+    a = plain.plan_cycle(start, PICK, PLACE, 0.6, start_at_contact=True, end_retreat=False)
+    b = planner.plan_cycle(start, PICK, PLACE, 0.6, start_at_contact=True, end_retreat=False)
+    assert b.duration < a.duration - 0.01
+    assert b.bound == pytest.approx(a.bound)
+    lift = b.piecewise.segments[b.piecewise.index("lift")]
+    assert b.leads[2] == pytest.approx(lift.duration)  # the swing starts with the lift
+    assert a.leads[2] < b.leads[2]
+    # The base turns away from the place first: joint 1 moves against its net travel.
+    t_lift = b.lift_off
+    q0 = b.trajectory.at(t_lift)[0][0]
+    q_early = b.trajectory.at(t_lift + 0.012)[0][0]
+    travel = b.place_q[0] - b.pick_q[0]
+    assert (q_early - q0) * travel < 0.0
+    loaded, _ = _drift_below_clearance(planner, b, np.zeros(3))
+    assert loaded <= CFG.cycle.max_lateral_drift + 5e-6
+
+
+def test_bound_covers_the_final_retreat(planner: PickPlacePlanner, start: JointState) -> None:
+    # A cycle ending with a retreat is held against a bound that ends there too: the bound
+    # without the retreat plus the time-optimal retreat (which the plan's retreat is).
+    end = planner.plan_cycle(start, PICK, PLACE, 0.6, start_at_contact=True, end_retreat=True)
+    retreat = end.piecewise.segments[-1]
+    assert retreat.label == "retreat_end"
+    zero = np.zeros(6)
+    without = planner.cycle_bound(start.q, end.pick_q, zero, CFG.cycle.pick_dwell, end.place_q)
+    assert end.bound - without == pytest.approx(retreat.duration, abs=1e-9)
+    assert end.bound == pytest.approx(
+        planner.cycle_bound(
+            start.q, end.pick_q, zero, CFG.cycle.pick_dwell, end.place_q, end.end.q
+        ),
+        abs=1e-12,
+    )
+    assert without < end.duration - retreat.duration and end.bound < end.duration
 
 
 def test_moving_belt_pick_matches_the_belt(planner: PickPlacePlanner, start: JointState) -> None:

@@ -9,15 +9,19 @@ import pytest
 
 from configs import ConfigError
 from planners.config import JointLimits, PlannerConfig, load_planner_config
-from planners.errors import InvalidTargetError, LimitError, PlannerError
+from planners.errors import InvalidTargetError, LimitError, PlannerError, TrajectoryError
 from planners.trajectory import (
     JointState,
+    Piecewise,
     chain,
     hold_segment,
+    join,
     limit_report,
     plan_segment,
+    superpose,
     unwrap_target,
     validate,
+    window,
 )
 
 LIMITS = load_planner_config().limits
@@ -108,6 +112,51 @@ def test_target_velocity_is_reached() -> None:
     np.testing.assert_allclose(a, 0.0, atol=1e-9)
     cruise = hold_segment(seg.end, 0.05)
     np.testing.assert_allclose(cruise.end.q, seg.end.q + qd * 0.05)
+
+
+def test_joined_and_superposed_segments_sample_as_their_pieces() -> None:
+    # A pulse at full jerk then a time-optimal stop (the planner's counter-swing), joined; a
+    # window of it superposed on a belt-like constant velocity. `states` (arrays) equals
+    # `state` (one time) everywhere, clamped outside the segment.
+    jerk = np.zeros(6)
+    jerk[0] = -LIMITS.max_jerk[0]
+    p = 0.01
+    pulse = plan_segment(
+        JointState.at_rest(np.zeros(6)),
+        jerk * p**3 / 6,
+        LIMITS,
+        jerk * p**2 / 2,
+        target_qdd=jerk * p,
+        label="swing",
+    )
+    assert pulse.duration == pytest.approx(p, abs=1e-6)  # the pulse is time-optimal
+    stop = plan_segment(pulse.end, np.full(6, 0.4), LIMITS, label="stop")
+    joined = join([pulse, stop], "bridge")
+    assert joined.duration == pytest.approx(pulse.duration + stop.duration)
+    np.testing.assert_allclose(joined.state(0.5 * p)[0], pulse.state(0.5 * p)[0])
+    np.testing.assert_allclose(joined.state(p + 0.1)[0], stop.state(0.1)[0])
+    drift = hold_segment(JointState(np.zeros(6), np.full(6, 0.05)), 0.3)
+    mixed = superpose([(window(joined, 0.005, 0.3), 0.0), (drift, 0.0)], 0.2, np.zeros(6), "m")
+    taus = np.linspace(-0.01, 0.35, 97)
+    for seg in (pulse, stop, joined, drift, mixed):
+        q, qd, qdd = seg.states(taus)
+        for k, t in enumerate(taus):
+            one = seg.state(float(t))
+            np.testing.assert_allclose(q[k], one[0], atol=1e-12)
+            np.testing.assert_allclose(qd[k], one[1], atol=1e-12)
+            np.testing.assert_allclose(qdd[k], one[2], atol=1e-12)
+    sampled = Piecewise((joined,)).sample(DT)
+    validate(sampled, LIMITS)
+    assert sampled.q[:, 0].min() < 0.0  # it turned away first
+
+
+def test_join_rejects_pieces_that_do_not_meet() -> None:
+    a = plan_segment(JointState.at_rest(np.zeros(6)), np.full(6, 0.1), LIMITS, label="a")
+    b = plan_segment(JointState.at_rest(np.full(6, 0.2)), np.full(6, 0.3), LIMITS, label="b")
+    with pytest.raises(TrajectoryError, match="'b' starts"):
+        join([a, b], "ab")
+    with pytest.raises(TrajectoryError, match="at least one"):
+        join([], "none")
 
 
 def test_unwrap_picks_nearest_equivalent_angle_inside_range() -> None:
