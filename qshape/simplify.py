@@ -26,6 +26,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from qshape.errors import InvalidFigureError, ToleranceError
+from qshape.fit import (
+    circle_outlines,
+    flat_corner_outlines,
+    merge_fitted_corners,
+    outline_moments,
+)
 from qshape.geometry import MAX_COORDINATE, BoolArray, FloatArray, cross2
 from qshape.tolerances import _load_section
 
@@ -85,6 +91,22 @@ class OutlineParams:
             over whole edges, so this holds where the window measure of
             ``corner_angle_deg`` is fooled by a rough edge; keep it below the shallowest real
             corner of the tiles (33 degrees in the bundled trencadis).
+        fit_merge_chi2: Corners from fits (`qshape.fit`), dimensionless, 0: off. A corner
+            is dropped when the runs on both sides fit one line (or one arc, where a run is
+            itself curved) with a squared residual at most this many times the outline's
+            roughness variance per independent sample above their separate fits; the kept
+            corners then move to the sample that best splits their runs, and an outline that
+            one circle fits as well as its runs keeps no corner (a closed curve). The
+            roughness is `roughness_sigmas`' measure, and one independent sample spans
+            (1 + rho) / (1 - rho) samples for the lag-1 autocorrelation rho of the measure
+            (a correlated bump counts once, however densely it is sampled).
+        fit_sigma_floor: Smallest roughness the fits assume, fraction of the outline's
+            diameter (a clean traced outline still carries its pixel staircase).
+        refine_trim_fraction: With ``refine_corners``, the samples left out at each end of
+            a run before its line is fitted, fraction of the outline's samples (at least one
+            sample; 0: ``corner_window``). A short trim fits the line to nearly the whole
+            edge, which averages a rough edge's bumps out: keep it just above the rounding
+            of a corner by blur.
     """
 
     resample_points: int = 256
@@ -102,6 +124,9 @@ class OutlineParams:
     missed_corner_ratio: float = 0.0
     roughness_sigmas: float = 0.0
     min_corner_deg: float = 0.0
+    fit_merge_chi2: float = 0.0
+    fit_sigma_floor: float = 0.0
+    refine_trim_fraction: float = 0.0
 
     def __post_init__(self) -> None:
         """Validate ranges.
@@ -120,6 +145,8 @@ class OutlineParams:
             "circle_residual",
             "chamfer_fraction",
             "missed_corner_ratio",
+            "fit_sigma_floor",
+            "refine_trim_fraction",
         ):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0.0 <= v < 0.5):
@@ -130,6 +157,8 @@ class OutlineParams:
             raise ToleranceError(
                 f"roughness_sigmas must be in [0, 20], got {self.roughness_sigmas}"
             )
+        if not (math.isfinite(self.fit_merge_chi2) and 0.0 <= self.fit_merge_chi2 <= 1e4):  # noqa: PLR2004
+            raise ToleranceError(f"fit_merge_chi2 must be in [0, 1e4], got {self.fit_merge_chi2}")
         if not 0.0 <= self.min_corner_deg < 90.0:  # noqa: PLR2004
             raise ToleranceError(f"min_corner_deg must be in [0, 90), got {self.min_corner_deg}")
         if not 0.0 <= self.arc_turning_deg < 180.0:
@@ -280,10 +309,20 @@ def _simplify_clean(
         change = _excess_turning(change, w, p.arc_turning_deg)
     corners = _corners_many(change, p.corner_angle_deg, max(w, round(p.merge_fraction * n)))
     noise = p.noise_fraction * diameter
-    if p.roughness_sigmas > 0.0:
-        noise = np.maximum(noise, p.roughness_sigmas * _roughness(res, w))
+    mom: FloatArray | None = None
+    if p.roughness_sigmas > 0.0 or p.fit_merge_chi2 > 0.0:
+        rough, corr = _roughness(res, w)
+        if p.roughness_sigmas > 0.0:
+            noise = np.maximum(noise, p.roughness_sigmas * rough)
+        if p.fit_merge_chi2 > 0.0:
+            mom = outline_moments(res, np.where(diameter > 0.0, diameter, 1.0))
+            _corners_from_fits(mom, corners, p, rough * np.sqrt(corr), diameter, flat, half)
     if p.min_corner_deg > 0.0:
-        for f in _with_flat_corners(res, corners, p.min_corner_deg, half).tolist():
+        if mom is None:
+            suspects = _with_flat_corners(res, corners, p.min_corner_deg, half)
+        else:
+            suspects = flat_corner_outlines(mom, corners, p.min_corner_deg, half)
+        for f in suspects.tolist():
             if not flat[f]:
                 corners[f] = _verified_corners(res[f], corners[f], p, float(noise[f]), half)
     ring = ext[:, w - 1 : w + n + 1]
@@ -309,13 +348,45 @@ def _simplify_clean(
         out[i] = (points, mask)
 
 
-def _roughness(res: FloatArray, w: int) -> FloatArray:
+def _corners_from_fits(  # noqa: PLR0913, PLR0917
+    mom: FloatArray,
+    corners: list[np.ndarray],
+    p: OutlineParams,
+    sigma: FloatArray,
+    diameter: FloatArray,
+    skip: BoolArray,
+    trim: int,
+) -> None:
+    """Corners (in place) dropped where one fit explains the runs beside them.
+
+    `qshape.fit.merge_fitted_corners`; then an outline one circle fits as well as its runs
+    loses them all (`qshape.fit.circle_outlines`: a closed curve). ``mom``: the outlines'
+    `qshape.fit.outline_moments` in units of their diameter; ``sigma`` (F,): each outline's
+    roughness per independent sample; ``trim``: samples left out at a run's far end.
+    """
+    rows = np.flatnonzero(~skip & (np.array([len(c) for c in corners]) > 1))
+    if len(rows) == 0:
+        return
+    scale = np.where(diameter > 0.0, diameter, 1.0)
+    sig = np.maximum(sigma, p.fit_sigma_floor * diameter) / scale
+    limit = p.fit_merge_chi2 * sig * sig
+    merge_fitted_corners(mom, corners, rows, limit, trim)
+    for f in circle_outlines(mom, corners, rows, limit).tolist():
+        corners[f] = np.zeros(0, dtype=np.int64)
+
+
+def _roughness(res: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
     """Robust edge roughness of each outline (F, n, 2) -> (F,), in the outline's unit.
 
     Each sample's signed distance from the chord of its neighbours ``w`` samples away, less
     its moving mean over 4 w + 1 samples (an arc's sagitta, constant along it), scaled by the
     normal-consistency factor of the median absolute deviation and by sqrt(2/3) (the chord's
     ends carry noise too).
+
+    Returns:
+        (roughness (F,), correlation (F,)): the second is how many consecutive samples one
+        independent sample of that roughness spans, (1 + rho) / (1 - rho) for the lag-1
+        autocorrelation rho of those distances (>= 1; a bump spread over many samples is one).
     """
     n = res.shape[1]
     a, b = np.roll(res, w, axis=1), np.roll(res, -w, axis=1)
@@ -328,8 +399,15 @@ def _roughness(res: FloatArray, w: int) -> FloatArray:
     csum = np.zeros((len(res), n + 2 * k + 1))
     np.cumsum(ext, axis=1, out=csum[:, 1:])
     local = (csum[:, 2 * k + 1 :] - csum[:, :n]) / (2 * k + 1)
-    dev = np.abs(dist - local)
-    return np.asarray(_MAD_TO_SIGMA * np.median(dev, axis=1) * math.sqrt(2.0 / 3.0))
+    detrended = dist - local
+    sigma = _MAD_TO_SIGMA * np.median(np.abs(detrended), axis=1) * math.sqrt(2.0 / 3.0)
+    lag = (detrended * np.roll(detrended, 1, axis=1)).sum(axis=1)
+    rho = np.clip(lag / np.maximum((detrended * detrended).sum(axis=1), 1e-300), 0.0, _MAX_RHO)
+    return np.asarray(sigma), np.asarray((1.0 + rho) / (1.0 - rho))
+
+
+_MAX_RHO = 0.99
+"""Largest lag-1 autocorrelation used (a correlation factor of at most 199 samples)."""
 
 
 _MAD_TO_SIGMA = 1.4826
@@ -441,7 +519,10 @@ def _excess_turning(change: FloatArray, w: int, arc_deg: float) -> FloatArray:
 
 
 def _snap_circles(
-    res: FloatArray, sign: FloatArray, results: list[tuple[FloatArray, BoolArray]], tol: float
+    res: FloatArray,
+    sign: FloatArray,
+    results: list[tuple[FloatArray, BoolArray]],
+    tol: float,
 ) -> None:
     """Replace, in place, each curved result whose samples fit a circle by two semicircles.
 
@@ -680,7 +761,7 @@ def _polylines(  # noqa: PLR0914
             (owner, starts, ends, prev),
             straight & (m >= 2)[owner],
             points,
-            trim=w,
+            trim=max(1, round(p.refine_trim_fraction * n)) if p.refine_trim_fraction > 0.0 else w,
             reach=p.corner_window * g.perimeter[fo],
             min_sin=math.sin(math.radians(p.corner_angle_deg)),
         )
