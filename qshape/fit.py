@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from qshape.geometry import BoolArray, FloatArray
+from qshape.geometry import FloatArray
 
 _MIN_ARC_SAMPLES = 5
 """Runs with fewer samples are fitted by a line only (an arc through them says nothing)."""
@@ -280,14 +280,6 @@ def flat_corner_outlines(
     diff = np.abs(phi - phi[ring.prev]) % np.pi
     ang = np.degrees(np.minimum(diff, np.pi - diff))
     return np.asarray(np.unique(ring.own[ang < min_deg]))
-
-
-def _side_sse(s: FloatArray, curved: BoolArray) -> FloatArray:
-    """`arc_sse` of the ranges ``s`` (k, 10) where ``curved``, else `line_sse`."""
-    out = line_sse(s)
-    if curved.any():
-        out[curved] = arc_sse(s[curved], out[curved])
-    return out
 
 
 __all__ = [

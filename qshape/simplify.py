@@ -8,7 +8,10 @@ chord, otherwise a curve segment, whose maximum-curvature point is the one farth
 chord; curves turning more than `OutlineParams.max_curve_turn_deg` are split into equal pieces.
 Three optional steps serve traced image contours (``configs/vision.yaml``): corners measured
 against an arc's own turning, round outlines snapped to two equal semicircles, and corners cut
-off or rounded by the pixel grid merged back into one.
+off or rounded by the pixel grid merged back into one. On rough edges (a chipped, ground tile
+traced by a camera) corners come from fits (`qshape.fit`, ``OutlineParams.fit_merge_chi2``): a
+proposed corner stays only where the runs beside it need two lines (or arcs) rather than one,
+judged against the outline's own measured roughness, and edge lines are fitted over whole edges.
 Every length parameter is a fraction of the outline's own size, so the same parameters serve
 millimetres and pixels. Cost is linear in the number of outline points.
 """
