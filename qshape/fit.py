@@ -40,18 +40,18 @@ def outline_moments(res: FloatArray, scale: FloatArray) -> FloatArray:
     """
     q = (res - res.mean(axis=1, keepdims=True)) / scale[:, None, None]
     x, y = q[..., 0], q[..., 1]
-    out = np.zeros((q.shape[0], 9, q.shape[1] + 1))
-    cols = out[:, :, 1:]
-    cols[:, 0], cols[:, 1] = x, y
-    np.multiply(x, x, out=cols[:, 2])
-    np.multiply(x, y, out=cols[:, 3])
-    np.multiply(y, y, out=cols[:, 4])
-    np.add(cols[:, 2], cols[:, 4], out=cols[:, 5])
-    np.multiply(cols[:, 5], x, out=cols[:, 6])
-    np.multiply(cols[:, 5], y, out=cols[:, 7])
-    np.multiply(cols[:, 5], cols[:, 5], out=cols[:, 8])
-    np.cumsum(cols, axis=2, out=cols)
-    return np.ascontiguousarray(out.transpose(0, 2, 1))
+    out = np.zeros((q.shape[0], q.shape[1] + 1, 9))
+    cols = out[:, 1:]
+    cols[..., 0], cols[..., 1] = x, y
+    np.multiply(x, x, out=cols[..., 2])
+    np.multiply(x, y, out=cols[..., 3])
+    np.multiply(y, y, out=cols[..., 4])
+    np.add(cols[..., 2], cols[..., 4], out=cols[..., 5])
+    np.multiply(cols[..., 5], x, out=cols[..., 6])
+    np.multiply(cols[..., 5], y, out=cols[..., 7])
+    np.multiply(cols[..., 5], cols[..., 5], out=cols[..., 8])
+    np.cumsum(cols, axis=1, out=cols)
+    return out
 
 
 def prefix_at(moments: FloatArray, f: np.ndarray, i: np.ndarray) -> FloatArray:

@@ -34,6 +34,7 @@ from qshape.fit import (
     flat_corner_outlines,
     merge_fitted_corners,
     outline_moments,
+    range_sums,
 )
 from qshape.geometry import MAX_COORDINATE, BoolArray, FloatArray, cross2
 from qshape.tolerances import _load_section
@@ -330,7 +331,10 @@ def _simplify_clean(
                 corners[f] = _verified_corners(res[f], corners[f], p, float(noise[f]), half)
     ring = ext[:, w - 1 : w + n + 1]
     geom = _Samples(res, smooth, ring, sign, noise, perimeter, flat)
-    results = _polylines(geom, corners, p, half, w)
+    frame = (
+        None if mom is None else (mom, res.mean(axis=1), np.where(diameter > 0.0, diameter, 1.0))
+    )
+    results = _polylines(geom, corners, p, (half, w), frame)
     if p.chamfer_fraction > 0.0:
         for f in _with_chamfers(results, p.chamfer_fraction).tolist():
             points, mask = results[f]
@@ -634,6 +638,23 @@ def _merge_chamfers(
 
 
 @dataclass(frozen=True)
+class _Moments:
+    """Prefix sums of moments of some runs' outlines (`qshape.fit.outline_moments`).
+
+    Attributes:
+        moments: (F, n + 1, 9) in units of ``scale``, centred on ``mean``.
+        rows: (G,) outline of each row of the rolled samples. first: (G,) its sample 0.
+        mean: (F, 2) centre of each outline. scale: (F,) its unit.
+    """
+
+    moments: FloatArray
+    rows: np.ndarray
+    first: np.ndarray
+    mean: FloatArray
+    scale: FloatArray
+
+
+@dataclass(frozen=True)
 class _Samples:
     """Resampled outlines, all of ``n`` samples.
 
@@ -706,14 +727,21 @@ def _closed_loop(g: _Samples, f: int, p: OutlineParams, half: int) -> tuple[Floa
 
 
 def _polylines(  # noqa: PLR0914
-    g: _Samples, corners: list[np.ndarray], p: OutlineParams, half: int, w: int
+    g: _Samples,
+    corners: list[np.ndarray],
+    p: OutlineParams,
+    windows: tuple[int, int],
+    frame: tuple[FloatArray, FloatArray, FloatArray] | None = None,
 ) -> list[tuple[FloatArray, BoolArray]]:
     """Relevant points of every outline: all runs' chord tests and line fits at once.
 
     Each outline's samples are rotated so that its first corner is sample 0; run r covers
     samples ``c[r] .. c[r + 1]`` (the last one ends at sample n = sample 0). Straight runs
     emit their corner; curved runs, and outlines without corners, go through `_emit_run`.
+    ``windows`` is (smoothing half-width, corner window) in samples; ``frame`` (moments, mean,
+    scale) the outlines' summed moments when already known (`qshape.fit.outline_moments`).
     """
+    half, w = windows
     count, n = g.res.shape[:2]
     empty = (np.zeros((0, 2)), np.zeros(0, dtype=bool))
     results: list[tuple[FloatArray, BoolArray]] = [empty] * count
@@ -767,6 +795,7 @@ def _polylines(  # noqa: PLR0914
             trim=max(1, round(p.refine_trim_fraction * n)) if p.refine_trim_fraction > 0.0 else w,
             reach=p.corner_window * g.perimeter[fo],
             min_sin=math.sin(math.radians(p.corner_angle_deg)),
+            fitted=None if frame is None else _Moments(frame[0], fo, c0, frame[1], frame[2]),
         )
     for row, f in enumerate(with_c):
         r0, r1 = int(first_run[row]), int(first_run[row] + m[row])
@@ -899,6 +928,7 @@ def _refine_all(
     trim: int,
     reach: FloatArray,
     min_sin: float,
+    fitted: _Moments | None = None,
 ) -> None:
     """Move each corner between two straight runs to the intersection of their fitted lines.
 
@@ -908,7 +938,8 @@ def _refine_all(
     Lines are total-least-squares fits of each run (its ends trimmed by ``trim`` samples when
     long enough), all runs of all outlines at once from prefix sums. ``runs`` is (owner,
     starts, ends, prev): run r covers ``rolled[owner[r], starts[r] .. ends[r]]`` and ``prev[r]``
-    is the run before it; ``points[r]`` (its corner) is updated in place.
+    is the run before it; ``points[r]`` (its corner) is updated in place. ``fitted``: the
+    outlines' moments when already summed (the same fits, without summing again).
     """
     owner, starts, ends, prev = runs
     both = straight & straight[prev]
@@ -917,17 +948,24 @@ def _refine_all(
     long = ends - starts + 1 > 2 * trim + 2
     lo = np.where(long, starts + trim, starts)
     hi = np.where(long, ends - trim + 1, ends + 1)  # exclusive
-    origin = rolled[:, 0, :]
-    q = rolled - origin[:, None, :]
-    x, y = q[..., 0], q[..., 1]
-    sums = np.zeros((q.shape[0], q.shape[1] + 1, 5))
-    np.cumsum(np.stack([x, y, x * x, y * y, x * y], axis=-1), axis=1, out=sums[:, 1:])
-    tot = sums[owner, hi] - sums[owner, lo]
     cnt = (hi - lo).astype(np.float64)
+    if fitted is None:
+        origin = rolled[:, 0, :]
+        q = rolled - origin[:, None, :]
+        x, y = q[..., 0], q[..., 1]
+        sums = np.zeros((q.shape[0], q.shape[1] + 1, 5))
+        np.cumsum(np.stack([x, y, x * x, x * y, y * y], axis=-1), axis=1, out=sums[:, 1:])
+        tot = sums[owner, hi] - sums[owner, lo]
+        unit = np.ones(len(owner))
+    else:
+        g, first = fitted.rows[owner], fitted.first[owner]
+        tot = range_sums(fitted.moments, g, first + lo, first + hi)[:, 1:6]
+        origin, unit = fitted.mean, fitted.scale[g]
+        owner = g
     mx, my = tot[:, 0] / cnt, tot[:, 1] / cnt
     sxx = tot[:, 2] - cnt * mx * mx
-    syy = tot[:, 3] - cnt * my * my
-    sxy = tot[:, 4] - cnt * mx * my
+    sxy = tot[:, 3] - cnt * mx * my
+    syy = tot[:, 4] - cnt * my * my
     phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)  # principal direction of each run
     dx, dy = np.cos(phi), np.sin(phi)
     pdx, pdy, pmx, pmy = dx[prev], dy[prev], mx[prev], my[prev]
@@ -935,9 +973,9 @@ def _refine_all(
     ok = both & (np.abs(den) >= min_sin)
     safe = np.where(ok, den, 1.0)
     t = ((mx - pmx) * dy - (my - pmy) * dx) / safe
-    cx = pmx + t * pdx + origin[owner, 0]
-    cy = pmy + t * pdy + origin[owner, 1]
-    ok &= np.hypot(cx - points[:, 0], cy - points[:, 1]) <= reach[owner]
+    cx = (pmx + t * pdx) * unit + origin[owner, 0]
+    cy = (pmy + t * pdy) * unit + origin[owner, 1]
+    ok &= np.hypot(cx - points[:, 0], cy - points[:, 1]) <= reach[runs[0]]
     points[ok, 0] = cx[ok]
     points[ok, 1] = cy[ok]
 
