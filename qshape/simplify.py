@@ -8,7 +8,10 @@ chord, otherwise a curve segment, whose maximum-curvature point is the one farth
 chord; curves turning more than `OutlineParams.max_curve_turn_deg` are split into equal pieces.
 Three optional steps serve traced image contours (``configs/vision.yaml``): corners measured
 against an arc's own turning, round outlines snapped to two equal semicircles, and corners cut
-off or rounded by the pixel grid merged back into one.
+off or rounded by the pixel grid merged back into one. On rough edges (a chipped, ground tile
+traced by a camera) corners come from fits (`qshape.fit`, ``OutlineParams.fit_merge_chi2``): a
+proposed corner stays only where the runs beside it need two lines (or arcs) rather than one,
+judged against the outline's own measured roughness, and edge lines are fitted over whole edges.
 Every length parameter is a fraction of the outline's own size, so the same parameters serve
 millimetres and pixels. Cost is linear in the number of outline points.
 """
@@ -26,6 +29,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from qshape.errors import InvalidFigureError, ToleranceError
+from qshape.fit import (
+    circle_outlines,
+    flat_corner_outlines,
+    merge_fitted_corners,
+    outline_moments,
+    range_sums,
+)
 from qshape.geometry import MAX_COORDINATE, BoolArray, FloatArray, cross2
 from qshape.tolerances import _load_section
 
@@ -85,6 +95,22 @@ class OutlineParams:
             over whole edges, so this holds where the window measure of
             ``corner_angle_deg`` is fooled by a rough edge; keep it below the shallowest real
             corner of the tiles (33 degrees in the bundled trencadis).
+        fit_merge_chi2: Corners from fits (`qshape.fit`), dimensionless, 0: off. A corner
+            is dropped when the runs on both sides fit one line (or one arc, where a run is
+            itself curved) with a squared residual at most this many times the outline's
+            roughness variance per independent sample above their separate fits; the kept
+            corners then move to the sample that best splits their runs, and an outline that
+            one circle fits as well as its runs keeps no corner (a closed curve). The
+            roughness is `roughness_sigmas`' measure, and one independent sample spans
+            (1 + rho) / (1 - rho) samples for the lag-1 autocorrelation rho of the measure
+            (a correlated bump counts once, however densely it is sampled).
+        fit_sigma_floor: Smallest roughness the fits assume, fraction of the outline's
+            diameter (a clean traced outline still carries its pixel staircase).
+        refine_trim_fraction: With ``refine_corners``, the samples left out at each end of
+            a run before its line is fitted, fraction of the outline's samples (at least one
+            sample; 0: ``corner_window``). A short trim fits the line to nearly the whole
+            edge, which averages a rough edge's bumps out: keep it just above the rounding
+            of a corner by blur.
     """
 
     resample_points: int = 256
@@ -102,6 +128,9 @@ class OutlineParams:
     missed_corner_ratio: float = 0.0
     roughness_sigmas: float = 0.0
     min_corner_deg: float = 0.0
+    fit_merge_chi2: float = 0.0
+    fit_sigma_floor: float = 0.0
+    refine_trim_fraction: float = 0.0
 
     def __post_init__(self) -> None:
         """Validate ranges.
@@ -120,6 +149,8 @@ class OutlineParams:
             "circle_residual",
             "chamfer_fraction",
             "missed_corner_ratio",
+            "fit_sigma_floor",
+            "refine_trim_fraction",
         ):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0.0 <= v < 0.5):
@@ -130,6 +161,8 @@ class OutlineParams:
             raise ToleranceError(
                 f"roughness_sigmas must be in [0, 20], got {self.roughness_sigmas}"
             )
+        if not (math.isfinite(self.fit_merge_chi2) and 0.0 <= self.fit_merge_chi2 <= 1e4):  # noqa: PLR2004
+            raise ToleranceError(f"fit_merge_chi2 must be in [0, 1e4], got {self.fit_merge_chi2}")
         if not 0.0 <= self.min_corner_deg < 90.0:  # noqa: PLR2004
             raise ToleranceError(f"min_corner_deg must be in [0, 90), got {self.min_corner_deg}")
         if not 0.0 <= self.arc_turning_deg < 180.0:
@@ -280,15 +313,28 @@ def _simplify_clean(
         change = _excess_turning(change, w, p.arc_turning_deg)
     corners = _corners_many(change, p.corner_angle_deg, max(w, round(p.merge_fraction * n)))
     noise = p.noise_fraction * diameter
-    if p.roughness_sigmas > 0.0:
-        noise = np.maximum(noise, p.roughness_sigmas * _roughness(res, w))
+    mom: FloatArray | None = None
+    if p.roughness_sigmas > 0.0 or p.fit_merge_chi2 > 0.0:
+        rough, corr = _roughness(res, w)
+        if p.roughness_sigmas > 0.0:
+            noise = np.maximum(noise, p.roughness_sigmas * rough)
+        if p.fit_merge_chi2 > 0.0:
+            mom = outline_moments(res, np.where(diameter > 0.0, diameter, 1.0))
+            _corners_from_fits(mom, corners, p, rough * np.sqrt(corr), diameter, flat, half)
     if p.min_corner_deg > 0.0:
-        for f in _with_flat_corners(res, corners, p.min_corner_deg, half).tolist():
+        if mom is None:
+            suspects = _with_flat_corners(res, corners, p.min_corner_deg, half)
+        else:
+            suspects = flat_corner_outlines(mom, corners, p.min_corner_deg, half)
+        for f in suspects.tolist():
             if not flat[f]:
                 corners[f] = _verified_corners(res[f], corners[f], p, float(noise[f]), half)
     ring = ext[:, w - 1 : w + n + 1]
     geom = _Samples(res, smooth, ring, sign, noise, perimeter, flat)
-    results = _polylines(geom, corners, p, half, w)
+    frame = (
+        None if mom is None else (mom, res.mean(axis=1), np.where(diameter > 0.0, diameter, 1.0))
+    )
+    results = _polylines(geom, corners, p, (half, w), frame)
     if p.chamfer_fraction > 0.0:
         for f in _with_chamfers(results, p.chamfer_fraction).tolist():
             points, mask = results[f]
@@ -309,13 +355,45 @@ def _simplify_clean(
         out[i] = (points, mask)
 
 
-def _roughness(res: FloatArray, w: int) -> FloatArray:
+def _corners_from_fits(  # noqa: PLR0913, PLR0917
+    mom: FloatArray,
+    corners: list[np.ndarray],
+    p: OutlineParams,
+    sigma: FloatArray,
+    diameter: FloatArray,
+    skip: BoolArray,
+    trim: int,
+) -> None:
+    """Corners (in place) dropped where one fit explains the runs beside them.
+
+    `qshape.fit.merge_fitted_corners`; then an outline one circle fits as well as its runs
+    loses them all (`qshape.fit.circle_outlines`: a closed curve). ``mom``: the outlines'
+    `qshape.fit.outline_moments` in units of their diameter; ``sigma`` (F,): each outline's
+    roughness per independent sample; ``trim``: samples left out at a run's far end.
+    """
+    rows = np.flatnonzero(~skip & (np.array([len(c) for c in corners]) > 1))
+    if len(rows) == 0:
+        return
+    scale = np.where(diameter > 0.0, diameter, 1.0)
+    sig = np.maximum(sigma, p.fit_sigma_floor * diameter) / scale
+    limit = p.fit_merge_chi2 * sig * sig
+    merge_fitted_corners(mom, corners, rows, limit, trim)
+    for f in circle_outlines(mom, corners, rows, limit).tolist():
+        corners[f] = np.zeros(0, dtype=np.int64)
+
+
+def _roughness(res: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
     """Robust edge roughness of each outline (F, n, 2) -> (F,), in the outline's unit.
 
     Each sample's signed distance from the chord of its neighbours ``w`` samples away, less
     its moving mean over 4 w + 1 samples (an arc's sagitta, constant along it), scaled by the
     normal-consistency factor of the median absolute deviation and by sqrt(2/3) (the chord's
     ends carry noise too).
+
+    Returns:
+        (roughness (F,), correlation (F,)): the second is how many consecutive samples one
+        independent sample of that roughness spans, (1 + rho) / (1 - rho) for the lag-1
+        autocorrelation rho of those distances (>= 1; a bump spread over many samples is one).
     """
     n = res.shape[1]
     a, b = np.roll(res, w, axis=1), np.roll(res, -w, axis=1)
@@ -328,8 +406,15 @@ def _roughness(res: FloatArray, w: int) -> FloatArray:
     csum = np.zeros((len(res), n + 2 * k + 1))
     np.cumsum(ext, axis=1, out=csum[:, 1:])
     local = (csum[:, 2 * k + 1 :] - csum[:, :n]) / (2 * k + 1)
-    dev = np.abs(dist - local)
-    return np.asarray(_MAD_TO_SIGMA * np.median(dev, axis=1) * math.sqrt(2.0 / 3.0))
+    detrended = dist - local
+    sigma = _MAD_TO_SIGMA * np.median(np.abs(detrended), axis=1) * math.sqrt(2.0 / 3.0)
+    lag = (detrended * np.roll(detrended, 1, axis=1)).sum(axis=1)
+    rho = np.clip(lag / np.maximum((detrended * detrended).sum(axis=1), 1e-300), 0.0, _MAX_RHO)
+    return np.asarray(sigma), np.asarray((1.0 + rho) / (1.0 - rho))
+
+
+_MAX_RHO = 0.99
+"""Largest lag-1 autocorrelation used (a correlation factor of at most 199 samples)."""
 
 
 _MAD_TO_SIGMA = 1.4826
@@ -441,7 +526,10 @@ def _excess_turning(change: FloatArray, w: int, arc_deg: float) -> FloatArray:
 
 
 def _snap_circles(
-    res: FloatArray, sign: FloatArray, results: list[tuple[FloatArray, BoolArray]], tol: float
+    res: FloatArray,
+    sign: FloatArray,
+    results: list[tuple[FloatArray, BoolArray]],
+    tol: float,
 ) -> None:
     """Replace, in place, each curved result whose samples fit a circle by two semicircles.
 
@@ -550,6 +638,23 @@ def _merge_chamfers(
 
 
 @dataclass(frozen=True)
+class _Moments:
+    """Prefix sums of moments of some runs' outlines (`qshape.fit.outline_moments`).
+
+    Attributes:
+        moments: (F, n + 1, 9) in units of ``scale``, centred on ``mean``.
+        rows: (G,) outline of each row of the rolled samples. first: (G,) its sample 0.
+        mean: (F, 2) centre of each outline. scale: (F,) its unit.
+    """
+
+    moments: FloatArray
+    rows: np.ndarray
+    first: np.ndarray
+    mean: FloatArray
+    scale: FloatArray
+
+
+@dataclass(frozen=True)
 class _Samples:
     """Resampled outlines, all of ``n`` samples.
 
@@ -622,14 +727,21 @@ def _closed_loop(g: _Samples, f: int, p: OutlineParams, half: int) -> tuple[Floa
 
 
 def _polylines(  # noqa: PLR0914
-    g: _Samples, corners: list[np.ndarray], p: OutlineParams, half: int, w: int
+    g: _Samples,
+    corners: list[np.ndarray],
+    p: OutlineParams,
+    windows: tuple[int, int],
+    frame: tuple[FloatArray, FloatArray, FloatArray] | None = None,
 ) -> list[tuple[FloatArray, BoolArray]]:
     """Relevant points of every outline: all runs' chord tests and line fits at once.
 
     Each outline's samples are rotated so that its first corner is sample 0; run r covers
     samples ``c[r] .. c[r + 1]`` (the last one ends at sample n = sample 0). Straight runs
     emit their corner; curved runs, and outlines without corners, go through `_emit_run`.
+    ``windows`` is (smoothing half-width, corner window) in samples; ``frame`` (moments, mean,
+    scale) the outlines' summed moments when already known (`qshape.fit.outline_moments`).
     """
+    half, w = windows
     count, n = g.res.shape[:2]
     empty = (np.zeros((0, 2)), np.zeros(0, dtype=bool))
     results: list[tuple[FloatArray, BoolArray]] = [empty] * count
@@ -680,9 +792,10 @@ def _polylines(  # noqa: PLR0914
             (owner, starts, ends, prev),
             straight & (m >= 2)[owner],
             points,
-            trim=w,
+            trim=max(1, round(p.refine_trim_fraction * n)) if p.refine_trim_fraction > 0.0 else w,
             reach=p.corner_window * g.perimeter[fo],
             min_sin=math.sin(math.radians(p.corner_angle_deg)),
+            fitted=None if frame is None else _Moments(frame[0], fo, c0, frame[1], frame[2]),
         )
     for row, f in enumerate(with_c):
         r0, r1 = int(first_run[row]), int(first_run[row] + m[row])
@@ -815,6 +928,7 @@ def _refine_all(
     trim: int,
     reach: FloatArray,
     min_sin: float,
+    fitted: _Moments | None = None,
 ) -> None:
     """Move each corner between two straight runs to the intersection of their fitted lines.
 
@@ -824,7 +938,8 @@ def _refine_all(
     Lines are total-least-squares fits of each run (its ends trimmed by ``trim`` samples when
     long enough), all runs of all outlines at once from prefix sums. ``runs`` is (owner,
     starts, ends, prev): run r covers ``rolled[owner[r], starts[r] .. ends[r]]`` and ``prev[r]``
-    is the run before it; ``points[r]`` (its corner) is updated in place.
+    is the run before it; ``points[r]`` (its corner) is updated in place. ``fitted``: the
+    outlines' moments when already summed (the same fits, without summing again).
     """
     owner, starts, ends, prev = runs
     both = straight & straight[prev]
@@ -833,17 +948,24 @@ def _refine_all(
     long = ends - starts + 1 > 2 * trim + 2
     lo = np.where(long, starts + trim, starts)
     hi = np.where(long, ends - trim + 1, ends + 1)  # exclusive
-    origin = rolled[:, 0, :]
-    q = rolled - origin[:, None, :]
-    x, y = q[..., 0], q[..., 1]
-    sums = np.zeros((q.shape[0], q.shape[1] + 1, 5))
-    np.cumsum(np.stack([x, y, x * x, y * y, x * y], axis=-1), axis=1, out=sums[:, 1:])
-    tot = sums[owner, hi] - sums[owner, lo]
     cnt = (hi - lo).astype(np.float64)
+    if fitted is None:
+        origin = rolled[:, 0, :]
+        q = rolled - origin[:, None, :]
+        x, y = q[..., 0], q[..., 1]
+        sums = np.zeros((q.shape[0], q.shape[1] + 1, 5))
+        np.cumsum(np.stack([x, y, x * x, x * y, y * y], axis=-1), axis=1, out=sums[:, 1:])
+        tot = sums[owner, hi] - sums[owner, lo]
+        unit = np.ones(len(owner))
+    else:
+        g, first = fitted.rows[owner], fitted.first[owner]
+        tot = range_sums(fitted.moments, g, first + lo, first + hi)[:, 1:6]
+        origin, unit = fitted.mean, fitted.scale[g]
+        owner = g
     mx, my = tot[:, 0] / cnt, tot[:, 1] / cnt
     sxx = tot[:, 2] - cnt * mx * mx
-    syy = tot[:, 3] - cnt * my * my
-    sxy = tot[:, 4] - cnt * mx * my
+    sxy = tot[:, 3] - cnt * mx * my
+    syy = tot[:, 4] - cnt * my * my
     phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)  # principal direction of each run
     dx, dy = np.cos(phi), np.sin(phi)
     pdx, pdy, pmx, pmy = dx[prev], dy[prev], mx[prev], my[prev]
@@ -851,9 +973,9 @@ def _refine_all(
     ok = both & (np.abs(den) >= min_sin)
     safe = np.where(ok, den, 1.0)
     t = ((mx - pmx) * dy - (my - pmy) * dx) / safe
-    cx = pmx + t * pdx + origin[owner, 0]
-    cy = pmy + t * pdy + origin[owner, 1]
-    ok &= np.hypot(cx - points[:, 0], cy - points[:, 1]) <= reach[owner]
+    cx = (pmx + t * pdx) * unit + origin[owner, 0]
+    cy = (pmy + t * pdy) * unit + origin[owner, 1]
+    ok &= np.hypot(cx - points[:, 0], cy - points[:, 1]) <= reach[runs[0]]
     points[ok, 0] = cx[ok]
     points[ok, 1] = cy[ok]
 

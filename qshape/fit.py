@@ -1,0 +1,294 @@
+"""Corners from fits: drop the corners of a closed outline that one line or one arc explains.
+
+The window measure of `qshape.simplify` proposes corners from local turning, which a rough edge
+fools: a bump becomes a corner. Here every run between proposed corners is fitted by a straight
+line (total least squares) and by a circle arc (algebraic fit), and a corner is dropped when the
+two runs beside it fit *one* line, or one arc, about as well as they fit two: the increase of
+the squared residual is compared with the outline's own measured roughness (its variance times
+``fit_merge_chi2``). An arc is tried only where one of the two runs is itself significantly
+curved, so the shallow real corners of a polygon are never rounded away into an arc. The fits of
+any run come in constant time from prefix sums of the samples' moments. Last, an outline
+whose corners one circle makes unnecessary (a rough circle cut into pieces) loses them all.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from qshape.geometry import FloatArray
+
+_MIN_ARC_SAMPLES = 5
+"""Runs with fewer samples are fitted by a line only (an arc through them says nothing)."""
+
+_SINGULAR = 1e-9
+"""Circle fits whose normal equations' determinant is below this x sxx syy n are lines."""
+
+
+def outline_moments(res: FloatArray, scale: FloatArray) -> FloatArray:
+    """Prefix sums of the moments of closed outlines, shape (F, n + 1, 9).
+
+    Columns: x, y, x x, x y, y y, z, z x, z y, z z with z = x x + y y, of each outline's
+    samples centred on their mean and divided by its ``scale`` (well conditioned sums).
+    Samples ``[i, j)`` of outline f walked twice round (0 <= i <= j <= 2 n) are summed by
+    `range_sums`.
+
+    Args:
+        res: Samples of F closed outlines, shape (F, n, 2).
+        scale: Length unit of each outline's moments (e.g. its diameter), shape (F,), > 0.
+    """
+    q = (res - res.mean(axis=1, keepdims=True)) / scale[:, None, None]
+    x, y = q[..., 0], q[..., 1]
+    out = np.zeros((q.shape[0], q.shape[1] + 1, 9))
+    cols = out[:, 1:]
+    cols[..., 0], cols[..., 1] = x, y
+    np.multiply(x, x, out=cols[..., 2])
+    np.multiply(x, y, out=cols[..., 3])
+    np.multiply(y, y, out=cols[..., 4])
+    np.add(cols[..., 2], cols[..., 4], out=cols[..., 5])
+    np.multiply(cols[..., 5], x, out=cols[..., 6])
+    np.multiply(cols[..., 5], y, out=cols[..., 7])
+    np.multiply(cols[..., 5], cols[..., 5], out=cols[..., 8])
+    np.cumsum(cols, axis=1, out=cols)
+    return out
+
+
+def prefix_at(moments: FloatArray, f: np.ndarray, i: np.ndarray) -> FloatArray:
+    """Sums of samples ``[0, i)`` of outlines f walked twice round, shape (k, 10).
+
+    Columns: count, then those of `outline_moments`; ``i`` in [0, 2 n].
+    """
+    n = moments.shape[1] - 1
+    over = i > n
+    out = np.empty((len(f), 10))
+    out[:, 0] = i
+    out[:, 1:] = moments[f, np.where(over, i - n, i)]
+    if over.any():
+        out[over, 1:] += moments[f[over], n]
+    return out
+
+
+def range_sums(moments: FloatArray, f: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> FloatArray:
+    """Sums of samples ``[lo, hi)`` of outlines f (twice-round indices), shape (k, 10)."""
+    return prefix_at(moments, f, hi) - prefix_at(moments, f, lo)
+
+
+def line_sse(s: FloatArray) -> FloatArray:
+    """Squared residual of the total-least-squares line of each range, shape (k,).
+
+    Args:
+        s: `range_sums`, shape (k, 10). Result in units of the outline's ``scale`` squared
+            (see `outline_moments`); 0 for fewer than 3 samples.
+    """
+    cnt = np.maximum(s[:, 0], 1.0)
+    mx, my = s[:, 1] / cnt, s[:, 2] / cnt
+    cxx = s[:, 3] - cnt * mx * mx
+    cxy = s[:, 4] - cnt * mx * my
+    cyy = s[:, 5] - cnt * my * my
+    half = 0.5 * (cxx + cyy)
+    lam = half - np.sqrt(np.maximum(0.25 * (cxx - cyy) ** 2 + cxy * cxy, 0.0))
+    return np.asarray(np.maximum(lam, 0.0))
+
+
+def arc_sse(s: FloatArray, line: FloatArray | None = None) -> FloatArray:
+    """Squared geometric residual of the circle fitted to each range, shape (k,).
+
+    Algebraic (Kasa) fit ``z + D x + E y + F = 0`` (normal equations solved by Cramer's
+    rule); its algebraic residual divided by (2 r)^2 is the geometric one to first order.
+    Never more than `line_sse` (a line is an arc of infinite radius, and a collinear range
+    makes the equations singular); ranges under 5 samples get `line_sse`.
+
+    Args:
+        s: `range_sums`, shape (k, 10).
+        line: `line_sse` of the same ranges when already known.
+    """
+    if line is None:
+        line = line_sse(s)
+    n, sx, sy, sxx, sxy, syy, sz, szx, szy, szz = s.T
+    # M = [[sxx, sxy, sx], [sxy, syy, sy], [sx, sy, n]], M (D, E, F) = -(szx, szy, sz).
+    c00 = syy * n - sy * sy
+    c01 = sx * sy - sxy * n
+    c02 = sxy * sy - syy * sx
+    c11 = sxx * n - sx * sx
+    c12 = sxy * sx - sxx * sy
+    c22 = sxx * syy - sxy * sxy
+    det = sxx * c00 + sxy * c01 + sx * c02
+    ok = (n >= _MIN_ARC_SAMPLES) & (np.abs(det) > _SINGULAR * np.maximum(sxx * syy * n, 1e-300))
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    d = -(c00 * szx + c01 * szy + c02 * sz) * inv
+    e = -(c01 * szx + c11 * szy + c12 * sz) * inv
+    g = -(c02 * szx + c12 * szy + c22 * sz) * inv
+    alg = np.maximum(szz + d * szx + e * szy + g * sz, 0.0)
+    r2 = 0.25 * (d * d + e * e) - g
+    good = ok & (r2 > 0.0)
+    geo = np.where(good, alg / np.where(good, 4.0 * r2, 1.0), np.inf)
+    return np.asarray(np.minimum(geo, line))
+
+
+@dataclass(frozen=True)
+class _Ring:
+    """Corners of many closed outlines, flat: outline f's are ``c[own == f]``, sorted.
+
+    Attributes:
+        c: Sample index of each corner, shape (k,). own: Its outline, shape (k,).
+        prev, nxt: Index (into c) of the corner before and after it on its outline, (k,).
+    """
+
+    c: np.ndarray
+    own: np.ndarray
+    prev: np.ndarray
+    nxt: np.ndarray
+
+    @staticmethod
+    def of(corners: list[np.ndarray], rows: np.ndarray) -> _Ring:
+        """The corners of outlines ``rows`` (each sorted), flat."""
+        counts = np.array([len(corners[f]) for f in rows.tolist()], dtype=np.int64)
+        c = np.concatenate([np.asarray(corners[f], dtype=np.int64) for f in rows.tolist()])
+        own = np.repeat(rows, counts)
+        k = np.arange(len(c))
+        first = np.repeat(np.cumsum(counts) - counts, counts)
+        last = first + np.repeat(counts, counts) - 1
+        return _Ring(c, own, np.where(k == first, last, k - 1), np.where(k == last, first, k + 1))
+
+    def sides(self, n: int, trim: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Ranges of the runs before and after each corner: (lo, mid, hi), twice-round indices.
+
+        Run before: ``[lo, mid)``, run after: ``[mid, hi)``; far ends trimmed by ``trim``
+        samples (at most a quarter of the run). A lone pair of corners splits the walk in two.
+        """
+        len_a = (self.c - self.c[self.prev]) % n
+        len_b = (self.c[self.nxt] - self.c) % n
+        len_a[len_a == 0] = n
+        len_b[len_b == 0] = n
+        base = self.c[self.prev]
+        lo = base + np.minimum(trim, len_a // 4)
+        mid = base + len_a
+        hi = mid + len_b - np.minimum(trim, len_b // 4)
+        shift = np.where(lo >= n, n, 0)
+        return lo - shift, mid - shift, hi - shift
+
+
+def merge_fitted_corners(  # noqa: PLR0913, PLR0917
+    moments: FloatArray,
+    corners: list[np.ndarray],
+    rows: np.ndarray,
+    limit: FloatArray,
+    trim: int,
+    min_corners: int = 2,
+) -> None:
+    """Drop, in place, the corners of outlines ``rows`` that the runs beside them do not need.
+
+    For each corner, the runs before and after it (far ends trimmed by ``trim`` samples, so a
+    neighbouring corner's rounding stays out) are fitted apart and together. The cost of
+    dropping it is the increase of the squared residual when fitted together by a line or,
+    when one of the runs is itself curved (its arc fit beats its line fit by more than
+    ``limit``), by an arc. Each round drops, on every outline, its cheapest corner while that
+    cost is at most ``limit`` and more than ``min_corners`` corners remain; rounds repeat
+    until none is dropped. All outlines at once.
+
+    Args:
+        moments: `outline_moments` of all outlines, shape (F, n + 1, 9).
+        corners: Sorted sample indices of each outline's corners; entries of ``rows`` are
+            replaced.
+        rows: Outlines to treat, shape (r,).
+        limit: Per outline, the largest residual increase that drops a corner, in its
+            ``scale`` squared (threshold x roughness variance), shape (F,).
+        trim: Samples left out at the far end of each run.
+        min_corners: Never fewer corners than this.
+    """
+    n = moments.shape[1] - 1
+    rows = np.asarray([f for f in rows.tolist() if len(corners[f]) > min_corners], dtype=np.int64)
+    while len(rows):
+        ring = _Ring.of(corners, rows)
+        lo, mid, hi = ring.sides(n, trim)
+        f = ring.own
+        p_lo, p_mid, p_hi = (prefix_at(moments, f, i) for i in (lo, mid, hi))
+        sa, sb = p_mid - p_lo, p_hi - p_mid
+        la, lb = line_sse(sa), line_sse(sb)
+        aa, ab = arc_sse(sa, la), arc_sse(sb, lb)
+        su = sa + sb
+        union = line_sse(su)
+        lim = limit[f]
+        curved = (la - aa > lim) | (lb - ab > lim)
+        if curved.any():
+            union[curved] = arc_sse(su[curved], union[curved])
+        cost = union - aa - ab  # arc_sse <= line_sse: each run's best fit
+        order = np.lexsort((cost, f))  # by outline, cheapest first
+        head = order[np.r_[True, f[order][1:] != f[order][:-1]]]
+        drop = head[cost[head] <= lim[head]]
+        if len(drop) == 0:
+            break
+        keep = np.ones(len(f), dtype=bool)
+        keep[drop] = False
+        changed = np.unique(f[drop])
+        for g in changed.tolist():
+            corners[g] = ring.c[keep & (f == g)]
+        rows = np.asarray(
+            [g for g in changed.tolist() if len(corners[g]) > min_corners], dtype=np.int64
+        )
+
+
+def circle_outlines(
+    moments: FloatArray, corners: list[np.ndarray], rows: np.ndarray, limit: FloatArray
+) -> np.ndarray:
+    """Outlines of ``rows`` whose corners one circle makes unnecessary, shape (c,).
+
+    The whole outline's circle fit is compared with the best fits (line or arc) of its runs
+    between corners: when it is at most ``limit`` worse, no corner is needed (a rough circle
+    whose bumps became corners).
+    """
+    n = moments.shape[1] - 1
+    rows = np.asarray([f for f in rows.tolist() if len(corners[f]) >= 1], dtype=np.int64)
+    if len(rows) == 0:
+        return rows
+    ring = _Ring.of(corners, rows)
+    lo = ring.c
+    hi = lo + (ring.c[ring.nxt] - ring.c) % n
+    hi = np.where(hi == lo, lo + n, hi)
+    parts = arc_sse(range_sums(moments, ring.own, lo, hi))
+    total = np.bincount(np.searchsorted(rows, ring.own), parts, minlength=len(rows))
+    zero = np.zeros(len(rows), dtype=np.int64)
+    whole = arc_sse(range_sums(moments, rows, zero, zero + n))
+    return np.asarray(rows[whole <= total + limit[rows]])
+
+
+def flat_corner_outlines(
+    moments: FloatArray, corners: list[np.ndarray], min_deg: float, trim: int
+) -> np.ndarray:
+    """Outlines with a corner whose runs' fitted lines (unoriented) meet below ``min_deg``.
+
+    A cheap superset (an unoriented line cannot tell a flat corner from a hairpin) of the
+    outlines with a corner between two nearly collinear runs: runs trimmed by ``trim``
+    samples at both ends, directions from the moments, all outlines with 4 or more corners
+    at once.
+    """
+    n = moments.shape[1] - 1
+    rows = np.asarray([f for f, c in enumerate(corners) if len(c) > 3], dtype=np.int64)  # noqa: PLR2004
+    if len(rows) == 0:
+        return rows
+    ring = _Ring.of(corners, rows)
+    length = (ring.c[ring.nxt] - ring.c) % n
+    cut = np.minimum(trim, length // 4)
+    s = range_sums(moments, ring.own, ring.c + cut, ring.c + length - cut)
+    cnt = np.maximum(s[:, 0], 1.0)
+    mx, my = s[:, 1] / cnt, s[:, 2] / cnt
+    phi = 0.5 * np.arctan2(
+        2.0 * (s[:, 4] - cnt * mx * my), (s[:, 3] - cnt * mx * mx) - (s[:, 5] - cnt * my * my)
+    )
+    # Run i follows corner i; corner i sits between run prev(i) and run i.
+    diff = np.abs(phi - phi[ring.prev]) % np.pi
+    ang = np.degrees(np.minimum(diff, np.pi - diff))
+    return np.asarray(np.unique(ring.own[ang < min_deg]))
+
+
+__all__ = [
+    "arc_sse",
+    "circle_outlines",
+    "flat_corner_outlines",
+    "line_sse",
+    "merge_fitted_corners",
+    "outline_moments",
+    "prefix_at",
+    "range_sums",
+]
