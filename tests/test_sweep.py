@@ -6,7 +6,8 @@ import json
 
 import pytest
 
-from agents.sweep import SweepError, load_sweep, plan, run_sweep
+from agents.sweep import SweepError, load_sweep, plan, run_sweep, select_tasks
+from envs.tasks import bundled_tasks
 
 
 def test_sweep_files_are_strict(tmp_path) -> None:
@@ -18,6 +19,26 @@ def test_sweep_files_are_strict(tmp_path) -> None:
     runs = plan(cfg, tmp_path)
     learned = [r for r in runs if r.entry.train]
     assert learned and all(len(cfg.seeds) >= 3 for _ in learned)
+
+
+def test_every_registered_task_has_rows() -> None:
+    ids = set(bundled_tasks())
+    cfg = load_sweep("baselines")
+    assert ids == {e.task for e in cfg.entries}
+    for task in ids:  # every rung has its random reference row
+        assert any(e.task == task and e.policy == "random" for e in cfg.entries), task
+
+
+def test_task_filter_and_niceness(tmp_path) -> None:
+    cfg = select_tasks(load_sweep("baselines"), ["MosaicStream-v0", "MosaicOneTileJoint-v0"])
+    runs = plan(cfg, tmp_path, niceness=19)
+    assert {r.entry.task for r in runs} == {"MosaicStream-v0", "MosaicOneTileJoint-v0"}
+    assert all(r.niceness == 19 for r in runs)
+    assert sorted(r.seed for r in runs if r.entry.train) == [0, 0, 1, 1, 2, 2]
+    with pytest.raises(SweepError, match="no sweep entry for task"):
+        select_tasks(cfg, ["MosaicDecision6-v0"])
+    with pytest.raises(SweepError, match="niceness must be in"):
+        plan(cfg, tmp_path, niceness=25)
 
 
 @pytest.mark.slow
