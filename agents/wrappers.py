@@ -9,6 +9,11 @@ into one Discrete(tiles x slots x rotations): a single categorical over (tile, s
 triples. Factored heads sample the tile and the slot independently, so once the slot head
 settles on one slot, only that slot's tile is ever rewarded (PPO on 6 slots stalled at 3 correct
 tiles); a joint categorical has no such coordination problem, and DQN can use it.
+
+`EpisodeRewardTerms` sums the env's named reward terms (``info["reward_<term>"]``) over each
+episode and hands the sums over in the last step's ``info``: training logs them per episode, so
+one can see which stage of a shaped reward a learner reaches (`agents.train` writes them to
+``reward_terms.csv``).
 """
 
 from __future__ import annotations
@@ -48,6 +53,44 @@ class FlatDiscreteActions(gym.ActionWrapper):
         return int(np.ravel_multi_index(tuple(int(a) for a in action), self.nvec))
 
 
+REWARD_TERM_PREFIX = "reward_"
+"""Prefix of the env's per-term reward entries in ``info``."""
+EPISODE_TERMS_KEY = "episode_reward_terms"
+"""``info`` key of the per-episode term sums (last step of an episode only)."""
+
+
+class EpisodeRewardTerms(gym.Wrapper):
+    """Per-episode sums of the named reward terms of ``info``.
+
+    Every numeric ``info["reward_<term>"]`` is summed over the episode; the step that ends it
+    (terminated or truncated) gets ``info["episode_reward_terms"] = {term: sum}``. Spaces,
+    rewards and observations are unchanged.
+
+    Args:
+        env: Any env whose ``info`` names its reward terms ``reward_<term>``.
+    """
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self._sums: dict[str, float] = {}
+
+    def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
+        """Reset the env and the sums."""
+        self._sums = {}
+        return self.env.reset(**kwargs)
+
+    def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict[str, Any]]:
+        """Step the env, add this step's terms, hand the sums over at the episode's end."""
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        n = len(REWARD_TERM_PREFIX)
+        for key, value in info.items():
+            if key.startswith(REWARD_TERM_PREFIX) and isinstance(value, int | float | np.number):
+                self._sums[key[n:]] = self._sums.get(key[n:], 0.0) + float(value)
+        if terminated or truncated:
+            info = {**info, EPISODE_TERMS_KEY: dict(self._sums)}
+        return obs, reward, terminated, truncated, info
+
+
 class RecordCycleVideo(gym.wrappers.RecordVideo):
     """`RecordVideo` that also records the frames rendered inside each step.
 
@@ -76,4 +119,10 @@ class RecordCycleVideo(gym.wrappers.RecordVideo):
         super()._capture_frame()
 
 
-__all__ = ["FlatDiscreteActions", "RecordCycleVideo"]
+__all__ = [
+    "EPISODE_TERMS_KEY",
+    "REWARD_TERM_PREFIX",
+    "EpisodeRewardTerms",
+    "FlatDiscreteActions",
+    "RecordCycleVideo",
+]

@@ -1,11 +1,11 @@
-"""RecordCycleVideo: a decision-level episode's video shows the motion inside each cycle."""
+"""Wrappers: RecordCycleVideo shows the motion inside each cycle; EpisodeRewardTerms sums terms."""
 
 from __future__ import annotations
 
 import gymnasium as gym
 
 import envs  # noqa: F401
-from agents.wrappers import RecordCycleVideo
+from agents.wrappers import EPISODE_TERMS_KEY, EpisodeRewardTerms, RecordCycleVideo
 
 
 def test_frames_from_inside_the_cycle_reach_the_video(tmp_path) -> None:
@@ -29,3 +29,31 @@ def test_frames_from_inside_the_cycle_reach_the_video(tmp_path) -> None:
     finally:
         env.close()
     assert list((tmp_path / "video").glob("*.mp4"))
+
+
+def test_episode_reward_terms_sum_the_named_terms() -> None:
+    env = EpisodeRewardTerms(gym.make("MosaicOneTile-v0", max_episode_steps=6))
+    try:
+        env.reset(seed=3)
+        env.action_space.seed(3)
+        total: dict[str, float] = {}
+        rewards, done, info = 0.0, False, {}
+        while not done:
+            _, r, term, trunc, info = env.step(env.action_space.sample())
+            rewards += float(r)
+            done = term or trunc
+            if not done:
+                assert EPISODE_TERMS_KEY not in info
+            for k, v in info.items():
+                if k.startswith("reward_"):
+                    total[k[7:]] = total.get(k[7:], 0.0) + float(v)
+        sums = info[EPISODE_TERMS_KEY]
+        assert set(sums) == set(total) and "stage_reach" in sums
+        assert all(abs(sums[k] - total[k]) < 1e-9 for k in total)
+        assert sums["stage_reach"] != 0.0  # random moves change the reach potential
+        # A reset starts new sums.
+        env.reset(seed=4)
+        *_, info = env.step(env.action_space.sample())
+        assert EPISODE_TERMS_KEY not in info
+    finally:
+        env.close()
