@@ -34,7 +34,12 @@ import numpy as np
 import yaml
 from gymnasium import spaces
 
-from agents.wrappers import EPISODE_TERMS_KEY, EpisodeRewardTerms, FlatDiscreteActions
+from agents.wrappers import (
+    EPISODE_TERMS_KEY,
+    EpisodeRewardTerms,
+    FlatDiscreteActions,
+    ReachShaping,
+)
 from configs import ConfigError, from_dict, load_yaml
 
 ENV_ID = "envs:MosaicAssembly-v0"
@@ -86,6 +91,9 @@ class TrainConfig:
             design i mod count) and ``env`` overrides on top; "" uses `MosaicAssembly-v0`.
         log_every_s: When output is not a terminal, print a progress line (steps, steps/s,
             recent return and success) to the log this often [s] instead of a progress bar.
+        reach_shaping: Weight of `agents.wrappers.ReachShaping` on the training envs [1/m]
+            (reward per metre the tool approaches the nearest tile; state observations);
+            0: off. Evaluation always uses the env's own reward.
     """
 
     algo: str = "PPO"
@@ -108,6 +116,7 @@ class TrainConfig:
     max_wall_s: float = 0.0
     task: str = ""
     log_every_s: float = 30.0
+    reach_shaping: float = 0.0
 
     def __post_init__(self) -> None:
         if self.vec_env not in VEC_ENVS:
@@ -117,8 +126,10 @@ class TrainConfig:
         for name in ("total_timesteps", "n_envs", "torch_threads"):
             if getattr(self, name) < 1:
                 raise TrainError(f"{name} must be >= 1, got {getattr(self, name)}")
-        if self.max_episode_steps < 0 or self.checkpoint_freq < 0 or self.max_wall_s < 0:
+        if min(self.max_episode_steps, self.checkpoint_freq, self.max_wall_s) < 0:
             raise TrainError("max_episode_steps, checkpoint_freq and max_wall_s must be >= 0")
+        if self.reach_shaping < 0:
+            raise TrainError(f"reach_shaping must be >= 0 [1/m], got {self.reach_shaping}")
         from envs.env_config import load_env_config  # noqa: PLC0415 - validates env keys
 
         load_env_config(**dict(self.env))
@@ -212,6 +223,8 @@ def make_env_fn(cfg: TrainConfig, index: int = 0) -> Any:
 
     def make() -> gym.Env:
         env = gym.make(env_id, **kwargs)
+        if cfg.reach_shaping:
+            env = ReachShaping(env, cfg.reach_shaping)
         return FlatDiscreteActions(env) if cfg.flatten_actions else env
 
     return make

@@ -72,6 +72,10 @@ def test_config_is_strict(tmp_path):
     with pytest.raises(TrainError, match="known"):
         algorithm_class("NOPE")
     assert algorithm_class("sac").__name__ == "SAC"
+    with pytest.raises(TrainError, match="reach_shaping must be >= 0"):
+        load_train_config(TINY, reach_shaping=-1.0)
+    shaped = load_train_config("bench_sac_one_tile_joint_reach")
+    assert shaped.reach_shaping > 0 and shaped.task == "MosaicOneTileJoint-v0"
 
 
 def test_policy_choice():

@@ -3,9 +3,17 @@
 from __future__ import annotations
 
 import gymnasium as gym
+import numpy as np
+import pytest
 
 import envs  # noqa: F401
-from agents.wrappers import EPISODE_TERMS_KEY, EpisodeRewardTerms, RecordCycleVideo
+from agents.errors import AgentError
+from agents.wrappers import (
+    EPISODE_TERMS_KEY,
+    EpisodeRewardTerms,
+    ReachShaping,
+    RecordCycleVideo,
+)
 
 
 def test_frames_from_inside_the_cycle_reach_the_video(tmp_path) -> None:
@@ -57,3 +65,28 @@ def test_episode_reward_terms_sum_the_named_terms() -> None:
         assert EPISODE_TERMS_KEY not in info
     finally:
         env.close()
+
+
+def test_reach_shaping_pays_the_approach_and_telescopes() -> None:
+    base = gym.make("MosaicOneTileJoint-v0", max_episode_steps=8)
+    env = ReachShaping(base, weight=2.0)
+    try:
+        obs, _ = env.reset(seed=5)
+        tool, tile = obs["robot"][12:15], obs["tiles"][:3]
+        start = env.potential(obs)
+        assert np.isclose(start, -2.0 * np.linalg.norm(tool - tile), atol=1e-6)
+        assert start < -1.0  # the tile starts far (~0.9 m) from the tool at home
+        # Joint 1 turns towards the tile (it lies at +y): the shaping pays for the approach.
+        action = np.zeros(env.action_space.shape, np.float32)
+        action[0] = 1.0
+        extras, done = [], False
+        while not done:
+            obs, r, term, trunc, info = env.step(action)
+            extras.append(info["reward_reach_shaping"])
+            done = term or trunc
+        assert sum(extras) > 0.1
+        assert np.isclose(sum(extras), env.potential(obs) - start, atol=1e-9)
+    finally:
+        env.close()
+    with pytest.raises(AgentError, match="weight > 0"):
+        ReachShaping(gym.make("MosaicOneTileJoint-v0"), weight=0.0)
