@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.protocol import METRICS, aggregate_runs
+from agents.protocol import METRICS, aggregate_runs, iqm_ci
 from configs import ConfigError, from_dict, load_yaml
 
 RESULT_FILE = "result.json"
@@ -360,6 +360,20 @@ def run_sweep(
     return results
 
 
+def run_return(result: Mapping[str, Any]) -> float | None:
+    """Mean env return of a run's held-out episodes (its ``episodes.jsonl``), or None.
+
+    The return is the env's own reward (a shaped training reward is never in it); on a task
+    with a staged reward it shows how far through the stages a policy gets when no tile is
+    placed.
+    """
+    path = Path(result.get("folder", "")) / "episodes.jsonl"
+    if not path.is_file():
+        return None
+    values = [json.loads(line)["episode_return"] for line in path.read_text().splitlines()]
+    return float(np.mean(values)) if values else None
+
+
 def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
     """Write ``summary.json``, ``summary.md`` and ``curves.png`` from run results."""
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
@@ -367,12 +381,15 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
         groups.setdefault((r["task"], r["entry"]), []).append(r)
     summary = []
     lines = [
-        "| task | policy | runs | success | slots filled | misplaced/ep | dropped/ep | "
-        "stranded/ep | left/ep | tiles/min (sim) | training steps | train wall s (per run) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| task | policy | runs | success | slots filled | misplaced/ep | dropped/ep | lost/ep | "
+        "stranded/ep | left/ep | tiles/min (sim) | return/ep | training steps | "
+        "train wall s (per run) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for (task, entry), rs in groups.items():
         est = aggregate_runs([r["metrics"] for r in rs])
+        returns = [run_return(r) for r in rs]
+        ret = iqm_ci([x for x in returns if x is not None]) if None not in returns else None
         steps = [r.get("timesteps", 0) for r in rs]
         walls = [r.get("train_wall_s", 0.0) for r in rs]
         summary.append(
@@ -381,6 +398,7 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
                 "entry": entry,
                 "runs": len(rs),
                 "estimates": {k: asdict(v) for k, v in est.items()},
+                "episode_return": asdict(ret) if ret is not None else None,
                 "timesteps": steps,
                 "train_wall_s": walls,
             }
@@ -388,8 +406,10 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
         lines.append(
             f"| {task} | {entry} | {len(rs)} | {est['success'].text('{:.2f}')} | "
             f"{est['filled'].text('{:.2f}')} | {est['misplaced'].text('{:.2f}')} | "
-            f"{est['dropped'].text('{:.2f}')} | {est['stranded'].text('{:.2f}')} | "
+            f"{est['dropped'].text('{:.2f}')} | {est['lost'].text('{:.2f}')} | "
+            f"{est['stranded'].text('{:.2f}')} | "
             f"{est['left'].text('{:.2f}')} | {est['tiles_per_min'].text('{:.1f}')} | "
+            f"{ret.text('{:.2f}') if ret is not None else '-'} | "
             f"{int(np.mean(steps)) if any(steps) else '-'} | "
             f"{f'{np.mean(walls):.0f}' if any(walls) else '-'} |"
         )
@@ -507,6 +527,7 @@ __all__ = [
     "load_sweep",
     "main",
     "plan",
+    "run_return",
     "run_sweep",
     "select_tasks",
     "summarize",

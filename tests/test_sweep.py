@@ -3,10 +3,18 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
-from agents.sweep import SweepError, load_sweep, plan, run_sweep, select_tasks
+from agents.sweep import (
+    SweepError,
+    load_sweep,
+    plan,
+    run_return,
+    run_sweep,
+    select_tasks,
+)
 from envs.tasks import bundled_tasks
 
 
@@ -53,6 +61,17 @@ def test_tiny_sweep_on_local_ray(tmp_path) -> None:
     summary = json.loads((tmp_path / "summary.json").read_text())
     row = next(s for s in summary if s["entry"] == "PPO tiny")
     assert row["runs"] == 2 and set(row["estimates"]["success"]) == {"iqm", "lo", "hi", "runs"}
+    # The env return of the held-out episodes, per run, read back from their episodes.jsonl.
+    for r in ppo:
+        eps = [
+            json.loads(x) for x in (Path(r["folder"]) / "episodes.jsonl").read_text().splitlines()
+        ]
+        assert len(eps) == 2 and run_return(r) == pytest.approx(
+            sum(e["episode_return"] for e in eps) / 2
+        )
+    assert row["episode_return"]["runs"] == 2
+    head = (tmp_path / "summary.md").read_text().splitlines()[0]
+    assert "lost/ep" in head and "return/ep" in head
     assert (tmp_path / "curves.png").stat().st_size > 0
     # A rerun finds every result on disk and starts no Ray task.
     again = run_sweep(cfg, tmp_path, num_cpus=2, progress=False)
