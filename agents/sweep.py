@@ -4,6 +4,8 @@ Run::
 
     python -m agents.sweep --config baselines --out runs/sweep              # local Ray, 2 CPUs
     python -m agents.sweep --config baselines --out runs/sweep --address auto   # a cluster
+    nice -n 19 python -m agents.sweep --config baselines --num-cpus 1 --niceness 19 \\
+        --tasks MosaicStream-v0 MosaicOneTileJoint-v0   # some rows, one run at a time, niced
 
 A sweep file (``configs/sweeps/*.yaml``, keys of `SweepConfig`) lists entries; a ``train``
 entry trains one run per seed (a ``configs/train`` preset with the seed replaced) and then
@@ -11,6 +13,9 @@ evaluates the final model on its task's held-out protocol; a ``policy`` entry (a
 `agents.policies`) is evaluated once. Each (entry, seed) is one Ray task with one CPU; without
 ``--address`` a local instance is started (``ray.init(num_cpus=..., include_dashboard=False)``),
 with it the same command runs on a cluster (every node needs the project on ``PYTHONPATH``).
+``--tasks`` keeps the entries of the given tasks only; ``--niceness`` sets every run's
+scheduling niceness (default 0: Ray's workers start at 15 and starve on a busy host; on a host
+shared with others, 19).
 
 Results are written as they finish: ``<out>/<task>/<entry>/seed_<k>/result.json`` (and the
 run's model, monitor CSVs and ``episodes.jsonl``) plus one line per finished run in
@@ -29,13 +34,13 @@ import os
 import re
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from agents.protocol import METRICS, aggregate_runs
+from agents.protocol import METRICS, aggregate_runs, iqm_ci
 from configs import ConfigError, from_dict, load_yaml
 
 RESULT_FILE = "result.json"
@@ -47,7 +52,10 @@ DEFAULT_CPUS = 2
 BC_SEED_STRIDE = 10_000
 """Demonstration reset seeds of a clone run start at its seed x this."""
 WORKER_NICENESS = 0
-"""Scheduling niceness of a run (Ray's default for workers, 15, starves them on a busy host)."""
+"""Default scheduling niceness of a run (Ray's default for workers, 15, starves them on a busy
+host); ``--niceness`` changes it."""
+NICENESS_RANGE = (-20, 19)
+"""Allowed niceness values (POSIX), inclusive."""
 CURVE_BINS = 20
 """Points of a training curve."""
 CURVE_BOOTSTRAP = 1000
@@ -139,31 +147,55 @@ class RunSpec:
         seed: Training seed.
         folder: Output folder of the run.
         eval_seeds: Evaluation seeds override, inclusive (lo, hi), or ().
+        niceness: Scheduling niceness the run sets for itself.
     """
 
     entry: SweepEntry
     seed: int
     folder: str
     eval_seeds: tuple[int, ...] = ()
+    niceness: int = WORKER_NICENESS
 
 
-def plan(cfg: SweepConfig, out: Path) -> list[RunSpec]:
-    """Every run of a sweep, in entry order."""
+def select_tasks(cfg: SweepConfig, tasks: Sequence[str]) -> SweepConfig:
+    """The sweep restricted to the entries of ``tasks`` (all entries when empty).
+
+    Raises:
+        SweepError: A task with no entry in the sweep.
+    """
+    if not tasks:
+        return cfg
+    known = {e.task for e in cfg.entries}
+    missing = sorted(set(tasks) - known)
+    if missing:
+        raise SweepError(f"no sweep entry for task(s) {missing}; the sweep has {sorted(known)}")
+    return replace(cfg, entries=tuple(e for e in cfg.entries if e.task in set(tasks)))
+
+
+def plan(cfg: SweepConfig, out: Path, niceness: int = WORKER_NICENESS) -> list[RunSpec]:
+    """Every run of a sweep, in entry order.
+
+    Raises:
+        SweepError: A niceness outside `NICENESS_RANGE`.
+    """
+    lo, hi = NICENESS_RANGE
+    if not lo <= niceness <= hi:
+        raise SweepError(f"niceness must be in [{lo}, {hi}], got {niceness}")
     runs = []
     for e in cfg.entries:
         base = out / e.task / e.slug
         seeds = cfg.seeds if e.learned else (-1,)
         for s in seeds:
             folder = base / (f"seed_{s}" if s >= 0 else "eval")
-            runs.append(RunSpec(e, s, str(folder.resolve()), cfg.eval_seeds))
+            runs.append(RunSpec(e, s, str(folder.resolve()), cfg.eval_seeds, niceness))
     return runs
 
 
 def execute(spec: RunSpec) -> dict[str, Any]:
     """Train (train entries) and evaluate one run; writes and returns its result dict."""
     os.environ.setdefault("MUJOCO_GL", "egl")
-    try:  # Ray starts workers at niceness 15: a run is the work itself, not background
-        os.setpriority(os.PRIO_PROCESS, 0, WORKER_NICENESS)
+    try:  # Ray starts workers at niceness 15; the run sets the niceness it was planned with
+        os.setpriority(os.PRIO_PROCESS, 0, spec.niceness)
     except PermissionError:
         pass
     import torch  # noqa: PLC0415
@@ -187,8 +219,6 @@ def execute(spec: RunSpec) -> dict[str, Any]:
             overrides["total_timesteps"] = e.timesteps
         cfg = load_train_config(e.train, **overrides)
         if e.env:
-            from dataclasses import replace  # noqa: PLC0415
-
             cfg = replace(cfg, env={**dict(cfg.env), **dict(e.env)})
         result = _trained(folder) or train(cfg, folder)
         base = {**base, **dict(cfg.env)}
@@ -274,13 +304,15 @@ def run_sweep(
     out: Path,
     address: str | None = None,
     num_cpus: int = DEFAULT_CPUS,
+    *,
     progress: bool = True,
+    niceness: int = WORKER_NICENESS,
 ) -> list[dict[str, Any]]:
     """Run every missing run of a sweep as Ray tasks; return all results (old and new)."""
     import ray  # noqa: PLC0415 - heavy import
 
     out.mkdir(parents=True, exist_ok=True)
-    runs = plan(cfg, out)
+    runs = plan(cfg, out, niceness)
     results = []
     todo = []
     for spec in runs:
@@ -328,6 +360,20 @@ def run_sweep(
     return results
 
 
+def run_return(result: Mapping[str, Any]) -> float | None:
+    """Mean env return of a run's held-out episodes (its ``episodes.jsonl``), or None.
+
+    The return is the env's own reward (a shaped training reward is never in it); on a task
+    with a staged reward it shows how far through the stages a policy gets when no tile is
+    placed.
+    """
+    path = Path(result.get("folder", "")) / "episodes.jsonl"
+    if not path.is_file():
+        return None
+    values = [json.loads(line)["episode_return"] for line in path.read_text().splitlines()]
+    return float(np.mean(values)) if values else None
+
+
 def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
     """Write ``summary.json``, ``summary.md`` and ``curves.png`` from run results."""
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
@@ -335,12 +381,15 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
         groups.setdefault((r["task"], r["entry"]), []).append(r)
     summary = []
     lines = [
-        "| task | policy | runs | success | slots filled | misplaced/ep | dropped/ep | "
-        "stranded/ep | left/ep | tiles/min (sim) | training steps | train wall s (per run) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| task | policy | runs | success | slots filled | misplaced/ep | dropped/ep | lost/ep | "
+        "stranded/ep | left/ep | tiles/min (sim) | return/ep | training steps | "
+        "train wall s (per run) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for (task, entry), rs in groups.items():
         est = aggregate_runs([r["metrics"] for r in rs])
+        returns = [run_return(r) for r in rs]
+        ret = iqm_ci([x for x in returns if x is not None]) if None not in returns else None
         steps = [r.get("timesteps", 0) for r in rs]
         walls = [r.get("train_wall_s", 0.0) for r in rs]
         summary.append(
@@ -349,6 +398,7 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
                 "entry": entry,
                 "runs": len(rs),
                 "estimates": {k: asdict(v) for k, v in est.items()},
+                "episode_return": asdict(ret) if ret is not None else None,
                 "timesteps": steps,
                 "train_wall_s": walls,
             }
@@ -356,8 +406,10 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
         lines.append(
             f"| {task} | {entry} | {len(rs)} | {est['success'].text('{:.2f}')} | "
             f"{est['filled'].text('{:.2f}')} | {est['misplaced'].text('{:.2f}')} | "
-            f"{est['dropped'].text('{:.2f}')} | {est['stranded'].text('{:.2f}')} | "
+            f"{est['dropped'].text('{:.2f}')} | {est['lost'].text('{:.2f}')} | "
+            f"{est['stranded'].text('{:.2f}')} | "
             f"{est['left'].text('{:.2f}')} | {est['tiles_per_min'].text('{:.1f}')} | "
+            f"{ret.text('{:.2f}') if ret is not None else '-'} | "
             f"{int(np.mean(steps)) if any(steps) else '-'} | "
             f"{f'{np.mean(walls):.0f}' if any(walls) else '-'} |"
         )
@@ -447,8 +499,12 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap.add_argument("--address", default=None, help="Ray cluster address (default: local)")
     ap.add_argument("--num-cpus", type=int, default=DEFAULT_CPUS, help="local Ray CPUs")
     ap.add_argument("--summary-only", action="store_true", help="re-summarise finished runs")
+    ap.add_argument("--tasks", nargs="*", default=[], help="only the entries of these tasks")
+    ap.add_argument(
+        "--niceness", type=int, default=WORKER_NICENESS, help="scheduling niceness of each run"
+    )
     args = ap.parse_args(argv)
-    cfg = load_sweep(args.config)
+    cfg = select_tasks(load_sweep(args.config), args.tasks)
     if args.summary_only:
         results = [
             json.loads((Path(s.folder) / RESULT_FILE).read_text(encoding="utf-8"))
@@ -457,7 +513,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
         ]
         summarize(results, args.out)
     else:
-        results = run_sweep(cfg, args.out, args.address, args.num_cpus)
+        results = run_sweep(cfg, args.out, args.address, args.num_cpus, niceness=args.niceness)
     print((args.out / "summary.md").read_text(encoding="utf-8"))
     return results
 
@@ -471,7 +527,9 @@ __all__ = [
     "load_sweep",
     "main",
     "plan",
+    "run_return",
     "run_sweep",
+    "select_tasks",
     "summarize",
 ]
 

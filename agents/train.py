@@ -7,8 +7,10 @@ Run::
 
 The run folder gets ``model.zip`` (final model), ``checkpoints/`` (`CheckpointCallback`),
 ``tb/`` (TensorBoard), ``monitor/`` (per-env episode CSVs with ``is_success``),
-``train_config.yaml`` (the resolved configuration; `agents.evaluate` rebuilds the env from it)
-and ``summary.json`` (timesteps, wall time, steps/s, first/last episode returns).
+``train_config.yaml`` (the resolved configuration; `agents.evaluate` rebuilds the env from it),
+``reward_terms.csv`` (per training episode: the step it ended at and the sum of each named reward
+term of the env, `agents.wrappers.EpisodeRewardTerms`) and ``summary.json`` (timesteps, wall
+time, steps/s, first/last episode returns, last episodes' mean of each reward term).
 
 The policy is picked from the observation space when ``policy: auto``: ``MultiInputPolicy``
 for Dict observations, ``CnnPolicy`` for image Boxes, ``MlpPolicy`` otherwise.
@@ -32,7 +34,12 @@ import numpy as np
 import yaml
 from gymnasium import spaces
 
-from agents.wrappers import FlatDiscreteActions
+from agents.wrappers import (
+    EPISODE_TERMS_KEY,
+    EpisodeRewardTerms,
+    FlatDiscreteActions,
+    ReachShaping,
+)
 from configs import ConfigError, from_dict, load_yaml
 
 ENV_ID = "envs:MosaicAssembly-v0"
@@ -43,6 +50,10 @@ POLICIES = ("auto", "MlpPolicy", "CnnPolicy", "MultiInputPolicy")
 """Allowed ``policy`` values."""
 RETURN_WINDOW = 100
 """Episodes averaged for the first/last returns of ``summary.json``."""
+TERMS_FILE = "reward_terms.csv"
+"""Per-episode reward-term sums of a run."""
+LOG_WINDOW = 20
+"""Recent episodes averaged in a progress line."""
 
 
 class TrainError(ConfigError):
@@ -80,6 +91,9 @@ class TrainConfig:
             design i mod count) and ``env`` overrides on top; "" uses `MosaicAssembly-v0`.
         log_every_s: When output is not a terminal, print a progress line (steps, steps/s,
             recent return and success) to the log this often [s] instead of a progress bar.
+        reach_shaping: Weight of `agents.wrappers.ReachShaping` on the training envs [1/m]
+            (reward per metre the tool approaches the nearest tile; state observations);
+            0: off. Evaluation always uses the env's own reward.
     """
 
     algo: str = "PPO"
@@ -102,6 +116,7 @@ class TrainConfig:
     max_wall_s: float = 0.0
     task: str = ""
     log_every_s: float = 30.0
+    reach_shaping: float = 0.0
 
     def __post_init__(self) -> None:
         if self.vec_env not in VEC_ENVS:
@@ -111,8 +126,10 @@ class TrainConfig:
         for name in ("total_timesteps", "n_envs", "torch_threads"):
             if getattr(self, name) < 1:
                 raise TrainError(f"{name} must be >= 1, got {getattr(self, name)}")
-        if self.max_episode_steps < 0 or self.checkpoint_freq < 0 or self.max_wall_s < 0:
+        if min(self.max_episode_steps, self.checkpoint_freq, self.max_wall_s) < 0:
             raise TrainError("max_episode_steps, checkpoint_freq and max_wall_s must be >= 0")
+        if self.reach_shaping < 0:
+            raise TrainError(f"reach_shaping must be >= 0 [1/m], got {self.reach_shaping}")
         from envs.env_config import load_env_config  # noqa: PLC0415 - validates env keys
 
         load_env_config(**dict(self.env))
@@ -206,6 +223,8 @@ def make_env_fn(cfg: TrainConfig, index: int = 0) -> Any:
 
     def make() -> gym.Env:
         env = gym.make(env_id, **kwargs)
+        if cfg.reach_shaping:
+            env = ReachShaping(env, cfg.reach_shaping)
         return FlatDiscreteActions(env) if cfg.flatten_actions else env
 
     return make
@@ -226,7 +245,7 @@ def make_vec(cfg: TrainConfig, monitor_dir: Path | None) -> Any:
             env = make()
             env.action_space.seed(cfg.seed + i)
             path = str(monitor_dir / str(i)) if monitor_dir is not None else None
-            return Monitor(env, path, info_keywords=("is_success",))
+            return Monitor(EpisodeRewardTerms(env), path, info_keywords=("is_success",))
 
         return build
 
@@ -253,6 +272,8 @@ class TrainResult:
         last_return: Mean return of the last `RETURN_WINDOW` episodes.
         first_success: Success rate of the first episodes.
         last_success: Success rate of the last episodes.
+        last_terms: Mean per-episode sum of each named reward term over the last
+            `RETURN_WINDOW` episodes ({} if the env names none).
     """
 
     out: Path
@@ -265,6 +286,7 @@ class TrainResult:
     last_return: float
     first_success: float
     last_success: float
+    last_terms: dict[str, float] = field(default_factory=dict)
 
 
 def _episode_stats(monitor_dir: Path) -> tuple[int, float, float, float, float]:
@@ -308,8 +330,61 @@ def _wall_clock_stop(limit_s: float) -> Any:
     return WallClockStop()
 
 
-def _log_progress(every_s: float, total: int) -> Any:
-    """A callback printing one progress line every ``every_s`` wall seconds (log files)."""
+class TermsLog:
+    """Writes each finished training episode's reward-term sums to a CSV file.
+
+    Columns: ``step`` (env steps over all envs when the episode ended) and one per term, in the
+    order of the first episode (terms are fixed per env). Call `add` with a step's infos.
+
+    Args:
+        path: The CSV file (created, truncated).
+    """
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.terms: list[str] = []
+        self.rows: list[list[float]] = []
+        path.write_text("", encoding="utf-8")
+
+    def add(self, step: int, infos: Any) -> None:
+        """Record the episodes that ended at ``step`` (infos of one vector step)."""
+        for info in infos:
+            sums = info.get(EPISODE_TERMS_KEY) if isinstance(info, dict) else None
+            if not sums:
+                continue
+            with self.path.open("a", encoding="utf-8") as fh:
+                if not self.terms:
+                    self.terms = list(sums)
+                    fh.write(",".join(["step", *self.terms]) + "\n")
+                row = [float(step), *(float(sums.get(t, 0.0)) for t in self.terms)]
+                fh.write(",".join(f"{v:.6g}" for v in row) + "\n")
+            self.rows.append(row[1:])
+
+    def recent(self, count: int) -> dict[str, float]:
+        """Mean of each term over the last ``count`` episodes ({} before the first)."""
+        if not self.rows:
+            return {}
+        mean = np.mean(self.rows[-count:], axis=0)
+        return {t: float(v) for t, v in zip(self.terms, mean, strict=True)}
+
+
+def _log_terms(log: TermsLog) -> Any:
+    """A callback feeding each step's infos to ``log``."""
+    from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
+
+    class LogTerms(BaseCallback):
+        def _on_step(self) -> bool:
+            log.add(int(self.model.num_timesteps), self.locals.get("infos", ()))
+            return True
+
+    return LogTerms()
+
+
+def _log_progress(every_s: float, total: int, terms: TermsLog) -> Any:
+    """A callback printing one progress line every ``every_s`` wall seconds (log files).
+
+    The line ends with the recent mean of each non-zero reward term of ``terms``.
+    """
     from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
 
     class LogProgress(BaseCallback):
@@ -324,9 +399,12 @@ def _log_progress(every_s: float, total: int) -> Any:
                 ret = np.mean([e["r"] for e in buf]) if buf else float("nan")
                 ok = np.mean([float(e.get("is_success", 0)) for e in buf]) if buf else float("nan")
                 n = self.model.num_timesteps
+                recent = terms.recent(LOG_WINDOW)
+                parts = " ".join(f"{k} {v:.3f}" for k, v in recent.items() if v)
                 print(
                     f"[train] {n}/{total} steps, {n / (now - self.t0):.0f} steps/s, "
-                    f"return {ret:.2f}, success {ok:.2f} (last {len(buf)} episodes)",
+                    f"return {ret:.2f}, success {ok:.2f} (last {len(buf)} episodes)"
+                    + (f"; terms/episode (last {LOG_WINDOW}): {parts}" if parts else ""),
                     flush=True,
                 )
             return True
@@ -360,10 +438,11 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             tensorboard_log=str(out / "tb") if cfg.tensorboard else None,
             **kwargs,
         )
-        callbacks = []
+        terms = TermsLog(out / TERMS_FILE)
+        callbacks = [_log_terms(terms)]
         show_bar = cfg.progress_bar and sys.stdout.isatty()
         if not show_bar and cfg.log_every_s > 0:
-            callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps))
+            callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps, terms))
         if cfg.max_wall_s:
             callbacks.append(_wall_clock_stop(cfg.max_wall_s))
         if cfg.checkpoint_freq:
@@ -377,7 +456,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
         t0 = time.perf_counter()
         model.learn(
             total_timesteps=cfg.total_timesteps,
-            callback=callbacks or None,
+            callback=callbacks,
             progress_bar=show_bar,
             tb_log_name=cfg.algo,
         )
@@ -388,7 +467,19 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
     finally:
         venv.close()
     episodes, r0, r1, s0, s1 = _episode_stats(monitor_dir)
-    result = TrainResult(out, model_path, steps, wall, steps / wall, episodes, r0, r1, s0, s1)
+    result = TrainResult(
+        out,
+        model_path,
+        steps,
+        wall,
+        steps / wall,
+        episodes,
+        r0,
+        r1,
+        s0,
+        s1,
+        terms.recent(RETURN_WINDOW),
+    )
     summary = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(result).items()}
     (out / "summary.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
     return result

@@ -9,6 +9,17 @@ into one Discrete(tiles x slots x rotations): a single categorical over (tile, s
 triples. Factored heads sample the tile and the slot independently, so once the slot head
 settles on one slot, only that slot's tile is ever rewarded (PPO on 6 slots stalled at 3 correct
 tiles); a joint categorical has no such coordination problem, and DQN can use it.
+
+`EpisodeRewardTerms` sums the env's named reward terms (``info["reward_<term>"]``) over each
+episode and hands the sums over in the last step's ``info``: training logs them per episode, so
+one can see which stage of a shaped reward a learner reaches (`agents.train` writes them to
+``reward_terms.csv``).
+
+`ReachShaping` adds a training-only, potential-based reach term read from the documented state
+observation: minus a weight times the distance from the tool to the nearest present tile. The
+env's own reach potential (``1 - tanh(d / 0.3 m)``) is flat at the one-tile task's start
+distance (~0.9 m: 0.04 per metre of approach against 3.3 per metre near the tile), so a learner
+starting at home sees almost no gradient towards the tile.
 """
 
 from __future__ import annotations
@@ -18,6 +29,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+
+from agents.errors import AgentError
 
 
 class FlatDiscreteActions(gym.ActionWrapper):
@@ -48,6 +61,109 @@ class FlatDiscreteActions(gym.ActionWrapper):
         return int(np.ravel_multi_index(tuple(int(a) for a in action), self.nvec))
 
 
+REWARD_TERM_PREFIX = "reward_"
+"""Prefix of the env's per-term reward entries in ``info``."""
+EPISODE_TERMS_KEY = "episode_reward_terms"
+"""``info`` key of the per-episode term sums (last step of an episode only)."""
+
+
+class EpisodeRewardTerms(gym.Wrapper):
+    """Per-episode sums of the named reward terms of ``info``.
+
+    Every numeric ``info["reward_<term>"]`` is summed over the episode; the step that ends it
+    (terminated or truncated) gets ``info["episode_reward_terms"] = {term: sum}``. Spaces,
+    rewards and observations are unchanged.
+
+    Args:
+        env: Any env whose ``info`` names its reward terms ``reward_<term>``.
+    """
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self._sums: dict[str, float] = {}
+
+    def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
+        """Reset the env and the sums."""
+        self._sums = {}
+        return self.env.reset(**kwargs)
+
+    def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict[str, Any]]:
+        """Step the env, add this step's terms, hand the sums over at the episode's end."""
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        n = len(REWARD_TERM_PREFIX)
+        for key, value in info.items():
+            if key.startswith(REWARD_TERM_PREFIX) and isinstance(value, int | float | np.number):
+                self._sums[key[n:]] = self._sums.get(key[n:], 0.0) + float(value)
+        if terminated or truncated:
+            info = {**info, EPISODE_TERMS_KEY: dict(self._sums)}
+        return obs, reward, terminated, truncated, info
+
+
+TOOL_POS = slice(12, 15)
+"""Tool position [m] in the state observation's ``robot`` vector."""
+TILE_HELD = 18
+"""Index of the tile-held flag in ``robot``."""
+TILE_ROW = 7
+"""Features per tile in ``tiles``: x, y, z [m], cos yaw, sin yaw, class, present."""
+TILE_PRESENT = 6
+"""Index of the present flag in a tile row."""
+SHAPING_KEY = "reward_reach_shaping"
+"""``info`` key of the added term (so `EpisodeRewardTerms` sums it too)."""
+
+
+class ReachShaping(gym.Wrapper):
+    """Training-only potential-based reach shaping from the state observation.
+
+    Potential: ``-weight x d`` with d the distance from the tool to the nearest present tile
+    [m], and 0 while a tile is held; each step adds ``potential(after) - potential(before)``
+    to the reward (so the added terms of an episode telescope: approaching pays, leaving
+    costs the same) and reports it as ``info["reward_reach_shaping"]``.
+
+    Args:
+        env: An env with the ``robot`` and ``tiles`` state observations.
+        weight: Reward per metre of approach [1/m] (> 0).
+
+    Raises:
+        AgentError: A weight <= 0 or an env without ``robot``/``tiles`` observations.
+    """
+
+    def __init__(self, env: gym.Env, weight: float) -> None:
+        super().__init__(env)
+        keys = getattr(env.observation_space, "spaces", {})
+        if not weight > 0 or "robot" not in keys or "tiles" not in keys:
+            raise AgentError(
+                f"ReachShaping needs weight > 0 (got {weight}) and 'robot' and 'tiles' "
+                f"observations (got {sorted(keys)})"
+            )
+        self.weight = float(weight)
+        self._last = 0.0
+
+    def potential(self, obs: dict[str, Any]) -> float:
+        """``-weight x`` tool-to-nearest-present-tile distance [m]; 0 while holding a tile."""
+        robot = np.asarray(obs["robot"], np.float64)
+        if robot[TILE_HELD] > 0.5:
+            return 0.0
+        tiles = np.asarray(obs["tiles"], np.float64).reshape(-1, TILE_ROW)
+        present = tiles[tiles[:, TILE_PRESENT] > 0.5, :3]
+        if not len(present):
+            return 0.0
+        d = np.linalg.norm(present - robot[TOOL_POS], axis=1).min()
+        return -self.weight * float(d)
+
+    def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
+        """Reset the env and the potential."""
+        obs, info = self.env.reset(**kwargs)
+        self._last = self.potential(obs)
+        return obs, info
+
+    def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict[str, Any]]:
+        """Step the env and add the change of the potential."""
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        now = self.potential(obs)
+        extra, self._last = now - self._last, now
+        return obs, float(reward) + extra, terminated, truncated, {**info, SHAPING_KEY: extra}
+
+
 class RecordCycleVideo(gym.wrappers.RecordVideo):
     """`RecordVideo` that also records the frames rendered inside each step.
 
@@ -76,4 +192,11 @@ class RecordCycleVideo(gym.wrappers.RecordVideo):
         super()._capture_frame()
 
 
-__all__ = ["FlatDiscreteActions", "RecordCycleVideo"]
+__all__ = [
+    "EPISODE_TERMS_KEY",
+    "REWARD_TERM_PREFIX",
+    "EpisodeRewardTerms",
+    "FlatDiscreteActions",
+    "ReachShaping",
+    "RecordCycleVideo",
+]

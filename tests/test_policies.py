@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -122,3 +123,27 @@ def test_image_checkpoint_spaces_are_compared_as_sb3_stores_them(tmp_path) -> No
     )
     rows, _ = evaluate_policy_set(make_policies([str(tmp_path / "m.zip")], BASE), SEEDS)
     assert rows[0].episodes == 2  # images transposed by SB3 still match
+
+
+CHECKPOINTS = Path(__file__).resolve().parent.parent / "checkpoints"
+
+
+@pytest.mark.parametrize(
+    "path",
+    sorted(str(p) for p in CHECKPOINTS.glob("*/*/seed_*/model.zip")),
+    ids=lambda p: "/".join(Path(p).parts[-4:-2]),
+)
+def test_committed_checkpoints_bind_to_their_task(path: str) -> None:
+    """Every SB3 checkpoint in the repository loads and acts on its task's held-out env."""
+    from agents.evaluate import _bind, task_protocol  # noqa: PLC0415
+
+    task = Path(path).parts[-4]
+    base, proto = task_protocol(task)
+    pol = make_policy(path, base)
+    [(env, predict)] = _bind(pol, proto.designs[:1])
+    try:
+        obs, _ = env.reset(seed=proto.seeds[0])
+        action = predict(obs, True)
+        assert env.action_space.contains(action.astype(env.action_space.dtype))
+    finally:
+        env.close()

@@ -38,6 +38,12 @@ def test_artefacts(run):
     assert list((out / "monitor").glob("*.monitor.csv"))
     assert (out / "train_config.yaml").is_file() and (out / "summary.json").is_file()
     assert result.timesteps >= 256 and result.steps_per_s > 0
+    # One row of reward-term sums per finished training episode, summed like the return.
+    lines = (out / "reward_terms.csv").read_text().splitlines()
+    head = lines[0].split(",")
+    assert head[0] == "step" and "correct" in head and "failed_action" in head
+    assert len(lines) - 1 == result.episodes >= 2
+    assert set(result.last_terms) == set(head[1:])
 
 
 def test_model_reloads_and_predicts(run):
@@ -66,6 +72,10 @@ def test_config_is_strict(tmp_path):
     with pytest.raises(TrainError, match="known"):
         algorithm_class("NOPE")
     assert algorithm_class("sac").__name__ == "SAC"
+    with pytest.raises(TrainError, match="reach_shaping must be >= 0"):
+        load_train_config(TINY, reach_shaping=-1.0)
+    shaped = load_train_config("bench_sac_one_tile_joint_reach")
+    assert shaped.reach_shaping > 0 and shaped.task == "MosaicOneTileJoint-v0"
 
 
 def test_policy_choice():
