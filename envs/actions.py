@@ -122,9 +122,13 @@ class JointActions(ActionAdapter):
 class CartesianActions(ActionAdapter):
     """``cartesian``: Box(5) = tool (dx, dy, dz, dyaw), tool down, via IK + vacuum.
 
-    The tool target stays in a box: x, y over the input tile area and the mesh (grown by the
-    pick/place margins), z in ``tool_z_range`` above the belt top. An unreachable target keeps
-    the previous one (the step reports a failed action).
+    The tool target stays in a box: x, y over the input tile area, the mesh (grown by the
+    pick/place margins) and the tool's home position, z from ``tool_z_range[0]`` above the belt
+    top up to the higher of ``tool_z_range[1]`` and the home height. The home position is in the
+    box so that an episode starts inside it (a zero action keeps the tool still) and so that a
+    carry from the input belt to the mesh can swing round in front of the robot instead of
+    crossing over its base, where the tool cannot point down. An unreachable target keeps the
+    previous one (the step reports a failed action).
     """
 
     def __init__(
@@ -136,9 +140,17 @@ class CartesianActions(ActionAdapter):
         period = self.substeps * self.dt
         self.max_step = np.array([config.tool_speed * period] * 3 + [config.tool_yaw_rate * period])
         z0 = pick.surface_z
+        home, _ = cell.tcp_pose()
         self._lo = np.array([*np.minimum(pick.lo, place.lo), z0 + config.tool_z_range[0]])
         self._hi = np.array([*np.maximum(pick.hi, place.hi), z0 + config.tool_z_range[1]])
+        self._lo = np.minimum(self._lo, home)
+        self._hi = np.maximum(self._hi, home)
         self.reset()
+
+    @property
+    def box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The tool target's box (low, high), each shape (3,) [m], world frame."""
+        return self._lo.copy(), self._hi.copy()
 
     def reset(self) -> None:
         """Tool target back to the current tool pose."""

@@ -175,6 +175,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
       Decision-level indices carry no answer by default (``tile_order: belt``, ``slot_order:
       mesh``, ``rotation_frame: tile``; ``design``/``design``/``slot`` restore the old,
       leaking encoding). The task ladder (`envs.tasks`) registers frozen presets of it.
+      ``cartesian``: the tool target's box also holds the tool's home position (an episode
+      starts inside it; the carry can swing round in front of the base); it was the tile area
+      and the mesh only, so the first step clipped the target 0.3 m away.
     """
 
     metadata = {  # noqa: RUF012 - Gymnasium convention

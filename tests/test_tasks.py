@@ -105,3 +105,26 @@ def test_staged_potentials_rise_through_reach_and_seal() -> None:
         assert u.cell.held_tile == 0 and held["seal"] == 1.0 and held["reach"] == 1.0
     finally:
         env.close()
+
+
+def test_one_tile_cartesian_starts_inside_its_box() -> None:
+    """A zero action keeps the tool still: the home pose lies in the tool target's box.
+
+    The box used to be only the tile area and the mesh, so the first step clipped the target
+    0.3 m away and the carry had to cross over the robot's base.
+    """
+    env = gym.make("MosaicOneTile-v0")
+    try:
+        env.reset(seed=1000)
+        u = env.unwrapped
+        start, _ = u.cell.tcp_pose()
+        lo, hi = u.actions.box
+        assert np.all(start >= lo - 1e-9) and np.all(start <= hi + 1e-9)
+        assert hi[0] >= start[0] > max(u.pick_area.hi[0], u.place_area.hi[0])
+        still = np.array([0, 0, 0, 0, -1], np.float32)
+        for _ in range(3):
+            _, _, _, _, info = env.step(still)
+        end, _ = u.cell.tcp_pose()
+        assert np.linalg.norm(end - start) < 0.002
+    finally:
+        env.close()
