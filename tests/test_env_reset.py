@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 import pytest
 import shapely
@@ -12,6 +13,8 @@ from shapely.geometry import Polygon
 
 import envs
 from envs.mosaic_env import MosaicAssemblyEnv
+from envs.scene import set_tile_rotation_lengths
+from envs.variants import CONST_BODY_FIELDS, CONST_DOF_FIELDS
 
 
 @pytest.fixture(scope="module")
@@ -72,3 +75,17 @@ def test_reset_settle_still_simulates_when_asked() -> None:
         assert e.unwrapped.cell.time == pytest.approx(0.02)
     finally:
         e.close()
+
+
+def test_variant_swap_constants_equal_mj_setconst(env: MosaicAssemblyEnv) -> None:
+    """The tabled mass-derived constants of the shown variants are mj_setConst's."""
+    cell = env.cell
+    assert cell.variants.count > 1  # configs/env.yaml builds several variants per tile
+    fields = CONST_BODY_FIELDS + CONST_DOF_FIELDS + ("dof_length",)
+    for seed in range(3):
+        env.reset(seed=seed)
+        ours = {f: getattr(cell.model, f).copy() for f in fields}
+        mujoco.mj_setConst(cell.model, cell.data)
+        set_tile_rotation_lengths(cell.model, cell.ids)
+        for f in fields:
+            np.testing.assert_allclose(ours[f], getattr(cell.model, f), rtol=1e-12, atol=0)
