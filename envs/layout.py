@@ -261,7 +261,7 @@ def _outlines_once(
     that yaw (`_Grid.contact_cells`), and takes the first that passes the exact test (in draw
     order); another yaw while none does, ``attempts`` poses in all.
     """
-    placed = _Placed(gap, half)
+    placed = _Placed(gap, half, len(radii))
     grid = _Grid(half, GRID_STEP)
     out = np.zeros((len(radii), 3))
     origin = np.zeros((1, 2))
@@ -345,9 +345,6 @@ class _Grid:
         return np.stack([cols, rows], axis=1) * self.step + self.step / 2 - self.half
 
 
-EXACT_CHUNKS = (1, 3)
-"""Candidates per clearance batch, growing (then all the rest): few when an early one passes,
-few calls when many fail."""
 SURE = 1e-9
 """Margin [m] by which a bound must clear the gap to decide a pair without the exact distance
 (far above rounding, so every decision equals the exact test's)."""
@@ -359,25 +356,27 @@ class _Placed:
     Args:
         gap: Clearance between outlines [m].
         half: Half size of the area, shape (2,) [m].
+        capacity: Most outlines the layout places.
     """
 
-    def __init__(self, gap: float, half: np.ndarray) -> None:
+    def __init__(self, gap: float, half: np.ndarray, capacity: int) -> None:
         self.gap = gap
         self.half = half
-        self.polys: list[Polygon] = []
-        self.centre = np.zeros((0, 2))
-        self.radius = np.zeros(0)
-        self.inner = np.zeros(0)
-        self.box = np.zeros((0, 4))
+        self.count = 0
+        self.polys = np.empty(capacity, dtype=object)
+        self.centre = np.zeros((capacity, 2))
+        self.radius = np.zeros(capacity)
+        self.inner = np.zeros(capacity)
+        self.box = np.zeros((capacity, 4))
 
     def first_clear(self, shape: Footprint, radius: float, xy: np.ndarray, yaw: np.ndarray) -> int:
         """First candidate inside the area and ``gap`` from every placed outline; placed.
 
-        Taken in draw order, in chunks of growing size (`EXACT_CHUNKS`). Inside: sure when the
-        outline's bounding circle is, else by its vertices. Against a placed outline whose
-        bounding circle (plus ``gap``) is near, a pair is decided by bounds where they are
-        sure (inscribed circles closer than the gap: too close; bounding boxes farther apart:
-        clear), else by the exact outline distance (GEOS).
+        Candidates are tested one by one in draw order. Inside: by the outline's vertices.
+        Against a placed outline whose bounding circle (plus ``gap``) is near, a pair is
+        decided by bounds where they are sure (inscribed circles closer than the gap: too
+        close; bounding boxes farther apart: clear), else by the exact outline distance
+        (GEOS).
 
         Args:
             shape: The tile's footprint.
@@ -388,52 +387,36 @@ class _Placed:
         Returns:
             The candidate index, or ``m`` when none passes.
         """
-        gap, half, n = self.gap, self.half, len(xy)
-        inner = shape.inner
-        centre, inners, box = self.centre, self.inner, self.box
-        others = np.empty(len(self.polys), dtype=object)
-        others[:] = self.polys
-        start = 0
-        for size in (*EXACT_CHUNKS, n):
-            chunk = np.arange(start, min(start + size, n))
-            start += len(chunk)
-            if len(chunk) == 0:
-                break
-            verts = _posed_all(shape.outline, xy[chunk], yaw[chunk])
-            lo_all, hi_all = _boxes(verts)
-            bad = np.any(np.abs(xy[chunk]) > half - shape.reach - SURE, axis=1)
-            bad[bad] = np.any((lo_all[bad] < -half) | (hi_all[bad] > half), axis=1)
-            d = np.linalg.norm(xy[chunk, None, :] - centre[None, :, :], axis=2)
-            rows, cols = np.nonzero(d < self.radius[None, :] + radius + gap)
-            if len(rows):
-                dist = d[rows, cols]
-                near = dist < inner + inners[cols] + gap - SURE
-                lo, hi = lo_all[rows], hi_all[rows]
-                apart = np.maximum(np.maximum(lo - box[cols, 2:], box[cols, :2] - hi), 0.0)
-                far = np.hypot(apart[:, 0], apart[:, 1]) >= gap + SURE
-                bad[rows[near]] = True
-                exact = np.flatnonzero(~near & ~far & ~bad[rows])
-                if len(exact):
-                    polys = shapely.polygons(verts[rows[exact]])
-                    close = shapely.distance(polys, others[cols[exact]]) < gap
-                    bad[rows[exact[close]]] = True
-            if not bad.all():
-                k = int(np.argmin(bad))
-                self.polys.append(Polygon(verts[k]))
-                self.centre = np.vstack([centre, xy[chunk[k]]])
-                self.radius = np.append(self.radius, radius)
-                self.inner = np.append(inners, inner)
-                self.box = np.vstack([box, np.concatenate([lo_all[k], hi_all[k]])])
-                return int(chunk[k])
-        return n
-
-
-def _boxes(verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Bounding boxes of outlines (m, k, 2): lower and upper corners, each (m, 2) [m]."""
-    x, y = verts[:, :, 0], verts[:, :, 1]
-    lo = np.stack([x.min(axis=1), y.min(axis=1)], axis=1)
-    hi = np.stack([x.max(axis=1), y.max(axis=1)], axis=1)
-    return lo, hi
+        gap, half, k = self.gap, self.half, self.count
+        centre, inners, box = self.centre[:k], self.inner[:k], self.box[:k]
+        reach = self.radius[:k] + radius + gap
+        close = shape.inner + inners + gap - SURE
+        for j in range(len(xy)):
+            c, s = math.cos(yaw[j]), math.sin(yaw[j])
+            verts = shape.outline @ np.array([[c, s], [-s, c]]) + xy[j]
+            lo, hi = verts.min(axis=0), verts.max(axis=0)
+            if np.any(lo < -half) or np.any(hi > half):
+                continue
+            dist = np.hypot(centre[:, 0] - xy[j, 0], centre[:, 1] - xy[j, 1])
+            near = np.flatnonzero(dist < reach)
+            if len(near):
+                if np.any(dist[near] < close[near]):
+                    continue
+                apart = np.maximum(np.maximum(lo - box[near, 2:], box[near, :2] - hi), 0.0)
+                exact = near[np.hypot(apart[:, 0], apart[:, 1]) < gap + SURE]
+                poly = shapely.polygons(verts)
+                if len(exact) and np.any(shapely.distance(poly, self.polys[exact]) < gap):
+                    continue
+            else:
+                poly = shapely.polygons(verts)
+            self.polys[k] = poly
+            self.centre[k] = xy[j]
+            self.radius[k] = radius
+            self.inner[k] = shape.inner
+            self.box[k] = (*lo, *hi)
+            self.count += 1
+            return j
+        return len(xy)
 
 
 def _posed_all(outline: np.ndarray, xy: np.ndarray, yaw: np.ndarray) -> np.ndarray:

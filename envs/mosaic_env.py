@@ -247,7 +247,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         for f in self._listeners:
             f.next_time = cell.time
         self._needs_reset = False
-        evaluation = self.task.evaluate()
+        evaluation = self.task.last_evaluation  # taken at the episode's set-up; nothing moved
         obs = self._observe(evaluation)
         return obs, self._info(evaluation, dict.fromkeys(REWARD_TERMS, 0.0), False, "")
 

@@ -258,6 +258,11 @@ class MosaicTask:
                 self.cell.data, rng, cfg.camera_position_jitter, cfg.camera_angle_jitter_deg
             )
 
+    @property
+    def last_evaluation(self) -> Evaluation:
+        """The evaluation `reset` or the last `rewards` call was given or took."""
+        return self._prev
+
     def reset(self) -> None:
         """Forget the counts of the previous step (call after the cell's reset)."""
         self._prev = self.evaluate()
