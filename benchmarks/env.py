@@ -19,9 +19,11 @@ Run ``python -m benchmarks.env`` (``--quick`` for shorter runs); prints the figu
 - ``decision``: the decision level (``pick_place_discrete``, kinematic) with its two 72 x 96
   camera images, the scripted correct decision every step (episodes of 16 steps); again
   without multisampling (``cell.render.samples: 0``, stair-stepped edges).
-- ``reset``: `reset` time [ms] of the 16-tile design and of its first 6 slots (mean and
-  worst over seeds 0..``RESET_SEEDS`` - 1, CPU and wall), decision level with images (the
-  reset renders its observation).
+- ``reset``: `reset` time [ms] of the 16-tile design and of its first 6 slots (mean, median
+  and worst over seeds 0..``RESET_SEEDS`` - 1, CPU and wall), decision level with images (the
+  reset renders its observation); ``task_resets``: the same CPU figures for every registered
+  rung of the task ladder (`envs.tasks`) as bundled. CPU time is the figure to read on a
+  shared machine (wall time includes waiting for the core).
 
 Targets (issues 5, 13, 14): kinematic pick_place >= 1,000 steps/s (was 500); joint with images
 >= 60 steps/s on one core; <= 600 MB per env; decision level with two 72 x 96 images >= 150
@@ -42,6 +44,7 @@ from pathlib import Path
 from typing import Any
 
 OUT = Path(__file__).resolve().parents[1] / "out" / "bench_env.json"
+OUT_RESETS = OUT.with_name("bench_env_resets.json")
 TARGET_KINEMATIC = 1000.0
 TARGET_JOINT_RGB = 60.0
 TARGET_RSS_MB = 600.0
@@ -176,6 +179,25 @@ def _resets(max_slots: int, queue: mp.Queue) -> None:
         obs_mode="rgb",
         image_size=DECISION_IMAGE,
     )
+    queue.put(_time_resets(env))
+
+
+def _task_resets(queue: mp.Queue) -> None:
+    """Child process: reset times [ms] of every registered rung of the task ladder."""
+    os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    import gymnasium as gym  # noqa: PLC0415
+
+    from envs.tasks import register_tasks  # noqa: PLC0415
+
+    rows = []
+    for task_id in register_tasks():
+        row = _time_resets(gym.make(task_id))
+        rows.append({"task": task_id, **row})
+    queue.put(rows)
+
+
+def _time_resets(env: Any) -> dict[str, Any]:
+    """Reset ``env`` over seeds 0..``RESET_SEEDS`` - 1 (after a first reset); closes it."""
     env.reset(seed=RESET_SEEDS)  # first renders, probes
     wall, cpu = [], []
     for seed in range(RESET_SEEDS):
@@ -185,14 +207,13 @@ def _resets(max_slots: int, queue: mp.Queue) -> None:
         cpu.append(1e3 * (time.process_time() - c))
     tiles = len(env.get_wrapper_attr("cell").tiles)
     env.close()
-    queue.put(
-        {
-            "tiles": tiles,
-            "reset_ms": sum(wall) / len(wall),
-            "reset_cpu_ms": sum(cpu) / len(cpu),
-            "reset_cpu_ms_max": max(cpu),
-        }
-    )
+    return {
+        "tiles": tiles,
+        "reset_ms": sum(wall) / len(wall),
+        "reset_cpu_ms": sum(cpu) / len(cpu),
+        "reset_cpu_ms_median": sorted(cpu)[len(cpu) // 2],
+        "reset_cpu_ms_max": max(cpu),
+    }
 
 
 def _child(target: Any, *args: Any) -> Any:
@@ -234,16 +255,58 @@ def _async(n: int, seconds: float, queue: mp.Queue) -> None:
     queue.put(rate)
 
 
+def _reset_rows() -> tuple[dict[int, Any], list[dict[str, Any]]]:
+    """Measure and print the reset rows (design and task ladder); also writes them alone."""
+    resets = {k: _child(_resets, k) for k in (0, 6)}
+    for r in resets.values():
+        print(
+            f"reset, {r['tiles']} tiles: {r['reset_ms']:.1f} ms [CPU {r['reset_cpu_ms']:.1f} ms, "
+            f"median {r['reset_cpu_ms_median']:.1f} ms, worst {r['reset_cpu_ms_max']:.1f} ms]",
+            flush=True,
+        )
+    task_resets = _child(_task_resets)
+    for r in task_resets:
+        print(
+            f"reset, {r['task']} ({r['tiles']} tiles): CPU {r['reset_cpu_ms']:.1f} ms "
+            f"[median {r['reset_cpu_ms_median']:.1f}, worst {r['reset_cpu_ms_max']:.1f}]",
+            flush=True,
+        )
+    cpu = resets[0]["reset_cpu_ms"]
+    print(
+        f"reset_16_tiles_cpu_ms: {cpu:.1f} (target {TARGET_RESET_MS}) "
+        f"{'MET' if cpu <= TARGET_RESET_MS else 'NOT MET'}"
+    )
+    OUT_RESETS.parent.mkdir(exist_ok=True)
+    OUT_RESETS.write_text(
+        json.dumps(
+            {
+                "design": DESIGN,
+                "load_average": os.getloadavg(),
+                "reset": {f"{r['tiles']}_tiles": r for r in resets.values()},
+                "task_resets": task_resets,
+            },
+            indent=2,
+        )
+    )
+    return resets, task_resets
+
+
 def main() -> None:
     """Run every measurement, print a table, write ``out/bench_env.json``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=4.0, help="stepping time per case [s]")
     parser.add_argument("--quick", action="store_true", help="1 s per case")
+    parser.add_argument(
+        "--resets", action="store_true", help=f"the reset rows only (writes {OUT_RESETS.name})"
+    )
     args = parser.parse_args()
     seconds = 1.0 if args.quick else args.seconds
     os.environ.setdefault("MUJOCO_GL", "egl")
     for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
         os.environ[var] = "1"
+    if args.resets:
+        _reset_rows()
+        return
     rows = []
     for mode, execution in CASES:
         for obs_mode in ("state", "rgb"):
@@ -264,13 +327,7 @@ def main() -> None:
             f"{r['steps_per_s']:.1f} steps/s [{r['steps_per_cpu_s']:.1f} per CPU-s]",
             flush=True,
         )
-    resets = {k: _child(_resets, k) for k in (0, 6)}
-    for r in resets.values():
-        print(
-            f"reset, {r['tiles']} tiles: {r['reset_ms']:.1f} ms [CPU {r['reset_cpu_ms']:.1f} ms, "
-            f"worst {r['reset_cpu_ms_max']:.1f} ms]",
-            flush=True,
-        )
+    resets, task_resets = _reset_rows()
     one = _child(_async, 1, seconds * 2)
     two = _child(_async, 2, seconds * 2)
     print(
@@ -352,6 +409,7 @@ def main() -> None:
         "decision_rgb": decision,
         "decision_rgb_no_multisampling": aliased,
         "reset": {f"{r['tiles']}_tiles": r for r in resets.values()},
+        "task_resets": task_resets,
         "targets": targets,
     }
     OUT.parent.mkdir(exist_ok=True)

@@ -207,10 +207,15 @@ class Cell:
         mujoco.mj_forward(m, d)
 
     def place_tiles(self, idx: np.ndarray, poses: np.ndarray) -> None:
-        """Put tiles at (x, y, yaw) poses relative to the tile area's centre, at rest."""
+        """Put tiles at (x, y, yaw) poses relative to the tile area's centre, at rest.
+
+        Each lies flat at its contact height on the belt (bottom face on the belt top), so it
+        needs no settling: within the first physics steps it sinks into its resting contact
+        (about 2 um) and falls asleep.
+        """
         c = self.geometry.input_centre
         qadr = self.ids.tile_qpos_index[idx]
-        z = c[2] + self.cfg.tiles.thickness / 2 + 1e-4
+        z = c[2] + self.cfg.tiles.thickness / 2
         self.data.qpos[qadr[:, 0]] = c[0] + poses[:, 0]
         self.data.qpos[qadr[:, 1]] = c[1] + poses[:, 1]
         self.data.qpos[qadr[:, 2]] = z

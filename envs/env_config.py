@@ -125,7 +125,7 @@ class EnvConfig:
         reject_past_belt_end: How far past the input belt's end `MosaicAssemblyEnv.reject`
             releases a tile over the reject bin [m].
         reject_release_height: Height above the belt top of that release [m].
-        reset_settle: Physics time simulated after reset so tiles rest [s].
+        reset_settle: Physics time simulated after reset [s] (0: none; tiles are laid at rest).
         layout_tries: Layout draws tried at reset until the tiles fit the belt.
         position_tolerance: Placement position tolerance [m].
         yaw_tolerance_deg: Placement yaw tolerance [deg], modulo the tile's symmetry.
@@ -177,7 +177,7 @@ class EnvConfig:
     failed_action_time: float = 0.04
     reject_past_belt_end: float = 0.08
     reject_release_height: float = 0.03
-    reset_settle: float = 0.16
+    reset_settle: float = 0.0
     layout_tries: int = 20
     position_tolerance: float = 0.0015
     yaw_tolerance_deg: float = 2.0

@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 
 from envs.errors import CellError
-from envs.layout import layout_capacity, sample_layout
+from envs.layout import Footprint, layout_capacity, sample_layout
 
 if TYPE_CHECKING:
     from envs.cell import Cell
@@ -49,6 +49,15 @@ class TileFeed:
         self.next_time = np.inf
         """Simulated time [s] of the next feed decision."""
         self._batch_due = np.inf
+        self._footprints = [
+            [Footprint.of(t.outline, self.cfg.min_gap) for t in variant]
+            for variant in cell.tile_pool
+        ]
+        """Layout footprint of every built tile, ``[variant][tile]`` (made once)."""
+
+    def footprint(self, i: int) -> Footprint:
+        """Layout footprint of tile ``i`` as shown in this episode."""
+        return self._footprints[int(self.cell.variant[i])][int(i)]
 
     def initial_count(self) -> int:
         """Tiles laid out at the start of an episode."""
@@ -91,16 +100,17 @@ class TileFeed:
         """
         cell, cfg = self.cell, self.cfg
         area = tuple(cell.cfg.input_belt.tile_area)
+        shapes = [self.footprint(i) for i in order]
         if cfg.feed == "batch":
-            k = layout_capacity([cell.tiles[i].outline for i in order], area, cfg.min_gap)
-            order = order[: max(k, 1)]
+            k = max(layout_capacity(shapes, area, cfg.min_gap), 1)
+            order, shapes = order[:k], shapes[:k]
         poses = sample_layout(
             cell.radii[order],
             area,
             cfg.min_gap,
             cfg.placement_attempts,
             rng,
-            outlines=[cell.tiles[k].outline for k in order],
+            outlines=shapes,
             restarts=cfg.placement_restarts,
         )
         cell.place_tiles(order, poses)

@@ -124,10 +124,12 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ``info`` as ``reward_<term>``.
 
     ## Starting State
-    Arm at home, vacuum off, tiles laid out at random (non-overlapping) on the input belt
+    Arm at home, vacuum off, tiles laid out at random (non-overlapping, each placed against
+    the ones before it or the tile area's edge, `envs.layout`) on the input belt
     (``feed="all"``), the first ``stream_initial`` of them (``feed="stream"``) or the first
-    ``batch_size`` (``feed="batch"``), settled for
-    ``reset_settle``. Manufacturing noise is re-drawn at every reset: each tile gets one of
+    ``batch_size`` (``feed="batch"``), lying at rest on the belt (``reset_settle`` > 0
+    simulates that long after the reset; 0 by default: the tiles are put at their contact
+    height). Manufacturing noise is re-drawn at every reset: each tile gets one of
     ``tile_variants`` outlines built with ``vertex_jitter`` (pre-built shapes in the tile's
     body, the ones not shown massless, without contacts and invisible, so a reset costs no
     rebuild) and a fresh glaze colour noise (``tile_color_jitter``); with ``tile_variants=1``
@@ -248,7 +250,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         for f in self._listeners:
             f.next_time = cell.time
         self._needs_reset = False
-        evaluation = self.task.evaluate()
+        evaluation = self.task.last_evaluation  # taken at the episode's set-up; nothing moved
         obs = self._observe(evaluation)
         return obs, self._info(evaluation, dict.fromkeys(REWARD_TERMS, 0.0), False, "")
 

@@ -3,7 +3,7 @@
 `MosaicTask.evaluate` returns one `Evaluation` the reward, the episode end and ``info`` all read
 (``info["evaluation"]`` is its `Evaluation.as_dict`). `MosaicTask.initialize_episode` is the
 episode set-up hook: layout (with retries), per-episode colour and light randomisation, belt
-speed and settling.
+speed and optional settling.
 Tiles and slots are matched by class name (the design's shape-and-colour class); distractors are
 never correct. A tile counts as placed when it lies over the mesh (not held, at any height: flat
 on the sheet, stacked on another tile or tilted); it fills the nearest slot when it lies flat on
@@ -219,8 +219,8 @@ class MosaicTask:
         tiles do not fit; its feed lays out the initial tiles and its variants are redrawn),
         tile colours, lights and camera poses are randomised (``color_randomization``,
         ``light_randomization``, ``camera_position_jitter``, ``camera_angle_jitter_deg``),
-        the input belt is set running and physics settles the tiles
-        for ``reset_settle``.
+        the input belt is set running and, with ``reset_settle`` > 0, physics runs that long
+        (the tiles are laid at their contact height, at rest: 0 needs no settling).
 
         Raises:
             CellError: No layout draw fits.
@@ -257,6 +257,11 @@ class MosaicTask:
             self._camera_jitter.draw(
                 self.cell.data, rng, cfg.camera_position_jitter, cfg.camera_angle_jitter_deg
             )
+
+    @property
+    def last_evaluation(self) -> Evaluation:
+        """The evaluation `reset` or the last `rewards` call was given or took."""
+        return self._prev
 
     def reset(self) -> None:
         """Forget the counts of the previous step (call after the cell's reset)."""

@@ -186,7 +186,7 @@ def test_stream_feed_large_design() -> None:
     try:
         env.reset(seed=0)
         assert env.cell.on_stage.sum() == 6
-        for _ in range(int(2.5 / env.config.control_dt)):
+        for _ in range(round(2.6 / env.config.control_dt)):  # past one stream period (2.5 s)
             env.step(np.zeros(7, np.float32))
         assert env.cell.on_stage.sum() > 6  # streamed in
         assert env.evaluate().placeable == len(env.cell.slots)
