@@ -24,6 +24,11 @@ Run ``python -m benchmarks.env`` (``--quick`` for shorter runs); prints the figu
   reset renders its observation); ``task_resets``: the same CPU figures for every registered
   rung of the task ladder (`envs.tasks`) as bundled. CPU time is the figure to read on a
   shared machine (wall time includes waiting for the core).
+- ``sections``: where a step's CPU time goes [ms per step], kinematic ``pick_place`` (state)
+  and the decision level with images: physics (`Cell.step`), IK, the planners' lower bound,
+  vacuum (seal check), evaluation, observation (the renders with images) and the rest
+  (action decoding, rewards, info, Gymnasium wrappers). Measured by timing those calls of
+  one env (the timers add a little to "rest").
 
 Targets (issues 5, 13, 14): kinematic pick_place >= 1,000 steps/s (was 500); joint with images
 >= 60 steps/s on one core; <= 600 MB per env; decision level with two 72 x 96 images >= 150
@@ -216,6 +221,73 @@ def _time_resets(env: Any) -> dict[str, Any]:
     }
 
 
+SECTIONS = (
+    ("physics", "cell", "step"),
+    ("ik", "ik", "solve"),
+    ("lower_bound", "planner", "lower_bound"),
+    ("vacuum", "cell", "vacuum"),
+    ("evaluate", "task", "evaluate"),
+    ("observe", "observer", "observe"),
+)
+"""Timed calls of a step: (label, owner attribute of the env, method)."""
+
+
+def _sections(decision: bool, seconds: float, queue: mp.Queue) -> None:
+    """Child process: CPU time per step [ms] in each of `SECTIONS` and the rest."""
+    os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: PLC0415
+
+    kwargs: dict[str, Any] = (
+        {"action_mode": "pick_place_discrete", "obs_mode": "rgb", "image_size": DECISION_IMAGE}
+        if decision
+        else {"action_mode": "pick_place", "obs_mode": "state"}
+    )
+    env = gym.make(envs.ENV_ID, design=DESIGN, execution="kinematic", **kwargs)
+    u = env.unwrapped
+    owners = {
+        "cell": u.cell,
+        "ik": u.ik,
+        "planner": u.executor.planner,
+        "task": u.task,
+        "observer": u.observer,
+    }
+    spent = dict.fromkeys([s[0] for s in SECTIONS], 0.0)
+
+    def timed(label: str, fn: Any) -> Any:
+        def call(*a: Any, **k: Any) -> Any:
+            c = time.process_time()
+            try:
+                return fn(*a, **k)
+            finally:
+                spent[label] += time.process_time() - c
+
+        return call
+
+    for label, owner, name in SECTIONS:
+        obj = owners[owner]
+        setattr(obj, name, timed(label, getattr(obj, name)))
+    env.reset(seed=0)
+    steps, cpu, k = 0, 0.0, 0
+    while cpu < seconds:
+        action = _scripted(env, k)
+        c = time.process_time()
+        _, _, term, trunc, _ = env.step(action)
+        cpu += time.process_time() - c
+        steps += 1
+        k += 1
+        if term or trunc:
+            after = dict(spent)
+            env.reset()
+            spent.update(after)  # a reset's calls are not a step's
+            k = 0
+    env.close()
+    ms = {key: 1e3 * v / steps for key, v in spent.items()}
+    ms["rest"] = 1e3 * cpu / steps - sum(ms.values())
+    queue.put({"steps": steps, "ms_per_step": 1e3 * cpu / steps, "sections_ms": ms})
+
+
 def _child(target: Any, *args: Any) -> Any:
     ctx = mp.get_context("spawn")
     q: mp.Queue = ctx.Queue()
@@ -328,6 +400,15 @@ def main() -> None:
             flush=True,
         )
     resets, task_resets = _reset_rows()
+    sections = {
+        "kinematic pick_place": _child(_sections, False, seconds),
+        "decision level, images": _child(_sections, True, seconds),
+    }
+    labels = [*(sec[0] for sec in SECTIONS), "rest"]
+    print(f"CPU ms per step: {'':22s}" + "".join(f"{lab:>12s}" for lab in labels) + "       total")
+    for name, r in sections.items():
+        row = "".join(f"{r['sections_ms'][lab]:12.3f}" for lab in labels)
+        print(f"  {name:36s}{row}{r['ms_per_step']:12.3f}", flush=True)
     one = _child(_async, 1, seconds * 2)
     two = _child(_async, 2, seconds * 2)
     print(
@@ -410,6 +491,7 @@ def main() -> None:
         "decision_rgb_no_multisampling": aliased,
         "reset": {f"{r['tiles']}_tiles": r for r in resets.values()},
         "task_resets": task_resets,
+        "sections": sections,
         "targets": targets,
     }
     OUT.parent.mkdir(exist_ok=True)

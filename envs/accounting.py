@@ -67,28 +67,29 @@ def tile_states(f: TileFlags) -> np.ndarray:
     Returns:
         Shape (n,) int8.
     """
-    # np.select takes the first true condition: the priority order of the module docstring.
-    conditions = [
-        ~f.real,
-        ~f.fed,
-        f.held,
-        f.rejected,
-        f.lost & f.was_dropped,
-        f.lost,
-        f.on_mesh & f.correct,
-        f.on_mesh,
-        f.on_input,
-        f.was_dropped,
-    ]
-    codes = [NOT_COUNTED, WAITING, HELD, REJECTED, DROPPED, LOST, CORRECT, MISPLACED, ON_INPUT]
-    codes.append(DROPPED)
-    return np.select(conditions, codes, default=STRANDED).astype(np.int8)
+    # The first true condition of the module docstring's priority order decides: written
+    # from the lowest priority up, each assignment overrides the ones before it.
+    states = np.full(len(f.real), STRANDED, np.int8)
+    for mask, code in (
+        (f.was_dropped, DROPPED),
+        (f.on_input, ON_INPUT),
+        (f.on_mesh, MISPLACED),
+        (f.on_mesh & f.correct, CORRECT),
+        (f.lost, LOST),
+        (f.lost & f.was_dropped, DROPPED),
+        (f.rejected, REJECTED),
+        (f.held, HELD),
+        (~f.fed, WAITING),
+        (~f.real, NOT_COUNTED),
+    ):
+        states[mask] = code
+    return states
 
 
 def state_counts(states: np.ndarray) -> dict[str, int]:
     """Count of each of `TILE_STATES` in a `tile_states` array (their sum: the real tiles fed)."""
-    counts = np.bincount(states[states >= 0], minlength=len(TILE_STATES))
-    return {name: int(c) for name, c in zip(TILE_STATES, counts, strict=True)}
+    counts = np.bincount(states[states >= 0], minlength=len(TILE_STATES)).tolist()
+    return dict(zip(TILE_STATES, counts, strict=True))
 
 
 __all__ = [

@@ -166,9 +166,12 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     1 / ``control_dt`` in every mode (a pick_place step spans a whole cycle). In a process that
     has rendered already, start async/subprocess workers with ``spawn`` (a forked worker can
     hang in EGL). Every camera image leaves out the geoms the camera cannot see (same pixels,
-    `envs.view_culling`); ``cell={"render": {"samples": 0}}`` turns multisampling off
-    (stair-stepped edges; the decision level with two 72 x 96 images then steps about 1.7x
-    faster in software rendering).
+    `envs.view_culling`). Small images (up to ``cell.render.supersample_max_pixels``, e.g. the
+    72 x 96 and 96 x 96 observations) are anti-aliased by rendering them at twice the size and
+    averaging 2 x 2 blocks (``cell.render.supersample``), about half the cost of 4-sample
+    multisampling in software rendering and as smooth; larger ones are multisampled
+    (``cell.render.samples``). ``cell={"render": {"samples": 0}}`` turns anti-aliasing off
+    (stair-stepped edges, cheaper still).
 
     ## Version History
     - v0: initial version; manufacturing noise re-drawn per reset (``tile_variants``).

@@ -272,21 +272,16 @@ class MosaicTask:
     def placement(self) -> Placement:
         """Where every tile lies relative to the slots now."""
         cell = self.cell
-        poses = cell.tile_poses()
-        n, k = len(cell.tiles), len(self.slot_class)
-        xy = poses.pos[:, :2]
-        up = 1 - 2 * (poses.quat[:, 1] ** 2 + poses.quat[:, 2] ** 2)  # z-axis z component
-        held = np.zeros(n, bool)
-        if cell.held_tile >= 0:
-            held[cell.held_tile] = True
-        dz = poses.pos[:, 2] - self._rest_z
+        q = cell.data.qpos[cell.ids.tile_qpos_index]  # (n, 7): position, quaternion (w, x, y, z)
+        n, k = len(q), len(self.slot_class)
+        x, y, dz = q[:, 0], q[:, 1], q[:, 2] - self._rest_z
         tol = self.cfg.mesh_height_tolerance
-        on_mesh = (
-            np.all((xy >= self._mesh_lo) & (xy <= self._mesh_hi), axis=1)
-            & (dz >= -tol)
-            & ~held
-            & cell.on_stage
-        )
+        lo, hi = self._mesh_lo, self._mesh_hi
+        on_mesh = (x >= lo[0]) & (x <= hi[0]) & (y >= lo[1]) & (y <= hi[1]) & (dz >= -tol)
+        on_mesh &= cell.on_stage
+        if cell.held_tile >= 0:
+            on_mesh[cell.held_tile] = False
+        up = 1 - 2 * (q[:, 4] ** 2 + q[:, 5] ** 2)  # z component of the tile's z axis
         flat = on_mesh & (dz <= tol) & (up > self._flat)
         slot = np.full(n, -1)
         perr = np.full(n, np.nan)
@@ -295,11 +290,15 @@ class MosaicTask:
         filled = np.zeros(k, bool)
         idx = np.flatnonzero(on_mesh)
         if k and len(idx):
-            d = np.linalg.norm(xy[idx, None, :] - self.slot_xyyaw[None, :, :2], axis=2)
-            nearest = np.argmin(d, axis=1)
+            w, qz = q[idx, 3], q[idx, 6]
+            yaw = np.arctan2(2 * (w * qz + q[idx, 4] * q[idx, 5]), 1 - 2 * (q[idx, 5] ** 2 + qz**2))
+            dx = x[idx, None] - self.slot_xyyaw[None, :, 0]
+            dy = y[idx, None] - self.slot_xyyaw[None, :, 1]
+            dist = np.sqrt(dx * dx + dy * dy)
+            nearest = dist.argmin(axis=1)
             slot[idx] = nearest
-            perr[idx] = d[np.arange(len(idx)), nearest]
-            yerr[idx] = yaw_error(poses.yaw[idx], self.slot_xyyaw[nearest, 2], self.symmetry[idx])
+            perr[idx] = dist[np.arange(len(idx)), nearest]
+            yerr[idx] = yaw_error(yaw, self.slot_xyyaw[nearest, 2], self.symmetry[idx])
             ok = (
                 flat[idx]
                 & (self.tile_class[idx] == self.slot_class[nearest])
@@ -308,12 +307,12 @@ class MosaicTask:
                 & (yerr[idx] <= self._yaw_tol)
             )
             # One tile per slot: the closest correct tile fills it, others are misplaced.
-            order = np.argsort(perr[idx])
-            for j in order[ok[order]]:
-                s = nearest[j]
-                if not filled[s]:
-                    filled[s] = True
-                    correct[idx[j]] = True
+            cand = np.flatnonzero(ok)
+            cand = cand[np.argsort(perr[idx[cand]], kind="stable")]
+            _, first = np.unique(nearest[cand], return_index=True)
+            winners = cand[first]
+            filled[nearest[winners]] = True
+            correct[idx[winners]] = True
         return Placement(on_mesh, flat, slot, perr, yerr, correct, filled)
 
     def evaluate(self) -> Evaluation:

@@ -18,7 +18,11 @@ from hypothesis import strategies as st
 
 import envs  # noqa: F401 - registers the env
 from envs.accounting import (
+    CORRECT,
     DROPPED,
+    HELD,
+    LOST,
+    MISPLACED,
     NOT_COUNTED,
     ON_INPUT,
     REJECTED,
@@ -197,3 +201,40 @@ def test_discrete_sequences_that_always_grasp_keep_every_tile_accounted(seed, ac
         check_accounting(info, n_real, terminated)
         if terminated or truncated:
             break
+
+
+def test_states_equal_a_per_tile_reading_of_the_priority_order():
+    """Random flag combinations (seeded): each tile's state is the first true test of the
+    module docstring's order, read tile by tile."""
+    rng = np.random.default_rng(0)
+    names = ("real", "fed", "held", "rejected", "lost", "was_dropped", "on_mesh", "correct")
+    for _ in range(50):
+        flags = {k: rng.random(24) < 0.5 for k in (*names, "on_input")}
+        states = tile_states(TileFlags(**flags))
+        for i in range(24):
+            f = {k: bool(v[i]) for k, v in flags.items()}
+            expected = (
+                NOT_COUNTED
+                if not f["real"]
+                else WAITING
+                if not f["fed"]
+                else HELD
+                if f["held"]
+                else REJECTED
+                if f["rejected"]
+                else DROPPED
+                if f["lost"] and f["was_dropped"]
+                else LOST
+                if f["lost"]
+                else CORRECT
+                if f["on_mesh"] and f["correct"]
+                else MISPLACED
+                if f["on_mesh"]
+                else ON_INPUT
+                if f["on_input"]
+                else DROPPED
+                if f["was_dropped"]
+                else STRANDED
+            )
+            assert states[i] == expected
+    assert states.dtype == np.int8
