@@ -245,7 +245,7 @@ def _sections(decision: bool, seconds: float, queue: mp.Queue) -> None:
         else {"action_mode": "pick_place", "obs_mode": "state"}
     )
     env = gym.make(envs.ENV_ID, design=DESIGN, execution="kinematic", **kwargs)
-    u = env.unwrapped
+    u: Any = env.unwrapped
     owners = {
         "cell": u.cell,
         "ik": u.ik,
