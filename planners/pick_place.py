@@ -63,12 +63,14 @@ import numpy.typing as npt
 from planners.config import JointLimits, PlannerConfig
 from planners.errors import InvalidTargetError, PlannerError, TrajectoryError, UnreachableError
 from planners.ik import IKSolver, symmetric_yaws, wrap_angle
+from planners.rest_to_rest import rest_to_rest_duration
 from planners.trajectory import (
     JointState,
     JointTrajectory,
     Piecewise,
     Segment,
     as_joint_vector,
+    check_in_range,
     hold_segment,
     join,
     plan_segment,
@@ -242,6 +244,25 @@ class PickPlacePlanner:
     ) -> Segment:
         q_t = unwrap_target(start.q, q, self.limits, self._wrap)
         return plan_segment(start, q_t, self.limits, qd, target_qdd=qdd, label=label)
+
+    def _move(
+        self, start: JointState, q: Array, qd: Array | None, label: str
+    ) -> tuple[float, JointState]:
+        """Duration [s] and end state of the move `_segment` plans, without the trajectory.
+
+        From rest to rest in closed form (`rest_to_rest_duration`, ruckig's duration to
+        ~1e-12 s); any other boundary state by ruckig.
+
+        Raises:
+            PlannerError: See `plan_segment`.
+        """
+        stops = qd is None or not as_joint_vector(qd, "target_qd").any()
+        if stops and not (start.qd.any() or start.qdd.any()):
+            q_t = unwrap_target(start.q, q, self.limits, self._wrap)
+            check_in_range(q_t, self.limits, f"segment {label!r} target")
+            return rest_to_rest_duration(start.q, q_t, self.limits), JointState(q_t)
+        seg = self._segment(start, q, qd, label)
+        return seg.duration, seg.end
 
     def _positions(self, segs: list[Segment]) -> tuple[Array, Array]:
         """Sample times (from the first segment's start) [s] and TCP positions (n, 3) [m]."""
@@ -898,9 +919,9 @@ class PickPlacePlanner:
                 None: it ends at the place contact.
         """
         s0 = JointState.at_rest(as_joint_vector(start_q, "start_q"))
-        a = self._segment(s0, pick_q, pick_qd, "bound_pick")
-        b = self._segment(a.end, place_q, None, "bound_place")
-        return a.duration + b.duration + self._end_bound(place_q, end_q)
+        t_pick, at_pick = self._move(s0, pick_q, pick_qd, "bound_pick")
+        t_place, _ = self._move(at_pick, place_q, None, "bound_place")
+        return t_pick + t_place + self._end_bound(place_q, end_q)
 
     def cycle_bound(  # noqa: PLR0917
         self,
@@ -927,17 +948,17 @@ class PickPlacePlanner:
                 [rad]; None: it ends at the place contact.
         """
         s0 = JointState.at_rest(as_joint_vector(start_q, "start_q"))
-        a = self._segment(s0, pick_q, pick_qd, "bound_pick")
-        held = hold_segment(a.end, pick_dwell, "bound_dwell")
-        b = self._segment(held.end, place_q, None, "bound_place")
+        t_pick, at_pick = self._move(s0, pick_q, pick_qd, "bound_pick")
+        held = hold_segment(at_pick, pick_dwell, "bound_dwell")
+        t_place, _ = self._move(held.end, place_q, None, "bound_place")
         dwells = pick_dwell + self.config.cycle.place_dwell
-        return a.duration + b.duration + dwells + self._end_bound(place_q, end_q)
+        return t_pick + t_place + dwells + self._end_bound(place_q, end_q)
 
     def _end_bound(self, place_q: Array, end_q: Array | None) -> float:
         """Time-optimal rest-to-rest move from the place contact to ``end_q`` [s] (0 if None)."""
         if end_q is None:
             return 0.0
-        return self._segment(JointState.at_rest(place_q), end_q, None, "bound_end").duration
+        return self._move(JointState.at_rest(place_q), end_q, None, "bound_end")[0]
 
     def plan_move(self, start: JointState, q: npt.ArrayLike, label: str = "move") -> Piecewise:
         """Time-optimal move from ``start`` to rest at ``q`` (6,) [rad] (e.g. back home).
