@@ -70,16 +70,17 @@ def rest_to_rest_duration(q0: npt.ArrayLike, q1: npt.ArrayLike, limits: JointLim
     """
     start = np.asarray(q0, dtype=np.float64).tolist()
     target = np.asarray(q1, dtype=np.float64).tolist()
-    n = len(limits.max_velocity)
+    vmax, amax, jmax = limits.max_velocity, limits.max_acceleration, limits.max_jerk
+    n = len(vmax)
     if len(start) != n or len(target) != n:
         raise LimitError(
             f"rest-to-rest move needs {n} start and target angles, got {len(start)} and "
             f"{len(target)}"
         )
-    axes = zip(limits.max_velocity, limits.max_acceleration, limits.max_jerk, strict=True)
-    return max(
-        axis_duration(b - s, v, a, j) for s, b, (v, a, j) in zip(start, target, axes, strict=True)
-    )
+    longest = 0.0
+    for i in range(n):
+        longest = max(longest, axis_duration(target[i] - start[i], vmax[i], amax[i], jmax[i]))
+    return longest
 
 
 __all__ = ["axis_duration", "rest_to_rest_duration"]

@@ -53,11 +53,13 @@ def check_in_range(q: Array, limits: JointLimits, name: str, margin: float = 0.0
     Raises:
         LimitError: Names the joint, its value and its range in degrees.
     """
-    lo = np.asarray(limits.lower) - margin
-    hi = np.asarray(limits.upper) + margin
-    bad = np.flatnonzero((q < lo) | (q > hi))
-    if bad.size:
-        i = int(bad[0])
+    bad = [
+        i
+        for i, (v, lo, hi) in enumerate(zip(q.tolist(), limits.lower, limits.upper, strict=True))
+        if v < lo - margin or v > hi + margin
+    ]
+    if bad:
+        i = bad[0]
         raise LimitError(
             f"{name}: joint {i + 1} at {math.degrees(q[i]):.3f} deg is outside its range "
             f"[{math.degrees(limits.lower[i]):.1f}, {math.degrees(limits.upper[i]):.1f}] deg"
@@ -85,8 +87,8 @@ def unwrap_target(
         InvalidTargetError: Non-finite input.
         LimitError: No equivalent angle of a wrapping joint lies inside its range.
     """
-    a = as_joint_vector(q_from, "q_from")
-    b = as_joint_vector(q_to, "q_to").copy()
+    a = as_joint_vector(q_from, "q_from").tolist()
+    b = as_joint_vector(q_to, "q_to").tolist()
     for j in joints:
         lo, hi = limits.lower[j], limits.upper[j]
         k_lo = math.ceil((lo - b[j]) / _TWO_PI)
@@ -98,7 +100,7 @@ def unwrap_target(
             )
         k_near = round((a[j] - b[j]) / _TWO_PI)
         b[j] += _TWO_PI * min(max(k_near, k_lo), k_hi)
-    return b
+    return np.array(b)
 
 
 @dataclass(frozen=True)
