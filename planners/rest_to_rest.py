@@ -21,6 +21,7 @@ durations infeasible for an axis; those moves are ruckig's (`planners.trajectory
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -55,7 +56,9 @@ def axis_duration(distance: float, v: float, a: float, j: float) -> float:
     return 2.0 * (vp / a + a_over_j)
 
 
-def rest_to_rest_duration(q0: npt.ArrayLike, q1: npt.ArrayLike, limits: JointLimits) -> float:
+def rest_to_rest_duration(
+    q0: Array | Sequence[float], q1: Array | Sequence[float], limits: JointLimits
+) -> float:
     """Synchronised time-optimal duration [s] from rest at ``q0`` to rest at ``q1``.
 
     Equals ruckig's duration for the same move (to its numerical precision, ~1e-12 s).
@@ -68,8 +71,8 @@ def rest_to_rest_duration(q0: npt.ArrayLike, q1: npt.ArrayLike, limits: JointLim
     Raises:
         LimitError: Shapes differ from the limits' number of axes.
     """
-    start = np.asarray(q0, dtype=np.float64).tolist()
-    target = np.asarray(q1, dtype=np.float64).tolist()
+    start = q0.tolist() if isinstance(q0, np.ndarray) else q0
+    target = q1.tolist() if isinstance(q1, np.ndarray) else q1
     vmax, amax, jmax = limits.max_velocity, limits.max_acceleration, limits.max_jerk
     n = len(vmax)
     if len(start) != n or len(target) != n:
