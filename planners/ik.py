@@ -221,7 +221,7 @@ class IKSolver:
     def pose_error(self, q: Array, position: Array, yaw: float) -> tuple[float, float]:
         """Position error [m] and orientation error [rad] of ``q`` against a tool-down target."""
         self.fk(q)
-        return self._error_from_data(self._data, position, yaw)
+        return self._error_from_data(self._data, np.asarray(position, dtype=np.float64), yaw)
 
     def _reach_geometry(self) -> tuple[Array, float, float, float]:
         """Shoulder anchor at q=0, upper-arm and forearm lengths, tool offset below the wrist."""
