@@ -125,3 +125,8 @@ def test_bounds_equal_the_chained_ruckig_moves(planner: PickPlacePlanner) -> Non
     )
     got = planner.cycle_bound(q0, q_pick, belt_qd, CFG.cycle.pick_dwell, q_place)
     assert got == pytest.approx(a.duration + b.duration + dwells, abs=1e-12)
+    b_now = plan_segment(
+        a.end, unwrap_target(a.end.q, q_place, LIMITS, CFG.trajectory.wrap_joints), LIMITS
+    )
+    got = planner.lower_bound(q0, q_pick, q_place, pick_qd=belt_qd)
+    assert got == pytest.approx(a.duration + b_now.duration, abs=1e-12)
