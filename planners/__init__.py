@@ -7,6 +7,7 @@ Modules:
     config: frozen dataclass settings (`PlannerConfig`, bundled ``configs/planner.yaml``).
     errors: `PlannerError` and its typed subclasses.
     trajectory: chained jerk-limited time-optimal ruckig segments, `JointTrajectory`.
+    rest_to_rest: closed-form duration of the time-optimal move between two rests.
     ik: tool-down IK with mink (`IKSolver`).
     pick_place: one pick-and-place cycle with events and lower bound (`PickPlacePlanner`).
     servo: position + velocity servo commands with inverse-dynamics feed-forward.

@@ -19,8 +19,9 @@ def wrap_angle(a: float | Array) -> float | Array:
 
     A float is wrapped exactly (an angle already in range comes back unchanged).
     """
-    if np.ndim(a) == 0:
-        w = math.remainder(float(np.asarray(a)), 2.0 * math.pi)
+    if isinstance(a, float) or np.ndim(a) == 0:
+        x = a if isinstance(a, float) else float(np.asarray(a))
+        w = math.remainder(x, 2.0 * math.pi)
         return -math.pi if w == math.pi else w
     return (np.asarray(a, dtype=float) + math.pi) % (2.0 * math.pi) - math.pi
 

@@ -131,6 +131,8 @@ class IKSolver:
             raise PlannerError(f"no site {cfg.site!r} in the model; sites: {sites}") from exc
         self.lower = np.maximum(m.jnt_range[:, 0], self.limits.lower) + cfg.limit_margin
         self.upper = np.minimum(m.jnt_range[:, 1], self.limits.upper) - cfg.limit_margin
+        self._lower_list: list[float] = self.lower.tolist()
+        self._upper_list: list[float] = self.upper.tolist()
         self.configuration = mink.Configuration(m)
         self._data = mujoco.MjData(m)
         self.task = mink.FrameTask(
@@ -219,7 +221,7 @@ class IKSolver:
     def pose_error(self, q: Array, position: Array, yaw: float) -> tuple[float, float]:
         """Position error [m] and orientation error [rad] of ``q`` against a tool-down target."""
         self.fk(q)
-        return self._error_from_data(self._data, position, yaw)
+        return self._error_from_data(self._data, np.asarray(position, dtype=np.float64), yaw)
 
     def _reach_geometry(self) -> tuple[Array, float, float, float]:
         """Shoulder anchor at q=0, upper-arm and forearm lengths, tool offset below the wrist."""
@@ -249,9 +251,9 @@ class IKSolver:
         annulus the upper arm and forearm span around the shoulder axis.
         """
         shoulder, upper, fore, tool = self._reach
-        wrist = position + np.array([0.0, 0.0, tool])
-        radial = math.hypot(wrist[0], wrist[1]) - math.hypot(shoulder[0], shoulder[1])
-        dist = math.hypot(radial, wrist[2] - shoulder[2])
+        x, y, z = np.asarray(position, dtype=np.float64).tolist()
+        sx, sy, sz = shoulder.tolist()
+        dist = math.hypot(math.hypot(x, y) - math.hypot(sx, sy), z + tool - sz)
         if dist > upper + fore + _REACH_SLACK or dist < abs(upper - fore) - _REACH_SLACK:
             raise UnreachableError(
                 f"tool-down pose at {np.round(position, 4).tolist()} m is out of reach: wrist "
@@ -306,29 +308,27 @@ class IKSolver:
         """Position error [m] and rotation angle [rad] from the tool-down target, from ``data``.
 
         The rotation angle of ``R_target^T R`` (from its trace): the one orientation-error
-        formula of the solver (convergence, seeds, `pose_error`).
+        formula of the solver (convergence, seeds, `pose_error`). With ``R_target`` =
+        `tool_down_rotation` ``(yaw)`` = [[c, s, 0], [s, -c, 0], [0, 0, -1]], the trace is
+        ``c (R00 - R11) + s (R01 + R10) - R22``: scalar arithmetic, no matrix built.
         """
-        p = data.site_xpos[self.site_id]
-        r = data.site_xmat[self.site_id].reshape(3, 3)
-        r_err = tool_down_rotation(yaw).T @ r
-        cos_angle = min(max(0.5 * (float(np.trace(r_err)) - 1.0), -1.0), 1.0)
-        return float(np.linalg.norm(p - position)), math.acos(cos_angle)
+        px, py, pz = data.site_xpos[self.site_id].tolist()
+        r00, r01, _, r10, r11, _, _, _, r22 = data.site_xmat[self.site_id].tolist()
+        tx, ty, tz = position.tolist()
+        c, s = math.cos(yaw), math.sin(yaw)
+        trace = c * (r00 - r11) + s * (r01 + r10) - r22
+        cos_angle = min(max(0.5 * (trace - 1.0), -1.0), 1.0)
+        dx, dy, dz = px - tx, py - ty, pz - tz
+        return math.sqrt(dx * dx + dy * dy + dz * dz), math.acos(cos_angle)
 
-    def _seeds(self, seed: Array | None, feature: Array) -> Iterator[Array]:
-        """Seeds to try, made as needed.
+    def _seeds(self, seed: Array | None, feature: Array, up: Array, exact: bool) -> Iterator[Array]:
+        """Seeds to try after the geometric guess ``up``, made as needed.
 
-        The geometric guess alone when it already meets the tolerances (the usual case inside
-        the joint ranges); else given, nearest known and default (nearest pose first); then
+        ``exact``: ``up`` already met the tolerances (and was tried first by `solve`). Given,
+        nearest known, ``up`` unless exact, and default elbow down (nearest pose first); then
         random perturbations of the nearest.
         """
         cfg = self.config
-        up = self._default_seed(feature)
-        self.fk(up)
-        exact = self._within_tolerance(
-            *self._error_from_data(self._data, feature[:3], float(feature[3]))
-        )
-        if exact:
-            yield up
         candidates: list[Array] = [] if seed is None else [seed]
         if self._n_known:
             d = self._feature_distance(self._known_feature[: self._n_known], feature)
@@ -364,25 +364,29 @@ class IKSolver:
 
         Planar two-link solution for the wrist centre (``tool`` above the target) in the arm's
         vertical plane, from the model's own link lengths; joint 5 then points the tool down
-        and joint 6 sets the yaw. Only a seed: mink refines it.
+        and joint 6 sets the yaw. Only a seed: mink refines it (where it is not already exact).
         """
         shoulder, upper, fore, tool = self._reach
-        q = np.zeros(N_JOINTS)
-        q[0] = math.atan2(feature[1], feature[0])
-        dr = math.hypot(feature[0], feature[1]) - math.hypot(shoulder[0], shoulder[1])
-        dz = feature[2] + tool - shoulder[2]
+        fx, fy, fz, fyaw = feature.tolist()
+        sx, sy, sz = shoulder.tolist()
+        dr = math.hypot(fx, fy) - math.hypot(sx, sy)
+        dz = fz + tool - sz
         d = max(math.hypot(dr, dz), 1e-9)
         cos_b = (upper**2 + d**2 - fore**2) / (2.0 * upper * d)
         beta = math.acos(min(max(cos_b, -1.0), 1.0))
-        q[1] = math.atan2(dr, dz) + (-beta if elbow_up else beta)
-        er, ez = upper * math.sin(q[1]), upper * math.cos(q[1])
+        q1 = math.atan2(dr, dz) + (-beta if elbow_up else beta)
+        er, ez = upper * math.sin(q1), upper * math.cos(q1)
         phi = math.atan2(-(dz - ez), dr - er)  # forearm angle below horizontal
-        q[2] = phi - q[1]
-        q[4] = 0.5 * math.pi - phi
-        q = self._in_range(q)
-        yaw0 = self.yaw_of(self.fk(q)[1])
-        q[5] = self._yaw_sign * float(wrap_angle(feature[3] - yaw0))
-        return self._in_range(q)
+        lo, hi = self._lower_list, self._upper_list
+        angles = (math.atan2(fy, fx), q1, phi - q1, 0.0, 0.5 * math.pi - phi, 0.0)
+        q = np.array([min(max(a, lo[i]), hi[i]) for i, a in enumerate(angles)])
+        d_kin = self._data
+        d_kin.qpos[:] = q
+        mujoco.mj_kinematics(self.model, d_kin)
+        r = d_kin.site_xmat[self.site_id]
+        yaw0 = math.atan2(float(r[3]), float(r[0]))
+        q[5] = min(max(self._yaw_sign * float(wrap_angle(fyaw - yaw0)), lo[5]), hi[5])
+        return q
 
     def solve(
         self, position: npt.ArrayLike, yaw: float, seed: npt.ArrayLike | None = None
@@ -401,7 +405,7 @@ class IKSolver:
                 message gives the pose and the best residual).
         """
         pos = np.asarray(position, dtype=np.float64)
-        if pos.shape != (3,) or not np.all(np.isfinite(pos)):
+        if pos.shape != (3,) or not all(map(math.isfinite, pos.tolist())):
             raise InvalidTargetError(f"position must be 3 finite numbers [m], got {position!r}")
         if not math.isfinite(yaw):
             raise InvalidTargetError(f"yaw must be finite, got {yaw!r}")
@@ -409,10 +413,20 @@ class IKSolver:
         self.check_reach(pos)
         feature = np.array([pos[0], pos[1], pos[2], yaw])
         cfg = self.config
+        # The geometric guess first: inside the joint ranges it is usually exact (no QP).
+        up = self._default_seed(feature)
+        self._data.qpos[:] = up
+        mujoco.mj_kinematics(self.model, self._data)
+        pe, oe = self._error_from_data(self._data, pos, yaw)
+        exact = self._within_tolerance(pe, oe)
+        if exact and self.clearance(up) >= cfg.collision_min_distance:
+            self._remember(feature, up)
+            return IKSolution(up, float(yaw), pe, oe, 0, 1)
         total_it = 0
-        best = (math.inf, math.inf)
-        attempts = 0
-        for attempts, s in enumerate(self._seeds(seed_q, feature), start=1):
+        best = (pe, oe) if exact else (math.inf, math.inf)
+        first = 2 if exact else 1  # attempt 1 was the exact guess (blocked by an obstacle)
+        attempts = first - 1
+        for attempts, s in enumerate(self._seeds(seed_q, feature, up, exact), start=first):
             q, pe, oe, it = self._attempt(s, pos, yaw)
             total_it += it
             if (

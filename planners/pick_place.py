@@ -63,18 +63,21 @@ import numpy.typing as npt
 from planners.config import JointLimits, PlannerConfig
 from planners.errors import InvalidTargetError, PlannerError, TrajectoryError, UnreachableError
 from planners.ik import IKSolver, symmetric_yaws, wrap_angle
+from planners.rest_to_rest import rest_to_rest_duration
 from planners.trajectory import (
     JointState,
     JointTrajectory,
     Piecewise,
     Segment,
     as_joint_vector,
+    check_in_range,
     hold_segment,
     join,
     plan_segment,
     segment_within_limits,
     superpose,
     unwrap_target,
+    unwrap_values,
     window,
 )
 
@@ -242,6 +245,44 @@ class PickPlacePlanner:
     ) -> Segment:
         q_t = unwrap_target(start.q, q, self.limits, self._wrap)
         return plan_segment(start, q_t, self.limits, qd, target_qdd=qdd, label=label)
+
+    def _move(
+        self, start: JointState, q: Array, qd: Array | None, label: str
+    ) -> tuple[float, JointState]:
+        """Duration [s] and end state of the move `_segment` plans, without the trajectory.
+
+        From rest to rest in closed form (`_rest_moves`); any other boundary state by ruckig.
+
+        Raises:
+            PlannerError: See `plan_segment`.
+        """
+        stops = qd is None or not as_joint_vector(qd, "target_qd").any()
+        if stops and not (start.qd.any() or start.qdd.any()):
+            duration, q_t = self._rest_moves(start.q, (q, label))
+            return duration, JointState(np.array(q_t))
+        seg = self._segment(start, q, qd, label)
+        return seg.duration, seg.end
+
+    def _rest_moves(
+        self, start_q: Array, *moves: tuple[npt.ArrayLike, str]
+    ) -> tuple[float, list[float]]:
+        """Duration [s] of time-optimal moves from rest to rest, and the last target [rad].
+
+        From ``start_q`` (6,) [rad] through each ``(q, label)`` of ``moves``, targets unwrapped
+        as `_segment` does. In closed form (`rest_to_rest_duration`: ruckig's duration to
+        ~1e-12 s), on plain floats.
+
+        Raises:
+            PlannerError: A non-finite or wrongly shaped target, or one outside the joint ranges.
+        """
+        prev = start_q.tolist()
+        total = 0.0
+        for q, label in moves:
+            q_t = unwrap_values(prev, as_joint_vector(q, "q_to").tolist(), self.limits, self._wrap)
+            check_in_range(q_t, self.limits, f"segment {label!r} target")
+            total += rest_to_rest_duration(prev, q_t, self.limits)
+            prev = q_t
+        return total, prev
 
     def _positions(self, segs: list[Segment]) -> tuple[Array, Array]:
         """Sample times (from the first segment's start) [s] and TCP positions (n, 3) [m]."""
@@ -897,10 +938,13 @@ class PickPlacePlanner:
             end_q: Where the cycle ends at rest after the place (a retreat), shape (6,) [rad];
                 None: it ends at the place contact.
         """
-        s0 = JointState.at_rest(as_joint_vector(start_q, "start_q"))
-        a = self._segment(s0, pick_q, pick_qd, "bound_pick")
-        b = self._segment(a.end, place_q, None, "bound_place")
-        return a.duration + b.duration + self._end_bound(place_q, end_q)
+        q0 = as_joint_vector(start_q, "start_q")
+        if pick_qd is None or not as_joint_vector(pick_qd, "pick_qd").any():
+            motion = self._rest_moves(q0, (pick_q, "bound_pick"), (place_q, "bound_place"))[0]
+        else:
+            t_pick, at_pick = self._move(JointState.at_rest(q0), pick_q, pick_qd, "bound_pick")
+            motion = t_pick + self._move(at_pick, place_q, None, "bound_place")[0]
+        return motion + self._end_bound(place_q, end_q)
 
     def cycle_bound(  # noqa: PLR0917
         self,
@@ -927,17 +971,17 @@ class PickPlacePlanner:
                 [rad]; None: it ends at the place contact.
         """
         s0 = JointState.at_rest(as_joint_vector(start_q, "start_q"))
-        a = self._segment(s0, pick_q, pick_qd, "bound_pick")
-        held = hold_segment(a.end, pick_dwell, "bound_dwell")
-        b = self._segment(held.end, place_q, None, "bound_place")
+        t_pick, at_pick = self._move(s0, pick_q, pick_qd, "bound_pick")
+        held = hold_segment(at_pick, pick_dwell, "bound_dwell")
+        t_place, _ = self._move(held.end, place_q, None, "bound_place")
         dwells = pick_dwell + self.config.cycle.place_dwell
-        return a.duration + b.duration + dwells + self._end_bound(place_q, end_q)
+        return t_pick + t_place + dwells + self._end_bound(place_q, end_q)
 
     def _end_bound(self, place_q: Array, end_q: Array | None) -> float:
         """Time-optimal rest-to-rest move from the place contact to ``end_q`` [s] (0 if None)."""
         if end_q is None:
             return 0.0
-        return self._segment(JointState.at_rest(place_q), end_q, None, "bound_end").duration
+        return self._rest_moves(as_joint_vector(place_q, "place_q"), (end_q, "bound_end"))[0]
 
     def plan_move(self, start: JointState, q: npt.ArrayLike, label: str = "move") -> Piecewise:
         """Time-optimal move from ``start`` to rest at ``q`` (6,) [rad] (e.g. back home).

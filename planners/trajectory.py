@@ -42,24 +42,29 @@ def as_joint_vector(value: npt.ArrayLike, name: str) -> Array:
     arr = np.asarray(value, dtype=np.float64)
     if arr.shape != (N_JOINTS,):
         raise InvalidTargetError(f"{name} must have shape ({N_JOINTS},), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise InvalidTargetError(f"{name} must be finite, got {arr.tolist()}")
     return arr
 
 
-def check_in_range(q: Array, limits: JointLimits, name: str, margin: float = 0.0) -> None:
+def check_in_range(
+    q: Array | list[float], limits: JointLimits, name: str, margin: float = 0.0
+) -> None:
     """Raise `LimitError` if configuration ``q`` [rad] leaves the joint ranges (plus ``margin``).
 
     Raises:
         LimitError: Names the joint, its value and its range in degrees.
     """
-    lo = np.asarray(limits.lower) - margin
-    hi = np.asarray(limits.upper) + margin
-    bad = np.flatnonzero((q < lo) | (q > hi))
-    if bad.size:
-        i = int(bad[0])
+    values = q.tolist() if isinstance(q, np.ndarray) else q
+    bad = [
+        i
+        for i, (v, lo, hi) in enumerate(zip(values, limits.lower, limits.upper, strict=True))
+        if v < lo - margin or v > hi + margin
+    ]
+    if bad:
+        i = bad[0]
         raise LimitError(
-            f"{name}: joint {i + 1} at {math.degrees(q[i]):.3f} deg is outside its range "
+            f"{name}: joint {i + 1} at {math.degrees(values[i]):.3f} deg is outside its range "
             f"[{math.degrees(limits.lower[i]):.1f}, {math.degrees(limits.upper[i]):.1f}] deg"
         )
 
@@ -85,8 +90,20 @@ def unwrap_target(
         InvalidTargetError: Non-finite input.
         LimitError: No equivalent angle of a wrapping joint lies inside its range.
     """
-    a = as_joint_vector(q_from, "q_from")
-    b = as_joint_vector(q_to, "q_to").copy()
+    a = as_joint_vector(q_from, "q_from").tolist()
+    b = as_joint_vector(q_to, "q_to").tolist()
+    return np.array(unwrap_values(a, b, limits, joints))
+
+
+def unwrap_values(
+    q_from: list[float], q_to: list[float], limits: JointLimits, joints: Sequence[int] = (3, 5)
+) -> list[float]:
+    """`unwrap_target` on validated plain lists of 6 angles [rad]: returns a new list.
+
+    Raises:
+        LimitError: No equivalent angle of a wrapping joint lies inside its range.
+    """
+    a, b = q_from, list(q_to)
     for j in joints:
         lo, hi = limits.lower[j], limits.upper[j]
         k_lo = math.ceil((lo - b[j]) / _TWO_PI)
@@ -617,5 +634,6 @@ __all__ = [
     "peak_usage",
     "plan_segment",
     "unwrap_target",
+    "unwrap_values",
     "validate",
 ]

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import json
 import math
 import time
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -167,3 +169,32 @@ def test_qp_path_meets_the_configured_orientation_tolerance(pos: list[float], ya
     angle = Rotation.from_matrix(tool_down_rotation(yaw).T @ r).magnitude()
     assert math.degrees(angle) <= CFG.ik.orientation_tolerance_deg
     assert sol.orientation_error == pytest.approx(angle, abs=1e-6)
+
+
+REFERENCE = Path(__file__).parent / "data" / "ik_reference_solutions.json"
+
+
+@pytest.mark.parametrize("case", ["arm", "tilted_tool"])
+def test_solutions_match_the_recorded_reference(case: str) -> None:
+    """Same q (to 1e-12 rad), iterations and attempts as the solver before its fast path.
+
+    Each recorded sequence is replayed on one fresh solver (the memory of known solutions
+    steers the seeds): 'arm' exercises the geometric guess, 'tilted_tool' mink's QP path.
+    """
+    rows = json.loads(REFERENCE.read_text())[case]
+    solver = (
+        IKSolver(config=CFG.ik, limits=CFG.limits)
+        if case == "arm"
+        else _tilted_tool_solver(tilt_deg=3.0, offset=0.004)
+    )
+    solved = 0
+    for row in rows:
+        if row["q"] is None:
+            with pytest.raises(UnreachableError):
+                solver.solve(row["position"], row["yaw"], seed=row["seed"])
+            continue
+        sol = solver.solve(row["position"], row["yaw"], seed=row["seed"])
+        np.testing.assert_allclose(sol.q, row["q"], rtol=0.0, atol=1e-12)
+        assert (sol.iterations, sol.attempts) == (row["iterations"], row["attempts"])
+        solved += 1
+    assert solved >= 0.7 * len(rows)
