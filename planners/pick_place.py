@@ -617,7 +617,8 @@ class PickPlacePlanner:
         """
         target = a.copy()
         idx = list(self.config.cycle.lead_joints)
-        target[idx] = unwrap_target(a, b, self.limits, self._wrap)[idx]
+        # b's own turn of a wrapping joint: the vertical move after the bridge starts there.
+        target[idx] = b[idx]
         lim = _share(self.limits, self._share, frame_qd)
         return plan_segment(
             JointState.at_rest(a), target, lim, label="bridge", min_duration=min_duration
@@ -869,6 +870,14 @@ class PickPlacePlanner:
         # Approach points straight above the contacts (the belt's motion is superposed).
         pick_in_q = self._solve(pick_c + up, pick_yaw, pick_q)
         lift_q = self._solve(pick_end + up, pick_yaw, pick_end_q)
+        # A wrapping joint (joint 6) may reach the place on any of its turns: the bridge takes
+        # the turn nearest the lift, so the approach point and the contact take that same turn
+        # (the vertical descent starts where the bridge ends).
+        # (If the contact would leave the joint's range on that turn, both keep the IK's turn.)
+        turn = unwrap_target(lift_q, place_in_q, self.limits, self._wrap) - place_in_q
+        lo, hi = np.asarray(self.limits.lower), np.asarray(self.limits.upper)
+        if turn.any() and np.all((place_q + turn >= lo) & (place_q + turn <= hi)):
+            place_q, place_in_q = place_q + turn, place_in_q + turn
         # Drift limits: the empty pad only clears the tile tops, a held tile its own thickness.
         empty, loaded = c.empty_clearance_height, c.lateral_clearance_height
         pick_in = _Contact(pick_c, belt, pick_q, belt_qd, pick_in_q, empty)

@@ -310,3 +310,35 @@ def test_carried_tile_pull_is_its_load_not_the_pad_contact() -> None:
         assert max(carried) <= 5.0 * weight
     finally:
         cell.close()
+
+
+def test_wrapping_joint_keeps_one_turn_through_the_cycle(planner: PickPlacePlanner) -> None:
+    """The transfer and the descent agree on joint 6's turn: the trajectory is continuous.
+
+    Recorded from the moving-belt cell (seed 14, ninth cycle): the transfer to the place's
+    approach point took joint 6 to -306 deg (nearest to the lift), while the descent started
+    from the IK's +54 deg; the servo was commanded a full turn in one sample and the tile was
+    set down spinning, 34 deg off.
+    """
+    start = JointState.at_rest(
+        np.array([-1.71687025, 0.71818514, 0.00186442, -1.5e-09, 0.85074658, 0.71924601])
+    )
+    plan = planner.plan_cycle(
+        start,
+        [-0.07700219, 0.47815151, 0.205],
+        [-0.02875, -0.52875, 0.207],
+        0.03426113,
+        object_yaw=0.75113704,
+        belt_velocity=(0.1, 0.0, 0.0),
+        start_at_contact=True,
+        end_retreat=False,
+    )
+    dt = 0.001
+    t = np.arange(0.0, plan.duration, dt)
+    q = np.array([plan.trajectory.at(float(ti))[0] for ti in t])
+    step = np.abs(np.diff(q, axis=0)).max(axis=0)
+    assert np.all(step <= np.asarray(CFG.limits.max_velocity) * dt * 1.01 + 1e-9), np.degrees(step)
+    end = plan.trajectory.at(plan.vacuum_off)[0]
+    assert np.allclose(end, plan.place_q, atol=1e-6)
+    yaw_turn = IKSolver.yaw_of(planner.ik.fk(end)[1]) - plan.pick_yaw
+    assert abs(math.remainder(yaw_turn - 0.03426113, 2 * math.pi)) < math.radians(0.5)
