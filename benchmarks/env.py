@@ -45,8 +45,10 @@ import os
 import platform
 import resource
 import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 OUT = Path(__file__).resolve().parents[1] / "out" / "bench_env.json"
 OUT_RESETS = OUT.with_name("bench_env_resets.json")
@@ -76,6 +78,49 @@ def _scripted(env: Any, step: int) -> Any:
     return env.unwrapped.expert_action(i, i)
 
 
+@dataclass
+class _Run:
+    """What `_play` measured: step counts and times [s]; episode ends and reset times."""
+
+    steps: int = 0
+    wall: float = 0.0  # inside env.step
+    cpu: float = 0.0  # inside env.step, this process
+    placed: int = 0  # tiles placed over the finished episodes
+    sim: float = 0.0  # simulated time of the finished episodes
+    reset_s: list[float] = field(default_factory=list)  # wall time of each reset after one
+
+
+def _play(
+    env: Any,
+    seconds: float,
+    scripted: bool = True,
+    budget: Literal["wall", "cpu"] = "wall",
+    reset: Callable[[], Any] | None = None,
+) -> _Run:
+    """Step ``env`` (already reset) until ``seconds`` of step time (wall or CPU) are spent.
+
+    Actions: the privileged correct one (`_scripted`) or random samples. At an episode's end
+    ``reset`` (default ``env.reset``) runs outside the step timers.
+    """
+    run, k = _Run(), 0
+    while (run.wall if budget == "wall" else run.cpu) < seconds:
+        action = _scripted(env, k) if scripted else env.action_space.sample()
+        t, c = time.perf_counter(), time.process_time()
+        _, _, term, trunc, info = env.step(action)
+        run.wall += time.perf_counter() - t
+        run.cpu += time.process_time() - c
+        run.steps += 1
+        k += 1
+        if term or trunc:
+            run.placed += info["tiles_placed"]
+            run.sim += info["sim_time"]
+            t = time.perf_counter()
+            (reset or env.reset)()
+            run.reset_s.append(time.perf_counter() - t)
+            k = 0
+    return run
+
+
 def _measure(mode: str, execution: str, obs_mode: str, seconds: float, queue: mp.Queue) -> None:
     """Child process: build one env, step it for ``seconds``, report speed and memory."""
     os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
@@ -96,23 +141,10 @@ def _measure(mode: str, execution: str, obs_mode: str, seconds: float, queue: mp
     env.action_space.seed(0)
     t_reset = time.perf_counter()
     env.reset(seed=0)
-    reset_s = [time.perf_counter() - t_reset]
-    steps, busy, cpu, k, placed, sim = 0, 0.0, 0.0, 0, 0, 0.0
-    while busy < seconds:
-        action = _scripted(env, k) if picks else env.action_space.sample()
-        t, c = time.perf_counter(), time.process_time()
-        _, _, term, trunc, info = env.step(action)
-        busy += time.perf_counter() - t
-        cpu += time.process_time() - c
-        steps += 1
-        k += 1
-        if term or trunc:
-            placed += info["tiles_placed"]
-            sim += info["sim_time"]
-            t = time.perf_counter()
-            env.reset()
-            reset_s.append(time.perf_counter() - t)
-            k = 0
+    first_reset_s = time.perf_counter() - t_reset
+    run = _play(env, seconds, picks)
+    steps, busy, cpu = run.steps, run.wall, run.cpu
+    reset_s = [first_reset_s, *run.reset_s]
     rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     env.close()
     queue.put(
@@ -125,7 +157,7 @@ def _measure(mode: str, execution: str, obs_mode: str, seconds: float, queue: mp
             "steps_per_cpu_s": steps / cpu if cpu > 0 else math.nan,
             "ms_per_step": 1e3 * busy / steps,
             "reset_ms": 1e3 * sum(reset_s) / len(reset_s),
-            "tiles_per_min_sim": 60.0 * placed / sim if sim > 0 else math.nan,
+            "tiles_per_min_sim": 60.0 * run.placed / run.sim if run.sim > 0 else math.nan,
             "peak_rss_mb": rss1,
             "env_rss_mb": rss1 - rss0,
         }
@@ -152,20 +184,15 @@ def _decision(seconds: float, samples: int, queue: mp.Queue) -> None:
         cell={"render": {"samples": samples}},
     )
     env.reset(seed=0)
-    steps, busy, cpu, k = 0, 0.0, 0.0, 0
-    while busy < seconds:
-        action = _scripted(env, k)
-        t, c = time.perf_counter(), time.process_time()
-        _, _, term, trunc, _ = env.step(action)
-        busy += time.perf_counter() - t
-        cpu += time.process_time() - c
-        steps += 1
-        k += 1
-        if term or trunc:
-            env.reset()
-            k = 0
+    run = _play(env, seconds)
     env.close()
-    queue.put({"steps_per_s": steps / busy, "steps_per_cpu_s": steps / cpu, "steps": steps})
+    queue.put(
+        {
+            "steps_per_s": run.steps / run.wall,
+            "steps_per_cpu_s": run.steps / run.cpu,
+            "steps": run.steps,
+        }
+    )
 
 
 def _resets(max_slots: int, queue: mp.Queue) -> None:
@@ -268,24 +295,18 @@ def _sections(decision: bool, seconds: float, queue: mp.Queue) -> None:
     for label, owner, name in SECTIONS:
         obj = owners[owner]
         setattr(obj, name, timed(label, getattr(obj, name)))
+
+    def reset() -> None:
+        after = dict(spent)
+        env.reset()
+        spent.update(after)  # a reset's calls are not a step's
+
     env.reset(seed=0)
-    steps, cpu, k = 0, 0.0, 0
-    while cpu < seconds:
-        action = _scripted(env, k)
-        c = time.process_time()
-        _, _, term, trunc, _ = env.step(action)
-        cpu += time.process_time() - c
-        steps += 1
-        k += 1
-        if term or trunc:
-            after = dict(spent)
-            env.reset()
-            spent.update(after)  # a reset's calls are not a step's
-            k = 0
+    run = _play(env, seconds, budget="cpu", reset=reset)
     env.close()
-    ms = {key: 1e3 * v / steps for key, v in spent.items()}
-    ms["rest"] = 1e3 * cpu / steps - sum(ms.values())
-    queue.put({"steps": steps, "ms_per_step": 1e3 * cpu / steps, "sections_ms": ms})
+    ms = {key: 1e3 * v / run.steps for key, v in spent.items()}
+    ms["rest"] = 1e3 * run.cpu / run.steps - sum(ms.values())
+    queue.put({"steps": run.steps, "ms_per_step": 1e3 * run.cpu / run.steps, "sections_ms": ms})
 
 
 def _child(target: Any, *args: Any) -> Any:
