@@ -118,9 +118,16 @@ def _classify(
     return (None, None) if best is None else (best[1], best[2])
 
 
-def _rot_error_deg(m: Any, expected: float, symmetry: int) -> float:
+def _rot_error_deg(m: Any, rep_angle_deg: float, tile: Any) -> float:
+    """Rotation error [deg] of match ``m`` against a drawn tile, modulo the tile's symmetry.
+
+    ``rep_angle_deg``: the angle of the reference figure matched; ``tile``: the drawn tile
+    (its angle [rad] and slot symmetry).
+    """
+    symmetry = tile.slot.symmetry
     if symmetry == 0 or m.continuous:
         return 0.0
+    expected = wrap_angle(math.radians(rep_angle_deg) - tile.angle)
     period = 2.0 * math.pi / symmetry
     return min(abs(math.degrees(math.remainder(r - expected, period))) for r in m.rotations)
 
@@ -165,9 +172,7 @@ def run_level(  # noqa: PLR0917
             c["shape_none"] += key is None
             ok_rot = False
             if ok_shape:
-                rep = refs.shape[key]  # type: ignore[index]
-                expected = wrap_angle(math.radians(rep.angle) - t.angle)
-                err = _rot_error_deg(m, expected, t.slot.symmetry)
+                err = _rot_error_deg(m, refs.shape[key].angle, t)  # type: ignore[index]
                 rot_errs.append(err)
                 ok_rot = err <= bp.rotation_tol_deg
             c["shape_and_rotation"] += ok_shape and ok_rot

@@ -35,7 +35,7 @@ from qshape import Description, Tolerances, describe, match
 from qshape.design import Design
 from qshape.effects import CameraEffects, undistort, undistort_points
 from qshape.extract import ExtractParams, extract_detailed
-from qshape.geometry import FloatArray, wrap_angle
+from qshape.geometry import FloatArray
 from qshape.synth import SynthParams, generate
 
 from .vision import _Refs, _rot_error_deg
@@ -189,9 +189,7 @@ def run_level(  # noqa: PLR0914, PLR0915, PLR0917
                     failures.append(f"{name}: {t.slot.shape_key} taken for {key}")
                 ok_rot = False
                 if ok:
-                    rep = classes.slot[key]  # type: ignore[index]
-                    expected = wrap_angle(math.radians(rep.angle) - t.angle)
-                    err = _rot_error_deg(m, expected, t.slot.symmetry)
+                    err = _rot_error_deg(m, classes.slot[key].angle, t)  # type: ignore[index]
                     rot_errs.append(err)
                     ok_rot = err <= bench.rotation_tol_deg
                 c["class_and_rotation"] += ok and ok_rot
