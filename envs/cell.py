@@ -100,6 +100,8 @@ class Cell:
         self.variant = np.zeros(n, int)
         """Variant of each tile in this episode, shape (n,)."""
         self._select(self.variant, self.tile_pool[0])
+        self._tile_trees = self.model.body_treeid[self.ids.tile_body]
+        """Kinematic tree of each tile, shape (n,)."""
         self.lost_tracker = LostTracker(self.cfg, n)
         self.cameras = CameraRig(  # renderers open lazily; lenses from the camera configs
             self.model,
@@ -204,7 +206,56 @@ class Cell:
         d.ctrl[ids.pos_actuators] = home
         d.ctrl[ids.vel_actuators] = 0.0
         self.feed.start_episode(self._rng)
+        if self.cfg.physics.sleep:
+            self._start_asleep()
         mujoco.mj_forward(m, d)
+
+    def _start_asleep(self) -> None:
+        """Start the tiles laid out at rest asleep (parked ones, and on a still belt all).
+
+        A tile laid at its contact height is at rest, but MuJoCo keeps every tree awake for
+        its first sleep countdown, and the tiles' contacts are most of an episode's physics
+        cost. MuJoCo's supported way to start trees asleep is the ``init`` sleep policy,
+        applied by `mj_resetData` at the model's ``qpos0``: both are set for this call only
+        (the layout becomes ``qpos0``), then restored. Tiles on a moving belt stay awake (they
+        must notice the belt's surface speed). A sleeping tile whose pose is written later
+        (picked, fed, parked) is woken by MuJoCo's own check of its positions.
+        """
+        m, d = self.model, self.data
+        asleep = ~self.on_stage if self.belt_speed != 0.0 else np.ones(len(self.on_stage), bool)
+        if not asleep.any():
+            return
+        trees = self._tile_trees[asleep]
+        qpos0, policy, ctrl = m.qpos0.copy(), m.tree_sleep_policy.copy(), d.ctrl.copy()
+        m.qpos0[:] = d.qpos
+        m.tree_sleep_policy[trees] = mujoco.mjtSleepPolicy.mjSLEEP_INIT
+        try:
+            mujoco.mj_resetData(m, d)
+        finally:
+            m.qpos0[:] = qpos0
+            m.tree_sleep_policy[:] = policy
+        d.ctrl[:] = ctrl
+        self.suction.reset(d)
+        self._wake[asleep] = False
+
+    def sleep_still_tiles(self) -> None:
+        """Let the tiles now under the sleep tolerance fall asleep at the next physics step.
+
+        MuJoCo puts a tree to sleep once it has stayed under ``physics.sleep_tolerance`` for a
+        countdown of physics steps; this ends the countdown of the tiles still now. MuJoCo
+        checks the tolerance again, over each tile's whole contact island, at that step. For
+        kinematic execution, whose released tiles are set down within one step.
+        """
+        if not self.cfg.physics.sleep:
+            return
+        d, trees = self.data, self._tile_trees
+        counting = np.flatnonzero(d.tree_asleep[trees] < -1)
+        if not len(counting):
+            return
+        dof = self.ids.tile_dof_index[counting]
+        speed = np.abs(d.qvel[dof]) * self.model.dof_length[dof]
+        still = counting[speed.max(axis=1) < self.model.opt.sleep_tolerance]
+        d.tree_asleep[trees[still]] = -1
 
     def place_tiles(self, idx: np.ndarray, poses: np.ndarray) -> None:
         """Put tiles at (x, y, yaw) poses relative to the tile area's centre, at rest.
@@ -440,8 +491,9 @@ class Cell:
 
     @belt_speed.setter
     def belt_speed(self, speed: float) -> None:
+        if speed != self.belt_speed:  # sleeping tiles would not notice a new speed
+            self._wake |= self.on_stage
         set_input_speed(self.model, self.ids, speed)
-        self._wake |= self.on_stage  # sleeping tiles would not notice the new speed
 
     def warnings(self) -> int:
         """Total count of MuJoCo warnings raised so far (should stay 0)."""

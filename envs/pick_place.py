@@ -3,8 +3,11 @@
 ``dynamic``: the planners' time-optimal cycle is played by `planners.executor` (servo feed-
 forward at every physics step), the vacuum switched at the plan's seal and release times.
 ``kinematic``: the arm is put (qpos, no dynamics) at the pick contact, the vacuum seals, then at
-the place contact (the held tile moves with the pad), the vacuum releases, the arm is put at
-the approach point above, and physics settles the released tile for ``kinematic_settle``.
+the place contact (the held tile moves with the pad, and is set down on the surface: the pad as
+far below the place height as it pressed at the pick, where a dynamic cycle releases it
+``place_gap`` above and lets it drop), the vacuum releases, the arm is put at the approach point
+above, and physics settles the released tile for ``kinematic_settle``; tiles then at rest end
+their sleep countdown (`Cell.sleep_still_tiles`), so a step simulates only what still moves.
 Simulated time advances by the planners' lower bound of the cycle plus the pick and place
 dwells (tiles on a moving belt do not move during that jump).
 """
@@ -153,7 +156,8 @@ class PickPlaceExecutor:
         tool_yaw = IKSolver.yaw_of(cell.tcp_pose()[1])
         q_pick = self.ik.solve(pick - [0.0, 0.0, c.pick_press], tool_yaw, seed=q0).q
         place_yaw = tool_yaw + rotation
-        q_place = self.ik.solve(place + [0.0, 0.0, c.place_gap], place_yaw, seed=q_pick).q
+        # Set down, not dropped: the tile's bottom on the surface (it hangs pick_press lower).
+        q_place = self.ik.solve(place - [0.0, 0.0, c.pick_press], place_yaw, seed=q_pick).q
         q_up = self._lift(q_place, c.approach_height)
         duration = self.planner.lower_bound(q0, q_pick, q_place) + c.pick_dwell + c.place_dwell
         self._put_arm(q_pick)  # `vacuum` updates the kinematics before its seal check
@@ -165,6 +169,7 @@ class PickPlaceExecutor:
         self._put_arm(q_up if grasped >= 0 else q_pick)
         cell.data.time += duration
         cell.step(self._settle)
+        cell.sleep_still_tiles()
         if grasped < 0:
             return ActionResult(True, "no tile sealed at the pick")
         return ActionResult(grasped=grasped)

@@ -24,9 +24,15 @@ from envs.errors import CellError
 from envs.tiles import PhysicalTile, SlotSpec
 
 # Contact bit masks: world/belts 1, tiles 2, arm 4 (the arm's classes set contype 4,
-# conaffinity 1 in irb140.xml). Tiles touch everything; the arm touches world and tiles.
+# conaffinity 1 in irb140.xml), support hulls 8. Tiles touch everything; the arm touches world
+# and tiles. A tile made of several convex pieces touches the world (belts, mesh sheet, floor,
+# bin) with one convex hull instead (`SUPPORT_CONTYPE`), its pieces only tiles and the arm.
 WORLD_CONTYPE, WORLD_CONAFFINITY = 1, 1
 TILE_CONTYPE, TILE_CONAFFINITY = 2, 7
+PIECE_CONAFFINITY = TILE_CONAFFINITY & ~WORLD_CONTYPE
+"""Pieces of a tile with a support hull: tiles and arm, not the world."""
+SUPPORT_CONTYPE, SUPPORT_CONAFFINITY = 8, WORLD_CONTYPE
+"""Support hull of a tile of several pieces: the world only."""
 PARK_SPACING = 0.08
 """Grid spacing of parked (not yet fed) tiles on the floor far from the cell [m]."""
 PARK_ORIGIN = np.array([-6.0, -1.0])
@@ -461,6 +467,33 @@ def tile_name(tile: int, variant: int = 0) -> str:
     return f"tile{tile}" if variant == 0 else f"tile{tile}v{variant}"
 
 
+def _add_prism(
+    spec: mujoco.MjSpec,
+    body: mujoco.MjsBody,
+    cfg: CellConfig,
+    polygon: np.ndarray,
+    *,
+    names: tuple[str, str],
+) -> mujoco.MjsGeom:
+    """A hidden collision geom: convex ``polygon`` (k, 2) [m] extruded over the tile thickness.
+
+    ``names``: the mesh's and the geom's.
+    """
+    t, m = cfg.tiles.thickness, len(polygon)
+    bottom = np.column_stack([polygon, np.full(m, -t / 2)])
+    verts = np.vstack([bottom, bottom + [0.0, 0.0, t]])
+    mesh_name, geom_name = names
+    mesh = spec.add_mesh(name=mesh_name)
+    mesh.uservert = verts.ravel().tolist()
+    g = body.add_geom(name=geom_name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh_name)
+    g.rgba = [*cfg.tiles.body_color, 1.0]
+    g.friction = [cfg.tiles.friction, 0.005, 0.0001]
+    g.condim = 4
+    g.solref = list(CONTACT_SOLREF)
+    g.group = 3  # collision, hidden; the visuals show the true (concave) shape
+    return g
+
+
 def _add_tiles(
     spec: mujoco.MjSpec, cfg: CellConfig, tiles: Sequence[PhysicalTile], variants: int
 ) -> None:
@@ -481,28 +514,20 @@ def _add_tiles(
     for j, tile in enumerate(tiles):
         name = tile_name(j % n, j // n)
         body = bodies[j % n] if variants == 1 else bodies[j % n].add_body(name=f"{name}_shape")
+        pieces = len(tile.pieces)
         for k, piece in enumerate(tile.pieces):
-            m = len(piece)
-            verts = np.vstack(
-                [
-                    np.column_stack([piece, np.full(m, -t / 2)]),
-                    np.column_stack([piece, np.full(m, t / 2)]),
-                ]
-            )
-            mesh = spec.add_mesh(name=f"{name}_piece{k}")
-            mesh.uservert = verts.ravel().tolist()
-            g = body.add_geom(
-                name=f"{name}_geom{k}",
-                type=mujoco.mjtGeom.mjGEOM_MESH,
-                meshname=f"{name}_piece{k}",
-            )
+            g = _add_prism(spec, body, cfg, piece, names=(f"{name}_piece{k}", f"{name}_geom{k}"))
             g.density = cfg.tiles.density
-            g.rgba = [*cfg.tiles.body_color, 1.0]
-            g.friction = [cfg.tiles.friction, 0.005, 0.0001]
-            g.contype, g.conaffinity = TILE_CONTYPE, TILE_CONAFFINITY
-            g.condim = 4
-            g.solref = list(CONTACT_SOLREF)
-            g.group = 3  # collision, hidden; the visuals below show the true (concave) shape
+            g.contype = TILE_CONTYPE
+            g.conaffinity = TILE_CONAFFINITY if pieces == 1 else PIECE_CONAFFINITY
+        if pieces > 1:
+            # A flat tile on a flat support touches it over its outline's convex hull: one hull
+            # gives that support with a few contacts where the pieces gave a few each (a holed
+            # square: 4 instead of ~150). Massless; the pieces carry the mass.
+            hull = np.asarray(Polygon(tile.outline).convex_hull.exterior.coords)[:-1]
+            g = _add_prism(spec, body, cfg, hull, names=(f"{name}_hull", f"{name}_support"))
+            g.density = 0.0
+            g.contype, g.conaffinity = SUPPORT_CONTYPE, SUPPORT_CONAFFINITY
         # Visuals: the ceramic body and the coloured glaze on the top face (massless).
         glaze = cfg.tiles.glaze_thickness
         for part, z0, z1, rgba in (

@@ -13,14 +13,15 @@ from envs.tile_shapes import basic_shapes
 SHAPES = basic_shapes()
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def cell() -> Cell:
+    """A fresh cell per test: a test's outcome must not depend on which ran before it."""
     c = Cell(None, SHAPES, seed=3)
     yield c
     c.close()
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def ik(cell: Cell) -> ArmIK:
     return ArmIK(cell)
 
