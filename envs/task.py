@@ -26,7 +26,6 @@ from envs.cell import Cell
 from envs.env_config import EnvConfig
 from envs.errors import CellError
 from envs.rewards import STAGES, StagedReward, load_staged_config
-from planners.angles import yaw_error
 
 REWARD_TERMS = (
     "correct",
@@ -202,6 +201,10 @@ class MosaicTask:
         self._rest_z = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2
         self._yaw_tol = math.radians(config.yaw_tolerance_deg)
         self._flat = math.cos(math.radians(config.max_tilt_deg))
+        self._real = ~self.distractor
+        self._turns = self.symmetry > 0  # 0: continuous symmetry, yaw error 0
+        self._period = 2.0 * math.pi / np.maximum(self.symmetry, 1)
+        self._slot_x, self._slot_y = self.slot_xyyaw[None, :, 0], self.slot_xyyaw[None, :, 1]
         self._base_light = cell.model.light_diffuse.copy()
         self._camera_jitter = CameraJitter(
             cell.model, [cell.ids.input_camera, cell.ids.output_camera]
@@ -281,7 +284,8 @@ class MosaicTask:
         on_mesh &= cell.on_stage
         if cell.held_tile >= 0:
             on_mesh[cell.held_tile] = False
-        up = 1 - 2 * (q[:, 4] ** 2 + q[:, 5] ** 2)  # z component of the tile's z axis
+        qx, qy = q[:, 4], q[:, 5]
+        up = 1 - 2 * (qx * qx + qy * qy)  # z component of the tile's z axis
         flat = on_mesh & (dz <= tol) & (up > self._flat)
         slot = np.full(n, -1)
         perr = np.full(n, np.nan)
@@ -290,75 +294,83 @@ class MosaicTask:
         filled = np.zeros(k, bool)
         idx = np.flatnonzero(on_mesh)
         if k and len(idx):
-            w, qz = q[idx, 3], q[idx, 6]
-            yaw = np.arctan2(2 * (w * qz + q[idx, 4] * q[idx, 5]), 1 - 2 * (q[idx, 5] ** 2 + qz**2))
-            dx = x[idx, None] - self.slot_xyyaw[None, :, 0]
-            dy = y[idx, None] - self.slot_xyyaw[None, :, 1]
+            qi = q[idx]
+            w, qz = qi[:, 3], qi[:, 6]
+            yaw = np.arctan2(2 * (w * qz + qi[:, 4] * qi[:, 5]), 1 - 2 * (qi[:, 5] ** 2 + qz**2))
+            dx = qi[:, :1] - self._slot_x
+            dy = qi[:, 1:2] - self._slot_y
             dist = np.sqrt(dx * dx + dy * dy)
             nearest = dist.argmin(axis=1)
-            slot[idx] = nearest
-            perr[idx] = dist[np.arange(len(idx)), nearest]
-            yerr[idx] = yaw_error(yaw, self.slot_xyyaw[nearest, 2], self.symmetry[idx])
+            err = dist[np.arange(len(idx)), nearest]
+            # |yaw - slot yaw| modulo each tile's symmetry period (`planners.angles.yaw_error`).
+            period = self._period[idx]
+            d = yaw - self.slot_xyyaw[nearest, 2]
+            yerr_i = np.where(self._turns[idx], np.abs((d + period / 2) % period - period / 2), 0.0)
+            slot[idx], perr[idx], yerr[idx] = nearest, err, yerr_i
             ok = (
                 flat[idx]
                 & (self.tile_class[idx] == self.slot_class[nearest])
-                & ~self.distractor[idx]
-                & (perr[idx] <= self.cfg.position_tolerance)
-                & (yerr[idx] <= self._yaw_tol)
+                & self._real[idx]
+                & (err <= self.cfg.position_tolerance)
+                & (yerr_i <= self._yaw_tol)
             )
-            # One tile per slot: the closest correct tile fills it, others are misplaced.
             cand = np.flatnonzero(ok)
-            cand = cand[np.argsort(perr[idx[cand]], kind="stable")]
-            _, first = np.unique(nearest[cand], return_index=True)
-            winners = cand[first]
-            filled[nearest[winners]] = True
-            correct[idx[winners]] = True
+            if len(cand):
+                # One tile per slot: the closest correct tile fills it, others are misplaced.
+                cand = cand[np.lexsort((err[cand], nearest[cand]))]
+                s = nearest[cand]
+                first = np.ones(len(cand), bool)
+                first[1:] = s[1:] != s[:-1]
+                filled[s[first]] = True
+                correct[idx[cand[first]]] = True
         return Placement(on_mesh, flat, slot, perr, yerr, correct, filled)
 
     def evaluate(self) -> Evaluation:
         """The task's state now (also ``info["evaluation"]``, as a dict)."""
         p = self.placement()
         cell = self.cell
-        real = ~self.distractor
         states = self.tile_states(p)
         counts_by_state = state_counts(states)
-        distractors = int(np.sum(p.on_mesh & self.distractor))
+        distractors = int(np.count_nonzero(p.on_mesh & self.distractor))
         # Tiles still available: real tiles on the input belt, held or waiting to be fed
         # (pick areas cover the input belt only).
         avail = (states == ON_INPUT) | (states == WAITING)
-        if cell.held_tile >= 0 and real[cell.held_tile]:
-            avail[cell.held_tile] = True
-        open_classes = self.slot_class[~p.slot_filled]
+        held = cell.held_tile
+        if held >= 0 and self._real[held]:
+            avail[held] = True
+        filled = p.slot_filled
         counts = np.bincount(self.tile_class[avail], minlength=len(self.class_names))
-        need = np.bincount(open_classes, minlength=len(self.class_names))
+        need = np.bincount(self.slot_class[~filled], minlength=len(self.class_names))
         placeable = int(np.minimum(counts, need).sum())
         on = p.on_mesh
+        n_on = int(np.count_nonzero(on))
         pe = p.position_error[on] * MM_PER_M
         ye = np.degrees(p.yaw_error[on])
-        success = bool(p.slot_filled.all()) and len(p.slot_filled) > 0
+        n_filled = int(np.count_nonzero(filled))
+        success = n_filled == len(filled) and len(filled) > 0
         return Evaluation(
             success=success,
             failure=not success and placeable == 0,
-            correct=int(p.slot_filled.sum()),
+            correct=n_filled,
             misplaced=counts_by_state["misplaced"],
             dropped=int(cell.n_dropped),
             stranded=counts_by_state["stranded"],
             lost=int(cell.n_lost),
-            fed=int(np.sum(states >= 0)),
-            waiting=int(np.sum(states == WAITING)),
+            fed=int(np.count_nonzero(states >= 0)),
+            waiting=int(np.count_nonzero(states == WAITING)),
             on_input=counts_by_state["on_input"],
             held=counts_by_state["held"],
             dropped_tiles=counts_by_state["dropped_tiles"],
             lost_tiles=counts_by_state["lost_tiles"],
             rejected=counts_by_state["rejected"],
             distractors_placed=distractors,
-            slots=len(p.slot_filled),
-            slot_filled=tuple(bool(v) for v in p.slot_filled),
+            slots=len(filled),
+            slot_filled=tuple(filled.tolist()),
             placeable=placeable,
-            position_error_mm=float(pe.mean()) if pe.size else None,
-            position_error_mm_max=float(pe.max()) if pe.size else None,
-            yaw_error_deg=float(ye.mean()) if ye.size else None,
-            yaw_error_deg_max=float(ye.max()) if ye.size else None,
+            position_error_mm=float(pe.sum()) / n_on if n_on else None,
+            position_error_mm_max=float(pe.max()) if n_on else None,
+            yaw_error_deg=float(ye.sum()) / n_on if n_on else None,
+            yaw_error_deg_max=float(ye.max()) if n_on else None,
         )
 
     def tile_states(self, placement: Placement | None = None) -> np.ndarray:
