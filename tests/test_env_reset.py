@@ -13,7 +13,7 @@ from shapely.geometry import Polygon
 
 import envs
 from envs.mosaic_env import MosaicAssemblyEnv
-from envs.scene import set_tile_rotation_lengths
+from envs.scene import WAKE_FORCE, set_tile_rotation_lengths
 from envs.variants import CONST_BODY_FIELDS, CONST_DOF_FIELDS
 
 
@@ -52,19 +52,26 @@ def test_reset_lays_every_tile_apart_inside_the_tile_area(env: MosaicAssemblyEnv
 
 
 def test_reset_needs_no_settling(env: MosaicAssemblyEnv) -> None:
-    """Tiles laid at their contact height stay put under physics and fall asleep."""
+    """Tiles laid at their contact height stay put under physics and fall asleep.
+
+    They start asleep (`Cell.reset`); here they are woken for the check, as a touch would.
+    """
     cell = env.cell
     env.reset(seed=5)
     assert cell.time == 0.0  # nothing simulated at reset
     before = cell.tile_poses()
     top = cell.geometry.input_centre[2] + cell.cfg.tiles.thickness / 2
     np.testing.assert_allclose(before.pos[:, 2], top, atol=1e-12)
+    tiles = cell.model.body_treeid[cell.ids.tile_body]
+    cell.data.xfrc_applied[cell.ids.tile_body, 2] = WAKE_FORCE
+    cell.step(1)
+    cell.data.xfrc_applied[cell.ids.tile_body, 2] = 0.0
+    assert np.all(cell.data.tree_asleep[tiles] < 0)  # awake
     cell.step(150)  # 0.3 s holding the arm at home
     after = cell.tile_poses()
     assert np.abs(after.pos[:, :2] - before.pos[:, :2]).max() < 5e-6
     assert np.abs(after.pos[:, 2] - before.pos[:, 2]).max() < 1e-5
     assert np.abs(np.angle(np.exp(1j * (after.yaw - before.yaw)))).max() < 1e-4
-    tiles = cell.model.body_treeid[cell.ids.tile_body]
     assert np.all(cell.data.tree_asleep[tiles] >= 0)  # at rest: asleep
 
 
