@@ -94,7 +94,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ``execution`` (pick_place modes): ``dynamic`` tracks the planned trajectory with the
     servo actuators at every physics step (full physics, suction weld). ``kinematic`` puts the
     arm at the pick, place and retreat poses (qpos, no arm dynamics), the held tile moving
-    with the pad, then settles the released tile briefly. Kinematic mode gives up: arm
+    with the pad and set down on the surface (not dropped from the release gap), then settles
+    the released tile briefly; tiles at rest sleep. Kinematic mode gives up: arm
     dynamics and tracking errors, inertial drops, collisions along the path, tile motion on a
     moving belt during the cycle, and the real cycle time (it charges the planners' lower
     bound plus dwells). Outcomes of clean picks agree with dynamic mode (tested).
