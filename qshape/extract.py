@@ -377,6 +377,32 @@ def _local_fill(
     return out
 
 
+def _grid_at(size: int, cells: int) -> tuple[np.ndarray, np.ndarray]:
+    """Whole pixel and fraction (cells + 1,) of each edge of ``cells`` cells across ``size`` px."""
+    edge = np.arange(cells + 1) * (size / cells)
+    whole = np.minimum(edge.astype(np.intp), size - 1)
+    return whole, edge - whole
+
+
+def _cell_means(img: np.ndarray, gh: int, gw: int) -> np.ndarray:
+    """Mean colour of each cell of a (gh, gw) grid over the image, (gh, gw, 3) float32 levels.
+
+    The area average of ``cv2.resize(..., INTER_AREA)`` (a pixel on a cell edge counts by the
+    share of it inside the cell), rounded to whole levels as that gives them, from the image's
+    integral (one OpenCV pass at any cell size: OpenCV's area resize takes a slow path when a
+    side is not a whole number of cells, e.g. 492 px rows in 30 cells).
+    """
+    h, w = img.shape[:2]
+    total = cv2.integral(img)  # (h + 1, w + 1, 3) int32: sums above and left of each corner
+    iy, ty = _grid_at(h, gh)
+    ix, tx = _grid_at(w, gw)
+    # The integral of a piecewise-constant image is bilinear inside each pixel.
+    rows = total[iy] * (1.0 - ty)[:, None, None] + total[iy + 1] * ty[:, None, None]
+    at = rows[:, ix] * (1.0 - tx)[None, :, None] + rows[:, ix + 1] * tx[None, :, None]
+    box = np.diff(np.diff(at, axis=0), axis=1) * (gh * gw / (h * w))
+    return np.asarray(np.rint(box), dtype=np.float32)
+
+
 def _illumination(
     img: np.ndarray, dominant: np.ndarray, p: ExtractParams
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -391,7 +417,7 @@ def _illumination(
     """
     h, w = img.shape[:2]
     gh, gw = max(2, h // p.illumination_cell_px), max(2, w // p.illumination_cell_px)
-    small = cv2.resize(img, (gw, gh), interpolation=cv2.INTER_AREA).astype(np.float32)
+    small = _cell_means(img, gh, gw)
     dom = dominant.astype(np.float32)
     # The belt under any light is the dominant colour times a gain: compare each cell with
     # the dominant colour brought to the cell's brightness (a tile differs in hue, a shadow
@@ -514,7 +540,7 @@ def _at_half_contrast(
     if count <= 256:  # noqa: PLR2004 (labels fit a byte: one table look-up per pixel)
         table = np.zeros(256, np.uint8)
         table[:count] = np.ceil(level)
-        per_pixel = cv2.LUT(labels.astype(np.uint8), table)
+        per_pixel = cv2.LUT(labels.astype(np.uint8, copy=False), table)
         keep = cv2.compare(dist, per_pixel, cv2.CMP_GE)
     else:
         per_pixel = np.take(level.astype(np.float32), np.asarray(labels, dtype=np.intp))
@@ -573,7 +599,8 @@ class _Segmentation:
     Attributes:
         dist: Colour distance to the belt model times the shading gain, (H, W) uint8 [levels].
         threshold: Foreground threshold on ``dist``, in [levels].
-        labels: Region label of every pixel (0: none), (H, W) int32.
+        labels: Region label of every pixel (0: none), (H, W) uint8 when ``count`` <= 256,
+            else int32.
         count: Number of labels (background included).
         present: Which labels are regions (not background, not a crumb), (count,) bool.
         pieces: Region pixels, each region apart from its neighbours, (H, W) uint8 0/255.
@@ -612,7 +639,8 @@ def _split_regions(
     dropping the pixels that border a piece with a higher label.
 
     Returns:
-        (count, labels (H, W) int32, present (count,) bool, pieces (H, W) uint8).
+        (count, labels (H, W) (uint8 when count <= 256, else int32), present (count,) bool,
+        pieces (H, W) uint8).
     """
     if not p.split_touching:
         count, labels = cv2.connectedComponents(mask, connectivity=8)
@@ -622,34 +650,33 @@ def _split_regions(
     edges = _color_edges(img, p)
     cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
     count, labels = cv2.connectedComponents(cut, connectivity=4)
-    small = count <= 256  # noqa: PLR2004 (labels fit a byte: histogram and look-up in OpenCV)
-    labels8 = labels.astype(np.uint8) if small else None
-    if labels8 is not None:
-        sizes = cv2.calcHist([labels8], [0], None, [256], [0, 256]).ravel()[:count]
+    # Up to 256 labels fit a byte: histogram, look-up and dilations in OpenCV's uint8 paths
+    # (a dilation of labels is a maximum filter: the same in any type that holds them).
+    small = count <= 256  # noqa: PLR2004
+    lab: np.ndarray = labels.astype(np.uint8) if small else labels.astype(np.float32)
+    if small:
+        sizes = cv2.calcHist([lab], [0], None, [256], [0, 256]).ravel()[:count]
     else:
         sizes = np.bincount(labels.ravel(), minlength=count)
     present = sizes >= p.min_area_px
     present[0] = False
-    labf: np.ndarray
-    if present[1:].all():
-        labf = labels.astype(np.float32)  # no crumbs: the labels as they are
-    else:  # crumbs (pieces smaller than a tile) to label 0
-        lut = np.where(present, np.arange(count), 0).astype(np.float32)
-        if labels8 is not None:
-            labf = cv2.LUT(labels8, np.pad(lut, (0, 256 - count)))
+    if not present[1:].all():  # crumbs (pieces smaller than a tile) to label 0
+        lut = np.where(present, np.arange(count), 0).astype(lab.dtype)
+        if small:
+            lab = cv2.LUT(lab, np.pad(lut, (0, 256 - count)))
         else:
-            labf = np.take(lut, np.asarray(labels, dtype=np.intp))
+            lab = np.take(lut, np.asarray(labels, dtype=np.intp))
     kernel3 = _box(3)
-    zero = np.zeros(1, np.float32)
-    lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
+    zero = np.zeros(1, lab.dtype)
+    lost = cv2.bitwise_and(mask, cv2.compare(lab, zero, cv2.CMP_EQ))
     for _ in range(p.restore_iterations):
         if cv2.countNonZero(lost) == 0:
             break
-        labf = cv2.copyTo(cv2.dilate(labf, kernel3), lost, labf)
-        lost = cv2.bitwise_and(mask, cv2.compare(labf, zero, cv2.CMP_EQ))
-    border = cv2.compare(cv2.dilate(labf, kernel3), labf, cv2.CMP_GT)
-    pieces = cv2.bitwise_and(cv2.compare(labf, zero, cv2.CMP_GT), cv2.bitwise_not(border))
-    return count, labf.astype(np.int32), present, pieces
+        lab = cv2.copyTo(cv2.dilate(lab, kernel3), lost, lab)
+        lost = cv2.bitwise_and(mask, cv2.compare(lab, zero, cv2.CMP_EQ))
+    border = cv2.compare(cv2.dilate(lab, kernel3), lab, cv2.CMP_GT)
+    pieces = cv2.bitwise_and(cv2.compare(lab, zero, cv2.CMP_GT), cv2.bitwise_not(border))
+    return count, (lab if small else lab.astype(np.int32)), present, pieces
 
 
 def _segment(
