@@ -228,6 +228,46 @@ def _clean(dense: ArrayLike, what: str) -> FloatArray:
     return pts
 
 
+def _clean_many(
+    dense: Sequence[ArrayLike], names: Sequence[str]
+) -> list[FloatArray | InvalidFigureError]:
+    """`_clean` of many outlines (the returned arrays are read, never written).
+
+    The common case (finite (k, 2) float points in range, no point repeated) is checked in one
+    pass over all of them; every other outline goes through `_clean`, which names the fault.
+    """
+    arrays: list[FloatArray | None] = []
+    for d in dense:
+        a = np.asarray(d, dtype=np.float64) if isinstance(d, np.ndarray) else None
+        arrays.append(a if a is not None and a.ndim == 2 and a.shape[1] == 2 else None)  # noqa: PLR2004
+    parts = [a for a in arrays if a is not None and len(a) >= 3]  # noqa: PLR2004
+    fast = [k for k, a in enumerate(arrays) if a is not None and len(a) >= 3]  # noqa: PLR2004
+    ok = np.zeros(len(arrays), dtype=bool)
+    if fast:
+        pts: FloatArray = np.concatenate(parts)
+        sizes = np.array([len(a) for a in parts])
+        start = np.cumsum(sizes) - sizes
+        nxt = np.arange(1, len(pts) + 1)
+        nxt[start + sizes - 1] = start
+        d = np.take(pts, nxt, axis=0) - pts
+        moved = (d[:, 0] != 0.0) | (d[:, 1] != 0.0)
+        # NaN fails both comparisons: such an outline goes to `_clean` for its message.
+        inside = np.maximum(np.abs(pts[:, 0]), np.abs(pts[:, 1])) <= MAX_COORDINATE
+        good = np.logical_and.reduceat(moved & inside, start)
+        ok[np.array(fast)[good]] = True
+    out: list[FloatArray | InvalidFigureError] = []
+    for k, d in enumerate(dense):
+        a = arrays[k]
+        if ok[k] and a is not None:
+            out.append(a)
+            continue
+        try:
+            out.append(_clean(d, names[k]))
+        except InvalidFigureError as exc:
+            out.append(exc)
+    return out
+
+
 def simplify_outline(
     dense: ArrayLike, params: OutlineParams | None = None, *, what: str = "outline"
 ) -> tuple[FloatArray, BoolArray]:
@@ -271,12 +311,11 @@ def simplify_outlines(
     out: list[tuple[FloatArray, BoolArray] | InvalidFigureError | None] = []
     good: list[int] = []
     cleaned: list[FloatArray] = []
-    for i, d in enumerate(dense):
-        try:
-            cleaned.append(_clean(d, names[i]))
-        except InvalidFigureError as exc:
-            out.append(exc)
+    for i, c in enumerate(_clean_many(dense, names)):
+        if isinstance(c, InvalidFigureError):
+            out.append(c)
             continue
+        cleaned.append(c)
         out.append(None)
         good.append(i)
     if good:
