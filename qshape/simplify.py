@@ -339,7 +339,7 @@ def _simplify_clean(
     mean = planes.mean(axis=2).T  # (F, 2)
     centre = mean[:, None, :]
     res_c = res - centre
-    diameter = np.maximum(np.ptp(res[:, :, 0], axis=1), np.ptp(res[:, :, 1], axis=1))
+    diameter = np.maximum(np.ptp(planes[0], axis=1), np.ptp(planes[1], axis=1))
     nxt = np.roll(res_c, -1, axis=1)
     area2 = (res_c[:, :, 0] * nxt[:, :, 1] - res_c[:, :, 1] * nxt[:, :, 0]).sum(axis=1)
     flat = (diameter <= 0.0) | (np.abs(area2) <= 1e-12 * diameter * diameter)
@@ -348,17 +348,17 @@ def _simplify_clean(
     # Circular moving average (prefix sums of the wrapped, centred samples).
     half = max(1, round(p.smooth_fraction * n))
     width = 2 * half + 1
-    planes -= mean.T[:, :, None]
-    padded = np.concatenate([planes[..., -half:], planes, planes[..., :half]], axis=2)
+    centred = planes - mean.T[:, :, None]
+    padded = np.concatenate([centred[..., -half:], centred, centred[..., :half]], axis=2)
     csum = np.zeros((2, len(cleaned), n + 2 * half + 1))
     np.cumsum(padded, axis=2, out=csum[..., 1:])
-    smooth = ((csum[..., width:] - csum[..., :-width]) / width).transpose(1, 2, 0) + centre
+    smooth_xy = (csum[..., width:] - csum[..., :-width]) / width + mean.T[:, :, None]
 
     w = max(1, round(p.corner_window * n))
-    ext = np.concatenate([smooth[:, -w:], smooth, smooth[:, :w]], axis=1)  # ext[i + w] = s[i]
-    back = smooth - ext[:, :n]
-    fwd = ext[:, 2 * w :] - smooth
-    bx, by, fx, fy = back[..., 0], back[..., 1], fwd[..., 0], fwd[..., 1]
+    ext = np.concatenate([smooth_xy[..., -w:], smooth_xy, smooth_xy[..., :w]], axis=2)
+    back = smooth_xy - ext[..., :n]  # ext[:, :, i + w] = smooth_xy[:, :, i]
+    fwd = ext[..., 2 * w :] - smooth_xy
+    bx, by, fx, fy = back[0], back[1], fwd[0], fwd[1]
     change = np.degrees(np.arctan2(np.abs(bx * fy - by * fx), bx * fx + by * fy))
     change[flat] = 0.0
     if p.arc_turning_deg > 0.0:
@@ -367,7 +367,7 @@ def _simplify_clean(
     noise = p.noise_fraction * diameter
     mom: FloatArray | None = None
     if p.roughness_sigmas > 0.0 or p.fit_merge_chi2 > 0.0:
-        rough, corr = _roughness(res, w)
+        rough, corr = _roughness(planes, w)
         if p.roughness_sigmas > 0.0:
             noise = np.maximum(noise, p.roughness_sigmas * rough)
         if p.fit_merge_chi2 > 0.0:
@@ -381,8 +381,8 @@ def _simplify_clean(
         for f in suspects.tolist():
             if not flat[f]:
                 corners[f] = _verified_corners(res[f], corners[f], p, float(noise[f]), half)
-    ring = ext[:, w - 1 : w + n + 1]
-    geom = _Samples(res, smooth, ring, sign, noise, perimeter, flat)
+    ring = ext[..., w - 1 : w + n + 1].transpose(1, 2, 0)
+    geom = _Samples(res, smooth_xy.transpose(1, 2, 0), ring, sign, noise, perimeter, flat)
     frame = None if mom is None else (mom, mean, np.where(diameter > 0.0, diameter, 1.0))
     results = _polylines(geom, corners, p, (half, w), frame)
     if p.chamfer_fraction > 0.0:
@@ -432,8 +432,8 @@ def _corners_from_fits(  # noqa: PLR0913, PLR0917
         corners[f] = np.zeros(0, dtype=np.int64)
 
 
-def _roughness(res: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
-    """Robust edge roughness of each outline (F, n, 2) -> (F,), in the outline's unit.
+def _roughness(planes: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
+    """Robust edge roughness of outlines given as x and y planes (2, F, n) -> (F,), in their unit.
 
     Each sample's signed distance from the chord of its neighbours ``w`` samples away, less
     its moving mean over 4 w + 1 samples (an arc's sagitta, constant along it), scaled by the
@@ -445,15 +445,15 @@ def _roughness(res: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
         independent sample of that roughness spans, (1 + rho) / (1 - rho) for the lag-1
         autocorrelation rho of those distances (>= 1; a bump spread over many samples is one).
     """
-    n = res.shape[1]
-    a, b = np.roll(res, w, axis=1), np.roll(res, -w, axis=1)
+    n = planes.shape[2]
+    a, b = np.roll(planes, w, axis=2), np.roll(planes, -w, axis=2)
     chord = b - a
-    length = _norm(chord[..., 0], chord[..., 1])
-    rel = res - a
-    dist = (chord[..., 0] * rel[..., 1] - chord[..., 1] * rel[..., 0]) / np.maximum(length, 1e-12)
+    length = _norm(chord[0], chord[1])
+    rel = planes - a
+    dist = (chord[0] * rel[1] - chord[1] * rel[0]) / np.maximum(length, 1e-12)
     k = min(2 * w, (n - 1) // 2)
     ext = np.concatenate([dist[:, -k:], dist, dist[:, :k]], axis=1)
-    csum = np.zeros((len(res), n + 2 * k + 1))
+    csum = np.zeros((planes.shape[1], n + 2 * k + 1))
     np.cumsum(ext, axis=1, out=csum[:, 1:])
     local = (csum[:, 2 * k + 1 :] - csum[:, :n]) / (2 * k + 1)
     detrended = dist - local
@@ -887,21 +887,30 @@ def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np
     (circularly) are no longer candidates. Each round does this for every row.
     """
     count, n = change.shape
-    vals = np.where(change > threshold, change, -np.inf)
-    keep: list[list[int]] = [[] for _ in range(count)]
+    above = change > threshold
+    rows = np.flatnonzero(above.any(axis=1))  # rows still holding a candidate
+    vals = np.where(above[rows], change[rows], -np.inf)
     pos = np.arange(n)
-    while True:
+    found_rows: list[np.ndarray] = []
+    found_at: list[np.ndarray] = []
+    while len(rows):
         i = np.argmax(vals, axis=1)
-        live = np.flatnonzero(vals[np.arange(count), i] > -np.inf)
-        if len(live) == 0:
-            break
-        for f, k in zip(live.tolist(), i[live].tolist(), strict=True):
-            keep[f].append(k)
-        d = np.abs(pos[None, :] - i[live][:, None])
-        sub = vals[live]
-        sub[np.minimum(d, n - d) <= spacing] = -np.inf
-        vals[live] = sub
-    return [np.array(sorted(k), dtype=np.int64) for k in keep]
+        live = np.take_along_axis(vals, i[:, None], axis=1)[:, 0] > -np.inf
+        if not live.all():
+            rows, vals, i = rows[live], vals[live], i[live]
+            if len(rows) == 0:
+                break
+        found_rows.append(rows)
+        found_at.append(i)
+        d = np.abs(pos[None, :] - i[:, None])
+        vals[np.minimum(d, n - d) <= spacing] = -np.inf
+    if not found_rows:
+        return [np.zeros(0, dtype=np.int64) for _ in range(count)]
+    row = np.concatenate(found_rows)
+    at = np.concatenate(found_at).astype(np.int64)
+    order = np.lexsort((at, row))
+    ends = np.cumsum(np.bincount(row, minlength=count))
+    return np.split(at[order], ends[:-1])
 
 
 def _emit_run(
