@@ -337,18 +337,16 @@ def _simplify_clean(
     # inner axis has only two entries (the coordinates) many times slower.
     planes = np.ascontiguousarray(res.transpose(2, 0, 1))
     mean = planes.mean(axis=2).T  # (F, 2)
-    centre = mean[:, None, :]
-    res_c = res - centre
+    centred = planes - mean.T[:, :, None]
     diameter = np.maximum(np.ptp(planes[0], axis=1), np.ptp(planes[1], axis=1))
-    nxt = np.roll(res_c, -1, axis=1)
-    area2 = (res_c[:, :, 0] * nxt[:, :, 1] - res_c[:, :, 1] * nxt[:, :, 0]).sum(axis=1)
+    nxt = np.roll(centred, -1, axis=2)
+    area2 = (centred[0] * nxt[1] - centred[1] * nxt[0]).sum(axis=1)
     flat = (diameter <= 0.0) | (np.abs(area2) <= 1e-12 * diameter * diameter)
     sign = np.where(area2 > 0.0, 1.0, -1.0)  # +1: counter-clockwise in the given frame
 
     # Circular moving average (prefix sums of the wrapped, centred samples).
     half = max(1, round(p.smooth_fraction * n))
     width = 2 * half + 1
-    centred = planes - mean.T[:, :, None]
     padded = np.concatenate([centred[..., -half:], centred, centred[..., :half]], axis=2)
     csum = np.zeros((2, len(cleaned), n + 2 * half + 1))
     np.cumsum(padded, axis=2, out=csum[..., 1:])
@@ -879,6 +877,15 @@ def _polylines(  # noqa: PLR0914
     return results
 
 
+@functools.cache
+def _circular_band(n: int, spacing: int) -> BoolArray:
+    """(n, n) read-only: row i marks the samples within ``spacing`` of sample i, circularly."""
+    d = np.abs(np.arange(n)[None, :] - np.arange(n)[:, None])
+    band = np.minimum(d, n - d) <= spacing
+    band.setflags(write=False)
+    return band
+
+
 def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np.ndarray]:
     """Corners of each row of ``change`` (F, n), all rows at once.
 
@@ -890,7 +897,7 @@ def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np
     above = change > threshold
     rows = np.flatnonzero(above.any(axis=1))  # rows still holding a candidate
     vals = np.where(above[rows], change[rows], -np.inf)
-    pos = np.arange(n)
+    band = _circular_band(n, spacing)
     found_rows: list[np.ndarray] = []
     found_at: list[np.ndarray] = []
     while len(rows):
@@ -902,8 +909,7 @@ def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np
                 break
         found_rows.append(rows)
         found_at.append(i)
-        d = np.abs(pos[None, :] - i[:, None])
-        vals[np.minimum(d, n - d) <= spacing] = -np.inf
+        np.copyto(vals, -np.inf, where=np.take(band, i, axis=0))
     if not found_rows:
         return [np.zeros(0, dtype=np.int64) for _ in range(count)]
     row = np.concatenate(found_rows)
