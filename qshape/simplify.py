@@ -881,7 +881,7 @@ def _polylines(  # noqa: PLR0914
 def _circular_band(n: int, spacing: int) -> BoolArray:
     """(n, n) read-only: row i marks the samples within ``spacing`` of sample i, circularly."""
     d = np.abs(np.arange(n)[None, :] - np.arange(n)[:, None])
-    band = np.minimum(d, n - d) <= spacing
+    band: BoolArray = np.minimum(d, n - d) <= spacing
     band.setflags(write=False)
     return band
 
