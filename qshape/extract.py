@@ -296,6 +296,24 @@ def _channel_span(image: np.ndarray) -> int:
     return max(int(hi - lo) for lo, hi, *_ in (cv2.minMaxLoc(c) for c in cv2.split(image)))
 
 
+_BLUR_TAP_MIN = 1.0 / 512.0
+"""Gaussian taps below this share of the kernel are dropped (they round to zero in OpenCV's
+8-bit fixed-point blur, whose weights have 8 fractional bits)."""
+
+
+@functools.cache
+def _blur_size(sigma: float) -> int:
+    """Odd kernel size [px] of the Gaussian pre-blur of ``sigma`` [px].
+
+    OpenCV's own choice for 8-bit images (about 3 sigma each side) less the outer taps below
+    `_BLUR_TAP_MIN`: for sigma 0.5 px 3, not 5, with the same output and a third less work.
+    """
+    default = round(sigma * 6.0 + 1.0) | 1
+    g = np.exp(-(np.arange(default // 2 + 1) ** 2) / (2.0 * sigma * sigma))
+    share = g / (g[0] + 2.0 * g[1:].sum())
+    return min(default, 2 * int(np.flatnonzero(share >= _BLUR_TAP_MIN)[-1]) + 1)
+
+
 def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, float]:
     """Dominant colour of the border band and its share.
 
@@ -835,7 +853,8 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         level = img[0, 0].astype(np.float64) / 255.0
         return ExtractResult([], [], [], [], (level[0], level[1], level[2]), 0.0)
     if p.blur_sigma_px > 0.0:
-        img = cv2.GaussianBlur(img, (0, 0), p.blur_sigma_px)
+        size = _blur_size(p.blur_sigma_px)
+        img = cv2.GaussianBlur(img, (size, size), p.blur_sigma_px)
     dominant, share = _dominant_color(img, p)
     background = (
         float(dominant[0]) / 255.0,

@@ -453,3 +453,15 @@ def test_cell_means_are_opencv_area_means(h: int, w: int, gh: int, gw: int) -> N
     assert got.shape == want.shape and got.dtype == np.float32
     diff = np.abs(got - want)
     assert diff.max() <= 1.0 and (diff > 0).mean() < 0.01  # off by one only at a tie
+
+
+@pytest.mark.parametrize("sigma", [0.3, 0.5, 0.8, 1.0, 1.5, 2.0])
+def test_trimmed_pre_blur_is_opencvs_blur(sigma: float) -> None:
+    """The pre-blur's trimmed kernel gives exactly OpenCV's default-size Gaussian blur."""
+    from qshape.extract import _blur_size  # noqa: PLC0415
+
+    img = np.random.default_rng(3).integers(0, 256, (90, 120, 3), dtype=np.uint8)
+    size = _blur_size(sigma)
+    assert size % 2 == 1 and size <= (round(6 * sigma + 1) | 1)
+    want = cv2.GaussianBlur(img, (0, 0), sigma)
+    np.testing.assert_array_equal(cv2.GaussianBlur(img, (size, size), sigma), want)
