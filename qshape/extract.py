@@ -415,9 +415,14 @@ def _cell_means(img: np.ndarray, gh: int, gw: int) -> np.ndarray:
     total = cv2.integral(img)  # (h + 1, w + 1, 3) int32: sums above and left of each corner
     iy, ty = _grid_at(h, gh)
     ix, tx = _grid_at(w, gw)
-    # The integral of a piecewise-constant image is bilinear inside each pixel.
-    rows = total[iy] * (1.0 - ty)[:, None, None] + total[iy + 1] * ty[:, None, None]
-    at = rows[:, ix] * (1.0 - tx)[None, :, None] + rows[:, ix + 1] * tx[None, :, None]
+    # The integral of a piecewise-constant image is bilinear inside each pixel: along x at
+    # the cell edges first (exact when they fall on pixel edges), then along y.
+    cols = np.take(total, ix, axis=1).astype(np.float64)
+    if tx.any():
+        cols *= (1.0 - tx)[None, :, None]
+        cols += np.take(total, ix + 1, axis=1) * tx[None, :, None]
+    at = np.take(cols, iy, axis=0) * (1.0 - ty)[:, None, None]
+    at += np.take(cols, iy + 1, axis=0) * ty[:, None, None]
     box = np.diff(np.diff(at, axis=0), axis=1) * (gh * gw / (h * w))
     return np.asarray(np.rint(box), dtype=np.float32)
 
@@ -763,18 +768,19 @@ def _outlines(
     m = p.border_margin_px
     partial: list[PartialTile] = []
     todo: list[_Todo] = []
+    unit = np.clip(colors / 255.0, 0.0, 1.0).tolist()  # every label's colour, RGB in [0, 1]
+    parent = hier[:, 3].tolist()
     for i, cnt in enumerate(contours):
-        if hier[i][3] != -1:
+        if parent[i] != -1:
             continue  # a hole; handled with its parent
         area = cv2.contourArea(cnt)
         if area < p.min_area_px:
             continue
         pts = cnt[:, 0, :].astype(np.float64)
         x0, y0 = int(cnt[0, 0, 0]), int(cnt[0, 0, 1])
-        rgb = colors[int(seg.labels[y0, x0])]
         bx, by, bw, bh = cv2.boundingRect(cnt)
-        c = np.clip(rgb / 255.0, 0.0, 1.0)
-        color3 = (float(c[0]), float(c[1]), float(c[2]))
+        r, g, b = unit[int(seg.labels[y0, x0])]
+        color3 = (r, g, b)
         if bx <= m or by <= m or bx + bw >= w - m or by + bh >= h - m:
             mom = cv2.moments(cnt)
             cen = np.array([mom["m10"], mom["m01"]]) / max(mom["m00"], 1e-9)
