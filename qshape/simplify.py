@@ -848,9 +848,11 @@ def _polylines(  # noqa: PLR0914
             min_sin=math.sin(math.radians(p.corner_angle_deg)),
             fitted=None if frame is None else _Moments(frame[0], fo, c0, frame[1], frame[2]),
         )
+    all_straight = np.logical_and.reduceat(straight, first_run).tolist()
+    bounds = (first_run + m).tolist()
     for row, f in enumerate(with_c):
-        r0, r1 = int(first_run[row]), int(first_run[row] + m[row])
-        if straight[r0:r1].all():
+        r0, r1 = bounds[row] - int(m[row]), bounds[row]
+        if all_straight[row]:
             results[f] = (points[r0:r1], np.zeros(r1 - r0, dtype=bool))
             continue
         turn = g.turning(f)
