@@ -416,13 +416,17 @@ def _cell_means(img: np.ndarray, gh: int, gw: int) -> np.ndarray:
     iy, ty = _grid_at(h, gh)
     ix, tx = _grid_at(w, gw)
     # The integral of a piecewise-constant image is bilinear inside each pixel: along x at
-    # the cell edges first (exact when they fall on pixel edges), then along y.
-    cols = np.take(total, ix, axis=1).astype(np.float64)
-    if tx.any():
-        cols *= (1.0 - tx)[None, :, None]
-        cols += np.take(total, ix + 1, axis=1) * tx[None, :, None]
-    at = np.take(cols, iy, axis=0) * (1.0 - ty)[:, None, None]
-    at += np.take(cols, iy + 1, axis=0) * ty[:, None, None]
+    # the cell edges first (exact when they fall on pixel edges), then along y; only the
+    # corners of pixels holding a cell edge are read.
+    def along_x(rows: np.ndarray) -> np.ndarray:
+        edge = np.take(np.take(total, rows, axis=0), ix, axis=1).astype(np.float64)
+        if tx.any():
+            edge *= (1.0 - tx)[None, :, None]
+            edge += np.take(np.take(total, rows, axis=0), ix + 1, axis=1) * tx[None, :, None]
+        return edge
+
+    at = along_x(iy) * (1.0 - ty)[:, None, None]
+    at += along_x(iy + 1) * ty[:, None, None]
     box = np.diff(np.diff(at, axis=0), axis=1) * (gh * gw / (h * w))
     return np.asarray(np.rint(box), dtype=np.float32)
 
