@@ -369,7 +369,10 @@ def _simplify_clean(
         if p.roughness_sigmas > 0.0:
             noise = np.maximum(noise, p.roughness_sigmas * rough)
         if p.fit_merge_chi2 > 0.0:
-            mom = outline_moments(res, np.where(diameter > 0.0, diameter, 1.0))
+            # The x/y planes seen as (F, n, 2): numpy then sums along contiguous memory.
+            mom = outline_moments(
+                planes.transpose(1, 2, 0), np.where(diameter > 0.0, diameter, 1.0)
+            )
             _corners_from_fits(mom, corners, p, rough * np.sqrt(corr), diameter, flat, half)
     if p.min_corner_deg > 0.0:
         if mom is None:
