@@ -447,7 +447,8 @@ def _roughness(planes: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
         autocorrelation rho of those distances (>= 1; a bump spread over many samples is one).
     """
     n = planes.shape[2]
-    a, b = np.roll(planes, w, axis=2), np.roll(planes, -w, axis=2)
+    ext = np.concatenate([planes[..., -w:], planes, planes[..., :w]], axis=2)
+    a, b = ext[..., :n], ext[..., 2 * w :]  # samples w before and w after, circularly
     chord = b - a
     length = _norm(chord[0], chord[1])
     rel = planes - a
@@ -739,12 +740,17 @@ def _resampled_many(pts: list[FloatArray], n: int) -> tuple[FloatArray, FloatArr
 
     One interpolation over all outlines: each one's arc length is offset past the previous.
     """
-    sizes = np.array([len(q) + 1 for q in pts])
-    closed = np.concatenate([np.concatenate([q, q[:1]]) for q in pts])
+    lens = np.array([len(q) for q in pts])
+    sizes = lens + 1
+    first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    # Every outline with its first point repeated at the end, taken from all points at once.
+    row = np.arange(int(sizes.sum())) - np.repeat(first, sizes)
+    row[first + lens] = 0
+    row += np.repeat(first - np.arange(len(pts)), sizes)
+    closed = np.take(np.concatenate(pts), row, axis=0)
     seg = np.zeros(len(closed))
     d = closed[1:] - closed[:-1]
     seg[1:] = _norm(d[:, 0], d[:, 1])
-    first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
     seg[first] = 0.0  # no length between one outline and the next
     cum = np.cumsum(seg)
     start = cum[first]
