@@ -735,8 +735,10 @@ def _measures_many(bounds: Sequence[Boundary]) -> list[tuple[float, FloatArray, 
     fast = [k for k, b in enumerate(bounds) if not b.curve_mask.any()]
     if fast:
         # Counter-clockwise in the y-up frame, as Boundary.measures walks it.
-        pts = np.concatenate([bounds[k].points_yup()[::-1] for k in fast])
+        pts = np.concatenate([bounds[k].points[::-1] for k in fast])
         n = np.array([len(bounds[k].points) for k in fast], dtype=np.intp)
+        flip = np.repeat(np.array([bounds[k].y_down for k in fast]), n)
+        pts[flip, 1] *= -1.0  # as Boundary.points_yup
         start = np.zeros(len(fast), dtype=np.intp)
         np.cumsum(n[:-1], out=start[1:])
         nxt = np.arange(1, len(pts) + 1)
