@@ -708,11 +708,12 @@ def _boundaries_many(
             & (np.abs(area) > _AREA_MARGIN * size * size)
             & ~np.logical_or.reduceat(mask & mask[nxt], start)
         )
-        for k in np.flatnonzero(ok):
-            i = int(fast[k])
+        fast_at, ccw_at = fast.tolist(), ccw.tolist()
+        for k in np.flatnonzero(ok).tolist():
+            i = fast_at[k]
             points, curve_mask = simple[i]
             # Clockwise as seen: counter-clockwise in y-down coordinates (see Boundary.make).
-            if bool(ccw[k]) != y_down:
+            if ccw_at[k] != y_down:
                 points = points[::-1].copy()
                 curve_mask = curve_mask[::-1].copy()
             out[i] = Boundary(_frozen(points), _frozen(curve_mask), y_down)
