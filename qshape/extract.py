@@ -415,6 +415,7 @@ def _cell_means(img: np.ndarray, gh: int, gw: int) -> np.ndarray:
     total = cv2.integral(img)  # (h + 1, w + 1, 3) int32: sums above and left of each corner
     iy, ty = _grid_at(h, gh)
     ix, tx = _grid_at(w, gw)
+
     # The integral of a piecewise-constant image is bilinear inside each pixel: along x at
     # the cell edges first (exact when they fall on pixel edges), then along y; only the
     # corners of pixels holding a cell edge are read.
