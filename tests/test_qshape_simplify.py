@@ -218,3 +218,25 @@ def test_batch_cleaning_matches_one_by_one() -> None:
         np.testing.assert_array_equal(out[1], alone[1])
     assert isinstance(got[2], InvalidFigureError) and "finite" in str(got[2])
     np.testing.assert_allclose(got[1][0], got[0][0], rtol=0.0, atol=1e-9)  # type: ignore[index]
+
+
+def test_corners_of_all_outlines_are_the_greedy_corners_of_each() -> None:
+    """Batched corner picking equals the one-outline greedy rule (strongest first, spaced)."""
+    from qshape.simplify import _corners_many  # noqa: PLC0415
+
+    rng = np.random.default_rng(SEED)
+    n, spacing, threshold = 96, 5, 20.0
+    change = rng.uniform(0.0, 60.0, (7, n))
+    change[2] = 0.0  # no candidate at all
+    change[3, ::7] = 45.0  # ties: the first of equal values wins
+    got = _corners_many(change, threshold, spacing)
+    for row, corners in zip(change, got, strict=True):
+        vals = np.where(row > threshold, row, -np.inf)
+        want = []
+        while np.isfinite(vals.max()):
+            k = int(np.argmax(vals))
+            want.append(k)
+            d = np.abs(np.arange(n) - k)
+            vals[np.minimum(d, n - d) <= spacing] = -np.inf
+        np.testing.assert_array_equal(corners, sorted(want))
+    assert len(got[2]) == 0
