@@ -708,11 +708,12 @@ def _boundaries_many(
             & (np.abs(area) > _AREA_MARGIN * size * size)
             & ~np.logical_or.reduceat(mask & mask[nxt], start)
         )
-        for k in np.flatnonzero(ok):
-            i = int(fast[k])
+        fast_at, ccw_at = fast.tolist(), ccw.tolist()
+        for k in np.flatnonzero(ok).tolist():
+            i = fast_at[k]
             points, curve_mask = simple[i]
             # Clockwise as seen: counter-clockwise in y-down coordinates (see Boundary.make).
-            if bool(ccw[k]) != y_down:
+            if ccw_at[k] != y_down:
                 points = points[::-1].copy()
                 curve_mask = curve_mask[::-1].copy()
             out[i] = Boundary(_frozen(points), _frozen(curve_mask), y_down)
@@ -735,8 +736,10 @@ def _measures_many(bounds: Sequence[Boundary]) -> list[tuple[float, FloatArray, 
     fast = [k for k, b in enumerate(bounds) if not b.curve_mask.any()]
     if fast:
         # Counter-clockwise in the y-up frame, as Boundary.measures walks it.
-        pts = np.concatenate([bounds[k].points_yup()[::-1] for k in fast])
+        pts = np.concatenate([bounds[k].points[::-1] for k in fast])
         n = np.array([len(bounds[k].points) for k in fast], dtype=np.intp)
+        flip = np.repeat(np.array([bounds[k].y_down for k in fast]), n)
+        pts[flip, 1] *= -1.0  # as Boundary.points_yup
         start = np.zeros(len(fast), dtype=np.intp)
         np.cumsum(n[:-1], out=start[1:])
         nxt = np.arange(1, len(pts) + 1)

@@ -193,6 +193,14 @@ def default_outline_params() -> OutlineParams:
     return OutlineParams.load()
 
 
+def _norm(x: FloatArray, y: FloatArray) -> FloatArray:
+    """Length of the vectors (x, y), elementwise, as ``np.hypot`` to a unit in the last place.
+
+    About three times faster; coordinates are at most `MAX_COORDINATE`, so nothing overflows.
+    """
+    return np.asarray(np.sqrt(x * x + y * y))
+
+
 def _clean(dense: ArrayLike, what: str) -> FloatArray:
     try:
         pts = np.array(dense, dtype=np.float64)
@@ -210,14 +218,54 @@ def _clean(dense: ArrayLike, what: str) -> FloatArray:
             f"{what}: coordinates must be at most {MAX_COORDINATE:g} in magnitude"
         )
     d = np.concatenate([pts[1:], pts[:1]]) - pts
-    step = np.hypot(d[:, 0], d[:, 1])
-    if not step.all():
-        pts = pts[step > 0.0]  # drop consecutive repeats (and the closing copy)
+    moved = (d[:, 0] != 0.0) | (d[:, 1] != 0.0)
+    if not moved.all():
+        pts = pts[moved]  # drop consecutive repeats (and the closing copy)
     if len(pts) < 3:
         raise InvalidFigureError(
             f"{what}: a closed outline needs at least 3 distinct points, got {len(pts)}"
         )
     return pts
+
+
+def _clean_many(
+    dense: Sequence[ArrayLike], names: Sequence[str]
+) -> list[FloatArray | InvalidFigureError]:
+    """`_clean` of many outlines (the returned arrays are read, never written).
+
+    The common case (finite (k, 2) float points in range, no point repeated) is checked in one
+    pass over all of them; every other outline goes through `_clean`, which names the fault.
+    """
+    arrays: list[FloatArray | None] = []
+    for d in dense:
+        a = np.asarray(d, dtype=np.float64) if isinstance(d, np.ndarray) else None
+        arrays.append(a if a is not None and a.ndim == 2 and a.shape[1] == 2 else None)  # noqa: PLR2004
+    parts = [a for a in arrays if a is not None and len(a) >= 3]  # noqa: PLR2004
+    fast = [k for k, a in enumerate(arrays) if a is not None and len(a) >= 3]  # noqa: PLR2004
+    ok = np.zeros(len(arrays), dtype=bool)
+    if fast:
+        pts: FloatArray = np.concatenate(parts)
+        sizes = np.array([len(a) for a in parts])
+        start = np.cumsum(sizes) - sizes
+        nxt = np.arange(1, len(pts) + 1)
+        nxt[start + sizes - 1] = start
+        d = np.take(pts, nxt, axis=0) - pts
+        moved = (d[:, 0] != 0.0) | (d[:, 1] != 0.0)
+        # NaN fails both comparisons: such an outline goes to `_clean` for its message.
+        inside = np.maximum(np.abs(pts[:, 0]), np.abs(pts[:, 1])) <= MAX_COORDINATE
+        good = np.logical_and.reduceat(moved & inside, start)
+        ok[np.array(fast)[good]] = True
+    out: list[FloatArray | InvalidFigureError] = []
+    for k, d in enumerate(dense):
+        a = arrays[k]
+        if ok[k] and a is not None:
+            out.append(a)
+            continue
+        try:
+            out.append(_clean(d, names[k]))
+        except InvalidFigureError as exc:
+            out.append(exc)
+    return out
 
 
 def simplify_outline(
@@ -263,12 +311,11 @@ def simplify_outlines(
     out: list[tuple[FloatArray, BoolArray] | InvalidFigureError | None] = []
     good: list[int] = []
     cleaned: list[FloatArray] = []
-    for i, d in enumerate(dense):
-        try:
-            cleaned.append(_clean(d, names[i]))
-        except InvalidFigureError as exc:
-            out.append(exc)
+    for i, c in enumerate(_clean_many(dense, names)):
+        if isinstance(c, InvalidFigureError):
+            out.append(c)
             continue
+        cleaned.append(c)
         out.append(None)
         good.append(i)
     if good:
@@ -286,27 +333,30 @@ def _simplify_clean(
     """Simplify cleaned outlines, writing each result (or error) to ``out[slots[f]]``."""
     n = p.resample_points
     res, perimeter = _resampled_many(cleaned, n)  # (F, n, 2), (F,)
-    centre = res.mean(axis=1, keepdims=True)
-    res_c = res - centre
-    diameter = np.maximum(np.ptp(res[:, :, 0], axis=1), np.ptp(res[:, :, 1], axis=1))
-    nxt = np.roll(res_c, -1, axis=1)
-    area2 = (res_c[:, :, 0] * nxt[:, :, 1] - res_c[:, :, 1] * nxt[:, :, 0]).sum(axis=1)
+    # Sums along the samples run over x and y apart (2, F, n): numpy reduces an axis whose
+    # inner axis has only two entries (the coordinates) many times slower.
+    planes = np.ascontiguousarray(res.transpose(2, 0, 1))
+    mean = planes.mean(axis=2).T  # (F, 2)
+    centred = planes - mean.T[:, :, None]
+    diameter = np.maximum(np.ptp(planes[0], axis=1), np.ptp(planes[1], axis=1))
+    nxt = np.roll(centred, -1, axis=2)
+    area2 = (centred[0] * nxt[1] - centred[1] * nxt[0]).sum(axis=1)
     flat = (diameter <= 0.0) | (np.abs(area2) <= 1e-12 * diameter * diameter)
     sign = np.where(area2 > 0.0, 1.0, -1.0)  # +1: counter-clockwise in the given frame
 
     # Circular moving average (prefix sums of the wrapped, centred samples).
     half = max(1, round(p.smooth_fraction * n))
     width = 2 * half + 1
-    padded = np.concatenate([res_c[:, -half:], res_c, res_c[:, :half]], axis=1)
-    csum = np.zeros((len(cleaned), n + 2 * half + 1, 2))
-    np.cumsum(padded, axis=1, out=csum[:, 1:])
-    smooth = (csum[:, width:] - csum[:, :-width]) / width + centre
+    padded = np.concatenate([centred[..., -half:], centred, centred[..., :half]], axis=2)
+    csum = np.zeros((2, len(cleaned), n + 2 * half + 1))
+    np.cumsum(padded, axis=2, out=csum[..., 1:])
+    smooth_xy = (csum[..., width:] - csum[..., :-width]) / width + mean.T[:, :, None]
 
     w = max(1, round(p.corner_window * n))
-    ext = np.concatenate([smooth[:, -w:], smooth, smooth[:, :w]], axis=1)  # ext[i + w] = s[i]
-    back = smooth - ext[:, :n]
-    fwd = ext[:, 2 * w :] - smooth
-    bx, by, fx, fy = back[..., 0], back[..., 1], fwd[..., 0], fwd[..., 1]
+    ext = np.concatenate([smooth_xy[..., -w:], smooth_xy, smooth_xy[..., :w]], axis=2)
+    back = smooth_xy - ext[..., :n]  # ext[:, :, i + w] = smooth_xy[:, :, i]
+    fwd = ext[..., 2 * w :] - smooth_xy
+    bx, by, fx, fy = back[0], back[1], fwd[0], fwd[1]
     change = np.degrees(np.arctan2(np.abs(bx * fy - by * fx), bx * fx + by * fy))
     change[flat] = 0.0
     if p.arc_turning_deg > 0.0:
@@ -315,11 +365,14 @@ def _simplify_clean(
     noise = p.noise_fraction * diameter
     mom: FloatArray | None = None
     if p.roughness_sigmas > 0.0 or p.fit_merge_chi2 > 0.0:
-        rough, corr = _roughness(res, w)
+        rough, corr = _roughness(planes, w)
         if p.roughness_sigmas > 0.0:
             noise = np.maximum(noise, p.roughness_sigmas * rough)
         if p.fit_merge_chi2 > 0.0:
-            mom = outline_moments(res, np.where(diameter > 0.0, diameter, 1.0))
+            # The x/y planes seen as (F, n, 2): numpy then sums along contiguous memory.
+            mom = outline_moments(
+                planes.transpose(1, 2, 0), np.where(diameter > 0.0, diameter, 1.0)
+            )
             _corners_from_fits(mom, corners, p, rough * np.sqrt(corr), diameter, flat, half)
     if p.min_corner_deg > 0.0:
         if mom is None:
@@ -329,11 +382,9 @@ def _simplify_clean(
         for f in suspects.tolist():
             if not flat[f]:
                 corners[f] = _verified_corners(res[f], corners[f], p, float(noise[f]), half)
-    ring = ext[:, w - 1 : w + n + 1]
-    geom = _Samples(res, smooth, ring, sign, noise, perimeter, flat)
-    frame = (
-        None if mom is None else (mom, res.mean(axis=1), np.where(diameter > 0.0, diameter, 1.0))
-    )
+    ring = ext[..., w - 1 : w + n + 1].transpose(1, 2, 0)
+    geom = _Samples(res, smooth_xy.transpose(1, 2, 0), ring, sign, noise, perimeter, flat)
+    frame = None if mom is None else (mom, mean, np.where(diameter > 0.0, diameter, 1.0))
     results = _polylines(geom, corners, p, (half, w), frame)
     if p.chamfer_fraction > 0.0:
         for f in _with_chamfers(results, p.chamfer_fraction).tolist():
@@ -382,8 +433,8 @@ def _corners_from_fits(  # noqa: PLR0913, PLR0917
         corners[f] = np.zeros(0, dtype=np.int64)
 
 
-def _roughness(res: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
-    """Robust edge roughness of each outline (F, n, 2) -> (F,), in the outline's unit.
+def _roughness(planes: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
+    """Robust edge roughness of outlines given as x and y planes (2, F, n) -> (F,), in their unit.
 
     Each sample's signed distance from the chord of its neighbours ``w`` samples away, less
     its moving mean over 4 w + 1 samples (an arc's sagitta, constant along it), scaled by the
@@ -395,15 +446,16 @@ def _roughness(res: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
         independent sample of that roughness spans, (1 + rho) / (1 - rho) for the lag-1
         autocorrelation rho of those distances (>= 1; a bump spread over many samples is one).
     """
-    n = res.shape[1]
-    a, b = np.roll(res, w, axis=1), np.roll(res, -w, axis=1)
+    n = planes.shape[2]
+    ext = np.concatenate([planes[..., -w:], planes, planes[..., :w]], axis=2)
+    a, b = ext[..., :n], ext[..., 2 * w :]  # samples w before and w after, circularly
     chord = b - a
-    length = np.hypot(chord[..., 0], chord[..., 1])
-    rel = res - a
-    dist = (chord[..., 0] * rel[..., 1] - chord[..., 1] * rel[..., 0]) / np.maximum(length, 1e-12)
+    length = _norm(chord[0], chord[1])
+    rel = planes - a
+    dist = (chord[0] * rel[1] - chord[1] * rel[0]) / np.maximum(length, 1e-12)
     k = min(2 * w, (n - 1) // 2)
     ext = np.concatenate([dist[:, -k:], dist, dist[:, :k]], axis=1)
-    csum = np.zeros((len(res), n + 2 * k + 1))
+    csum = np.zeros((planes.shape[1], n + 2 * k + 1))
     np.cumsum(ext, axis=1, out=csum[:, 1:])
     local = (csum[:, 2 * k + 1 :] - csum[:, :n]) / (2 * k + 1)
     detrended = dist - local
@@ -541,7 +593,7 @@ def _snap_circles(
         return
     idx = np.flatnonzero(curved)
     pts = res[idx]  # (C, n, 2)
-    c0 = pts.mean(axis=1, keepdims=True)
+    c0 = np.stack([pts[..., 0].mean(axis=1), pts[..., 1].mean(axis=1)], axis=1)[:, None, :]
     q = pts - c0  # centred: better conditioned
     a = np.concatenate([q, np.ones(q.shape[:2] + (1,))], axis=2)  # (C, n, 3)
     b = -(q**2).sum(axis=2)  # (C, n)
@@ -551,7 +603,7 @@ def _snap_circles(
     centre = -0.5 * sol[:, :2]
     r2 = (centre**2).sum(axis=1) - sol[:, 2]
     r = np.sqrt(np.maximum(r2, 0.0))
-    dev = np.hypot(q[..., 0] - centre[:, None, 0], q[..., 1] - centre[:, None, 1]) - r[:, None]
+    dev = _norm(q[..., 0] - centre[:, None, 0], q[..., 1] - centre[:, None, 1]) - r[:, None]
     rms = np.sqrt((dev**2).mean(axis=1))
     good = (r2 > 0.0) & (rms <= tol * r)
     steps = np.arange(_CIRCLE_POINTS) * (2.0 * math.pi / _CIRCLE_POINTS)
@@ -688,12 +740,17 @@ def _resampled_many(pts: list[FloatArray], n: int) -> tuple[FloatArray, FloatArr
 
     One interpolation over all outlines: each one's arc length is offset past the previous.
     """
-    sizes = np.array([len(q) + 1 for q in pts])
-    closed = np.concatenate([np.concatenate([q, q[:1]]) for q in pts])
+    lens = np.array([len(q) for q in pts])
+    sizes = lens + 1
+    first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    # Every outline with its first point repeated at the end, taken from all points at once.
+    row = np.arange(int(sizes.sum())) - np.repeat(first, sizes)
+    row[first + lens] = 0
+    row += np.repeat(first - np.arange(len(pts)), sizes)
+    closed = np.take(np.concatenate(pts), row, axis=0)
     seg = np.zeros(len(closed))
     d = closed[1:] - closed[:-1]
-    seg[1:] = np.hypot(d[:, 0], d[:, 1])
-    first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    seg[1:] = _norm(d[:, 0], d[:, 1])
     seg[first] = 0.0  # no length between one outline and the next
     cum = np.cumsum(seg)
     start = cum[first]
@@ -764,17 +821,20 @@ def _polylines(  # noqa: PLR0914
     last_run = first_run + m - 1
     ends = np.append(starts[1:], 0)
     ends[last_run] = n
-    rolled = g.res[fo[:, None], (c0[:, None] + np.arange(n + 1)[None, :]) % n]  # (G, n+1, 2)
-    a = rolled[owner, starts]
-    chord = rolled[owner, ends] - a
+    # Row gathers with np.take: numpy's fancy indexing of (k, 2) rows is far slower.
+    at = (fo * n)[:, None] + (c0[:, None] + np.arange(n + 1)[None, :]) % n
+    rolled = np.take(g.res.reshape(-1, 2), at, axis=0)  # (G, n + 1, 2)
+    flat = rolled.reshape(-1, 2)
+    a = np.take(flat, owner * (n + 1) + starts, axis=0)
+    chord = np.take(flat, owner * (n + 1) + ends, axis=0) - a
     length = np.hypot(chord[:, 0], chord[:, 1])
-    # Every sample of every run (its start included, its end left out: distance 0 there).
+    # Every sample of every run (its start included, its end left out: distance 0 there):
+    # the runs of an outline tile its samples 0 .. n - 1 in order.
     lens = ends - starts
     seg_start = np.concatenate([[0], np.cumsum(lens)[:-1]])
-    run_id = np.repeat(np.arange(len(starts)), lens)
-    flat_idx = (owner * (n + 1) + starts - seg_start)[run_id] + np.arange(int(lens.sum()))
-    rel = rolled.reshape(-1, 2)[flat_idx] - a[run_id]
-    dev = np.abs(chord[run_id, 0] * rel[:, 1] - chord[run_id, 1] * rel[:, 0])
+    rel = rolled[:, :n].reshape(-1, 2) - np.repeat(a, lens, axis=0)
+    along = np.repeat(chord, lens, axis=0)
+    dev = np.abs(along[:, 0] * rel[:, 1] - along[:, 1] * rel[:, 0])
     dev_max = np.maximum.reduceat(dev, seg_start)
     zero = length == 0.0
     if zero.any():  # degenerate chord: distance from the run's start
@@ -797,9 +857,11 @@ def _polylines(  # noqa: PLR0914
             min_sin=math.sin(math.radians(p.corner_angle_deg)),
             fitted=None if frame is None else _Moments(frame[0], fo, c0, frame[1], frame[2]),
         )
+    all_straight = np.logical_and.reduceat(straight, first_run).tolist()
+    bounds = (first_run + m).tolist()
     for row, f in enumerate(with_c):
-        r0, r1 = int(first_run[row]), int(first_run[row] + m[row])
-        if straight[r0:r1].all():
+        r0, r1 = bounds[row] - int(m[row]), bounds[row]
+        if all_straight[row]:
             results[f] = (points[r0:r1], np.zeros(r1 - r0, dtype=bool))
             continue
         turn = g.turning(f)
@@ -826,6 +888,15 @@ def _polylines(  # noqa: PLR0914
     return results
 
 
+@functools.cache
+def _circular_band(n: int, spacing: int) -> BoolArray:
+    """(n, n) read-only: row i marks the samples within ``spacing`` of sample i, circularly."""
+    d = np.abs(np.arange(n)[None, :] - np.arange(n)[:, None])
+    band: BoolArray = np.minimum(d, n - d) <= spacing
+    band.setflags(write=False)
+    return band
+
+
 def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np.ndarray]:
     """Corners of each row of ``change`` (F, n), all rows at once.
 
@@ -834,21 +905,29 @@ def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np
     (circularly) are no longer candidates. Each round does this for every row.
     """
     count, n = change.shape
-    vals = np.where(change > threshold, change, -np.inf)
-    keep: list[list[int]] = [[] for _ in range(count)]
-    pos = np.arange(n)
-    while True:
+    above = change > threshold
+    rows = np.flatnonzero(above.any(axis=1))  # rows still holding a candidate
+    vals = np.where(above[rows], change[rows], -np.inf)
+    band = _circular_band(n, spacing)
+    found_rows: list[np.ndarray] = []
+    found_at: list[np.ndarray] = []
+    while len(rows):
         i = np.argmax(vals, axis=1)
-        live = np.flatnonzero(vals[np.arange(count), i] > -np.inf)
-        if len(live) == 0:
-            break
-        for f, k in zip(live.tolist(), i[live].tolist(), strict=True):
-            keep[f].append(k)
-        d = np.abs(pos[None, :] - i[live][:, None])
-        sub = vals[live]
-        sub[np.minimum(d, n - d) <= spacing] = -np.inf
-        vals[live] = sub
-    return [np.array(sorted(k), dtype=np.int64) for k in keep]
+        live = np.take_along_axis(vals, i[:, None], axis=1)[:, 0] > -np.inf
+        if not live.all():
+            rows, vals, i = rows[live], vals[live], i[live]
+            if len(rows) == 0:
+                break
+        found_rows.append(rows)
+        found_at.append(i)
+        np.copyto(vals, -np.inf, where=np.take(band, i, axis=0))
+    if not found_rows:
+        return [np.zeros(0, dtype=np.int64) for _ in range(count)]
+    row = np.concatenate(found_rows)
+    at = np.concatenate(found_at).astype(np.int64)
+    order = np.lexsort((at, row))
+    ends = np.cumsum(np.bincount(row, minlength=count))
+    return np.split(at[order], ends[:-1])
 
 
 def _emit_run(

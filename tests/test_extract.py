@@ -437,3 +437,31 @@ def test_crumbs_beyond_a_byte_of_labels_leave_pieces_unchanged() -> None:
     assert many > 256 and present2.sum() == 2
     np.testing.assert_array_equal(pieces2, pieces)
     np.testing.assert_array_equal(labels2[:100] > 0, labels[:100] > 0)
+
+
+@pytest.mark.parametrize(
+    ("h", "w", "gh", "gw"), [(492, 656, 30, 41), (64, 80, 4, 5), (97, 61, 7, 3)]
+)
+def test_cell_means_are_opencv_area_means(h: int, w: int, gh: int, gw: int) -> None:
+    """The illumination grid's cell means equal OpenCV's area resize (ties within a level)."""
+    from qshape.extract import _cell_means  # noqa: PLC0415
+
+    rng = np.random.default_rng(5)
+    img = cv2.GaussianBlur(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), (0, 0), 2.0)
+    want = cv2.resize(img, (gw, gh), interpolation=cv2.INTER_AREA).astype(np.float32)
+    got = _cell_means(img, gh, gw)
+    assert got.shape == want.shape and got.dtype == np.float32
+    diff = np.abs(got - want)
+    assert diff.max() <= 1.0 and (diff > 0).mean() < 0.01  # off by one only at a tie
+
+
+@pytest.mark.parametrize("sigma", [0.3, 0.5, 0.8, 1.0, 1.5, 2.0])
+def test_trimmed_pre_blur_is_opencvs_blur(sigma: float) -> None:
+    """The pre-blur's trimmed kernel gives exactly OpenCV's default-size Gaussian blur."""
+    from qshape.extract import _blur_size  # noqa: PLC0415
+
+    img = np.random.default_rng(3).integers(0, 256, (90, 120, 3), dtype=np.uint8)
+    size = _blur_size(sigma)
+    assert size % 2 == 1 and size <= (round(6 * sigma + 1) | 1)
+    want = cv2.GaussianBlur(img, (0, 0), sigma)
+    np.testing.assert_array_equal(cv2.GaussianBlur(img, (size, size), sigma), want)

@@ -190,3 +190,53 @@ def test_rough_edges_keep_their_corners(sides: int) -> None:
         bad_plain += len(pts0) != sides or bool(mask0.any())
     assert good >= 8
     assert good >= 10 - bad_plain  # the roughness checks never lose what plain finds
+
+
+def test_batch_cleaning_matches_one_by_one() -> None:
+    """A batch with faulty outlines gives each outline what simplifying it alone gives."""
+    from qshape.simplify import simplify_outlines  # noqa: PLC0415
+
+    rng = np.random.default_rng(SEED)
+    square = dense_outline(L_TILE, [False] * 6, 0.5, rng, 0.05)
+    repeated = np.repeat(square, 2, axis=0)  # every point twice: dropped, same outline
+    bad_nan = square.copy()
+    bad_nan[3, 1] = np.nan
+    batch = [square, repeated, bad_nan, square.tolist(), square[:2], square.astype(np.int64)]
+    got = simplify_outlines(batch)
+    for dense, out in zip(batch, got, strict=True):
+        try:
+            alone = simplify_outline(dense)
+        except InvalidFigureError as exc:
+            assert (
+                isinstance(out, InvalidFigureError)
+                and str(out).split(":", 1)[1] == str(exc).split(":", 1)[1]
+            )
+            continue
+        assert not isinstance(out, InvalidFigureError)
+        # Batched arc lengths are offset per outline: the same points to rounding.
+        np.testing.assert_allclose(out[0], alone[0], rtol=0.0, atol=1e-9)
+        np.testing.assert_array_equal(out[1], alone[1])
+    assert isinstance(got[2], InvalidFigureError) and "finite" in str(got[2])
+    np.testing.assert_allclose(got[1][0], got[0][0], rtol=0.0, atol=1e-9)  # type: ignore[index]
+
+
+def test_corners_of_all_outlines_are_the_greedy_corners_of_each() -> None:
+    """Batched corner picking equals the one-outline greedy rule (strongest first, spaced)."""
+    from qshape.simplify import _corners_many  # noqa: PLC0415
+
+    rng = np.random.default_rng(SEED)
+    n, spacing, threshold = 96, 5, 20.0
+    change = rng.uniform(0.0, 60.0, (7, n))
+    change[2] = 0.0  # no candidate at all
+    change[3, ::7] = 45.0  # ties: the first of equal values wins
+    got = _corners_many(change, threshold, spacing)
+    for row, corners in zip(change, got, strict=True):
+        vals = np.where(row > threshold, row, -np.inf)
+        want = []
+        while np.isfinite(vals.max()):
+            k = int(np.argmax(vals))
+            want.append(k)
+            d = np.abs(np.arange(n) - k)
+            vals[np.minimum(d, n - d) <= spacing] = -np.inf
+        np.testing.assert_array_equal(corners, sorted(want))
+    assert len(got[2]) == 0
