@@ -281,11 +281,125 @@ def evaluate_block(
     rss = cand.sumsq[ti] + ref.sumsq[si] - 2.0 * np.sqrt(dot * dot + crs * crs)
     sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[si]))
     k = offsets[kk]
+    if tol.point_tolerance > 0.0:
+        strict = np.zeros(base.shape, dtype=bool)
+        strict[ti, si] = True
+        rt, rs = np.nonzero(base & ~strict)
+        if len(rt):
+            extra = relaxed_entries(ref, cand, rs, rt, tol)
+            order = np.lexsort((np.r_[k, extra.k], np.r_[si, extra.si], np.r_[ti, extra.ti]))
+            ti, si, k = (
+                np.r_[ti, extra.ti][order],
+                np.r_[si, extra.si][order],
+                np.r_[k, extra.k][order],
+            )
+            sc, dot, crs = (
+                np.r_[sc, extra.score][order],
+                np.r_[dot, extra.dot][order],
+                np.r_[crs, extra.cross][order],
+            )
     if ref.hole_codes:
         ok, hole_score = _holes(ref, cand, (ti, si, np.arctan2(crs, dot)), tol)
         sc = sc + hole_score
         ti, si, k, sc, dot, crs = ti[ok], si[ok], k[ok], sc[ok], dot[ok], crs[ok]
     return BlockResult(ti, si, k, sc, dot, crs)
+
+
+def _sensitivity(pts: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Label measurements of packed boundaries and how much a point's error moves them.
+
+    Args:
+        pts: Relevant points, shape (G, n, 2), y-up, clockwise as seen.
+
+    Returns:
+        (values, gain), each shape (G, n, 3): per node the angle [deg], the length ratio and
+        half-chord / sagitta (`qshape.labels.measure`), and their change per unit of point
+        displacement: [deg / unit] for the angle, relative change per unit for the ratios
+        (sqrt(1/a^2 + 1/b^2) for the two lengths a, b each measurement divides).
+    """
+    g, n, _ = pts.shape
+    flat = pts.reshape(-1, 2)
+    prev, nxt = lb.ring_index(n)
+    row = (np.arange(g)[:, None] * n).repeat(n, axis=1).ravel()
+    before = flat[row + np.tile(prev, g)]
+    after = flat[row + np.tile(nxt, g)]
+    angle, _, ratio, chord_ratio = lb.measure(flat, before, after)
+    l1 = np.hypot(*(flat - before).T)
+    l2 = np.hypot(*(after - flat).T)
+    da = 0.5 * np.hypot(*(after - before).T)
+    db = np.hypot(*(flat - 0.5 * (before + after)).T)
+    tiny = np.finfo(np.float64).tiny
+    inv_l = np.sqrt(1.0 / np.maximum(l1, tiny) ** 2 + 1.0 / np.maximum(l2, tiny) ** 2)
+    inv_c = np.sqrt(1.0 / np.maximum(da, tiny) ** 2 + 1.0 / np.maximum(db, tiny) ** 2)
+    values = np.stack([angle, ratio, chord_ratio], axis=-1).reshape(g, n, 3)
+    gain = np.stack([np.degrees(inv_l), inv_l, inv_c], axis=-1).reshape(g, n, 3)
+    return values, gain
+
+
+def loose_codes(cand: Pack, rows: NDArray[np.int64], tol: Tolerances) -> NDArray[np.int64]:
+    """Node codes of candidates ``rows`` whose labels also admit what their points allow.
+
+    A measured tile's relevant points may lie ``tol.point_tolerance`` from where its design
+    puts them (manufacturing, edge roughness, pixels); each label then also admits its
+    neighbouring label when its measurement lies within the configured margin plus the
+    change such a displacement causes (`_sensitivity`: larger between short edges). Kind and
+    convexity are unchanged.
+
+    Returns:
+        Shape (len(rows), n) node codes.
+    """
+    values, gain = _sensitivity(cand.pts[rows])
+    g, n, _ = values.shape
+    extra = tol.point_tolerance * gain
+    masks = lb.widened_masks(values.reshape(-1, 3).T, extra.reshape(-1, 3).T, tol).reshape(3, g, n)
+    codes = cand.codes[rows]
+    curve = (codes & lb.KIND_BIT) == 1
+    a_mask = np.where(curve, (codes & lb.A_MASK) >> lb.A_MASK_SHIFT, masks[0])
+    t_mask = np.where(curve, masks[2], masks[1])
+    return np.asarray(
+        (codes & ~(lb.A_MASK | lb.T_MASK))
+        | (a_mask << lb.A_MASK_SHIFT)
+        | (t_mask << lb.T_MASK_SHIFT),
+        dtype=np.int64,
+    )
+
+
+def relaxed_entries(
+    ref: Pack,
+    cand: Pack,
+    si: NDArray[np.int64],
+    ti: NDArray[np.int64],
+    tol: Tolerances,
+) -> BlockResult:
+    """Entries of label-incompatible pairs that the point tolerance admits.
+
+    For each pair (reference ``si[p]``, candidate ``ti[p]``) and cyclic offset, the
+    candidate's `loose_codes` are compared with the reference's codes; the compatible
+    entries are aligned (2D Procrustes) and kept when their residual (as `Match.score`) is
+    at most ``tol.uncertainty_residual``. Holes are checked by the caller.
+
+    Returns:
+        The admitted entries, ordered by (candidate, reference, offset).
+    """
+    n = ref.codes.shape[1]
+    used, local = np.unique(ti, return_inverse=True)
+    loose = loose_codes(cand, used, tol)
+    idx = (np.arange(n)[None, :] + np.arange(n)[:, None]) % n  # (k, i)
+    ok = np.asarray(
+        lb.compatible(loose[local][:, idx], ref.codes[si][:, None, :]).all(axis=-1)
+    )  # (P, k)
+    p, k = np.nonzero(ok)
+    t, s = ti[p], si[p]
+    cp = cand.pts[t[:, None], idx[k]]  # (E, n, 2)
+    rp = ref.pts[s]
+    dot = np.einsum("end,end->e", cp, rp)
+    crs = np.einsum("en,en->e", cp[..., 0], rp[..., 1]) - np.einsum(
+        "en,en->e", cp[..., 1], rp[..., 0]
+    )
+    rss = np.maximum(cand.sumsq[t] + ref.sumsq[s] - 2.0 * np.sqrt(dot * dot + crs * crs), 0.0)
+    sc = np.sqrt(rss / (n * ref.area[s]))
+    near = sc <= tol.uncertainty_residual
+    return BlockResult(t[near], s[near], k[near], sc[near], dot[near], crs[near])
 
 
 def evaluate_pairs(
@@ -443,8 +557,10 @@ __all__ = [
     "equivalent_entries",
     "evaluate_block",
     "evaluate_pairs",
+    "loose_codes",
     "pack",
     "prefilter",
+    "relaxed_entries",
     "self_residuals",
     "take",
 ]

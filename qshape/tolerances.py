@@ -81,6 +81,15 @@ class Tolerances:
             canonical keys for one figure; beyond it the figure is looked up by a coarse key.
         tie_tolerance: Fraction of the figure's size within which two vertices count as equally
             high when choosing the uppermost-left starting vertex. Dimensionless.
+        point_tolerance: How far a measured tile's relevant points may lie from where its
+            design puts them (manufacturing tolerance, edge roughness, pixels), in the
+            figures' length unit (mm for designs; scale it with the camera, as `joint_width`).
+            When a pair's labels disagree, each candidate label also admits its neighbouring
+            label when its measurement lies within the configured margin plus the change such
+            a displacement causes (more between short edges). 0: off, labels alone decide.
+        uncertainty_residual: Pairs matched through `point_tolerance` must also align with
+            a residual (as `Match.score`) of at most this fraction of sqrt(area).
+            Dimensionless.
     """
 
     right_angle_deg: tuple[float, ...] = (85.0, 95.0)
@@ -99,6 +108,8 @@ class Tolerances:
     symmetry_tolerance: float = 0.02
     max_key_variants: int = 64
     tie_tolerance: float = 1e-6
+    point_tolerance: float = 0.5
+    uncertainty_residual: float = 0.05
 
     def __post_init__(self) -> None:
         """Validate bands (ordered, positive) and margins (non-negative, narrower than bands).
@@ -129,6 +140,8 @@ class Tolerances:
             "symmetry_residual",
             "symmetry_tolerance",
             "tie_tolerance",
+            "point_tolerance",
+            "uncertainty_residual",
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
