@@ -254,12 +254,16 @@ def evaluate_block(
     tol: Tolerances,
     use_color: bool,
     base: NDArray[np.bool_] | None = None,
+    *,
+    relax: bool = False,
 ) -> BlockResult:
     """Match every candidate against every reference of two packs, vectorised.
 
     Both packs must have the same node count, hole count and hole node counts; ``base`` is
     `prefilter`'s result when already known. The alignment of all pairs and offsets is one
-    matrix product; scores and holes are computed only for label-compatible entries.
+    matrix product; scores and holes are computed only for label-compatible entries. With
+    ``relax``, pairs without a label-compatible offset get `relaxed_entries` (the point
+    tolerance).
     """
     n = ref.codes.shape[1]
     s_count = ref.codes.shape[0]
@@ -281,7 +285,7 @@ def evaluate_block(
     rss = cand.sumsq[ti] + ref.sumsq[si] - 2.0 * np.sqrt(dot * dot + crs * crs)
     sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[si]))
     k = offsets[kk]
-    if tol.point_tolerance > 0.0:
+    if relax and tol.point_tolerance > 0.0:
         strict = np.zeros(base.shape, dtype=bool)
         strict[ti, si] = True
         rt, rs = np.nonzero(base & ~strict)
@@ -374,32 +378,34 @@ def relaxed_entries(
     """Entries of label-incompatible pairs that the point tolerance admits.
 
     For each pair (reference ``si[p]``, candidate ``ti[p]``) and cyclic offset, the
-    candidate's `loose_codes` are compared with the reference's codes; the compatible
-    entries are aligned (2D Procrustes) and kept when their residual (as `Match.score`) is
-    at most ``tol.uncertainty_residual``. Holes are checked by the caller.
+    candidate's relevant points are aligned onto the reference's (2D Procrustes); entries
+    whose residual (as `Match.score`) is at most ``tol.uncertainty_residual`` are kept when
+    the candidate's `loose_codes` are compatible with the reference's codes. Holes are
+    checked by the caller.
 
     Returns:
         The admitted entries, ordered by (candidate, reference, offset).
     """
     n = ref.codes.shape[1]
-    used, local = np.unique(ti, return_inverse=True)
-    loose = loose_codes(cand, used, tol)
     idx = (np.arange(n)[None, :] + np.arange(n)[:, None]) % n  # (k, i)
-    ok = np.asarray(
-        lb.compatible(loose[local][:, idx], ref.codes[si][:, None, :]).all(axis=-1)
-    )  # (P, k)
-    p, k = np.nonzero(ok)
-    t, s = ti[p], si[p]
-    cp = cand.pts[t[:, None], idx[k]]  # (E, n, 2)
-    rp = ref.pts[s]
-    dot = np.einsum("end,end->e", cp, rp)
-    crs = np.einsum("en,en->e", cp[..., 0], rp[..., 1]) - np.einsum(
-        "en,en->e", cp[..., 1], rp[..., 0]
+    cp = cand.pts[ti][:, idx]  # (P, k, n, 2)
+    rp = ref.pts[si]  # (P, n, 2)
+    dot = np.einsum("pknd,pnd->pk", cp, rp)
+    crs = np.einsum("pkn,pn->pk", cp[..., 0], rp[..., 1]) - np.einsum(
+        "pkn,pn->pk", cp[..., 1], rp[..., 0]
     )
-    rss = np.maximum(cand.sumsq[t] + ref.sumsq[s] - 2.0 * np.sqrt(dot * dot + crs * crs), 0.0)
-    sc = np.sqrt(rss / (n * ref.area[s]))
-    near = sc <= tol.uncertainty_residual
-    return BlockResult(t[near], s[near], k[near], sc[near], dot[near], crs[near])
+    rss = cand.sumsq[ti][:, None] + ref.sumsq[si][:, None] - 2.0 * np.hypot(dot, crs)
+    sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[si])[:, None])
+    p, k = np.nonzero(sc <= tol.uncertainty_residual)
+    if len(p) == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return BlockResult(empty, empty, empty, np.zeros(0), np.zeros(0), np.zeros(0))
+    t, s = ti[p], si[p]
+    used, local = np.unique(t, return_inverse=True)
+    loose = loose_codes(cand, used, tol)[local[:, None], idx[k]]  # (E, n)
+    ok = np.asarray(lb.compatible(loose, ref.codes[s]).all(axis=1))
+    p, k = p[ok], k[ok]
+    return BlockResult(ti[p], si[p], k, sc[p, k], dot[p, k], crs[p, k])
 
 
 def evaluate_pairs(

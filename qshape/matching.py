@@ -176,7 +176,7 @@ def match(
     if ref.type_hole != cand.type_hole or ref.type_curve != cand.type_curve:
         return None
     ref_pack = pack([ref])
-    res = evaluate_block(ref_pack, pack([cand]), tol, use_color)
+    res = evaluate_block(ref_pack, pack([cand]), tol, use_color, relax=True)
     if len(res.k) == 0:
         return None
     scores = res.score
