@@ -302,6 +302,7 @@ def evaluate_block(
                 np.r_[dot, extra.dot][order],
                 np.r_[crs, extra.cross][order],
             )
+    dot, crs = turn_sums(ref, cand, (ti, si, k), tol, (dot, crs))
     if ref.hole_codes:
         ok, hole_score = _holes(ref, cand, (ti, si, np.arctan2(crs, dot)), tol)
         sc = sc + hole_score
@@ -338,6 +339,45 @@ def _sensitivity(pts: FloatArray) -> tuple[FloatArray, FloatArray]:
     values = np.stack([angle, ratio, chord_ratio], axis=-1).reshape(g, n, 3)
     gain = np.stack([np.degrees(inv_l), inv_l, inv_c], axis=-1).reshape(g, n, 3)
     return values, gain
+
+
+def turn_sums(
+    ref: Pack,
+    cand: Pack,
+    entries: tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]],
+    tol: Tolerances,
+    plain: tuple[FloatArray, FloatArray],
+) -> tuple[FloatArray, FloatArray]:
+    """Weighted sums whose angle atan2(cross, dot) is the rotation of each entry.
+
+    A curve's maximum-curvature point lies on a flat maximum: its place along the curve is
+    measured far less well than a corner's, so it weighs ``tol.curve_point_weight`` in the
+    least-squares rotation (vertices 1). The residual score stays unweighted.
+
+    Args:
+        ref: Reference pack.
+        cand: Candidate pack.
+        entries: (candidate index, reference index, cyclic offset), each shape (E,).
+        tol: ``curve_point_weight``.
+        plain: The unweighted (dot, cross) sums of the entries, returned as they are when
+            no weight differs from 1.
+
+    Returns:
+        (dot, cross), each shape (E,).
+    """
+    ti, si, k = entries
+    curve = (ref.codes[si] & lb.KIND_BIT) == 1  # (E, n)
+    if tol.curve_point_weight == 1.0 or not curve.any():
+        return plain
+    n = ref.codes.shape[1]
+    w = np.where(curve, tol.curve_point_weight, 1.0)
+    cp = cand.pts[ti[:, None], (np.arange(n)[None, :] + k[:, None]) % n]  # (E, n, 2)
+    rp = ref.pts[si] * w[..., None]
+    dot = np.einsum("end,end->e", cp, rp)
+    crs = np.einsum("en,en->e", cp[..., 0], rp[..., 1]) - np.einsum(
+        "en,en->e", cp[..., 1], rp[..., 0]
+    )
+    return dot, crs
 
 
 def loose_codes(cand: Pack, rows: NDArray[np.int64], tol: Tolerances) -> NDArray[np.int64]:
@@ -442,6 +482,7 @@ def evaluate_pairs(
     )
     rss = cand.sumsq[pi] + ref.sumsq[pi] - 2.0 * np.sqrt(dot * dot + crs * crs)
     sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[pi]))
+    dot, crs = turn_sums(ref, cand, (pi, pi, k), tol, (dot, crs))
     theta = np.arctan2(crs, dot)
     if ref.hole_codes:
         hok, hole_score = _holes(ref, cand, (pi, pi, theta), tol)
@@ -569,4 +610,5 @@ __all__ = [
     "relaxed_entries",
     "self_residuals",
     "take",
+    "turn_sums",
 ]

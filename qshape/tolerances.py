@@ -90,6 +90,9 @@ class Tolerances:
         uncertainty_residual: Pairs matched through `point_tolerance` must also align with
             a residual (as `Match.score`) of at most this fraction of sqrt(area).
             Dimensionless.
+        curve_point_weight: Weight of a curve's maximum-curvature point in the least-squares
+            rotation of a match (a vertex weighs 1): on a flat maximum its place along the
+            curve is measured much less well than a corner's. In [0, 1]. Dimensionless.
     """
 
     right_angle_deg: tuple[float, ...] = (85.0, 95.0)
@@ -110,6 +113,7 @@ class Tolerances:
     tie_tolerance: float = 1e-6
     point_tolerance: float = 0.5
     uncertainty_residual: float = 0.05
+    curve_point_weight: float = 0.25
 
     def __post_init__(self) -> None:
         """Validate bands (ordered, positive) and margins (non-negative, narrower than bands).
@@ -165,6 +169,10 @@ class Tolerances:
                     f"{margin_name}={margin} is too wide for {band_name}={(blo, bhi)}: "
                     f"(1 + margin)^2 must be < high / low = {bhi / blo:.4g}"
                 )
+        if not (math.isfinite(self.curve_point_weight) and 0.0 <= self.curve_point_weight <= 1.0):
+            raise ToleranceError(
+                f"curve_point_weight must be in [0, 1], got {self.curve_point_weight!r}"
+            )
         if self.convexity_margin_deg >= 90.0:
             raise ToleranceError("convexity_margin_deg must be < 90")
         if self.cone_margin_deg >= 22.5:
