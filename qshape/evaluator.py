@@ -255,15 +255,16 @@ def evaluate_block(
     use_color: bool,
     base: NDArray[np.bool_] | None = None,
     *,
-    relax: bool = False,
+    measured: bool = False,
 ) -> BlockResult:
     """Match every candidate against every reference of two packs, vectorised.
 
     Both packs must have the same node count, hole count and hole node counts; ``base`` is
     `prefilter`'s result when already known. The alignment of all pairs and offsets is one
     matrix product; scores and holes are computed only for label-compatible entries. With
-    ``relax``, pairs without a label-compatible offset get `relaxed_entries` (the point
-    tolerance).
+    ``measured`` (`qshape.match`: candidates measured from pictures), pairs without a
+    label-compatible offset get `relaxed_entries` (the point tolerance), and rotations weigh
+    curve points by ``tol.curve_point_weight`` (`turn_sums`); `qshape.assign` leaves it off.
     """
     n = ref.codes.shape[1]
     s_count = ref.codes.shape[0]
@@ -285,7 +286,7 @@ def evaluate_block(
     rss = cand.sumsq[ti] + ref.sumsq[si] - 2.0 * np.sqrt(dot * dot + crs * crs)
     sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[si]))
     k = offsets[kk]
-    if relax and tol.point_tolerance > 0.0:
+    if measured and tol.point_tolerance > 0.0:
         strict = np.zeros(base.shape, dtype=bool)
         strict[ti, si] = True
         rt, rs = np.nonzero(base & ~strict)
@@ -302,7 +303,8 @@ def evaluate_block(
                 np.r_[dot, extra.dot][order],
                 np.r_[crs, extra.cross][order],
             )
-    dot, crs = turn_sums(ref, cand, (ti, si, k), tol, (dot, crs))
+    if measured:
+        dot, crs = turn_sums(ref, cand, (ti, si, k), tol, (dot, crs))
     if ref.hole_codes:
         ok, hole_score = _holes(ref, cand, (ti, si, np.arctan2(crs, dot)), tol)
         sc = sc + hole_score
@@ -482,7 +484,6 @@ def evaluate_pairs(
     )
     rss = cand.sumsq[pi] + ref.sumsq[pi] - 2.0 * np.sqrt(dot * dot + crs * crs)
     sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[pi]))
-    dot, crs = turn_sums(ref, cand, (pi, pi, k), tol, (dot, crs))
     theta = np.arctan2(crs, dot)
     if ref.hole_codes:
         hok, hole_score = _holes(ref, cand, (pi, pi, theta), tol)

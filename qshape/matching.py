@@ -19,7 +19,7 @@ The cyclic comparison also gives the correspondence, hence the rotation that tur
 onto the reference: the least-squares rotation (2D Procrustes, no reflection) of the candidate's
 relevant points onto the reference's under that correspondence, a curve's maximum-curvature
 point weighing ``Tolerances.curve_point_weight`` (its place along a flat maximum is measured far
-less well than a corner's). Holes are compared after that
+less well than a corner's; `qshape.assign` weighs every point alike). Holes are compared after that
 rotation, in the reference's cardinal frame; a hole boundary is compared cyclically (a deliberate
 robustness change from the paper's fixed start vertex, which a noisy vertex can move).
 """
@@ -188,7 +188,7 @@ def match(
     if ref.type_hole != cand.type_hole or ref.type_curve != cand.type_curve:
         return None
     ref_pack = pack([ref])
-    res = evaluate_block(ref_pack, pack([cand]), tol, use_color, relax=True)
+    res = evaluate_block(ref_pack, pack([cand]), tol, use_color, measured=True)
     if len(res.k) == 0:
         return None
     scores = res.score

@@ -86,12 +86,13 @@ class Tolerances:
             figures' length unit (mm for designs; scale it with the camera, as `joint_width`).
             When a pair's labels disagree, each candidate label also admits its neighbouring
             label when its measurement lies within the configured margin plus the change such
-            a displacement causes (more between short edges). 0: off, labels alone decide.
+            a displacement causes (more between short edges). Used by `qshape.match`; the
+            canonical keys of `qshape.assign` stay on the labels alone. 0: off.
         uncertainty_residual: Pairs matched through `point_tolerance` must also align with
             a residual (as `Match.score`) of at most this fraction of sqrt(area).
             Dimensionless.
         curve_point_weight: Weight of a curve's maximum-curvature point in the least-squares
-            rotation of a match (a vertex weighs 1): on a flat maximum its place along the
+            rotation `qshape.match` returns (a vertex weighs 1; `qshape.assign` weighs all alike): on a flat maximum its place along the
             curve is measured much less well than a corner's. In [0, 1]. Dimensionless.
     """
 
