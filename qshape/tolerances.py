@@ -92,8 +92,9 @@ class Tolerances:
             a residual (as `Match.score`) of at most this fraction of sqrt(area).
             Dimensionless.
         curve_point_weight: Weight of a curve's maximum-curvature point in the least-squares
-            rotation `qshape.match` returns (a vertex weighs 1; `qshape.assign` weighs all alike): on a flat maximum its place along the
-            curve is measured much less well than a corner's. In [0, 1]. Dimensionless.
+            rotation `qshape.match` returns (a vertex weighs 1; `qshape.assign` weighs all
+            alike): on a flat maximum its place along the curve is measured much less well
+            than a corner's. In [0, 1]. Dimensionless.
     """
 
     right_angle_deg: tuple[float, ...] = (85.0, 95.0)
