@@ -143,11 +143,15 @@ def run_level(  # noqa: PLR0914, PLR0915, PLR0917
     c: dict[str, float] = defaultdict(float)
     per_shape: dict[str, list[int]] = defaultdict(lambda: [0, 0])
     shape_names: dict[str, str] = {}
+    mm_tol = Tolerances.load()
     rot_errs: list[float] = []
     failures: list[str] = []
     for name in bench.designs:
         design = Design.load(name)
-        tol = Tolerances.load(joint_width=design.joint * s)
+        # Lengths in the design's mm, scaled to the picture's pixels.
+        tol = Tolerances.load(
+            joint_width=design.joint * s, point_tolerance=mm_tol.point_tolerance * s
+        )
         classes = _Classes(design, s, tol)
         for _ in range(images):
             params = _synth_for(level, sp, rng)

@@ -254,12 +254,17 @@ def evaluate_block(
     tol: Tolerances,
     use_color: bool,
     base: NDArray[np.bool_] | None = None,
+    *,
+    measured: bool = False,
 ) -> BlockResult:
     """Match every candidate against every reference of two packs, vectorised.
 
     Both packs must have the same node count, hole count and hole node counts; ``base`` is
     `prefilter`'s result when already known. The alignment of all pairs and offsets is one
-    matrix product; scores and holes are computed only for label-compatible entries.
+    matrix product; scores and holes are computed only for label-compatible entries. With
+    ``measured`` (`qshape.match`: candidates measured from pictures), pairs without a
+    label-compatible offset get `relaxed_entries` (the point tolerance), and rotations weigh
+    curve points by ``tol.curve_point_weight`` (`turn_sums`); `qshape.assign` leaves it off.
     """
     n = ref.codes.shape[1]
     s_count = ref.codes.shape[0]
@@ -281,11 +286,168 @@ def evaluate_block(
     rss = cand.sumsq[ti] + ref.sumsq[si] - 2.0 * np.sqrt(dot * dot + crs * crs)
     sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[si]))
     k = offsets[kk]
+    if measured and tol.point_tolerance > 0.0:
+        strict = np.zeros(base.shape, dtype=bool)
+        strict[ti, si] = True
+        rt, rs = np.nonzero(base & ~strict)
+        if len(rt):
+            extra = relaxed_entries(ref, cand, rs, rt, tol)
+            order = np.lexsort((np.r_[k, extra.k], np.r_[si, extra.si], np.r_[ti, extra.ti]))
+            ti, si, k = (
+                np.r_[ti, extra.ti][order],
+                np.r_[si, extra.si][order],
+                np.r_[k, extra.k][order],
+            )
+            sc, dot, crs = (
+                np.r_[sc, extra.score][order],
+                np.r_[dot, extra.dot][order],
+                np.r_[crs, extra.cross][order],
+            )
+    if measured:
+        dot, crs = turn_sums(ref, cand, (ti, si, k), tol, (dot, crs))
     if ref.hole_codes:
         ok, hole_score = _holes(ref, cand, (ti, si, np.arctan2(crs, dot)), tol)
         sc = sc + hole_score
         ti, si, k, sc, dot, crs = ti[ok], si[ok], k[ok], sc[ok], dot[ok], crs[ok]
     return BlockResult(ti, si, k, sc, dot, crs)
+
+
+def _sensitivity(pts: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Label measurements of packed boundaries and how much a point's error moves them.
+
+    Args:
+        pts: Relevant points, shape (G, n, 2), y-up, clockwise as seen.
+
+    Returns:
+        (values, gain), each shape (G, n, 3): per node the angle [deg], the length ratio and
+        half-chord / sagitta (`qshape.labels.measure`), and their change per unit of point
+        displacement: [deg / unit] for the angle, relative change per unit for the ratios
+        (sqrt(1/a^2 + 1/b^2) for the two lengths a, b each measurement divides).
+    """
+    g, n, _ = pts.shape
+    flat = pts.reshape(-1, 2)
+    prev, nxt = lb.ring_index(n)
+    row = (np.arange(g)[:, None] * n).repeat(n, axis=1).ravel()
+    before = flat[row + np.tile(prev, g)]
+    after = flat[row + np.tile(nxt, g)]
+    angle, _, ratio, chord_ratio = lb.measure(flat, before, after)
+    l1 = np.hypot(*(flat - before).T)
+    l2 = np.hypot(*(after - flat).T)
+    da = 0.5 * np.hypot(*(after - before).T)
+    db = np.hypot(*(flat - 0.5 * (before + after)).T)
+    tiny = np.finfo(np.float64).tiny
+    inv_l = np.sqrt(1.0 / np.maximum(l1, tiny) ** 2 + 1.0 / np.maximum(l2, tiny) ** 2)
+    inv_c = np.sqrt(1.0 / np.maximum(da, tiny) ** 2 + 1.0 / np.maximum(db, tiny) ** 2)
+    values = np.stack([angle, ratio, chord_ratio], axis=-1).reshape(g, n, 3)
+    gain = np.stack([np.degrees(inv_l), inv_l, inv_c], axis=-1).reshape(g, n, 3)
+    return values, gain
+
+
+def turn_sums(
+    ref: Pack,
+    cand: Pack,
+    entries: tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]],
+    tol: Tolerances,
+    plain: tuple[FloatArray, FloatArray],
+) -> tuple[FloatArray, FloatArray]:
+    """Weighted sums whose angle atan2(cross, dot) is the rotation of each entry.
+
+    A curve's maximum-curvature point lies on a flat maximum: its place along the curve is
+    measured far less well than a corner's, so it weighs ``tol.curve_point_weight`` in the
+    least-squares rotation (vertices 1). The residual score stays unweighted.
+
+    Args:
+        ref: Reference pack.
+        cand: Candidate pack.
+        entries: (candidate index, reference index, cyclic offset), each shape (E,).
+        tol: ``curve_point_weight``.
+        plain: The unweighted (dot, cross) sums of the entries, returned as they are when
+            no weight differs from 1.
+
+    Returns:
+        (dot, cross), each shape (E,).
+    """
+    ti, si, k = entries
+    curve = (ref.codes[si] & lb.KIND_BIT) == 1  # (E, n)
+    if tol.curve_point_weight == 1.0 or not curve.any():
+        return plain
+    n = ref.codes.shape[1]
+    w = np.where(curve, tol.curve_point_weight, 1.0)
+    cp = cand.pts[ti[:, None], (np.arange(n)[None, :] + k[:, None]) % n]  # (E, n, 2)
+    rp = ref.pts[si] * w[..., None]
+    dot = np.einsum("end,end->e", cp, rp)
+    crs = np.einsum("en,en->e", cp[..., 0], rp[..., 1]) - np.einsum(
+        "en,en->e", cp[..., 1], rp[..., 0]
+    )
+    return dot, crs
+
+
+def loose_codes(cand: Pack, rows: NDArray[np.int64], tol: Tolerances) -> NDArray[np.int64]:
+    """Node codes of candidates ``rows`` whose labels also admit what their points allow.
+
+    A measured tile's relevant points may lie ``tol.point_tolerance`` from where its design
+    puts them (manufacturing, edge roughness, pixels); each label then also admits its
+    neighbouring label when its measurement lies within the configured margin plus the
+    change such a displacement causes (`_sensitivity`: larger between short edges). Kind and
+    convexity are unchanged.
+
+    Returns:
+        Shape (len(rows), n) node codes.
+    """
+    values, gain = _sensitivity(cand.pts[rows])
+    g, n, _ = values.shape
+    extra = tol.point_tolerance * gain
+    masks = lb.widened_masks(values.reshape(-1, 3).T, extra.reshape(-1, 3).T, tol).reshape(3, g, n)
+    codes = cand.codes[rows]
+    curve = (codes & lb.KIND_BIT) == 1
+    a_mask = np.where(curve, (codes & lb.A_MASK) >> lb.A_MASK_SHIFT, masks[0])
+    t_mask = np.where(curve, masks[2], masks[1])
+    return np.asarray(
+        (codes & ~(lb.A_MASK | lb.T_MASK))
+        | (a_mask << lb.A_MASK_SHIFT)
+        | (t_mask << lb.T_MASK_SHIFT),
+        dtype=np.int64,
+    )
+
+
+def relaxed_entries(
+    ref: Pack,
+    cand: Pack,
+    si: NDArray[np.int64],
+    ti: NDArray[np.int64],
+    tol: Tolerances,
+) -> BlockResult:
+    """Entries of label-incompatible pairs that the point tolerance admits.
+
+    For each pair (reference ``si[p]``, candidate ``ti[p]``) and cyclic offset, the
+    candidate's relevant points are aligned onto the reference's (2D Procrustes); entries
+    whose residual (as `Match.score`) is at most ``tol.uncertainty_residual`` are kept when
+    the candidate's `loose_codes` are compatible with the reference's codes. Holes are
+    checked by the caller.
+
+    Returns:
+        The admitted entries, ordered by (candidate, reference, offset).
+    """
+    n = ref.codes.shape[1]
+    idx = (np.arange(n)[None, :] + np.arange(n)[:, None]) % n  # (k, i)
+    cp = cand.pts[ti][:, idx]  # (P, k, n, 2)
+    rp = ref.pts[si]  # (P, n, 2)
+    dot = np.einsum("pknd,pnd->pk", cp, rp)
+    crs = np.einsum("pkn,pn->pk", cp[..., 0], rp[..., 1]) - np.einsum(
+        "pkn,pn->pk", cp[..., 1], rp[..., 0]
+    )
+    rss = cand.sumsq[ti][:, None] + ref.sumsq[si][:, None] - 2.0 * np.hypot(dot, crs)
+    sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[si])[:, None])
+    p, k = np.nonzero(sc <= tol.uncertainty_residual)
+    if len(p) == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return BlockResult(empty, empty, empty, np.zeros(0), np.zeros(0), np.zeros(0))
+    t, s = ti[p], si[p]
+    used, local = np.unique(t, return_inverse=True)
+    loose = loose_codes(cand, used, tol)[local[:, None], idx[k]]  # (E, n)
+    ok = np.asarray(lb.compatible(loose, ref.codes[s]).all(axis=1))
+    p, k = p[ok], k[ok]
+    return BlockResult(ti[p], si[p], k, sc[p, k], dot[p, k], crs[p, k])
 
 
 def evaluate_pairs(
@@ -443,8 +605,11 @@ __all__ = [
     "equivalent_entries",
     "evaluate_block",
     "evaluate_pairs",
+    "loose_codes",
     "pack",
     "prefilter",
+    "relaxed_entries",
     "self_residuals",
     "take",
+    "turn_sums",
 ]

@@ -103,6 +103,39 @@ def _band3(value: FloatArray, b: _Bands) -> tuple[CodeArray, CodeArray]:
     return primary, mask
 
 
+def widened_masks(value: FloatArray, extra: FloatArray, tol: Tolerances) -> CodeArray:
+    """Admissible label masks with each measurement's own uncertainty added to the margins.
+
+    The configured margins stay; ``extra`` widens them per measurement (a value whose
+    uncertainty reaches across a band edge also admits the neighbouring label).
+
+    Args:
+        value: Measurements, shape (3, n): angle [deg], length ratio, half-chord / sagitta.
+        extra: Added margins, shape (3, n): [deg] for the angle, relative (as
+            ``length_margin``) for the two ratios; >= 0.
+        tol: Bands and configured margins.
+
+    Returns:
+        Shape (3, n) admissible bit masks (rows: A, L, TC), as in the node codes.
+    """
+    b = _bands(tol)
+    fixed = np.array([[tol.angle_margin_deg], [tol.length_margin], [tol.semicircle_margin]])
+    m = fixed + extra
+    rel = np.array([[False], [True], [True]])
+    f = 1.0 + m
+    lo_amb = (np.where(rel, b.lo / f, b.lo - m), np.where(rel, b.lo * f, b.lo + m))
+    hi_amb = (np.where(rel, b.hi / f, b.hi - m), np.where(rel, b.hi * f, b.hi + m))
+    primary = np.where(value < b.lo, b.below, np.where(value > b.hi, b.above, b.inside))
+    near_lo = (value >= lo_amb[0]) & (value <= lo_amb[1])
+    near_hi = (value >= hi_amb[0]) & (value <= hi_amb[1])
+    return np.asarray(
+        (1 << primary)
+        | (near_lo * ((1 << b.below) | (1 << b.inside)))
+        | (near_hi * ((1 << b.inside) | (1 << b.above))),
+        dtype=np.int64,
+    )
+
+
 @lru_cache(maxsize=256)
 def ring_index(n: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Index arrays of the previous and next point around a closed boundary of n points."""
@@ -262,6 +295,7 @@ __all__ = [
     "codes_from",
     "measure",
     "ring_index",
+    "widened_masks",
     "node_codes",
     "primary_code",
 ]

@@ -5,9 +5,21 @@ agree, their type flags agree, their outer node strings are equal cyclically, an
 agree in position and boundary. Here "equal" means compatible: every label component has a
 common admissible label, so measurements near a band edge still match (see `qshape.labels`).
 
+A measured tile is not its design: its relevant points may lie up to
+``Tolerances.point_tolerance`` away (manufacturing, rough edges, pixels), and between short
+edges that moves an angle or a length ratio further than the configured margins. So when a
+pair has no label-compatible offset, each candidate label also admits its neighbouring label
+when its measurement lies within the configured margin plus the change that displacement
+causes (computed per node from the candidate's own edge lengths); such a pair matches only if
+its alignment residual is at most ``Tolerances.uncertainty_residual``. Labels and bands stay
+qualitative; only the admissible neighbours widen, and only as far as the tolerance reaches.
+`qshape.assign` looks tiles up by their exact labels' canonical keys and does not use it.
+
 The cyclic comparison also gives the correspondence, hence the rotation that turns the candidate
 onto the reference: the least-squares rotation (2D Procrustes, no reflection) of the candidate's
-relevant points onto the reference's under that correspondence. Holes are compared after that
+relevant points onto the reference's under that correspondence, a curve's maximum-curvature
+point weighing ``Tolerances.curve_point_weight`` (its place along a flat maximum is measured far
+less well than a corner's; `qshape.assign` weighs every point alike). Holes are compared after that
 rotation, in the reference's cardinal frame; a hole boundary is compared cyclically (a deliberate
 robustness change from the paper's fixed start vertex, which a noisy vertex can move).
 """
@@ -176,7 +188,7 @@ def match(
     if ref.type_hole != cand.type_hole or ref.type_curve != cand.type_curve:
         return None
     ref_pack = pack([ref])
-    res = evaluate_block(ref_pack, pack([cand]), tol, use_color)
+    res = evaluate_block(ref_pack, pack([cand]), tol, use_color, measured=True)
     if len(res.k) == 0:
         return None
     scores = res.score

@@ -81,6 +81,20 @@ class Tolerances:
             canonical keys for one figure; beyond it the figure is looked up by a coarse key.
         tie_tolerance: Fraction of the figure's size within which two vertices count as equally
             high when choosing the uppermost-left starting vertex. Dimensionless.
+        point_tolerance: How far a measured tile's relevant points may lie from where its
+            design puts them (manufacturing tolerance, edge roughness, pixels), in the
+            figures' length unit (mm for designs; scale it with the camera, as `joint_width`).
+            When a pair's labels disagree, each candidate label also admits its neighbouring
+            label when its measurement lies within the configured margin plus the change such
+            a displacement causes (more between short edges). Used by `qshape.match`; the
+            canonical keys of `qshape.assign` stay on the labels alone. 0: off.
+        uncertainty_residual: Pairs matched through `point_tolerance` must also align with
+            a residual (as `Match.score`) of at most this fraction of sqrt(area).
+            Dimensionless.
+        curve_point_weight: Weight of a curve's maximum-curvature point in the least-squares
+            rotation `qshape.match` returns (a vertex weighs 1; `qshape.assign` weighs all
+            alike): on a flat maximum its place along the curve is measured much less well
+            than a corner's. In [0, 1]. Dimensionless.
     """
 
     right_angle_deg: tuple[float, ...] = (85.0, 95.0)
@@ -99,6 +113,9 @@ class Tolerances:
     symmetry_tolerance: float = 0.02
     max_key_variants: int = 64
     tie_tolerance: float = 1e-6
+    point_tolerance: float = 0.5
+    uncertainty_residual: float = 0.05
+    curve_point_weight: float = 0.25
 
     def __post_init__(self) -> None:
         """Validate bands (ordered, positive) and margins (non-negative, narrower than bands).
@@ -129,6 +146,8 @@ class Tolerances:
             "symmetry_residual",
             "symmetry_tolerance",
             "tie_tolerance",
+            "point_tolerance",
+            "uncertainty_residual",
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
@@ -152,6 +171,10 @@ class Tolerances:
                     f"{margin_name}={margin} is too wide for {band_name}={(blo, bhi)}: "
                     f"(1 + margin)^2 must be < high / low = {bhi / blo:.4g}"
                 )
+        if not (math.isfinite(self.curve_point_weight) and 0.0 <= self.curve_point_weight <= 1.0):
+            raise ToleranceError(
+                f"curve_point_weight must be in [0, 1], got {self.curve_point_weight!r}"
+            )
         if self.convexity_margin_deg >= 90.0:
             raise ToleranceError("convexity_margin_deg must be < 90")
         if self.cone_margin_deg >= 22.5:

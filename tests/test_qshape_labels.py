@@ -160,12 +160,26 @@ def rhombus(angle_deg: float, side: float = 20.0, rot: float = 0.0) -> Figure:
 def test_copies_across_an_angle_edge_still_match(a, b):
     ra, rb = rhombus(a), rhombus(b, rot=0.7)
     assert qshape.match(ra, rb) is not None
-    # Without margins the two copies, on opposite sides of an edge, would not match.
-    assert qshape.match(ra, rb, Tolerances(angle_margin_deg=0.0)) is None
+    # Without margins (labels alone) the two copies, on opposite sides of an edge, would not match.
+    assert qshape.match(ra, rb, Tolerances(angle_margin_deg=0.0, point_tolerance=0.0)) is None
 
 
 def test_far_apart_angles_do_not_match():
-    assert qshape.match(rhombus(92.0), rhombus(98.0)) is None
+    assert qshape.match(rhombus(92.0), rhombus(98.0), Tolerances(point_tolerance=0.0)) is None
+    assert qshape.match(rhombus(92.0), rhombus(102.0)) is None
+
+
+def test_point_tolerance_admits_what_a_displaced_vertex_reaches():
+    # 20 mm edges: a 0.5 mm displacement turns an angle by ~2 deg, so 98 deg (3 deg past the
+    # right-angle band, 1 deg past its 2 deg margin) may be a 92 deg design; 102 deg may not.
+    tol = Tolerances(point_tolerance=0.5)
+    assert qshape.match(rhombus(92.0), rhombus(98.0, rot=0.4), tol) is not None
+    assert (
+        qshape.match(rhombus(92.0), rhombus(98.0, rot=0.4), Tolerances(point_tolerance=0.2)) is None
+    )
+    # Longer edges: the same displacement turns the angle less.
+    big = Tolerances(point_tolerance=0.5, check_size=False)
+    assert qshape.match(rhombus(92.0, side=60.0), rhombus(98.0, side=60.0), big) is None
 
 
 @pytest.mark.parametrize(("a", "b"), [(1.24, 1.26), (0.79, 0.81)])
@@ -174,7 +188,12 @@ def test_copies_across_a_length_edge_still_match(a, b):
         return Figure.from_polygon([[0, 0], [20, 0], [20, 20 * ratio], [0, 20 * ratio]])
 
     assert qshape.match(kite(a), kite(b), Tolerances(check_size=False)) is not None
-    assert qshape.match(kite(a), kite(b), Tolerances(check_size=False, length_margin=0.0)) is None
+    assert (
+        qshape.match(
+            kite(a), kite(b), Tolerances(check_size=False, length_margin=0.0, point_tolerance=0.0)
+        )
+        is None
+    )
 
 
 @pytest.mark.parametrize(("a", "b"), [(1.09, 1.11), (0.89, 0.91)])
@@ -186,7 +205,12 @@ def test_copies_across_a_semicircle_edge_still_match(a, b):
 
     loose = Tolerances(check_size=False)
     assert qshape.match(arc(a), arc(b), loose) is not None
-    assert qshape.match(arc(a), arc(b), Tolerances(check_size=False, semicircle_margin=0.0)) is None
+    assert (
+        qshape.match(
+            arc(a), arc(b), Tolerances(check_size=False, semicircle_margin=0.0, point_tolerance=0.0)
+        )
+        is None
+    )
 
 
 def test_copies_across_convexity_edge_still_match():
