@@ -25,13 +25,13 @@ def _best(cand: Description, refs: dict[str, Description], tol: Tolerances) -> s
 
 @pytest.fixture(scope="module")
 def trencadis_pictures():
-    """Drawn trencadis pictures (0.3 mm rough edges, 0.5 mm vertex jitter) and their figures."""
+    """Drawn trencadis pictures (0.4 mm rough edges, 0.5 mm vertex jitter) and their figures."""
     sp = SynthParams.load()
     design = Design.load("trencadis")
-    params = replace(sp, effects=CameraEffects(edge_roughness_mm=0.3))
+    params = replace(sp, effects=CameraEffects(edge_roughness_mm=0.4))
     ep = ExtractParams.load()
     pictures = []
-    for seed in (4, 26):
+    for seed in (26, 31):
         img = generate(design, 14, np.random.default_rng(seed), params)
         pictures.append((img, extract_detailed(img.image, ep).figures))
     return sp.px_per_mm, design, pictures
@@ -63,8 +63,8 @@ def test_point_tolerance_recovers_tiles_whose_labels_cross_a_band(trencadis_pict
                 wrong += key is not None and key != t.slot.shape_key
         results[point_mm] = (right, wrong)
     # A tile whose jittered vertices move a label past its band's margin matches no class
-    # (seed 26), or, worse, only a neighbouring class (seed 4: a 87 deg corner measured 81 deg);
-    # through the point tolerance both match their own class, and nothing else is taken.
+    # (seed 26), or, worse, only a neighbouring class (seed 31); through the point tolerance
+    # both match their own class, and nothing else is taken.
     assert results[0.5][0] >= results[0.0][0] + 2
     assert results[0.0][1] >= 1
     assert results[0.5][1] == 0

@@ -40,20 +40,24 @@ def _recognised(design: Design, img, ep: ExtractParams, s: float) -> tuple[int, 
 def test_rough_hexagons_keep_their_six_corners():
     # 0.4 mm rough edges (1 mm correlation) spread a 60 deg corner over more samples than a
     # 2.5 % window sees: it turned by < 25 deg there, the corner was lost and two sides
-    # became an arc (or the whole outline a circle). The bundled 3.5 % window keeps them.
+    # became an arc (or the whole outline a circle). The bundled, wider window keeps them.
     sp = SynthParams.load()
     s = sp.px_per_mm
     design = Design.load("hexagon")
-    img = generate(
-        design,
-        14,
-        np.random.default_rng(1),
-        replace(sp, effects=CameraEffects(edge_roughness_mm=0.4)),
-    )
     ep = ExtractParams.load()
     narrow = replace(ep, outline=replace(ep.outline, corner_window=0.025))
-    whole = sum(not t.partial for t in img.tiles)
-    assert _recognised(design, img, ep, s) == (whole, 0)
-    right_narrow, wrong_narrow = _recognised(design, img, narrow, s)
-    assert right_narrow <= whole - 2
-    assert wrong_narrow == 0
+    whole = right = right_narrow = 0
+    for seed in (1, 3):
+        img = generate(
+            design,
+            14,
+            np.random.default_rng(seed),
+            replace(sp, effects=CameraEffects(edge_roughness_mm=0.4)),
+        )
+        whole += sum(not t.partial for t in img.tiles)
+        r, wrong = _recognised(design, img, ep, s)
+        rn, wrong_narrow = _recognised(design, img, narrow, s)
+        assert wrong == wrong_narrow == 0
+        right, right_narrow = right + r, right_narrow + rn
+    assert right >= whole - 1
+    assert right >= right_narrow + 2
