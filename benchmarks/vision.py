@@ -143,7 +143,10 @@ def run_level(  # noqa: PLR0917
     """Figures for one design at one noise level."""
     s = sp.px_per_mm
     params = sp.noise_level(level)
-    tol = Tolerances.load(joint_width=design.joint * s)
+    # Length tolerances are in the figures' unit: millimetres scaled to pixels.
+    tol = Tolerances.load(
+        joint_width=design.joint * s, point_tolerance=Tolerances.load().point_tolerance * s
+    )
     refs = _Refs(design, s)
     c: dict[str, float] = defaultdict(float)
     rot_errs: list[float] = []
