@@ -694,7 +694,7 @@ class _Moments:
     """Prefix sums of moments of some runs' outlines (`qshape.fit.outline_moments`).
 
     Attributes:
-        moments: (F, n + 1, 9) in units of ``scale``, centred on ``mean``.
+        moments: (9, F, n + 1) in units of ``scale``, centred on ``mean``.
         rows: (G,) outline of each row of the rolled samples. first: (G,) its sample 0.
         mean: (F, 2) centre of each outline. scale: (F,) its unit.
     """
