@@ -225,14 +225,12 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
         np.subtract(at[k:], at[:-k], out=s[: 2 * k])  # runs before, then runs after
         np.add(s[:k], s[k : 2 * k], out=s[2 * k :])  # both runs
         line = line_sse(s)
-        arc = arc_sse(s[: 2 * k], line[: 2 * k])
-        la, lb, union = line[:k], line[k : 2 * k], line[2 * k :]
-        aa, ab = arc[:k], arc[k:]
-        su = s[2 * k :]
+        arc = arc_sse(s, line)  # the union's arc is used only where a run is curved
+        la, lb = line[:k], line[k : 2 * k]
+        aa, ab = arc[:k], arc[k : 2 * k]
         lim = limit[f]
         curved = (la - aa > lim) | (lb - ab > lim)
-        if curved.any():
-            union[curved] = arc_sse(su[curved], union[curved])
+        union = np.where(curved, arc[2 * k :], line[2 * k :])
         cost = union - aa - ab  # arc_sse <= line_sse: each run's best fit
         order = np.lexsort((cost, f))  # by outline, cheapest first
         head = order[np.r_[True, f[order][1:] != f[order][:-1]]]
