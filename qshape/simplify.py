@@ -339,7 +339,7 @@ def _simplify_clean(
     mean = planes.mean(axis=2).T  # (F, 2)
     centred = planes - mean.T[:, :, None]
     diameter = np.maximum(np.ptp(planes[0], axis=1), np.ptp(planes[1], axis=1))
-    nxt = np.roll(centred, -1, axis=2)
+    nxt = _roll_last(centred, -1)
     area2 = (centred[0] * nxt[1] - centred[1] * nxt[0]).sum(axis=1)
     flat = (diameter <= 0.0) | (np.abs(area2) <= 1e-12 * diameter * diameter)
     sign = np.where(area2 > 0.0, 1.0, -1.0)  # +1: counter-clockwise in the given frame
@@ -460,7 +460,7 @@ def _roughness(planes: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
     local = (csum[:, 2 * k + 1 :] - csum[:, :n]) / (2 * k + 1)
     detrended = dist - local
     sigma = _MAD_TO_SIGMA * np.median(np.abs(detrended), axis=1) * math.sqrt(2.0 / 3.0)
-    lag = (detrended * np.roll(detrended, 1, axis=1)).sum(axis=1)
+    lag = (detrended * _roll_last(detrended, 1)).sum(axis=1)
     rho = np.clip(lag / np.maximum((detrended * detrended).sum(axis=1), 1e-300), 0.0, _MAX_RHO)
     return np.asarray(sigma), np.asarray((1.0 + rho) / (1.0 - rho))
 
@@ -565,14 +565,23 @@ def _line_direction(run: FloatArray, trim: int) -> FloatArray:
     return d if float(d @ (run[-1] - run[0])) >= 0.0 else -d
 
 
+def _roll_last(a: FloatArray, shift: int) -> FloatArray:
+    """``np.roll(a, shift, axis=-1)``: the same values, in one concatenation.
+
+    Several times faster than `np.roll` on the (F, n) and (2, F, n) arrays of a batch.
+    """
+    k = shift % a.shape[-1]
+    return np.concatenate([a[..., a.shape[-1] - k :], a[..., : a.shape[-1] - k]], axis=-1)
+
+
 def _excess_turning(change: FloatArray, w: int, arc_deg: float) -> FloatArray:
     """``change`` (F, n) less the turning beside each point that lies inside an arc.
 
     Each side's turning is the mean change 2 and 3 windows ``w`` away; where the smaller
     side turns by ``arc_deg`` or more, it is subtracted (see `OutlineParams.arc_turning_deg`).
     """
-    before = np.roll(change, 2 * w, axis=1) + np.roll(change, 3 * w, axis=1)
-    after = np.roll(change, -2 * w, axis=1) + np.roll(change, -3 * w, axis=1)
+    before = _roll_last(change, 2 * w) + _roll_last(change, 3 * w)
+    after = _roll_last(change, -2 * w) + _roll_last(change, -3 * w)
     side = 0.5 * np.minimum(before, after)
     return np.asarray(change - np.where(side >= arc_deg, side, 0.0))
 

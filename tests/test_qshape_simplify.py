@@ -240,3 +240,12 @@ def test_corners_of_all_outlines_are_the_greedy_corners_of_each() -> None:
             vals[np.minimum(d, n - d) <= spacing] = -np.inf
         np.testing.assert_array_equal(corners, sorted(want))
     assert len(got[2]) == 0
+
+
+def test_roll_last_equals_numpy_roll() -> None:
+    from qshape.simplify import _roll_last  # noqa: PLC0415
+
+    a = np.random.default_rng(2).normal(size=(2, 3, 7))
+    for shift in range(-15, 16):
+        np.testing.assert_array_equal(_roll_last(a, shift), np.roll(a, shift, axis=-1))
+    np.testing.assert_array_equal(_roll_last(a[0], 3), np.roll(a[0], 3, axis=1))
