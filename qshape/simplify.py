@@ -936,7 +936,7 @@ def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np
     found_at: list[np.ndarray] = []
     while len(rows):
         i = np.argmax(vals, axis=1)
-        live = np.take_along_axis(vals, i[:, None], axis=1)[:, 0] > -np.inf
+        live = np.take(vals, i + n * np.arange(len(rows))) > -np.inf  # vals[r, i[r]]
         if not live.all():
             rows, vals, i = rows[live], vals[live], i[live]
             if len(rows) == 0:
