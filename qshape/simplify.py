@@ -949,8 +949,9 @@ def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np
     row = np.concatenate(found_rows)
     at = np.concatenate(found_at).astype(np.int64)
     order = np.lexsort((at, row))
-    ends = np.cumsum(np.bincount(row, minlength=count))
-    return np.split(at[order], ends[:-1])
+    ends = np.cumsum(np.bincount(row, minlength=count)).tolist()
+    flat = at[order]
+    return [flat[a:b] for a, b in zip([0, *ends[:-1]], ends, strict=True)]  # np.split, faster
 
 
 def _emit_run(
