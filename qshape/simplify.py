@@ -339,7 +339,7 @@ def _simplify_clean(
     mean = planes.mean(axis=2).T  # (F, 2)
     centred = planes - mean.T[:, :, None]
     diameter = np.maximum(np.ptp(planes[0], axis=1), np.ptp(planes[1], axis=1))
-    nxt = np.roll(centred, -1, axis=2)
+    nxt = _roll_last(centred, -1)
     area2 = (centred[0] * nxt[1] - centred[1] * nxt[0]).sum(axis=1)
     flat = (diameter <= 0.0) | (np.abs(area2) <= 1e-12 * diameter * diameter)
     sign = np.where(area2 > 0.0, 1.0, -1.0)  # +1: counter-clockwise in the given frame
@@ -383,7 +383,7 @@ def _simplify_clean(
             if not flat[f]:
                 corners[f] = _verified_corners(res[f], corners[f], p, float(noise[f]), half)
     ring = ext[..., w - 1 : w + n + 1].transpose(1, 2, 0)
-    geom = _Samples(res, smooth_xy.transpose(1, 2, 0), ring, sign, noise, perimeter, flat)
+    geom = _Samples(res, planes, smooth_xy.transpose(1, 2, 0), ring, sign, noise, perimeter, flat)
     frame = None if mom is None else (mom, mean, np.where(diameter > 0.0, diameter, 1.0))
     results = _polylines(geom, corners, p, (half, w), frame)
     if p.chamfer_fraction > 0.0:
@@ -459,8 +459,8 @@ def _roughness(planes: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
     np.cumsum(ext, axis=1, out=csum[:, 1:])
     local = (csum[:, 2 * k + 1 :] - csum[:, :n]) / (2 * k + 1)
     detrended = dist - local
-    sigma = _MAD_TO_SIGMA * np.median(np.abs(detrended), axis=1) * math.sqrt(2.0 / 3.0)
-    lag = (detrended * np.roll(detrended, 1, axis=1)).sum(axis=1)
+    sigma = _MAD_TO_SIGMA * _row_medians(np.abs(detrended)) * math.sqrt(2.0 / 3.0)
+    lag = (detrended * _roll_last(detrended, 1)).sum(axis=1)
     rho = np.clip(lag / np.maximum((detrended * detrended).sum(axis=1), 1e-300), 0.0, _MAX_RHO)
     return np.asarray(sigma), np.asarray((1.0 + rho) / (1.0 - rho))
 
@@ -565,14 +565,37 @@ def _line_direction(run: FloatArray, trim: int) -> FloatArray:
     return d if float(d @ (run[-1] - run[0])) >= 0.0 else -d
 
 
+def _row_medians(a: FloatArray) -> FloatArray:
+    """``np.median(a, axis=1)`` of finite (F, n) values, the same numbers without its overhead.
+
+    The middle order statistic, or the mean of the two middle ones (their sum halved, as
+    numpy's mean of two).
+    """
+    n = a.shape[1]
+    mid = n // 2
+    if n % 2:
+        return np.asarray(np.partition(a, mid, axis=1)[:, mid])
+    part = np.partition(a, (mid - 1, mid), axis=1)
+    return np.asarray((part[:, mid - 1] + part[:, mid]) / 2.0)
+
+
+def _roll_last(a: FloatArray, shift: int) -> FloatArray:
+    """``np.roll(a, shift, axis=-1)``: the same values, in one concatenation.
+
+    Several times faster than `np.roll` on the (F, n) and (2, F, n) arrays of a batch.
+    """
+    k = shift % a.shape[-1]
+    return np.concatenate([a[..., a.shape[-1] - k :], a[..., : a.shape[-1] - k]], axis=-1)
+
+
 def _excess_turning(change: FloatArray, w: int, arc_deg: float) -> FloatArray:
     """``change`` (F, n) less the turning beside each point that lies inside an arc.
 
     Each side's turning is the mean change 2 and 3 windows ``w`` away; where the smaller
     side turns by ``arc_deg`` or more, it is subtracted (see `OutlineParams.arc_turning_deg`).
     """
-    before = np.roll(change, 2 * w, axis=1) + np.roll(change, 3 * w, axis=1)
-    after = np.roll(change, -2 * w, axis=1) + np.roll(change, -3 * w, axis=1)
+    before = _roll_last(change, 2 * w) + _roll_last(change, 3 * w)
+    after = _roll_last(change, -2 * w) + _roll_last(change, -3 * w)
     side = 0.5 * np.minimum(before, after)
     return np.asarray(change - np.where(side >= arc_deg, side, 0.0))
 
@@ -694,7 +717,7 @@ class _Moments:
     """Prefix sums of moments of some runs' outlines (`qshape.fit.outline_moments`).
 
     Attributes:
-        moments: (F, n + 1, 9) in units of ``scale``, centred on ``mean``.
+        moments: (9, F, n + 1) in units of ``scale``, centred on ``mean``.
         rows: (G,) outline of each row of the rolled samples. first: (G,) its sample 0.
         mean: (F, 2) centre of each outline. scale: (F,) its unit.
     """
@@ -711,13 +734,15 @@ class _Samples:
     """Resampled outlines, all of ``n`` samples.
 
     Attributes:
-        res: Samples, shape (F, n, 2). smooth: Their moving average, (F, n, 2).
+        res: Samples, shape (F, n, 2). planes: The same as x and y planes, (2, F, n).
+        smooth: Their moving average, (F, n, 2).
         ring: ``ring[:, i + 1] = smooth[:, i]``, wrapped, shape (F, n + 2, 2).
         sign: (F,) +1 for counter-clockwise outlines. noise: (F,) chord noise floor.
         perimeter: (F,) outline lengths. skip: (F,) degenerate outlines (no result).
     """
 
     res: FloatArray
+    planes: FloatArray
     smooth: FloatArray
     ring: FloatArray
     sign: FloatArray
@@ -821,34 +846,34 @@ def _polylines(  # noqa: PLR0914
     last_run = first_run + m - 1
     ends = np.append(starts[1:], 0)
     ends[last_run] = n
-    # Row gathers with np.take: numpy's fancy indexing of (k, 2) rows is far slower.
+    # Gathers with np.take, x and y apart: numpy handles (k, 2) rows far slower.
     at = (fo * n)[:, None] + (c0[:, None] + np.arange(n + 1)[None, :]) % n
-    rolled = np.take(g.res.reshape(-1, 2), at, axis=0)  # (G, n + 1, 2)
-    flat = rolled.reshape(-1, 2)
-    a = np.take(flat, owner * (n + 1) + starts, axis=0)
-    chord = np.take(flat, owner * (n + 1) + ends, axis=0) - a
-    length = np.hypot(chord[:, 0], chord[:, 1])
+    rx, ry = np.take(g.planes[0], at), np.take(g.planes[1], at)  # rolled samples (G, n + 1)
+    i0, i1 = owner * (n + 1) + starts, owner * (n + 1) + ends
+    ax, ay = np.take(rx, i0), np.take(ry, i0)
+    chx, chy = np.take(rx, i1) - ax, np.take(ry, i1) - ay
+    length = np.hypot(chx, chy)
     # Every sample of every run (its start included, its end left out: distance 0 there):
     # the runs of an outline tile its samples 0 .. n - 1 in order.
     lens = ends - starts
     seg_start = np.concatenate([[0], np.cumsum(lens)[:-1]])
-    rel = rolled[:, :n].reshape(-1, 2) - np.repeat(a, lens, axis=0)
-    along = np.repeat(chord, lens, axis=0)
-    dev = np.abs(along[:, 0] * rel[:, 1] - along[:, 1] * rel[:, 0])
+    rel_x = rx[:, :n].ravel() - np.repeat(ax, lens)
+    rel_y = ry[:, :n].ravel() - np.repeat(ay, lens)
+    dev = np.abs(np.repeat(chx, lens) * rel_y - np.repeat(chy, lens) * rel_x)
     dev_max = np.maximum.reduceat(dev, seg_start)
     zero = length == 0.0
     if zero.any():  # degenerate chord: distance from the run's start
-        dist0 = np.maximum.reduceat(np.hypot(rel[:, 0], rel[:, 1]), seg_start)
+        dist0 = np.maximum.reduceat(np.hypot(rel_x, rel_y), seg_start)
         dev_max = np.where(zero, dist0, dev_max / np.where(zero, 1.0, length))
     else:
         dev_max = dev_max / length
     straight = dev_max <= np.maximum(p.straight_sagitta_ratio * length, g.noise[fo][owner])
-    points = a.copy()
+    points = np.stack([ax, ay], axis=1)
     if p.refine_corners:
         prev = np.arange(len(starts)) - 1
         prev[first_run] = last_run
         _refine_all(
-            rolled,
+            (rx, ry),
             (owner, starts, ends, prev),
             straight & (m >= 2)[owner],
             points,
@@ -913,7 +938,7 @@ def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np
     found_at: list[np.ndarray] = []
     while len(rows):
         i = np.argmax(vals, axis=1)
-        live = np.take_along_axis(vals, i[:, None], axis=1)[:, 0] > -np.inf
+        live = np.take(vals, i + n * np.arange(len(rows))) > -np.inf  # vals[r, i[r]]
         if not live.all():
             rows, vals, i = rows[live], vals[live], i[live]
             if len(rows) == 0:
@@ -926,8 +951,9 @@ def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np
     row = np.concatenate(found_rows)
     at = np.concatenate(found_at).astype(np.int64)
     order = np.lexsort((at, row))
-    ends = np.cumsum(np.bincount(row, minlength=count))
-    return np.split(at[order], ends[:-1])
+    ends = np.cumsum(np.bincount(row, minlength=count)).tolist()
+    flat = at[order]
+    return [flat[a:b] for a, b in zip([0, *ends[:-1]], ends, strict=True)]  # np.split, faster
 
 
 def _emit_run(
@@ -999,7 +1025,7 @@ def _emit_run(
 
 
 def _refine_all(
-    rolled: FloatArray,
+    rolled: tuple[FloatArray, FloatArray],
     runs: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     straight: BoolArray,
     points: FloatArray,
@@ -1015,10 +1041,12 @@ def _refine_all(
     adjacent edges meet at the true corner. Kept only when the lines cross at a corner angle
     (sine of the angle between them >= ``min_sin``) within ``reach`` of the detected corner.
     Lines are total-least-squares fits of each run (its ends trimmed by ``trim`` samples when
-    long enough), all runs of all outlines at once from prefix sums. ``runs`` is (owner,
-    starts, ends, prev): run r covers ``rolled[owner[r], starts[r] .. ends[r]]`` and ``prev[r]``
-    is the run before it; ``points[r]`` (its corner) is updated in place. ``fitted``: the
-    outlines' moments when already summed (the same fits, without summing again).
+    long enough), all runs of all outlines at once from prefix sums. ``rolled``: x and y of
+    each outline's samples from its first corner on, (G, n + 1) each. ``runs`` is (owner,
+    starts, ends, prev): run r covers samples ``starts[r] .. ends[r]`` of row ``owner[r]``,
+    ``prev[r]`` is the run before it; ``points[r]`` (its corner) is updated in place.
+    ``fitted``: the outlines' moments when already summed (the same fits, without summing
+    again).
     """
     owner, starts, ends, prev = runs
     both = straight & straight[prev]
@@ -1029,8 +1057,9 @@ def _refine_all(
     hi = np.where(long, ends - trim + 1, ends + 1)  # exclusive
     cnt = (hi - lo).astype(np.float64)
     if fitted is None:
-        origin = rolled[:, 0, :]
-        q = rolled - origin[:, None, :]
+        xy = np.stack(rolled, axis=-1)  # (G, n + 1, 2)
+        origin = xy[:, 0, :]
+        q = xy - origin[:, None, :]
         x, y = q[..., 0], q[..., 1]
         sums = np.zeros((q.shape[0], q.shape[1] + 1, 5))
         np.cumsum(np.stack([x, y, x * x, x * y, y * y], axis=-1), axis=1, out=sums[:, 1:])

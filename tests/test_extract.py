@@ -465,3 +465,23 @@ def test_trimmed_pre_blur_is_opencvs_blur(sigma: float) -> None:
     assert size % 2 == 1 and size <= (round(6 * sigma + 1) | 1)
     want = cv2.GaussianBlur(img, (0, 0), sigma)
     np.testing.assert_array_equal(cv2.GaussianBlur(img, (size, size), sigma), want)
+
+
+def test_piece_labels_are_16_bit_when_they_fit_else_32_bit() -> None:
+    from qshape.extract import _label_pieces  # noqa: PLC0415
+
+    rng = np.random.default_rng(5)
+    blobs = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 3.0)
+    mask = np.where(blobs > 128, 255, 0).astype(np.uint8)
+    count, labels = _label_pieces(mask)
+    want_count, want = cv2.connectedComponents(mask, connectivity=4)
+    assert labels.dtype == np.uint16
+    assert count == want_count > 10
+    np.testing.assert_array_equal(labels, want)
+    # A checkerboard of 492 x 656 px: 161377 labels in 4-connectivity do not fit 16 bits.
+    yy, xx = np.mgrid[0:492, 0:656]
+    board = (((yy + xx) % 2) * 255).astype(np.uint8)
+    count, labels = _label_pieces(board)
+    assert labels.dtype == np.int32
+    assert count == 492 * 656 // 2 + 1
+    assert int(labels.max()) == count - 1

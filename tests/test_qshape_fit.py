@@ -176,3 +176,25 @@ def test_rough_tiles_are_recognised(sigma_mm: float, least: int) -> None:
     old = _recognised(dataclasses.replace(p, **OLD_CORNERS), sigma_mm, tiles)
     assert new >= least, f"{new} of {len(TILES) * tiles} (corners before fits: {old})"
     assert new >= old
+
+
+def test_range_sums_of_many_outlines_equal_direct_moment_sums() -> None:
+    # Three different outlines, ranges on each, some walking past sample n (wrapping round).
+    rng = np.random.default_rng(3)
+    n = 50
+    res = rng.normal(0.0, 20.0, (3, n, 2)) + np.array([[[100.0, 40.0]], [[0.0, 0.0]], [[-7, 9]]])
+    scale = np.array([40.0, 25.0, 60.0])
+    mom = outline_moments(res, scale)
+    f = np.array([0, 2, 1, 2, 0, 1, 1])
+    lo = np.array([0, 10, 45, 0, 49, 30, 7])
+    hi = np.array([n, 12, 80, 2 * n, 51, 30, 99])
+    got = range_sums(mom, f, lo, hi)
+    assert got.shape == (len(f), 10)
+    for row, g, a, b in zip(got, f, lo, hi, strict=True):
+        q = (res[g] - res[g].mean(axis=0)) / scale[g]
+        walk = np.concatenate([q, q])[a:b]
+        x, y = walk[:, 0], walk[:, 1]
+        z = x * x + y * y
+        want = [len(walk), x.sum(), y.sum(), (x * x).sum(), (x * y).sum(), (y * y).sum()]
+        want += [z.sum(), (z * x).sum(), (z * y).sum(), (z * z).sum()]
+        np.testing.assert_allclose(row, want, rtol=1e-9, atol=1e-9)
