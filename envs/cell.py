@@ -234,8 +234,7 @@ class Cell:
         finally:
             m.qpos0[:] = qpos0
             m.tree_sleep_policy[:] = policy
-        d.ctrl[:] = ctrl
-        self.suction.reset(d)
+        d.ctrl[:] = ctrl  # the suction weld is off in qpos0's reset too (built inactive)
         self._wake[asleep] = False
 
     def sleep_still_tiles(self) -> None:

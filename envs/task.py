@@ -26,6 +26,7 @@ from envs.cell import Cell
 from envs.env_config import EnvConfig
 from envs.errors import CellError
 from envs.rewards import STAGES, StagedReward, load_staged_config
+from planners.angles import yaw_error
 
 REWARD_TERMS = (
     "correct",
@@ -202,8 +203,6 @@ class MosaicTask:
         self._yaw_tol = math.radians(config.yaw_tolerance_deg)
         self._flat = math.cos(math.radians(config.max_tilt_deg))
         self._real = ~self.distractor
-        self._turns = self.symmetry > 0  # 0: continuous symmetry, yaw error 0
-        self._period = 2.0 * math.pi / np.maximum(self.symmetry, 1)
         self._slot_x, self._slot_y = self.slot_xyyaw[None, :, 0], self.slot_xyyaw[None, :, 1]
         self._base_light = cell.model.light_diffuse.copy()
         self._camera_jitter = CameraJitter(
@@ -302,10 +301,7 @@ class MosaicTask:
             dist = np.sqrt(dx * dx + dy * dy)
             nearest = dist.argmin(axis=1)
             err = dist[np.arange(len(idx)), nearest]
-            # |yaw - slot yaw| modulo each tile's symmetry period (`planners.angles.yaw_error`).
-            period = self._period[idx]
-            d = yaw - self.slot_xyyaw[nearest, 2]
-            yerr_i = np.where(self._turns[idx], np.abs((d + period / 2) % period - period / 2), 0.0)
+            yerr_i = yaw_error(yaw, self.slot_xyyaw[nearest, 2], self.symmetry[idx])
             slot[idx], perr[idx], yerr[idx] = nearest, err, yerr_i
             ok = (
                 flat[idx]
