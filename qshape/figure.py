@@ -609,14 +609,16 @@ def figures_from_outlines(
     limits = default_limits()
     dense: list[ArrayLike] = list(outlines)
     whats = ["outline"] * len(dense)
-    for h in holes:
+    parents: list[int | None] = [None] * len(dense)
+    for i, h in enumerate(holes):
         limits.check_count(len(h), "max_holes", "outline: holes", FigureLimitError)
         dense.extend(h)
         whats.extend(f"hole {k} outline" for k in range(len(h)))
+        parents.extend([i] * len(h))
     for d, what in zip(dense, whats, strict=True):
         count = len(d) if isinstance(d, Sized) else 0
         limits.check_count(count, "max_dense_points", f"{what}: points", FigureLimitError)
-    simple = simplify_outlines(dense, params, whats=whats)
+    simple = simplify_outlines(dense, params, whats=whats, parents=parents)
     good = [k for k, x in enumerate(simple) if not isinstance(x, InvalidFigureError)]
     names = ["figure"] * len(outlines) + [
         w.removesuffix(" outline") for w in whats[len(outlines) :]

@@ -295,6 +295,7 @@ def simplify_outlines(
     params: OutlineParams | None = None,
     *,
     whats: Sequence[str] | None = None,
+    parents: Sequence[int | None] | None = None,
 ) -> list[tuple[FloatArray, BoolArray] | InvalidFigureError]:
     """`simplify_outline` of many outlines at once (vectorised over all of them).
 
@@ -302,6 +303,10 @@ def simplify_outlines(
         dense: Closed outlines, each of shape (k_i, 2).
         params: Simplification parameters; None: the bundled defaults.
         whats: Names used in error messages, one per outline (default "outline i").
+        parents: Per outline, the index in ``dense`` of the outline it lies in (a hole's
+            figure outline) or None. A hole's cut-off corners are judged at its figure's
+            size (``OutlineParams.chamfer_fraction`` of the parent's perimeter): the blur and
+            roughness that cut a corner are as long on a small hole as on the figure.
 
     Returns:
         Per outline, (points, curve_mask) or the `InvalidFigureError` it raised.
@@ -319,8 +324,15 @@ def simplify_outlines(
         out.append(None)
         good.append(i)
     if good:
-        _simplify_clean(cleaned, p, [names[i] for i in good], out, good)
+        row = {i: f for f, i in enumerate(good)}
+        up = [None if parents is None else _row_of(parents[i], row) for i in good]
+        _simplify_clean(cleaned, p, [names[i] for i in good], out, good, parents=up)
     return [x for x in out if x is not None]
+
+
+def _row_of(index: int | None, row: dict[int, int]) -> int | None:
+    """Cleaned row of outline ``index`` (None: no outline, or one that failed cleaning)."""
+    return None if index is None else row.get(index)
 
 
 def _simplify_clean(
@@ -329,8 +341,13 @@ def _simplify_clean(
     names: list[str],
     out: list[tuple[FloatArray, BoolArray] | InvalidFigureError | None],
     slots: list[int],
+    *,
+    parents: list[int | None],
 ) -> None:
-    """Simplify cleaned outlines, writing each result (or error) to ``out[slots[f]]``."""
+    """Simplify cleaned outlines, writing each result (or error) to ``out[slots[f]]``.
+
+    ``parents[f]``: the cleaned outline outline f lies in (see `simplify_outlines`), or None.
+    """
     n = p.resample_points
     res, perimeter = _resampled_many(cleaned, n)  # (F, n, 2), (F,)
     # Sums along the samples run over x and y apart (2, F, n): numpy reduces an axis whose
@@ -387,9 +404,18 @@ def _simplify_clean(
     frame = None if mom is None else (mom, mean, np.where(diameter > 0.0, diameter, 1.0))
     results = _polylines(geom, corners, p, (half, w), frame)
     if p.chamfer_fraction > 0.0:
-        for f in _with_chamfers(results, p.chamfer_fraction).tolist():
+        # Outer outlines first: a hole's limit is its parent's perimeter once merged.
+        outer = [f for f in range(len(results)) if parents[f] is None]
+        for f in _with_chamfers(results, p.chamfer_fraction, outer):
             points, mask = results[f]
             results[f] = _merge_chamfers(points, mask, p.chamfer_fraction)
+        inner = [f for f in range(len(results)) if parents[f] is not None]
+        if inner:
+            size = _perimeters(results)
+            scale = {f: max(size[f], size[q]) for f in inner if (q := parents[f]) is not None}
+            for f in _with_chamfers(results, p.chamfer_fraction, inner, list(scale.values())):
+                points, mask = results[f]
+                results[f] = _merge_chamfers(points, mask, p.chamfer_fraction, scale[f])
     if p.circle_residual > 0.0:
         _snap_circles(res, sign, results, p.circle_residual)
     for f, i in enumerate(slots):
@@ -646,13 +672,31 @@ _PARALLEL_SIN = 1e-3
 """Edges whose unit directions' cross product is below this are parallel."""
 
 
-def _with_chamfers(results: list[tuple[FloatArray, BoolArray]], fraction: float) -> np.ndarray:
-    """Indices of the results `_merge_chamfers` would change, all outlines at once."""
-    sizes = np.array([len(m) for _, m in results])
+def _perimeters(results: list[tuple[FloatArray, BoolArray]]) -> list[float]:
+    """Perimeter of each result's relevant points (0 for an empty one)."""
+    return [
+        float(np.hypot(*(np.roll(q, -1, axis=0) - q).T).sum()) if len(q) else 0.0
+        for q, _ in results
+    ]
+
+
+def _with_chamfers(
+    results: list[tuple[FloatArray, BoolArray]],
+    fraction: float,
+    which: list[int],
+    scale: list[float] | None = None,
+) -> list[int]:
+    """Indices (among ``which``) of the results `_merge_chamfers` would change, all at once.
+
+    ``scale``: per entry of ``which``, the perimeter the fraction applies to (default: the
+    result's own).
+    """
+    chosen = [results[f] for f in which]
+    sizes = np.array([len(m) for _, m in chosen], dtype=np.int64)
     if sizes.sum() == 0:
-        return np.zeros(0, dtype=np.int64)
-    pts = np.concatenate([q.reshape(-1, 2) for q, _ in results])
-    mask = np.concatenate([m for _, m in results])
+        return []
+    pts = np.concatenate([q.reshape(-1, 2) for q, _ in chosen])
+    mask = np.concatenate([m for _, m in chosen])
     start = np.repeat(np.cumsum(sizes) - sizes, sizes)
     size = np.repeat(sizes, sizes)
     local = np.arange(len(mask)) - start
@@ -660,18 +704,21 @@ def _with_chamfers(results: list[tuple[FloatArray, BoolArray]], fraction: float)
     nxt2 = start + (local + 2) % size
     d1 = np.hypot(*(pts[nxt1] - pts).T)
     d2 = np.hypot(*(pts[nxt2] - pts).T)
-    owner = np.repeat(np.arange(len(results)), sizes)
-    limit = fraction * np.bincount(owner, d1, minlength=len(results))[owner]
+    owner = np.repeat(np.arange(len(chosen)), sizes)
+    per = np.bincount(owner, d1, minlength=len(chosen)) if scale is None else np.array(scale)
+    limit = fraction * per[owner]
     corner = ~mask
     one = corner & corner[nxt1] & (d1 < limit) & (size > 3)  # noqa: PLR2004
     two = corner & mask[nxt1] & corner[nxt2] & (d2 < limit) & (size > 4)  # noqa: PLR2004
-    return np.unique(owner[one | two])
+    return [which[k] for k in np.unique(owner[one | two]).tolist()]
 
 
 def _merge_chamfers(
-    pts: FloatArray, mask: BoolArray, fraction: float
+    pts: FloatArray, mask: BoolArray, fraction: float, perimeter: float | None = None
 ) -> tuple[FloatArray, BoolArray]:
     """Merge neighbouring corners closer than ``fraction`` x perimeter (see `OutlineParams`).
+
+    ``perimeter``: the length the fraction applies to (default: the points' own perimeter).
 
     Two corners count as neighbours when joined by one edge (a cut-off corner) or by one short
     curve (a rounded one). The pair (and the curve point between) becomes the point where
@@ -681,7 +728,8 @@ def _merge_chamfers(
     while len(pts) > 3:  # noqa: PLR2004 (a figure's fewest points)
         n = len(pts)
         steps = np.roll(pts, -1, axis=0) - pts
-        limit = fraction * float(np.hypot(steps[:, 0], steps[:, 1]).sum())
+        own = float(np.hypot(steps[:, 0], steps[:, 1]).sum())
+        limit = fraction * (own if perimeter is None else perimeter)
         best: tuple[float, int, int] | None = None
         corners = np.flatnonzero(~mask)
         for a, b in zip(corners.tolist(), np.roll(corners, -1).tolist(), strict=True):
