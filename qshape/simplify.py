@@ -111,6 +111,12 @@ class OutlineParams:
             sample; 0: ``corner_window``). A short trim fits the line to nearly the whole
             edge, which averages a rough edge's bumps out: keep it just above the rounding
             of a corner by blur.
+        hole_corner_window: ``corner_window`` of an outline lying in another (a hole, see
+            `simplify_outlines`' ``parents``), fraction of its own perimeter, but at most
+            the figure outline's window in length (dimensionless; 0: ``corner_window``).
+            Blur and rough edges round a small hole's corner over as many millimetres as
+            the figure's, a larger share of the hole's short perimeter: over the figure's
+            fraction the rounded corner turned twice, a corner gained.
     """
 
     resample_points: int = 256
@@ -131,6 +137,7 @@ class OutlineParams:
     fit_merge_chi2: float = 0.0
     fit_sigma_floor: float = 0.0
     refine_trim_fraction: float = 0.0
+    hole_corner_window: float = 0.0
 
     def __post_init__(self) -> None:
         """Validate ranges.
@@ -151,6 +158,7 @@ class OutlineParams:
             "missed_corner_ratio",
             "fit_sigma_floor",
             "refine_trim_fraction",
+            "hole_corner_window",
         ):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0.0 <= v < 0.5):
@@ -370,19 +378,23 @@ def _simplify_clean(
     smooth_xy = (csum[..., width:] - csum[..., :-width]) / width + mean.T[:, :, None]
 
     w = max(1, round(p.corner_window * n))
-    ext = np.concatenate([smooth_xy[..., -w:], smooth_xy, smooth_xy[..., :w]], axis=2)
-    back = smooth_xy - ext[..., :n]  # ext[:, :, i + w] = smooth_xy[:, :, i]
-    fwd = ext[..., 2 * w :] - smooth_xy
-    bx, by, fx, fy = back[0], back[1], fwd[0], fwd[1]
-    change = np.degrees(np.arctan2(np.abs(bx * fy - by * fx), bx * fx + by * fy))
+    change, ext = _direction_change(smooth_xy, w)
     change[flat] = 0.0
     if p.arc_turning_deg > 0.0:
         change = _excess_turning(change, w, p.arc_turning_deg)
-    corners = _corners_many(change, p.corner_angle_deg, max(w, round(p.merge_fraction * n)))
+    spacing = max(w, round(p.merge_fraction * n))
+    corners = _corners_many(change, p.corner_angle_deg, spacing)
+    holes = _hole_windows(p, perimeter, parents, w) if p.hole_corner_window > 0.0 else {}
+    for wh, rows in holes.items():
+        found = _hole_corners(smooth_xy[:, rows], wh, flat[rows], p, max(wh, spacing))
+        for f, c in zip(rows.tolist(), found, strict=True):
+            corners[f] = c
     noise = p.noise_fraction * diameter
     mom: FloatArray | None = None
     if p.roughness_sigmas > 0.0 or p.fit_merge_chi2 > 0.0:
         rough, corr = _roughness(planes, w)
+        for wh, rows in holes.items():  # a hole's roughness over its own window
+            rough[rows], corr[rows] = _roughness(planes[:, rows], wh)
         if p.roughness_sigmas > 0.0:
             noise = np.maximum(noise, p.roughness_sigmas * rough)
         if p.fit_merge_chi2 > 0.0:
@@ -430,6 +442,51 @@ def _simplify_clean(
             )
             continue
         out[i] = (points, mask)
+
+
+def _direction_change(smooth_xy: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
+    """Direction change [deg] over ``w`` samples each side of every sample, shape (F, n).
+
+    Also returns the wrapped samples it used, ``ext[:, :, i + w] = smooth_xy[:, :, i]``,
+    shape (2, F, n + 2 w).
+    """
+    n = smooth_xy.shape[2]
+    ext = np.concatenate([smooth_xy[..., -w:], smooth_xy, smooth_xy[..., :w]], axis=2)
+    back = smooth_xy - ext[..., :n]
+    fwd = ext[..., 2 * w :] - smooth_xy
+    bx, by, fx, fy = back[0], back[1], fwd[0], fwd[1]
+    return np.degrees(np.arctan2(np.abs(bx * fy - by * fx), bx * fx + by * fy)), ext
+
+
+def _hole_windows(
+    p: OutlineParams, perimeter: FloatArray, parents: list[int | None], w: int
+) -> dict[int, np.ndarray]:
+    """Outlines lying in another, grouped by their wider corner window in samples (> ``w``).
+
+    A hole's window is ``hole_corner_window`` of its own samples, but never longer than the
+    window of its figure's outline (``corner_window`` x the figure's perimeter).
+    """
+    n = p.resample_points
+    groups: dict[int, list[int]] = {}
+    for f, q in enumerate(parents):
+        if q is None or perimeter[f] <= 0.0:
+            continue
+        frac = min(p.hole_corner_window, p.corner_window * float(perimeter[q] / perimeter[f]))
+        wh = round(frac * n)
+        if wh > w:
+            groups.setdefault(wh, []).append(f)
+    return {wh: np.array(rows, dtype=np.int64) for wh, rows in groups.items()}
+
+
+def _hole_corners(
+    smooth_xy: FloatArray, w: int, flat: BoolArray, p: OutlineParams, spacing: int
+) -> list[np.ndarray]:
+    """Window-measure corners of outlines (x and y planes (2, F, n)) over a window of ``w``."""
+    change, _ = _direction_change(smooth_xy, w)
+    change[flat] = 0.0
+    if p.arc_turning_deg > 0.0:
+        change = _excess_turning(change, w, p.arc_turning_deg)
+    return _corners_many(change, p.corner_angle_deg, spacing)
 
 
 def _corners_from_fits(  # noqa: PLR0913, PLR0917
