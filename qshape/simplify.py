@@ -384,7 +384,11 @@ def _simplify_clean(
         change = _excess_turning(change, w, p.arc_turning_deg)
     spacing = max(w, round(p.merge_fraction * n))
     corners = _corners_many(change, p.corner_angle_deg, spacing)
-    holes = _hole_windows(p, perimeter, parents, w) if p.hole_corner_window > 0.0 else {}
+    holes = (
+        _hole_windows(p, perimeter, np.abs(area2) / 2.0, parents, w)
+        if p.hole_corner_window > 0.0
+        else {}
+    )
     for wh, rows in holes.items():
         found = _hole_corners(smooth_xy[:, rows], wh, flat[rows], p, max(wh, spacing))
         for f, c in zip(rows.tolist(), found, strict=True):
@@ -459,19 +463,29 @@ def _direction_change(smooth_xy: FloatArray, w: int) -> tuple[FloatArray, FloatA
 
 
 def _hole_windows(
-    p: OutlineParams, perimeter: FloatArray, parents: list[int | None], w: int
+    p: OutlineParams,
+    perimeter: FloatArray,
+    area: FloatArray,
+    parents: list[int | None],
+    w: int,
 ) -> dict[int, np.ndarray]:
     """Outlines lying in another, grouped by their wider corner window in samples (> ``w``).
 
     A hole's window is ``hole_corner_window`` of its own samples, but never longer than the
-    window of its figure's outline (``corner_window`` x the figure's perimeter).
+    window of its figure's outline (``corner_window`` x the figure's perimeter) nor than half
+    the hole's width (2 x area / perimeter: a slit's two ends stay two corners each).
     """
     n = p.resample_points
     groups: dict[int, list[int]] = {}
     for f, q in enumerate(parents):
         if q is None or perimeter[f] <= 0.0:
             continue
-        frac = min(p.hole_corner_window, p.corner_window * float(perimeter[q] / perimeter[f]))
+        own = float(perimeter[f])
+        frac = min(
+            p.hole_corner_window,
+            p.corner_window * float(perimeter[q]) / own,
+            float(area[f]) / (own * own),  # half the width 2 area / perimeter
+        )
         wh = round(frac * n)
         if wh > w:
             groups.setdefault(wh, []).append(f)
