@@ -427,8 +427,11 @@ def _simplify_clean(
             results[f] = _merge_chamfers(points, mask, p.chamfer_fraction)
         inner = [f for f in range(len(results)) if parents[f] is not None]
         if inner:
-            size = _perimeters(results)
-            scale = {f: max(size[f], size[q]) for f in inner if (q := parents[f]) is not None}
+            scale = {
+                f: max(_perimeter(results[f][0]), _perimeter(results[q][0]))
+                for f in inner
+                if (q := parents[f]) is not None
+            }
             for f in _with_chamfers(results, p.chamfer_fraction, inner, list(scale.values())):
                 points, mask = results[f]
                 results[f] = _merge_chamfers(points, mask, p.chamfer_fraction, scale[f])
@@ -743,12 +746,12 @@ _PARALLEL_SIN = 1e-3
 """Edges whose unit directions' cross product is below this are parallel."""
 
 
-def _perimeters(results: list[tuple[FloatArray, BoolArray]]) -> list[float]:
-    """Perimeter of each result's relevant points (0 for an empty one)."""
-    return [
-        float(np.hypot(*(np.roll(q, -1, axis=0) - q).T).sum()) if len(q) else 0.0
-        for q, _ in results
-    ]
+def _perimeter(points: FloatArray) -> float:
+    """Perimeter of closed relevant points (k, 2) (0 for none)."""
+    if len(points) == 0:
+        return 0.0
+    step = _roll_last(points.T, -1) - points.T
+    return float(_norm(step[0], step[1]).sum())
 
 
 def _with_chamfers(
