@@ -498,12 +498,24 @@ def _hole_windows(
 def _hole_corners(
     smooth_xy: FloatArray, w: int, flat: BoolArray, p: OutlineParams, spacing: int
 ) -> list[np.ndarray]:
-    """Window-measure corners of outlines (x and y planes (2, F, n)) over a window of ``w``."""
+    """Window-measure corners of outlines (x and y planes (2, F, n)) over a window of ``w``.
+
+    The corner angle rises by the turning a circle adds over the window's extra length
+    (``_FULL_TURN_OVER_WINDOWS`` x the extra fraction of the perimeter): a round hole's
+    steady turning stays below it as over ``corner_window``.
+    """
     change, _ = _direction_change(smooth_xy, w)
     change[flat] = 0.0
     if p.arc_turning_deg > 0.0:
         change = _excess_turning(change, w, p.arc_turning_deg)
-    return _corners_many(change, p.corner_angle_deg, spacing)
+    n = smooth_xy.shape[2]
+    extra = max(0.0, w / n - p.corner_window)
+    return _corners_many(change, p.corner_angle_deg + _FULL_TURN_OVER_WINDOWS * extra, spacing)
+
+
+_FULL_TURN_OVER_WINDOWS = 720.0
+"""Direction change [deg] of a circle measured over windows of its whole perimeter per
+unit of window fraction: 2 windows x 360 deg (a 3.25 % window: 23.4 deg)."""
 
 
 def _corners_from_fits(  # noqa: PLR0913, PLR0917
