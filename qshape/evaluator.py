@@ -350,36 +350,107 @@ def turn_sums(
     tol: Tolerances,
     plain: tuple[FloatArray, FloatArray],
 ) -> tuple[FloatArray, FloatArray]:
-    """Weighted sums whose angle atan2(cross, dot) is the rotation of each entry.
+    """Sums whose angle atan2(cross, dot) is the rotation `qshape.match` returns, per entry.
 
     A curve's maximum-curvature point lies on a flat maximum: its place along the curve is
     measured far less well than a corner's, so it weighs ``tol.curve_point_weight`` in the
-    least-squares rotation (vertices 1). The residual score stays unweighted.
+    least-squares rotation of the relevant points (vertices 1). With
+    ``tol.rotation_corner_share`` below 1 the rotation also fits the candidate's edges to
+    the reference's edge lines (`edge_rotation`). The residual score stays unweighted.
 
     Args:
         ref: Reference pack.
         cand: Candidate pack.
         entries: (candidate index, reference index, cyclic offset), each shape (E,).
-        tol: ``curve_point_weight``.
+        tol: ``curve_point_weight`` and ``rotation_corner_share``.
         plain: The unweighted (dot, cross) sums of the entries, returned as they are when
-            no weight differs from 1.
+            every point weighs alike and the edges take no share.
 
     Returns:
         (dot, cross), each shape (E,).
     """
     ti, si, k = entries
     curve = (ref.codes[si] & lb.KIND_BIT) == 1  # (E, n)
-    if tol.curve_point_weight == 1.0 or not curve.any():
+    edges_used = tol.rotation_corner_share < 1.0 and len(ti) > 0
+    if not edges_used and (tol.curve_point_weight == 1.0 or not curve.any()):
         return plain
     n = ref.codes.shape[1]
     w = np.where(curve, tol.curve_point_weight, 1.0)
     cp = cand.pts[ti[:, None], (np.arange(n)[None, :] + k[:, None]) % n]  # (E, n, 2)
-    rp = ref.pts[si] * w[..., None]
-    dot = np.einsum("end,end->e", cp, rp)
-    crs = np.einsum("en,en->e", cp[..., 0], rp[..., 1]) - np.einsum(
-        "en,en->e", cp[..., 1], rp[..., 0]
+    rp = ref.pts[si]
+    wp = rp * w[..., None]
+    dot = np.einsum("end,end->e", cp, wp)
+    crs = np.einsum("en,en->e", cp[..., 0], wp[..., 1]) - np.einsum(
+        "en,en->e", cp[..., 1], wp[..., 0]
     )
-    return dot, crs
+    if not edges_used:
+        return dot, crs
+    theta = edge_rotation(rp, cp, w, np.arctan2(crs, dot), tol.rotation_corner_share)
+    size = np.hypot(dot, crs)
+    return size * np.cos(theta), size * np.sin(theta)
+
+
+_GAUSS_NEWTON_STEPS = 3
+"""Steps of `edge_rotation` from the points' rotation: the misfit is nearly quadratic in the
+angle over the few degrees between them, so each step gains several digits."""
+
+
+def edge_rotation(
+    ref_pts: FloatArray,
+    cand_pts: FloatArray,
+    weight: FloatArray,
+    start: FloatArray,
+    corner_share: float,
+) -> FloatArray:
+    """Rotation fitting corresponding points and the candidate's edges onto the reference's.
+
+    Minimises over the angle t (about the centroids, as the points are given)
+    ``corner_share`` x sum_i w_i |R(t) c_i - r_i|^2 / sum_i w_i + (1 - ``corner_share``) x
+    sum_e w_e L_e int_0^1 (n_e . (R(t) c(s) - r_e))^2 ds / sum_e L_e, where edge e runs from
+    point e to point e + 1 (c(s) along the candidate's edge, L_e its length, n_e the unit
+    normal of the reference's edge e through r_e, w_e the smaller weight of its two ends: a
+    chord of a curve weighs as its curve point). The edge integral of a straight segment
+    against a line is exact in closed form (the distance is linear along the segment).
+    Gauss-Newton steps from ``start``.
+
+    Args:
+        ref_pts: Reference points, shape (E, n, 2), centred.
+        cand_pts: Corresponding candidate points, shape (E, n, 2), centred.
+        weight: Per point weight, shape (E, n).
+        start: Starting angles [rad], shape (E,) (the points' weighted Procrustes).
+        corner_share: In [0, 1] (`Tolerances.rotation_corner_share`).
+
+    Returns:
+        Angles [rad], shape (E,).
+    """
+    tiny = np.finfo(np.float64).tiny
+    nxt = np.roll(np.arange(ref_pts.shape[1]), -1)
+    edge = ref_pts[:, nxt] - ref_pts
+    normal = np.stack([-edge[..., 1], edge[..., 0]], axis=-1)
+    normal /= np.maximum(np.hypot(normal[..., 0], normal[..., 1]), tiny)[..., None]
+    length = np.hypot(*(cand_pts[:, nxt] - cand_pts).transpose(2, 0, 1))  # (E, n)
+    w_edge = (1.0 - corner_share) * np.minimum(weight, weight[:, nxt]) * length
+    w_edge /= np.maximum(length.sum(axis=1), tiny)[:, None]
+    w_point = corner_share * weight / np.maximum(weight.sum(axis=1), tiny)[:, None]
+    theta = np.asarray(start, dtype=np.float64).copy()
+    for _ in range(_GAUSS_NEWTON_STEPS):
+        c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+        x = c * cand_pts[..., 0] - s * cand_pts[..., 1]
+        y = s * cand_pts[..., 0] + c * cand_pts[..., 1]
+        turned = np.stack([x, y], axis=-1)
+        d_turned = np.stack([-y, x], axis=-1)  # derivative of the turned points by the angle
+        # Points: residual vectors and their derivatives.
+        num = np.einsum("en,end,end->e", w_point, d_turned, turned - ref_pts)
+        den = np.einsum("en,end,end->e", w_point, d_turned, d_turned)
+        # Edges: signed distances of both ends to the reference's line, and derivatives.
+        r0 = np.einsum("end,end->en", turned - ref_pts, normal)
+        r1 = np.einsum("end,end->en", turned[:, nxt] - ref_pts, normal)
+        j0 = np.einsum("end,end->en", d_turned, normal)
+        j1 = np.einsum("end,end->en", d_turned[:, nxt], normal)
+        num += np.einsum("en,en->e", w_edge, (2 * j0 * r0 + j0 * r1 + j1 * r0 + 2 * j1 * r1) / 6)
+        den += np.einsum("en,en->e", w_edge, (j0 * j0 + j0 * j1 + j1 * j1) / 3)
+        theta -= num / np.maximum(den, tiny)
+    return theta
 
 
 def loose_codes(cand: Pack, rows: NDArray[np.int64], tol: Tolerances) -> NDArray[np.int64]:
@@ -612,4 +683,5 @@ __all__ = [
     "self_residuals",
     "take",
     "turn_sums",
+    "edge_rotation",
 ]
