@@ -19,7 +19,10 @@ The cyclic comparison also gives the correspondence, hence the rotation that tur
 onto the reference: the least-squares rotation (2D Procrustes, no reflection) of the candidate's
 relevant points onto the reference's under that correspondence, a curve's maximum-curvature
 point weighing ``Tolerances.curve_point_weight`` (its place along a flat maximum is measured far
-less well than a corner's; `qshape.assign` weighs every point alike). Holes are compared after that
+less well than a corner's), refined by fitting the candidate's edges to the reference's edge
+lines too (``Tolerances.rotation_corner_share``: a measured corner is the intersection of lines
+fitted over whole edges, and a misfitted short edge slides its corners along the long ones;
+`qshape.assign` weighs every point alike and fits points alone). Holes are compared after that
 rotation, in the reference's cardinal frame; a hole boundary is compared cyclically (a deliberate
 robustness change from the paper's fixed start vertex, which a noisy vertex can move).
 """

@@ -95,6 +95,15 @@ class Tolerances:
             rotation `qshape.match` returns (a vertex weighs 1; `qshape.assign` weighs all
             alike): on a flat maximum its place along the curve is measured much less well
             than a corner's. In [0, 1]. Dimensionless.
+        rotation_corner_share: Share of the relevant points in the rotation `qshape.match`
+            returns; the rest goes to the measured outline's edges. The rotation minimises
+            ``share`` x (mean squared distance of the candidate's relevant points to the
+            reference's) + (1 - ``share``) x (mean squared distance, per unit of outline
+            length, of the candidate's edges to the reference's edge lines), edges touching a
+            curve point weighing ``curve_point_weight``. A measured polygon's corners are
+            intersections of edge lines fitted over whole edges, so its edges carry their
+            directions even where a corner slid along its bisector. 1: relevant points alone
+            (a weighted Procrustes). In [0, 1]. Dimensionless.
     """
 
     right_angle_deg: tuple[float, ...] = (85.0, 95.0)
@@ -116,6 +125,7 @@ class Tolerances:
     point_tolerance: float = 0.5
     uncertainty_residual: float = 0.05
     curve_point_weight: float = 0.25
+    rotation_corner_share: float = 0.33
 
     def __post_init__(self) -> None:
         """Validate bands (ordered, positive) and margins (non-negative, narrower than bands).
@@ -174,6 +184,12 @@ class Tolerances:
         if not (math.isfinite(self.curve_point_weight) and 0.0 <= self.curve_point_weight <= 1.0):
             raise ToleranceError(
                 f"curve_point_weight must be in [0, 1], got {self.curve_point_weight!r}"
+            )
+        if not (
+            math.isfinite(self.rotation_corner_share) and 0.0 <= self.rotation_corner_share <= 1.0
+        ):
+            raise ToleranceError(
+                f"rotation_corner_share must be in [0, 1], got {self.rotation_corner_share!r}"
             )
         if self.convexity_margin_deg >= 90.0:
             raise ToleranceError("convexity_margin_deg must be < 90")

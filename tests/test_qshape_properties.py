@@ -69,7 +69,9 @@ def test_match_is_invariant_and_finds_the_turn(points: np.ndarray, pose) -> None
     assert m is not None
     # The candidate was turned by theta: the match turns it back by -theta (mod a symmetry).
     assert min(abs(wrap_angle(r + pose[0])) for r in m.rotations) < 1e-6
-    assert m.score < 1e-6
+    # The exact turn, or (a nearly regular polygon) a turn its geometry makes equivalent.
+    exact = abs(wrap_angle(m.rotation + pose[0])) < 1e-6
+    assert m.score < (1e-6 if exact else Tolerances().symmetry_residual)
 
 
 @SETTINGS
