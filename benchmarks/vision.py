@@ -118,16 +118,18 @@ def _classify(
     return (None, None) if best is None else (best[1], best[2])
 
 
-def _rot_error_deg(m: Any, rep_angle_deg: float, tile: Any) -> float:
+def _rot_error_deg(m: Any, rep_angle_deg: float, tile: Any, angle: float | None = None) -> float:
     """Rotation error [deg] of match ``m`` against a drawn tile, modulo the tile's symmetry.
 
     ``rep_angle_deg``: the angle of the reference figure matched; ``tile``: the drawn tile
-    (its angle [rad] and slot symmetry).
+    (its angle [rad] and slot symmetry); ``angle``: the tile's orientation [rad] to measure
+    against instead of its drawing angle (e.g. ``benchmarks.drawn_rotation.drawn_angle``).
     """
     symmetry = tile.slot.symmetry
     if symmetry == 0 or m.continuous:
         return 0.0
-    expected = wrap_angle(math.radians(rep_angle_deg) - tile.angle)
+    truth = tile.angle if angle is None else angle
+    expected = wrap_angle(math.radians(rep_angle_deg) - truth)
     period = 2.0 * math.pi / symmetry
     return min(abs(math.degrees(math.remainder(r - expected, period))) for r in m.rotations)
 

@@ -120,6 +120,8 @@ class TileTruth:
         hole_curve_masks: Curve mask of each hole.
         color: Tile colour after colour jitter, RGB in [0, 1].
         partial: True when the tile is cut by the image border.
+        outline_px: The outline as drawn into the picture (manufacturing noise and edge wear
+            included, before any lens), shape (m, 2), [px], y down; None before it is drawn.
     """
 
     slot: Slot
@@ -133,6 +135,7 @@ class TileTruth:
     hole_curve_masks: tuple[BoolArray, ...]
     color: tuple[float, float, float]
     partial: bool = False
+    outline_px: FloatArray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -262,6 +265,7 @@ def generate(
             )
             holes = [hl.dense(step) for hl in placed.holes]
             outline, holes = _worn_edges(placed, outline, holes, e, s, gen)
+            truths[-1] = replace(truths[-1], outline_px=outline)
             drawn.append((outline, holes))
             colors.append(rgb)
             radii.append(radius)
