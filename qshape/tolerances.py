@@ -141,7 +141,7 @@ class Tolerances:
     weak_turn_deg: float = 40.0
     weak_pair_fraction: float = 0.08
     weak_slide_fraction: float = 0.03
-    neighbour_residual: float = 0.05
+    neighbour_residual: float = 0.04
 
     def __post_init__(self) -> None:
         """Validate bands (ordered, positive) and margins (non-negative, narrower than bands).
