@@ -25,6 +25,11 @@ fitted over whole edges, and a misfitted short edge slides its corners along the
 `qshape.assign` weighs every point alike and fits points alone). Holes are compared after that
 rotation, in the reference's cardinal frame; a hole boundary is compared cyclically (a deliberate
 robustness change from the paper's fixed start vertex, which a noisy vertex can move).
+
+`match_best` picks the reference a measured figure matches best. When the figure as measured
+matches none, its structure may be what is off (a corner cut in two, added, or placed along its
+edge): it tries the figure's structural neighbours (`qshape.neighbours`), each under the stricter
+``Tolerances.neighbour_residual``, and answers only when exactly one reference is reached so.
 """
 
 from __future__ import annotations
