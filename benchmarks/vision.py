@@ -30,7 +30,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from qshape import Boundary, Figure, Tolerances, match
+from qshape import Boundary, Figure, Tolerances, match_best
 from qshape.design import Design, Slot
 from qshape.extract import ExtractParams, extract_detailed
 from qshape.figure import figures_from_outlines
@@ -110,12 +110,8 @@ class _Refs:
 def _classify(
     fig: Figure, refs: dict[str, Slot], figs: dict[str, Figure], tol: Tolerances, use_color: bool
 ) -> tuple[str | None, Any]:
-    best: tuple[float, str, Any] | None = None
-    for key in refs:
-        m = match(figs[key], fig, tol, use_color)
-        if m is not None and (best is None or m.score < best[0]):
-            best = (m.score, key, m)
-    return (None, None) if best is None else (best[1], best[2])
+    best = match_best({key: figs[key] for key in refs}, fig, tol, use_color)
+    return (None, None) if best is None else best
 
 
 def _rot_error_deg(m: Any, rep_angle_deg: float, tile: Any, angle: float | None = None) -> float:

@@ -34,7 +34,7 @@ import cv2
 import numpy as np
 
 from configs import load_config
-from qshape import Description, Tolerances, describe, match
+from qshape import Description, Tolerances, describe, match_best
 from qshape.design import Design
 from qshape.effects import CameraEffects, undistort, undistort_points
 from qshape.extract import ExtractParams, extract_detailed
@@ -111,12 +111,8 @@ class _Classes:
     def best(
         cand: Description, refs: dict[str, Description], tol: Tolerances, use_color: bool
     ) -> tuple[str | None, Any]:
-        best: tuple[float, str, Any] | None = None
-        for key, ref in refs.items():
-            m = match(ref, cand, tol, use_color)
-            if m is not None and (best is None or m.score < best[0]):
-                best = (m.score, key, m)
-        return (None, None) if best is None else (best[1], best[2])
+        best = match_best(refs, cand, tol, use_color)
+        return (None, None) if best is None else best
 
 
 def _seen(img: Any, e: CameraEffects, bench: RealisticBench) -> tuple[np.ndarray, FloatArray]:

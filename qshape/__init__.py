@@ -36,7 +36,7 @@ from qshape.errors import (
 )
 from qshape.figure import Boundary, Figure
 from qshape.limits import Limits
-from qshape.matching import Match, canonical_key, canonical_keys, match
+from qshape.matching import Match, canonical_key, canonical_keys, match, match_best
 from qshape.simplify import OutlineParams
 from qshape.text_parser import parse
 from qshape.tolerances import Tolerances
@@ -69,6 +69,7 @@ __all__ = [
     "describe",
     "describe_many",
     "match",
+    "match_best",
     "parse",
 ]
 

@@ -25,12 +25,18 @@ fitted over whole edges, and a misfitted short edge slides its corners along the
 `qshape.assign` weighs every point alike and fits points alone). Holes are compared after that
 rotation, in the reference's cardinal frame; a hole boundary is compared cyclically (a deliberate
 robustness change from the paper's fixed start vertex, which a noisy vertex can move).
+
+`match_best` picks the reference a measured figure matches best. When the figure as measured
+matches none, its structure may be what is off (a corner cut in two, added, or placed along its
+edge): it tries the figure's structural neighbours (`qshape.neighbours`), each under the stricter
+``Tolerances.neighbour_residual``, and answers only when exactly one reference is reached so.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from typing import TypeVar
 
 import numpy as np
 
@@ -53,7 +59,10 @@ from qshape.figure import Figure
 from qshape.geometry import wrap_angle
 from qshape.keys import canonical_key, canonical_keys, clear_key_caches, coarse_key
 from qshape.labels import CodeArray
+from qshape.neighbours import neighbours
 from qshape.tolerances import Tolerances, resolve_tolerances
+
+K = TypeVar("K")
 
 
 @dataclass(frozen=True)
@@ -79,6 +88,9 @@ class Match:
             ``vertex02``).
         continuous: True when both shapes are rotationally continuous (circles, concentric
             rings): every rotation fits; `rotation` is then just the fitted one.
+        neighbour: None when the candidate matched as measured; else the structural
+            neighbour of it that matched (`match_best`), whose nodes ``correspondence`` and
+            ``offset`` index.
     """
 
     rotation: float
@@ -87,6 +99,7 @@ class Match:
     correspondence: tuple[int, ...]
     offset: int
     continuous: bool = False
+    neighbour: Description | None = None
 
 
 def as_description(obj: Description | Figure, tol: Tolerances) -> Description:
@@ -215,6 +228,66 @@ def match(
     )
 
 
+def match_best(
+    references: Mapping[K, Description | Figure],
+    candidate: Description | Figure,
+    tolerances: Tolerances | None = None,
+    use_color: bool = True,
+) -> tuple[K, Match] | None:
+    """The reference a measured candidate matches best, trying its structural neighbours.
+
+    First the candidate as measured: of the references it matches (`match`), the one with
+    the lowest score (the first listed on a tie). When it matches none, its structural
+    neighbours (`qshape.neighbours`: one weak corner removed, a chamfer merged, or a weak
+    corner slid along its edges) are tried; a neighbour's match counts only when its score is
+    at most ``Tolerances.neighbour_residual``, and the result stands only when exactly one
+    reference is matched so (ambiguity is no match). The returned `Match` then carries the
+    neighbour. ``neighbour_residual`` 0 turns the neighbours off.
+
+    Args:
+        references: Reference descriptions (or figures) by key.
+        candidate: Candidate description (or figure), typically measured from a picture.
+        tolerances: Bands, margins and thresholds; None: bundled defaults.
+        use_color: Compare colours.
+
+    Returns:
+        (key, match), or None when no reference (or more than one, through neighbours) matches.
+
+    Raises:
+        MatchError: A reference or the candidate not a description or figure, a non-bool
+            flag, or ``references`` not a mapping.
+        ToleranceError: ``tolerances`` not a `Tolerances`.
+    """
+    tol = resolve_tolerances(tolerances)
+    check_flag(use_color, "use_color")
+    if not isinstance(references, Mapping):
+        raise MatchError(
+            f"references must be a mapping of key -> Description or Figure, got "
+            f"{type(references).__name__}"
+        )
+    refs = {key: as_description(ref, tol) for key, ref in references.items()}
+    cand = as_description(candidate, tol)
+    best: tuple[K, Match] | None = None
+    for key, ref in refs.items():
+        m = match(ref, cand, tol, use_color)
+        if m is not None and (best is None or m.score < best[1].score):
+            best = (key, m)
+    if best is not None or tol.neighbour_residual <= 0.0:
+        return best
+    found: dict[K, Match] = {}
+    for variant in neighbours(cand, tol):
+        for key, ref in refs.items():
+            m = match(ref, variant, tol, use_color)
+            if m is None or m.score > tol.neighbour_residual:
+                continue
+            if key not in found or m.score < found[key].score:
+                found[key] = replace(m, neighbour=variant)
+    if len(found) != 1:
+        return None
+    ((key, m),) = found.items()
+    return key, m
+
+
 __all__ = [
     "BlockResult",
     "Match",
@@ -233,6 +306,7 @@ __all__ = [
     "evaluate_pairs",
     "is_continuous",
     "match",
+    "match_best",
     "pack",
     "prefilter",
     "self_residuals",

@@ -104,6 +104,18 @@ class Tolerances:
             intersections of edge lines fitted over whole edges, so its edges carry their
             directions even where a corner slid along its bisector. 1: relevant points alone
             (a weighted Procrustes). In [0, 1]. Dimensionless.
+        weak_turn_deg: A measured corner between straight edges whose direction changes by at
+            most this much either way is weak, in [deg]: blur and rough edges may have cut it
+            from a corner (a chamfer), added it, or placed it along its edge. `qshape.match_best`
+            tries the figure with one weak corner removed, merged or slid (`qshape.neighbours`)
+            when the figure as measured matches nothing. Below 90.
+        weak_pair_fraction: Two adjacent weak corners turning the same way at most this
+            fraction of the perimeter apart may be one corner cut by a chamfer. Dimensionless.
+        weak_slide_fraction: How far along its edges a weak corner may lie from its place,
+            as a fraction of the perimeter. Dimensionless.
+        neighbour_residual: A structural neighbour matches only when its alignment residual
+            (as `Match.score`) is at most this fraction of sqrt(area), and only when it matches
+            exactly one reference. 0: structural neighbours off. Dimensionless.
     """
 
     right_angle_deg: tuple[float, ...] = (85.0, 95.0)
@@ -126,6 +138,10 @@ class Tolerances:
     uncertainty_residual: float = 0.05
     curve_point_weight: float = 0.25
     rotation_corner_share: float = 0.33
+    weak_turn_deg: float = 40.0
+    weak_pair_fraction: float = 0.08
+    weak_slide_fraction: float = 0.03
+    neighbour_residual: float = 0.04
 
     def __post_init__(self) -> None:
         """Validate bands (ordered, positive) and margins (non-negative, narrower than bands).
@@ -158,6 +174,10 @@ class Tolerances:
             "tie_tolerance",
             "point_tolerance",
             "uncertainty_residual",
+            "weak_turn_deg",
+            "weak_pair_fraction",
+            "weak_slide_fraction",
+            "neighbour_residual",
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
@@ -191,6 +211,8 @@ class Tolerances:
             raise ToleranceError(
                 f"rotation_corner_share must be in [0, 1], got {self.rotation_corner_share!r}"
             )
+        if self.weak_turn_deg >= 90.0:
+            raise ToleranceError(f"weak_turn_deg must be < 90, got {self.weak_turn_deg!r}")
         if self.convexity_margin_deg >= 90.0:
             raise ToleranceError("convexity_margin_deg must be < 90")
         if self.cone_margin_deg >= 22.5:
