@@ -386,17 +386,17 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         f"timing on {t['image']} px, {t['figures']} tiles: extract {t['extract_ms']:.2f} ms "
         f"(image stages {t['image_stages_ms']:.2f} ms + outline simplification and figures "
         f"{t['outline_simplify_ms']:.2f} ms); cv2.Canny on the RGB picture {t['canny_rgb_ms']:.2f} "
-        f"ms; interleaved: ratio of medians {t['ratio_vs_canny_rgb']:.1f}x, median of pair "
-        f"ratios {t['ratio_vs_canny_rgb_pairs']:.1f}x (target <= {VISION_CANNY_RATIO:g}x); "
+        f"ms; interleaved: ratio of medians {t['ratio_vs_canny_rgb']:.2f}x, median of pair "
+        f"ratios {t['ratio_vs_canny_rgb_pairs']:.2f}x (target <= {VISION_CANNY_RATIO:g}x); "
         f"CPU time {t['extract_cpu_ms']:.2f} vs {t['canny_rgb_cpu_ms']:.2f} ms: "
-        f"{t['ratio_vs_canny_rgb_cpu']:.1f}x"
+        f"{t['ratio_vs_canny_rgb_cpu']:.2f}x"
     )
     print(
         f"  other references (CPU time): Canny on the grey picture {t['canny_gray_cpu_ms']:.2f} ms "
-        f"({t['ratio_vs_canny_gray_cpu']:.1f}x), one Canny per channel (extraction's edge step) "
-        f"{t['canny_channels_cpu_ms']:.2f} ms ({t['ratio_vs_canny_channels_cpu']:.1f}x); without "
+        f"({t['ratio_vs_canny_gray_cpu']:.2f}x), one Canny per channel (extraction's edge step) "
+        f"{t['canny_channels_cpu_ms']:.2f} ms ({t['ratio_vs_canny_channels_cpu']:.2f}x); without "
         f"corner refinement (wall): extract {t['extract_no_refine_ms']:.2f} ms "
-        f"({t['ratio_no_refine']:.1f}x)"
+        f"({t['ratio_no_refine']:.2f}x)"
     )
     if args.timing_only:  # no accuracy table: nothing written
         return results
