@@ -110,6 +110,7 @@ class ExtractParams:
             blurred edge), dimensionless; 0: at the global threshold.
         edge_threshold_max: Upper clamp of that per-region level, in [levels] (the global
             threshold is the lower one).
+        edge_sample_step: Every n-th pixel (each axis) of a region enters its median distance.
         split_touching: Remove Canny edges found inside the foreground (splits touching tiles).
         canny_low: Canny hysteresis low threshold, on the blurred RGB image.
         canny_high: Canny hysteresis high threshold.
@@ -162,6 +163,7 @@ class ExtractParams:
     open_px: int = 3
     edge_fraction: float = 0.5
     edge_threshold_max: float = 60.0
+    edge_sample_step: int = 2
     split_touching: bool = True
     canny_low: float = 60.0
     canny_high: float = 150.0
@@ -568,7 +570,7 @@ def _at_half_contrast(
     """
     count = len(present)
     lut, k = _compact(present)
-    lab, val = _samples(pieces, labels, lut, max(1, p.color_sample_step), dist)
+    lab, val = _samples(pieces, labels, lut, max(1, p.edge_sample_step), dist)
     median = np.zeros(count)
     median[present] = _label_medians(lab, val, k)[0][1:, 0]
     level = np.clip(p.edge_fraction * median, thr, max(thr, p.edge_threshold_max))
