@@ -536,8 +536,11 @@ def _sample_points(region: np.ndarray, step: int) -> np.ndarray:
 def _values_at(
     at: np.ndarray, labels: np.ndarray, lut: np.ndarray, *images: np.ndarray
 ) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Compact labels (N,) and, per uint8 (H, W) or (H, W, c) image, its values (N, c) at the
-    flat pixel indices ``at`` (N,); ``lut`` maps a label to its compact index."""
+    """Compact labels (N,) and each image's values at the flat pixel indices ``at`` (N,).
+
+    ``lut`` maps a label to its compact index; each image is uint8 (H, W) or (H, W, c) and
+    gives (N, c) values.
+    """
     h, w = labels.shape[:2]
     values = [np.take(im.reshape(h * w, -1), at, axis=0) for im in images]
     return lut[np.take(labels.ravel(), at)], values
