@@ -530,7 +530,8 @@ def _sample_points(region: np.ndarray, step: int) -> np.ndarray:
     w = region.shape[1]
     found = cv2.findNonZero(np.ascontiguousarray(region[::step, ::step]))
     xy = np.zeros((0, 2), np.intp) if found is None else found.reshape(-1, 2).astype(np.intp)
-    return (xy[:, 1] * (step * w)) + xy[:, 0] * step
+    at: np.ndarray = (xy[:, 1] * (step * w)) + xy[:, 0] * step
+    return at
 
 
 def _values_at(
