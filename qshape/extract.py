@@ -13,8 +13,9 @@ Pipeline, all O(height x width) image operations in OpenCV plus linear work per 
    figures, and the reason in ``ExtractResult.rejected``.
 3. Segmentation: per-pixel colour distance to the belt model, times the shading gain (so a
    tile in a shadow stands out as much as in the light), thresholded (Otsu, clamped), cleaned
-   by a morphological opening. Canny edges inside the foreground split tiles of different
-   colours that touch. Each region's outline is then taken where the distance reaches half
+   by a morphological opening. Canny edges inside the foreground (found per channel on the
+   picture reduced ``canny_reduction`` times per axis) split tiles of different colours that
+   touch. Each region's outline is then taken where the distance reaches half
    of the region's own contrast (the middle of a blurred edge, faint or bright tile alike).
 4. Contour tracing with hierarchy (``cv2.findContours``), so holes are the children of outer
    contours; a hole counts only if it shows the belt (a dark spot of glaze is no hole).
