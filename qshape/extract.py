@@ -617,8 +617,9 @@ def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
     several times faster than its three-channel one (which thresholds the largest channel
     gradient); the union marks the same boundaries. With ``canny_reduction`` f > 1 the edges
     are found on the picture reduced f times per axis (a quarter of the work at f = 2) and
-    each is a block of f x f px here: the cut only has to part the pieces, and the label
-    dilations that give the cut pixels back fill a band of that width from both sides.
+    each is a block of f x f px here: the
+    cut only has to part the pieces, and the label dilations that give the cut pixels back
+    fill a band of that width from both sides.
     """
     f = p.canny_reduction
     h, w = img.shape[:2]
@@ -758,11 +759,15 @@ def _split_regions(
     kernel3 = _box(3)
     zero = np.zeros(1, lab.dtype)
     lost = cv2.bitwise_and(mask, cv2.compare(lab, zero, cv2.CMP_EQ))
+    left = cv2.countNonZero(lost)
     for _ in range(p.restore_iterations):
-        if cv2.countNonZero(lost) == 0:
+        if left == 0:
             break
         lab = cv2.copyTo(cv2.dilate(lab, kernel3), lost, lab)
         lost = cv2.bitwise_and(mask, cv2.compare(lab, zero, cv2.CMP_EQ))
+        before, left = left, cv2.countNonZero(lost)
+        if left == before:  # the rest touches no piece (a speck): nothing more to give back
+            break
     border = cv2.compare(cv2.dilate(lab, kernel3), lab, cv2.CMP_GT)
     pieces = cv2.bitwise_and(cv2.compare(lab, zero, cv2.CMP_GT), cv2.bitwise_not(border))
     return count, (lab if small else lab.astype(np.int32)), present, pieces
