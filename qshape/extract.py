@@ -13,8 +13,9 @@ Pipeline, all O(height x width) image operations in OpenCV plus linear work per 
    figures, and the reason in ``ExtractResult.rejected``.
 3. Segmentation: per-pixel colour distance to the belt model, times the shading gain (so a
    tile in a shadow stands out as much as in the light), thresholded (Otsu, clamped), cleaned
-   by a morphological opening. Canny edges inside the foreground split tiles of different
-   colours that touch. Each region's outline is then taken where the distance reaches half
+   by a morphological opening. Canny edges inside the foreground (found per channel on the
+   picture reduced ``canny_reduction`` times per axis) split tiles of different colours that
+   touch. Each region's outline is then taken where the distance reaches half
    of the region's own contrast (the middle of a blurred edge, faint or bright tile alike).
 4. Contour tracing with hierarchy (``cv2.findContours``), so holes are the children of outer
    contours; a hole counts only if it shows the belt (a dark spot of glaze is no hole).
@@ -110,9 +111,13 @@ class ExtractParams:
             blurred edge), dimensionless; 0: at the global threshold.
         edge_threshold_max: Upper clamp of that per-region level, in [levels] (the global
             threshold is the lower one).
+        edge_sample_step: Every n-th pixel (each axis) of a region enters its median distance.
         split_touching: Remove Canny edges found inside the foreground (splits touching tiles).
         canny_low: Canny hysteresis low threshold, on the blurred RGB image.
         canny_high: Canny hysteresis high threshold.
+        canny_reduction: The split's Canny runs on the blurred picture reduced by this factor
+            per axis (area average; 1: full size), its edges scaled back (each a block of
+            ``canny_reduction`` px), dimensionless.
         restore_iterations: After the Canny cut, pixels on the cut are given back to a
             neighbouring piece by this many label dilations.
         min_area_px: Regions smaller than this are ignored, in [px^2].
@@ -132,6 +137,8 @@ class ExtractParams:
             through the centres of the outermost region pixels), in [px].
         color_erode_px: Erosion before taking the median colour, in [px].
         color_sample_step: Every n-th pixel (each axis) of a tile enters its median colour.
+        light_sample_every: Every n-th of those samples (in scan order) enters the median of
+            the belt model under the tile (the light its colour is corrected for).
         correct_illumination: Divide tile colours by the modelled relative illumination.
         outline: Slope-comparison simplification parameters for pixel outlines.
     """
@@ -159,9 +166,11 @@ class ExtractParams:
     open_px: int = 3
     edge_fraction: float = 0.5
     edge_threshold_max: float = 60.0
+    edge_sample_step: int = 2
     split_touching: bool = True
     canny_low: float = 60.0
     canny_high: float = 150.0
+    canny_reduction: int = 1
     restore_iterations: int = 3
     min_area_px: float = 150.0
     min_hole_area_px: float = 40.0
@@ -173,6 +182,7 @@ class ExtractParams:
     boundary_offset_px: float = 0.5
     color_erode_px: int = 3
     color_sample_step: int = 2
+    light_sample_every: int = 1
     correct_illumination: bool = True
     outline: OutlineParams = field(default_factory=OutlineParams)
 
@@ -202,6 +212,10 @@ class ExtractParams:
         sizes = (self.open_px, self.restore_iterations, self.color_erode_px, self.border_margin_px)
         if min(sizes) < 0:
             raise ImageError("pixel sizes must be >= 0")
+        if self.light_sample_every < 1:
+            raise ImageError(f"light_sample_every must be >= 1, got {self.light_sample_every}")
+        if self.canny_reduction < 1:
+            raise ImageError(f"canny_reduction must be >= 1, got {self.canny_reduction}")
         if self.blur_sigma_px < 0.0 or self.min_area_px < 0.0 or self.min_hole_area_px < 0.0:
             raise ImageError("blur_sigma_px, min_area_px and min_hole_area_px must be >= 0")
 
@@ -512,6 +526,28 @@ def _label_medians(
     return median.reshape(k, channels), cum[::channels, -1] > 0
 
 
+def _sample_points(region: np.ndarray, step: int) -> np.ndarray:
+    """Flat indices (N,) of every ``step``-th pixel (each axis) set in the uint8 ``region``."""
+    w = region.shape[1]
+    found = cv2.findNonZero(np.ascontiguousarray(region[::step, ::step]))
+    xy = np.zeros((0, 2), np.intp) if found is None else found.reshape(-1, 2).astype(np.intp)
+    at: np.ndarray = (xy[:, 1] * (step * w)) + xy[:, 0] * step
+    return at
+
+
+def _values_at(
+    at: np.ndarray, labels: np.ndarray, lut: np.ndarray, *images: np.ndarray
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Compact labels (N,) and each image's values at the flat pixel indices ``at`` (N,).
+
+    ``lut`` maps a label to its compact index; each image is uint8 (H, W) or (H, W, c) and
+    gives (N, c) values.
+    """
+    h, w = labels.shape[:2]
+    values = [np.take(im.reshape(h * w, -1), at, axis=0) for im in images]
+    return lut[np.take(labels.ravel(), at)], values
+
+
 def _samples(
     region: np.ndarray, labels: np.ndarray, lut: np.ndarray, step: int, *images: np.ndarray
 ) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -527,12 +563,7 @@ def _samples(
     Returns:
         The compact labels (N,) and, per image, its values (N, c).
     """
-    h, w = region.shape
-    found = cv2.findNonZero(np.ascontiguousarray(region[::step, ::step]))
-    xy = np.zeros((0, 2), np.intp) if found is None else found.reshape(-1, 2).astype(np.intp)
-    at = (xy[:, 1] * (step * w)) + xy[:, 0] * step
-    values = [np.take(im.reshape(h * w, -1), at, axis=0) for im in images]
-    return lut[np.take(labels.ravel(), at)], values
+    return _values_at(_sample_points(region, step), labels, lut, *images)
 
 
 def _compact(present: np.ndarray) -> tuple[np.ndarray, int]:
@@ -562,7 +593,7 @@ def _at_half_contrast(
     """
     count = len(present)
     lut, k = _compact(present)
-    lab, val = _samples(pieces, labels, lut, max(1, p.color_sample_step), dist)
+    lab, val = _samples(pieces, labels, lut, max(1, p.edge_sample_step), dist)
     median = np.zeros(count)
     median[present] = _label_medians(lab, val, k)[0][1:, 0]
     level = np.clip(p.edge_fraction * median, thr, max(thr, p.edge_threshold_max))
@@ -584,13 +615,27 @@ def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
 
     Colour tiles that touch differ in at least one channel. OpenCV's single-channel Canny is
     several times faster than its three-channel one (which thresholds the largest channel
-    gradient); the union marks the same boundaries.
+    gradient); the union marks the same boundaries. With ``canny_reduction`` f > 1 the edges
+    are found on the picture reduced f times per axis (a quarter of the work at f = 2) and
+    each is a block of f x f px here: the
+    cut only has to part the pieces, and the label dilations that give the cut pixels back
+    fill a band of that width from both sides.
     """
-    r, g, b = cv2.split(img)
-    edges = cv2.Canny(r, p.canny_low, p.canny_high)
-    cv2.bitwise_or(edges, cv2.Canny(g, p.canny_low, p.canny_high), dst=edges)
-    cv2.bitwise_or(edges, cv2.Canny(b, p.canny_low, p.canny_high), dst=edges)
-    return edges
+    f = p.canny_reduction
+    h, w = img.shape[:2]
+    small = img if f == 1 else cv2.resize(img, (w // f, h // f), interpolation=cv2.INTER_AREA)
+    low, high = p.canny_low, p.canny_high
+    r, g, b = cv2.split(small)
+    edges = cv2.Canny(r, low, high)
+    cv2.bitwise_or(edges, cv2.Canny(g, low, high), dst=edges)
+    cv2.bitwise_or(edges, cv2.Canny(b, low, high), dst=edges)
+    if f == 1:
+        return edges
+    full = np.zeros((h, w), np.uint8)
+    full[: (h // f) * f, : (w // f) * f] = cv2.resize(
+        edges, ((w // f) * f, (h // f) * f), interpolation=cv2.INTER_NEAREST
+    )
+    return full
 
 
 def _shows_belt(dist: np.ndarray, hole: np.ndarray, limit: float, percentile: float) -> bool:
@@ -714,11 +759,15 @@ def _split_regions(
     kernel3 = _box(3)
     zero = np.zeros(1, lab.dtype)
     lost = cv2.bitwise_and(mask, cv2.compare(lab, zero, cv2.CMP_EQ))
+    left = cv2.countNonZero(lost)
     for _ in range(p.restore_iterations):
-        if cv2.countNonZero(lost) == 0:
+        if left == 0:
             break
         lab = cv2.copyTo(cv2.dilate(lab, kernel3), lost, lab)
         lost = cv2.bitwise_and(mask, cv2.compare(lab, zero, cv2.CMP_EQ))
+        before, left = left, cv2.countNonZero(lost)
+        if left == before:  # the rest touches no piece (a speck): nothing more to give back
+            break
     border = cv2.compare(cv2.dilate(lab, kernel3), lab, cv2.CMP_GT)
     pieces = cv2.bitwise_and(cv2.compare(lab, zero, cv2.CMP_GT), cv2.bitwise_not(border))
     return count, (lab if small else lab.astype(np.int32)), present, pieces
@@ -745,15 +794,20 @@ def _tile_colours(
     else:
         region = pieces
     lut, k = _compact(seg.present)
-    st = max(1, p.color_sample_step)
-    medians, seen = _label_medians(*_samples(region, labels, lut, st, img, model), k)
+    at = _sample_points(region, max(1, p.color_sample_step))
+    medians, seen = _label_medians(*_values_at(at, labels, lut, img), k)
+    # The belt model is smooth: the light under a tile from a share of its colour samples.
+    light, lit = _label_medians(*_values_at(at[:: p.light_sample_every], labels, lut, model), k)
+    if not lit[seen].all():  # a tile with too few samples for that: all of them
+        light = _label_medians(*_values_at(at, labels, lut, model), k)[0]
     # Tiles eroded away entirely fall back to their whole region.
     if not seen[1:].all():
         again = _label_medians(*_samples(pieces, labels, lut, 1, img, model), k)[0]
-        medians[~seen] = again[~seen]
-    compact = medians[:, :3].astype(np.float64)
+        medians[~seen] = again[~seen, :3]
+        light[~seen] = again[~seen, 3:]
+    compact = medians.astype(np.float64)
     if p.correct_illumination:  # each tile's median colour under its median light
-        compact = compact * mean_light / np.maximum(medians[:, 3:], 1.0)
+        compact = compact * mean_light / np.maximum(light, 1.0)
     colors = np.zeros((seg.count, 3))
     colors[seg.present] = compact[1:]
     return colors

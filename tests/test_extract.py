@@ -180,7 +180,8 @@ def test_colour_robust_to_shading(known: tuple[Design, np.ndarray, list[Figure]]
         assert math.dist(fig.color, slot.color) < 0.06, slot.name
 
 
-def test_touching_tiles_split_by_canny() -> None:
+@pytest.mark.parametrize("reduction", [1, 2])
+def test_touching_tiles_split_by_canny(reduction: int) -> None:
     data = {
         "name": "touch",
         "mesh": {"width": 100, "height": 60},
@@ -205,8 +206,9 @@ def test_touching_tiles_split_by_canny() -> None:
     # Close the 0.5 mm joint: the two tiles touch.
     lo, hi = round(49.5 * S), round(50.5 * S) + 1
     image[:, lo:hi] = image[:, lo - 1 : lo]
-    assert len(extract(image)) == 2
-    off = replace(ExtractParams.load(), split_touching=False)
+    on = replace(ExtractParams.load(), canny_reduction=reduction)
+    assert len(extract(image, on)) == 2
+    off = replace(on, split_touching=False)
     assert len(extract(image, off)) == 1
 
 
@@ -297,6 +299,8 @@ def test_params_load_and_validate() -> None:
     assert p.outline.max_curve_turn_deg >= 200.0
     with pytest.raises(ImageError):
         ExtractParams(threshold_min=50.0, threshold_max=10.0)
+    with pytest.raises(ImageError, match="canny_reduction"):
+        ExtractParams(canny_reduction=0)
 
 
 def test_synthetic_view_matches_slots() -> None:
@@ -485,3 +489,65 @@ def test_piece_labels_are_16_bit_when_they_fit_else_32_bit() -> None:
     assert labels.dtype == np.int32
     assert count == 492 * 656 // 2 + 1
     assert int(labels.max()) == count - 1
+
+
+@pytest.mark.parametrize(("h", "w"), [(120, 160), (97, 61)])
+def test_reduced_canny_edges_are_blocks_of_the_reduced_pictures_edges(h: int, w: int) -> None:
+    """With canny_reduction 2 each edge of the halved picture is a 2 x 2 block (odd sides: none
+    in the last row/column), the union over the channels."""
+    from qshape.extract import _color_edges  # noqa: PLC0415
+
+    rng = np.random.default_rng(7)
+    img = cv2.GaussianBlur(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), (0, 0), 2.0)
+    p = replace(ExtractParams.load(), canny_reduction=2, canny_low=20.0, canny_high=50.0)
+    got = _color_edges(img, p)
+    small = cv2.resize(img, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
+    want = np.zeros((h // 2, w // 2), np.uint8)
+    for c in range(3):
+        want |= cv2.Canny(np.ascontiguousarray(small[..., c]), 20.0, 50.0)
+    assert got.shape == (h, w) and want.any()
+    blocks = got[: h // 2 * 2, : w // 2 * 2].reshape(h // 2, 2, w // 2, 2)
+    for dy in range(2):
+        for dx in range(2):
+            np.testing.assert_array_equal(blocks[:, dy, :, dx], want)
+    assert not got[h // 2 * 2 :].any() and not got[:, w // 2 * 2 :].any()
+
+
+def test_reduced_canny_cut_parts_touching_tiles_at_their_boundary() -> None:
+    """Two touching rectangles of different colours: the cut of the halved picture's Canny is
+    given back from both sides, so each piece ends within a pixel of the true boundary."""
+    from qshape.extract import _split_regions  # noqa: PLC0415
+
+    img = np.full((120, 200, 3), 50, np.uint8)
+    img[30:90, 30:101] = (200, 60, 40)  # columns 30..100
+    img[30:90, 101:170] = (60, 180, 60)  # columns 101..169, touching
+    img = cv2.GaussianBlur(img, (0, 0), 0.8)
+    mask = np.where(np.abs(img.astype(int) - 50).max(axis=2) > 20, 255, 0).astype(np.uint8)
+    for reduction in (1, 2):
+        p = replace(ExtractParams.load(), canny_reduction=reduction)
+        count, labels, present, pieces = _split_regions(img, mask, p)
+        assert present.sum() == 2
+        row = labels[60] * (pieces[60] > 0)
+        left, right = (np.flatnonzero(row == k) for k in np.flatnonzero(present))
+        if left.mean() > right.mean():
+            left, right = right, left
+        # The colours change between columns 100 and 101; one pixel on the cut is dropped
+        # (it borders the other piece): the gap is within a pixel of the change.
+        assert 98 <= left.max() <= 100 and 100 <= right.min() <= 102
+        assert right.min() - left.max() == 2
+
+
+def test_edge_level_from_every_fourth_pixel_keeps_the_synthetic_figures() -> None:
+    """A region's median distance from every 4th pixel per axis gives the same figures as from
+    every pixel on a camera-like view: the same vertices, most of them bit for bit (a level
+    one step off moves a few by about a tenth of a pixel)."""
+    sp = SynthParams.load()
+    img = generate(Design.load("hexagon"), 20, 11, sp).image
+    every = extract_detailed(img, replace(ExtractParams.load(), edge_sample_step=1)).figures
+    fourth = extract_detailed(img, replace(ExtractParams.load(), edge_sample_step=4)).figures
+    assert len(fourth) == len(every) >= 15
+    for a, b in zip(every, fourth, strict=True):
+        assert len(a.points) == len(b.points)
+        np.testing.assert_allclose(a.points, b.points, atol=0.25)
+    same = [np.array_equal(a.points, b.points) for a, b in zip(every, fourth, strict=True)]
+    assert sum(same) >= len(same) - 3
