@@ -260,7 +260,7 @@ def markdown(rows: list[dict[str, Any]], date: str) -> str:
     ]
     for r in rows:
         lines.append(
-            f"| {r['effect']} | {r['label']} | {r['tiles']} | {100 * r['class_accuracy']:.1f}% "
+            f"| {r['effect']} | {r['label']} | {r['tiles']} | {100 * r['class_accuracy']:.2f}% "
             f"| {100 * r['class_color_accuracy']:.1f}% | {100 * r['class_and_rotation']:.1f}% "
             f"| {r['rotation_err_deg_p99']:.2f} / {r['rotation_err_deg_max']:.2f} "
             f"| {r['rotation_drawn_err_deg_p99']:.2f} / {r['rotation_drawn_err_deg_max']:.2f} "
