@@ -137,8 +137,6 @@ class ExtractParams:
             through the centres of the outermost region pixels), in [px].
         color_erode_px: Erosion before taking the median colour, in [px].
         color_sample_step: Every n-th pixel (each axis) of a tile enters its median colour.
-        light_sample_every: Every n-th of those samples (in scan order) enters the median of
-            the belt model under the tile (the light its colour is corrected for).
         correct_illumination: Divide tile colours by the modelled relative illumination.
         outline: Slope-comparison simplification parameters for pixel outlines.
     """
@@ -182,7 +180,6 @@ class ExtractParams:
     boundary_offset_px: float = 0.5
     color_erode_px: int = 3
     color_sample_step: int = 2
-    light_sample_every: int = 1
     correct_illumination: bool = True
     outline: OutlineParams = field(default_factory=OutlineParams)
 
@@ -212,8 +209,6 @@ class ExtractParams:
         sizes = (self.open_px, self.restore_iterations, self.color_erode_px, self.border_margin_px)
         if min(sizes) < 0:
             raise ImageError("pixel sizes must be >= 0")
-        if self.light_sample_every < 1:
-            raise ImageError(f"light_sample_every must be >= 1, got {self.light_sample_every}")
         if self.canny_reduction < 1:
             raise ImageError(f"canny_reduction must be >= 1, got {self.canny_reduction}")
         if self.blur_sigma_px < 0.0 or self.min_area_px < 0.0 or self.min_hole_area_px < 0.0:
@@ -526,28 +521,6 @@ def _label_medians(
     return median.reshape(k, channels), cum[::channels, -1] > 0
 
 
-def _sample_points(region: np.ndarray, step: int) -> np.ndarray:
-    """Flat indices (N,) of every ``step``-th pixel (each axis) set in the uint8 ``region``."""
-    w = region.shape[1]
-    found = cv2.findNonZero(np.ascontiguousarray(region[::step, ::step]))
-    xy = np.zeros((0, 2), np.intp) if found is None else found.reshape(-1, 2).astype(np.intp)
-    at: np.ndarray = (xy[:, 1] * (step * w)) + xy[:, 0] * step
-    return at
-
-
-def _values_at(
-    at: np.ndarray, labels: np.ndarray, lut: np.ndarray, *images: np.ndarray
-) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Compact labels (N,) and each image's values at the flat pixel indices ``at`` (N,).
-
-    ``lut`` maps a label to its compact index; each image is uint8 (H, W) or (H, W, c) and
-    gives (N, c) values.
-    """
-    h, w = labels.shape[:2]
-    values = [np.take(im.reshape(h * w, -1), at, axis=0) for im in images]
-    return lut[np.take(labels.ravel(), at)], values
-
-
 def _samples(
     region: np.ndarray, labels: np.ndarray, lut: np.ndarray, step: int, *images: np.ndarray
 ) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -563,7 +536,12 @@ def _samples(
     Returns:
         The compact labels (N,) and, per image, its values (N, c).
     """
-    return _values_at(_sample_points(region, step), labels, lut, *images)
+    h, w = region.shape
+    found = cv2.findNonZero(np.ascontiguousarray(region[::step, ::step]))
+    xy = np.zeros((0, 2), np.intp) if found is None else found.reshape(-1, 2).astype(np.intp)
+    at = (xy[:, 1] * (step * w)) + xy[:, 0] * step
+    values = [np.take(im.reshape(h * w, -1), at, axis=0) for im in images]
+    return lut[np.take(labels.ravel(), at)], values
 
 
 def _compact(present: np.ndarray) -> tuple[np.ndarray, int]:
@@ -794,20 +772,15 @@ def _tile_colours(
     else:
         region = pieces
     lut, k = _compact(seg.present)
-    at = _sample_points(region, max(1, p.color_sample_step))
-    medians, seen = _label_medians(*_values_at(at, labels, lut, img), k)
-    # The belt model is smooth: the light under a tile from a share of its colour samples.
-    light, lit = _label_medians(*_values_at(at[:: p.light_sample_every], labels, lut, model), k)
-    if not lit[seen].all():  # a tile with too few samples for that: all of them
-        light = _label_medians(*_values_at(at, labels, lut, model), k)[0]
+    st = max(1, p.color_sample_step)
+    medians, seen = _label_medians(*_samples(region, labels, lut, st, img, model), k)
     # Tiles eroded away entirely fall back to their whole region.
     if not seen[1:].all():
         again = _label_medians(*_samples(pieces, labels, lut, 1, img, model), k)[0]
-        medians[~seen] = again[~seen, :3]
-        light[~seen] = again[~seen, 3:]
-    compact = medians.astype(np.float64)
+        medians[~seen] = again[~seen]
+    compact = medians[:, :3].astype(np.float64)
     if p.correct_illumination:  # each tile's median colour under its median light
-        compact = compact * mean_light / np.maximum(light, 1.0)
+        compact = compact * mean_light / np.maximum(medians[:, 3:], 1.0)
     colors = np.zeros((seg.count, 3))
     colors[seg.present] = compact[1:]
     return colors
