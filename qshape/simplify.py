@@ -378,19 +378,20 @@ def _simplify_clean(
     smooth_xy = (csum[..., width:] - csum[..., :-width]) / width + mean.T[:, :, None]
 
     w = max(1, round(p.corner_window * n))
-    change, ext = _direction_change(smooth_xy, w)
-    change[flat] = 0.0
-    if p.arc_turning_deg > 0.0:
-        change = _excess_turning(change, w, p.arc_turning_deg)
     spacing = max(w, round(p.merge_fraction * n))
-    corners = _corners_many(change, p.corner_angle_deg, spacing)
+    corners, ext = _window_corners(smooth_xy, w, flat, p, p.corner_angle_deg, spacing)
     holes = (
         _hole_windows(p, perimeter, np.abs(area2) / 2.0, parents, w)
         if p.hole_corner_window > 0.0
         else {}
     )
     for wh, rows in holes.items():
-        found = _hole_corners(smooth_xy[:, rows], wh, flat[rows], p, max(wh, spacing))
+        # Over the hole's longer window the corner angle rises by the turning a circle adds
+        # (`_FULL_TURN_OVER_WINDOWS` x the extra fraction of the perimeter): a round hole's
+        # steady turning stays below it as over ``corner_window``.
+        extra = max(0.0, wh / n - p.corner_window)
+        angle = p.corner_angle_deg + _FULL_TURN_OVER_WINDOWS * extra
+        found, _ = _window_corners(smooth_xy[:, rows], wh, flat[rows], p, angle, max(wh, spacing))
         for f, c in zip(rows.tolist(), found, strict=True):
             corners[f] = c
     noise = p.noise_fraction * diameter
@@ -495,22 +496,20 @@ def _hole_windows(
     return {wh: np.array(rows, dtype=np.int64) for wh, rows in groups.items()}
 
 
-def _hole_corners(
-    smooth_xy: FloatArray, w: int, flat: BoolArray, p: OutlineParams, spacing: int
-) -> list[np.ndarray]:
+def _window_corners(  # noqa: PLR0917
+    smooth_xy: FloatArray, w: int, flat: BoolArray, p: OutlineParams, angle: float, spacing: int
+) -> tuple[list[np.ndarray], FloatArray]:
     """Window-measure corners of outlines (x and y planes (2, F, n)) over a window of ``w``.
 
-    The corner angle rises by the turning a circle adds over the window's extra length
-    (``_FULL_TURN_OVER_WINDOWS`` x the extra fraction of the perimeter): a round hole's
-    steady turning stays below it as over ``corner_window``.
+    A corner turns by at least ``angle`` [deg] over the window; corners closer than
+    ``spacing`` samples are one. Flat outlines have none. Also returns the wrapped samples of
+    `_direction_change`.
     """
-    change, _ = _direction_change(smooth_xy, w)
+    change, ext = _direction_change(smooth_xy, w)
     change[flat] = 0.0
     if p.arc_turning_deg > 0.0:
         change = _excess_turning(change, w, p.arc_turning_deg)
-    n = smooth_xy.shape[2]
-    extra = max(0.0, w / n - p.corner_window)
-    return _corners_many(change, p.corner_angle_deg + _FULL_TURN_OVER_WINDOWS * extra, spacing)
+    return _corners_many(change, angle, spacing), ext
 
 
 _FULL_TURN_OVER_WINDOWS = 720.0
