@@ -23,6 +23,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial import cKDTree
 
+from qshape.geometry import polygon_centroid
 from qshape.synth import TileTruth
 
 
@@ -50,7 +51,7 @@ def drawn_angle(
     design = tile.slot.local_path.outer.dense(step_mm) * px_per_mm  # local, y up
     tree = cKDTree(design)
     drawn = np.asarray(tile.outline_px, dtype=np.float64) * np.array([1.0, -1.0])  # y up
-    centre = _area_centroid(drawn)  # the local origin is the tile's area centroid
+    centre = polygon_centroid(drawn)  # the local origin is the tile's area centroid
 
     def residuals(x: np.ndarray) -> np.ndarray:
         c, s = math.cos(x[0]), math.sin(x[0])
@@ -68,14 +69,3 @@ def drawn_angle(
         f_scale=f_scale_mm * px_per_mm,
     )
     return float(fit.x[0])
-
-
-def _area_centroid(ring: np.ndarray) -> np.ndarray:
-    """Area centroid of a closed polygon ``ring`` (m, 2)."""
-    x, y = ring[:, 0], ring[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
-    cross = x * yn - xn * y
-    area = cross.sum() / 2.0
-    if abs(area) < 1e-12:
-        return ring.mean(axis=0)
-    return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6.0 * area)

@@ -248,6 +248,8 @@ def generate(
             rgb = (float(color[0]), float(color[1]), float(color[2]))
             pts, mask = placed.outer.relevant(slot.rules.max_arc_deg)
             hole_rel = [hl.relevant(slot.rules.max_arc_deg) for hl in placed.holes]
+            holes = [hl.dense(step) for hl in placed.holes]
+            worn, holes = _worn_edges(placed, outline, holes, e, s, gen)
             truths.append(
                 TileTruth(
                     slot=slot,
@@ -261,12 +263,10 @@ def generate(
                     hole_curve_masks=tuple(hm for _, hm in hole_rel),
                     color=rgb,
                     partial=_cut_by_border(outline, w, h),
+                    outline_px=worn,
                 )
             )
-            holes = [hl.dense(step) for hl in placed.holes]
-            outline, holes = _worn_edges(placed, outline, holes, e, s, gen)
-            truths[-1] = replace(truths[-1], outline_px=outline)
-            drawn.append((outline, holes))
+            drawn.append((worn, holes))
             colors.append(rgb)
             radii.append(radius)
             break
