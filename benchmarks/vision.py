@@ -335,10 +335,20 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--designs", nargs="*", default=list(BenchParams.designs))
     ap.add_argument("--out", type=Path, default=Path("out/bench_vision.json"))
     ap.add_argument("--timing-only", action="store_true", help="only the extraction timing")
+    ap.add_argument(
+        "--px-per-mm",
+        type=float,
+        default=None,
+        help="scale of the accuracy pictures in [px/mm] (default: configs/vision.yaml's synth)",
+    )
     args = ap.parse_args(argv)
     cv2.setNumThreads(1)
     bp = BenchParams(images=args.images, designs=tuple(args.designs))
     sp = SynthParams.load()
+    if args.px_per_mm is not None:
+        if not (math.isfinite(args.px_per_mm) and args.px_per_mm > 0.0):
+            ap.error(f"--px-per-mm must be a positive number, got {args.px_per_mm}")
+        sp = replace(sp, px_per_mm=args.px_per_mm)
     ep = ExtractParams.load()
     rng = np.random.default_rng(bp.seed)
     results: dict[str, Any] = {

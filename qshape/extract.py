@@ -36,7 +36,8 @@ names with ``from qshape.extract import ExtractParams, extract_detailed, ...``.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -47,7 +48,7 @@ from qshape.config_sections import load_section
 from qshape.errors import InvalidFigureError, QShapeError
 from qshape.figure import Color, Figure, figures_from_outlines
 from qshape.geometry import FloatArray
-from qshape.simplify import OutlineParams
+from qshape.simplify import MIN_RESAMPLE_POINTS, OutlineParams
 
 _GAIN_SCALE = 32.0
 """Fixed-point scale of the shading gain image (uint8): gains up to 255 / 32 ~ 8."""
@@ -138,6 +139,11 @@ class ExtractParams:
         color_erode_px: Erosion before taking the median colour, in [px].
         color_sample_step: Every n-th pixel (each axis) of a tile enters its median colour.
         correct_illumination: Divide tile colours by the modelled relative illumination.
+        resample_per_px: The picture's outlines are resampled to this many samples per
+            traced pixel of its longest whole-tile outline, in [samples/px], and at most
+            ``outline.resample_points`` (0: always ``outline.resample_points``). Small tiles
+            in a coarse picture carry fewer pixels; sampling them more densely than that
+            adds work, not information.
         outline: Slope-comparison simplification parameters for pixel outlines.
     """
 
@@ -181,6 +187,7 @@ class ExtractParams:
     color_erode_px: int = 3
     color_sample_step: int = 2
     correct_illumination: bool = True
+    resample_per_px: float = 0.0
     outline: OutlineParams = field(default_factory=OutlineParams)
 
     def __post_init__(self) -> None:
@@ -209,6 +216,8 @@ class ExtractParams:
         sizes = (self.open_px, self.restore_iterations, self.color_erode_px, self.border_margin_px)
         if min(sizes) < 0:
             raise ImageError("pixel sizes must be >= 0")
+        if not (math.isfinite(self.resample_per_px) and self.resample_per_px >= 0.0):
+            raise ImageError(f"resample_per_px must be >= 0, got {self.resample_per_px}")
         if self.canny_reduction < 1:
             raise ImageError(f"canny_reduction must be >= 1, got {self.canny_reduction}")
         if self.blur_sigma_px < 0.0 or self.min_area_px < 0.0 or self.min_hole_area_px < 0.0:
@@ -323,12 +332,13 @@ def _blur_size(sigma: float) -> int:
     return min(default, 2 * int(np.flatnonzero(share >= _BLUR_TAP_MIN)[-1]) + 1)
 
 
-def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, float]:
-    """Dominant colour of the border band and its share.
+def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, float, int]:
+    """Dominant colour of the border band, its share, and the sample's channel span.
 
     Returns:
-        The median colour (3,) [levels] of the most populated coarse colour bin, and the
-        fraction of sampled pixels within ``background_tolerance`` of it.
+        The median colour (3,) [levels] of the most populated coarse colour bin, the
+        fraction of sampled pixels within ``background_tolerance`` of it, and the largest
+        range of levels over the channels among the sampled pixels.
     """
     b, step = p.background_border_px, p.background_sample_step
     if b > 0 and 2 * b < min(img.shape[:2]):
@@ -348,7 +358,8 @@ def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, floa
     dominant = np.asarray(np.median(sample[code == top], axis=0), dtype=np.float64)
     off = np.abs(sample.astype(np.float64) - dominant)
     near = np.maximum(np.maximum(off[:, 0], off[:, 1]), off[:, 2]) <= p.background_tolerance
-    return dominant, float(near.mean())
+    span = int((sample.max(axis=0).astype(np.int32) - sample.min(axis=0)).max())
+    return dominant, float(near.mean()), span
 
 
 @functools.cache
@@ -857,12 +868,26 @@ def _outlines(
     return todo, partial
 
 
+def _outline_params(todo: list[_Todo], p: ExtractParams) -> OutlineParams:
+    """The outline parameters with the picture's resample count (see ``resample_per_px``)."""
+    cap = p.outline.resample_points
+    if p.resample_per_px <= 0.0 or not todo:
+        return p.outline
+    longest = max(t[4] for t in todo)
+    n = min(cap, max(MIN_RESAMPLE_POINTS, math.ceil(p.resample_per_px * longest)))
+    return p.outline if n == cap else replace(p.outline, resample_points=n)
+
+
 def _figures(
     todo: list[_Todo], p: ExtractParams
 ) -> tuple[list[Figure], list[FloatArray], list[str]]:
     """Every outline simplified at once into figures; noise-like outlines rejected."""
     made = figures_from_outlines(
-        [t[0] for t in todo], [t[1] for t in todo], [t[2] for t in todo], p.outline, y_down=True
+        [t[0] for t in todo],
+        [t[1] for t in todo],
+        [t[2] for t in todo],
+        _outline_params(todo, p),
+        y_down=True,
     )
     figures: list[Figure] = []
     outlines: list[FloatArray] = []
@@ -899,14 +924,17 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         ImageError: Invalid image (see `check_image`).
     """
     p = default_params() if params is None else params
-    img = check_image(image, p)
-    if _channel_span(img) <= p.uniform_range:
-        level = img[0, 0].astype(np.float64) / 255.0
-        return ExtractResult([], [], [], [], (level[0], level[1], level[2]), 0.0)
+    raw = check_image(image, p)
+    img = raw
     if p.blur_sigma_px > 0.0:
         size = _blur_size(p.blur_sigma_px)
-        img = cv2.GaussianBlur(img, (size, size), p.blur_sigma_px)
-    dominant, share = _dominant_color(img, p)
+        img = cv2.GaussianBlur(raw, (size, size), p.blur_sigma_px)
+    dominant, share, seen_span = _dominant_color(img, p)
+    # The blur keeps every level within the picture's range: a border sample spanning more
+    # than uniform_range proves the picture is not one colour without reading all of it.
+    if seen_span <= p.uniform_range and _channel_span(raw) <= p.uniform_range:
+        level = raw[0, 0].astype(np.float64) / 255.0
+        return ExtractResult([], [], [], [], (level[0], level[1], level[2]), 0.0)
     background = (
         float(dominant[0]) / 255.0,
         float(dominant[1]) / 255.0,

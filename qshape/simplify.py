@@ -39,6 +39,9 @@ from qshape.fit import (
 from qshape.geometry import MAX_COORDINATE, BoolArray, FloatArray, cross2
 from qshape.tolerances import _load_section
 
+MIN_RESAMPLE_POINTS = 16
+"""Fewest uniform samples an outline is resampled to (`OutlineParams.resample_points`)."""
+
 
 @dataclass(frozen=True)
 class OutlineParams:
@@ -145,8 +148,10 @@ class OutlineParams:
         Raises:
             ToleranceError: Naming the field and the allowed range.
         """
-        if self.resample_points < 16:
-            raise ToleranceError(f"resample_points must be >= 16, got {self.resample_points}")
+        if self.resample_points < MIN_RESAMPLE_POINTS:
+            raise ToleranceError(
+                f"resample_points must be >= {MIN_RESAMPLE_POINTS}, got {self.resample_points}"
+            )
         for name in (
             "smooth_fraction",
             "corner_window",
