@@ -7,8 +7,11 @@ two runs beside it fit *one* line, or one arc, about as well as they fit two: th
 the squared residual is compared with the outline's own measured roughness (its variance times
 ``fit_merge_chi2``). An arc is tried only where one of the two runs is itself significantly
 curved, so the shallow real corners of a polygon are never rounded away into an arc. The fits of
-any run come in constant time from prefix sums of the samples' moments. Last, an outline
-whose corners one circle makes unnecessary (a rough circle cut into pieces) loses them all.
+any run come in constant time from prefix sums of the samples' moments. A run that two lines
+meeting at a real corner fit better than its arc (a corner the window measure missed, or
+placed off) is bent, not curved: it never lets an arc absorb its neighbours' corners, and it
+gets its corner back where the two lines meet best. Last, an outline whose corners one circle
+makes unnecessary (a rough circle cut into pieces) loses them all.
 """
 
 from __future__ import annotations
@@ -140,6 +143,82 @@ def arc_sse(s: FloatArray, line: FloatArray | None = None) -> FloatArray:
     return np.asarray(np.minimum(geo, line))
 
 
+def _line_directions(s: FloatArray) -> FloatArray:
+    """Unit direction of the total-least-squares line of each range, shape (k, 2), unsigned."""
+    cnt = np.maximum(s[:, 0], 1.0)
+    mx, my = s[:, 1] / cnt, s[:, 2] / cnt
+    phi = 0.5 * np.arctan2(
+        2.0 * (s[:, 4] - cnt * mx * my), (s[:, 3] - cnt * mx * mx) - (s[:, 5] - cnt * my * my)
+    )
+    return np.stack([np.cos(phi), np.sin(phi)], axis=1)
+
+
+@dataclass(frozen=True)
+class BendTest:
+    """When a run between corners is two straight edges meeting at a corner, not one arc.
+
+    Attributes:
+        min_turn_deg: The two lines' directions differ by at least this, in [deg] (> 0): a
+            real corner, never the gentle bend of a rough edge or of a short arc piece.
+        arm: Fewest samples on each side of the split (the corner spacing: a split nearer a
+            run's end would sit on that end's corner).
+    """
+
+    min_turn_deg: float
+    arm: int
+
+
+def bent_runs(  # noqa: PLR0913, PLR0917
+    moments: FloatArray,
+    f: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    limit: FloatArray,
+    test: BendTest,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Runs ``[lo, hi)`` of outlines f (twice-round indices) that two lines fit better than one.
+
+    Every sample at least ``test.arm`` from both ends is tried as the split; the run is bent
+    when the best split's two total-least-squares lines fit with a squared residual more than
+    ``limit[f]`` below the run's own best fit (arc or line, `arc_sse`) and their directions
+    differ by at least ``test.min_turn_deg``. A circle's arc piece is fitted far better by its
+    arc than by two chords, and a straight run has no turn: neither is bent. Cost linear in
+    the runs' total length (one call per fit for all candidate splits).
+
+    Returns:
+        (bent (k,) bool, split (k,) sample index of the best split, twice-round; ``lo`` where
+        the run is too short to split).
+    """
+    k = len(f)
+    room = np.maximum(hi - lo - 2 * test.arm + 1, 0)
+    split = lo.copy()
+    bent = np.zeros(k, dtype=bool)
+    total = int(room.sum())
+    if total == 0:
+        return bent, split
+    run = np.repeat(np.arange(k), room)
+    start = np.cumsum(room) - room
+    s = lo[run] + test.arm + (np.arange(total) - start[run])
+    g = f[run]
+    at = prefix_at(moments, np.concatenate((g, g, g)), np.concatenate((lo[run], s, hi[run])))
+    first, second = at[total : 2 * total] - at[:total], at[2 * total :] - at[total : 2 * total]
+    cost = line_sse(first) + line_sse(second)
+    order = np.lexsort((cost, run))
+    head = order[np.r_[True, run[order][1:] != run[order][:-1]]]  # cheapest split of each run
+    has = run[head]
+    whole = arc_sse(range_sums(moments, f[has], lo[has], hi[has]))
+    d1, d2 = _line_directions(first[head]), _line_directions(second[head])
+    cnt1, cnt2 = np.maximum(first[head, 0], 1.0), np.maximum(second[head, 0], 1.0)
+    step = second[head, 1:3] / cnt2[:, None] - first[head, 1:3] / cnt1[:, None]
+    # Orient both lines along the walk (from the first half's centroid to the second's).
+    d1 *= np.where((d1 * step).sum(axis=1) >= 0.0, 1.0, -1.0)[:, None]
+    d2 *= np.where((d2 * step).sum(axis=1) >= 0.0, 1.0, -1.0)[:, None]
+    turn = np.degrees(np.arccos(np.clip((d1 * d2).sum(axis=1), -1.0, 1.0)))
+    bent[has] = (whole - cost[head] > limit[f[has]]) & (turn >= test.min_turn_deg)
+    split[has] = s[head]
+    return bent, split
+
+
 @dataclass(frozen=True)
 class _Ring:
     """Corners of many closed outlines, flat: outline f's are ``c[own == f]``, sorted.
@@ -190,6 +269,7 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
     limit: FloatArray,
     trim: int,
     min_corners: int = 2,
+    bend: BendTest | None = None,
 ) -> None:
     """Drop, in place, the corners of outlines ``rows`` that the runs beside them do not need.
 
@@ -197,9 +277,10 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
     neighbouring corner's rounding stays out) are fitted apart and together. The cost of
     dropping it is the increase of the squared residual when fitted together by a line or,
     when one of the runs is itself curved (its arc fit beats its line fit by more than
-    ``limit``), by an arc. Each round drops, on every outline, its cheapest corner while that
-    cost is at most ``limit`` and more than ``min_corners`` corners remain; rounds repeat
-    until none is dropped. All outlines at once.
+    ``limit``, and with ``bend`` it is not `bent_runs`: two edges meeting at a corner the
+    window measure missed also beat one line), by an arc. Each round drops, on every outline,
+    its cheapest corner while that cost is at most ``limit`` and more than ``min_corners``
+    corners remain; rounds repeat until none is dropped. All outlines at once.
 
     Args:
         moments: `outline_moments` of all outlines, shape (9, F, n + 1).
@@ -210,6 +291,7 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
             ``scale`` squared (threshold x roughness variance), shape (F,).
         trim: Samples left out at the far end of each run.
         min_corners: Never fewer corners than this.
+        bend: When a curved run is two straight edges instead (None: never).
     """
     n = _samples(moments)
     rows = np.asarray([f for f in rows.tolist() if len(corners[f]) > min_corners], dtype=np.int64)
@@ -229,7 +311,20 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
         la, lb = line[:k], line[k : 2 * k]
         aa, ab = arc[:k], arc[k : 2 * k]
         lim = limit[f]
-        curved = (la - aa > lim) | (lb - ab > lim)
+        curved_a, curved_b = la - aa > lim, lb - ab > lim
+        if bend is not None and (curved_a.any() or curved_b.any()):
+            ia, ib = np.flatnonzero(curved_a), np.flatnonzero(curved_b)
+            bent, _ = bent_runs(
+                moments,
+                np.concatenate((f[ia], f[ib])),
+                np.concatenate((lo[ia], mid[ib])),
+                np.concatenate((mid[ia], hi[ib])),
+                limit,
+                bend,
+            )
+            curved_a[ia[bent[: len(ia)]]] = False
+            curved_b[ib[bent[len(ia) :]]] = False
+        curved = curved_a | curved_b
         union = np.where(curved, arc[2 * k :], line[2 * k :])
         cost = union - aa - ab  # arc_sse <= line_sse: each run's best fit
         order = np.lexsort((cost, f))  # by outline, cheapest first
@@ -245,6 +340,43 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
         rows = np.asarray(
             [g for g in changed.tolist() if len(corners[g]) > min_corners], dtype=np.int64
         )
+
+
+def split_bent_runs(  # noqa: PLR0913, PLR0917
+    moments: FloatArray,
+    corners: list[np.ndarray],
+    rows: np.ndarray,
+    limit: FloatArray,
+    trim: int,
+    bend: BendTest,
+) -> None:
+    """Give each bent run of outlines ``rows`` its corner back, in place.
+
+    A run between consecutive corners (ends trimmed by ``trim`` samples, at most a quarter of
+    the run) whose arc fit beats its line fit by more than ``limit`` (it is not straight) and
+    that `bent_runs` finds to be two edges gets a corner at the best split; repeated while a
+    run gains one (each split leaves ``bend.arm`` samples on both sides, so this ends).
+    """
+    n = _samples(moments)
+    rows = np.asarray([f for f in rows.tolist() if len(corners[f]) >= 1], dtype=np.int64)
+    while len(rows):
+        ring = _Ring.of(corners, rows)
+        length = (ring.c[ring.nxt] - ring.c) % n
+        length[length == 0] = n
+        cut = np.minimum(trim, length // 4)
+        lo, hi = ring.c + cut, ring.c + length - cut
+        s = range_sums(moments, ring.own, lo, hi)
+        line = line_sse(s)
+        ask = np.flatnonzero(line - arc_sse(s, line) > limit[ring.own])
+        if len(ask) == 0:
+            return
+        bent, split = bent_runs(moments, ring.own[ask], lo[ask], hi[ask], limit, bend)
+        if not bent.any():
+            return
+        grow = ring.own[ask[bent]]
+        for g, at in zip(grow.tolist(), (split[bent] % n).tolist(), strict=True):
+            corners[g] = np.sort(np.append(corners[g], at))
+        rows = np.unique(grow)
 
 
 def circle_outlines(
@@ -309,7 +441,9 @@ def flat_corner_outlines(
 
 
 __all__ = [
+    "BendTest",
     "arc_sse",
+    "bent_runs",
     "circle_outlines",
     "flat_corner_outlines",
     "line_sse",
@@ -317,4 +451,5 @@ __all__ = [
     "outline_moments",
     "prefix_at",
     "range_sums",
+    "split_bent_runs",
 ]
