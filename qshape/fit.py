@@ -168,22 +168,20 @@ class BendTest:
     arm: int
 
 
-def bent_runs(  # noqa: PLR0913, PLR0917
-    moments: FloatArray,
-    f: np.ndarray,
-    lo: np.ndarray,
-    hi: np.ndarray,
-    limit: FloatArray,
-    test: BendTest,
+def bent_runs(
+    moments: FloatArray, f: np.ndarray, lo: np.ndarray, hi: np.ndarray, test: BendTest
 ) -> tuple[np.ndarray, np.ndarray]:
     """Runs ``[lo, hi)`` of outlines f (twice-round indices) that two lines fit better than one.
 
     Every sample at least ``test.arm`` from both ends is tried as the split; the run is bent
-    when the best split's two total-least-squares lines fit with a squared residual more than
-    ``limit[f]`` below the run's own best fit (arc or line, `arc_sse`) and their directions
-    differ by at least ``test.min_turn_deg``. A circle's arc piece is fitted far better by its
-    arc than by two chords, and a straight run has no turn: neither is bent. Cost linear in
-    the runs' total length (one call per fit for all candidate splits).
+    when the best split's two total-least-squares lines fit it with a smaller squared
+    residual than its own best fit (arc or line, `arc_sse`) and their directions differ by at
+    least ``test.min_turn_deg``. The two models have about as many parameters (an arc 3, two
+    lines 4 and the split), so the comparison needs no margin; the turn is what keeps arcs
+    whole: two chords meeting at 45 deg stand for an arc turning 90 deg, whose chords bow
+    from it by 8 % of its radius, far above what its arc leaves, and a shorter arc piece
+    turns too little. A straight run has no turn. Cost linear in the runs' total length (one
+    call per fit for all candidate splits).
 
     Returns:
         (bent (k,) bool, split (k,) sample index of the best split, twice-round; ``lo`` where
@@ -214,7 +212,7 @@ def bent_runs(  # noqa: PLR0913, PLR0917
     d1 *= np.where((d1 * step).sum(axis=1) >= 0.0, 1.0, -1.0)[:, None]
     d2 *= np.where((d2 * step).sum(axis=1) >= 0.0, 1.0, -1.0)[:, None]
     turn = np.degrees(np.arccos(np.clip((d1 * d2).sum(axis=1), -1.0, 1.0)))
-    bent[has] = (whole - cost[head] > limit[f[has]]) & (turn >= test.min_turn_deg)
+    bent[has] = (cost[head] < whole) & (turn >= test.min_turn_deg)
     split[has] = s[head]
     return bent, split
 
@@ -280,7 +278,8 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
     ``limit``, and with ``bend`` it is not `bent_runs`: two edges meeting at a corner the
     window measure missed also beat one line), by an arc. Each round drops, on every outline,
     its cheapest corner while that cost is at most ``limit`` and more than ``min_corners``
-    corners remain; rounds repeat until none is dropped. All outlines at once.
+    corners remain; rounds repeat until none is dropped. All outlines at once. Last, with
+    ``bend``, each bent run of an outline's final corners gets a corner at its best split.
 
     Args:
         moments: `outline_moments` of all outlines, shape (9, F, n + 1).
@@ -295,6 +294,7 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
     """
     n = _samples(moments)
     rows = np.asarray([f for f in rows.tolist() if len(corners[f]) > min_corners], dtype=np.int64)
+    splits: dict[int, list[int]] = {}  # corners given back to bent runs, per outline
     while len(rows):
         ring = _Ring.of(corners, rows)
         lo, mid, hi = ring.sides(n, trim)
@@ -312,17 +312,21 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
         aa, ab = arc[:k], arc[k : 2 * k]
         lim = limit[f]
         curved_a, curved_b = la - aa > lim, lb - ab > lim
+        split_at = split = np.zeros(0, dtype=np.int64)  # corners whose run before is bent
         if bend is not None and (curved_a.any() or curved_b.any()):
             ia, ib = np.flatnonzero(curved_a), np.flatnonzero(curved_b)
-            bent, _ = bent_runs(
+            # Near ends trimmed too: the corner's own rounding stays out of the split's lines.
+            cut_a = np.minimum(trim, (mid[ia] - lo[ia]) // 4)
+            cut_b = np.minimum(trim, (hi[ib] - mid[ib]) // 4)
+            bent, split = bent_runs(
                 moments,
                 np.concatenate((f[ia], f[ib])),
-                np.concatenate((lo[ia], mid[ib])),
-                np.concatenate((mid[ia], hi[ib])),
-                limit,
+                np.concatenate((lo[ia], mid[ib] + cut_b)),
+                np.concatenate((mid[ia] - cut_a, hi[ib])),
                 bend,
             )
-            curved_a[ia[bent[: len(ia)]]] = False
+            split_at, split = ia[bent[: len(ia)]], split[: len(ia)][bent[: len(ia)]]
+            curved_a[split_at] = False
             curved_b[ib[bent[len(ia) :]]] = False
         curved = curved_a | curved_b
         union = np.where(curved, arc[2 * k :], line[2 * k :])
@@ -330,53 +334,23 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
         order = np.lexsort((cost, f))  # by outline, cheapest first
         head = order[np.r_[True, f[order][1:] != f[order][:-1]]]
         drop = head[cost[head] <= lim[head]]
+        changed = np.unique(f[drop])
+        # An outline that keeps its corners this round is final: its bent runs' splits hold.
+        moved = set(changed.tolist())
+        for g, at_ in zip(f[split_at].tolist(), (split % n).tolist(), strict=True):
+            if g not in moved:
+                splits.setdefault(g, []).append(at_)
         if len(drop) == 0:
             break
         keep = np.ones(len(f), dtype=bool)
         keep[drop] = False
-        changed = np.unique(f[drop])
         for g in changed.tolist():
             corners[g] = ring.c[keep & (f == g)]
         rows = np.asarray(
             [g for g in changed.tolist() if len(corners[g]) > min_corners], dtype=np.int64
         )
-
-
-def split_bent_runs(  # noqa: PLR0913, PLR0917
-    moments: FloatArray,
-    corners: list[np.ndarray],
-    rows: np.ndarray,
-    limit: FloatArray,
-    trim: int,
-    bend: BendTest,
-) -> None:
-    """Give each bent run of outlines ``rows`` its corner back, in place.
-
-    A run between consecutive corners (ends trimmed by ``trim`` samples, at most a quarter of
-    the run) whose arc fit beats its line fit by more than ``limit`` (it is not straight) and
-    that `bent_runs` finds to be two edges gets a corner at the best split; repeated while a
-    run gains one (each split leaves ``bend.arm`` samples on both sides, so this ends).
-    """
-    n = _samples(moments)
-    rows = np.asarray([f for f in rows.tolist() if len(corners[f]) >= 1], dtype=np.int64)
-    while len(rows):
-        ring = _Ring.of(corners, rows)
-        length = (ring.c[ring.nxt] - ring.c) % n
-        length[length == 0] = n
-        cut = np.minimum(trim, length // 4)
-        lo, hi = ring.c + cut, ring.c + length - cut
-        s = range_sums(moments, ring.own, lo, hi)
-        line = line_sse(s)
-        ask = np.flatnonzero(line - arc_sse(s, line) > limit[ring.own])
-        if len(ask) == 0:
-            return
-        bent, split = bent_runs(moments, ring.own[ask], lo[ask], hi[ask], limit, bend)
-        if not bent.any():
-            return
-        grow = ring.own[ask[bent]]
-        for g, at in zip(grow.tolist(), (split[bent] % n).tolist(), strict=True):
-            corners[g] = np.sort(np.append(corners[g], at))
-        rows = np.unique(grow)
+    for g, extra in splits.items():
+        corners[g] = np.sort(np.concatenate((corners[g], np.asarray(extra, dtype=np.int64))))
 
 
 def circle_outlines(
@@ -451,5 +425,4 @@ __all__ = [
     "outline_moments",
     "prefix_at",
     "range_sums",
-    "split_bent_runs",
 ]

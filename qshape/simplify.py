@@ -36,7 +36,6 @@ from qshape.fit import (
     merge_fitted_corners,
     outline_moments,
     range_sums,
-    split_bent_runs,
 )
 from qshape.geometry import MAX_COORDINATE, BoolArray, FloatArray, cross2
 from qshape.tolerances import _load_section
@@ -109,11 +108,12 @@ class OutlineParams:
         fit_split_turn_deg: With ``fit_merge_chi2``, a run between corners that is not
             straight is two edges meeting at a corner the window measure missed (or placed
             off, so the run took in part of the next edge) when two lines split at one of its
-            samples fit it better than its arc by the same roughness margin and their
-            directions differ by at least this, in [deg] (0: off). Such a run never lets an
-            arc absorb its neighbours' corners (a rough hexagon merged side by side into a
-            circle) and gets its corner back at the best split. Keep it above the turn of an
-            arc piece between two corners: a circle's run is fitted far better by its arc.
+            samples (at least the corner spacing from its ends) fit it better than its arc
+            and their directions differ by at least this, in [deg] (0: off). Such a run never
+            lets an arc absorb its neighbours' corners (a rough hexagon merged side by side
+            into a circle) and gets its corner back at the best split. Keep it well above
+            the turn between a short arc piece's two chords (half the arc's turn): a longer
+            arc is fitted far better by its arc than by two chords.
         fit_sigma_floor: Smallest roughness the fits assume, fraction of the outline's
             diameter (a clean traced outline still carries its pixel staircase).
         refine_trim_fraction: With ``refine_corners``, the samples left out at each end of
@@ -545,8 +545,8 @@ def _corners_from_fits(  # noqa: PLR0913, PLR0917
 ) -> None:
     """Corners (in place) dropped where one fit explains the runs beside them.
 
-    `qshape.fit.merge_fitted_corners`; with ``fit_split_turn_deg`` a run that is two edges
-    gets its corner back (`qshape.fit.split_bent_runs`); then an outline one circle fits as
+    `qshape.fit.merge_fitted_corners` (with ``fit_split_turn_deg``, a run that is two edges
+    gets its corner back); then an outline one circle fits as
     well as its runs loses them all (`qshape.fit.circle_outlines`: a closed curve). ``mom``:
     the outlines' `qshape.fit.outline_moments` in units of their diameter; ``sigma`` (F,):
     each outline's roughness per independent sample; ``spans``: samples left out at a run's
@@ -561,8 +561,6 @@ def _corners_from_fits(  # noqa: PLR0913, PLR0917
     limit = p.fit_merge_chi2 * sig * sig
     bend = BendTest(p.fit_split_turn_deg, spacing) if p.fit_split_turn_deg > 0.0 else None
     merge_fitted_corners(mom, corners, rows, limit, trim, bend=bend)
-    if bend is not None:
-        split_bent_runs(mom, corners, rows, limit, trim, bend)
     for f in circle_outlines(mom, corners, rows, limit).tolist():
         corners[f] = np.zeros(0, dtype=np.int64)
 
