@@ -268,7 +268,7 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
     trim: int,
     min_corners: int = 2,
     bend: BendTest | None = None,
-) -> None:
+) -> dict[int, np.ndarray]:
     """Drop, in place, the corners of outlines ``rows`` that the runs beside them do not need.
 
     For each corner, the runs before and after it (far ends trimmed by ``trim`` samples, so a
@@ -278,8 +278,7 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
     ``limit``, and with ``bend`` it is not `bent_runs`: two edges meeting at a corner the
     window measure missed also beat one line), by an arc. Each round drops, on every outline,
     its cheapest corner while that cost is at most ``limit`` and more than ``min_corners``
-    corners remain; rounds repeat until none is dropped. All outlines at once. Last, with
-    ``bend``, each bent run of an outline's final corners gets a corner at its best split.
+    corners remain; rounds repeat until none is dropped. All outlines at once.
 
     Args:
         moments: `outline_moments` of all outlines, shape (9, F, n + 1).
@@ -291,6 +290,11 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
         trim: Samples left out at the far end of each run.
         min_corners: Never fewer corners than this.
         bend: When a curved run is two straight edges instead (None: never).
+
+    Returns:
+        The corners the bent runs between each outline's final corners would get back
+        (their best splits, sample indices, sorted), by outline; not inserted, so that the
+        caller can first ask whether the outline is a closed curve (`circle_outlines`).
     """
     n = _samples(moments)
     rows = np.asarray([f for f in rows.tolist() if len(corners[f]) > min_corners], dtype=np.int64)
@@ -349,8 +353,7 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
         rows = np.asarray(
             [g for g in changed.tolist() if len(corners[g]) > min_corners], dtype=np.int64
         )
-    for g, extra in splits.items():
-        corners[g] = np.sort(np.concatenate((corners[g], np.asarray(extra, dtype=np.int64))))
+    return {g: np.sort(np.asarray(extra, dtype=np.int64)) for g, extra in splits.items()}
 
 
 def circle_outlines(

@@ -545,9 +545,9 @@ def _corners_from_fits(  # noqa: PLR0913, PLR0917
 ) -> None:
     """Corners (in place) dropped where one fit explains the runs beside them.
 
-    `qshape.fit.merge_fitted_corners` (with ``fit_split_turn_deg``, a run that is two edges
-    gets its corner back); then an outline one circle fits as
-    well as its runs loses them all (`qshape.fit.circle_outlines`: a closed curve). ``mom``:
+    `qshape.fit.merge_fitted_corners`; then an outline one circle fits as well as its runs
+    loses them all (`qshape.fit.circle_outlines`: a closed curve), and in any other outline
+    (with ``fit_split_turn_deg``) a run that is two edges gets its corner back. ``mom``:
     the outlines' `qshape.fit.outline_moments` in units of their diameter; ``sigma`` (F,):
     each outline's roughness per independent sample; ``spans``: samples left out at a run's
     far end, and the spacing kept between corners.
@@ -560,9 +560,12 @@ def _corners_from_fits(  # noqa: PLR0913, PLR0917
     sig = np.maximum(sigma, p.fit_sigma_floor * diameter) / scale
     limit = p.fit_merge_chi2 * sig * sig
     bend = BendTest(p.fit_split_turn_deg, spacing) if p.fit_split_turn_deg > 0.0 else None
-    merge_fitted_corners(mom, corners, rows, limit, trim, bend=bend)
-    for f in circle_outlines(mom, corners, rows, limit).tolist():
+    splits = merge_fitted_corners(mom, corners, rows, limit, trim, bend=bend)
+    circles = circle_outlines(mom, corners, rows, limit).tolist()
+    for f in circles:
         corners[f] = np.zeros(0, dtype=np.int64)
+    for f in set(splits) - set(circles):
+        corners[f] = np.sort(np.concatenate((corners[f], splits[f])))
 
 
 def _roughness(planes: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
