@@ -143,13 +143,21 @@ def arc_sse(s: FloatArray, line: FloatArray | None = None) -> FloatArray:
     return np.asarray(np.minimum(geo, line))
 
 
-def _line_directions(s: FloatArray) -> FloatArray:
-    """Unit direction of the total-least-squares line of each range, shape (k, 2), unsigned."""
+def _line_angles(s: FloatArray) -> FloatArray:
+    """Direction [rad] of the total-least-squares line of each range (`range_sums`), (k,).
+
+    Unsigned: in (-pi / 2, pi / 2].
+    """
     cnt = np.maximum(s[:, 0], 1.0)
     mx, my = s[:, 1] / cnt, s[:, 2] / cnt
-    phi = 0.5 * np.arctan2(
-        2.0 * (s[:, 4] - cnt * mx * my), (s[:, 3] - cnt * mx * mx) - (s[:, 5] - cnt * my * my)
-    )
+    cxy = s[:, 4] - cnt * mx * my
+    spread = (s[:, 3] - cnt * mx * mx) - (s[:, 5] - cnt * my * my)
+    return np.asarray(0.5 * np.arctan2(2.0 * cxy, spread))
+
+
+def _line_directions(s: FloatArray) -> FloatArray:
+    """Unit direction of the total-least-squares line of each range, shape (k, 2), unsigned."""
+    phi = _line_angles(s)
     return np.stack([np.cos(phi), np.sin(phi)], axis=1)
 
 
@@ -405,12 +413,7 @@ def flat_corner_outlines(
     ring = _Ring.of(corners, rows)
     length = (ring.c[ring.nxt] - ring.c) % n
     cut = np.minimum(trim, length // 4)
-    s = range_sums(moments, ring.own, ring.c + cut, ring.c + length - cut)
-    cnt = np.maximum(s[:, 0], 1.0)
-    mx, my = s[:, 1] / cnt, s[:, 2] / cnt
-    phi = 0.5 * np.arctan2(
-        2.0 * (s[:, 4] - cnt * mx * my), (s[:, 3] - cnt * mx * mx) - (s[:, 5] - cnt * my * my)
-    )
+    phi = _line_angles(range_sums(moments, ring.own, ring.c + cut, ring.c + length - cut))
     # Run i follows corner i; corner i sits between run prev(i) and run i.
     diff = np.abs(phi - phi[ring.prev]) % np.pi
     ang = np.degrees(np.minimum(diff, np.pi - diff))

@@ -11,7 +11,8 @@ against an arc's own turning, round outlines snapped to two equal semicircles, a
 off or rounded by the pixel grid merged back into one. On rough edges (a chipped, ground tile
 traced by a camera) corners come from fits (`qshape.fit`, ``OutlineParams.fit_merge_chi2``): a
 proposed corner stays only where the runs beside it need two lines (or arcs) rather than one,
-judged against the outline's own measured roughness, and edge lines are fitted over whole edges.
+judged against the outline's own measured roughness, a run that two edges fit better than an arc
+gets back the corner the window measure missed, and edge lines are fitted over whole edges.
 Every length parameter is a fraction of the outline's own size, so the same parameters serve
 millimetres and pixels. Cost is linear in the number of outline points.
 """
