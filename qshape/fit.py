@@ -203,16 +203,18 @@ def bent_runs(
     if total == 0:
         return bent, split
     run = np.repeat(np.arange(k), room)
-    start = np.cumsum(room) - room
-    s = lo[run] + test.arm + (np.arange(total) - start[run])
-    g = f[run]
-    at = prefix_at(moments, np.concatenate((g, g, g)), np.concatenate((lo[run], s, hi[run])))
-    first, second = at[total : 2 * total] - at[:total], at[2 * total :] - at[total : 2 * total]
-    cost = line_sse(first) + line_sse(second)
-    order = np.lexsort((cost, run))
-    head = order[np.r_[True, run[order][1:] != run[order][:-1]]]  # cheapest split of each run
-    has = run[head]
-    whole = arc_sse(range_sums(moments, f[has], lo[has], hi[has]))
+    pos = np.arange(total) - np.repeat(np.cumsum(room) - room, room)  # candidate of its run
+    s = lo[run] + test.arm + pos
+    ends = prefix_at(moments, np.concatenate((f, f)), np.concatenate((lo, hi)))
+    at = prefix_at(moments, f[run], s)
+    halves = np.concatenate((at - ends[:k][run], ends[k:][run] - at))  # first, then second
+    fits = line_sse(halves)
+    grid = np.full((k, int(room.max())), np.inf)
+    grid[run, pos] = fits[:total] + fits[total:]
+    best = np.argmin(grid, axis=1)  # the cheapest split of each run (the first of equals)
+    has = np.flatnonzero(room > 0)
+    head = (np.cumsum(room) - room + best)[has]
+    first, second = halves[:total], halves[total:]
     d1, d2 = _line_directions(first[head]), _line_directions(second[head])
     cnt1, cnt2 = np.maximum(first[head, 0], 1.0), np.maximum(second[head, 0], 1.0)
     step = second[head, 1:3] / cnt2[:, None] - first[head, 1:3] / cnt1[:, None]
@@ -220,8 +222,11 @@ def bent_runs(
     d1 *= np.where((d1 * step).sum(axis=1) >= 0.0, 1.0, -1.0)[:, None]
     d2 *= np.where((d2 * step).sum(axis=1) >= 0.0, 1.0, -1.0)[:, None]
     turn = np.degrees(np.arccos(np.clip((d1 * d2).sum(axis=1), -1.0, 1.0)))
-    bent[has] = (cost[head] < whole) & (turn >= test.min_turn_deg)
     split[has] = s[head]
+    sharp = has[turn >= test.min_turn_deg]
+    if len(sharp):  # only these can be bent: their own arcs fitted
+        whole = arc_sse(ends[k:][sharp] - ends[:k][sharp])
+        bent[sharp] = grid[sharp, best[sharp]] < whole
     return bent, split
 
 
