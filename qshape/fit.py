@@ -7,8 +7,11 @@ two runs beside it fit *one* line, or one arc, about as well as they fit two: th
 the squared residual is compared with the outline's own measured roughness (its variance times
 ``fit_merge_chi2``). An arc is tried only where one of the two runs is itself significantly
 curved, so the shallow real corners of a polygon are never rounded away into an arc. The fits of
-any run come in constant time from prefix sums of the samples' moments. Last, an outline
-whose corners one circle makes unnecessary (a rough circle cut into pieces) loses them all.
+any run come in constant time from prefix sums of the samples' moments. A run that two lines
+meeting at a real corner fit better than its arc (a corner the window measure missed, or
+placed off) is bent, not curved: it never lets an arc absorb its neighbours' corners, and it
+gets its corner back where the two lines meet best. Last, an outline whose corners one circle
+makes unnecessary (a rough circle cut into pieces) loses them all.
 """
 
 from __future__ import annotations
@@ -140,6 +143,93 @@ def arc_sse(s: FloatArray, line: FloatArray | None = None) -> FloatArray:
     return np.asarray(np.minimum(geo, line))
 
 
+def _line_angles(s: FloatArray) -> FloatArray:
+    """Direction [rad] of the total-least-squares line of each range (`range_sums`), (k,).
+
+    Unsigned: in (-pi / 2, pi / 2].
+    """
+    cnt = np.maximum(s[:, 0], 1.0)
+    mx, my = s[:, 1] / cnt, s[:, 2] / cnt
+    cxy = s[:, 4] - cnt * mx * my
+    spread = (s[:, 3] - cnt * mx * mx) - (s[:, 5] - cnt * my * my)
+    return np.asarray(0.5 * np.arctan2(2.0 * cxy, spread))
+
+
+def _line_directions(s: FloatArray) -> FloatArray:
+    """Unit direction of the total-least-squares line of each range, shape (k, 2), unsigned."""
+    phi = _line_angles(s)
+    return np.stack([np.cos(phi), np.sin(phi)], axis=1)
+
+
+@dataclass(frozen=True)
+class BendTest:
+    """When a run between corners is two straight edges meeting at a corner, not one arc.
+
+    Attributes:
+        min_turn_deg: The two lines' directions differ by at least this, in [deg] (> 0): a
+            real corner, never the gentle bend of a rough edge or of a short arc piece.
+        arm: Fewest samples on each side of the split (the corner spacing: a split nearer a
+            run's end would sit on that end's corner).
+    """
+
+    min_turn_deg: float
+    arm: int
+
+
+def bent_runs(
+    moments: FloatArray, f: np.ndarray, lo: np.ndarray, hi: np.ndarray, test: BendTest
+) -> tuple[np.ndarray, np.ndarray]:
+    """Runs ``[lo, hi)`` of outlines f (twice-round indices) that two lines fit better than one.
+
+    Every sample at least ``test.arm`` from both ends is tried as the split; the run is bent
+    when the best split's two total-least-squares lines fit it with a smaller squared
+    residual than its own best fit (arc or line, `arc_sse`) and their directions differ by at
+    least ``test.min_turn_deg``. The two models have about as many parameters (an arc 3, two
+    lines 4 and the split), so the comparison needs no margin; the turn is what keeps arcs
+    whole: two chords meeting at 45 deg stand for an arc turning 90 deg, whose chords bow
+    from it by 8 % of its radius, far above what its arc leaves, and a shorter arc piece
+    turns too little. A straight run has no turn. Cost linear in the runs' total length (one
+    call per fit for all candidate splits).
+
+    Returns:
+        (bent (k,) bool, split (k,) sample index of the best split, twice-round; ``lo`` where
+        the run is too short to split).
+    """
+    k = len(f)
+    room = np.maximum(hi - lo - 2 * test.arm + 1, 0)
+    split = lo.copy()
+    bent = np.zeros(k, dtype=bool)
+    total = int(room.sum())
+    if total == 0:
+        return bent, split
+    run = np.repeat(np.arange(k), room)
+    pos = np.arange(total) - np.repeat(np.cumsum(room) - room, room)  # candidate of its run
+    s = lo[run] + test.arm + pos
+    ends = prefix_at(moments, np.concatenate((f, f)), np.concatenate((lo, hi)))
+    at = prefix_at(moments, f[run], s)
+    halves = np.concatenate((at - ends[:k][run], ends[k:][run] - at))  # first, then second
+    fits = line_sse(halves)
+    grid = np.full((k, int(room.max())), np.inf)
+    grid[run, pos] = fits[:total] + fits[total:]
+    best = np.argmin(grid, axis=1)  # the cheapest split of each run (the first of equals)
+    has = np.flatnonzero(room > 0)
+    head = (np.cumsum(room) - room + best)[has]
+    first, second = halves[:total], halves[total:]
+    d1, d2 = _line_directions(first[head]), _line_directions(second[head])
+    cnt1, cnt2 = np.maximum(first[head, 0], 1.0), np.maximum(second[head, 0], 1.0)
+    step = second[head, 1:3] / cnt2[:, None] - first[head, 1:3] / cnt1[:, None]
+    # Orient both lines along the walk (from the first half's centroid to the second's).
+    d1 *= np.where((d1 * step).sum(axis=1) >= 0.0, 1.0, -1.0)[:, None]
+    d2 *= np.where((d2 * step).sum(axis=1) >= 0.0, 1.0, -1.0)[:, None]
+    turn = np.degrees(np.arccos(np.clip((d1 * d2).sum(axis=1), -1.0, 1.0)))
+    split[has] = s[head]
+    sharp = has[turn >= test.min_turn_deg]
+    if len(sharp):  # only these can be bent: their own arcs fitted
+        whole = arc_sse(ends[k:][sharp] - ends[:k][sharp])
+        bent[sharp] = grid[sharp, best[sharp]] < whole
+    return bent, split
+
+
 @dataclass(frozen=True)
 class _Ring:
     """Corners of many closed outlines, flat: outline f's are ``c[own == f]``, sorted.
@@ -190,16 +280,18 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
     limit: FloatArray,
     trim: int,
     min_corners: int = 2,
-) -> None:
+    bend: BendTest | None = None,
+) -> dict[int, np.ndarray]:
     """Drop, in place, the corners of outlines ``rows`` that the runs beside them do not need.
 
     For each corner, the runs before and after it (far ends trimmed by ``trim`` samples, so a
     neighbouring corner's rounding stays out) are fitted apart and together. The cost of
     dropping it is the increase of the squared residual when fitted together by a line or,
     when one of the runs is itself curved (its arc fit beats its line fit by more than
-    ``limit``), by an arc. Each round drops, on every outline, its cheapest corner while that
-    cost is at most ``limit`` and more than ``min_corners`` corners remain; rounds repeat
-    until none is dropped. All outlines at once.
+    ``limit``, and with ``bend`` it is not `bent_runs`: two edges meeting at a corner the
+    window measure missed also beat one line), by an arc. Each round drops, on every outline,
+    its cheapest corner while that cost is at most ``limit`` and more than ``min_corners``
+    corners remain; rounds repeat until none is dropped. All outlines at once.
 
     Args:
         moments: `outline_moments` of all outlines, shape (9, F, n + 1).
@@ -210,9 +302,16 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
             ``scale`` squared (threshold x roughness variance), shape (F,).
         trim: Samples left out at the far end of each run.
         min_corners: Never fewer corners than this.
+        bend: When a curved run is two straight edges instead (None: never).
+
+    Returns:
+        The corners the bent runs between each outline's final corners would get back
+        (their best splits, sample indices, sorted), by outline; not inserted, so that the
+        caller can first ask whether the outline is a closed curve (`circle_outlines`).
     """
     n = _samples(moments)
     rows = np.asarray([f for f in rows.tolist() if len(corners[f]) > min_corners], dtype=np.int64)
+    splits: dict[int, list[int]] = {}  # corners given back to bent runs, per outline
     while len(rows):
         ring = _Ring.of(corners, rows)
         lo, mid, hi = ring.sides(n, trim)
@@ -229,22 +328,45 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
         la, lb = line[:k], line[k : 2 * k]
         aa, ab = arc[:k], arc[k : 2 * k]
         lim = limit[f]
-        curved = (la - aa > lim) | (lb - ab > lim)
+        curved_a, curved_b = la - aa > lim, lb - ab > lim
+        split_at = split = np.zeros(0, dtype=np.int64)  # corners whose run before is bent
+        if bend is not None and (curved_a.any() or curved_b.any()):
+            ia, ib = np.flatnonzero(curved_a), np.flatnonzero(curved_b)
+            # Near ends trimmed too: the corner's own rounding stays out of the split's lines.
+            cut_a = np.minimum(trim, (mid[ia] - lo[ia]) // 4)
+            cut_b = np.minimum(trim, (hi[ib] - mid[ib]) // 4)
+            bent, split = bent_runs(
+                moments,
+                np.concatenate((f[ia], f[ib])),
+                np.concatenate((lo[ia], mid[ib] + cut_b)),
+                np.concatenate((mid[ia] - cut_a, hi[ib])),
+                bend,
+            )
+            split_at, split = ia[bent[: len(ia)]], split[: len(ia)][bent[: len(ia)]]
+            curved_a[split_at] = False
+            curved_b[ib[bent[len(ia) :]]] = False
+        curved = curved_a | curved_b
         union = np.where(curved, arc[2 * k :], line[2 * k :])
         cost = union - aa - ab  # arc_sse <= line_sse: each run's best fit
         order = np.lexsort((cost, f))  # by outline, cheapest first
         head = order[np.r_[True, f[order][1:] != f[order][:-1]]]
         drop = head[cost[head] <= lim[head]]
+        changed = np.unique(f[drop])
+        # An outline that keeps its corners this round is final: its bent runs' splits hold.
+        moved = set(changed.tolist())
+        for g, at_ in zip(f[split_at].tolist(), (split % n).tolist(), strict=True):
+            if g not in moved:
+                splits.setdefault(g, []).append(at_)
         if len(drop) == 0:
             break
         keep = np.ones(len(f), dtype=bool)
         keep[drop] = False
-        changed = np.unique(f[drop])
         for g in changed.tolist():
             corners[g] = ring.c[keep & (f == g)]
         rows = np.asarray(
             [g for g in changed.tolist() if len(corners[g]) > min_corners], dtype=np.int64
         )
+    return {g: np.sort(np.asarray(extra, dtype=np.int64)) for g, extra in splits.items()}
 
 
 def circle_outlines(
@@ -296,12 +418,7 @@ def flat_corner_outlines(
     ring = _Ring.of(corners, rows)
     length = (ring.c[ring.nxt] - ring.c) % n
     cut = np.minimum(trim, length // 4)
-    s = range_sums(moments, ring.own, ring.c + cut, ring.c + length - cut)
-    cnt = np.maximum(s[:, 0], 1.0)
-    mx, my = s[:, 1] / cnt, s[:, 2] / cnt
-    phi = 0.5 * np.arctan2(
-        2.0 * (s[:, 4] - cnt * mx * my), (s[:, 3] - cnt * mx * mx) - (s[:, 5] - cnt * my * my)
-    )
+    phi = _line_angles(range_sums(moments, ring.own, ring.c + cut, ring.c + length - cut))
     # Run i follows corner i; corner i sits between run prev(i) and run i.
     diff = np.abs(phi - phi[ring.prev]) % np.pi
     ang = np.degrees(np.minimum(diff, np.pi - diff))
@@ -309,7 +426,9 @@ def flat_corner_outlines(
 
 
 __all__ = [
+    "BendTest",
     "arc_sse",
+    "bent_runs",
     "circle_outlines",
     "flat_corner_outlines",
     "line_sse",

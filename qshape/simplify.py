@@ -11,7 +11,8 @@ against an arc's own turning, round outlines snapped to two equal semicircles, a
 off or rounded by the pixel grid merged back into one. On rough edges (a chipped, ground tile
 traced by a camera) corners come from fits (`qshape.fit`, ``OutlineParams.fit_merge_chi2``): a
 proposed corner stays only where the runs beside it need two lines (or arcs) rather than one,
-judged against the outline's own measured roughness, and edge lines are fitted over whole edges.
+judged against the outline's own measured roughness, a run that two edges fit better than an arc
+gets back the corner the window measure missed, and edge lines are fitted over whole edges.
 Every length parameter is a fraction of the outline's own size, so the same parameters serve
 millimetres and pixels. Cost is linear in the number of outline points.
 """
@@ -30,6 +31,7 @@ from numpy.typing import ArrayLike
 
 from qshape.errors import InvalidFigureError, ToleranceError
 from qshape.fit import (
+    BendTest,
     circle_outlines,
     flat_corner_outlines,
     merge_fitted_corners,
@@ -107,6 +109,15 @@ class OutlineParams:
             roughness is `roughness_sigmas`' measure, and one independent sample spans
             (1 + rho) / (1 - rho) samples for the lag-1 autocorrelation rho of the measure
             (a correlated bump counts once, however densely it is sampled).
+        fit_split_turn_deg: With ``fit_merge_chi2``, a run between corners that is not
+            straight is two edges meeting at a corner the window measure missed (or placed
+            off, so the run took in part of the next edge) when two lines split at one of its
+            samples (at least the corner spacing from its ends) fit it better than its arc
+            and their directions differ by at least this, in [deg] (0: off). Such a run never
+            lets an arc absorb its neighbours' corners (a rough hexagon merged side by side
+            into a circle) and gets its corner back at the best split. Keep it well above
+            the turn between a short arc piece's two chords (half the arc's turn): a longer
+            arc is fitted far better by its arc than by two chords.
         fit_sigma_floor: Smallest roughness the fits assume, fraction of the outline's
             diameter (a clean traced outline still carries its pixel staircase).
         refine_trim_fraction: With ``refine_corners``, the samples left out at each end of
@@ -139,6 +150,7 @@ class OutlineParams:
     min_corner_deg: float = 0.0
     fit_merge_chi2: float = 0.0
     fit_sigma_floor: float = 0.0
+    fit_split_turn_deg: float = 0.0
     refine_trim_fraction: float = 0.0
     hole_corner_window: float = 0.0
 
@@ -178,6 +190,10 @@ class OutlineParams:
             raise ToleranceError(f"fit_merge_chi2 must be in [0, 1e4], got {self.fit_merge_chi2}")
         if not 0.0 <= self.min_corner_deg < 90.0:  # noqa: PLR2004
             raise ToleranceError(f"min_corner_deg must be in [0, 90), got {self.min_corner_deg}")
+        if not 0.0 <= self.fit_split_turn_deg < 180.0:  # noqa: PLR2004
+            raise ToleranceError(
+                f"fit_split_turn_deg must be in [0, 180), got {self.fit_split_turn_deg}"
+            )
         if not 0.0 <= self.arc_turning_deg < 180.0:
             raise ToleranceError(f"arc_turning_deg must be in [0, 180), got {self.arc_turning_deg}")
         if not 0.0 < self.corner_angle_deg < 180.0:
@@ -412,7 +428,9 @@ def _simplify_clean(
             mom = outline_moments(
                 planes.transpose(1, 2, 0), np.where(diameter > 0.0, diameter, 1.0)
             )
-            _corners_from_fits(mom, corners, p, rough * np.sqrt(corr), diameter, flat, half)
+            _corners_from_fits(
+                mom, corners, p, rough * np.sqrt(corr), diameter, flat, (half, spacing)
+            )
     if p.min_corner_deg > 0.0:
         if mom is None:
             suspects = _with_flat_corners(res, corners, p.min_corner_deg, half)
@@ -529,24 +547,31 @@ def _corners_from_fits(  # noqa: PLR0913, PLR0917
     sigma: FloatArray,
     diameter: FloatArray,
     skip: BoolArray,
-    trim: int,
+    spans: tuple[int, int],
 ) -> None:
     """Corners (in place) dropped where one fit explains the runs beside them.
 
     `qshape.fit.merge_fitted_corners`; then an outline one circle fits as well as its runs
-    loses them all (`qshape.fit.circle_outlines`: a closed curve). ``mom``: the outlines'
-    `qshape.fit.outline_moments` in units of their diameter; ``sigma`` (F,): each outline's
-    roughness per independent sample; ``trim``: samples left out at a run's far end.
+    loses them all (`qshape.fit.circle_outlines`: a closed curve), and in any other outline
+    (with ``fit_split_turn_deg``) a run that is two edges gets its corner back. ``mom``:
+    the outlines' `qshape.fit.outline_moments` in units of their diameter; ``sigma`` (F,):
+    each outline's roughness per independent sample; ``spans``: samples left out at a run's
+    far end, and the spacing kept between corners.
     """
     rows = np.flatnonzero(~skip & (np.array([len(c) for c in corners]) > 1))
     if len(rows) == 0:
         return
+    trim, spacing = spans
     scale = np.where(diameter > 0.0, diameter, 1.0)
     sig = np.maximum(sigma, p.fit_sigma_floor * diameter) / scale
     limit = p.fit_merge_chi2 * sig * sig
-    merge_fitted_corners(mom, corners, rows, limit, trim)
-    for f in circle_outlines(mom, corners, rows, limit).tolist():
+    bend = BendTest(p.fit_split_turn_deg, spacing) if p.fit_split_turn_deg > 0.0 else None
+    splits = merge_fitted_corners(mom, corners, rows, limit, trim, bend=bend)
+    circles = circle_outlines(mom, corners, rows, limit).tolist()
+    for f in circles:
         corners[f] = np.zeros(0, dtype=np.int64)
+    for f in set(splits) - set(circles):
+        corners[f] = np.sort(np.concatenate((corners[f], splits[f])))
 
 
 def _roughness(planes: FloatArray, w: int) -> tuple[FloatArray, FloatArray]:
