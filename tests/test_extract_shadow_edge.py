@@ -9,17 +9,24 @@ over from the local belt average to the polynomial smoothly (see ``illumination_
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
+from benchmarks.vision_realistic import RealisticBench, _Classes, _seen, _synth_for
+from configs import load_config
+from qshape import Tolerances, describe
+from qshape.design import Design
 from qshape.extract import (
     ExtractParams,
     ImageError,
     _local_fill,
     _polynomial_fit,
+    extract_detailed,
 )
+from qshape.synth import SynthParams, generate
 
 _BELT = np.array([72.0, 77.0, 83.0], np.float32)  # lit belt colour [levels]
 
@@ -77,3 +84,55 @@ def test_blend_min_change_is_validated() -> None:
     p = ExtractParams.load()
     assert p.illumination_blend and p.illumination_blend_min_change >= 0.0
     assert replace(p, illumination_blend=False).illumination_blend is False
+
+
+# The realistic benchmark's random generator just before its 127th realistic picture (a
+# trencadis picture with a dark brown piece at a soft shadow's edge), recorded from the sweep.
+_PICTURE_126 = {
+    "bit_generator": "PCG64",
+    "state": {
+        "state": 115667472749554256899937443333607954512,
+        "inc": 168635386100685449938534718985723470245,
+    },
+    "has_uint32": 0,
+    "uinteger": 1178366455,
+}
+_DARK_PIECE = "0fe5fb"  # its shape class (key prefix)
+
+
+def test_dark_piece_at_a_shadow_edge_keeps_its_outline() -> None:
+    bench = load_config(RealisticBench, "bench_vision_realistic")
+    level = next(lv for lv in bench.levels if lv.effect == bench.target_level)
+    sp = SynthParams.load()
+    rng = np.random.default_rng()
+    rng.bit_generator.state = _PICTURE_126
+    design = Design.load("trencadis")
+    params = _synth_for(level, sp, rng)
+    img = generate(design, bench.tiles_per_image, rng, params)
+    picture, centres = _seen(img, params.effects, bench)
+    s = sp.px_per_mm
+    tol = Tolerances.load(
+        joint_width=design.joint * s, point_tolerance=Tolerances.load().point_tolerance * s
+    )
+    classes = _Classes(design, s, tol)
+    dark = [
+        (t, c)
+        for t, c in zip(img.tiles, centres, strict=True)
+        if not t.partial and t.slot.shape_key.startswith(_DARK_PIECE)
+    ]
+    assert dark
+
+    def recognised(ep: ExtractParams) -> list[bool]:
+        figs = extract_detailed(picture, ep).figures
+        cents = np.array([f.centroid for f in figs]).reshape(-1, 2)
+        out = []
+        for t, centre in dark:
+            k = int(np.argmin(np.hypot(*(cents - centre).T)))
+            near = math.hypot(*(cents[k] - centre)) <= 0.3 * math.sqrt(t.slot.area) * s
+            key, _ = classes.best(describe(figs[k], tol), classes.shape, tol, False)
+            out.append(near and key == t.slot.shape_key)
+        return out
+
+    # Before the blend: one of the two pieces lost a third of its outline (no match).
+    assert recognised(ExtractParams.load(illumination_blend=False)).count(False) == 1
+    assert all(recognised(ExtractParams.load()))
