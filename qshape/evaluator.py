@@ -248,6 +248,19 @@ class BlockResult:
         return np.asarray(np.arctan2(self.cross, self.dot))
 
 
+def _alignment_score(
+    sumsq: FloatArray, dot: FloatArray, crs: FloatArray, norm: FloatArray
+) -> FloatArray:
+    """Residual of the best rotation of corresponding centred points, as `Match.score`.
+
+    ``sumsq``: the two point sets' summed squared norms; ``dot``, ``crs``: their dot and cross
+    sums under the correspondence; ``norm``: node count x the reference's area. The squared
+    residual of the least-squares rotation is ``sumsq - 2 |(dot, crs)|``.
+    """
+    rss = sumsq - 2.0 * np.sqrt(dot * dot + crs * crs)
+    return np.asarray(np.sqrt(np.maximum(rss, 0.0) / norm))
+
+
 def evaluate_block(
     ref: Pack,
     cand: Pack,
@@ -283,8 +296,7 @@ def evaluate_block(
     row = ti * k_count + kk
     dot = prod[row, si]
     crs = prod[row, s_count + si]
-    rss = cand.sumsq[ti] + ref.sumsq[si] - 2.0 * np.sqrt(dot * dot + crs * crs)
-    sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[si]))
+    sc = _alignment_score(cand.sumsq[ti] + ref.sumsq[si], dot, crs, n * ref.area[si])
     k = offsets[kk]
     if measured and tol.point_tolerance > 0.0:
         strict = np.zeros(base.shape, dtype=bool)
@@ -512,8 +524,9 @@ def relaxed_entries(
     crs = np.einsum("pkn,pn->pk", cp[..., 0], rp[..., 1]) - np.einsum(
         "pkn,pn->pk", cp[..., 1], rp[..., 0]
     )
-    rss = cand.sumsq[ti][:, None] + ref.sumsq[si][:, None] - 2.0 * np.hypot(dot, crs)
-    sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[si])[:, None])
+    sc = _alignment_score(
+        (cand.sumsq[ti] + ref.sumsq[si])[:, None], dot, crs, (n * ref.area[si])[:, None]
+    )
     p, k = np.nonzero(sc <= tol.uncertainty_residual)
     if len(p) == 0:
         empty = np.zeros(0, dtype=np.int64)
@@ -558,8 +571,7 @@ def evaluate_pairs(
     crs = np.einsum("en,en->e", cp[..., 0], rp[..., 1]) - np.einsum(
         "en,en->e", cp[..., 1], rp[..., 0]
     )
-    rss = cand.sumsq[pi] + ref.sumsq[pi] - 2.0 * np.sqrt(dot * dot + crs * crs)
-    sc = np.sqrt(np.maximum(rss, 0.0) / (n * ref.area[pi]))
+    sc = _alignment_score(cand.sumsq[pi] + ref.sumsq[pi], dot, crs, n * ref.area[pi])
     theta = np.arctan2(crs, dot)
     if ref.hole_codes:
         hok, hole_score = _holes(ref, cand, (pi, pi, theta), tol)

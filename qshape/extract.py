@@ -347,6 +347,16 @@ def _blur_size(sigma: float) -> int:
     return min(default, 2 * int(np.flatnonzero(share >= _BLUR_TAP_MIN)[-1]) + 1)
 
 
+def _channel_max(values: np.ndarray) -> np.ndarray:
+    """Maximum over the last axis of (..., 3) values, from the three planes.
+
+    numpy's reduction over an axis of 3 costs ~45 us on the (30, 41, 3) cell grid, the planes
+    ~5 us; the result is the same.
+    """
+    out: np.ndarray = np.maximum(np.maximum(values[..., 0], values[..., 1]), values[..., 2])
+    return out
+
+
 def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, float, int]:
     """Dominant colour of the border band, its share, and the sample's channel span.
 
@@ -372,7 +382,7 @@ def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, floa
     top = int(np.argmax(np.bincount(code, minlength=p.background_bins**3)))
     dominant = np.asarray(np.median(sample[code == top], axis=0), dtype=np.float64)
     off = np.abs(sample.astype(np.float64) - dominant)
-    near = np.maximum(np.maximum(off[:, 0], off[:, 1]), off[:, 2]) <= p.background_tolerance
+    near = _channel_max(off) <= p.background_tolerance
     span = int((sample.max(axis=0).astype(np.int32) - sample.min(axis=0)).max())
     return dominant, float(near.mean()), span
 
@@ -432,16 +442,6 @@ def _local_fill(
     out[ok] = acc[ok] / weight[ok, None]
     if p.illumination_blend and not ok.all():
         _blend_far(out, ~ok, weight, acc, p)
-    return out
-
-
-def _channel_max(values: np.ndarray) -> np.ndarray:
-    """Maximum over the last axis of (..., 3) values, from the three planes.
-
-    numpy's reduction over an axis of 3 costs ~45 us on the (30, 41, 3) cell grid, the planes
-    ~5 us; the result is the same.
-    """
-    out: np.ndarray = np.maximum(np.maximum(values[..., 0], values[..., 1]), values[..., 2])
     return out
 
 

@@ -18,7 +18,7 @@ common admissible label.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -62,14 +62,27 @@ class _Bands:
     above: NDArray[np.int64]
 
 
+_RELATIVE = np.array([[False], [True], [True]])
+"""Rows (A, L, TC) whose margin is relative (the two ratios) rather than absolute (the angle)."""
+
+
+def _margins(tol: Tolerances) -> FloatArray:
+    """The configured margins, shape (3, 1): [deg] for the angle, relative for the ratios."""
+    return np.array([[tol.angle_margin_deg], [tol.length_margin], [tol.semicircle_margin]])
+
+
+def _ambiguity(edge: FloatArray, m: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The interval ``m`` spans around band edges ``edge`` (rows A, L, TC; see `_RELATIVE`)."""
+    f = 1.0 + m
+    return np.where(_RELATIVE, edge / f, edge - m), np.where(_RELATIVE, edge * f, edge + m)
+
+
 @lru_cache(maxsize=16)
 def _bands(tol: Tolerances) -> _Bands:
     """Bands of the angle (absolute margin), length and curvature (relative margin) labels."""
     band = np.array([tol.right_angle_deg, tol.equal_length_ratio, tol.semicircle_ratio])
     lo, hi = band[:, 0:1], band[:, 1:2]
-    m = np.array([[tol.angle_margin_deg], [tol.length_margin], [tol.semicircle_margin]])
-    rel = np.array([[False], [True], [True]])
-    f = 1.0 + m
+    m = _margins(tol)
     labels = np.array(
         [[ACUTE, RIGHT, OBTUSE], [SMALLER, EQUAL, BIGGER], [ACUTE_CURVE, SEMICIRCLE, PLANE]],
         dtype=np.int64,
@@ -77,8 +90,8 @@ def _bands(tol: Tolerances) -> _Bands:
     return _Bands(
         lo=lo,
         hi=hi,
-        lo_amb=(np.where(rel, lo / f, lo - m), np.where(rel, lo * f, lo + m)),
-        hi_amb=(np.where(rel, hi / f, hi - m), np.where(rel, hi * f, hi + m)),
+        lo_amb=_ambiguity(lo, m),
+        hi_amb=_ambiguity(hi, m),
         below=labels[:, 0:1],
         inside=labels[:, 1:2],
         above=labels[:, 2:3],
@@ -119,21 +132,9 @@ def widened_masks(value: FloatArray, extra: FloatArray, tol: Tolerances) -> Code
         Shape (3, n) admissible bit masks (rows: A, L, TC), as in the node codes.
     """
     b = _bands(tol)
-    fixed = np.array([[tol.angle_margin_deg], [tol.length_margin], [tol.semicircle_margin]])
-    m = fixed + extra
-    rel = np.array([[False], [True], [True]])
-    f = 1.0 + m
-    lo_amb = (np.where(rel, b.lo / f, b.lo - m), np.where(rel, b.lo * f, b.lo + m))
-    hi_amb = (np.where(rel, b.hi / f, b.hi - m), np.where(rel, b.hi * f, b.hi + m))
-    primary = np.where(value < b.lo, b.below, np.where(value > b.hi, b.above, b.inside))
-    near_lo = (value >= lo_amb[0]) & (value <= lo_amb[1])
-    near_hi = (value >= hi_amb[0]) & (value <= hi_amb[1])
-    return np.asarray(
-        (1 << primary)
-        | (near_lo * ((1 << b.below) | (1 << b.inside)))
-        | (near_hi * ((1 << b.inside) | (1 << b.above))),
-        dtype=np.int64,
-    )
+    m = _margins(tol) + extra
+    wide = replace(b, lo_amb=_ambiguity(b.lo, m), hi_amb=_ambiguity(b.hi, m))
+    return np.asarray(_band3(value, wide)[1], dtype=np.int64)
 
 
 @lru_cache(maxsize=256)

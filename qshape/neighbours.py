@@ -30,7 +30,7 @@ import numpy as np
 from qshape.description import Description, describe
 from qshape.errors import InvalidFigureError
 from qshape.figure import Boundary, Figure
-from qshape.geometry import BoolArray, FloatArray
+from qshape.geometry import BoolArray, FloatArray, cross2
 from qshape.tolerances import Tolerances
 
 
@@ -38,9 +38,8 @@ def _turns(pts: FloatArray) -> FloatArray:
     """Signed direction change [deg] at each point of a closed polygon, shape (n,)."""
     u = pts - np.roll(pts, 1, axis=0)
     v = np.roll(pts, -1, axis=0) - pts
-    cross = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
     dot = np.einsum("ij,ij->i", u, v)
-    return np.asarray(np.degrees(np.arctan2(cross, dot)))
+    return np.asarray(np.degrees(np.arctan2(cross2(u, v), dot)))
 
 
 def _straight_corners(mask: BoolArray) -> BoolArray:

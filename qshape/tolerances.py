@@ -201,16 +201,10 @@ class Tolerances:
                     f"{margin_name}={margin} is too wide for {band_name}={(blo, bhi)}: "
                     f"(1 + margin)^2 must be < high / low = {bhi / blo:.4g}"
                 )
-        if not (math.isfinite(self.curve_point_weight) and 0.0 <= self.curve_point_weight <= 1.0):
-            raise ToleranceError(
-                f"curve_point_weight must be in [0, 1], got {self.curve_point_weight!r}"
-            )
-        if not (
-            math.isfinite(self.rotation_corner_share) and 0.0 <= self.rotation_corner_share <= 1.0
-        ):
-            raise ToleranceError(
-                f"rotation_corner_share must be in [0, 1], got {self.rotation_corner_share!r}"
-            )
+        for name in ("curve_point_weight", "rotation_corner_share"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 <= value <= 1.0):
+                raise ToleranceError(f"{name} must be in [0, 1], got {value!r}")
         if self.weak_turn_deg >= 90.0:
             raise ToleranceError(f"weak_turn_deg must be < 90, got {self.weak_turn_deg!r}")
         if self.convexity_margin_deg >= 90.0:
