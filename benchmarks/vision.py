@@ -82,6 +82,18 @@ def _scaled(fig: Figure, s: float) -> Figure:
     return Figure.from_polygon(fig.points * s, holes, fig.color, curve_mask=fig.curve_mask)
 
 
+def pixel_tolerances(design: Design, px_per_mm: float) -> Tolerances:
+    """The bundled tolerances for figures in pixels of a picture of ``design``'s tiles.
+
+    Length tolerances are in the figures' unit: the design's joint and the point tolerance
+    (millimetres) scaled to pixels.
+    """
+    mm = Tolerances.load()
+    return replace(
+        mm, joint_width=design.joint * px_per_mm, point_tolerance=mm.point_tolerance * px_per_mm
+    )
+
+
 def _pr(truth: np.ndarray, pred: np.ndarray, tol: float) -> tuple[int, int, int, int]:
     """(truth points found, truth count, predicted points confirmed, predicted count)."""
     if len(truth) == 0 or len(pred) == 0:
@@ -141,10 +153,7 @@ def run_level(  # noqa: PLR0917
     """Figures for one design at one noise level."""
     s = sp.px_per_mm
     params = sp.noise_level(level)
-    # Length tolerances are in the figures' unit: millimetres scaled to pixels.
-    tol = Tolerances.load(
-        joint_width=design.joint * s, point_tolerance=Tolerances.load().point_tolerance * s
-    )
+    tol = pixel_tolerances(design, s)
     refs = _Refs(design, s)
     c: dict[str, float] = defaultdict(float)
     rot_errs: list[float] = []

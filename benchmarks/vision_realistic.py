@@ -42,7 +42,7 @@ from qshape.geometry import FloatArray
 from qshape.synth import SynthParams, generate
 
 from .drawn_rotation import drawn_angle
-from .vision import _Refs, _rot_error_deg
+from .vision import _Refs, _rot_error_deg, pixel_tolerances
 
 
 @dataclass(frozen=True)
@@ -143,16 +143,12 @@ def run_level(  # noqa: PLR0914, PLR0915, PLR0917
     c: dict[str, float] = defaultdict(float)
     per_shape: dict[str, list[int]] = defaultdict(lambda: [0, 0])
     shape_names: dict[str, str] = {}
-    mm_tol = Tolerances.load()
     rot_errs: list[float] = []
     drawn_errs: list[float] = []
     failures: list[str] = []
     for name in bench.designs:
         design = Design.load(name)
-        # Lengths in the design's mm, scaled to the picture's pixels.
-        tol = Tolerances.load(
-            joint_width=design.joint * s, point_tolerance=mm_tol.point_tolerance * s
-        )
+        tol = pixel_tolerances(design, s)
         classes = _Classes(design, s, tol)
         for _ in range(images):
             params = _synth_for(level, sp, rng)
