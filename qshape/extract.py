@@ -381,9 +381,11 @@ def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, floa
     code = (q[:, 0] * p.background_bins + q[:, 1]) * p.background_bins + q[:, 2]
     top = int(np.argmax(np.bincount(code, minlength=p.background_bins**3)))
     dominant = np.asarray(np.median(sample[code == top], axis=0), dtype=np.float64)
-    off = np.abs(sample.astype(np.float64) - dominant)
-    near = _channel_max(off) <= p.background_tolerance
-    span = int((sample.max(axis=0).astype(np.int32) - sample.min(axis=0)).max())
+    # Channel-major (3, N): numpy reduces an axis of 3 many times slower than three planes.
+    planes = np.ascontiguousarray(sample.T)
+    off = np.abs(planes - dominant[:, None])
+    near = np.maximum(np.maximum(off[0], off[1]), off[2]) <= p.background_tolerance
+    span = int((planes.max(axis=1).astype(np.int32) - planes.min(axis=1)).max())
     return dominant, float(near.mean()), span
 
 
