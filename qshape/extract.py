@@ -394,7 +394,7 @@ def _dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, floa
     # Channel-major (3, N): numpy reduces an axis of 3 many times slower than three planes.
     planes = np.ascontiguousarray(sample.T)
     off = np.abs(planes - dominant[:, None])
-    near = np.maximum(np.maximum(off[0], off[1]), off[2]) <= p.background_tolerance
+    near = _channel_max(off.T) <= p.background_tolerance
     span = int((planes.max(axis=1).astype(np.int32) - planes.min(axis=1)).max())
     return dominant, float(near.mean()), span
 
