@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -518,11 +519,12 @@ def _cell_means(img: np.ndarray, gh: int, gw: int) -> np.ndarray:
 
 def _illumination(
     img: np.ndarray, dominant: np.ndarray, p: ExtractParams
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[tuple[np.ndarray, ...], np.ndarray, np.ndarray]:
     """Background model of the belt under the cell's light.
 
     Returns:
-        The model image (H, W, 3) uint8; the belt's colour under the reference light (3,) in
+        The model image as its three channels, each (H, W) uint8 (the colour distance and the
+        tile colours read it plane by plane); the belt's colour under the reference light (3,) in
         levels (tile colours are corrected to that light); and the shading gain (H, W) uint8
         in units of 1 / ``_GAIN_SCALE`` (the reference brightness over the modelled one,
         saturating), by which colour distances are multiplied so that a tile in a shadow
@@ -560,8 +562,10 @@ def _illumination(
         gain[:] = 1.0
     gain8 = np.clip(gain * _GAIN_SCALE + 0.5, 0, 255).astype(np.uint8)
     model8 = np.clip(model + 0.5, 0, 255).astype(np.uint8)
+    # Resized plane by plane: the same levels as resizing the colour image.
+    planes = tuple(cv2.resize(c, (w, h), interpolation=cv2.INTER_LINEAR) for c in cv2.split(model8))
     return (
-        cv2.resize(model8, (w, h), interpolation=cv2.INTER_LINEAR),
+        planes,
         model.reshape(-1, 3).mean(axis=0).astype(np.float64) * lit / max(float(light.mean()), 1.0),
         cv2.resize(gain8, (w, h), interpolation=cv2.INTER_LINEAR),
     )
@@ -675,7 +679,9 @@ def _canny(plane: np.ndarray, low: float, high: float) -> np.ndarray:
     return cv2.Canny(dx, dy, low, high)
 
 
-def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
+def _color_edges(
+    img: np.ndarray, p: ExtractParams, planes: Sequence[np.ndarray] | None = None
+) -> np.ndarray:
     """Canny edges of any channel: the union of one single-channel Canny per channel, uint8.
 
     Colour tiles that touch differ in at least one channel. OpenCV's single-channel Canny is
@@ -684,13 +690,14 @@ def _color_edges(img: np.ndarray, p: ExtractParams) -> np.ndarray:
     are found on the picture reduced f times per axis (a quarter of the work at f = 2) and
     each is a block of f x f px here: the
     cut only has to part the pieces, and the label dilations that give the cut pixels back
-    fill a band of that width from both sides.
+    fill a band of that width from both sides. ``planes``: the picture's channels when already
+    split.
     """
     f = p.canny_reduction
     h, w = img.shape[:2]
     small = img if f == 1 else cv2.resize(img, (w // f, h // f), interpolation=cv2.INTER_AREA)
     low, high = p.canny_low, p.canny_high
-    r, g, b = cv2.split(small)
+    r, g, b = planes if f == 1 and planes is not None else cv2.split(small)
     edges = _canny(r, low, high)
     cv2.bitwise_or(edges, _canny(g, low, high), dst=edges)
     cv2.bitwise_or(edges, _canny(b, low, high), dst=edges)
@@ -756,11 +763,14 @@ class _Segmentation:
 
 
 def _colour_distance(
-    img: np.ndarray, model: np.ndarray, gain: np.ndarray, p: ExtractParams
+    planes: Sequence[np.ndarray], model: Sequence[np.ndarray], gain: np.ndarray, p: ExtractParams
 ) -> tuple[np.ndarray, float, np.ndarray]:
-    """Colour distance to the belt model (uint8), its threshold, and the opened foreground mask."""
-    diff = cv2.absdiff(img, model)
-    r, g, b = cv2.split(diff)
+    """Colour distance to the belt model (uint8), its threshold, and the opened foreground mask.
+
+    ``planes`` and ``model``: the picture's and the model's channels, each (H, W) uint8 (plane
+    by plane, the largest channel difference needs no split of a difference image).
+    """
+    r, g, b = (cv2.absdiff(c, m) for c, m in zip(planes, model, strict=True))
     dist = cv2.multiply(cv2.max(cv2.max(r, g), b), gain, scale=1.0 / _GAIN_SCALE)
     otsu, _ = cv2.threshold(dist, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
     thr = float(np.clip(otsu, p.threshold_min, p.threshold_max))
@@ -784,13 +794,14 @@ def _label_pieces(cut: np.ndarray) -> tuple[int, np.ndarray]:
 
 
 def _split_regions(
-    img: np.ndarray, mask: np.ndarray, p: ExtractParams
+    img: np.ndarray, mask: np.ndarray, p: ExtractParams, planes: Sequence[np.ndarray] | None = None
 ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """Label the foreground, touching tiles of different colours apart.
 
     Cut the foreground along Canny edges, label the pieces, give the cut pixels (and crumbs
     smaller than a tile) back to a neighbouring piece, then separate touching pieces by
-    dropping the pixels that border a piece with a higher label.
+    dropping the pixels that border a piece with a higher label. ``planes``: the picture's
+    channels when already split.
 
     Returns:
         (count, labels (H, W) (uint8 when count <= 256, else int32), present (count,) bool,
@@ -801,7 +812,7 @@ def _split_regions(
         present = np.ones(count, bool)
         present[0] = False
         return count, labels, present, mask
-    edges = _color_edges(img, p)
+    edges = _color_edges(img, p, planes)
     cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
     # Scan-order labels as connectedComponents gives them; its 4-connected default is slower.
     count, labels = _label_pieces(cut)
@@ -839,20 +850,28 @@ def _split_regions(
 
 
 def _segment(
-    img: np.ndarray, model: np.ndarray, gain: np.ndarray, p: ExtractParams
+    img: np.ndarray, model: Sequence[np.ndarray], gain: np.ndarray, p: ExtractParams
 ) -> _Segmentation:
     """Image stages after the belt model: distance, threshold, regions, per-region edge level."""
-    dist, thr, mask = _colour_distance(img, model, gain, p)
-    count, labels, present, pieces = _split_regions(img, mask, p)
+    planes = cv2.split(img)
+    dist, thr, mask = _colour_distance(planes, model, gain, p)
+    count, labels, present, pieces = _split_regions(img, mask, p, planes)
     if p.edge_fraction > 0.0:
         pieces = _at_half_contrast(pieces, labels, dist, present, thr=thr, p=p)
     return _Segmentation(dist, thr, labels, count, present, pieces)
 
 
 def _tile_colours(
-    img: np.ndarray, model: np.ndarray, mean_light: np.ndarray, seg: _Segmentation, p: ExtractParams
+    img: np.ndarray,
+    model: Sequence[np.ndarray],
+    mean_light: np.ndarray,
+    seg: _Segmentation,
+    p: ExtractParams,
 ) -> np.ndarray:
-    """Median colour of every label (count, 3) [levels], under the reference light."""
+    """Median colour of every label (count, 3) [levels], under the reference light.
+
+    ``model``: the belt model's three channels, each (H, W) uint8.
+    """
     labels, pieces = seg.labels, seg.pieces
     if p.color_erode_px > 0:
         region = cv2.erode(pieces, _box(2 * p.color_erode_px + 1))
@@ -860,10 +879,10 @@ def _tile_colours(
         region = pieces
     lut, k = _compact(seg.present)
     st = max(1, p.color_sample_step)
-    medians, seen = _label_medians(*_samples(region, labels, lut, st, img, model), k)
+    medians, seen = _label_medians(*_samples(region, labels, lut, st, img, *model), k)
     # Tiles eroded away entirely fall back to their whole region.
     if not seen[1:].all():
-        again = _label_medians(*_samples(pieces, labels, lut, 1, img, model), k)[0]
+        again = _label_medians(*_samples(pieces, labels, lut, 1, img, *model), k)[0]
         medians[~seen] = again[~seen]
     compact = medians[:, :3].astype(np.float64)
     if p.correct_illumination:  # each tile's median colour under its median light

@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib
 from dataclasses import replace
 
+import cv2
 import numpy as np
 import pytest
 
@@ -67,3 +68,28 @@ def test_dominant_colour_from_planes_matches_the_plain_reductions(design: str, s
     # noise make it span some levels.
     assert share > 0.5
     assert span > 0
+
+
+@pytest.mark.parametrize("size", [(656, 492), (641, 479)])
+def test_belt_model_resized_plane_by_plane_equals_the_colour_resize(size: tuple[int, int]) -> None:
+    rng = np.random.default_rng(3)
+    grid = rng.integers(0, 256, (30, 41, 3), dtype=np.uint8)
+    whole = cv2.resize(grid, size, interpolation=cv2.INTER_LINEAR)
+    planes = [cv2.resize(c, size, interpolation=cv2.INTER_LINEAR) for c in cv2.split(grid)]
+    for k in range(3):
+        np.testing.assert_array_equal(planes[k], whole[..., k])
+
+
+def test_colour_distance_from_planes_equals_the_colour_image_difference() -> None:
+    p = ExtractParams.load()
+    sp = replace(SynthParams.load(), px_per_mm=1.8)
+    img = generate(Design.load("paper_mixed"), 30, 2, sp).image
+    dominant = extract_module._dominant_color(img, p)[0]
+    model, _, gain = extract_module._illumination(img, dominant, p)
+    dist, thr, mask = extract_module._colour_distance(cv2.split(img), model, gain, p)
+    # The definition: the largest channel of |picture - model|, scaled by the shading gain.
+    diff = cv2.absdiff(img, cv2.merge(model))
+    want = cv2.multiply(diff.max(axis=2), gain, scale=1.0 / extract_module._GAIN_SCALE)
+    np.testing.assert_array_equal(dist, want)
+    assert thr > 0.0
+    assert 0.05 < np.count_nonzero(mask) / mask.size < 0.9  # tiles found, not everything
