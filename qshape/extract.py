@@ -504,39 +504,41 @@ def _grid_at(size: int, cells: int) -> tuple[np.ndarray, np.ndarray]:
     return whole, edge - whole
 
 
-def _cell_means(img: np.ndarray, gh: int, gw: int) -> np.ndarray:
+def _cell_means(planes: Sequence[np.ndarray], gh: int, gw: int) -> np.ndarray:
     """Mean colour of each cell of a (gh, gw) grid over the image, (gh, gw, 3) float32 levels.
 
     The area average of ``cv2.resize(..., INTER_AREA)`` (a pixel on a cell edge counts by the
     share of it inside the cell), rounded to whole levels as that gives them, from the image's
     integral (one OpenCV pass at any cell size: OpenCV's area resize takes a slow path when a
-    side is not a whole number of cells, e.g. 492 px rows in 30 cells).
+    side is not a whole number of cells, e.g. 492 px rows in 30 cells). ``planes``: the
+    image's three channels, each (H, W) uint8 (three one-channel integrals cost less than
+    one of the colour image).
     """
-    h, w = img.shape[:2]
-    total = cv2.integral(img)  # (h + 1, w + 1, 3) int32: sums above and left of each corner
+    h, w = planes[0].shape[:2]
     iy, ty = _grid_at(h, gh)
     ix, tx = _grid_at(w, gw)
-
+    rows = np.concatenate((iy, iy + 1))
+    cols = np.concatenate((ix, ix + 1)) if tx.any() else ix
+    # Sums above and left of the pixel corners next to each cell edge, (2 (gh + 1), ., 3).
+    total = np.stack(
+        [np.take(np.take(cv2.integral(c), rows, axis=0), cols, axis=1) for c in planes], axis=-1
+    ).astype(np.float64)
     # The integral of a piecewise-constant image is bilinear inside each pixel: along x at
-    # the cell edges first (exact when they fall on pixel edges), then along y; only the
-    # corners of pixels holding a cell edge are read.
-    def along_x(rows: np.ndarray) -> np.ndarray:
-        edge = np.take(np.take(total, rows, axis=0), ix, axis=1).astype(np.float64)
-        if tx.any():
-            edge *= (1.0 - tx)[None, :, None]
-            edge += np.take(np.take(total, rows, axis=0), ix + 1, axis=1) * tx[None, :, None]
-        return edge
-
-    at = along_x(iy) * (1.0 - ty)[:, None, None]
-    at += along_x(iy + 1) * ty[:, None, None]
+    # the cell edges first (exact when they fall on pixel edges), then along y.
+    edge = total[:, : gw + 1]
+    if tx.any():
+        edge = edge * (1.0 - tx)[None, :, None]
+        edge += total[:, gw + 1 :] * tx[None, :, None]
+    at = edge[: gh + 1] * (1.0 - ty)[:, None, None]
+    at += edge[gh + 1 :] * ty[:, None, None]
     box = np.diff(np.diff(at, axis=0), axis=1) * (gh * gw / (h * w))
     return np.asarray(np.rint(box), dtype=np.float32)
 
 
 def _illumination(
-    img: np.ndarray, dominant: np.ndarray, p: ExtractParams
+    planes: Sequence[np.ndarray], dominant: np.ndarray, p: ExtractParams
 ) -> tuple[tuple[np.ndarray, ...], np.ndarray, np.ndarray]:
-    """Background model of the belt under the cell's light.
+    """Background model of the belt under the cell's light, from the picture's three channels.
 
     Returns:
         The model image as its three channels, each (H, W) uint8 (the colour distance and the
@@ -546,9 +548,9 @@ def _illumination(
         saturating), by which colour distances are multiplied so that a tile in a shadow
         stands out as much as in full light.
     """
-    h, w = img.shape[:2]
+    h, w = planes[0].shape[:2]
     gh, gw = max(2, h // p.illumination_cell_px), max(2, w // p.illumination_cell_px)
-    small = _cell_means(img, gh, gw)
+    small = _cell_means(planes, gh, gw)
     dom = dominant.astype(np.float32)
     # The belt under any light is the dominant colour times a gain: compare each cell with
     # the dominant colour brought to the cell's brightness (a tile differs in hue, a shadow
@@ -866,10 +868,16 @@ def _split_regions(
 
 
 def _segment(
-    img: np.ndarray, model: Sequence[np.ndarray], gain: np.ndarray, p: ExtractParams
+    img: np.ndarray,
+    planes: Sequence[np.ndarray],
+    model: Sequence[np.ndarray],
+    gain: np.ndarray,
+    p: ExtractParams,
 ) -> _Segmentation:
-    """Image stages after the belt model: distance, threshold, regions, per-region edge level."""
-    planes = cv2.split(img)
+    """Image stages after the belt model: distance, threshold, regions, per-region edge level.
+
+    ``planes``: the picture's channels; ``model``: the belt model's.
+    """
     dist, thr, mask = _colour_distance(planes, model, gain, p)
     count, labels, present, pieces = _split_regions(img, mask, p, planes)
     if p.edge_fraction > 0.0:
@@ -1058,8 +1066,9 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
             "segmented"
         )
         return ExtractResult([], [], [], [why], background, 0.0)
-    model, mean_light, gain = _illumination(img, dominant, p)
-    seg = _segment(img, model, gain, p)
+    planes = cv2.split(img)
+    model, mean_light, gain = _illumination(planes, dominant, p)
+    seg = _segment(img, planes, model, gain, p)
     contours, hierarchy = _trace(seg.pieces)
     if seg.count <= 1 or hierarchy is None:
         return ExtractResult([], [], [], [], background, seg.threshold)

@@ -85,7 +85,7 @@ def test_colour_distance_from_planes_equals_the_colour_image_difference() -> Non
     sp = replace(SynthParams.load(), px_per_mm=1.8)
     img = generate(Design.load("paper_mixed"), 30, 2, sp).image
     dominant = extract_module._dominant_color(img, p)[0]
-    model, _, gain = extract_module._illumination(img, dominant, p)
+    model, _, gain = extract_module._illumination(cv2.split(img), dominant, p)
     dist, thr, mask = extract_module._colour_distance(cv2.split(img), model, gain, p)
     # The definition: the largest channel of |picture - model|, scaled by the shading gain.
     diff = cv2.absdiff(img, cv2.merge(model))
