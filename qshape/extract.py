@@ -590,36 +590,37 @@ def _illumination(
 
 
 def _label_medians(
-    lab: np.ndarray, values: list[np.ndarray], k: int
+    lab: np.ndarray, values: Sequence[np.ndarray], k: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Median of each channel per label: one histogram of (label, channel, level) triples.
+    """Median of each channel per label, from one (label, level) histogram per channel.
 
     Args:
         lab: int (N,) labels below ``k``.
-        values: uint8 samples, each (N, c_i); their channels side by side make the C channels.
+        values: uint8 (N,) samples, one array per channel (C channels).
         k: Number of labels.
 
     Returns:
-        The medians (k, C) in levels (0 for a label without samples), and which labels had
-        a sample (k,) bool.
+        The medians (k, C) in levels (0 for a label without samples; the lower middle level
+        of an even count), and which labels had a sample (k,) bool.
     """
-    channels = sum(v.shape[1] for v in values)
-    # Channel-major (C, N): numpy is far slower broadcasting over a short inner axis.
-    code = np.empty((channels, len(lab)), np.intp)
-    at = 0
-    for v in values:
-        code[at : at + v.shape[1]] = v.T
-        at += v.shape[1]
-    code += lab * (channels * 256)
-    code += np.arange(0, channels * 256, 256)[:, None]
-    hist = np.bincount(code.ravel(), minlength=k * channels * 256).reshape(k * channels, 256)
-    cum = np.cumsum(hist, axis=1)
+    channels = len(values)
+    # OpenCV's 2-D histogram of (label, level) pairs, exact for whole-number bins; 8-bit
+    # images when the labels fit, else float (all images of one call share a depth).
+    small = k <= 256  # noqa: PLR2004
+    depth = np.uint8 if small else np.float32
+    row = np.ascontiguousarray(lab, dtype=depth).reshape(1, -1)
+    hist = np.empty((k, channels, 256), np.float32)
+    for c, v in enumerate(values):
+        pair: list[Any] = [row, np.asarray(v, dtype=depth).reshape(1, -1)]
+        hist[:, c] = cv2.calcHist(pair, [0, 1], None, [k, 256], [0, k, 0, 256])
+    # Counts are whole numbers (exact in float32 below 2^24 samples); int32 sums are faster.
+    cum = np.cumsum(hist.reshape(k * channels, 256).astype(np.int32), axis=1)
     median = np.argmax(cum >= np.maximum((cum[:, -1:] + 1) // 2, 1), axis=1)
     return median.reshape(k, channels), cum[::channels, -1] > 0
 
 
 def _samples(
-    region: np.ndarray, labels: np.ndarray, lut: np.ndarray, step: int, *images: np.ndarray
+    region: np.ndarray, labels: np.ndarray, lut: np.ndarray, step: int, *planes: np.ndarray
 ) -> tuple[np.ndarray, list[np.ndarray]]:
     """Compact labels (N,) and values of every ``step``-th pixel (each axis) set in ``region``.
 
@@ -628,17 +629,20 @@ def _samples(
         labels: int (H, W) labels.
         lut: Map of a label to its compact index.
         step: Sampling step, in [px].
-        images: uint8 (H, W) or (H, W, c) images sampled.
+        planes: uint8 (H, W) single-channel images sampled.
 
     Returns:
-        The compact labels (N,) and, per image, its values (N, c).
+        The compact labels (N,) and, per plane, its values (N,).
     """
-    h, w = region.shape
+    w = region.shape[1]
     found = cv2.findNonZero(np.ascontiguousarray(region[::step, ::step]))
-    xy = np.zeros((0, 2), np.intp) if found is None else found.reshape(-1, 2).astype(np.intp)
-    at = (xy[:, 1] * (step * w)) + xy[:, 0] * step
-    values = [np.take(im.reshape(h * w, -1), at, axis=0) for im in images]
-    return lut[np.take(labels.ravel(), at)], values
+    if found is None:
+        return np.zeros(0, lut.dtype), [np.zeros(0, np.uint8) for _ in planes]
+    xy = found.reshape(-1, 2)
+    at = xy[:, 1].astype(np.intp) * (step * w)
+    at += xy[:, 0] * step
+    values = [np.take(c.ravel(), at) for c in planes]
+    return np.take(lut, np.take(labels.ravel(), at)), values
 
 
 def _compact(present: np.ndarray) -> tuple[np.ndarray, int]:
@@ -886,7 +890,7 @@ def _segment(
 
 
 def _tile_colours(
-    img: np.ndarray,
+    planes: Sequence[np.ndarray],
     model: Sequence[np.ndarray],
     mean_light: np.ndarray,
     seg: _Segmentation,
@@ -894,7 +898,8 @@ def _tile_colours(
 ) -> np.ndarray:
     """Median colour of every label (count, 3) [levels], under the reference light.
 
-    ``model``: the belt model's three channels, each (H, W) uint8.
+    ``planes`` and ``model``: the picture's and the belt model's three channels, each (H, W)
+    uint8.
     """
     labels, pieces = seg.labels, seg.pieces
     if p.color_erode_px > 0:
@@ -903,10 +908,10 @@ def _tile_colours(
         region = pieces
     lut, k = _compact(seg.present)
     st = max(1, p.color_sample_step)
-    medians, seen = _label_medians(*_samples(region, labels, lut, st, img, *model), k)
+    medians, seen = _label_medians(*_samples(region, labels, lut, st, *planes, *model), k)
     # Tiles eroded away entirely fall back to their whole region.
     if not seen[1:].all():
-        again = _label_medians(*_samples(pieces, labels, lut, 1, img, *model), k)[0]
+        again = _label_medians(*_samples(pieces, labels, lut, 1, *planes, *model), k)[0]
         medians[~seen] = again[~seen]
     compact = medians[:, :3].astype(np.float64)
     if p.correct_illumination:  # each tile's median colour under its median light
@@ -1072,7 +1077,7 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     contours, hierarchy = _trace(seg.pieces)
     if seg.count <= 1 or hierarchy is None:
         return ExtractResult([], [], [], [], background, seg.threshold)
-    colors = _tile_colours(img, model, mean_light, seg, p)
+    colors = _tile_colours(planes, model, mean_light, seg, p)
     todo, partial = _outlines(contours, hierarchy[0], colors, seg, shape=img.shape[:2], p=p)
     figures, outlines, rejected = _figures(todo, p)
     return ExtractResult(figures, outlines, partial, rejected, background, seg.threshold)

@@ -407,16 +407,23 @@ def test_square_hole_corners_are_single_vertices(px_per_mm: float) -> None:
         assert len(fig.holes[0].points) == 4 and not fig.holes[0].curve_mask.any()
 
 
-def test_label_medians_are_lower_medians() -> None:
-    """The one-histogram medians equal sorted lower medians, per label and channel."""
+@pytest.mark.parametrize(("labels", "count"), [(7, 8), (300, 310)])
+def test_label_medians_are_lower_medians(labels: int, count: int) -> None:
+    """The histogram medians equal sorted lower medians, per label and channel.
+
+    More labels than a byte holds take the float histogram; labels above ``labels`` have no
+    sample.
+    """
     from qshape.extract import _label_medians  # noqa: PLC0415
 
     rng = np.random.default_rng(11)
-    lab = rng.integers(0, 7, 5000)
-    values = [rng.integers(0, 256, (5000, 3), dtype=np.uint8), rng.integers(0, 9, (5000, 1))]
-    medians, seen = _label_medians(lab, [v.astype(np.uint8) for v in values], 8)
-    both = np.concatenate(values, axis=1)
-    for k in range(8):
+    lab = rng.integers(0, labels, 20000)
+    both = np.concatenate(
+        [rng.integers(0, 256, (20000, 3)), rng.integers(0, 9, (20000, 1))], axis=1
+    ).astype(np.uint8)
+    medians, seen = _label_medians(lab, [both[:, c] for c in range(4)], count)
+    assert medians.shape == (count, 4)
+    for k in range(count):
         rows = np.sort(both[lab == k], axis=0)
         assert seen[k] == (len(rows) > 0)
         want = rows[(len(rows) - 1) // 2] if len(rows) else np.zeros(4)
