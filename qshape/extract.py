@@ -693,12 +693,14 @@ def _canny(plane: np.ndarray, low: float, high: float) -> np.ndarray:
     """``cv2.Canny`` of one uint8 channel, given the 3 x 3 Sobel derivatives it would take.
 
     Canny's image path computes those derivatives itself, with the border replicated; its
-    path taking them ready-made gives the same edges, and the two Sobel calls are cheaper
-    than Canny's own (about 0.2 ms less per 656 x 492 channel).
+    path taking them ready-made gives the same edges. They come from ``cv2.spatialGradient``
+    (both derivatives in one pass) on the channel padded by one replicated pixel, so that its
+    own border rule only reaches the pad: 0.1-0.15 ms less per 656 x 492 channel than Canny
+    on the channel itself.
     """
-    dx = cv2.Sobel(plane, cv2.CV_16S, 1, 0, borderType=cv2.BORDER_REPLICATE)
-    dy = cv2.Sobel(plane, cv2.CV_16S, 0, 1, borderType=cv2.BORDER_REPLICATE)
-    return cv2.Canny(dx, dy, low, high)
+    pad = cv2.copyMakeBorder(plane, 1, 1, 1, 1, cv2.BORDER_REPLICATE)
+    dx, dy = cv2.spatialGradient(pad)
+    return cv2.Canny(dx[1:-1, 1:-1], dy[1:-1, 1:-1], low, high)
 
 
 def _color_edges(
