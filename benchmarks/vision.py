@@ -244,7 +244,11 @@ def run_level(  # noqa: PLR0917
 
 
 def _channel_canny(image: np.ndarray, low: float, high: float) -> np.ndarray:
-    """Union of one single-channel ``cv2.Canny`` per colour channel (extraction's edge step)."""
+    """Union of one single-channel ``cv2.Canny`` per colour channel.
+
+    Extraction's edge step finds the same edges, from Sobel derivatives it computes itself
+    (see ``qshape.extract._canny``).
+    """
     r, g, b = cv2.split(image)
     edges = cv2.Canny(r, low, high)
     cv2.bitwise_or(edges, cv2.Canny(g, low, high), dst=edges)
@@ -259,7 +263,8 @@ def timing(bp: BenchParams, sp: SynthParams, ep: ExtractParams) -> dict[str, Any
     extraction's thresholds: OpenCV's colour Canny, which keeps the largest gradient over the
     channels. Beside it, interleaved in the same loop: Canny on the grey picture, and the
     union of one single-channel Canny per channel on the full-size picture (extraction's own
-    edge step does that on its blurred picture reduced ``canny_reduction`` times per axis).
+    edge step finds those edges, faster, on its blurred picture, reduced ``canny_reduction``
+    times per axis when that is above 1).
     Times are wall clock (``perf_counter``) and, less disturbed by other processes on a shared
     machine, this process's CPU time (``process_time``); every figure is the median over
     ``timing_repeats`` rounds.
