@@ -115,6 +115,8 @@ class ExtractParams:
             this distance (max over channels) of the dominant colour, in [levels].
         threshold_min: Lowest foreground threshold on the colour distance, in [levels].
         threshold_max: Highest foreground threshold (Otsu's value is clamped to the range).
+        otsu_sample_step: Otsu's threshold is taken from the histogram of every n-th pixel
+            (each axis) of the colour distance; the mask is then thresholded at every pixel.
         open_px: Size of the square opening that removes specks from the mask, in [px] (0: none).
         edge_fraction: Each region's outline is traced where the colour distance is this
             fraction of the region's median distance (its contrast; 0.5: the middle of a
@@ -178,6 +180,7 @@ class ExtractParams:
     background_tolerance: float = 40.0
     threshold_min: float = 20.0
     threshold_max: float = 60.0
+    otsu_sample_step: int = 1
     open_px: int = 3
     edge_fraction: float = 0.5
     edge_threshold_max: float = 60.0
@@ -229,6 +232,11 @@ class ExtractParams:
             )
         if not 0.0 < self.threshold_min <= self.threshold_max:
             raise ImageError("need 0 < threshold_min <= threshold_max")
+        if self.otsu_sample_step < 1 or self.edge_sample_step < 1:
+            raise ImageError(
+                "otsu_sample_step and edge_sample_step must be >= 1 [px], got "
+                f"{self.otsu_sample_step} and {self.edge_sample_step}"
+            )
         sizes = (self.open_px, self.restore_iterations, self.color_erode_px, self.border_margin_px)
         if min(sizes) < 0:
             raise ImageError("pixel sizes must be >= 0")
@@ -794,11 +802,18 @@ def _colour_distance(
     ``planes`` and ``model``: the picture's and the model's channels, each (H, W) uint8 (plane
     by plane, the largest channel difference needs no split of a difference image).
     """
-    r, g, b = (cv2.absdiff(c, m) for c, m in zip(planes, model, strict=True))
-    dist = cv2.multiply(cv2.max(cv2.max(r, g), b), gain, scale=1.0 / _GAIN_SCALE)
-    otsu, _ = cv2.threshold(dist, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    # Two picture-sized buffers, each written several times (fewer fresh buffers to fault in).
+    dist = cv2.absdiff(planes[0], model[0])
+    other = cv2.absdiff(planes[1], model[1])
+    cv2.max(dist, other, dst=dist)
+    cv2.max(dist, cv2.absdiff(planes[2], model[2], dst=other), dst=dist)
+    cv2.multiply(dist, gain, dst=dist, scale=1.0 / _GAIN_SCALE)
+    st = p.otsu_sample_step
+    sample = dist if st == 1 else np.ascontiguousarray(dist[::st, ::st])
+    otsu, mask = cv2.threshold(sample, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
     thr = float(np.clip(otsu, p.threshold_min, p.threshold_max))
-    _, mask = cv2.threshold(dist, thr, 255, cv2.THRESH_BINARY)
+    if st > 1 or thr != otsu:
+        _, mask = cv2.threshold(dist, thr, 255, cv2.THRESH_BINARY)
     if p.open_px > 1:
         mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, _box(p.open_px))
     return dist, thr, mask
