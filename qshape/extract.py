@@ -434,10 +434,10 @@ def _polynomial_fit(small: np.ndarray, keep: np.ndarray, degree: int) -> np.ndar
     flat = keep.ravel()
     used, values = basis[flat], small.reshape(-1, 3)[flat]
     # Least squares by the normal equations where they are well conditioned: the monomials of
-    # cell centres spread over the grid are (about 50 for a cubic on 60 % of the cells, so
-    # ~3e3 squared; the model agrees with an SVD solution to 1e-11 levels) and cost half of
-    # lstsq. Background cells that leave a monomial nearly undetermined (all in a few rows,
-    # say) take lstsq's minimum-norm solution instead.
+    # cell centres spread over the grid are (condition number about 50 for a cubic on 60 % of
+    # the cells, ~3e3 for the normal equations; the model agrees with an SVD solution to 1e-11
+    # levels), and solving them costs half of lstsq. Background cells that leave a monomial
+    # nearly undetermined (all in a few rows, say) take lstsq's minimum-norm solution.
     gram = used.T @ used
     eig = np.linalg.eigvalsh(gram)
     if eig[0] > eig[-1] / _MAX_GRAM_CONDITION:
@@ -589,9 +589,9 @@ def _illumination(
     gain8 = np.clip(gain * _GAIN_SCALE + 0.5, 0, 255).astype(np.uint8)
     model8 = np.clip(model + 0.5, 0, 255).astype(np.uint8)
     # Resized plane by plane: the same levels as resizing the colour image.
-    planes = tuple(cv2.resize(c, (w, h), interpolation=cv2.INTER_LINEAR) for c in cv2.split(model8))
+    up = tuple(cv2.resize(c, (w, h), interpolation=cv2.INTER_LINEAR) for c in cv2.split(model8))
     return (
-        planes,
+        up,
         model.reshape(-1, 3).mean(axis=0).astype(np.float64) * lit / max(float(light.mean()), 1.0),
         cv2.resize(gain8, (w, h), interpolation=cv2.INTER_LINEAR),
     )
