@@ -680,7 +680,7 @@ def _at_half_contrast(
     """
     count = len(present)
     lut, k = _compact(present)
-    lab, val = _samples(pieces, labels, lut, max(1, p.edge_sample_step), dist)
+    lab, val = _samples(pieces, labels, lut, p.edge_sample_step, dist)
     median = np.zeros(count)
     median[present] = _label_medians(lab, val, k)[0][1:, 0]
     level = np.clip(p.edge_fraction * median, thr, max(thr, p.edge_threshold_max))
