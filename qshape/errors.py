@@ -31,6 +31,10 @@ class DesignError(QShapeError):
     """A design file or design value is malformed; the message names the slot and the problem."""
 
 
+class GeneratorError(DesignError):
+    """A design generator parameter is out of range; the message names it and what is allowed."""
+
+
 class LimitError(QShapeError):
     """An input exceeds a documented cap (``limits`` of configs/qshape.yaml), named in it."""
 
@@ -46,6 +50,7 @@ class TextLimitError(LimitError, ParseError):
 __all__ = [
     "DesignError",
     "FigureLimitError",
+    "GeneratorError",
     "InvalidFigureError",
     "LimitError",
     "InvalidHoleError",
