@@ -69,10 +69,10 @@ DEFAULT_PALETTE = (
     "#3f9e4d",
     "#8e4fb5",
     "#f2f2ee",
-    "#2b2b2b",
     "#d96aa7",
 )
-"""Colours of the bundled designs and a few more, '#rrggbb'."""
+"""Colours of the bundled designs and a few more, '#rrggbb'. No near-black: the input belt is
+near-black (RGB 0.12), and a tile of its colour is not seen on it."""
 CONFIG_NAME = "design_generator"
 """Bundled parameter file, ``configs/design_generator.yaml``."""
 
