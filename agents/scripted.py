@@ -22,6 +22,7 @@ accepted)::
 
 from __future__ import annotations
 
+import dataclasses
 from collections import deque
 from typing import Any
 
@@ -37,10 +38,12 @@ from agents.perception import (
     Perception,
     balance_colors,
     perceive_tiles,
+    refigured,
     slot_targets,
 )
 from agents.placement import PickPlace, PlacementPlan, Unplaced, plan_placements
 from envs.task_spec import PickPlaceCodec, PickPlaceCommand, TaskSpec
+from qshape import ExtractParams, OutlineParams
 from qshape.assign import feasible_pairs
 from qshape.tolerances import default_tolerances
 
@@ -98,6 +101,12 @@ class ScriptedAgent:
         else:
             self.camera = spec.camera("input_camera")
         self.slots = slot_targets(spec.slots)
+        retry = self.cfg.perception.retry_outline
+        self.retry_params: OutlineParams | None = (
+            OutlineParams(**{**dataclasses.asdict(ExtractParams.load().outline), **retry})
+            if retry
+            else None
+        )
         self.tile_top = spec.pick.tile_top_z
         self.palette = np.array([s.color for s in self.slots])
         self.queue: deque[PickPlace] = deque()
@@ -162,6 +171,8 @@ class ScriptedAgent:
                 per, self.palette, pcfg, history=np.array(self.colors), per_channel=many
             )
         plan = self._assign(per)
+        if self.retry_params is not None and any(u.reason == "shape_absent" for u in plan.unplaced):
+            per, plan = self._retry_unmatched(per, plan)
         taken = [u.tile for u in plan.unplaced if u.reason == "slots_taken"]
         if taken and self._reopen([per.tiles[k] for k in taken]):
             plan = self._assign(per)
@@ -170,6 +181,41 @@ class ScriptedAgent:
         self.last_plan = plan
         self.unplaced = plan.unplaced
         return plan
+
+    def _retry_unmatched(
+        self, per: Perception, plan: PlacementPlan
+    ) -> tuple[Perception, PlacementPlan]:
+        """Simplify the outlines of tiles matching no open slot's shape again (finer).
+
+        A tile's retried figure replaces its first one only when it then matches; the plan is
+        made again when any did.
+        """
+        assert self.retry_params is not None
+        absent = {u.tile for u in plan.unplaced if u.reason == "shape_absent"}
+        tiles = list(per.tiles)
+        open_slots = [s for s in self.slots if s.index not in self.filled]
+        changed = False
+        for pos, t in enumerate(tiles):
+            if t.index not in absent:
+                continue
+            again = refigured(
+                t, self.camera, per.plane_z, self.retry_params, cfg=self.cfg.perception
+            )
+            if again is None:
+                continue
+            _, slots, _, _ = feasible_pairs(
+                [again.description],
+                [s.description for s in open_slots],
+                default_tolerances(),
+                self.cfg.placement.use_color,
+            )
+            if len(slots):
+                tiles[pos] = again
+                changed = True
+        if not changed:
+            return per, plan
+        per = dataclasses.replace(per, tiles=tuple(tiles))
+        return per, self._assign(per)
 
     def _assign(self, per: Perception) -> PlacementPlan:
         open_slots = [s for s in self.slots if s.index not in self.filled]

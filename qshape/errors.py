@@ -35,6 +35,10 @@ class GeneratorError(DesignError):
     """A design generator parameter is out of range; the message names it and what is allowed."""
 
 
+class SmallFeatureWarning(UserWarning):
+    """A design slot holds a curved feature below what the camera recognises (named in it)."""
+
+
 class LimitError(QShapeError):
     """An input exceeds a documented cap (``limits`` of configs/qshape.yaml), named in it."""
 
@@ -57,6 +61,7 @@ __all__ = [
     "MatchError",
     "ParseError",
     "QShapeError",
+    "SmallFeatureWarning",
     "TextLimitError",
     "ToleranceError",
 ]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from collections import Counter
 from pathlib import Path
 
@@ -20,7 +21,8 @@ from qshape.design.generator import (
     GeneratorConfig,
     random_design,
 )
-from qshape.errors import DesignError, GeneratorError
+from qshape.design.rules import DesignRules
+from qshape.errors import DesignError, GeneratorError, SmallFeatureWarning
 
 GEN = DesignGenerator()
 
@@ -31,11 +33,13 @@ def test_every_drawn_design_passes_the_loader_and_keeps_its_features(
     seed: int, tmp_path_factory: pytest.TempPathFactory
 ) -> None:
     cfg = GEN.config
-    design = GEN.draw(np.random.default_rng(seed), name=f"r{seed}")
-    # The design loader's own checks, from the written file.
-    path = Path(tmp_path_factory.mktemp("designs")) / "d.yaml"
-    design.save(path)
-    loaded = Design.load(path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        design = GEN.draw(np.random.default_rng(seed), name=f"r{seed}")
+        # The design loader's own checks, from the written file.
+        path = Path(tmp_path_factory.mktemp("designs")) / "d.yaml"
+        design.save(path)
+        loaded = Design.load(path)
     assert loaded.to_dict() == design.to_dict()
     assert cfg.tiles[0] <= len(design.slots) <= cfg.tiles[1]
     for slot in design.slots:
@@ -45,6 +49,8 @@ def test_every_drawn_design_passes_the_loader_and_keeps_its_features(
             assert f.chord_mm >= cfg.min_feature_mm - 1e-6, f.describe()
             if f.curved:
                 assert abs(f.sagitta_mm) >= cfg.min_sagitta_mm - 1e-6, f.describe()
+    # Drawn at the camera's smallest recognised arc: the loader warns about none.
+    assert not [w for w in caught if issubclass(w.category, SmallFeatureWarning)]
 
 
 def test_draws_are_seeded_and_cover_every_family_holes_copies_and_arcs() -> None:
@@ -103,6 +109,7 @@ def test_a_regular_square_grid_is_a_special_case() -> None:
         ({"size_mm": (10.0, 40.0)}, "size_mm"),
         ({"min_feature_mm": 0.0}, "min_feature_mm"),
         ({"min_sagitta_mm": 20.0}, "min_sagitta_mm"),
+        ({"min_arc_chord_mm": -1.0}, "min_arc_chord_mm"),
         ({"families": {"blob": 1.0}}, "allowed"),
         ({"families": {"regular": 0.0}}, "families"),
         ({"hole_probability": 1.5}, "hole_probability"),
@@ -152,7 +159,14 @@ def test_small_arcs_names_shallow_bites() -> None:
             }
         ],
     }
-    slot = Design.from_dict(data).slots[0]
+    with pytest.warns(SmallFeatureWarning, match=r"slot 'bitten_square'.*outline edge 1: bite"):
+        slot = Design.from_dict(data).slots[0]
+    with pytest.raises(DesignError, match="bitten_square.*small_features: refuse"):
+        Design.from_dict(data, rules=DesignRules(small_features="refuse"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Design.from_dict(data, rules=DesignRules(small_features="ignore"))
+        Design.from_dict(data, rules=DesignRules(min_arc_sagitta_mm=3.0, min_arc_chord_mm=12.0))
     (arc,) = small_arcs(slot, min_sagitta_mm=4.0, min_chord_mm=4.0)
     assert arc.edge == 1 and arc.chord_mm == pytest.approx(12.0)
     assert arc.sagitta_mm == pytest.approx(-3.0)

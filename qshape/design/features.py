@@ -8,13 +8,16 @@ warns about arcs the camera may not resolve (`small_arcs`).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+import warnings
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from qshape.design.paths import Loop
+from qshape.design.rules import DesignRules
 from qshape.design.slot import Slot
+from qshape.errors import DesignError, SmallFeatureWarning
 
 
 @dataclass(frozen=True)
@@ -73,14 +76,38 @@ def edge_features(slot: Slot) -> list[EdgeFeature]:
 def small_arcs(slot: Slot, min_sagitta_mm: float, min_chord_mm: float) -> list[EdgeFeature]:
     """Arcs of the slot shallower than ``min_sagitta_mm`` or shorter than ``min_chord_mm``.
 
-    A circle or semicircle's arcs are never small by chord (they are the whole outline); an
-    arc turning 180 deg or more has a sagitta of at least half its chord.
+    Only arcs turning less than 180 deg count: arcs turning 180 deg or more (a semicircle, a
+    circle's halves) are recognised as semicircles and circles, whatever their size.
     """
     return [
         f
         for f in edge_features(slot)
-        if f.curved and (abs(f.sagitta_mm) < min_sagitta_mm or f.chord_mm < min_chord_mm)
+        if f.curved
+        and abs(f.sagitta_mm) < f.chord_mm / 2.0 - 1e-9
+        and (abs(f.sagitta_mm) < min_sagitta_mm or f.chord_mm < min_chord_mm)
     ]
 
 
-__all__ = ["EdgeFeature", "edge_features", "small_arcs"]
+def check_small_features(slots: Sequence[Slot], rules: DesignRules, pre: str = "") -> None:
+    """Warn about (or refuse) slots with arcs below ``rules``' smallest recognised arc.
+
+    Raises:
+        DesignError: With ``rules.small_features == "refuse"``, naming the slot and the arc.
+    """
+    if rules.small_features == "ignore":
+        return
+    for slot in slots:
+        small = small_arcs(slot, rules.min_arc_sagitta_mm, rules.min_arc_chord_mm)
+        if not small:
+            continue
+        text = (
+            f"{pre}slot {slot.name!r} has curved features below what the camera recognises "
+            f"(arcs need a sagitta >= {rules.min_arc_sagitta_mm:g} mm and a chord >= "
+            f"{rules.min_arc_chord_mm:g} mm): " + "; ".join(f.describe() for f in small)
+        )
+        if rules.small_features == "refuse":
+            raise DesignError(f"{text} (small_features: refuse; 'warn' loads it anyway)")
+        warnings.warn(text, SmallFeatureWarning, stacklevel=4)
+
+
+__all__ = ["EdgeFeature", "check_small_features", "edge_features", "small_arcs"]

@@ -73,6 +73,9 @@ DEFAULT_PALETTE = (
 )
 """Colours of the bundled designs and a few more, '#rrggbb'. No near-black: the input belt is
 near-black (RGB 0.12), and a tile of its colour is not seen on it."""
+KEEP_ABOVE_MM = 0.01
+"""[mm] drawn features stay this far above their limits (design files round to 0.1 um, and
+the loader's small-feature check is strict)."""
 CONFIG_NAME = "design_generator"
 """Bundled parameter file, ``configs/design_generator.yaml``."""
 
@@ -93,6 +96,7 @@ class GeneratorConfig:
         min_feature_mm: Smallest straight edge, arc chord, hole size (inscribed diameter) and
             material between a hole and the outline or another hole, in [mm].
         min_sagitta_mm: Smallest depth of an arc off its chord, in [mm].
+        min_arc_chord_mm: Smallest chord of an arc, in [mm] (arcs turning less than 180 deg).
         max_sagitta_ratio: Largest arc sagitta / chord of the ``arcs`` and ``bite`` families
             (dimensionless; 0.5 is a half circle).
         families: Weight of each of `SHAPE_FAMILIES` (missing: 0; at least one > 0).
@@ -114,7 +118,8 @@ class GeneratorConfig:
     classes: tuple[int, int] = (3, 9)
     size_mm: tuple[float, float] = (30.0, 50.0)
     min_feature_mm: float = 6.0
-    min_sagitta_mm: float = 3.0
+    min_sagitta_mm: float = 5.0
+    min_arc_chord_mm: float = 20.0
     max_sagitta_ratio: float = 0.3
     families: dict[str, float] = field(default_factory=lambda: dict.fromkeys(SHAPE_FAMILIES, 1.0))
     hole_probability: float = 0.3
@@ -133,7 +138,13 @@ class GeneratorConfig:
         except ConfigError as exc:
             raise GeneratorError(str(exc)) from exc
         pre = "GeneratorConfig."
-        for name in ("joint_mm", "min_feature_mm", "min_sagitta_mm", "max_sagitta_ratio"):
+        for name in (
+            "joint_mm",
+            "min_feature_mm",
+            "min_sagitta_mm",
+            "min_arc_chord_mm",
+            "max_sagitta_ratio",
+        ):
             if not getattr(self, name) > 0.0:
                 raise GeneratorError(f"{pre}{name} must be > 0, got {getattr(self, name)!r}")
         if min(self.mesh_mm) <= 0.0:
@@ -401,9 +412,12 @@ class DesignGenerator:
         if geo.self_intersects(outer) or float(np.max(np.hypot(*outer.T))) > radius + 1e-6:
             return False
         for f in edge_features(slot):
-            if f.chord_mm < cfg.min_feature_mm - 1e-9:
+            if f.chord_mm < cfg.min_feature_mm + KEEP_ABOVE_MM:
                 return False
-            if f.curved and abs(f.sagitta_mm) < cfg.min_sagitta_mm - 1e-9:
+            if f.curved and abs(f.sagitta_mm) < cfg.min_sagitta_mm + KEEP_ABOVE_MM:
+                return False
+            whole_turn = abs(f.sagitta_mm) >= f.chord_mm / 2.0 - 1e-9
+            if f.curved and not whole_turn and f.chord_mm < cfg.min_arc_chord_mm + KEEP_ABOVE_MM:
                 return False
         return self._holes_ok(path)
 
@@ -488,7 +502,7 @@ class DesignGenerator:
         """
         cfg = self.config
         top = cfg.max_sagitta_ratio * chord
-        if top < cfg.min_sagitta_mm:
+        if top < cfg.min_sagitta_mm or chord < cfg.min_arc_chord_mm:
             return 0.0
         return sign * 2.0 * float(rng.uniform(cfg.min_sagitta_mm, top)) / chord
 
@@ -515,13 +529,21 @@ class DesignGenerator:
         turn = np.abs(geo.wrap_angles(heading - np.roll(heading, 1)))  # at each vertex
         cot = 1.0 / np.tan((math.pi - turn) / 2.0)  # tangent length per unit radius
         lengths = np.hypot(d[:, 0], d[:, 1])
-        # Radius: every arc at least min_sagitta_mm deep, every straight edge left >= the
-        # smallest feature.
-        rho_lo = cfg.min_sagitta_mm / float(np.min(1.0 - np.cos(turn / 2.0)))
-        rho_hi = float(np.min((lengths - cfg.min_feature_mm) / (cot + np.roll(cot, -1))))
+        # Some corners (at least one) rounded, all by one radius: every arc at least
+        # min_sagitta_mm deep with a chord of at least min_arc_chord_mm, every straight edge
+        # left at least the smallest feature long.
+        rounded = rng.random(len(v)) < 0.5
+        rounded[int(rng.integers(len(v)))] = True
+        t = turn[rounded]
+        rho_lo = max(
+            cfg.min_sagitta_mm / float(np.min(1.0 - np.cos(t / 2.0))),
+            cfg.min_arc_chord_mm / float(np.min(2.0 * np.sin(t / 2.0))),
+        )
+        cot = np.where(rounded, cot, 0.0)
+        rho_hi = float(np.min((lengths - cfg.min_feature_mm) / (cot + np.roll(cot, -1) + 1e-12)))
         if rho_hi < rho_lo:
             return None
-        return _rounded(v, float(rng.uniform(rho_lo, rho_hi)))
+        return _rounded(v, float(rng.uniform(rho_lo, rho_hi)), rounded)
 
     def _draw_bite(self, rng: np.random.Generator, r: float) -> Shape | None:
         cfg = self.config
@@ -533,7 +555,7 @@ class DesignGenerator:
         lengths = np.hypot(*(np.roll(v, -1, axis=0) - v).T)
         k = int(rng.choice(n, p=lengths / lengths.sum()))
         p, q, length = v[k], v[(k + 1) % n], float(lengths[k])
-        w_lo = max(cfg.min_feature_mm, cfg.min_sagitta_mm / cfg.max_sagitta_ratio)
+        w_lo = max(cfg.min_arc_chord_mm, cfg.min_sagitta_mm / cfg.max_sagitta_ratio)
         w_hi = length - 2.0 * cfg.min_feature_mm
         if w_hi < w_lo:
             return None  # too short an edge for a bite
@@ -568,18 +590,42 @@ class DesignGenerator:
             kind = kinds[int(rng.integers(len(kinds)))]
             # Inscribed size between the smallest feature and what the room allows.
             fit = _inradius(room, c) if k == 0 else 0.0
-            hi = max(cfg.min_feature_mm, min(0.6 * _inradius(solid, c), 2.0 * fit))
-            size = float(rng.uniform(cfg.min_feature_mm, max(cfg.min_feature_mm, hi)))
+            # Off-centre holes move the area centroid and the tile is fitted again (shrunk a
+            # little): holes start a fifth above the smallest feature.
+            lo = 1.2 * cfg.min_feature_mm
+            hi = max(lo, min(0.6 * _inradius(solid, c), 2.0 * fit))
+            size = float(rng.uniform(lo, hi))
             centred = k == 0 and rng.random() < cfg.centred_hole_probability
+            hole = _hole(kind, size, rng)
             if centred:
                 at = c
             else:
-                minx, miny, maxx, maxy = room.bounds
-                at = np.array([rng.uniform(minx, maxx), rng.uniform(miny, maxy)])
-            hole = _hole(kind, size, rng)
+                # Anywhere the whole hole (its circumscribed circle) keeps the smallest
+                # feature of material, at least the smallest feature off the centroid.
+                reach = room.buffer(-_circumradius(hole))
+                if reach.is_empty:
+                    return None
+                minx, miny, maxx, maxy = reach.bounds
+                for _ in range(_PLACE_TRIES):
+                    at = np.array([rng.uniform(minx, maxx), rng.uniform(miny, maxy)])
+                    far = float(np.hypot(*(at - c))) >= cfg.min_feature_mm
+                    if far and reach.contains(shapely.Point(float(at[0]), float(at[1]))):
+                        break
+                else:
+                    return None
             hole.update({"x": float(at[0]), "y": float(at[1]), "angle": float(rng.uniform(0, 360))})
             holes.append(hole)
         return {**shape, "holes": holes}
+
+
+_PLACE_TRIES = 50
+"""Random positions tried for an off-centre hole."""
+
+
+def _circumradius(hole: Shape) -> float:
+    """Largest distance of a hole mapping's outline from its own centre, [mm]."""
+    path = tile_path(hole, "generated hole")
+    return float(np.max(np.hypot(*path.outer.dense(0.5).T)))
 
 
 def _inradius(poly: shapely.Polygon, c: np.ndarray) -> float:
@@ -615,13 +661,18 @@ def _polygon(vertices: Any, bulges: Any = None) -> Shape:
     return {"kind": "polygon", "vertices": rows}
 
 
-def _rounded(v: np.ndarray, rho: float) -> Shape:
-    """A convex polygon with every corner rounded by a radius-``rho`` arc tangent to its edges."""
-    v = v if geo.signed_area(v) > 0 else v[::-1]
+def _rounded(v: np.ndarray, rho: float, which: np.ndarray) -> Shape:
+    """A convex counter-clockwise polygon with some corners rounded.
+
+    The corners ``which`` (bool per vertex) get a radius-``rho`` arc tangent to both edges.
+    """
     n = len(v)
     verts: list[list[float]] = []
     for i in range(n):
         p, a, b = v[i], v[i - 1], v[(i + 1) % n]
+        if not which[i]:
+            verts.append(p.tolist())
+            continue
         u0 = (a - p) / np.hypot(*(a - p))
         u1 = (b - p) / np.hypot(*(b - p))
         interior = math.acos(float(np.clip(np.dot(u0, u1), -1.0, 1.0)))
