@@ -310,7 +310,15 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             with mp.get_context("spawn").Pool(args.workers) as pool:
                 rows = pool.map(play_design, jobs, chunksize=1)
         else:
-            rows = [play_design(j) for j in jobs]
+            rows = []
+            for j in jobs:
+                rows.append(play_design(j))
+                r = rows[-1]
+                print(
+                    f"{r['level']}: design {r['design']}: {r['correct']}/{r['slots']} "
+                    f"({r['wall_s']:.1f} s) {r['failures'] or ''}",
+                    flush=True,
+                )
     summary = [summarise(lv, [r for r in rows if r["level"] == lv.name]) for lv in levels]
     pictures = save_pictures(rows, args.out.with_suffix(""))
     wall = time.perf_counter() - t0
