@@ -29,7 +29,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from agents.calibration import calibrate_cell_camera
+from agents.calibration import CalibrationResult, calibrate_cell_camera
 from agents.config import AgentsConfig, load_agents_config
 from agents.errors import AgentError
 from agents.perception import (
@@ -66,6 +66,8 @@ class ScriptedAgent:
         replan_every_step: Take a new picture before every command (tiles move on a moving
             belt, new ones arrive with a stream feed) instead of once per batch of commands
             (the paper's static loop). None: every step when the belt moves or tiles stream.
+        calibration: An earlier calibration of this cell's input camera at this image size,
+            used as it is (another design in the same cell: the camera is the same).
 
     Raises:
         AgentError: Wrong action mode.
@@ -77,6 +79,8 @@ class ScriptedAgent:
         config: AgentsConfig | None = None,
         calibrate: bool = True,
         replan_every_step: bool | None = None,
+        *,
+        calibration: CalibrationResult | None = None,
     ) -> None:
         self.cfg = config or load_agents_config()
         if spec.codec is None:
@@ -92,8 +96,10 @@ class ScriptedAgent:
             else replan_every_step
         )
         self.camera: CameraLike
-        self.calibration = None
-        if calibrate:
+        self.calibration = calibration
+        if calibration is not None:
+            self.camera = calibration.camera
+        elif calibrate:
             self.calibration = calibrate_cell_camera(
                 spec.cell, "input_camera", self.cfg.calibration, spec.image_size
             )
@@ -128,6 +134,8 @@ class ScriptedAgent:
         config: AgentsConfig | None = None,
         calibrate: bool = True,
         replan_every_step: bool | None = None,
+        *,
+        calibration: CalibrationResult | None = None,
     ) -> ScriptedAgent:
         """The agent of a `MosaicAssembly-v0` env (wrapped or not), from its task description.
 
@@ -141,7 +149,7 @@ class ScriptedAgent:
         if not isinstance(obs_space, gym.spaces.Dict) or "input_camera" not in obs_space.spaces:
             raise AgentError("the scripted agent needs the input_camera observation (obs_mode rgb)")
         spec: TaskSpec = env.get_wrapper_attr("task_spec")
-        return cls(spec, config, calibrate, replan_every_step)
+        return cls(spec, config, calibrate, replan_every_step, calibration=calibration)
 
     def reset(self) -> None:
         """Forget the episode (open slots, queued commands, measured colours)."""

@@ -102,6 +102,8 @@ class RandomDesignsBenchConfig:
 
 
 Job = tuple[Level, int, RandomDesignsBenchConfig, str]
+_CALIBRATIONS: dict[str, Any] = {}
+"""Per worker process and level: the input camera's calibration."""
 
 
 def _outline_picture(image: np.ndarray, outlines: list[np.ndarray], path: Path) -> None:
@@ -139,7 +141,9 @@ def play_design(job: Job) -> dict[str, Any]:
         },
     )
     try:
-        agent = ScriptedAgent.from_env(env)
+        # The camera is the same for every design of a level: calibrated once per process.
+        agent = ScriptedAgent.from_env(env, calibration=_CALIBRATIONS.get(level.name))
+        _CALIBRATIONS[level.name] = agent.calibration
         last: dict[str, Any] = {}
 
         def observe(obs: Any, info: dict[str, Any]) -> None:

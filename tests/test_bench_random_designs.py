@@ -14,11 +14,11 @@ from configs import ConfigError, load_config
 def test_bundled_config_has_the_issue_targets() -> None:
     cfg = load_config(RandomDesignsBenchConfig, "bench_random_designs")
     by = {lv.name: lv for lv in cfg.levels}
-    kin = by["kinematic"]
+    kin = by["ideal camera, kinematic"]
     assert kin.designs[1] - kin.designs[0] >= 200
     assert kin.env["execution"] == "kinematic"
-    assert by["dynamic"].env["execution"] == "dynamic"
-    assert "cell" in by["kinematic, realistic camera"].env
+    assert by["ideal camera, dynamic"].env["execution"] == "dynamic"
+    assert "cell" in by["realistic camera, kinematic"].env
     for lv in cfg.levels:
         assert (lv.min_correct, lv.min_complete, lv.max_misplaced) == (0.995, 0.98, 0)
     with pytest.raises(ConfigError, match="designs"):
