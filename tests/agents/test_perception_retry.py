@@ -11,8 +11,8 @@ from agents.perception import perceive_tiles, refigured, slot_targets
 from benchmarks.design_cell import build_design_cell
 from envs.task_spec import work_areas, world_slots
 from qshape import ExtractParams, OutlineParams
-from qshape.theory.assign import feasible_pairs
 from qshape.design import Design
+from qshape.theory.assign import feasible_pairs
 from qshape.theory.tolerances import default_tolerances
 
 

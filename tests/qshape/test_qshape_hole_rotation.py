@@ -16,8 +16,8 @@ import pytest
 
 from qshape import Boundary, Figure, assign, match
 from qshape.design import Design, Slot
-from qshape.vision.extract import extract_detailed
 from qshape.synthetic.render import render_design
+from qshape.vision.extract import extract_detailed
 
 PX_PER_MM = 2.05
 """The default input camera's scale on the tile tops [px/mm] (0.24 m over 492 px)."""
