@@ -246,10 +246,15 @@ def summarise(level: Level, rows: list[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
-def save_pictures(rows: list[dict[str, Any]], folder: Path) -> dict[str, str]:
-    """The first failing picture of every (level, failure kind); returns kind -> file."""
+def save_pictures(
+    rows: list[dict[str, Any]], folder: Path, saved: dict[str, str] | None = None
+) -> dict[str, str]:
+    """The first failing picture of every (level, failure kind) not in ``saved`` yet.
+
+    Returns ``saved`` (a new mapping when None) with the files added: "level: kind" -> file.
+    """
     folder.mkdir(parents=True, exist_ok=True)
-    saved: dict[str, str] = {}
+    saved = {} if saved is None else saved
     for r in rows:
         for kind in r["failures"]:
             key = f"{r['level']}: {kind}"
@@ -308,39 +313,68 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         raise SystemExit(f"error: no level matches {args.level}")
     t0 = time.perf_counter()
     os.environ.setdefault("MUJOCO_GL", "egl")
+    pictures: dict[str, str] = {}
+    folder_out = args.out.with_suffix("")
+    rows: list[dict[str, Any]] = []
+
+    def keep(row: dict[str, Any]) -> None:
+        save_pictures([row], folder_out, pictures)
+        rows.append({k: v for k, v in row.items() if not k.startswith("_")})
+
     with tempfile.TemporaryDirectory(prefix="random_designs_") as folder:
         jobs: list[Job] = [(lv, i, cfg, folder) for lv in levels for i in range(*lv.designs)]
+        # Interleaved across levels (by the share of each level played): a run stopped early
+        # has played every level in proportion.
+        jobs.sort(key=lambda j: (j[1] - j[0].designs[0]) / (j[0].designs[1] - j[0].designs[0]))
         if args.workers > 1:
             with mp.get_context("spawn").Pool(args.workers) as pool:
-                rows = pool.map(play_design, jobs, chunksize=1)
+                for row in pool.imap(play_design, jobs, chunksize=1):
+                    keep(row)
         else:
-            rows = []
             for j in jobs:
-                rows.append(play_design(j))
+                keep(play_design(j))
                 r = rows[-1]
                 print(
                     f"{r['level']}: design {r['design']}: {r['correct']}/{r['slots']} "
                     f"({r['wall_s']:.1f} s) {r['failures'] or ''}",
                     flush=True,
                 )
-    summary = [summarise(lv, [r for r in rows if r["level"] == lv.name]) for lv in levels]
-    pictures = save_pictures(rows, args.out.with_suffix(""))
-    wall = time.perf_counter() - t0
-    print(table(summary))
+                # Written after every design: a run stopped early keeps what it played.
+                _write(args, cfg, levels, rows, pictures, time.perf_counter() - t0, done=False)
+    result = _write(args, cfg, levels, rows, pictures, time.perf_counter() - t0, done=True)
+    print(table(result["levels"]))
+    print(
+        f"wrote {args.out} and {len(pictures)} pictures; run time {result['wall_s']:.0f} s "
+        f"({args.workers} worker)"
+    )
+    return result
+
+
+def _write(  # noqa: PLR0913, PLR0917
+    args: argparse.Namespace,
+    cfg: RandomDesignsBenchConfig,
+    levels: list[Level],
+    rows: list[dict[str, Any]],
+    pictures: dict[str, str],
+    wall: float,
+    done: bool,
+) -> dict[str, Any]:
+    summary = [
+        summarise(lv, [r for r in rows if r["level"] == lv.name])
+        for lv in levels
+        if any(r["level"] == lv.name for r in rows)
+    ]
     result = {
         "generator": cfg.generator,
         "generator_overrides": cfg.generator_overrides,
         "workers": args.workers,
+        "complete_run": done,
         "wall_s": wall,
         "levels": summary,
         "pictures": pictures,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=2, default=float))
-    print(
-        f"wrote {args.out} and {len(pictures)} pictures; run time {wall:.0f} s "
-        f"({args.workers} worker)"
-    )
     return result
 
 
