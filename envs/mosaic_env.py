@@ -70,6 +70,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     ## Action Space
     Chosen by ``action_mode`` (continuous ones are Box in [-1, 1] float32):
+
     - ``joint``: Box(7): joint target deltas scaled by each axis' speed limit times
       ``control_dt``, then vacuum (> 0: on). One step = ``control_dt`` of simulated time.
     - ``cartesian``: Box(5): tool dx, dy, dz (x ``tool_speed * control_dt``) and dyaw
