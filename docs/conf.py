@@ -49,6 +49,7 @@ autodoc_mock_imports: list[str] = []
 napoleon_google_docstring = True
 napoleon_numpy_docstring = False
 napoleon_attr_annotations = True
+napoleon_use_ivar = True  # "Attributes:" as fields: no second description of a property
 
 html_theme = "furo"
 html_title = "Mosaic assembly cell"
