@@ -58,6 +58,11 @@ html_static_path: list[str] = []
 # The architecture page's diagram is Mermaid source: shown as plain text (no highlighter).
 lexers["mermaid"] = TextLexer()
 
+# Docstrings name exceptions and types by their short names ("Raises: LimitError"); where two
+# packages define the same short name (qshape and planners both have a LimitError) Sphinx links
+# the first and warns: these are ambiguities of the short names, not broken references.
+suppress_warnings = ["ref.python"]
+
 
 _LITERAL = re.compile(r"(``.+?``)")
 
