@@ -31,8 +31,8 @@ import numpy as np
 from agents.config import load_agents_config
 from agents.perception import color_gain, perceive_tiles
 from benchmarks.design_cell import build_design_cell
-from envs.cell import Cell
-from envs.cell_config import CellConfig, load_cell_config
+from envs.cell.cell import Cell
+from envs.cell.config import CellConfig, load_cell_config
 from envs.task_spec import work_areas
 from qshape.design import Design
 

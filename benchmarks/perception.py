@@ -23,7 +23,7 @@ from agents.config import load_agents_config
 from agents.perception import CameraLike, balance_colors, perceive_tiles, slot_targets
 from agents.placement import plan_placements
 from benchmarks.design_cell import build_design_cell, nearest_tile
-from envs.cell_config import load_cell_config
+from envs.cell.config import load_cell_config
 from envs.task_spec import work_areas, world_slots
 from planners.angles import yaw_error
 from qshape.design import Design

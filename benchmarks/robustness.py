@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 import qshape
-from qshape.keys import clear_key_caches
 from qshape.limits import default_limits
+from qshape.theory.keys import clear_key_caches
 
 TARGET_S = 1.0
 """Every entry point at its cap must run in under this many seconds."""

@@ -30,7 +30,7 @@ import gymnasium as gym
 
 import envs  # noqa: F401 - registers the env
 from configs import load_config
-from envs.accounting import TILE_STATES
+from envs.cell.accounting import TILE_STATES
 
 ENV_ID = "envs:MosaicAssembly-v0"
 MB = 1024.0 * 1024.0
