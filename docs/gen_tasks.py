@@ -100,8 +100,10 @@ def space_rows(space: gym.Space[Any], key: str = "") -> Iterator[tuple[str, ...]
 def space_table(space: gym.Space[Any]) -> str:
     """A space as a Markdown table."""
     lines = ["| key | space | shape | dtype | low | high |", "|---|---|---|---|---|---|"]
-    lines += ["| " + " | ".join(f"`{c}`" if i == 0 else c for i, c in enumerate(r)) + " |"
-              for r in space_rows(space)]
+    lines += [
+        "| " + " | ".join(f"`{c}`" if i == 0 else c for i, c in enumerate(r)) + " |"
+        for r in space_rows(space)
+    ]
     return "\n".join(lines)
 
 
@@ -253,10 +255,14 @@ def write(
         page.path.write_text(page.text, encoding="utf-8")
     for env_id, rgb in pictures.items():
         h, w = rgb.shape[:2]
-        small = cv2.resize(rgb, (PICTURE_WIDTH, round(h * PICTURE_WIDTH / w)),
-                           interpolation=cv2.INTER_AREA)
-        cv2.imwrite(str(IMG_DIR / f"{env_id}.png"), cv2.cvtColor(small, cv2.COLOR_RGB2BGR),
-                    [cv2.IMWRITE_PNG_COMPRESSION, 9])
+        small = cv2.resize(
+            rgb, (PICTURE_WIDTH, round(h * PICTURE_WIDTH / w)), interpolation=cv2.INTER_AREA
+        )
+        cv2.imwrite(
+            str(IMG_DIR / f"{env_id}.png"),
+            cv2.cvtColor(small, cv2.COLOR_RGB2BGR),
+            [cv2.IMWRITE_PNG_COMPRESSION, 9],
+        )
     wanted = {p.path for p in expected}
     for path in TASKS_DIR.glob("*.md"):
         if path not in wanted:

@@ -43,7 +43,7 @@ def _has_python(path: Path) -> bool:
     ids=lambda p: p.relative_to(ROOT).as_posix(),
 )
 def test_python_snippets_run(path: Path) -> None:
-    """Every Python block of the README and the docs pages runs (Sybil; `skip` comments honoured)."""
+    """Every Python block of the README and the docs pages runs (Sybil; skip comments kept)."""
     document = Sybil(parsers=[PythonCodeBlockParser(), SkipParser()]).parse(path)
     examples = list(document.examples())
     assert examples, f"{path.name}: no Python block found"
