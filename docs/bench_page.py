@@ -44,6 +44,10 @@ def bench_markdown(report: dict[str, Any]) -> str:
     failed = report["summary"]["failed"]
     if failed:
         parts.append("Targets missed in this run: " + "; ".join(failed) + ".")
+    runs = {name: src.get("run") for name, src in report.get("sources", {}).items()}
+    broken = [f"{name} ({run['error'].strip()})" for name, run in runs.items() if run and run["rc"]]
+    if broken:
+        parts.append("Scripts that gave no figures in this run: " + "; ".join(broken) + ".")
     parts.append(table(figures))
     return "\n\n".join(parts) + "\n"
 
