@@ -48,11 +48,13 @@ from agents.placement import PlacementPlan, Unplaced
 from agents.scripted import ScriptedAgent
 from configs import ConfigError
 from envs.cell.accounting import TILE_STATES
+from envs.env_config import FEEDS
 from envs.errors import CellError
 from envs.task import GroundTruth
 from envs.task_spec import FeedMode, TaskSpec
-from planners.angles import yaw_error
 from qshape import QShapeError
+from spatial.angles import yaw_error
+from spatial.units import MM_PER_M
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV_ID = "envs:MosaicAssembly-v0"
@@ -229,7 +231,7 @@ def draw_slots(
     target: int | None = None,
     scale: float = 1.0,
     recognise: bool = False,
-    mm_per_m: float = 1000.0,
+    mm_per_m: float = MM_PER_M,
 ) -> np.ndarray:
     """An output-camera image with the design's slots projected through ``camera``.
 
@@ -658,7 +660,7 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     parser.add_argument("--design", help="design name or path (default: config)")
     parser.add_argument("--seed", type=int, help="episode seed (default: config)")
     parser.add_argument("--belt-speed", type=float, help="input belt speed [m/s]")
-    parser.add_argument("--feed", choices=("all", "stream", "batch"), help="tile feed")
+    parser.add_argument("--feed", choices=FEEDS, help="tile feed")
     parser.add_argument("--distractor-rate", type=float, help="distractor tiles per real tile")
     parser.add_argument("--max-slots", type=int, help="first k slots of the design only")
     parser.add_argument("--greedy", action="store_true", help="the paper's greedy assignment")

@@ -40,14 +40,14 @@ from envs.cell.cell import Cell
 from envs.cell.config import CellConfig, load_cell_config
 from envs.cell.scene import build_arm_model
 from envs.cell.tiles.shapes import tile_shapes_from_design
-from planners.angles import yaw_error
 from planners.config import PlannerConfig, load_planner_config
 from planners.errors import LimitError, PlannerError
 from planners.executor import TimedEvent, TrajectoryExecutor
-from planners.ik import IKSolver, wrap_angle
+from planners.ik import IKSolver
 from planners.pick_place import CyclePlan, PickPlacePlanner
 from planners.trajectory import JointState, validate
 from qshape.design import Design
+from spatial.angles import wrap_angle, yaw_error
 
 OUT = Path(__file__).resolve().parents[1] / "out" / "planner_bench.json"
 POSITION_TOL = 1e-3

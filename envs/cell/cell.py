@@ -31,7 +31,6 @@ from envs.cell.scene import (
     build_scene,
     cell_geometry,
     park_positions,
-    yaw_quat,
 )
 from envs.cell.suction import Suction, SuctionEvent
 from envs.cell.tiles.shapes import basic_shapes
@@ -39,6 +38,7 @@ from envs.cell.tiles.tile import PhysicalTile, SlotSpec, TileShape, make_tile_po
 from envs.cell.tiles.variants import TileVariants
 from envs.errors import CellError, LayoutError
 from planners.robot import joint_ranges, joint_speed_limits
+from spatial.rotations import quat_from_yaw, yaw_from_quat
 
 CAMERAS = ("input_camera", "output_camera")
 """Names of the observation cameras."""
@@ -269,7 +269,7 @@ class Cell:
         self.data.qpos[qadr[:, 0]] = c[0] + poses[:, 0]
         self.data.qpos[qadr[:, 1]] = c[1] + poses[:, 1]
         self.data.qpos[qadr[:, 2]] = z
-        self.data.qpos[qadr[:, 3:]] = yaw_quat(poses[:, 2])
+        self.data.qpos[qadr[:, 3:]] = quat_from_yaw(poses[:, 2])
         self.data.qvel[self.ids.tile_dof_index[idx]] = 0.0
         self.on_stage[idx] = True
         self._wake[idx] = True
@@ -283,7 +283,12 @@ class Cell:
         self.on_stage[idx] = False
 
     def input_side(self) -> np.ndarray:
-        """Tiles on the input belt (fed, not lost, not on the pad), shape (n,) bool."""
+        """Tiles on the input belt (fed, not lost, not on the pad), shape (n,) bool.
+
+        On the belt: the centroid within the belt's half width plus the tile's radius of the
+        belt's centre line. The feed and the tile accounting use it; `input_half` is the
+        coarser test of the decision-level actions and indices.
+        """
         pos = self.data.xpos[self.ids.tile_body]
         half_w = self.cfg.input_belt.width / 2 + self.radii
         side = self.on_stage & ~self.lost_tracker.lost
@@ -291,6 +296,20 @@ class Cell:
         if self.suction.held >= 0:
             side[self.suction.held] = False
         return side
+
+    def input_half(self) -> np.ndarray:
+        """Tiles on the input belt's side of the cell, shape (n,) bool.
+
+        Fed, not lost, not on the pad, with the centroid beyond the midline between the belts
+        (`CellGeometry.midline_y`, strictly). Unlike `input_side` it also holds a tile lying
+        between the belts or beyond the belt's outer edge; the decision-level actions
+        (`envs.actions`) and tile indices (`envs.indexing`) use it.
+        """
+        pos = self.data.qpos[self.ids.tile_qpos_index[:, 1]]
+        half = self.on_stage & ~self.lost_tracker.lost & (pos > self.geometry.midline_y)
+        if self.suction.held >= 0:
+            half[self.suction.held] = False
+        return half
 
     # ------------------------------------------------------------- stepping
     def step(self, n: int = 1) -> list[SuctionEvent]:
@@ -427,11 +446,7 @@ class Cell:
         """Poses of all tiles (parked ones included; see `on_stage`)."""
         q = self.data.qpos[self.ids.tile_qpos_index]
         quat = q[:, 3:].copy()
-        yaw = np.arctan2(
-            2 * (quat[:, 0] * quat[:, 3] + quat[:, 1] * quat[:, 2]),
-            1 - 2 * (quat[:, 2] ** 2 + quat[:, 3] ** 2),
-        )
-        return TilePoses(q[:, :3].copy(), quat, yaw)
+        return TilePoses(q[:, :3].copy(), quat, yaw_from_quat(quat))
 
     @property
     def retired(self) -> np.ndarray:

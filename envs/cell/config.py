@@ -11,10 +11,15 @@ import math
 from dataclasses import dataclass, field, fields
 from functools import partial
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 from configs import ConfigError, check_positive, load_config
 from envs.errors import CellError
+
+FeedMode = Literal["all", "stream", "batch"]
+"""How tiles arrive on the input belt (`TileConfig.feed`, `envs.cell.feed`)."""
+FEED_MODES: tuple[str, ...] = get_args(FeedMode)
+"""Allowed ``feed`` values."""
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 """Repository root (assets are resolved relative to it)."""
@@ -242,7 +247,7 @@ class TileConfig:
     placement_restarts: int = 40
     distractor_rate: float = 0.0
     distractor_kinds: tuple[str, ...] = ("color", "broken", "shape")
-    feed: Literal["all", "stream", "batch"] = "all"
+    feed: FeedMode = "all"
     stream_period: float = 2.0
     stream_initial: int = 0
     batch_size: int = 16
@@ -283,8 +288,9 @@ class TileConfig:
                 f"TileConfig.distractor_kinds {self.distractor_kinds}; allowed: non-empty subset "
                 f"of {sorted(allowed)}"
             )
-        if self.feed not in ("all", "stream", "batch"):
-            raise CellError(f"TileConfig.feed {self.feed!r}; allowed: 'all', 'stream', 'batch'")
+        if self.feed not in FEED_MODES:
+            allowed = ", ".join(repr(m) for m in FEED_MODES)
+            raise CellError(f"TileConfig.feed {self.feed!r}; allowed: {allowed}")
         if self.thickness > 0.02:
             raise CellError(f"TileConfig.thickness {self.thickness} m; allowed: (0, 0.02]")
 

@@ -25,6 +25,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from envs.errors import CellError, LayoutError
+from spatial.units import MM_PER_M
 
 OUTLINE_FILL = 0.5
 """Largest fraction of a tile area random placement of outlines is asked to fill."""
@@ -176,8 +177,8 @@ def sample_layout(
     if np.any(extent + gap / 2 > half.min()):
         k = int(np.argmax(extent))
         raise CellError(
-            f"tile {k} (size {2 * extent[k] * 1000:.1f} mm) does not fit the tile area "
-            f"{area_size[0] * 1000:.0f} x {area_size[1] * 1000:.0f} mm"
+            f"tile {k} (size {2 * extent[k] * MM_PER_M:.1f} mm) does not fit the tile area "
+            f"{area_size[0] * MM_PER_M:.0f} x {area_size[1] * MM_PER_M:.0f} mm"
         )
     if shapes is not None:
         need = float(sum(f.area for f in shapes))
@@ -211,7 +212,7 @@ def sample_layout(
 def _jammed(n: int, half: np.ndarray, attempts: int) -> LayoutError:
     return LayoutError(
         f"could not place {n} tiles without overlap in the tile area "
-        f"{2 * half[0] * 1000:.0f} x {2 * half[1] * 1000:.0f} mm after {attempts} "
+        f"{2 * half[0] * MM_PER_M:.0f} x {2 * half[1] * MM_PER_M:.0f} mm after {attempts} "
         "tries per tile; use fewer tiles, a larger area or feed='stream'"
     )
 

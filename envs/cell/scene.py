@@ -22,6 +22,8 @@ from shapely.geometry import Polygon
 from envs.cell.config import CellConfig
 from envs.cell.tiles.tile import PhysicalTile, SlotSpec
 from envs.errors import CellError
+from spatial.rotations import quat_from_yaw
+from spatial.units import MM_PER_M
 
 # Contact bit masks: world/belts 1, tiles 2, arm 4 (the arm's classes set contype 4,
 # conaffinity 1 in irb140.xml), support hulls 8. Tiles touch everything; the arm touches world
@@ -153,6 +155,11 @@ class CellGeometry:
     belt_top: float
     mesh_top: float
 
+    @property
+    def midline_y(self) -> float:
+        """Y of the midline between the belts' centre lines [m] (see `Cell.input_half`)."""
+        return float(self.output_centre[1] + self.input_centre[1]) / 2
+
 
 def cell_geometry(cfg: CellConfig) -> CellGeometry:
     """Positions of the belts and working areas from the configuration."""
@@ -170,15 +177,6 @@ def cell_geometry(cfg: CellConfig) -> CellGeometry:
         belt_top=top,
         mesh_top=mesh_top,
     )
-
-
-def yaw_quat(yaw: np.ndarray | float) -> np.ndarray:
-    """Quaternions (w, x, y, z) of rotations about z, shape (..., 4)."""
-    yaw = np.asarray(yaw, dtype=float)
-    q = np.zeros((*yaw.shape, 4))
-    q[..., 0] = np.cos(yaw / 2)
-    q[..., 3] = np.sin(yaw / 2)
-    return q
 
 
 def park_positions(n: int, thickness: float) -> np.ndarray:
@@ -399,7 +397,8 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         if np.any(np.abs(world) > half + 1e-9):
             raise CellError(
                 f"slot {k} ({slot.shape.name}) at pose {slot.pose} extends beyond the mesh "
-                f"({ob.mesh_size[0] * 1000:.0f} x {ob.mesh_size[1] * 1000:.0f} mm, centred at 0)"
+                f"({ob.mesh_size[0] * MM_PER_M:.0f} x {ob.mesh_size[1] * MM_PER_M:.0f} mm, "
+                "centred at 0)"
             )
         verts, faces = extrusion(outline, holes, 0.0, ob.slot_mark_height)
         mesh = spec.add_mesh(name=f"slot{k}_mark")
@@ -408,7 +407,7 @@ def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotS
         mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
         g = wb.add_geom(name=f"slot{k}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"slot{k}_mark")
         g.pos = [oc[0] + x, oc[1] + y, geo.mesh_top]
-        g.quat = yaw_quat(yaw)
+        g.quat = quat_from_yaw(yaw)
         g.contype, g.conaffinity, g.group = 0, 0, 1
         col = look.slot_white + (1 - look.slot_white) * np.asarray(slot.shape.color)
         g.rgba = [*col, 1.0]
@@ -721,5 +720,4 @@ __all__ = [
     "resolve_ids",
     "set_tile_rotation_lengths",
     "tile_name",
-    "yaw_quat",
 ]
