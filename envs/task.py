@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from envs.cell.accounting import ON_INPUT, WAITING, TileFlags, state_counts, tile_states
-from envs.cell.cameras import CameraJitter
+from envs.cell.camera_effects import CameraJitter
 from envs.cell.cell import Cell
 from envs.env_config import EnvConfig
 from envs.errors import CellError

@@ -23,7 +23,8 @@ import mujoco
 import numpy as np
 
 from envs.cell.belts import LostTracker, input_speed, set_input_speed
-from envs.cell.cameras import BeltBlur, CameraModel, CameraRig, camera_model
+from envs.cell.camera_effects import BeltBlur
+from envs.cell.cameras import CameraModel, CameraRig, camera_model
 from envs.cell.config import CameraConfig, CellConfig, load_cell_config
 from envs.cell.feed import TileFeed
 from envs.cell.scene import (
