@@ -49,6 +49,7 @@ from agents.scripted import ScriptedAgent
 from configs import ConfigError
 from envs.cell.accounting import TILE_STATES
 from envs.env_config import FEEDS
+from envs.episode_setup import with_feed_fallback
 from envs.errors import CellError
 from envs.task import GroundTruth
 from envs.task_spec import FeedMode, TaskSpec
@@ -419,13 +420,12 @@ def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
         "distractor_rate": rc.distractor_rate,
         "max_slots": rc.max_slots,
     }
-    try:
-        return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
-    except CellError:
-        if rc.feed != "all":
-            raise
-        over["feed"] = "batch"
-        return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
+
+    def make(feed: FeedMode) -> gym.Env[Any, Any]:
+        kw = {**over, "feed": feed}
+        return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **kw)
+
+    return with_feed_fallback(make, rc.feed)[0]
 
 
 def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:

@@ -24,6 +24,7 @@ from envs.cell.accounting import ON_INPUT, WAITING, TileFlags, state_counts, til
 from envs.cell.camera_effects import CameraJitter
 from envs.cell.cell import Cell
 from envs.env_config import EnvConfig
+from envs.episode_setup import retry_layout
 from envs.errors import CellError
 from envs.rewards import STAGES, SlotProgress, StagedReward, load_staged_config
 from spatial.angles import yaw_error
@@ -229,13 +230,11 @@ class MosaicTask:
             CellError: No layout draw fits.
         """
         cell, cfg = self.cell, self.cfg
-        for attempt in range(cfg.layout_tries):
-            try:
-                cell.reset(seed=np.random.default_rng(rng.integers(SEED_BOUND)))
-                break
-            except CellError:
-                if attempt == cfg.layout_tries - 1:
-                    raise
+
+        def draw(_attempt: int) -> None:
+            cell.reset(seed=np.random.default_rng(rng.integers(SEED_BOUND)))
+
+        retry_layout(draw, cfg.layout_tries, retry_on=CellError)  # `envs.episode_setup`
         self._randomize(rng)
         cell.belt_speed = cfg.belt_speed
         if self._settle_steps:

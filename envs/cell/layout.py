@@ -174,6 +174,37 @@ def sample_layout(
         extent = np.array([f.half_extent for f in shapes])
     else:
         extent = radii
+    _check_fits(radii, area_size, gap, shapes, extent)
+
+    def once() -> np.ndarray:
+        if shapes is None:
+            return _circles_once(
+                radii, half, gap, attempts, rng, occupied=occupied, occupied_radii=occupied_radii
+            )
+        return _outlines_once(radii, half, gap, attempts, rng, shapes=shapes)
+
+    for _ in range(max(restarts, 1) - 1):
+        try:
+            return once()
+        except CellError:
+            continue
+    return once()
+
+
+def _check_fits(
+    radii: np.ndarray,
+    area_size: tuple[float, ...],
+    gap: float,
+    shapes: Sequence[Footprint] | None,
+    extent: np.ndarray,
+) -> None:
+    """Raise `CellError` when a tile is too large or the tiles too many for the area.
+
+    Deterministic (no draw can pass): a tile's half extent plus half the gap beyond the
+    area's half width, or more tile area than random placement fills (`OUTLINE_FILL`,
+    `CIRCLE_FILL`).
+    """
+    half = np.asarray(area_size, dtype=float) / 2
     if np.any(extent + gap / 2 > half.min()):
         k = int(np.argmax(extent))
         raise CellError(
@@ -193,20 +224,6 @@ def sample_layout(
             f"{have * 1e4:.0f} cm^2 (random placement fills at most ~{fill:.0%}); use fewer "
             "tiles, a larger input_belt.tile_area, or feed='stream' or 'batch'"
         )
-
-    def once() -> np.ndarray:
-        if shapes is None:
-            return _circles_once(
-                radii, half, gap, attempts, rng, occupied=occupied, occupied_radii=occupied_radii
-            )
-        return _outlines_once(radii, half, gap, attempts, rng, shapes=shapes)
-
-    for _ in range(max(restarts, 1) - 1):
-        try:
-            return once()
-        except CellError:
-            continue
-    return once()
 
 
 def _jammed(n: int, half: np.ndarray, attempts: int) -> LayoutError:
