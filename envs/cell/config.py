@@ -287,8 +287,8 @@ class TileConfig:
                 f"of {sorted(allowed)}"
             )
         if self.feed not in FEED_MODES:
-            allowed = ", ".join(repr(m) for m in FEED_MODES)
-            raise CellError(f"TileConfig.feed {self.feed!r}; allowed: {allowed}")
+            feeds = ", ".join(repr(m) for m in FEED_MODES)
+            raise CellError(f"TileConfig.feed {self.feed!r}; allowed: {feeds}")
         if self.thickness > 0.02:
             raise CellError(f"TileConfig.thickness {self.thickness} m; allowed: (0, 0.02]")
 
