@@ -607,7 +607,7 @@ def recognition(truth: GroundTruth, agent: ScriptedAgent) -> list[RecognitionRow
         class_ok = truth.class_name[i] == truth.slot_class[c.slot] and not truth.distractor[i]
         err = yaw_error(truth.yaw[i] + c.rotation, c.place[2], int(truth.symmetry[i]))
         rows.append(
-            RecognitionRow(c.slot_name, i, bool(class_ok), 1e3 * d, math.degrees(float(err)))
+            RecognitionRow(c.slot_name, i, bool(class_ok), MM_PER_M * d, math.degrees(float(err)))
         )
     return rows
 

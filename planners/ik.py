@@ -33,6 +33,7 @@ from planners.robot import ROBOT_XML
 from planners.trajectory import as_joint_vector
 from spatial.angles import wrap_angle
 from spatial.rotations import yaw_from_matrix
+from spatial.units import MM_PER_M
 
 Array = npt.NDArray[np.float64]
 
@@ -437,8 +438,8 @@ class IKSolver:
         raise UnreachableError(
             f"no tool-down solution at position {np.round(pos, 4).tolist()} m, yaw "
             f"{math.degrees(yaw):.2f} deg after {attempts} attempts: best residual "
-            f"{best[0] * 1e3:.2f} mm / {math.degrees(best[1]):.2f} deg, tolerance "
-            f"{cfg.position_tolerance * 1e3:.2f} mm / {cfg.orientation_tolerance_deg:.2f} deg "
+            f"{best[0] * MM_PER_M:.2f} mm / {math.degrees(best[1]):.2f} deg, tolerance "
+            f"{cfg.position_tolerance * MM_PER_M:.2f} mm / {cfg.orientation_tolerance_deg:.2f} deg "
             "(joint limits, obstacles or a flipped tool)"
         )
 
