@@ -101,10 +101,12 @@ def add_fixtures(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotSpec]
 
 
 def _friction(cfg: CellConfig) -> list[float]:
+    """Friction (sliding, torsional, rolling) of the belts and the mesh sheet."""
     return [cfg.tiles.friction, *BELT_FRICTION_TORSION_ROLL]
 
 
 def _add_floor_and_light(spec: mujoco.MjSpec, cfg: CellConfig) -> None:
+    """The checkered floor, the belts' matte material and the light from above."""
     wb, look = spec.worldbody, cfg.scenery
     spec.add_texture(
         name="floor_tex",
