@@ -107,6 +107,15 @@ def test_lock_pins_every_dependency() -> None:
     assert pinned["mujoco"] == "3.17.0"
 
 
+def test_api_reference_lists_every_package() -> None:
+    """The API reference walks every top-level package that pyproject.toml ships."""
+    find = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["tool"]
+    patterns = find["setuptools"]["packages"]["find"]["include"]
+    packages = {p.rstrip("*") for p in patterns}
+    listed = set((DOCS / "api.md").read_text(encoding="utf-8").split())
+    assert packages <= listed, f"missing from docs/api.md: {sorted(packages - listed)}"
+
+
 def test_license_and_citation() -> None:
     license_text = (ROOT / "LICENSE").read_text(encoding="utf-8")
     assert "Apache License" in license_text and "Version 2.0, January 2004" in license_text
