@@ -26,7 +26,7 @@ from qshape.errors import (
     ToleranceError,
 )
 from qshape.limits import Limits
-from qshape.outline.simplify import OutlineParams
+from qshape.outline.params import OutlineParams
 from qshape.theory.assign import Assignment, assign
 from qshape.theory.description import (
     BoundaryDescription,

@@ -26,7 +26,8 @@ from qshape import geometry as geo
 from qshape.errors import FigureLimitError, InvalidFigureError, InvalidHoleError
 from qshape.geometry import MAX_COORDINATE, BoolArray, FloatArray
 from qshape.limits import default_limits
-from qshape.outline.simplify import OutlineParams, simplify_outlines
+from qshape.outline.params import OutlineParams
+from qshape.outline.simplify import simplify_outlines
 
 _REL_EPS = 1e-12
 """Numerical precision: lengths below this fraction of the figure size count as zero."""

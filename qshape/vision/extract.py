@@ -48,7 +48,7 @@ import numpy as np
 from qshape.config_sections import load_section
 from qshape.errors import InvalidFigureError, QShapeError
 from qshape.geometry import FloatArray
-from qshape.outline.simplify import MIN_RESAMPLE_POINTS, OutlineParams
+from qshape.outline.params import MIN_RESAMPLE_POINTS, OutlineParams
 from qshape.theory.figure import Color, Figure, figures_from_outlines
 
 _GAIN_SCALE = 32.0
