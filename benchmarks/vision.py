@@ -36,7 +36,8 @@ from qshape.design import Design, Slot
 from qshape.geometry import wrap_angle
 from qshape.synthetic.synth import SynthParams, generate
 from qshape.theory.figure import figures_from_outlines
-from qshape.vision.extract import ExtractParams, extract_detailed
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams
 
 from .table import VISION_CANNY_RATIO
 
@@ -248,7 +249,7 @@ def _channel_canny(image: np.ndarray, low: float, high: float) -> np.ndarray:
     """Union of one single-channel ``cv2.Canny`` per colour channel.
 
     Extraction's edge step finds the same edges, from Sobel derivatives it computes itself
-    (see ``qshape.vision.extract._canny``).
+    (see ``qshape.vision.segment._canny``).
     """
     r, g, b = cv2.split(image)
     edges = cv2.Canny(r, low, high)

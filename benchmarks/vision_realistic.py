@@ -39,7 +39,8 @@ from qshape.design import Design
 from qshape.geometry import FloatArray
 from qshape.synthetic.effects import CameraEffects, undistort, undistort_points
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams, extract_detailed
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams
 
 from .drawn_rotation import drawn_angle
 from .vision import _Refs, _rot_error_deg, pixel_tolerances

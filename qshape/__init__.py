@@ -76,14 +76,9 @@ __all__ = [
 # Vision: mosaic designs, rendering, extraction from images (issue 3).
 from qshape.design import Design, Slot  # noqa: E402
 from qshape.synthetic.render import render_design, save_png  # noqa: E402
-from qshape.vision.extract import (  # noqa: E402
-    ExtractParams,
-    ExtractResult,
-    ImageError,
-    extract,
-    extract_detailed,
-)
+from qshape.vision.extract import ExtractResult, extract, extract_detailed
 from qshape.vision.health import ImageHealth, image_health  # noqa: E402
+from qshape.vision.params import ExtractParams, ImageError
 
 __all__ += [
     "Design",

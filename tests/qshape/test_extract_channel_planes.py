@@ -16,7 +16,7 @@ import pytest
 
 from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams
+from qshape.vision.params import ExtractParams
 
 extract_module = importlib.import_module("qshape.vision.extract")
 

@@ -10,7 +10,7 @@ from qshape.outline import simplify
 from qshape.outline.simplify import simplify_outlines
 from qshape.synthetic.effects import roughen
 from qshape.theory.figure import figures_from_outlines
-from qshape.vision.extract import ExtractParams
+from qshape.vision.params import ExtractParams
 
 STEP_PX = 0.5  # spacing of the drawn outline samples, as a traced contour gives them
 

@@ -10,7 +10,7 @@ import qshape
 from qshape import Figure, InvalidFigureError, OutlineParams, canonical_key, describe
 from qshape.outline.simplify import simplify_outline
 from qshape.theory.figure import densify
-from qshape.vision.extract import default_params
+from qshape.vision.params import default_params
 
 SEED = 5
 DATA = Path(__file__).parents[1] / "data"
@@ -168,7 +168,7 @@ def test_missed_corner_rule_keeps_arcs_curved(arc_deg):
 def test_rough_edges_keep_their_corners(sides: int) -> None:
     """A chipped, ground edge (~1 px of roughness on a 60 px polygon) is still one edge."""
     from qshape.synthetic.effects import roughen  # noqa: PLC0415
-    from qshape.vision.extract import ExtractParams  # noqa: PLC0415
+    from qshape.vision.params import ExtractParams  # noqa: PLC0415
 
     p = ExtractParams.load().outline
     plain = dataclasses.replace(p, roughness_sigmas=0.0, min_corner_deg=0.0)
