@@ -42,8 +42,8 @@ import numpy as np  # noqa: E402
 
 import qshape  # noqa: E402
 from qshape import Description, Figure, Tolerances  # noqa: E402
+from qshape.theory.boundary import Boundary  # noqa: E402
 from qshape.theory.description import describe_many  # noqa: E402
-from qshape.theory.figure import Boundary  # noqa: E402
 from qshape.theory.labels import primary_code  # noqa: E402
 from qshape.theory.matching import clear_key_caches  # noqa: E402
 

@@ -28,6 +28,7 @@ from qshape.errors import (
 from qshape.limits import Limits
 from qshape.outline.params import OutlineParams
 from qshape.theory.assign import Assignment, assign
+from qshape.theory.boundary import Boundary
 from qshape.theory.description import (
     BoundaryDescription,
     Description,
@@ -36,7 +37,7 @@ from qshape.theory.description import (
     describe,
     describe_many,
 )
-from qshape.theory.figure import Boundary, Figure
+from qshape.theory.figure import Figure
 from qshape.theory.matching import Match, canonical_key, canonical_keys, match, match_best
 from qshape.theory.text_parser import parse
 from qshape.theory.tolerances import Tolerances

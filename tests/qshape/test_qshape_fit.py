@@ -16,7 +16,7 @@ from qshape.outline.fit import (
     range_sums,
 )
 from qshape.synthetic.effects import roughen
-from qshape.theory.figure import densify
+from qshape.theory.boundary import densify
 from qshape.vision.params import ExtractParams
 
 PX_PER_MM = 2.5  # the synthetic belt camera's scale

@@ -9,7 +9,7 @@ import pytest
 import qshape
 from qshape import Figure, InvalidFigureError, OutlineParams, canonical_key, describe
 from qshape.outline.simplify import simplify_outline
-from qshape.theory.figure import densify
+from qshape.theory.boundary import densify
 from qshape.vision.params import default_params
 
 SEED = 5
