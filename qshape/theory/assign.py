@@ -33,19 +33,11 @@ from scipy.sparse.csgraph import connected_components
 from qshape.errors import MatchError
 from qshape.geometry import FloatArray
 from qshape.theory.description import Description, describe_many
-from qshape.theory.evaluator import (
-    Pack,
-    cyclic_compat_by_offset,
-    equivalent_entries,
-    evaluate_block,
-    evaluate_pairs,
-    pack,
-    prefilter,
-    take,
-)
+from qshape.theory.evaluator import equivalent_entries, evaluate_block, evaluate_pairs
 from qshape.theory.figure import Figure
 from qshape.theory.keys import canonical_key, canonical_keys, coarse_key
 from qshape.theory.matching import as_description, check_match_inputs
+from qshape.theory.pack import Pack, cyclic_compat_by_offset, pack, prefilter, take
 from qshape.theory.slot_classes import SlotClasses, transport
 from qshape.theory.slot_classes import slot_classes as find_slot_classes
 from qshape.theory.tolerances import Tolerances
