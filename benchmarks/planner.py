@@ -42,10 +42,11 @@ from envs.cell.scene import build_arm_model
 from envs.cell.tiles.shapes import tile_shapes_from_design
 from planners.angles import yaw_error
 from planners.config import PlannerConfig, load_planner_config
+from planners.cycle.plan import CyclePlan
 from planners.errors import LimitError, PlannerError
 from planners.executor import TimedEvent, TrajectoryExecutor
 from planners.ik import IKSolver, wrap_angle
-from planners.pick_place import CyclePlan, PickPlacePlanner
+from planners.pick_place import PickPlacePlanner
 from planners.trajectory import JointState, validate
 from qshape.design import Design
 

@@ -11,9 +11,10 @@ import pytest
 from benchmarks.planner import CellRunner, _build_cell, cell_config
 from envs.cell.tiles.shapes import basic_shapes
 from planners.config import load_planner_config
+from planners.cycle.plan import CyclePlan
 from planners.errors import InvalidTargetError, UnreachableError
 from planners.ik import IKSolver
-from planners.pick_place import CyclePlan, PickPlacePlanner, relative_rotation
+from planners.pick_place import PickPlacePlanner, relative_rotation
 from planners.trajectory import JointState, validate
 
 CFG = load_planner_config()
