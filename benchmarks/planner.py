@@ -46,8 +46,9 @@ from planners.cycle.plan import CyclePlan
 from planners.errors import LimitError, PlannerError
 from planners.executor import TimedEvent, TrajectoryExecutor
 from planners.ik import IKSolver, wrap_angle
+from planners.joints import JointState
+from planners.limit_checks import validate
 from planners.pick_place import PickPlacePlanner
-from planners.trajectory import JointState, validate
 from qshape.design import Design
 
 OUT = Path(__file__).resolve().parents[1] / "out" / "planner_bench.json"

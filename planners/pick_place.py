@@ -65,13 +65,8 @@ from planners.cycle.moves import ArmMoves, Array, Contact
 from planners.cycle.plan import CyclePlan
 from planners.errors import InvalidTargetError, PlannerError, TrajectoryError
 from planners.ik import IKSolver, wrap_angle
-from planners.trajectory import (
-    JointState,
-    Piecewise,
-    Segment,
-    as_joint_vector,
-    hold_segment,
-)
+from planners.joints import JointState, as_joint_vector
+from planners.trajectory import Piecewise, Segment, hold_segment
 
 
 def _vec3(value: npt.ArrayLike, name: str) -> Array:

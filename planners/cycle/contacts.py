@@ -13,8 +13,8 @@ import numpy as np
 
 from planners.cycle.moves import ArmMoves, Array, Contact
 from planners.errors import PlannerError, UnreachableError
-from planners.ik import symmetric_yaws
-from planners.trajectory import JointState, unwrap_target
+from planners.joints import JointState, unwrap_target
+from planners.tool_pose import symmetric_yaws
 
 
 def rotate(xy: Array, yaw: float) -> Array:

@@ -17,13 +17,9 @@ import numpy as np
 
 from planners.cycle.moves import ArmMoves, Array, Contact
 from planners.errors import PlannerError
-from planners.trajectory import (
-    JointState,
-    Segment,
-    segment_within_limits,
-    superpose,
-    window,
-)
+from planners.joints import JointState
+from planners.limit_checks import segment_within_limits
+from planners.trajectory import Segment, superpose, window
 
 _CROSSING_BISECTIONS = 12
 """Bisection steps locating where the tool crosses a clearance height between two check samples

@@ -16,19 +16,15 @@ import numpy.typing as npt
 from planners.config import JointLimits, PlannerConfig
 from planners.errors import PlannerError
 from planners.ik import IKSolver
-from planners.rest_to_rest import rest_to_rest_duration
-from planners.trajectory import (
+from planners.joints import (
     JointState,
-    Segment,
     as_joint_vector,
     check_in_range,
-    hold_segment,
-    join,
-    plan_segment,
-    superpose,
     unwrap_target,
     unwrap_values,
 )
+from planners.rest_to_rest import rest_to_rest_duration
+from planners.trajectory import Segment, hold_segment, join, plan_segment, superpose
 
 Array = npt.NDArray[np.float64]
 

@@ -5,11 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from planners.cycle.moves import Array
-from planners.trajectory import (
-    JointState,
-    JointTrajectory,
-    Piecewise,
-)
+from planners.joints import JointState
+from planners.trajectory import JointTrajectory, Piecewise
 
 
 @dataclass(frozen=True)

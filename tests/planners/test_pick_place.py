@@ -14,8 +14,9 @@ from planners.config import load_planner_config
 from planners.cycle.plan import CyclePlan
 from planners.errors import InvalidTargetError, UnreachableError
 from planners.ik import IKSolver
+from planners.joints import JointState
+from planners.limit_checks import validate
 from planners.pick_place import PickPlacePlanner, relative_rotation
-from planners.trajectory import JointState, validate
 
 CFG = load_planner_config()
 PICK = np.array([0.03, 0.52, 0.205])
