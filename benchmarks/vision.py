@@ -39,7 +39,7 @@ from qshape.theory.figure import figures_from_outlines
 from qshape.vision.extract import extract_detailed
 from qshape.vision.params import ExtractParams
 
-from .table import VISION_CANNY_RATIO
+from .figures import VISION_CANNY_RATIO
 
 
 @dataclass(frozen=True)
