@@ -122,57 +122,22 @@ def _reset_rows() -> tuple[dict[int, Any], list[dict[str, Any]]]:
     return resets, task_resets
 
 
-def main() -> None:
-    """Run every measurement, print a table, write ``out/bench_env.json``."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=4.0, help="stepping time per case [s]")
-    parser.add_argument("--quick", action="store_true", help="1 s per case")
-    parser.add_argument(
-        "--resets", action="store_true", help=f"the reset rows only (writes {OUT_RESETS.name})"
-    )
-    args = parser.parse_args()
-    seconds = 1.0 if args.quick else args.seconds
-    os.environ.setdefault("MUJOCO_GL", "egl")
-    for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-        os.environ[var] = "1"
-    if args.resets:
-        _reset_rows()
-        return
-    rows = []
-    for mode, execution in CASES:
-        for obs_mode in ("state", "rgb"):
-            r = _child(measure_case, mode, execution, obs_mode, seconds)
-            rows.append(r)
-            print(
-                f"{mode:20s} {r['execution']:9s} {obs_mode:5s} {r['steps_per_s']:8.1f} steps/s "
-                f"[{r['steps_per_cpu_s']:7.1f} per CPU-s] "
-                f"({r['ms_per_step']:.2f} ms)  reset {r['reset_ms']:.0f} ms  "
-                f"peak RSS {r['peak_rss_mb']:.0f} MB (env +{r['env_rss_mb']:.0f} MB)",
-                flush=True,
-            )
-    decision = _child(measure_decision, seconds, DEFAULT_SAMPLES)
-    aliased = _child(measure_decision, seconds, 0)
-    for label, r in (("", decision), (", no multisampling", aliased)):
-        print(
-            f"decision level, two {DECISION_IMAGE[0]}x{DECISION_IMAGE[1]} images{label}: "
-            f"{r['steps_per_s']:.1f} steps/s [{r['steps_per_cpu_s']:.1f} per CPU-s]",
-            flush=True,
-        )
-    resets, task_resets = _reset_rows()
-    sections = {
-        "kinematic pick_place": _child(measure_sections, False, seconds),
-        "decision level, images": _child(measure_sections, True, seconds),
+def _machine() -> dict[str, Any]:
+    """The machine the figures were measured on."""
+    return {
+        "cpus": os.cpu_count(),
+        "platform": platform.platform(),
+        "python": platform.python_version(),
+        "note": "shared 2-core machine (other engineers' jobs may run); one core per case",
+        "load_average": os.getloadavg(),
+        "gl": os.environ.get("MUJOCO_GL", ""),
     }
-    labels = [*(sec[0] for sec in SECTIONS), "rest"]
-    print(f"CPU ms per step: {'':22s}" + "".join(f"{lab:>12s}" for lab in labels) + "       total")
-    for name, r in sections.items():
-        row = "".join(f"{r['sections_ms'][lab]:12.3f}" for lab in labels)
-        print(f"  {name:36s}{row}{r['ms_per_step']:12.3f}", flush=True)
-    one = _child(measure_async, 1, seconds * 2)
-    two = _child(measure_async, 2, seconds * 2)
-    print(
-        f"async joint+rgb: 1 worker {one:.1f}, 2 workers {two:.1f} env steps/s (x{two / one:.2f})"
-    )
+
+
+def _targets(
+    rows: list[dict[str, Any]], decision: dict[str, Any], resets: dict[int, Any]
+) -> dict[str, dict[str, Any]]:
+    """Each target's figure, target and whether it is met."""
 
     def figure(key: str, mode: str, execution: str, obs: str) -> float:
         return next(
@@ -231,17 +196,66 @@ def main() -> None:
             "met": resets[0]["reset_cpu_ms"] <= TARGET_RESET_MS,
         },
     }
+    return targets
+
+
+def main() -> None:
+    """Run every measurement, print a table, write ``out/bench_env.json``."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=4.0, help="stepping time per case [s]")
+    parser.add_argument("--quick", action="store_true", help="1 s per case")
+    parser.add_argument(
+        "--resets", action="store_true", help=f"the reset rows only (writes {OUT_RESETS.name})"
+    )
+    args = parser.parse_args()
+    seconds = 1.0 if args.quick else args.seconds
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        os.environ[var] = "1"
+    if args.resets:
+        _reset_rows()
+        return
+    rows = []
+    for mode, execution in CASES:
+        for obs_mode in ("state", "rgb"):
+            r = _child(measure_case, mode, execution, obs_mode, seconds)
+            rows.append(r)
+            print(
+                f"{mode:20s} {r['execution']:9s} {obs_mode:5s} {r['steps_per_s']:8.1f} steps/s "
+                f"[{r['steps_per_cpu_s']:7.1f} per CPU-s] "
+                f"({r['ms_per_step']:.2f} ms)  reset {r['reset_ms']:.0f} ms  "
+                f"peak RSS {r['peak_rss_mb']:.0f} MB (env +{r['env_rss_mb']:.0f} MB)",
+                flush=True,
+            )
+    decision = _child(measure_decision, seconds, DEFAULT_SAMPLES)
+    aliased = _child(measure_decision, seconds, 0)
+    for label, r in (("", decision), (", no multisampling", aliased)):
+        print(
+            f"decision level, two {DECISION_IMAGE[0]}x{DECISION_IMAGE[1]} images{label}: "
+            f"{r['steps_per_s']:.1f} steps/s [{r['steps_per_cpu_s']:.1f} per CPU-s]",
+            flush=True,
+        )
+    resets, task_resets = _reset_rows()
+    sections = {
+        "kinematic pick_place": _child(measure_sections, False, seconds),
+        "decision level, images": _child(measure_sections, True, seconds),
+    }
+    labels = [*(sec[0] for sec in SECTIONS), "rest"]
+    print(f"CPU ms per step: {'':22s}" + "".join(f"{lab:>12s}" for lab in labels) + "       total")
+    for name, r in sections.items():
+        row = "".join(f"{r['sections_ms'][lab]:12.3f}" for lab in labels)
+        print(f"  {name:36s}{row}{r['ms_per_step']:12.3f}", flush=True)
+    one = _child(measure_async, 1, seconds * 2)
+    two = _child(measure_async, 2, seconds * 2)
+    print(
+        f"async joint+rgb: 1 worker {one:.1f}, 2 workers {two:.1f} env steps/s (x{two / one:.2f})"
+    )
+
+    targets = _targets(rows, decision, resets)
     for k, v in targets.items():
         print(f"{k}: {v['value']:.1f} (target {v['target']}) {'MET' if v['met'] else 'NOT MET'}")
     result = {
-        "machine": {
-            "cpus": os.cpu_count(),
-            "platform": platform.platform(),
-            "python": platform.python_version(),
-            "note": "shared 2-core machine (other engineers' jobs may run); one core per case",
-            "load_average": os.getloadavg(),
-            "gl": os.environ.get("MUJOCO_GL", ""),
-        },
+        "machine": _machine(),
         "design": DESIGN,
         "seconds_per_case": seconds,
         "cases": rows,

@@ -244,8 +244,8 @@ def _case_rows(name: str, res: dict, paper: dict) -> list[tuple[str, str]]:
     return rows
 
 
-def main(argv: list[str] | None = None) -> dict:
-    """Run the benchmark; return the results written to ``out/bench_qshape.json``."""
+def _parser() -> argparse.ArgumentParser:
+    """The command line of ``python -m benchmarks.shapes``."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tiles", type=int, default=10_000)
     ap.add_argument("--classes", type=int, default=50, help="classes of the balanced mix")
@@ -268,7 +268,12 @@ def main(argv: list[str] | None = None) -> dict:
         help="run the paper's loop on all tiles instead of extrapolating",
     )
     ap.add_argument("--out", type=Path, default=Path("out/bench_qshape.json"))
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """Run the benchmark; return the results written to ``out/bench_qshape.json``."""
+    args = _parser().parse_args(argv)
     mixes = ["balanced", *(m for m in args.mixes.split(",") if m and m != "balanced")]
     rng = np.random.default_rng(args.seed)
     tol = Tolerances.load()
