@@ -30,7 +30,8 @@ Pipeline, all O(height x width) image operations in OpenCV plus linear work per 
 Figures are in pixel coordinates with ``y_down=True``.
 
 Note: ``qshape.extract`` (the package attribute) is the function; import this module's other
-names with ``from qshape.extract import ExtractParams, extract_detailed, ...``.
+names with ``from qshape.vision.extract import extract_detailed, ...`` and the parameters with
+``from qshape.vision.params import ExtractParams``.
 """
 
 from __future__ import annotations
