@@ -64,9 +64,11 @@ from planners.cycle.leads import Leads
 from planners.cycle.moves import ArmMoves, Array, Contact
 from planners.cycle.plan import CyclePlan
 from planners.errors import InvalidTargetError, PlannerError, TrajectoryError
-from planners.ik import IKSolver, wrap_angle
+from planners.ik import IKSolver
 from planners.joints import JointState, as_joint_vector
 from planners.trajectory import Piecewise, Segment, hold_segment
+from spatial.angles import wrap_angle
+from spatial.rotations import yaw_from_matrix
 
 
 def _vec3(value: npt.ArrayLike, name: str) -> Array:
@@ -161,7 +163,7 @@ class PickPlacePlanner:
             raise InvalidTargetError("plan_cycle starts at rest: start.qd must be zero")
         as_joint_vector(start.q, "start.q")
         # Tool yaw at the pick: keep the current one (the round pad may pick at any yaw).
-        pick_yaw = IKSolver.yaw_of(self.ik.fk(start.q)[1])
+        pick_yaw = yaw_from_matrix(self.ik.fk(start.q)[1])
         rotations = [
             (rotation + k * 2.0 * math.pi / symmetry_order, grasp, object_yaw)
             for k in range(symmetry_order)
