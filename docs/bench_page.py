@@ -12,7 +12,8 @@ import json
 from pathlib import Path
 from typing import Any
 
-from benchmarks.table import Figure, table
+from benchmarks.figures import Figure
+from benchmarks.table import table
 
 DOCS = Path(__file__).resolve().parent
 BENCH_JSON = DOCS / "bench.json"
