@@ -1,6 +1,7 @@
 """Observations of `MosaicAssembly-v0`: a Dict space built from the cell's sensors.
 
 Keys (by ``obs_mode``):
+
 - ``input_camera``, ``output_camera`` (``rgb``, ``rgb+state``): RGB uint8, (H, W, 3).
 - ``input_depth``, ``output_depth`` (with ``depth=True``): float32 (H, W, 1) [m].
 - ``robot`` (always): float32 (19,) = joint positions (6) [rad], joint velocities (6) [rad/s],
@@ -23,7 +24,7 @@ from gymnasium import spaces
 from envs.cell.cell import CAMERAS, Cell
 from envs.env_config import EnvConfig
 from envs.task import Evaluation, MosaicTask
-from planners.ik import IKSolver
+from spatial.rotations import yaw_from_matrix
 
 ROBOT_DIM = 19
 """Length of the ``robot`` vector."""
@@ -94,7 +95,7 @@ class Observer:
         if self.cfg.obs_noise > 0:
             q = q + rng.normal(0.0, self.cfg.obs_noise, q.shape)
         pos, rot = cell.tcp_pose()
-        yaw = IKSolver.yaw_of(rot)
+        yaw = yaw_from_matrix(rot)
         v = np.concatenate(
             [q, cell.qvel, pos, [np.cos(yaw), np.sin(yaw)], [cell.vacuum_on, cell.tile_held]]
         )
