@@ -118,6 +118,36 @@ def _outline_picture(image: np.ndarray, outlines: list[np.ndarray], path: Path) 
     pic.save(path)
 
 
+def open_slot_kinds(e: dict[str, Any], agent: Any) -> Counter[str]:
+    """Every slot an episode left open, by the kind of failure (`FAILURE_KINDS`).
+
+    ``e`` is the last ``info["evaluation"]``, ``agent`` the `ScriptedAgent` after the episode.
+    """
+    filled = np.asarray(e["slot_filled"], dtype=bool)
+    kinds: Counter[str] = Counter()
+    open_slots = int(np.count_nonzero(~filled))
+    budget = open_slots
+
+    def take(kind: str, n: int) -> None:
+        nonlocal budget
+        k = min(max(n, 0), budget)
+        if k:
+            kinds[kind] += k
+            budget -= k
+
+    take("misplaced", int(e["misplaced"]))
+    take("dropped", int(e["dropped_tiles"]))
+    take("lost", int(e["lost_tiles"]))
+    take("stranded", int(e["stranded"]))
+    reasons = Counter(u.reason for u in agent.unplaced)
+    take("unrecognised_shape", reasons["shape_absent"])
+    take("unrecognised_colour", reasons["color_absent"])
+    per = agent.last_perception
+    take("outline_refused", len(per.unrecognised) if per is not None else 0)
+    take("not_placed", budget)
+    return kinds
+
+
 def play_design(job: Job) -> dict[str, Any]:
     """Draw design ``index``, play one episode of it, classify the open slots (worker)."""
     import gymnasium as gym  # noqa: PLC0415 - workers import the stack themselves
@@ -157,27 +187,8 @@ def play_design(job: Job) -> dict[str, Any]:
         env.close()
     e = info["evaluation"]
     filled = np.asarray(e["slot_filled"], dtype=bool)
-    kinds: Counter[str] = Counter()
-    open_slots = int(np.count_nonzero(~filled))
-    budget = open_slots
-
-    def take(kind: str, n: int) -> None:
-        nonlocal budget
-        k = min(max(n, 0), budget)
-        if k:
-            kinds[kind] += k
-            budget -= k
-
-    take("misplaced", int(e["misplaced"]))
-    take("dropped", int(e["dropped_tiles"]))
-    take("lost", int(e["lost_tiles"]))
-    take("stranded", int(e["stranded"]))
-    reasons = Counter(u.reason for u in agent.unplaced)
-    take("unrecognised_shape", reasons["shape_absent"])
-    take("unrecognised_colour", reasons["color_absent"])
+    kinds = open_slot_kinds(e, agent)
     per = agent.last_perception
-    take("outline_refused", len(per.unrecognised) if per is not None else 0)
-    take("not_placed", budget)
     families = Counter(
         s.name.split("_")[1] for s, ok in zip(design.slots, filled, strict=True) if not ok
     )
