@@ -14,6 +14,7 @@ from typing import Any, Literal
 
 from agents.errors import AgentError
 from configs import load_config
+from envs.cell.calibration_board import CalibrationTarget
 
 AGENTS_CONFIG = "agents"
 """Bundled config name (``configs/agents.yaml``)."""
@@ -143,6 +144,20 @@ class CalibrationConfig:
             raise AgentError("calibration: squares >= 3 each, square_size > 0, border >= 0")
         if self.min_views < 3 or self.subpix_window_px < 1:
             raise AgentError("calibration: min_views >= 3, subpix_window_px >= 1")
+
+    @property
+    def target(self) -> CalibrationTarget:
+        """The board and its poses, as the env renders them (`envs.cell.calibration_board`)."""
+        return CalibrationTarget(
+            squares=self.squares,
+            square_size=self.square_size,
+            border=self.border,
+            plate_thickness=self.plate_thickness,
+            square_height=self.square_height,
+            tilts_deg=self.tilts_deg,
+            lift=self.lift,
+            shifts=self.shifts,
+        )
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -24,7 +25,7 @@ from envs.cell.accounting import ON_INPUT, WAITING, TileFlags, state_counts, til
 from envs.cell.cameras import CameraJitter
 from envs.cell.cell import Cell
 from envs.env_config import EnvConfig
-from envs.errors import CellError
+from envs.errors import CellError, EnvError
 from envs.rewards import STAGES, StagedReward, load_staged_config
 from planners.angles import yaw_error
 
@@ -45,6 +46,7 @@ REWARD_TERMS = (
 
 
 MM_PER_M = 1e3
+SECONDS_PER_MINUTE = 60.0
 SEED_BOUND = 2**63
 """Exclusive bound of the layout seeds drawn from the episode generator at each reset."""
 
@@ -141,6 +143,48 @@ class Evaluation:
         d = {f.name: getattr(self, f.name) for f in _EVALUATION_FIELDS}  # flat: no deep copy
         d["slot_filled"] = list(self.slot_filled)
         return d
+
+    @classmethod
+    def from_info(cls, info: Mapping[str, Any]) -> Evaluation:
+        """The evaluation of a step's ``info`` (``info["evaluation"]``, `as_dict` read back).
+
+        Raises:
+            EnvError: ``info`` has no evaluation, or it lacks fields (they are listed).
+        """
+        d = info.get("evaluation")
+        if not isinstance(d, Mapping):
+            raise EnvError("info has no 'evaluation' dict (pass the info of a MosaicAssembly step)")
+        missing = [f.name for f in _EVALUATION_FIELDS if f.name not in d]
+        if missing:
+            raise EnvError(f"info['evaluation'] lacks {', '.join(missing)}")
+        fields = {f.name: d[f.name] for f in _EVALUATION_FIELDS}
+        fields["slot_filled"] = tuple(bool(x) for x in d["slot_filled"])
+        return cls(**fields)
+
+    @property
+    def left(self) -> int:
+        """Real tiles never placed: on the input belt, held or waiting to be fed [count]."""
+        return self.on_input + self.held + self.waiting
+
+    def throughput_span(self, sim_s: float, horizon_s: float = 0.0) -> float:
+        """Simulated time the throughput is measured over [s].
+
+        ``sim_s`` (the episode's time) for a success; otherwise ``max(sim_s, horizon_s)``, so a
+        failed episode that stops early after a few tiles cannot look as fast as finishing.
+        """
+        return sim_s if self.success else max(sim_s, horizon_s)
+
+    def tiles_per_min(self, sim_s: float, horizon_s: float = 0.0) -> float:
+        """Correctly placed tiles per minute of simulated time, over `throughput_span` [1/min].
+
+        The one definition of tiles/min: ``info["tiles_per_min"]`` is it with no horizon.
+        """
+        return tiles_per_minute(self.correct, self.throughput_span(sim_s, horizon_s))
+
+
+def tiles_per_minute(correct: int, span_s: float) -> float:
+    """``correct`` tiles over ``span_s`` simulated seconds, per minute (0 for no time) [1/min]."""
+    return SECONDS_PER_MINUTE * correct / span_s if span_s > 0 else 0.0
 
 
 _EVALUATION_FIELDS = dataclasses.fields(Evaluation)
