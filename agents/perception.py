@@ -204,18 +204,9 @@ def perceive_tiles(
     """
     cfg = cfg or PerceptionConfig()
     z = float(tile_top_z)
-    try:
-        health = qshape.image_health(image)
-        if health.verdict in ("dark", "overexposed"):
-            # A uniform picture is an empty belt; a black or blown-out one is a camera fault.
-            return Perception((), (), (f"image not usable: {health.message}",), z)
-        res = qshape.extract_detailed(image, extract_params)
-    except qshape.ImageError as exc:
-        arr = np.asarray(image)
-        well_formed = arr.dtype == np.uint8 and arr.ndim == 3 and arr.shape[2] == 3  # noqa: PLR2004
-        if not well_formed:
-            raise
-        return Perception((), (), (f"image not usable: {exc}",), z)
+    res = _extract(image, extract_params)
+    if isinstance(res, str):
+        return Perception((), (), (res,), z)
     world: list[Figure] = []
     unrecognised = list(res.rejected)
     kept_px: list[Figure] = []
@@ -239,11 +230,8 @@ def perceive_tiles(
     ):
         centre = np.asarray(fw.centroid) * s
         ray = _unproject(camera, np.asarray(fpx.centroid)[None], z)[0, :2]
-        tiles.append(
-            PerceivedTile(
-                k, fpx, f, d, centre, ray, grasp_point(fw, centre, cfg), color, fw.area * s * s
-            )
-        )
+        grasp = grasp_point(fw, centre, cfg)
+        tiles.append(PerceivedTile(k, fpx, f, d, centre, ray, grasp, color, fw.area * s * s))
     partial = tuple(
         PartialRegion(
             _unproject(camera, np.asarray(p.centroid)[None], z)[0, :2],
@@ -253,6 +241,28 @@ def perceive_tiles(
         for p in res.partial
     )
     return Perception(tuple(tiles), partial, tuple(unrecognised), z)
+
+
+def _extract(
+    image: np.ndarray, extract_params: qshape.ExtractParams | None
+) -> qshape.ExtractResult | str:
+    """The figures qshape extracts from a picture, or why the picture is not usable.
+
+    Raises:
+        qshape.ImageError: Not an RGB uint8 image of a usable size.
+    """
+    try:
+        health = qshape.image_health(image)
+        if health.verdict in ("dark", "overexposed"):
+            # A uniform picture is an empty belt; a black or blown-out one is a camera fault.
+            return f"image not usable: {health.message}"
+        return qshape.extract_detailed(image, extract_params)
+    except qshape.ImageError as exc:
+        arr = np.asarray(image)
+        well_formed = arr.dtype == np.uint8 and arr.ndim == 3 and arr.shape[2] == 3  # noqa: PLR2004
+        if not well_formed:
+            raise
+        return f"image not usable: {exc}"
 
 
 def recolour(figure: Figure, measured: tuple[float, float, float], gain: np.ndarray) -> Figure:

@@ -1,7 +1,8 @@
 """The mosaic task: which tile belongs where, placement evaluation and rewards.
 
 `MosaicTask.evaluate` returns one `Evaluation` the reward, the episode end and ``info`` all read
-(``info["evaluation"]`` is its `Evaluation.as_dict`). `MosaicTask.initialize_episode` is the
+(``info["evaluation"]`` is its `Evaluation.as_dict`, read back by `Evaluation.from_info`;
+``info["tiles_per_min"]`` is `Evaluation.tiles_per_min`). `MosaicTask.initialize_episode` is the
 episode set-up hook: layout (with retries), per-episode colour and light randomisation, belt
 speed and optional settling.
 Tiles and slots are matched by class name (the design's shape-and-colour class); distractors are
@@ -46,7 +47,6 @@ REWARD_TERMS = (
 
 
 MM_PER_M = 1e3
-SECONDS_PER_MINUTE = 60.0
 SEED_BOUND = 2**63
 """Exclusive bound of the layout seeds drawn from the episode generator at each reset."""
 
@@ -146,45 +146,30 @@ class Evaluation:
 
     @classmethod
     def from_info(cls, info: Mapping[str, Any]) -> Evaluation:
-        """The evaluation of a step's ``info`` (``info["evaluation"]``, `as_dict` read back).
-
-        Raises:
-            EnvError: ``info`` has no evaluation, or it lacks fields (they are listed).
-        """
+        """The evaluation in a step's ``info`` (`as_dict` read back; `EnvError` if absent)."""
         d = info.get("evaluation")
-        if not isinstance(d, Mapping):
-            raise EnvError("info has no 'evaluation' dict (pass the info of a MosaicAssembly step)")
-        missing = [f.name for f in _EVALUATION_FIELDS if f.name not in d]
-        if missing:
-            raise EnvError(f"info['evaluation'] lacks {', '.join(missing)}")
+        if not isinstance(d, Mapping) or any(f.name not in d for f in _EVALUATION_FIELDS):
+            raise EnvError("info has no complete 'evaluation' (a MosaicAssembly step's info)")
         fields = {f.name: d[f.name] for f in _EVALUATION_FIELDS}
-        fields["slot_filled"] = tuple(bool(x) for x in d["slot_filled"])
-        return cls(**fields)
+        return cls(**{**fields, "slot_filled": tuple(bool(x) for x in d["slot_filled"])})
 
     @property
     def left(self) -> int:
         """Real tiles never placed: on the input belt, held or waiting to be fed [count]."""
         return self.on_input + self.held + self.waiting
 
-    def throughput_span(self, sim_s: float, horizon_s: float = 0.0) -> float:
-        """Simulated time the throughput is measured over [s].
-
-        ``sim_s`` (the episode's time) for a success; otherwise ``max(sim_s, horizon_s)``, so a
-        failed episode that stops early after a few tiles cannot look as fast as finishing.
-        """
-        return sim_s if self.success else max(sim_s, horizon_s)
-
     def tiles_per_min(self, sim_s: float, horizon_s: float = 0.0) -> float:
-        """Correctly placed tiles per minute of simulated time, over `throughput_span` [1/min].
-
-        The one definition of tiles/min: ``info["tiles_per_min"]`` is it with no horizon.
-        """
+        """Correct tiles per simulated minute over `throughput_span`: the one definition."""
         return tiles_per_minute(self.correct, self.throughput_span(sim_s, horizon_s))
+
+    def throughput_span(self, sim_s: float, horizon_s: float = 0.0) -> float:
+        """``sim_s`` [s] for a success, else ``max(sim_s, horizon_s)``: stopping early is slow."""
+        return sim_s if self.success else max(sim_s, horizon_s)
 
 
 def tiles_per_minute(correct: int, span_s: float) -> float:
-    """``correct`` tiles over ``span_s`` simulated seconds, per minute (0 for no time) [1/min]."""
-    return SECONDS_PER_MINUTE * correct / span_s if span_s > 0 else 0.0
+    """``correct`` tiles over ``span_s`` simulated seconds, per minute (0 for no time)."""
+    return 60.0 * correct / span_s if span_s > 0 else 0.0  # 60 s per minute
 
 
 _EVALUATION_FIELDS = dataclasses.fields(Evaluation)
