@@ -120,14 +120,15 @@ class CalibrationConfig:
         lens_grid: Points per side of the image grid the estimated lens is checked on.
     """
 
-    squares: tuple[int, int] = (10, 7)
-    square_size: float = 0.016
-    border: float = 0.012
-    plate_thickness: float = 0.003
-    square_height: float = 0.0002
-    tilts_deg: tuple[float, ...] = (0.0, 20.0, -20.0, 30.0, -30.0, 15.0, -15.0, 25.0)
-    lift: tuple[float, ...] = (0.02, 0.05, 0.08)
-    shifts: tuple[tuple[float, float], ...] = ((0.0, 0.0), (0.02, -0.015), (-0.02, 0.015))
+    # The board and its poses (the env renders them; `target`), defaults as the env's.
+    squares: tuple[int, int] = CalibrationTarget.squares
+    square_size: float = CalibrationTarget.square_size
+    border: float = CalibrationTarget.border
+    plate_thickness: float = CalibrationTarget.plate_thickness
+    square_height: float = CalibrationTarget.square_height
+    tilts_deg: tuple[float, ...] = CalibrationTarget.tilts_deg
+    lift: tuple[float, ...] = CalibrationTarget.lift
+    shifts: tuple[tuple[float, float], ...] = CalibrationTarget.shifts
     subpix_window_px: int = 5
     subpix_iterations: int = 50
     subpix_epsilon_px: float = 1e-3
