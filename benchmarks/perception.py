@@ -27,8 +27,8 @@ from envs.cell.calibration_board import render_calibration_views
 from envs.cell.cameras import CameraModel
 from envs.cell.config import load_cell_config
 from envs.task_spec import work_areas, world_slots
-from planners.angles import yaw_error
 from qshape.design import Design
+from spatial.angles import yaw_error
 
 ROOT = Path(__file__).resolve().parents[1]
 SETTLE_STEPS = 100
