@@ -32,7 +32,7 @@ from envs.errors import CellError
 from envs.task_spec import WorldSlot
 from qshape import Description, Figure
 from qshape.geometry import signed_area
-from qshape.theory.figure import Boundary
+from qshape.theory.boundary import Boundary
 
 _BLACK = (0.0, 0.0, 0.0)
 """Colour of a figure extracted without one."""
