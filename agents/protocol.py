@@ -102,7 +102,7 @@ class EpisodeMetrics:
             dropped=float(ev.dropped),
             lost=float(ev.lost),
             stranded=float(ev.stranded),
-            left=float(ev.left),
+            left=float(ev.on_input + ev.held + ev.waiting),  # never placed
             tiles_per_min=ev.tiles_per_min(sim_s, horizon_s),
             sim_s=sim_s,
         )

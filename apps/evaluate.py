@@ -272,6 +272,7 @@ def run_episode(
         done = terminated or truncated
     ev = Evaluation.from_info(info)
     sim = float(info["sim_time"])
+    metrics = EpisodeMetrics.from_evaluation(ev, sim, horizon_s)
     return EpisodeResult(
         policy=label,
         seed=seed,
@@ -283,7 +284,7 @@ def run_episode(
         dropped=ev.dropped,
         lost=ev.lost,
         stranded=ev.stranded,
-        left=ev.left,
+        left=int(metrics.left),
         steps=steps,
         sim_s=sim,
         span_s=ev.throughput_span(sim, horizon_s),

@@ -22,11 +22,6 @@ from envs.actions import (
     PickPlaceActions,
     transfer_poses,
 )
-from envs.cell.calibration_board import (
-    CalibrationTarget,
-    CalibrationViews,
-    render_calibration_views,
-)
 from envs.cell.cameras import CameraModel
 from envs.cell.cell import CAMERAS, Cell
 from envs.cell.pick_place import PickPlaceExecutor
@@ -112,10 +107,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ## Task description
     ``env.get_wrapper_attr("task_spec")`` is a frozen `envs.task_spec.TaskSpec`: the design's
     slots in the world, the pick and place areas and heights, the tile thickness, the camera
-    models and the ``pick_place`` action codec. Agents are built from it and, to calibrate a
-    camera from pictures as a real cell does, ``calibration_views(camera)`` (a checkerboard
-    before the camera; ``ScriptedAgent.from_env``). ``ground_truth()`` (privileged tile poses
-    and classes) is for scoring and reports, never for decisions.
+    models and the ``pick_place`` action codec. Agents are built from it and calibrate from
+    ``calibration_views(camera)`` (``ScriptedAgent.from_env``). ``ground_truth()`` (privileged
+    tile poses and classes) is for scoring and reports, never for decisions.
 
     ## Rewards
     ``sparse``: +reward_correct per newly filled slot, +reward_success when complete,
@@ -218,6 +212,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.codec = PickPlaceCodec(self.pick_area, self.place_area)
         self.task_spec: TaskSpec = build_task_spec(self.cell, cfg, design)
         """What agents may know besides the observations (see `envs.task_spec`)."""
+        self.calibration_views = self.cell.views.calibration_views
+        """Checkerboard pictures to calibrate a camera (`envs.cell.views.CellViews`)."""
         self.executor: PickPlaceExecutor | None = None
         self.actions = self._adapter(pcfg)
         self.action_space = self.actions.space
@@ -436,31 +432,6 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             self.cell.set_qpos(home)
         self.actions.reset()
         return self.observer.observe(self.np_random, self.task.evaluate())
-
-    def calibration_views(
-        self,
-        camera: str,
-        target: CalibrationTarget | None = None,
-        size: tuple[int, int] | None = None,
-    ) -> CalibrationViews:
-        """Pictures of a checkerboard target before one camera, for calibrating it.
-
-        What a real cell's calibration takes: the board at several tilted, lifted and shifted
-        poses, then lying flat at its fixture position (`envs.cell.calibration_board`), rendered
-        in a copy of the cell's scene without tiles through the camera's lens. The episode's
-        state is not touched; no reset is needed.
-
-        Args:
-            camera: ``"input_camera"`` or ``"output_camera"``.
-            target: Board and poses (defaults when None).
-            size: Image (height, width) [px]; the camera's configured size when None.
-
-        Raises:
-            CellError: Unknown camera (the message lists the allowed names).
-            MosaicEnvError: Called after `close`.
-        """
-        self._check_open()
-        return render_calibration_views(self.cell.cfg, camera, target, size)
 
     def add_frame_listener(self, listener: Callable[[], None], fps: float) -> None:
         """Call ``listener()`` every ``1 / fps`` s of simulated time, also inside a step.

@@ -1,8 +1,8 @@
 """The mosaic task: which tile belongs where, placement evaluation and rewards.
 
 `MosaicTask.evaluate` returns one `Evaluation` the reward, the episode end and ``info`` all read
-(``info["evaluation"]`` is its `Evaluation.as_dict`, read back by `Evaluation.from_info`;
-``info["tiles_per_min"]`` is `Evaluation.tiles_per_min`). `MosaicTask.initialize_episode` is the
+(``info["evaluation"]`` is its `Evaluation.as_dict`; ``info["tiles_per_min"]`` its
+`Evaluation.tiles_per_min`). `MosaicTask.initialize_episode` is the
 episode set-up hook: layout (with retries), per-episode colour and light randomisation, belt
 speed and optional settling.
 Tiles and slots are matched by class name (the design's shape-and-colour class); distractors are
@@ -154,11 +154,6 @@ class Evaluation:
             raise EnvError("info has no complete 'evaluation' (a MosaicAssembly step's info)")
         fields = {f.name: d[f.name] for f in _EVALUATION_FIELDS}
         return cls(**{**fields, "slot_filled": tuple(bool(x) for x in d["slot_filled"])})
-
-    @property
-    def left(self) -> int:
-        """Real tiles never placed: on the input belt, held or waiting to be fed [count]."""
-        return self.on_input + self.held + self.waiting
 
     def tiles_per_min(self, sim_s: float, horizon_s: float = 0.0) -> float:
         """Correct tiles per simulated minute over `throughput_span`: the one definition."""

@@ -2,7 +2,8 @@
 
 A real cell calibrates its cameras from pictures of a checkerboard; the simulated cell takes
 those pictures here, so an agent calibrates from images without knowing how the scene is made
-(the env publishes them as an extra, ``env.get_wrapper_attr("calibration_views")``).
+(the env publishes them as an extra, ``env.get_wrapper_attr("calibration_views")``, which is
+`envs.cell.views.CellViews.calibration_views`).
 
 The target (a white plate with black square tiles, one mocap body) is added to the cell's own
 scene (`envs.cell.scene.build_spec`, so the camera's configuration and pose are exactly the
@@ -27,8 +28,6 @@ from envs.errors import CellError
 
 BOARD = "calibration_board"
 """Name of the target's mocap body."""
-CALIBRATION_CAMERAS = ("input_camera", "output_camera")
-"""Cameras that can be calibrated (each looks at its own work surface)."""
 
 _WHITE = (0.92, 0.92, 0.92, 1.0)
 _BLACK = (0.04, 0.04, 0.04, 1.0)
@@ -162,7 +161,7 @@ def render_calibration_views(
 
     Args:
         cell_cfg: The cell configuration (the scene is the cell's, without tiles).
-        camera: One of `CALIBRATION_CAMERAS`.
+        camera: ``"input_camera"`` or ``"output_camera"``.
         target: Board and poses (defaults when None).
         size: Image (height, width) [px]; the camera's configured size when None.
 
@@ -207,7 +206,6 @@ def render_calibration_views(
 
 __all__ = [
     "BOARD",
-    "CALIBRATION_CAMERAS",
     "CalibrationTarget",
     "CalibrationViews",
     "add_board",
