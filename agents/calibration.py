@@ -1,10 +1,9 @@
 """Camera calibration as a real cell does it: checkerboard images, OpenCV, reprojection error.
 
-A checkerboard target (a white plate with black square tiles, one mocap body) is added to the
-cell's own scene (`envs.cell.scene.build_spec`, so the camera's configuration and pose are exactly
-the
-cell's) and rendered by that camera at several tilted, lifted and shifted poses. OpenCV finds the
-inner corners (`cv2.findChessboardCorners` + `cv2.cornerSubPix`) and estimates the intrinsics
+The pictures come from the env (``env.get_wrapper_attr("calibration_views")``, rendered on the
+env's side by `envs.cell.calibration_board`): a checkerboard target at several tilted, lifted
+and shifted poses before one camera, and once lying flat at its fixture position. OpenCV finds
+the inner corners (`cv2.findChessboardCorners` + `cv2.cornerSubPix`) and estimates the intrinsics
 (`cv2.calibrateCamera`: one focal length, principal point, OpenCV's lens distortion k1, k2,
 p1, p2; k3 as configured: a camera with a lens distortion renders through it). A last
 view of the board lying flat on the belt at its known fixture position gives the extrinsics
@@ -24,22 +23,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
-import mujoco
+import gymnasium as gym
 import numpy as np
 
 from agents.config import CalibrationConfig
 from agents.errors import CalibrationError
-from envs.cell.cameras import CameraModel, CameraRig, camera_model, distort_normalised
-from envs.cell.config import CellConfig
-from envs.cell.scene import build_spec, cell_geometry
+from envs.cell.calibration_board import CalibrationViews
+from envs.cell.cameras import CameraModel, distort_normalised
+from envs.errors import CellError
 
-BOARD = "calibration_board"
-"""Name of the target's mocap body."""
-
-_WHITE = (0.92, 0.92, 0.92, 1.0)
-_BLACK = (0.04, 0.04, 0.04, 1.0)
 _DARK_LEVEL = 128
 """Grey level (0-255) below which a sampled square counts as black."""
 
@@ -92,152 +87,8 @@ class CalibrationResult:
         }
 
 
-def board_corners(cfg: CalibrationConfig) -> np.ndarray:
-    """Inner corners in the board frame (origin at the board centre, on its top), (n, 3) [m].
-
-    Ordered as OpenCV reports them: along the board's x first, then y.
-    """
-    nx, ny = cfg.squares
-    s = cfg.square_size
-    i, j = np.meshgrid(np.arange(1, nx), np.arange(1, ny))
-    x = i.ravel() * s - nx * s / 2
-    y = j.ravel() * s - ny * s / 2
-    return np.column_stack([x, y, np.zeros_like(x)])
-
-
-def _board_half_height(cfg: CalibrationConfig) -> float:
-    return cfg.plate_thickness / 2
-
-
-def add_board(spec: mujoco.MjSpec, cfg: CalibrationConfig) -> None:
-    """Add the checkerboard (white plate + black squares) as a mocap body to a scene spec.
-
-    The body frame is at the centre of the plate's top face; black squares sit on it and the
-    square at the corner -x, -y is black.
-    """
-    nx, ny = cfg.squares
-    s = cfg.square_size
-    body = spec.worldbody.add_body(name=BOARD, mocap=True)
-    half = [nx * s / 2 + cfg.border, ny * s / 2 + cfg.border, cfg.plate_thickness / 2]
-    plate = body.add_geom(
-        type=mujoco.mjtGeom.mjGEOM_BOX, size=half, pos=[0, 0, -cfg.plate_thickness / 2]
-    )
-    plate.rgba = _WHITE
-    plate.contype = plate.conaffinity = 0
-    h = cfg.square_height / 2
-    for ix in range(nx):
-        for iy in range(ny):
-            if (ix + iy) % 2:
-                continue
-            g = body.add_geom(
-                type=mujoco.mjtGeom.mjGEOM_BOX,
-                size=[s / 2, s / 2, h],
-                pos=[(ix + 0.5) * s - nx * s / 2, (iy + 0.5) * s - ny * s / 2, h],
-            )
-            g.rgba = _BLACK
-            g.contype = g.conaffinity = 0
-
-
-def _quat(rx: float, ry: float, rz: float) -> np.ndarray:
-    """Quaternion (w, x, y, z) of rotations about x, then y, then z (extrinsic) [rad]."""
-    q = np.zeros(4)
-    mat = _rotmat(rx, ry, rz)
-    mujoco.mju_mat2Quat(q, mat.ravel())
-    return q
-
-
-def _rotmat(rx: float, ry: float, rz: float) -> np.ndarray:
-    cx, sx, cy, sy, cz, sz = (
-        math.cos(rx), math.sin(rx), math.cos(ry), math.sin(ry), math.cos(rz), math.sin(rz)
-    )  # fmt: skip
-    rot_x = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    rot_y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rot_z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return rot_z @ rot_y @ rot_x
-
-
-@dataclass(frozen=True, eq=False)
-class CalibrationViews:
-    """Rendered calibration images.
-
-    Attributes:
-        intrinsic: RGB images of the tilted board, each (h, w, 3) uint8.
-        flat: RGB image of the board lying flat at its fixture pose.
-        flat_pose: World position of the flat board's frame (3,) [m] (its yaw is 0).
-        true_camera: The simulator's camera model (comparison only).
-    """
-
-    intrinsic: tuple[np.ndarray, ...]
-    flat: np.ndarray
-    flat_pose: np.ndarray
-    true_camera: CameraModel
-
-
-def render_views(
-    cell_cfg: CellConfig,
-    camera: str,
-    cfg: CalibrationConfig | None = None,
-    size: tuple[int, int] | None = None,
-) -> CalibrationViews:
-    """Render the board at the calibration poses with one of the cell's cameras.
-
-    Args:
-        cell_cfg: The cell configuration (the scene is the cell's, without tiles).
-        camera: "input_camera" or "output_camera".
-        cfg: Board and poses.
-        size: Image (height, width) [px]; the camera's configured size when None.
-
-    Raises:
-        CalibrationError: Unknown camera.
-    """
-    cfg = cfg or CalibrationConfig()
-    cams = {"input_camera": cell_cfg.input_camera, "output_camera": cell_cfg.output_camera}
-    if camera not in cams:
-        raise CalibrationError(f"unknown camera {camera!r}; allowed: {sorted(cams)}")
-    cam_cfg = cams[camera]
-    height, width = size if size is not None else (cam_cfg.height, cam_cfg.width)
-    geo = cell_geometry(cell_cfg)
-    if camera == "input_camera":
-        centre = np.array([geo.input_centre[0], geo.input_centre[1], geo.belt_top])
-    else:
-        centre = np.array([geo.output_centre[0], geo.output_centre[1], geo.mesh_top])
-    spec = build_spec(cell_cfg)
-    add_board(spec, cfg)
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, BOARD)
-    mocap = int(model.body_mocapid[body])
-    cam_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera)
-    rig = CameraRig(model, cell_cfg.render, {camera: cam_cfg})  # through the camera's lens
-    try:
-
-        def shot(pos: np.ndarray, quat: np.ndarray) -> np.ndarray:
-            data.mocap_pos[mocap] = pos
-            data.mocap_quat[mocap] = quat
-            mujoco.mj_forward(model, data)
-            return rig.render(data, cam_id, height, width).copy()
-
-        views = []
-        top = cfg.plate_thickness + cfg.square_height
-        for k, tilt in enumerate(cfg.tilts_deg):
-            about_x = k % 2 == 0
-            t = math.radians(tilt)
-            yaw = math.radians(10.0 * (k - len(cfg.tilts_deg) / 2))  # varied in-plane turn
-            quat = _quat(t if about_x else 0.0, 0.0 if about_x else t, yaw)
-            dx, dy = cfg.shifts[k % len(cfg.shifts)]
-            pos = centre + [dx, dy, cfg.lift[k % len(cfg.lift)] + top]
-            views.append(shot(pos, quat))
-        flat_pose = centre + [0.0, 0.0, top]
-        flat = shot(flat_pose, np.array([1.0, 0.0, 0.0, 0.0]))
-        mujoco.mj_forward(model, data)
-        true_cam = camera_model(model, data, cam_id, width, height, distortion=cam_cfg.distortion)
-    finally:
-        rig.close()
-    return CalibrationViews(tuple(views), flat, flat_pose, true_cam)
-
-
 def find_corners(image: np.ndarray, cfg: CalibrationConfig) -> np.ndarray | None:
-    """Inner corners in a view, shape (n, 2) [px], in `board_corners` order; None if not found."""
+    """Inner corners in a view, (n, 2) [px], in `CalibrationTarget.corners` order (None: none)."""
     grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
     nx, ny = cfg.squares
     pattern = (nx - 1, ny - 1)
@@ -260,7 +111,7 @@ def find_corners(image: np.ndarray, cfg: CalibrationConfig) -> np.ndarray | None
 
 
 def _orient(grid: np.ndarray, grey: np.ndarray) -> np.ndarray | None:
-    """Put detected corners, shape (rows, cols, 2), into `board_corners` order, (n, 2).
+    """Put detected corners, shape (rows, cols, 2), into `CalibrationTarget.corners` order, (n, 2).
 
     The colour of the square beyond the first corner fixes the x direction (the board's
     corner squares differ in colour along x, not along y); the y direction follows from
@@ -294,7 +145,7 @@ def calibrate(views: CalibrationViews, cfg: CalibrationConfig | None = None) -> 
     """
     cfg = cfg or CalibrationConfig()
     true = views.true_camera
-    obj = board_corners(cfg).astype(np.float32)
+    obj = cfg.target.corners().astype(np.float32)
     img_pts, obj_pts = [], []
     for image in (*views.intrinsic, views.flat):
         c = find_corners(image, cfg)
@@ -322,7 +173,7 @@ def calibrate(views: CalibrationViews, cfg: CalibrationConfig | None = None) -> 
     flat = find_corners(views.flat, cfg)
     if flat is None:
         raise CalibrationError("the flat (extrinsic) view of the board was not found")
-    world = board_corners(cfg) + views.flat_pose
+    world = cfg.target.corners() + views.flat_pose
     ok, rvec, tvec = cv2.solvePnP(world, flat.astype(np.float64), k, dist)
     if not ok:
         raise CalibrationError("solvePnP failed on the flat view")
@@ -366,34 +217,37 @@ def _lens_error_px(true: CameraModel, est: CameraModel, grid: int) -> float:
     return float(np.max(np.linalg.norm(again - uv.reshape(-1, 2), axis=1)))
 
 
-def calibrate_cell_camera(
-    cell_cfg: CellConfig,
+def calibrate_env_camera(
+    env: gym.Env[Any, Any],
     camera: str,
     cfg: CalibrationConfig | None = None,
     size: tuple[int, int] | None = None,
 ) -> CalibrationResult:
-    """Render the calibration views with a cell camera and calibrate it.
+    """Calibrate one camera of a `MosaicAssembly-v0` env from the pictures the env takes.
+
+    The pictures come through Gymnasium's public API
+    (``env.get_wrapper_attr("calibration_views")``); the solve is `calibrate`.
 
     Args:
-        cell_cfg: The cell configuration.
+        env: The env (wrapped or not).
         camera: "input_camera" or "output_camera".
         cfg: Board, poses and solver options.
         size: Image (height, width) [px] the camera will be used at (configured when None).
 
     Raises:
-        CalibrationError: See `calibrate` and `render_views`.
+        CalibrationError: Unknown camera, or see `calibrate`.
     """
-    return calibrate(render_views(cell_cfg, camera, cfg, size), cfg)
+    cfg = cfg or CalibrationConfig()
+    try:
+        views = env.get_wrapper_attr("calibration_views")(camera, cfg.target, size)
+    except CellError as exc:
+        raise CalibrationError(str(exc)) from exc
+    return calibrate(views, cfg)
 
 
 __all__ = [
-    "BOARD",
     "CalibrationResult",
-    "CalibrationViews",
-    "add_board",
-    "board_corners",
     "calibrate",
-    "calibrate_cell_camera",
+    "calibrate_env_camera",
     "find_corners",
-    "render_views",
 ]

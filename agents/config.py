@@ -14,6 +14,7 @@ from typing import Any, Literal
 
 from agents.errors import AgentError
 from configs import load_config
+from envs.cell.calibration_board import CalibrationTarget
 from envs.task_spec import FeedMode
 from spatial.units import MM_PER_M
 
@@ -131,14 +132,15 @@ class CalibrationConfig:
         lens_grid: Points per side of the image grid the estimated lens is checked on.
     """
 
-    squares: tuple[int, int] = (10, 7)
-    square_size: float = 0.016
-    border: float = 0.012
-    plate_thickness: float = 0.003
-    square_height: float = 0.0002
-    tilts_deg: tuple[float, ...] = (0.0, 20.0, -20.0, 30.0, -30.0, 15.0, -15.0, 25.0)
-    lift: tuple[float, ...] = (0.02, 0.05, 0.08)
-    shifts: tuple[tuple[float, float], ...] = ((0.0, 0.0), (0.02, -0.015), (-0.02, 0.015))
+    # The board and its poses (the env renders them; `target`), defaults as the env's.
+    squares: tuple[int, int] = CalibrationTarget.squares
+    square_size: float = CalibrationTarget.square_size
+    border: float = CalibrationTarget.border
+    plate_thickness: float = CalibrationTarget.plate_thickness
+    square_height: float = CalibrationTarget.square_height
+    tilts_deg: tuple[float, ...] = CalibrationTarget.tilts_deg
+    lift: tuple[float, ...] = CalibrationTarget.lift
+    shifts: tuple[tuple[float, float], ...] = CalibrationTarget.shifts
     subpix_window_px: int = 5
     subpix_iterations: int = 50
     subpix_epsilon_px: float = 1e-3
@@ -155,6 +157,20 @@ class CalibrationConfig:
             raise AgentError("calibration: squares >= 3 each, square_size > 0, border >= 0")
         if self.min_views < 3 or self.subpix_window_px < 1:
             raise AgentError("calibration: min_views >= 3, subpix_window_px >= 1")
+
+    @property
+    def target(self) -> CalibrationTarget:
+        """The board and its poses, as the env renders them (`envs.cell.calibration_board`)."""
+        return CalibrationTarget(
+            squares=self.squares,
+            square_size=self.square_size,
+            border=self.border,
+            plate_thickness=self.plate_thickness,
+            square_height=self.square_height,
+            tilts_deg=self.tilts_deg,
+            lift=self.lift,
+            shifts=self.shifts,
+        )
 
 
 @dataclass(frozen=True)

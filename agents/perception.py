@@ -17,11 +17,9 @@ Only the camera model (what a calibrated cell knows) and the image are used: no 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Protocol
 
-import cv2
 import numpy as np
 import shapely
 from shapely.geometry import Point, Polygon
@@ -29,74 +27,33 @@ from shapely.geometry import Point, Polygon
 import qshape
 from agents.config import PerceptionConfig
 from agents.errors import PerceptionError
-from envs.cell.cameras import distort_normalised
+from envs.cell.cameras import CameraModel
+from envs.errors import CellError
 from envs.task_spec import WorldSlot
 from qshape import Description, Figure
 from qshape.geometry import signed_area
 from qshape.theory.boundary import Boundary
 
+_BLACK = (0.0, 0.0, 0.0)
+"""Colour of a figure extracted without one."""
 
-class CameraLike(Protocol):
-    """What perception needs of a camera: intrinsics, lens distortion and extrinsics.
-
-    Attributes:
-        K: Intrinsic matrix, shape (3, 3) [px] (OpenCV convention: u right, v down).
-        world_to_camera: Rigid transform, shape (4, 4): camera point = T @ world point (OpenCV
-            camera frame: x right, y down, z forward).
-        distortion: OpenCV lens distortion (k1, k2, p1, p2, k3), shape (5,) (zeros: pinhole).
-    """
-
-    @property
-    def distortion(self) -> np.ndarray:
-        """Lens distortion coefficients, shape (5,)."""
-        ...
-
-    @property
-    def K(self) -> np.ndarray:  # noqa: N802 (the usual name of the intrinsic matrix)
-        """Intrinsic matrix, shape (3, 3) [px]."""
-        ...
-
-    @property
-    def world_to_camera(self) -> np.ndarray:
-        """World-to-camera transform, shape (4, 4)."""
-        ...
+WhiteBalance = Callable[[np.ndarray], np.ndarray]
+"""Measured colours of one picture's tiles, shape (n, 3) in [0, 1] -> per-channel gain (3,)."""
 
 
-def unproject(camera: CameraLike, uv: np.ndarray, z: float) -> np.ndarray:
-    """World points on the horizontal plane at height ``z`` seen at pixels ``uv``.
+def _unproject(camera: CameraModel, uv: np.ndarray, z: float) -> np.ndarray:
+    """World points (n, 3) [m] on the plane at height ``z`` seen at pixels ``uv`` (n, 2) [px].
 
-    Args:
-        camera: Camera model.
-        uv: Pixel coordinates, shape (n, 2) [px].
-        z: Plane height [m].
-
-    Returns:
-        World points, shape (n, 3) [m].
+    `envs.cell.cameras.CameraModel.unproject_to_plane` (the one pinhole model), its refusal
+    as this package's error.
 
     Raises:
         PerceptionError: A ray parallel to the plane or the plane behind the camera.
     """
-    uv = np.atleast_2d(np.asarray(uv, dtype=float))
-    if np.any(camera.distortion):  # pixels through the lens -> ideal pinhole pixels
-        ideal = cv2.undistortPoints(uv.reshape(-1, 1, 2), camera.K, camera.distortion, P=camera.K)
-        uv = ideal.reshape(-1, 2).astype(float)
-    rays_cam = np.column_stack([uv, np.ones(len(uv))]) @ np.linalg.inv(camera.K).T
-    r = camera.world_to_camera[:3, :3]
-    origin = -r.T @ camera.world_to_camera[:3, 3]
-    rays = rays_cam @ r  # camera -> world directions (rows)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = (z - origin[2]) / rays[:, 2]
-    if not np.all(np.isfinite(s)) or np.any(s <= 0):
-        raise PerceptionError(f"the plane z = {z} m is not in front of the camera for every pixel")
-    return origin + s[:, None] * rays
-
-
-def project(camera: CameraLike, points: np.ndarray) -> np.ndarray:
-    """Pixels of world points (through the lens), shape (n, 3) [m] -> (n, 2) [px]."""
-    pts = np.atleast_2d(np.asarray(points, dtype=float))
-    cam = pts @ camera.world_to_camera[:3, :3].T + camera.world_to_camera[:3, 3]
-    xy = distort_normalised(cam[:, :2] / cam[:, 2:3], camera.distortion)
-    return xy @ camera.K[:2, :2].T + camera.K[:2, 2]
+    try:
+        return camera.unproject_to_plane(uv, z)
+    except CellError as exc:
+        raise PerceptionError(str(exc)) from exc
 
 
 @dataclass(frozen=True, eq=False)
@@ -163,14 +120,14 @@ class Perception:
 
 
 def _to_world_boundary(
-    camera: CameraLike, b: Boundary, z: float, scale: float
+    camera: CameraModel, b: Boundary, z: float, scale: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    pts = unproject(camera, np.asarray(b.points), z)[:, :2] * scale
+    pts = _unproject(camera, np.asarray(b.points), z)[:, :2] * scale
     return pts, np.asarray(b.curve_mask)
 
 
 def figure_to_world(
-    camera: CameraLike, fig: Figure, z: float, cfg: PerceptionConfig | None = None
+    camera: CameraModel, fig: Figure, z: float, cfg: PerceptionConfig | None = None
 ) -> Figure:
     """Map a pixel figure (``y_down``) onto the world plane at height ``z``, in [mm], y up.
 
@@ -215,14 +172,15 @@ def grasp_point(fig_mm: Figure, centre: np.ndarray, cfg: PerceptionConfig) -> np
 
 def perceive_tiles(
     image: np.ndarray,
-    camera: CameraLike,
+    camera: CameraModel,
     tile_top_z: float,
     *,
     cfg: PerceptionConfig | None = None,
     extract_params: qshape.ExtractParams | None = None,
     tolerances: qshape.Tolerances | None = None,
+    white_balance: WhiteBalance | None = None,
 ) -> Perception:
-    """Tiles in an input-camera image, described and located in the world.
+    """Tiles in an input-camera image, located in the world and described (once).
 
     Args:
         image: RGB uint8, shape (h, w, 3).
@@ -233,6 +191,10 @@ def perceive_tiles(
         extract_params: qshape extraction parameters (bundled ``configs/vision.yaml`` when
             None).
         tolerances: qshape tolerances for the descriptions (bundled when None).
+        white_balance: Called once with the measured colours of the picture's tiles, shape
+            (n, 3), when there are any; the tiles' colours are multiplied by the gain (3,) it
+            returns (clipped to [0, 1], `recolour`) before they are described. None: the
+            colours as measured.
 
     Returns:
         The perceived tiles, partial regions and unrecognised regions. An image qshape cannot
@@ -245,18 +207,9 @@ def perceive_tiles(
     """
     cfg = cfg or PerceptionConfig()
     z = float(tile_top_z)
-    try:
-        health = qshape.image_health(image)
-        if health.verdict in ("dark", "overexposed"):
-            # A uniform picture is an empty belt; a black or blown-out one is a camera fault.
-            return Perception((), (), (f"image not usable: {health.message}",), z)
-        res = qshape.extract_detailed(image, extract_params)
-    except qshape.ImageError as exc:
-        arr = np.asarray(image)
-        well_formed = arr.dtype == np.uint8 and arr.ndim == 3 and arr.shape[2] == 3  # noqa: PLR2004
-        if not well_formed:
-            raise
-        return Perception((), (), (f"image not usable: {exc}",), z)
+    res = _extract(image, extract_params)
+    if isinstance(res, str):
+        return Perception((), (), (res,), z)
     world: list[Figure] = []
     unrecognised = list(res.rejected)
     kept_px: list[tuple[Figure, np.ndarray]] = []
@@ -266,14 +219,22 @@ def perceive_tiles(
             kept_px.append((fig, res.outlines[k]))
         except qshape.QShapeError as exc:
             unrecognised.append(f"figure {k}: not mapped to the belt plane: {exc}")
-    descs = qshape.describe_many(world, tolerances) if world else []
+    colors = [fw.color if fw.color is not None else _BLACK for fw in world]
+    figs = world
+    if white_balance is not None and world:
+        gain = white_balance(np.array(colors))
+        figs = [recolour(fw, c, gain) for fw, c in zip(world, colors, strict=True)]
+        colors = [f.color or c for f, c in zip(figs, colors, strict=True)]
+    descs = qshape.describe_many(figs, tolerances) if figs else []
     tiles = [
-        _perceived(k, fpx, fw, d, camera, z, cfg, outline)
-        for k, ((fpx, outline), fw, d) in enumerate(zip(kept_px, world, descs, strict=True))
+        _perceived(k, fpx, fw, f, d, color, camera, z, cfg, outline)
+        for k, ((fpx, outline), fw, f, d, color) in enumerate(
+            zip(kept_px, world, figs, descs, colors, strict=True)
+        )
     ]
     partial = tuple(
         PartialRegion(
-            unproject(camera, np.asarray(p.centroid)[None], z)[0, :2],
+            _unproject(camera, np.asarray(p.centroid)[None], z)[0, :2],
             _pixel_area_to_plane(camera, np.asarray(p.outline), z),
             p.color,
         )
@@ -286,23 +247,25 @@ def _perceived(  # noqa: PLR0913, PLR0917
     k: int,
     fpx: Figure,
     fw: Figure,
+    figure: Figure,
     d: qshape.Description,
-    camera: CameraLike,
+    color: tuple[float, float, float],
+    camera: CameraModel,
     z: float,
     cfg: PerceptionConfig,
     outline: np.ndarray | None,
 ) -> PerceivedTile:
+    """One perceived tile: ``fw`` places it, ``figure`` (``fw`` recoloured) describes it."""
     s = 1.0 / cfg.mm_per_m
     centre = np.asarray(fw.centroid) * s
-    ray = unproject(camera, np.asarray(fpx.centroid)[None], z)[0, :2]
-    color = fw.color if fw.color is not None else (0.0, 0.0, 0.0)
+    ray = _unproject(camera, np.asarray(fpx.centroid)[None], z)[0, :2]
     grasp = grasp_point(fw, centre, cfg)
-    return PerceivedTile(k, fpx, fw, d, centre, ray, grasp, color, fw.area * s * s, outline)
+    return PerceivedTile(k, fpx, figure, d, centre, ray, grasp, color, fw.area * s * s, outline)
 
 
 def refigured(
     tile: PerceivedTile,
-    camera: CameraLike,
+    camera: CameraModel,
     z: float,
     outline_params: qshape.OutlineParams,
     *,
@@ -311,8 +274,9 @@ def refigured(
 ) -> PerceivedTile | None:
     """The tile with its traced outline simplified again with other outline parameters.
 
-    The holes, colour and index stay those of the first figure. None when the tile kept no
-    traced outline or the new simplification gives no valid figure.
+    The holes, index and colour (as balanced for the first figure) stay those of the first
+    figure. None when the tile kept no traced outline or the new simplification gives no
+    valid figure.
 
     Args:
         tile: A perceived tile (``outline_px`` kept).
@@ -336,10 +300,39 @@ def refigured(
             y_down=True,
         )
         fw = figure_to_world(camera, fpx, z, cfg)
-        d = qshape.describe(fw, tolerances)
+        figure = dataclasses.replace(fw, color=tile.color)
+        d = qshape.describe(figure, tolerances)
     except qshape.QShapeError:
         return None
-    return _perceived(tile.index, fpx, fw, d, camera, z, cfg, tile.outline_px)
+    return _perceived(tile.index, fpx, fw, figure, d, tile.color, camera, z, cfg, tile.outline_px)
+
+
+def _extract(
+    image: np.ndarray, extract_params: qshape.ExtractParams | None
+) -> qshape.ExtractResult | str:
+    """The figures qshape extracts from a picture, or why the picture is not usable.
+
+    Raises:
+        qshape.ImageError: Not an RGB uint8 image of a usable size.
+    """
+    try:
+        health = qshape.image_health(image)
+        if health.verdict in ("dark", "overexposed"):
+            # A uniform picture is an empty belt; a black or blown-out one is a camera fault.
+            return f"image not usable: {health.message}"
+        return qshape.extract_detailed(image, extract_params)
+    except qshape.ImageError as exc:
+        arr = np.asarray(image)
+        well_formed = arr.dtype == np.uint8 and arr.ndim == 3 and arr.shape[2] == 3  # noqa: PLR2004
+        if not well_formed:
+            raise
+        return f"image not usable: {exc}"
+
+
+def recolour(figure: Figure, measured: tuple[float, float, float], gain: np.ndarray) -> Figure:
+    """``figure`` with the colour ``measured`` x ``gain`` (per channel, clipped to [0, 1])."""
+    c = np.clip(np.asarray(measured) * gain, 0.0, 1.0)
+    return dataclasses.replace(figure, color=(float(c[0]), float(c[1]), float(c[2])))
 
 
 def color_gain(
@@ -427,10 +420,7 @@ def balance_colors(
         return perception, np.ones(3)
     fit_on = np.array([t.color for t in perception.tiles]) if history is None else history
     gain = color_gain(fit_on, palette, cfg, per_channel)
-    figs = []
-    for t in perception.tiles:
-        c = np.clip(np.asarray(t.color) * gain, 0.0, 1.0)
-        figs.append(dataclasses.replace(t.figure, color=(float(c[0]), float(c[1]), float(c[2]))))
+    figs = [recolour(t.figure, t.color, gain) for t in perception.tiles]
     descs = qshape.describe_many(figs, tolerances)
     tiles = [
         dataclasses.replace(t, figure=f, description=d, color=f.color or t.color)
@@ -439,8 +429,8 @@ def balance_colors(
     return dataclasses.replace(perception, tiles=tuple(tiles)), gain
 
 
-def _pixel_area_to_plane(camera: CameraLike, outline_px: np.ndarray, z: float) -> float:
-    pts = unproject(camera, outline_px, z)[:, :2]
+def _pixel_area_to_plane(camera: CameraModel, outline_px: np.ndarray, z: float) -> float:
+    pts = _unproject(camera, outline_px, z)[:, :2]
     return abs(signed_area(pts))
 
 
@@ -495,10 +485,10 @@ def slot_targets(
 
 
 __all__ = [
-    "CameraLike",
     "PartialRegion",
     "PerceivedTile",
     "Perception",
+    "WhiteBalance",
     "SlotTarget",
     "balance_colors",
     "color_gain",
@@ -506,7 +496,6 @@ __all__ = [
     "grasp_point",
     "refigured",
     "perceive_tiles",
-    "project",
+    "recolour",
     "slot_targets",
-    "unproject",
 ]

@@ -184,6 +184,50 @@ def refine_rotation(
     return float(res.x) if float(res.fun) <= cost(rotation) else rotation
 
 
+@dataclass(eq=False)
+class FeasiblePairs:
+    """Which tiles of one picture could fill which design slots: found once per colour mode.
+
+    `qshape.theory.assign.feasible_pairs` of every perceived tile against every slot given,
+    run at most once with colour and once without for the picture, on first use. Whether a
+    pair matches depends on that tile and that slot alone, so every subset a caller asks about
+    (the tiles left out against the open and filled slots, a tile against the filled slots)
+    reads the same answer as a run on that subset.
+
+    Args:
+        tiles: The picture's perceived tiles (positions are the indices asked about).
+        slots: Design slots (by `SlotTarget.index`).
+        tolerances: qshape tolerances (bundled when None).
+    """
+
+    def __init__(
+        self,
+        tiles: Sequence[PerceivedTile],
+        slots: Sequence[SlotTarget],
+        tolerances: qshape.Tolerances | None = None,
+    ) -> None:
+        self._tiles = [t.description for t in tiles]
+        self._slots = [s.description for s in slots]
+        self._slot_index = np.array([s.index for s in slots], dtype=np.int64)
+        self._tol = _tol(tolerances)
+        self._found: dict[bool, dict[int, set[int]]] = {}
+
+    def _table(self, use_color: bool) -> dict[int, set[int]]:
+        """Slot indices per tile position with a match (tiles without one absent)."""
+        if use_color not in self._found:
+            table: dict[int, set[int]] = {}
+            if self._tiles and self._slots:
+                t, s, _, _ = feasible_pairs(self._tiles, self._slots, self._tol, use_color)
+                for ti, si in zip(t.tolist(), self._slot_index[s].tolist(), strict=True):
+                    table.setdefault(ti, set()).add(si)
+            self._found[use_color] = table
+        return self._found[use_color]
+
+    def slots_of(self, tile: int, use_color: bool) -> set[int]:
+        """Indices of the slots the tile at position ``tile`` matches."""
+        return set(self._table(use_color).get(tile, ()))
+
+
 def plan_placements(
     tiles: Sequence[PerceivedTile],
     slots: Sequence[SlotTarget],
@@ -191,6 +235,7 @@ def plan_placements(
     tolerances: qshape.Tolerances | None = None,
     *,
     filled: Sequence[SlotTarget] = (),
+    pairs: FeasiblePairs | None = None,
 ) -> PlacementPlan:
     """Assign perceived tiles to slots and turn each pair into a pick-and-place command.
 
@@ -204,6 +249,8 @@ def plan_placements(
         tolerances: qshape tolerances (bundled when None).
         filled: The design's slots already filled: a left-over tile matching one of them is
             reported as ``slots_taken`` (not as absent from the design).
+        pairs: The picture's feasible pairs (``tiles`` against at least ``slots`` and
+            ``filled``, same tolerances), shared by the calls on one picture; None: found here.
 
     Returns:
         The plan.
@@ -215,61 +262,67 @@ def plan_placements(
     tdesc = [t.description for t in tiles]
     sdesc = [s.description for s in slots]
     result = qshape.assign(tdesc, sdesc, tolerances, cfg.method, cfg.use_color)
-    commands = []
-    for a in result:
-        t, s = tiles[a.tile], slots[a.slot]
-        rot = wrap(
-            refine_rotation(
-                t.figure,
-                s.figure,
-                a.rotation,
-                math.radians(cfg.refine_span_deg),
-                math.radians(cfg.refine_tolerance_deg),
-            )
-        )
-        yaw_place = float(s.pose[2])
-        yaw_pick = wrap(yaw_place - rot)
-        g_off = rotate_xy(t.grasp - t.centre, rot)
-        g_place = s.pose[:2] + g_off
-        commands.append(
-            PickPlace(
-                tile=t.index,
-                slot=s.index,
-                slot_name=s.name,
-                pick=(float(t.centre[0]), float(t.centre[1]), yaw_pick),
-                place=(float(s.pose[0]), float(s.pose[1]), yaw_place),
-                grasp_pick=(float(t.grasp[0]), float(t.grasp[1])),
-                grasp_place=(float(g_place[0]), float(g_place[1])),
-                rotation=rot,
-                place_yaws=equivalent_yaws(yaw_place, s.symmetry, cfg.continuous_yaw_steps),
-                symmetry=s.symmetry,
-                score=a.score,
-            )
-        )
+    commands = tuple(_command(tiles[a.tile], slots[a.slot], a, cfg) for a in result)
     assigned = {a.tile for a in result}
     left = [k for k in range(len(tiles)) if k not in assigned]
-    unplaced = []
+    unplaced: tuple[Unplaced, ...] = ()
     if left:
-        ld = [tdesc[k] for k in left]
-        every = sdesc + [f.description for f in filled]
-        shape_ok = set(feasible_pairs(ld, every, _tol(tolerances), False)[0].tolist())
-        color_ok = (
-            set(feasible_pairs(ld, every, _tol(tolerances), True)[0].tolist())
-            if cfg.use_color
-            else shape_ok
+        pairs = pairs or FeasiblePairs(tiles, [*slots, *filled], tolerances)
+        every = {s.index for s in (*slots, *filled)}
+        unplaced = tuple(
+            Unplaced(tiles[k].index, r, REASONS[r])
+            for k, r in zip(left, _reasons(left, pairs, every, cfg.use_color), strict=True)
         )
-        for j, k in enumerate(left):
-            reason: UnplacedReason
-            if j not in shape_ok:
-                reason = "shape_absent"
-            elif j not in color_ok:
-                reason = "color_absent"
-            else:
-                reason = "slots_taken"
-            unplaced.append(Unplaced(tiles[k].index, reason, REASONS[reason]))
     assigned_slots = {a.slot for a in result}
     open_slots = tuple(s.index for k, s in enumerate(slots) if k not in assigned_slots)
-    return PlacementPlan(tuple(commands), tuple(unplaced), open_slots, cfg.method, cfg.use_color)
+    return PlacementPlan(commands, unplaced, open_slots, cfg.method, cfg.use_color)
+
+
+def _command(
+    t: PerceivedTile, s: SlotTarget, a: qshape.Assignment, cfg: PlacementConfig
+) -> PickPlace:
+    """The pick-and-place of one assigned (tile, slot) pair (rotation refined, yaws wrapped)."""
+    rot = wrap(
+        refine_rotation(
+            t.figure,
+            s.figure,
+            a.rotation,
+            math.radians(cfg.refine_span_deg),
+            math.radians(cfg.refine_tolerance_deg),
+        )
+    )
+    yaw_place = float(s.pose[2])
+    yaw_pick = wrap(yaw_place - rot)
+    g_off = rotate_xy(t.grasp - t.centre, rot)
+    g_place = s.pose[:2] + g_off
+    return PickPlace(
+        tile=t.index,
+        slot=s.index,
+        slot_name=s.name,
+        pick=(float(t.centre[0]), float(t.centre[1]), yaw_pick),
+        place=(float(s.pose[0]), float(s.pose[1]), yaw_place),
+        grasp_pick=(float(t.grasp[0]), float(t.grasp[1])),
+        grasp_place=(float(g_place[0]), float(g_place[1])),
+        rotation=rot,
+        place_yaws=equivalent_yaws(yaw_place, s.symmetry, cfg.continuous_yaw_steps),
+        symmetry=s.symmetry,
+        score=a.score,
+    )
+
+
+def _reasons(
+    left: Sequence[int], pairs: FeasiblePairs, every: set[int], use_color: bool
+) -> list[UnplacedReason]:
+    """Why each tile left out (by position) is not placed, against the slots ``every``."""
+    out: list[UnplacedReason] = []
+    for k in left:
+        if not pairs.slots_of(k, False) & every:
+            out.append("shape_absent")
+        elif use_color and not pairs.slots_of(k, True) & every:
+            out.append("color_absent")
+        else:
+            out.append("slots_taken")
+    return out
 
 
 def _tol(tolerances: qshape.Tolerances | None) -> qshape.Tolerances:
@@ -280,6 +333,7 @@ def _tol(tolerances: qshape.Tolerances | None) -> qshape.Tolerances:
 
 __all__ = [
     "REASONS",
+    "FeasiblePairs",
     "PickPlace",
     "PlacementPlan",
     "Unplaced",

@@ -1,16 +1,18 @@
 """The evaluation protocol: per-episode metrics and their aggregation over training seeds.
 
-Per episode (`EpisodeMetrics.of`, from the env's final ``info``):
+Per episode (`EpisodeMetrics.of`, from the env's final ``info``: its `envs.task.Evaluation`,
+the one record of an episode, and the simulated time):
 
 - ``success``: every slot filled correctly;
 - ``filled``: fraction of the slots filled correctly;
 - ``misplaced``, ``dropped`` (drop events), ``lost``, ``stranded`` (real tiles fed that lie
   out of every other state: beside the mesh, tilted over its edge), ``left`` (real tiles never
   placed: still on the input belt, held or waiting to be fed at the end), counts;
-- ``tiles_per_min``: correct tiles per simulated minute, measured to completion for a
-  successful episode and over ``max(episode time, horizon)`` otherwise, so stopping early
-  after a few tiles cannot look as fast as finishing (the horizon is the task's
-  ``horizon_s``).
+- ``tiles_per_min``: correct tiles per simulated minute (`envs.task.Evaluation.tiles_per_min`,
+  the one definition), measured to completion for a successful episode and over
+  ``max(episode time, horizon)`` otherwise, so stopping early after a few tiles cannot look as
+  fast as finishing (the horizon is the task's ``horizon_s``). Over several episodes it is the
+  mean of the episodes' figures (each episode weighs the same), as every other metric.
 
 Aggregation (`aggregate_runs`): each training run (seed) is scored by its mean over the held-out
 episodes; a result over runs is the interquartile mean (IQM) with a 95 % stratified-bootstrap
@@ -27,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from agents.errors import AgentError
+from envs.task import Evaluation
 
-SECONDS_PER_MINUTE = 60.0
 METRICS = (
     "success",
     "filled",
@@ -44,11 +46,6 @@ BOOTSTRAP_REPS = 2000
 """Bootstrap resamples of the confidence intervals."""
 CONFIDENCE = 0.95
 """Confidence level of the intervals."""
-
-
-def tiles_left(evaluation: Mapping[str, Any]) -> int:
-    """Real tiles never placed: on the input belt, held or waiting to be fed [count]."""
-    return sum(int(evaluation.get(k, 0)) for k in ("on_input", "held", "waiting"))
 
 
 @dataclass(frozen=True)
@@ -85,21 +82,29 @@ class EpisodeMetrics:
             info: The last step's info dict.
             horizon_s: Throughput horizon of a failed episode [s].
         """
-        ev = info["evaluation"]
-        sim = float(info["sim_time"])
-        ok = bool(ev["success"])
-        span = sim if ok else max(sim, horizon_s)
-        slots = max(int(ev["slots"]), 1)
+        return EpisodeMetrics.from_evaluation(
+            Evaluation.from_info(info), float(info["sim_time"]), horizon_s
+        )
+
+    @staticmethod
+    def from_evaluation(ev: Evaluation, sim_s: float, horizon_s: float) -> EpisodeMetrics:
+        """Metrics of an episode's final evaluation after ``sim_s`` simulated seconds.
+
+        Args:
+            ev: The evaluation of the episode's last step.
+            sim_s: Simulated episode time [s].
+            horizon_s: Throughput horizon of a failed episode [s].
+        """
         return EpisodeMetrics(
-            success=float(ok),
-            filled=int(ev["correct"]) / slots,
-            misplaced=float(ev["misplaced"]),
-            dropped=float(ev["dropped"]),
-            lost=float(ev["lost"]),
-            stranded=float(ev.get("stranded", 0)),
-            left=float(tiles_left(ev)),
-            tiles_per_min=SECONDS_PER_MINUTE * int(ev["correct"]) / span if span > 0 else 0.0,
-            sim_s=sim,
+            success=float(ev.success),
+            filled=ev.correct / max(ev.slots, 1),
+            misplaced=float(ev.misplaced),
+            dropped=float(ev.dropped),
+            lost=float(ev.lost),
+            stranded=float(ev.stranded),
+            left=float(ev.on_input + ev.held + ev.waiting),  # never placed
+            tiles_per_min=ev.tiles_per_min(sim_s, horizon_s),
+            sim_s=sim_s,
         )
 
 
@@ -173,7 +178,6 @@ def aggregate_runs(runs: Sequence[Mapping[str, float]]) -> dict[str, Estimate]:
 
 
 __all__ = [
-    "tiles_left",
     "METRICS",
     "EpisodeMetrics",
     "Estimate",

@@ -7,8 +7,11 @@ perceived on the tiles' top plane (`agents.perception`) and assigned to the open
 (`agents.placement`); the resulting commands are encoded one per step by the spec's
 ``pick_place`` codec, and a new picture is taken once they are used up. Tiles matching no open
 slot are never placed; a tile still on the belt after its command (a failed pick) reopens its
-slot. The input camera is calibrated from rendered checkerboard images (`agents.calibration`)
-at the observation's image size, or the spec's camera model is used (``calibrate=False``).
+slot. The input camera is calibrated from checkerboard pictures the env takes
+(``calibration_views``, `agents.calibration`) at the observation's image size, or the spec's
+camera model is used (``calibrate=False``). Each picture's tiles are described once (after
+the white balance) and matched against the design's slots once per colour mode
+(`agents.placement.FeasiblePairs`).
 
 `ScriptedAgent.predict` has stable-baselines3's signature, so ``evaluate_policy`` can run it
 like a learned policy (one env; a vectorised observation with a leading batch of 1 is
@@ -29,23 +32,14 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from agents.calibration import CalibrationResult, calibrate_cell_camera
+from agents.calibration import CalibrationResult, calibrate_env_camera
 from agents.config import AgentsConfig, load_agents_config
 from agents.errors import AgentError
-from agents.perception import (
-    CameraLike,
-    PerceivedTile,
-    Perception,
-    balance_colors,
-    perceive_tiles,
-    refigured,
-    slot_targets,
-)
-from agents.placement import PickPlace, PlacementPlan, Unplaced, plan_placements
+from agents.perception import Perception, color_gain, perceive_tiles, refigured, slot_targets
+from agents.placement import FeasiblePairs, PickPlace, PlacementPlan, Unplaced, plan_placements
+from envs.cell.cameras import CameraModel
 from envs.task_spec import PickPlaceCodec, PickPlaceCommand, TaskSpec
 from qshape import ExtractParams, OutlineParams
-from qshape.theory.assign import feasible_pairs
-from qshape.theory.tolerances import default_tolerances
 
 IMAGE_DIMS = 3
 """An unbatched RGB observation has (height, width, 3)."""
@@ -61,13 +55,11 @@ class ScriptedAgent:
     Args:
         spec: The env's task description (``pick_place`` action mode).
         config: Agent settings (bundled ``configs/agents.yaml`` when None).
-        calibrate: Calibrate the input camera from rendered checkerboard images (True) or use
-            the spec's camera model.
+        calibration: The input camera's calibration at the observation size (its camera model
+            is used), or None: the spec's camera model.
         replan_every_step: Take a new picture before every command (tiles move on a moving
             belt, new ones arrive with a stream feed) instead of once per batch of commands
             (the paper's static loop). None: every step when the belt moves or tiles stream.
-        calibration: An earlier calibration of this cell's input camera at this image size,
-            used as it is (another design in the same cell: the camera is the same).
 
     Raises:
         AgentError: Wrong action mode.
@@ -77,10 +69,8 @@ class ScriptedAgent:
         self,
         spec: TaskSpec,
         config: AgentsConfig | None = None,
-        calibrate: bool = True,
-        replan_every_step: bool | None = None,
-        *,
         calibration: CalibrationResult | None = None,
+        replan_every_step: bool | None = None,
     ) -> None:
         self.cfg = config or load_agents_config()
         if spec.codec is None:
@@ -95,17 +85,10 @@ class ScriptedAgent:
             if replan_every_step is None
             else replan_every_step
         )
-        self.camera: CameraLike
         self.calibration = calibration
-        if calibration is not None:
-            self.camera = calibration.camera
-        elif calibrate:
-            self.calibration = calibrate_cell_camera(
-                spec.cell, "input_camera", self.cfg.calibration, spec.image_size
-            )
-            self.camera = self.calibration.camera
-        else:
-            self.camera = spec.camera("input_camera")
+        self.camera: CameraModel = (
+            calibration.camera if calibration is not None else spec.camera("input_camera")
+        )
         self.slots = slot_targets(spec.slots)
         retry = self.cfg.perception.retry_outline
         self.retry_params: OutlineParams | None = (
@@ -139,17 +122,25 @@ class ScriptedAgent:
     ) -> ScriptedAgent:
         """The agent of a `MosaicAssembly-v0` env (wrapped or not), from its task description.
 
-        The one place an agent reads an env beyond its spaces: ``task_spec`` through
-        Gymnasium's ``get_wrapper_attr``.
+        The one place an agent reads an env beyond its spaces: ``task_spec`` and, with
+        ``calibrate``, the checkerboard pictures of the input camera (``calibration_views``,
+        at the observation size), through Gymnasium's ``get_wrapper_attr``.
+
+        ``calibration``: an earlier calibration of the same camera, used instead of a new one.
 
         Raises:
             AgentError: Not a ``pick_place`` env with an ``input_camera`` observation.
+            CalibrationError: The calibration failed.
         """
         obs_space = env.observation_space
         if not isinstance(obs_space, gym.spaces.Dict) or "input_camera" not in obs_space.spaces:
             raise AgentError("the scripted agent needs the input_camera observation (obs_mode rgb)")
         spec: TaskSpec = env.get_wrapper_attr("task_spec")
-        return cls(spec, config, calibrate, replan_every_step, calibration=calibration)
+        cfg = config or load_agents_config()
+        cal = calibration
+        if cal is None and calibrate:
+            cal = calibrate_env_camera(env, "input_camera", cfg.calibration, spec.image_size)
+        return cls(spec, cfg, cal, replan_every_step)
 
     def reset(self) -> None:
         """Forget the episode (open slots, queued commands, measured colours)."""
@@ -171,19 +162,20 @@ class ScriptedAgent:
         commanded of those slots is reopened and the picture planned again.
         """
         pcfg = self.cfg.perception
-        per = perceive_tiles(image, self.camera, self.tile_top, cfg=pcfg)
-        if pcfg.color_balance:
-            self.colors.extend(t.color for t in per.tiles)
-            many = len(self.colors) >= pcfg.color_min_samples
-            per, _ = balance_colors(
-                per, self.palette, pcfg, history=np.array(self.colors), per_channel=many
-            )
-        plan = self._assign(per)
+        per = perceive_tiles(
+            image,
+            self.camera,
+            self.tile_top,
+            cfg=pcfg,
+            white_balance=self._white_balance if pcfg.color_balance else None,
+        )
+        pairs = FeasiblePairs(per.tiles, self.slots)
+        plan = self._assign(per, pairs)
         if self.retry_params is not None and any(u.reason == "shape_absent" for u in plan.unplaced):
-            per, plan = self._retry_unmatched(per, plan)
+            per, pairs, plan = self._retry_unmatched(per, pairs, plan)
         taken = [u.tile for u in plan.unplaced if u.reason == "slots_taken"]
-        if taken and self._reopen([per.tiles[k] for k in taken]):
-            plan = self._assign(per)
+        if taken and self._reopen(taken, pairs):
+            plan = self._assign(per, pairs)
         self.pictures += 1
         self.last_perception = per
         self.last_plan = plan
@@ -191,17 +183,18 @@ class ScriptedAgent:
         return plan
 
     def _retry_unmatched(
-        self, per: Perception, plan: PlacementPlan
-    ) -> tuple[Perception, PlacementPlan]:
+        self, per: Perception, pairs: FeasiblePairs, plan: PlacementPlan
+    ) -> tuple[Perception, FeasiblePairs, PlacementPlan]:
         """Simplify the outlines of tiles matching no open slot's shape again (finer).
 
-        A tile's retried figure replaces its first one only when it then matches; the plan is
-        made again when any did.
+        A tile's retried figure replaces its first one only when it then matches an open
+        slot; the pairs and the plan are made again when any did.
         """
         assert self.retry_params is not None
         absent = {u.tile for u in plan.unplaced if u.reason == "shape_absent"}
-        tiles = list(per.tiles)
         open_slots = [s for s in self.slots if s.index not in self.filled]
+        use_color = self.cfg.placement.use_color
+        tiles = list(per.tiles)
         changed = False
         for pos, t in enumerate(tiles):
             if t.index not in absent:
@@ -209,41 +202,34 @@ class ScriptedAgent:
             again = refigured(
                 t, self.camera, per.plane_z, self.retry_params, cfg=self.cfg.perception
             )
-            if again is None:
-                continue
-            _, slots, _, _ = feasible_pairs(
-                [again.description],
-                [s.description for s in open_slots],
-                default_tolerances(),
-                self.cfg.placement.use_color,
-            )
-            if len(slots):
+            if again is not None and FeasiblePairs([again], open_slots).slots_of(0, use_color):
                 tiles[pos] = again
                 changed = True
         if not changed:
-            return per, plan
+            return per, pairs, plan
         per = dataclasses.replace(per, tiles=tuple(tiles))
-        return per, self._assign(per)
+        pairs = FeasiblePairs(per.tiles, self.slots)
+        return per, pairs, self._assign(per, pairs)
 
-    def _assign(self, per: Perception) -> PlacementPlan:
+    def _white_balance(self, measured: np.ndarray) -> np.ndarray:
+        """The gain of a picture's measured colours (n, 3), fitted on the recent history."""
+        pcfg = self.cfg.perception
+        self.colors.extend((r, g, b) for r, g, b in measured.tolist())
+        many = len(self.colors) >= pcfg.color_min_samples
+        return color_gain(np.array(self.colors), self.palette, pcfg, per_channel=many)
+
+    def _assign(self, per: Perception, pairs: FeasiblePairs) -> PlacementPlan:
         open_slots = [s for s in self.slots if s.index not in self.filled]
         done = [s for s in self.slots if s.index in self.filled]
-        return plan_placements(per.tiles, open_slots, self.cfg.placement, filled=done)
+        return plan_placements(per.tiles, open_slots, self.cfg.placement, filled=done, pairs=pairs)
 
-    def _reopen(self, tiles: list[PerceivedTile]) -> bool:
-        """Reopen, per tile, the most recently commanded filled slot it matches."""
-        filled = [s for s in self.slots if s.index in self.filled]
-        if not filled:
+    def _reopen(self, tiles: list[int], pairs: FeasiblePairs) -> bool:
+        """Reopen, per tile (by position), the most recently commanded filled slot it matches."""
+        if not self.filled:
             return False
-        t, s, _, _ = feasible_pairs(
-            [x.description for x in tiles],
-            [x.description for x in filled],
-            default_tolerances(),
-            self.cfg.placement.use_color,
-        )
         reopened = False
-        for k in range(len(tiles)):
-            cands = {filled[j].index for j in s[t == k].tolist()} & self.filled
+        for k in tiles:
+            cands = pairs.slots_of(k, self.cfg.placement.use_color) & self.filled
             recent = [i for i in reversed(self.order) if i in cands]
             if recent:
                 self.filled.discard(recent[0])

@@ -20,7 +20,7 @@ pairs already there, so results already computed are never lost or recomputed. A
 one table, ``<out>/eval.json``, ``<out>/eval.md`` and ``<out>/eval.png``. Columns (protocol of
 `agents.protocol`): success rate, slots filled, misplaced, dropped (events), lost and stranded
 tiles per episode, tiles/min (correct tiles per simulated minute, to completion or over the
-horizon) and wall seconds per correct tile.
+horizon, the mean of the episodes' figures) and wall seconds per correct tile.
 """
 
 from __future__ import annotations
@@ -48,8 +48,9 @@ from agents.policies import (
     make_policies,
     parse_pairs,
 )
-from agents.protocol import EpisodeMetrics, tiles_left
+from agents.protocol import EpisodeMetrics
 from configs import ConfigError, load_yaml
+from envs.task import Evaluation, tiles_per_minute
 
 ENV_ID = "envs:MosaicAssembly-v0"
 """Gymnasium id of the environment."""
@@ -120,6 +121,11 @@ class EpisodeResult:
     episode_return: float
     left: int = 0
 
+    @property
+    def tiles_per_min(self) -> float:
+        """Correct tiles per simulated minute over ``span_s`` (`envs.task.tiles_per_minute`)."""
+        return tiles_per_minute(self.correct, self.span_s)
+
 
 @dataclass(frozen=True)
 class PolicyRow:
@@ -137,8 +143,8 @@ class PolicyRow:
         lost: Mean lost tiles per episode.
         stranded: Mean stranded tiles per episode.
         left: Mean tiles never placed per episode.
-        tiles_per_min: Correct tiles per simulated minute over all episodes (each measured to
-            completion or over the horizon).
+        tiles_per_min: Mean over the episodes of their correct tiles per simulated minute
+            (each measured to completion or over the horizon; `agents.protocol`).
         wall_s_per_tile: Wall seconds per correct tile over all episodes (None: no tile).
         mean_return: Mean episode return.
         mean_steps: Mean episode length [steps].
@@ -264,25 +270,41 @@ def run_episode(
         total += float(reward)
         steps += 1
         done = terminated or truncated
-    ev = info["evaluation"]
-    m = EpisodeMetrics.of(info, horizon_s)
+    ev = Evaluation.from_info(info)
+    sim = float(info["sim_time"])
+    metrics = EpisodeMetrics.from_evaluation(ev, sim, horizon_s)
     return EpisodeResult(
         policy=label,
         seed=seed,
         design=str(env.unwrapped.config.design),  # type: ignore[attr-defined]
-        success=bool(ev["success"]),
-        correct=int(ev["correct"]),
-        slots=int(ev["slots"]),
-        misplaced=int(ev["misplaced"]),
-        dropped=int(ev["dropped"]),
-        lost=int(ev["lost"]),
-        stranded=int(ev.get("stranded", 0)),
-        left=tiles_left(ev),
+        success=ev.success,
+        correct=ev.correct,
+        slots=ev.slots,
+        misplaced=ev.misplaced,
+        dropped=ev.dropped,
+        lost=ev.lost,
+        stranded=ev.stranded,
+        left=int(metrics.left),
         steps=steps,
-        sim_s=m.sim_s,
-        span_s=m.sim_s if m.success else max(m.sim_s, horizon_s),
+        sim_s=sim,
+        span_s=ev.throughput_span(sim, horizon_s),
         wall_s=wall,
         episode_return=total,
+    )
+
+
+def episode_metrics(ep: EpisodeResult) -> EpisodeMetrics:
+    """The protocol's metrics of an episode result (`agents.protocol.EpisodeMetrics`)."""
+    return EpisodeMetrics(
+        success=float(ep.success),
+        filled=ep.correct / max(ep.slots, 1),
+        misplaced=float(ep.misplaced),
+        dropped=float(ep.dropped),
+        lost=float(ep.lost),
+        stranded=float(ep.stranded),
+        left=float(ep.left),
+        tiles_per_min=ep.tiles_per_min,
+        sim_s=ep.sim_s,
     )
 
 
@@ -290,25 +312,29 @@ def aggregate(label: str, episodes: Sequence[EpisodeResult], env: dict[str, Any]
     """One table row from a policy's episodes."""
     n = max(len(episodes), 1)
     correct = sum(e.correct for e in episodes)
-    span = sum(e.span_s for e in episodes)
     wall = sum(e.wall_s for e in episodes)
+
+    metrics = [episode_metrics(e) for e in episodes]
 
     def mean(key: str) -> float:
         return sum(float(getattr(e, key)) for e in episodes) / n
 
+    def protocol(key: str) -> float:
+        return sum(float(getattr(m, key)) for m in metrics) / n
+
     return PolicyRow(
         policy=label,
         episodes=len(episodes),
-        success_rate=mean("success"),
-        filled=sum(e.correct / max(e.slots, 1) for e in episodes) / n,
+        success_rate=protocol("success"),
+        filled=protocol("filled"),
         correct=correct / n,
         slots=mean("slots"),
-        misplaced=mean("misplaced"),
-        dropped=mean("dropped"),
-        lost=mean("lost"),
-        stranded=mean("stranded"),
-        left=mean("left"),
-        tiles_per_min=60.0 * correct / span if span > 0 else 0.0,
+        misplaced=protocol("misplaced"),
+        dropped=protocol("dropped"),
+        lost=protocol("lost"),
+        stranded=protocol("stranded"),
+        left=protocol("left"),
+        tiles_per_min=protocol("tiles_per_min"),
         wall_s_per_tile=wall / correct if correct else None,
         mean_return=mean("episode_return"),
         mean_steps=mean("steps"),

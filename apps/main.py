@@ -20,7 +20,8 @@ centres and target slots of the latest picture, the output view with the design'
 projected through the calibrated camera (open white, filled green, the current target magenta);
 ``input_camera_annotated.png`` and ``output_camera_annotated.png`` (the first picture and the
 empty mesh at full resolution) and ``output_camera_final.png`` (the assembled mosaic).
-``tiles_per_min`` counts correctly placed tiles per simulated minute of the episode.
+``tiles_per_min`` counts correctly placed tiles per simulated minute of the episode
+(`envs.task.Evaluation.tiles_per_min`, no horizon: the run is one episode to its end).
 """
 
 from __future__ import annotations
@@ -40,18 +41,19 @@ import cv2
 import gymnasium as gym
 import numpy as np
 
-from agents.calibration import calibrate_cell_camera
+from agents.calibration import calibrate_env_camera
 from agents.config import AgentsConfig, PlacementConfig, RunConfig, load_agents_config
 from agents.errors import AgentError
-from agents.perception import CameraLike, PerceivedTile, Perception, SlotTarget, project
+from agents.perception import PerceivedTile, Perception, SlotTarget
 from agents.placement import PlacementPlan, Unplaced
 from agents.scripted import ScriptedAgent
 from configs import ConfigError
 from envs.cell.accounting import TILE_STATES
+from envs.cell.cameras import CameraModel
 from envs.env_config import FEEDS
 from envs.episode_setup import with_feed_fallback
 from envs.errors import CellError
-from envs.task import GroundTruth
+from envs.task import Evaluation, GroundTruth
 from envs.task_spec import FeedMode, TaskSpec
 from qshape import QShapeError
 from spatial.angles import yaw_error
@@ -223,7 +225,7 @@ def draw_perception(
 
 def draw_slots(
     image: np.ndarray,
-    camera: CameraLike,
+    camera: CameraModel,
     slots: Sequence[SlotTarget],
     z: float,
     cfg: RunConfig,
@@ -265,11 +267,11 @@ def draw_slots(
         colour = _TARGET if s.index == target else _FILLED if s.index in done else _OUTLINE
         pts = np.asarray(s.figure.points, dtype=float)
         world = s.pose[:2] + (pts - np.asarray(s.figure.centroid)) / mm_per_m
-        uv = scale * project(camera, np.column_stack([world, np.full(len(world), z)]))
+        uv = scale * camera.project(np.column_stack([world, np.full(len(world), z)]))
         cv2.polylines(out, [np.round(uv).astype(np.int32)], True, colour, 1, cv2.LINE_AA)
         for p in uv:
             cv2.circle(out, _pt(p), max(1, r - 1), colour, -1, cv2.LINE_AA)
-        centre = scale * project(camera, np.array([[s.pose[0], s.pose[1], z]]))[0]
+        centre = scale * camera.project(np.array([[s.pose[0], s.pose[1], z]]))[0]
         cv2.drawMarker(out, _pt(centre), _CENTRE, cv2.MARKER_CROSS, 3 * r, 1)
         if scale >= 1.0:
             cv2.putText(out, s.name, _pt(centre + [-6 * r, 4 * r]), cv2.FONT_HERSHEY_SIMPLEX,
@@ -319,7 +321,7 @@ class CellVideo:
         self,
         env: gym.Env[Any, Any],
         agent: ScriptedAgent,
-        output_camera: CameraLike,
+        output_camera: CameraModel,
         cfg: RunConfig,
         mm_per_m: float,
     ) -> None:
@@ -328,7 +330,7 @@ class CellVideo:
         self.output_camera = output_camera
         self.cfg = cfg
         self.mm_per_m = mm_per_m
-        cell = agent.spec.cell
+        cell = env.get_wrapper_attr("config").cell
         h = cell.render.overview_size[0]
         cam = cell.input_camera
         self.panel = (h // 2, round(h // 2 * cam.width / cam.height))
@@ -450,8 +452,8 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
         cal_in = cal_out = None
         if agent.calibration is not None:
             cal_in = agent.calibration.summary()
-            out_cal = calibrate_cell_camera(spec.cell, "output_camera", cfg.calibration)
-            out_cam: CameraLike = out_cal.camera
+            out_cal = calibrate_env_camera(env, "output_camera", cfg.calibration)
+            out_cam: CameraModel = out_cal.camera
             cal_out = out_cal.summary()
         else:
             out_cam = spec.camera("output_camera")
@@ -509,7 +511,7 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             bar.update(info["tiles_placed"] - bar.n)
             if terminated or truncated:
                 break
-        evaluation = info["evaluation"]
+        evaluation = Evaluation.from_info(info)
         if first is not None:
             cv2.imwrite(str(out_dir / "input_camera_annotated.png"), draw_perception(*first, rc))
         cv2.imwrite(
@@ -530,20 +532,20 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             cv2.cvtColor(home_obs["output_camera"], cv2.COLOR_RGB2BGR),
         )
         video_path = video.write(out_dir / "cell.mp4") if video is not None else None
-        n = int(evaluation["slots"])
+        n = evaluation.slots
         rec_ok = sum(1 for r in rec if r.class_ok)
         last = agent.last_perception
         report = RunReport(
             design=spec.design,
             seed=rc.seed,
             tiles_total=n,
-            correct=int(evaluation["correct"]),
-            misplaced=int(evaluation["misplaced"]),
-            dropped=int(evaluation["dropped"]),
-            lost=int(evaluation["lost"]),
-            distractors_placed=int(evaluation["distractors_placed"]),
-            success=bool(evaluation["success"]),
-            tiles_per_min=float(info["tiles_per_min"]),
+            correct=evaluation.correct,
+            misplaced=evaluation.misplaced,
+            dropped=evaluation.dropped,
+            lost=evaluation.lost,
+            distractors_placed=evaluation.distractors_placed,
+            success=evaluation.success,
+            tiles_per_min=evaluation.tiles_per_min(float(info["sim_time"])),
             sim_s=float(info["sim_time"]),
             wall_s=time.perf_counter() - t_wall,
             executed=rc.execute,
@@ -552,12 +554,12 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             steps=steps,
             waits=waits,
             rejects=tuple(rejects),
-            tile_states={s: int(evaluation[s]) for s in TILE_STATES},
+            tile_states={s: int(getattr(evaluation, s)) for s in TILE_STATES},
             failed_actions=failed,
             failures=tuple(failures),
             pictures=agent.pictures,
-            position_error_mm_max=evaluation["position_error_mm_max"],
-            yaw_error_deg_max=evaluation["yaw_error_deg_max"],
+            position_error_mm_max=evaluation.position_error_mm_max,
+            yaw_error_deg_max=evaluation.yaw_error_deg_max,
             recognition=tuple(rec),
             recognised_tiles=len(rec),
             recognised_correct_class=rec_ok,
@@ -567,9 +569,7 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             unplaced=agent.unplaced,
             unrecognised=last.unrecognised if last else (),
             open_slots=tuple(
-                s.name
-                for s, ok in zip(agent.slots, evaluation["slot_filled"], strict=True)
-                if not ok
+                s.name for s, ok in zip(agent.slots, evaluation.slot_filled, strict=True) if not ok
             ),
             placement=cfg.placement,
             video=str(video_path) if video_path else None,

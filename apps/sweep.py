@@ -291,12 +291,10 @@ def _trained(folder: Path) -> Any:
 
 
 def _metric(ep: Any, name: str) -> float:
-    """A protocol metric of an `apps.evaluate.EpisodeResult`."""
-    if name == "filled":
-        return ep.correct / max(ep.slots, 1)
-    if name == "tiles_per_min":
-        return 60.0 * ep.correct / ep.span_s if ep.span_s > 0 else 0.0
-    return float(getattr(ep, name))
+    """A protocol metric of an `apps.evaluate.EpisodeResult` (`apps.evaluate.episode_metrics`)."""
+    from apps.evaluate import episode_metrics  # noqa: PLC0415
+
+    return float(getattr(episode_metrics(ep), name))
 
 
 def run_sweep(

@@ -18,11 +18,13 @@ from typing import Any
 
 import numpy as np
 
-from agents.calibration import calibrate_cell_camera
+from agents.calibration import calibrate
 from agents.config import load_agents_config
-from agents.perception import CameraLike, balance_colors, perceive_tiles, slot_targets
+from agents.perception import balance_colors, perceive_tiles, slot_targets
 from agents.placement import plan_placements
 from benchmarks.design_cell import build_design_cell, nearest_tile
+from envs.cell.calibration_board import render_calibration_views
+from envs.cell.cameras import CameraModel
 from envs.cell.config import load_cell_config
 from envs.task_spec import work_areas, world_slots
 from qshape.design import Design
@@ -48,10 +50,11 @@ def bench(
     design = Design.load(design_name)
     if max_slots:
         design = design.with_slots(design.slots[:max_slots])
-    camera: CameraLike | None = None
+    camera: CameraModel | None = None
     cal = None
     if not true_camera:
-        cal = calibrate_cell_camera(load_cell_config(), "input_camera", cfg.calibration)
+        views = render_calibration_views(load_cell_config(), "input_camera", cfg.calibration.target)
+        cal = calibrate(views, cfg.calibration)
         camera = cal.camera
     tiles = ok = 0
     pos, yaw, wall, failures = [], [], [], []

@@ -108,9 +108,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ## Task description
     ``env.get_wrapper_attr("task_spec")`` is a frozen `envs.task_spec.TaskSpec`: the design's
     slots in the world, the pick and place areas and heights, the tile thickness, the camera
-    models and the ``pick_place`` action codec. Agents are built from it alone
-    (``ScriptedAgent.from_env``). ``ground_truth()`` (privileged tile poses and classes) is
-    for scoring and reports, never for decisions.
+    models and the ``pick_place`` action codec. Agents are built from it and calibrate from
+    ``calibration_views(camera)`` (``ScriptedAgent.from_env``). ``ground_truth()`` (privileged
+    tile poses and classes) is for scoring and reports, never for decisions.
 
     ## Rewards
     ``sparse``: +reward_correct per newly filled slot, +reward_success when complete,
@@ -206,6 +206,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.codec = PickPlaceCodec(self.pick_area, self.place_area)
         self.task_spec: TaskSpec = build_task_spec(self.cell, cfg, design)
         """What agents may know besides the observations (see `envs.task_spec`)."""
+        self.calibration_views = self.cell.views.calibration_views
+        """Checkerboard pictures to calibrate a camera (`envs.cell.views.CellViews`)."""
         self.executor: PickPlaceExecutor | None = None
         self.actions = self._adapter(pcfg)
         self.action_space = self.actions.space
@@ -462,7 +464,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         info: dict[str, Any] = {
             "sim_time": t,
             "tiles_placed": placed,
-            "tiles_per_min": 60.0 * placed / t if t > 0 else 0.0,
+            "tiles_per_min": evaluation.tiles_per_min(t),
             "evaluation": evaluation.as_dict(),
             "is_success": evaluation.success,
             "action_failed": failed,

@@ -1,7 +1,8 @@
 """The mosaic task: which tile belongs where, placement evaluation and rewards.
 
 `MosaicTask.evaluate` returns one `Evaluation` the reward, the episode end and ``info`` all read
-(``info["evaluation"]`` is its `Evaluation.as_dict`). `MosaicTask.initialize_episode` is the
+(``info["evaluation"]`` is its `Evaluation.as_dict`; ``info["tiles_per_min"]`` its
+`Evaluation.tiles_per_min`). `MosaicTask.initialize_episode` is the
 episode set-up hook: layout (with retries), per-episode colour and light randomisation, belt
 speed and optional settling.
 Tiles and slots are matched by class name (the design's shape-and-colour class); distractors are
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -25,7 +27,7 @@ from envs.cell.camera_effects import CameraJitter
 from envs.cell.cell import Cell
 from envs.env_config import EnvConfig
 from envs.episode_setup import retry_layout
-from envs.errors import CellError
+from envs.errors import CellError, EnvError
 from envs.rewards import STAGES, SlotProgress, StagedReward, load_staged_config
 from spatial.angles import yaw_error
 from spatial.rotations import yaw_from_quat
@@ -143,6 +145,28 @@ class Evaluation:
         d = {f.name: getattr(self, f.name) for f in _EVALUATION_FIELDS}  # flat: no deep copy
         d["slot_filled"] = list(self.slot_filled)
         return d
+
+    @classmethod
+    def from_info(cls, info: Mapping[str, Any]) -> Evaluation:
+        """The evaluation in a step's ``info`` (`as_dict` read back; `EnvError` if absent)."""
+        d = info.get("evaluation")
+        if not isinstance(d, Mapping) or any(f.name not in d for f in _EVALUATION_FIELDS):
+            raise EnvError("info has no complete 'evaluation' (a MosaicAssembly step's info)")
+        fields = {f.name: d[f.name] for f in _EVALUATION_FIELDS}
+        return cls(**{**fields, "slot_filled": tuple(bool(x) for x in d["slot_filled"])})
+
+    def tiles_per_min(self, sim_s: float, horizon_s: float = 0.0) -> float:
+        """Correct tiles per simulated minute over `throughput_span`: the one definition."""
+        return tiles_per_minute(self.correct, self.throughput_span(sim_s, horizon_s))
+
+    def throughput_span(self, sim_s: float, horizon_s: float = 0.0) -> float:
+        """``sim_s`` [s] for a success, else ``max(sim_s, horizon_s)``: stopping early is slow."""
+        return sim_s if self.success else max(sim_s, horizon_s)
+
+
+def tiles_per_minute(correct: int, span_s: float) -> float:
+    """``correct`` tiles over ``span_s`` simulated seconds, per minute (0 for no time)."""
+    return 60.0 * correct / span_s if span_s > 0 else 0.0  # 60 s per minute
 
 
 _EVALUATION_FIELDS = dataclasses.fields(Evaluation)

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from envs.cell.cameras import CameraModel
-from envs.cell.config import CellConfig, FeedMode
+from envs.cell.config import FeedMode
 from envs.errors import EnvError
 from spatial.angles import wrap_angle
 from spatial.units import MM_PER_M
@@ -196,7 +196,6 @@ class TaskSpec:
         image_size: Observation image (height, width) [px].
         cameras: Camera models at ``image_size``, by name.
         codec: The ``pick_place`` action codec (None in the other action modes).
-        cell: The cell's configuration (what a calibration rig rebuilds the cameras from).
     """
 
     design: str
@@ -211,7 +210,6 @@ class TaskSpec:
     image_size: tuple[int, int]
     cameras: dict[str, CameraModel]
     codec: PickPlaceCodec | None
-    cell: CellConfig
 
     def camera(self, name: CameraName) -> CameraModel:
         """The camera model of ``name`` at the observation size.
@@ -294,7 +292,6 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
         image_size=(int(h), int(w)),
         cameras=cameras,
         codec=codec,
-        cell=cell.cfg,
     )
 
 

@@ -79,16 +79,24 @@ class CameraModel:
 
         Returns:
             World points, shape (n, 3) [m].
+
+        Raises:
+            CellError: A ray parallel to the plane, or the plane behind the camera.
         """
         uv = np.atleast_2d(np.asarray(uv, dtype=float))
-        if np.any(self.distortion):
+        if np.any(self.distortion):  # pixels through the lens -> ideal pinhole pixels
             uv = cv2.undistortPoints(uv.reshape(-1, 1, 2), self.K, self.distortion, P=self.K)
             uv = uv.reshape(-1, 2).astype(float)
         rays_cam = np.column_stack([uv, np.ones(len(uv))]) @ np.linalg.inv(self.K).T
         r = self.world_to_camera[:3, :3]
         origin = -r.T @ self.world_to_camera[:3, 3]
-        rays = rays_cam @ r  # camera -> world directions
-        s = (z - origin[2]) / rays[:, 2]
+        rays = rays_cam @ r  # camera -> world directions (rows)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = (z - origin[2]) / rays[:, 2]
+        if not np.all(np.isfinite(s)) or np.any(s <= 0):
+            raise CellError(
+                f"the plane z = {z} m is not in front of camera {self.name!r} for every pixel"
+            )
         return origin + s[:, None] * rays
 
 

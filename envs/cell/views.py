@@ -14,6 +14,11 @@ import mujoco
 import numpy as np
 
 from envs.cell.belts import input_speed
+from envs.cell.calibration_board import (
+    CalibrationTarget,
+    CalibrationViews,
+    render_calibration_views,
+)
 from envs.cell.camera_effects import BeltBlur
 from envs.cell.cameras import CameraModel, CameraRig, camera_model
 from envs.cell.config import CameraConfig, CellConfig
@@ -76,6 +81,29 @@ class CellViews:
             height or cam_cfg.height,
             distortion=cam_cfg.distortion,
         )
+
+    def calibration_views(
+        self,
+        camera: str,
+        target: CalibrationTarget | None = None,
+        size: tuple[int, int] | None = None,
+    ) -> CalibrationViews:
+        """Pictures of a checkerboard target before one camera, for calibrating it.
+
+        What a real cell's calibration takes (`envs.cell.calibration_board`): the board at
+        several tilted, lifted and shifted poses, then lying flat at its fixture position,
+        rendered through the camera's lens in a copy of the cell's scene without tiles (the
+        cell's state is not touched).
+
+        Args:
+            camera: ``"input_camera"`` or ``"output_camera"``.
+            target: Board and poses (defaults when None).
+            size: Image (height, width) [px]; the camera's configured size when None.
+
+        Raises:
+            CellError: Unknown camera (the message lists the allowed names).
+        """
+        return render_calibration_views(self.cfg, camera, target, size)
 
     def belt_blur(
         self, data: mujoco.MjData, height: int, width: int

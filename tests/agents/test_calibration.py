@@ -5,12 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agents.calibration import board_corners, calibrate, find_corners, render_views
+from agents.calibration import calibrate, find_corners
 from agents.config import CalibrationConfig, load_agents_config
 from agents.errors import CalibrationError
 from agents.perception import perceive_tiles
 from benchmarks.design_cell import build_design_cell, nearest_tile
+from envs.cell.calibration_board import render_calibration_views
 from envs.cell.config import load_cell_config
+from envs.errors import CellError
 from envs.task_spec import work_areas
 from qshape.design import Design
 
@@ -22,7 +24,7 @@ def cfg() -> CalibrationConfig:
 
 @pytest.fixture(scope="module")
 def views(cfg):
-    return render_views(load_cell_config(), "input_camera", cfg)
+    return render_calibration_views(load_cell_config(), "input_camera", cfg.target)
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +46,7 @@ def test_corner_order_matches_the_board(views, cfg, result):
     """Projected world corners of the flat view land on the detected ones (no flip)."""
     corners = find_corners(views.flat, cfg)
     assert corners is not None
-    world = board_corners(cfg) + views.flat_pose
+    world = cfg.target.corners() + views.flat_pose
     np.testing.assert_allclose(views.true_camera.project(world), corners, atol=0.5)
 
 
@@ -71,5 +73,5 @@ def test_too_few_views_is_an_error(views, cfg):
 
 
 def test_unknown_camera(cfg):
-    with pytest.raises(CalibrationError, match="allowed"):
-        render_views(load_cell_config(), "top_camera", cfg)
+    with pytest.raises(CellError, match="allowed"):
+        render_calibration_views(load_cell_config(), "top_camera", cfg.target)

@@ -11,12 +11,11 @@ from agents.perception import (
     balance_colors,
     color_gain,
     perceive_tiles,
-    project,
     slot_targets,
-    unproject,
 )
 from benchmarks.design_cell import build_design_cell, nearest_tile
 from benchmarks.perception import bench
+from envs.errors import CellError
 from envs.task_spec import work_areas, world_slots
 from qshape.design import Design
 
@@ -68,11 +67,29 @@ def test_slots_match_cell_slot_poses(scene):
 def test_unproject_project_round_trip(scene):
     _, _, cam, _, _, _ = scene
     uv = np.array([[0.0, 0.0], [655.0, 491.0], [300.5, 200.25]])
-    pts = unproject(cam, uv, 0.205)
-    np.testing.assert_allclose(project(cam, pts), uv, atol=1e-9)
-    np.testing.assert_allclose(pts, cam.unproject_to_plane(uv, 0.205), atol=1e-12)
-    with pytest.raises(PerceptionError):
-        unproject(cam, uv, 5.0)  # plane above the camera
+    pts = cam.unproject_to_plane(uv, 0.205)
+    np.testing.assert_allclose(cam.project(pts), uv, atol=1e-9)
+    np.testing.assert_allclose(pts[:, 2], 0.205)
+    with pytest.raises(CellError, match="not in front"):
+        cam.unproject_to_plane(uv, 5.0)  # plane above the camera
+
+
+def test_a_plane_behind_the_camera_is_a_perception_error(scene):
+    cell, _, cam, _, _, _ = scene
+    with pytest.raises(PerceptionError, match="not in front"):
+        perceive_tiles(cell.render("input_camera"), cam, 5.0)  # plane above the camera
+
+
+def test_white_balance_in_perception_equals_balancing_after(scene):
+    """Balancing while perceiving describes once and gives what re-describing gave."""
+    cell, _, cam, slots, per, gain = scene
+    z = per.plane_z
+    once = perceive_tiles(cell.render("input_camera"), cam, z, white_balance=lambda _: gain)
+    assert len(once.tiles) == len(per.tiles)
+    for a, b in zip(once.tiles, per.tiles, strict=True):
+        assert a.color == b.color and a.figure.color == b.figure.color
+        assert a.description == b.description
+        np.testing.assert_allclose(a.centre, b.centre)
 
 
 def test_color_gain_recovers_a_known_gain():

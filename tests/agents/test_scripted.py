@@ -6,7 +6,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from agents.errors import AgentError
+from agents.calibration import calibrate_env_camera
+from agents.errors import AgentError, CalibrationError
 from agents.scripted import ScriptedAgent
 
 FULL = (492, 656)
@@ -28,6 +29,12 @@ def env():
 def test_scripted_agent_fills_the_design(env):
     agent = ScriptedAgent.from_env(env)
     assert agent.calibration is not None and agent.calibration.reprojection_px < 0.5
+    # The pictures were the env's own camera's, at the observation size.
+    true, spec_cam = agent.calibration.true_camera, agent.spec.camera("input_camera")
+    np.testing.assert_allclose(true.K, spec_cam.K)
+    np.testing.assert_allclose(true.world_to_camera, spec_cam.world_to_camera, atol=1e-12)
+    with pytest.raises(CalibrationError, match="allowed"):
+        calibrate_env_camera(env, "top_camera")
     obs, _ = env.reset(seed=0)
     info = {}
     for step in range(20):

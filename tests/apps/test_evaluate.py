@@ -8,7 +8,10 @@ import pytest
 
 from apps.evaluate import (
     COLUMNS,
+    EpisodeResult,
     EvaluateError,
+    aggregate,
+    episode_metrics,
     evaluate_policy_set,
     load_env_overrides,
     make_policies,
@@ -51,6 +54,21 @@ def test_rows_have_the_keys(evaluated, tmp_path):
     saved = json.loads((tmp_path / "eval.json").read_text())
     assert saved["rows"][0]["policy"] == "scripted" and report["seeds"] == [1000, 1001]
     assert "| scripted |" in markdown_table(rows)
+
+
+def test_one_tiles_per_min_definition(evaluated):
+    """A row's tiles/min is the mean of its episodes' protocol figures (what the sweep averages)."""
+    rows, episodes = evaluated
+    for r in rows:
+        eps = episodes[r.policy]
+        per_episode = [episode_metrics(e).tiles_per_min for e in eps]
+        assert r.tiles_per_min == pytest.approx(sum(per_episode) / len(eps))
+        for e in eps:  # failed episodes are measured over at least the horizon (2 x 5 s)
+            assert e.span_s == (e.sim_s if e.success else max(e.sim_s, 10.0))
+    fast = EpisodeResult("p", 0, "d", True, 2, 2, 0, 0, 0, 0, 2, 5.0, 5.0, 1.0, 0.0)
+    failed = EpisodeResult("p", 1, "d", False, 0, 2, 0, 0, 0, 0, 2, 3.0, 20.0, 1.0, 0.0)
+    row = aggregate("p", [fast, failed], {})
+    assert row.tiles_per_min == pytest.approx(12.0)  # (24 + 0) / 2, not 60 * 2 / 25 = 4.8
 
 
 def test_random_is_reproducible(evaluated):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
@@ -11,6 +12,8 @@ import pytest
 
 import envs  # noqa: F401
 from agents.scripted import ScriptedAgent
+from envs.errors import EnvError
+from envs.task import Evaluation
 from envs.task_spec import ActionError, PickPlaceCommand, TaskSpec
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -85,9 +88,37 @@ def test_agent_is_built_from_the_spec_alone(env) -> None:
     assert agent.tile_top == agent.spec.pick.tile_top_z
 
 
+def test_agents_know_no_simulator() -> None:
+    """The spec carries no cell configuration; no agent module builds or imports the scene."""
+    assert "cell" not in {f.name for f in dataclasses.fields(TaskSpec)}
+    for path in sorted((ROOT / "agents").glob("*.py")):
+        text = path.read_text()
+        for banned in ("import mujoco", "build_spec", "envs.cell.scene", "CameraRig"):
+            assert banned not in text, f"{path.name} uses {banned}"
+
+
+def test_the_info_evaluation_is_the_typed_record(env) -> None:
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(env.unwrapped.expert_action(0, 0))
+    ev = Evaluation.from_info(info)
+    assert ev.as_dict() == info["evaluation"] and ev.correct == 1
+    assert info["tiles_per_min"] == ev.tiles_per_min(info["sim_time"])
+    # A failed episode is measured over the horizon when that is longer than its own time.
+    late = dataclasses.replace(ev, success=False)
+    assert late.tiles_per_min(info["sim_time"], 600.0) == pytest.approx(0.1)
+    with pytest.raises(EnvError, match="evaluation"):
+        Evaluation.from_info({"sim_time": 1.0})
+
+
 @pytest.mark.parametrize(
     "path",
-    ["agents/scripted.py", "agents/perception.py", "agents/placement.py", "apps/main.py"],
+    [
+        "agents/scripted.py",
+        "agents/perception.py",
+        "agents/placement.py",
+        "agents/calibration.py",
+        "apps/main.py",
+    ],
 )
 def test_the_policy_and_the_main_job_never_reach_into_the_env(path: str) -> None:
     text = (ROOT / path).read_text()
