@@ -16,7 +16,6 @@ with cross-entropy on every recorded step (`BCConfig`, ``configs/bc.yaml``). The
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 from dataclasses import asdict, dataclass
@@ -26,7 +25,9 @@ from typing import Any
 import numpy as np
 
 from agents.errors import AgentError
+from apps.cli import CommandParser, run_cli
 from configs import load_config
+from configs.files import atomic_path, write_json
 
 STATE_KEYS = ("robot", "tiles", "slots")
 """Observation keys the clone reads, in order."""
@@ -121,15 +122,16 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
         acc = float((net(x).argmax(1) == y).float().mean())
     out.mkdir(parents=True, exist_ok=True)
     path = out / "bc.pt"
-    torch.save(
-        {
-            "state_dict": net.state_dict(),
-            "nvec": nvec.tolist(),
-            "n_in": int(x.shape[1]),
-            "config": asdict(cfg),
-        },
-        path,
-    )
+    with atomic_path(path) as tmp:
+        torch.save(
+            {
+                "state_dict": net.state_dict(),
+                "nvec": nvec.tolist(),
+                "n_in": int(x.shape[1]),
+                "config": asdict(cfg),
+            },
+            tmp,
+        )
     summary = {
         "model_path": str(path),
         "samples": len(x),
@@ -138,7 +140,7 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
         "wall_s": time.perf_counter() - t0,
         "seed": seed,
     }
-    (out / "bc_summary.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
+    write_json(out / "bc_summary.json", summary)
     return summary
 
 
@@ -153,10 +155,18 @@ class BCPolicy:
         import torch  # noqa: PLC0415
         from gymnasium import spaces  # noqa: PLC0415
 
-        blob = torch.load(str(path), map_location="cpu", weights_only=True)
-        self.nvec = np.asarray(blob["nvec"], np.int64)
-        self.net = _network(int(blob["n_in"]), int(np.prod(self.nvec)), BCConfig(**blob["config"]))
-        self.net.load_state_dict(blob["state_dict"])
+        try:
+            blob = torch.load(str(path), map_location="cpu", weights_only=True)
+            self.nvec = np.asarray(blob["nvec"], np.int64)
+            cfg = BCConfig(**blob["config"])
+            self.net = _network(int(blob["n_in"]), int(np.prod(self.nvec)), cfg)
+            self.net.load_state_dict(blob["state_dict"])
+        except (OSError, RuntimeError, KeyError, TypeError, ValueError, EOFError) as exc:
+            detail = " ".join(str(exc).split())[:200]
+            raise AgentError(
+                f"{path} is not a behaviour clone saved by agents.bc ({type(exc).__name__}: "
+                f"{detail})"
+            ) from exc
         self.net.eval()
         self.action_space = spaces.MultiDiscrete(self.nvec)
         self.n_in = int(blob["n_in"])
@@ -177,7 +187,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line (see the module docstring)."""
     from agents.record_demos import DEFAULT_ROOT, load  # noqa: PLC0415
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dataset-id", required=True)
     ap.add_argument("--root", type=Path, default=DEFAULT_ROOT)
     ap.add_argument("--out", type=Path, default=Path("runs/bc"))
@@ -194,4 +204,4 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 __all__ = ["BCConfig", "BCPolicy", "load_bc_config", "main", "train_bc"]
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)
