@@ -17,6 +17,7 @@ with cross-entropy on every recorded step (`BCConfig`, ``configs/bc.yaml``). The
 from __future__ import annotations
 
 import json
+import pickle
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -161,11 +162,20 @@ class BCPolicy:
             cfg = BCConfig(**blob["config"])
             self.net = _network(int(blob["n_in"]), int(np.prod(self.nvec)), cfg)
             self.net.load_state_dict(blob["state_dict"])
-        except (OSError, RuntimeError, KeyError, TypeError, ValueError, EOFError) as exc:
-            detail = " ".join(str(exc).split())[:200]
+        except (
+            OSError,
+            RuntimeError,
+            KeyError,
+            TypeError,
+            ValueError,
+            EOFError,
+            pickle.UnpicklingError,
+        ) as exc:
+            what = "no such file" if isinstance(exc, FileNotFoundError) else "unreadable"
+            if isinstance(exc, KeyError | TypeError):
+                what = f"missing or wrong entry {exc}"
             raise AgentError(
-                f"{path} is not a behaviour clone saved by agents.bc ({type(exc).__name__}: "
-                f"{detail})"
+                f"{path} is not a behaviour clone saved by agents.bc ({what}: {type(exc).__name__})"
             ) from exc
         self.net.eval()
         self.action_space = spaces.MultiDiscrete(self.nvec)

@@ -28,7 +28,6 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import argparse  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import time  # noqa: E402
@@ -41,6 +40,8 @@ from typing import TypeVar  # noqa: E402
 import numpy as np  # noqa: E402
 
 import qshape  # noqa: E402
+from apps.cli import CommandParser, UsageError, run_cli  # noqa: E402
+from configs.files import write_text  # noqa: E402
 from qshape import Description, Figure, Tolerances  # noqa: E402
 from qshape.description import describe_many  # noqa: E402
 from qshape.figure import Boundary  # noqa: E402
@@ -269,7 +270,7 @@ def mix_classes(
     if mix == "zipf20":
         weights = 1.0 / np.arange(1, 21)
         return make_classes(rng, 20), weights / weights.sum()
-    raise SystemExit(f"error: unknown mix {mix!r}; allowed: {', '.join(MIXES)}")
+    raise UsageError(f"unknown mix {mix!r}; allowed: {', '.join(MIXES)}")
 
 
 MIXES = ("balanced", "one_class", "five_colours", "zipf20")
@@ -431,7 +432,7 @@ def _case_rows(name: str, res: dict, paper: dict) -> list[tuple[str, str]]:
 
 def main(argv: list[str] | None = None) -> dict:
     """Run the benchmark; return the results written to ``out/bench_qshape.json``."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tiles", type=int, default=10_000)
     ap.add_argument("--classes", type=int, default=50, help="classes of the balanced mix")
     ap.add_argument("--seed", type=int, default=0)
@@ -513,7 +514,7 @@ def main(argv: list[str] | None = None) -> dict:
         "cases": cases,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
+    write_text(args.out, json.dumps(out, indent=2) + "\n")
     width = max(len(r[0]) for r in rows)
     for name, value in rows:
         print(f"{name:<{width}}  {value}")
@@ -522,4 +523,4 @@ def main(argv: list[str] | None = None) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

@@ -94,6 +94,19 @@ def write_json(path: str | Path, value: Any, **dumps: Any) -> None:
     write_text(path, json.dumps(value, **{"indent": 2, **dumps}))
 
 
+def write_image(path: str | Path, bgr: Any) -> None:
+    """Write a BGR picture with OpenCV (format from the suffix) whole or not at all.
+
+    Raises:
+        OSError: OpenCV could not encode the picture.
+    """
+    import cv2  # noqa: PLC0415 - only the programs that write pictures need OpenCV
+
+    with atomic_path(path) as tmp:
+        if not cv2.imwrite(str(tmp), bgr):
+            raise OSError(f"cannot write the picture {path}")
+
+
 @contextlib.contextmanager
 def atomic_dir(path: str | Path) -> Iterator[Path]:
     """Yield an empty temporary folder that replaces the folder ``path`` on success.
@@ -168,6 +181,7 @@ __all__ = [
     "partial_path",
     "replace_dir",
     "write_bytes",
+    "write_image",
     "write_json",
     "write_text",
 ]

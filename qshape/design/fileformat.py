@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import yaml
 
+from configs.files import write_text
 from qshape.design.rules import DesignRules
 from qshape.design.slot import Slot
 from qshape.design.values import color_hex, number, parse_color, plain, round_mm
@@ -113,7 +114,7 @@ def save(design: Design, path: str | Path, header: str = "") -> None:
     """Write the design as YAML (``header`` lines become leading comments)."""
     text = "".join(f"# {line}\n".replace("# \n", "#\n") for line in header.splitlines())
     text += yaml.safe_dump(to_mapping(design), sort_keys=False, default_flow_style=None, width=100)
-    Path(path).write_text(text, encoding="utf-8")
+    write_text(Path(path), text)
 
 
 __all__ = ["DESIGN_KEYS", "POSE_KEYS", "SLOT_KEYS", "read_fields", "save", "to_mapping"]
