@@ -24,6 +24,7 @@ from qshape.description import (
 )
 from qshape.errors import (
     DesignError,
+    DesignLimitError,
     FigureLimitError,
     InvalidFigureError,
     InvalidHoleError,
@@ -47,6 +48,7 @@ __all__ = [
     "BoundaryDescription",
     "Description",
     "DesignError",
+    "DesignLimitError",
     "FigureLimitError",
     "Figure",
     "HoleDescription",

@@ -8,8 +8,9 @@ import numpy as np
 import shapely
 
 from qshape import geometry as geo
-from qshape.errors import DesignError, InvalidFigureError
+from qshape.errors import DesignError, DesignLimitError, InvalidFigureError
 from qshape.geometry import FloatArray
+from qshape.limits import default_limits
 
 if TYPE_CHECKING:
     from qshape.design.model import Design
@@ -22,6 +23,7 @@ def validate(design: Design, source: str = "") -> None:
         DesignError: Duplicate names, degenerate or self-crossing outlines, bad holes,
             slots outside the mesh (by more than ``rules.mesh_margin_mm``), or two slots
             closer than ``rules.min_gap_fraction`` x joint.
+        DesignLimitError: A mesh side or tile outline above the ``max_design_mm`` cap.
     """
     pre = f"{source}: " if source else f"design {design.name!r}: "
     names = [s.name for s in design.slots]
@@ -29,6 +31,8 @@ def validate(design: Design, source: str = "") -> None:
     if dupes:
         raise DesignError(f"{pre}duplicate slot name(s) {dupes}")
     w, h = design.mesh_size
+    for side, value in (("width", w), ("height", h)):
+        default_limits().check_length(float(value), f"{pre}mesh {side}")
     margin = design.rules.mesh_margin_mm
     outlines = []
     for s in design.slots:
@@ -37,6 +41,8 @@ def validate(design: Design, source: str = "") -> None:
             if geo.self_intersects(dense):
                 raise DesignError("its outline crosses itself")
             s.figure()
+        except DesignLimitError as exc:
+            raise DesignLimitError(f"{pre}{exc}") from exc
         except (DesignError, InvalidFigureError) as exc:
             text = str(exc)
             named = text if text.startswith(f"slot {s.name!r}") else f"slot {s.name!r}: {text}"
