@@ -122,7 +122,6 @@ class Limits:
                 f"{self.coordinate_resolution:g} of its size; move it nearer the origin"
             )
 
-
     def check_length(self, length_mm: float, what: str) -> None:
         """Raise `DesignLimitError` when a design length exceeds ``max_design_mm``.
 
