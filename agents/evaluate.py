@@ -292,7 +292,7 @@ def run_episode(
         left=tiles_left(ev),
         steps=steps,
         sim_s=m.sim_s,
-        span_s=m.sim_s if m.success else max(m.sim_s, horizon_s),
+        span_s=m.span_s,
         wall_s=wall,
         episode_return=total,
     )

@@ -65,6 +65,8 @@ class EpisodeMetrics:
         left: Real tiles never placed: on the input belt, held or waiting at the end [count].
         tiles_per_min: Correct tiles per simulated minute (see the module docstring).
         sim_s: Simulated episode time [s].
+        span_s: Time the throughput is measured over [s]: ``sim_s`` for a successful
+            episode, ``max(sim_s, horizon)`` otherwise (the one home of that rule).
     """
 
     success: float
@@ -76,6 +78,7 @@ class EpisodeMetrics:
     left: float
     tiles_per_min: float
     sim_s: float
+    span_s: float
 
     @staticmethod
     def of(info: Mapping[str, Any], horizon_s: float) -> EpisodeMetrics:
@@ -100,6 +103,7 @@ class EpisodeMetrics:
             left=float(tiles_left(ev)),
             tiles_per_min=SECONDS_PER_MINUTE * int(ev["correct"]) / span if span > 0 else 0.0,
             sim_s=sim,
+            span_s=span,
         )
 
 
