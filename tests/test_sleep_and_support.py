@@ -131,3 +131,21 @@ def test_a_kinematic_place_sets_the_tile_down(kinematic: MosaicAssemblyEnv) -> N
     placed = np.array([e.tile for e in cell.events if e.kind == "release"])
     asleep = cell.data.tree_asleep[trees[placed]]
     assert np.all(asleep[:-2] >= 0) and asleep[-2] >= -1 and asleep[-1] < 0
+
+
+def test_ending_countdowns_spares_tiles_riding_a_moving_belt(cell: Cell) -> None:
+    """A tile still in every direction but one (riding the belt) keeps its countdown."""
+    cell.belt_speed = 0.1
+    cell.reset(seed=4)
+    cell.step(20)
+    riding = cell.on_stage.copy()
+    before = cell.tile_poses().pos
+    steps = 0
+    for _ in range(10):
+        cell.sleep_still_tiles()
+        cell.step(10)
+        steps += 10
+    moved = cell.tile_poses().pos[riding, 0] - before[riding, 0]
+    travel = 0.1 * steps * cell.model.opt.timestep
+    np.testing.assert_allclose(moved, travel, atol=0.1 * travel)  # still riding at belt speed
+    assert np.all(cell.data.tree_asleep[_trees(cell)[riding]] < 0)  # and awake

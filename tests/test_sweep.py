@@ -8,7 +8,9 @@ from pathlib import Path
 
 import pytest
 
+from agents.protocol import METRICS
 from agents.sweep import (
+    RESULT_FILE,
     RESULTS_LOG,
     SweepError,
     SweepRunsFailed,
@@ -138,3 +140,42 @@ def test_a_dying_worker_is_retried_then_reported_and_the_rest_finish(tmp_path, m
     assert "error" in logged["doomed"] and "metrics" in logged["flaky"]
     summary = {r["entry"] for r in json.loads((out / "summary.json").read_text())}
     assert summary == {"random", "flaky"}
+
+
+def test_a_behaviour_cloning_entry_runs_once_per_seed(tmp_path) -> None:
+    cfg = tmp_path / "bc.yaml"
+    cfg.write_text(
+        "seeds: [0, 1, 2]\nentries:\n"
+        "  - {name: clone, task: MosaicDecision6-v0, bc_episodes: 4}\n"
+        "  - {name: random, task: MosaicDecision6-v0, policy: random}\n"
+    )
+    runs = plan(load_sweep(cfg), tmp_path)
+    clone = [r for r in runs if r.entry.name == "clone"]
+    assert [r.seed for r in clone] == [0, 1, 2]
+    assert [Path(r.folder).name for r in clone] == ["seed_0", "seed_1", "seed_2"]
+    assert [(r.seed, Path(r.folder).name) for r in runs if r.entry.policy] == [(-1, "eval")]
+
+
+def test_a_rerun_of_a_finished_sweep_starts_no_ray_task(tmp_path, monkeypatch) -> None:
+    import ray  # noqa: PLC0415
+
+    cfg = load_sweep("tiny")
+    for i, spec in enumerate(plan(cfg, tmp_path)):  # every run finished: its result.json
+        metrics = {m: 0.1 * i for m in METRICS}
+        result = {"entry": spec.entry.name, "task": spec.entry.task, "seed": spec.seed}
+        result |= {"folder": spec.folder, "metrics": metrics}
+        Path(spec.folder).mkdir(parents=True)
+        (Path(spec.folder) / RESULT_FILE).write_text(json.dumps(result))
+
+    def no_ray(*args, **kwargs):
+        raise AssertionError("a finished sweep must not start Ray")
+
+    monkeypatch.setattr(ray, "init", no_ray)
+    results = run_sweep(cfg, tmp_path, num_cpus=2, progress=False)
+    assert sorted((r["entry"], r["seed"]) for r in results) == [
+        ("PPO tiny", 0),
+        ("PPO tiny", 1),
+        ("random", -1),
+    ]
+    summary = {r["entry"]: r["runs"] for r in json.loads((tmp_path / "summary.json").read_text())}
+    assert summary == {"random": 1, "PPO tiny": 2}
