@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
 
+from configs import CONFIG_DIR
 from envs.cell import Cell
 from envs.cell_config import (
     CameraConfig,
@@ -146,3 +148,25 @@ def test_configs_are_frozen() -> None:
     cfg = CellConfig()
     with pytest.raises(dataclasses.FrozenInstanceError):
         cfg.layout.belt_top_z = 1.0  # type: ignore[misc]
+
+
+@pytest.mark.parametrize(("joint", "angle"), [(0, 10.0), (2, 1.2), (4, -2.1)])
+def test_a_robot_home_outside_a_joint_range_is_refused_naming_the_joint(
+    tmp_path, joint: int, angle: float
+) -> None:
+    # The ranges are the MJCF's: joint1 +-180 deg, joint3 [-230, 50] deg, joint5 +-115 deg.
+    home = list(load_cell_config().robot.home)
+    home[joint] = angle
+    text = (CONFIG_DIR / "cell.yaml").read_text()
+    bad = tmp_path / "cell.yaml"
+    bad.write_text(text.replace("home: [0.0, 0.0, 0.0, 0.0, 1.5707963, 0.0]", f"home: {home}"))
+    with pytest.raises(CellError, match=rf"home: joint{joint + 1} = {angle:g} rad is outside"):
+        load_cell_config(bad)
+    with pytest.raises(CellError, match=f"joint{joint + 1}"):
+        dataclasses.replace(load_cell_config().robot, home=tuple(home))
+
+
+def test_a_robot_home_at_a_joint_limit_is_accepted() -> None:
+    robot = load_cell_config().robot
+    home = (math.pi, *robot.home[1:])  # joint1 at +180 deg exactly
+    assert dataclasses.replace(robot, home=home).home[0] == math.pi
