@@ -1,22 +1,10 @@
-r"""Behaviour cloning from Minari demonstrations of the decision-level tasks.
+"""Behaviour cloning of the decision-level tasks: the network, its training and the policy.
 
-Run::
-
-    python -m agents.record_demos --task MosaicDecision6-v0 --expert --episodes 50 \\
-        --dataset-id mosaic/decision6-expert-v0
-    python -m agents.bc --dataset-id mosaic/decision6-expert-v0 --out runs/bc [--seed 0]
-    python -m agents.evaluate --task MosaicDecision6-v0 --policies runs/bc/bc.pt
-
-A multilayer perceptron maps the state observation (``robot``, ``tiles``, ``slots``
-concatenated) to one categorical over the flat ``(tile, slot, rotation)`` actions, trained
-with cross-entropy on every recorded step (`BCConfig`, ``configs/bc.yaml``). The file
-``bc.pt`` holds the weights, the spaces' sizes and the configuration; `BCPolicy` plays it
-(a ``.pt`` path is a policy name of `agents.evaluate`).
+Trained from Minari demonstrations by ``python -m apps.bc``; see that program for the run.
 """
 
 from __future__ import annotations
 
-import json
 import pickle
 import time
 from dataclasses import asdict, dataclass
@@ -26,7 +14,6 @@ from typing import Any
 import numpy as np
 
 from agents.errors import AgentError
-from apps.cli import CommandParser, run_cli
 from configs import load_config
 from configs.files import atomic_path, write_json
 
@@ -193,25 +180,4 @@ class BCPolicy:
         return np.array(np.unravel_index(k, self.nvec), np.int64), None
 
 
-def main(argv: list[str] | None = None) -> dict[str, Any]:
-    """Command line (see the module docstring)."""
-    from agents.record_demos import DEFAULT_ROOT, load  # noqa: PLC0415
-
-    ap = CommandParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--dataset-id", required=True)
-    ap.add_argument("--root", type=Path, default=DEFAULT_ROOT)
-    ap.add_argument("--out", type=Path, default=Path("runs/bc"))
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--config", default=BC_CONFIG, help="name in configs/ or a YAML path")
-    args = ap.parse_args(argv)
-    summary = train_bc(
-        load(args.dataset_id, args.root), args.out, args.seed, load_bc_config(args.config)
-    )
-    print(json.dumps(summary, indent=2))
-    return summary
-
-
-__all__ = ["BCConfig", "BCPolicy", "load_bc_config", "main", "train_bc"]
-
-if __name__ == "__main__":
-    run_cli(main)
+__all__ = ["BCConfig", "BCPolicy", "load_bc_config", "train_bc"]

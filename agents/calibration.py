@@ -1,7 +1,8 @@
 """Camera calibration as a real cell does it: checkerboard images, OpenCV, reprojection error.
 
 A checkerboard target (a white plate with black square tiles, one mocap body) is added to the
-cell's own scene (`envs.scene.build_spec`, so the camera's configuration and pose are exactly the
+cell's own scene (`envs.cell.scene.build_spec`, so the camera's configuration and pose are exactly
+the
 cell's) and rendered by that camera at several tilted, lifted and shifted poses. OpenCV finds the
 inner corners (`cv2.findChessboardCorners` + `cv2.cornerSubPix`) and estimates the intrinsics
 (`cv2.calibrateCamera`: one focal length, principal point, OpenCV's lens distortion k1, k2,
@@ -13,7 +14,7 @@ The board has an even by odd count of squares so its colour pattern is not symme
 half turn: the corner order is made unique by the colour of the square beyond the first corner
 and by handedness (see `_orient`).
 
-The estimated `envs.cameras.CameraModel` (with the estimated distortion, which perception
+The estimated `envs.cell.cameras.CameraModel` (with the estimated distortion, which perception
 removes from every point it unprojects) is what perception uses; the simulator's true model is
 read only to report the differences (focal %, principal point px, position mm, angle deg, and
 the worst pixel displacement between the true and the estimated lens over the image).
@@ -30,9 +31,9 @@ import numpy as np
 
 from agents.config import CalibrationConfig
 from agents.errors import CalibrationError
-from envs.cameras import CameraModel, CameraRig, camera_model, distort_normalised
-from envs.cell_config import CellConfig
-from envs.scene import build_spec, cell_geometry
+from envs.cell.cameras import CameraModel, CameraRig, camera_model, distort_normalised
+from envs.cell.config import CellConfig
+from envs.cell.scene import build_spec, cell_geometry
 
 BOARD = "calibration_board"
 """Name of the target's mocap body."""

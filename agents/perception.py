@@ -29,11 +29,11 @@ from shapely.geometry import Point, Polygon
 import qshape
 from agents.config import PerceptionConfig
 from agents.errors import PerceptionError
-from envs.cameras import distort_normalised
+from envs.cell.cameras import distort_normalised
 from envs.task_spec import WorldSlot
 from qshape import Description, Figure
-from qshape.figure import Boundary
 from qshape.geometry import signed_area
+from qshape.theory.figure import Boundary
 
 
 class CameraLike(Protocol):

@@ -31,7 +31,7 @@ from agents.config import PlacementConfig
 from agents.perception import PerceivedTile, SlotTarget
 from envs.task_spec import PickPlaceCommand
 from planners.angles import rotate_xy, wrap_angle
-from qshape.assign import feasible_pairs
+from qshape.theory.assign import feasible_pairs
 
 
 def wrap(angle: float) -> float:
@@ -273,7 +273,7 @@ def plan_placements(
 
 
 def _tol(tolerances: qshape.Tolerances | None) -> qshape.Tolerances:
-    from qshape.tolerances import default_tolerances  # noqa: PLC0415
+    from qshape.theory.tolerances import default_tolerances  # noqa: PLC0415
 
     return default_tolerances() if tolerances is None else tolerances
 

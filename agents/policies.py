@@ -209,7 +209,7 @@ def load_model(model_path: Path, algo: str = "") -> Any:
     Raises:
         PolicyError: No algorithm loads it.
     """
-    from agents.train import algorithm_class  # noqa: PLC0415
+    from agents.algorithms import algorithm_class  # noqa: PLC0415
 
     names = [algo] if algo else list(ALGORITHMS)
     reason = ""

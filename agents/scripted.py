@@ -41,8 +41,8 @@ from agents.perception import (
 )
 from agents.placement import PickPlace, PlacementPlan, Unplaced, plan_placements
 from envs.task_spec import PickPlaceCodec, PickPlaceCommand, TaskSpec
-from qshape.assign import feasible_pairs
-from qshape.tolerances import default_tolerances
+from qshape.theory.assign import feasible_pairs
+from qshape.theory.tolerances import default_tolerances
 
 IMAGE_DIMS = 3
 """An unbatched RGB observation has (height, width, 3)."""

@@ -12,7 +12,7 @@ tiles); a joint categorical has no such coordination problem, and DQN can use it
 
 `EpisodeRewardTerms` sums the env's named reward terms (``info["reward_<term>"]``) over each
 episode and hands the sums over in the last step's ``info``: training logs them per episode, so
-one can see which stage of a shaped reward a learner reaches (`agents.train` writes them to
+one can see which stage of a shaped reward a learner reaches (`apps.train` writes them to
 ``reward_terms.csv``).
 
 `ReachShaping` adds a training-only, potential-based reach term read from the documented state

@@ -45,7 +45,7 @@ from agents.placement import PlacementPlan, Unplaced
 from agents.scripted import ScriptedAgent
 from apps.cli import CommandParser, run_cli
 from configs.files import atomic_path, write_image, write_json, write_text
-from envs.accounting import TILE_STATES
+from envs.cell.accounting import TILE_STATES
 from envs.errors import CellError
 from envs.task import GroundTruth
 from envs.task_spec import FeedMode, TaskSpec
@@ -108,7 +108,7 @@ class RunReport:
         steps: Pick-and-place steps taken.
         waits: Waiting steps taken (nothing to place in the picture; a new one follows).
         rejects: Tiles put into the reject bin (position and outcome).
-        tile_states: Where the real tiles fed ended, per state (`envs.accounting`; the
+        tile_states: Where the real tiles fed ended, per state (`envs.cell.accounting`; the
             counts sum to the tiles fed).
         failed_actions: Steps whose action failed.
         failures: Slot name and reason of each failed action.
@@ -284,7 +284,7 @@ def _draw_figure(
     scale: float,
     colour: tuple[int, int, int],
 ) -> None:
-    from qshape.figure import densify  # noqa: PLC0415
+    from qshape.theory.figure import densify  # noqa: PLC0415
 
     p = np.asarray(pts, dtype=float)
     m = np.asarray(mask, dtype=bool)
@@ -409,7 +409,7 @@ def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
         CellError: The design's tiles do not fit the input belt.
         ConfigError: A bad env setting.
     """
-    from envs.cell_config import load_cell_config  # noqa: PLC0415
+    from envs.cell.config import load_cell_config  # noqa: PLC0415
 
     cam = load_cell_config().input_camera
     over: dict[str, Any] = {

@@ -19,8 +19,8 @@ import numpy as np
 from apps.cli import CommandParser, run_cli
 from configs import CONFIG_DIR
 from qshape.design import DESIGN_SUBDIR, Design, color_hex
+from qshape.design.mural import MURAL_SUBDIR, Mural
 from qshape.geometry import polygon_centroid
-from qshape.mural import MURAL_SUBDIR, Mural
 
 PALETTE = {
     "red": "#c0392b",

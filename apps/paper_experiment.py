@@ -6,7 +6,8 @@ Run ``python -m apps.paper_experiment``: prints the table and writes
 the number of the tile that marked each object: Figs. 6a and 6b) and ``out/paper_experiment.json``.
 
 Eight physical tiles (numbered 1-8 as in the paper's Fig. 5c) are drawn on a belt-coloured image
-and recognised with `qshape.extract`; the design (Fig. 6) has 16 objects. The set reproduces the
+and recognised with `qshape.extract`; the design (Fig. 6) has 16 objects. The set reproduces
+the
 paper's findings:
 
 * Shape only, the paper's loop (each tile in turn marks *every* still-unmarked design object of
@@ -39,11 +40,11 @@ import numpy as np
 import qshape
 from apps.cli import CommandParser, run_cli
 from configs.files import write_image, write_text
-from qshape.assign import feasible_pairs
 from qshape.design import Design, Slot
-from qshape.render import RenderParams, fill_tiles, mm_to_px, render_design
-from qshape.synth import place_path
-from qshape.tolerances import default_tolerances
+from qshape.synthetic.render import RenderParams, fill_tiles, mm_to_px, render_design
+from qshape.synthetic.synth import place_path
+from qshape.theory.assign import feasible_pairs
+from qshape.theory.tolerances import default_tolerances
 
 ROOT = Path(__file__).resolve().parents[1]
 

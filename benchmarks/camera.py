@@ -32,8 +32,8 @@ from agents.perception import color_gain, perceive_tiles
 from apps.cli import CommandParser, run_cli
 from benchmarks.design_cell import build_design_cell
 from configs.files import write_image, write_text
-from envs.cell import Cell
-from envs.cell_config import CellConfig, load_cell_config
+from envs.cell.cell import Cell
+from envs.cell.config import CellConfig, load_cell_config
 from envs.task_spec import work_areas
 from qshape.design import Design
 

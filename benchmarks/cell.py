@@ -18,9 +18,9 @@ import numpy as np
 
 from apps.cli import CommandParser, run_cli
 from configs.files import write_text
-from envs.cell import CAMERAS, Cell
-from envs.cell_config import CellConfig, InputBeltConfig, load_cell_config
-from envs.tile_shapes import basic_shapes
+from envs.cell.cell import CAMERAS, Cell
+from envs.cell.config import CellConfig, InputBeltConfig, load_cell_config
+from envs.cell.tiles.shapes import basic_shapes
 
 N_TILES = 40
 PHYSICS_TARGET_RTF = 20.0

@@ -1,6 +1,7 @@
 """Benchmark helper: the simulated cell of a design, and its ground truth (for scoring only).
 
-The cell takes tile shapes and slots (`envs.tile_shapes.tile_shapes_from_design` converts a design);
+The cell takes tile shapes and slots (`envs.cell.tiles.shapes.tile_shapes_from_design` converts a
+design);
 with the cell's random layout some seeds do not fit every tile on the belt, so the first seed
 from ``seed`` on whose layout fits is used. Ground truth (`nearest_tile`) is for scoring, never
 for the agent's decisions.
@@ -10,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from envs.cell import Cell
-from envs.cell_config import CellConfig, load_cell_config
-from envs.tile_shapes import tile_shapes_from_design
+from envs.cell.cell import Cell
+from envs.cell.config import CellConfig, load_cell_config
+from envs.cell.tiles.shapes import tile_shapes_from_design
 from qshape.design import Design
 
 

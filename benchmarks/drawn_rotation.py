@@ -24,7 +24,7 @@ from scipy.optimize import least_squares
 from scipy.spatial import cKDTree
 
 from qshape.geometry import polygon_centroid
-from qshape.synth import TileTruth
+from qshape.synthetic.synth import TileTruth
 
 
 def drawn_angle(

@@ -22,7 +22,7 @@ from apps.cli import CommandParser, run_cli
 from benchmarks.scripted import Episode, Scenario, ScriptedBenchConfig, play, summarise, table
 from configs import load_config
 from configs.files import write_text
-from qshape.mural import Mural, MuralError
+from qshape.design.mural import Mural, MuralError
 
 OUT = Path("out/bench_mural.json")
 """Default output file."""
@@ -52,7 +52,7 @@ def scenarios(mural: Mural, names: list[str] | None) -> list[Scenario]:
 
 def mesh_area_mm() -> tuple[float, float]:
     """The cell's mesh sheet, (width, height) in [mm] (``configs/cell.yaml``)."""
-    from envs.cell_config import load_cell_config  # noqa: PLC0415 - keep the import light
+    from envs.cell.config import load_cell_config  # noqa: PLC0415 - keep the import light
 
     cell = load_cell_config()
     return cell.output_belt.mesh_size[0] * 1000.0, cell.output_belt.mesh_size[1] * 1000.0

@@ -24,7 +24,7 @@ from agents.placement import plan_placements
 from apps.cli import CommandParser, run_cli
 from benchmarks.design_cell import build_design_cell, nearest_tile
 from configs.files import write_text
-from envs.cell_config import load_cell_config
+from envs.cell.config import load_cell_config
 from envs.task_spec import work_areas, world_slots
 from planners.angles import yaw_error
 from qshape.design import Design

@@ -37,10 +37,10 @@ import numpy as np
 
 from apps.cli import CommandParser, run_cli
 from configs.files import write_text
-from envs.cell import Cell
-from envs.cell_config import CellConfig, load_cell_config
-from envs.scene import build_arm_model
-from envs.tile_shapes import tile_shapes_from_design
+from envs.cell.cell import Cell
+from envs.cell.config import CellConfig, load_cell_config
+from envs.cell.scene import build_arm_model
+from envs.cell.tiles.shapes import tile_shapes_from_design
 from planners.angles import yaw_error
 from planners.config import PlannerConfig, load_planner_config
 from planners.errors import LimitError, PlannerError

@@ -25,8 +25,8 @@ import numpy as np
 import qshape
 from apps.cli import CommandParser, run_cli
 from configs.files import write_text
-from qshape.keys import clear_key_caches
 from qshape.limits import default_limits
+from qshape.theory.keys import clear_key_caches
 
 TARGET_S = 1.0
 """Every entry point at its cap must run in under this many seconds."""

@@ -43,10 +43,10 @@ import qshape  # noqa: E402
 from apps.cli import CommandParser, UsageError, run_cli  # noqa: E402
 from configs.files import write_text  # noqa: E402
 from qshape import Description, Figure, Tolerances  # noqa: E402
-from qshape.description import describe_many  # noqa: E402
-from qshape.figure import Boundary  # noqa: E402
-from qshape.labels import primary_code  # noqa: E402
-from qshape.matching import clear_key_caches  # noqa: E402
+from qshape.theory.description import describe_many  # noqa: E402
+from qshape.theory.figure import Boundary  # noqa: E402
+from qshape.theory.labels import primary_code  # noqa: E402
+from qshape.theory.matching import clear_key_caches  # noqa: E402
 
 T = TypeVar("T")
 
@@ -328,7 +328,7 @@ def make_case(
 
 
 def _assign_methods(case: Case, tile_desc: list[Description], tol: Tolerances, args) -> dict:
-    """Time ``qshape.assign`` (optimal, greedy) and, with ``--pairwise``, the every-slot path."""
+    """Time ``qshape.assign`` (optimal, greedy); ``--pairwise``: the every-slot path."""
     runs = [("optimal", qshape.assign), ("greedy", qshape.assign)]
     if args.pairwise:
         every = partial(qshape.assign, slot_classes=False)

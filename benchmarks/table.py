@@ -10,7 +10,7 @@ Sources (``BENCHES``): ``benchmarks.shapes`` (describe/assign 10,000 tiles),
 rendering speed), ``benchmarks.planner`` (cycle time, tiles/min, tracking),
 ``benchmarks.env`` (env steps/s, memory), ``benchmarks.perception`` (camera-to-world
 perception), ``benchmarks.scripted`` (the scripted cell over 20 seeds per scenario),
-``agents.evaluate`` (learned vs scripted vs random), and the main job's
+``apps.evaluate`` (learned vs scripted vs random), and the main job's
 ``out/report.json`` when present (collected only). A missing source gives rows marked
 ``missing``; a figure without a target is reported only.
 """
@@ -505,7 +505,7 @@ BENCHES = (
         ("--seeds", "0-1"),
         scripted_figures,
     ),
-    Bench("learned", "agents.evaluate", "eval.json", (), learned_figures),
+    Bench("learned", "apps.evaluate", "eval.json", (), learned_figures),
     Bench("main", "", "report.json", (), main_job_figures),
 )
 """Every benchmark source, in table order."""
@@ -524,7 +524,7 @@ def command(bench: Bench, out_dir: Path, quick: bool, model: Path | None) -> lis
     if not bench.module:
         return None
     cmd = [sys.executable, "-m", bench.module]
-    if bench.module == "agents.evaluate":
+    if bench.module == "apps.evaluate":
         policies = ["scripted", "scripted@execution=dynamic", "random", "openloop"]
         policies += [str(model)] if model else []
         cmd += [

@@ -1,7 +1,8 @@
 """Recognition benchmark of `qshape.extract` + `qshape.match` on synthetic tile images.
 
 ``python -m benchmarks.vision`` draws tiles from the bundled designs at random poses on a belt
-(``qshape.synth``), extracts them, and matches each against the design's shape classes (shape
+(``qshape.synthetic.synth``), extracts them, and matches each against the design's shape classes
+(shape
 only) and shape-and-colour classes. Printed and written to ``out/bench_vision.json``:
 
 - vertex precision / recall within 2 px (tiles without curves; outer boundary),
@@ -34,10 +35,10 @@ from apps.cli import CommandParser, run_cli
 from configs.files import write_text
 from qshape import Boundary, Figure, Tolerances, match_best
 from qshape.design import Design, Slot
-from qshape.extract import ExtractParams, extract_detailed
-from qshape.figure import figures_from_outlines
 from qshape.geometry import wrap_angle
-from qshape.synth import SynthParams, generate
+from qshape.synthetic.synth import SynthParams, generate
+from qshape.theory.figure import figures_from_outlines
+from qshape.vision.extract import ExtractParams, extract_detailed
 
 from .table import VISION_CANNY_RATIO
 
@@ -249,7 +250,7 @@ def _channel_canny(image: np.ndarray, low: float, high: float) -> np.ndarray:
     """Union of one single-channel ``cv2.Canny`` per colour channel.
 
     Extraction's edge step finds the same edges, from Sobel derivatives it computes itself
-    (see ``qshape.extract._canny``).
+    (see ``qshape.vision.extract._canny``).
     """
     r, g, b = cv2.split(image)
     edges = cv2.Canny(r, low, high)

@@ -1,4 +1,4 @@
-"""Recognition as a real line sees it: `qshape.extract` + `qshape.match` under a line's effects.
+"""Recognition as a real line sees it: `qshape.extract` + `qshape.match` under its effects.
 
 ``python -m benchmarks.vision_realistic`` draws tiles of the bundled designs as
 ``benchmarks.vision`` does (default synthetic noise), adds one effect of a real line at a
@@ -38,10 +38,10 @@ from configs import load_config
 from configs.files import atomic_path, write_text
 from qshape import Description, Tolerances, describe, match_best
 from qshape.design import Design
-from qshape.effects import CameraEffects, undistort, undistort_points
-from qshape.extract import ExtractParams, extract_detailed
 from qshape.geometry import FloatArray
-from qshape.synth import SynthParams, generate
+from qshape.synthetic.effects import CameraEffects, undistort, undistort_points
+from qshape.synthetic.synth import SynthParams, generate
+from qshape.vision.extract import ExtractParams, extract_detailed
 
 from .drawn_rotation import drawn_angle
 from .vision import _Refs, _rot_error_deg, pixel_tolerances

@@ -9,7 +9,7 @@ to the `Cell`, advancing simulated time. Continuous spaces are Box in [-1, 1] fl
   rate times the control period, tool kept pointing down through the planners' IK, plus vacuum.
 - `PickPlaceActions` (``pick_place``): pick (x, y, yaw) over the input tile area and place
   (x, y, yaw) over the mesh, normalised to [-1, 1] (see `envs.task_spec.PickPlaceCodec`); one
-  full cycle run by `envs.pick_place.PickPlaceExecutor`.
+  full cycle run by `envs.cell.pick_place.PickPlaceExecutor`.
 - `DiscretePickPlaceActions` (``pick_place_discrete``): MultiDiscrete (tile, slot, rotation).
 """
 
@@ -21,9 +21,9 @@ from abc import ABC, abstractmethod
 import numpy as np
 from gymnasium import spaces
 
-from envs.cell import Cell
+from envs.cell.cell import Cell
+from envs.cell.pick_place import ActionResult, PickPlaceExecutor
 from envs.env_config import EnvConfig
-from envs.pick_place import ActionResult, PickPlaceExecutor
 from envs.task_spec import RANGE_SLACK, ActionError, Area, PickPlaceCodec, PickPlaceCommand
 from planners.angles import rotate_xy, wrap_angle
 from planners.errors import PlannerError

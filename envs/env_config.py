@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from configs import ConfigError, from_dict, load_yaml, resolve_path
-from envs.cell_config import CellConfig, load_cell_config, section_names
+from envs.cell.config import CellConfig, load_cell_config, section_names
 from envs.errors import CellError, EnvError
 
 ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
@@ -79,7 +79,7 @@ class EnvConfig:
     Attributes:
         design: Bundled design name (``configs/designs``) or path to a design YAML.
         max_slots: Use only the first ``max_slots`` slots (and their tiles); 0 uses all.
-        cell: The cell (`envs.cell_config.CellConfig`), nested: in YAML a bundled name or
+        cell: The cell (`envs.cell.config.CellConfig`), nested: in YAML a bundled name or
             path, or a mapping ``{config: <name or path>, <section>: {<key>: value}}`` that
             changes sections of that cell file key by key. The input belt's speed, the tile
             feed and the tiles' noise and variants live here (``cell.input_belt.speed``,

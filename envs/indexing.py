@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from envs.cell import Cell
+from envs.cell.cell import Cell
 from envs.env_config import EnvConfig
 
 ROW_DECIMALS = 3

@@ -23,14 +23,16 @@ from envs.actions import (
     PickPlaceActions,
     transfer_poses,
 )
-from envs.cameras import CameraModel
-from envs.cell import CAMERAS, Cell
+from envs.cell.cameras import CameraModel
+from envs.cell.cell import CAMERAS, Cell
+from envs.cell.pick_place import PickPlaceExecutor
+from envs.cell.scene import build_arm_model
+from envs.cell.tiles.shapes import tile_shapes_from_design
+from envs.cell.tiles.tile import SlotSpec, TileShape
 from envs.env_config import EnvConfig, EnvConfigError, load_env_config
 from envs.errors import EnvError
 from envs.indexing import IndexMaps
 from envs.observations import Observer
-from envs.pick_place import PickPlaceExecutor
-from envs.scene import build_arm_model
 from envs.task import REWARD_TERMS, Evaluation, GroundTruth, MosaicTask
 from envs.task_spec import (
     ActionError,
@@ -40,8 +42,6 @@ from envs.task_spec import (
     build_task_spec,
     work_areas,
 )
-from envs.tile_shapes import tile_shapes_from_design
-from envs.tiles import SlotSpec, TileShape
 from planners.config import PlannerConfig, load_planner_config
 from planners.ik import IKSolver
 
@@ -126,7 +126,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     ## Starting State
     Arm at home, vacuum off, tiles laid out at random (non-overlapping, each placed against
-    the ones before it or the tile area's edge, `envs.layout`) on the input belt
+    the ones before it or the tile area's edge, `envs.cell.layout`) on the input belt
     (``feed="all"``), the first ``stream_initial`` of them (``feed="stream"``) or the first
     ``batch_size`` (``feed="batch"``), lying at rest on the belt (``reset_settle`` > 0
     simulates that long after the reset; 0 by default: the tiles are put at their contact
@@ -144,7 +144,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ## Episode End
     ``terminated`` when every slot is filled correctly or no real tile on the input belt, held
     or still to be fed can fill an open slot (stranded, dropped, lost and rejected tiles are out
-    of reach; ``info["evaluation"]`` counts every real tile fed in one state, `envs.accounting`);
+    of reach; ``info["evaluation"]`` counts every real tile fed in one state,
+    `envs.cell.accounting`);
     truncation by ``TimeLimit`` (``max_episode_steps`` at registration: 1000).
 
     ## Arguments
@@ -167,7 +168,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     1 / ``control_dt`` in every mode (a pick_place step spans a whole cycle). In a process that
     has rendered already, start async/subprocess workers with ``spawn`` (a forked worker can
     hang in EGL). Every camera image leaves out the geoms the camera cannot see (same pixels,
-    `envs.view_culling`). Small images (up to ``cell.render.supersample_max_pixels``, e.g. the
+    `envs.cell.view_culling`). Small images (up to ``cell.render.supersample_max_pixels``, e.g. the
     72 x 96 and 96 x 96 observations) are anti-aliased by rendering them at twice the size and
     averaging 2 x 2 blocks (``cell.render.supersample``), about half the cost of 4-sample
     multisampling in software rendering and as smooth; larger ones are multisampled

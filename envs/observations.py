@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from envs.cell import CAMERAS, Cell
+from envs.cell.cell import CAMERAS, Cell
 from envs.env_config import EnvConfig
 from envs.task import Evaluation, MosaicTask
 from planners.ik import IKSolver

@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from envs.accounting import ON_INPUT, WAITING, TileFlags, state_counts, tile_states
-from envs.cameras import CameraJitter
-from envs.cell import Cell
+from envs.cell.accounting import ON_INPUT, WAITING, TileFlags, state_counts, tile_states
+from envs.cell.cameras import CameraJitter
+from envs.cell.cell import Cell
 from envs.env_config import EnvConfig
 from envs.errors import CellError
 from envs.rewards import STAGES, StagedReward, load_staged_config
@@ -92,7 +92,7 @@ class Evaluation:
         lost: Tiles lost off the input belt (distractors included; the ``lost`` reward term).
         fed: Real tiles fed into the cell so far; the sum of ``on_input``, ``held``,
             ``correct``, ``misplaced``, ``stranded``, ``dropped_tiles``, ``lost_tiles`` and
-            ``rejected`` (`envs.accounting`: each real tile fed is in exactly one state).
+            ``rejected`` (`envs.cell.accounting`: each real tile fed is in exactly one state).
         waiting: Real tiles not fed yet.
         on_input: Real tiles on the input belt, not held.
         held: Real tiles on the pad (0 or 1).
@@ -370,7 +370,7 @@ class MosaicTask:
         )
 
     def tile_states(self, placement: Placement | None = None) -> np.ndarray:
-        """State code of every tile now (`envs.accounting.tile_states`), shape (n,) int8."""
+        """State code of every tile now (`envs.cell.accounting.tile_states`), shape (n,) int8."""
         p = placement if placement is not None else self.placement()
         cell = self.cell
         n = len(cell.tiles)

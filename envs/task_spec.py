@@ -18,16 +18,16 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from envs.cameras import CameraModel
-from envs.cell_config import CellConfig
+from envs.cell.cameras import CameraModel
+from envs.cell.config import CellConfig
 from envs.errors import EnvError
 from planners.angles import wrap_angle
 
 if TYPE_CHECKING:
-    from envs.cell import Cell
+    from envs.cell.cell import Cell
     from envs.env_config import ActionMode, EnvConfig
     from qshape.design import Design
-    from qshape.figure import Figure
+    from qshape.theory.figure import Figure
 
 RANGE_SLACK = 1e-6
 """Allowed excess over [-1, 1] for float rounding in normalised actions."""

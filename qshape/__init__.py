@@ -13,15 +13,6 @@ the descriptions, match them (with the rotation that places a tile), and assign 
 Tolerances (bands, margins, thresholds) live in `Tolerances`, defaults in configs/qshape.yaml.
 """
 
-from qshape.assign import Assignment, assign
-from qshape.description import (
-    BoundaryDescription,
-    Description,
-    HoleDescription,
-    Node,
-    describe,
-    describe_many,
-)
 from qshape.errors import (
     DesignError,
     DesignLimitError,
@@ -35,12 +26,21 @@ from qshape.errors import (
     TextLimitError,
     ToleranceError,
 )
-from qshape.figure import Boundary, Figure
 from qshape.limits import Limits
-from qshape.matching import Match, canonical_key, canonical_keys, match, match_best
-from qshape.simplify import OutlineParams
-from qshape.text_parser import parse
-from qshape.tolerances import Tolerances
+from qshape.outline.simplify import OutlineParams
+from qshape.theory.assign import Assignment, assign
+from qshape.theory.description import (
+    BoundaryDescription,
+    Description,
+    HoleDescription,
+    Node,
+    describe,
+    describe_many,
+)
+from qshape.theory.figure import Boundary, Figure
+from qshape.theory.matching import Match, canonical_key, canonical_keys, match, match_best
+from qshape.theory.text_parser import parse
+from qshape.theory.tolerances import Tolerances
 
 __all__ = [
     "Assignment",
@@ -77,15 +77,15 @@ __all__ = [
 
 # Vision: mosaic designs, rendering, extraction from images (issue 3).
 from qshape.design import Design, Slot  # noqa: E402
-from qshape.extract import (  # noqa: E402
+from qshape.synthetic.render import render_design, save_png  # noqa: E402
+from qshape.vision.extract import (  # noqa: E402
     ExtractParams,
     ExtractResult,
     ImageError,
     extract,
     extract_detailed,
 )
-from qshape.health import ImageHealth, image_health  # noqa: E402
-from qshape.render import render_design, save_png  # noqa: E402
+from qshape.vision.health import ImageHealth, image_health  # noqa: E402
 
 __all__ += [
     "Design",

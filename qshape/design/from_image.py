@@ -17,9 +17,9 @@ from qshape.design.paths import Loop, TilePath
 from qshape.design.rules import DesignRules
 from qshape.design.values import color_hex, number, round_mm
 from qshape.errors import DesignError
-from qshape.extract import extract_detailed, read_image
-from qshape.figure import Figure
 from qshape.geometry import BoolArray, FloatArray
+from qshape.theory.figure import Figure
+from qshape.vision.extract import extract_detailed, read_image
 
 _UNKNOWN_COLOR = (0.5, 0.5, 0.5)
 """Colour of a slot whose tile has no extracted colour (RGB in [0, 1])."""
@@ -38,7 +38,7 @@ def design_mapping(
 
     Raises:
         DesignError: Bad scale or joint, or no whole tiles found.
-        qshape.extract.ImageError: Unreadable file or malformed image.
+        qshape.vision.extract.ImageError: Unreadable file or malformed image.
     """
     scale = number(mm_per_px, "mm_per_px")
     joint = number(joint_mm, "joint_mm")

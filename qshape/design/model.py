@@ -20,7 +20,7 @@ from qshape.design.from_image import design_mapping
 from qshape.design.rules import DesignRules
 from qshape.design.slot import Slot
 from qshape.errors import DesignError
-from qshape.figure import Figure
+from qshape.theory.figure import Figure
 
 DESIGN_SUBDIR = "designs"
 """Sub-folder of ``configs/`` holding the bundled designs."""
@@ -144,12 +144,12 @@ class Design:
             mm_per_px: Scale, in [mm/px].
             joint_mm: Joint width of the design, in [mm].
             name: Design name.
-            params: `qshape.extract.ExtractParams` (None: ``configs/vision.yaml``).
+            params: `qshape.vision.extract.ExtractParams` (None: ``configs/vision.yaml``).
             rules: Validation rules.
 
         Raises:
             DesignError: Unreadable file, bad scale, no tiles, or an invalid resulting design.
-            qshape.extract.ImageError: Malformed image.
+            qshape.vision.extract.ImageError: Malformed image.
         """
         data = design_mapping(image, mm_per_px, joint_mm, name=name, params=params, rules=rules)
         return cls.from_dict(data, rules=rules, source=f"design image {name!r}")

@@ -16,8 +16,8 @@ from numpy.typing import ArrayLike
 
 from qshape import geometry as geo
 from qshape.errors import DesignError
-from qshape.figure import Boundary, Figure
 from qshape.geometry import BoolArray, FloatArray
+from qshape.theory.figure import Boundary, Figure
 
 
 @dataclass(frozen=True, eq=False)

@@ -19,8 +19,8 @@ from qshape.design.rules import DesignRules
 from qshape.design.shapes import tile_path
 from qshape.design.values import color_hex, plain, round_mm
 from qshape.errors import DesignError
-from qshape.figure import Figure
 from qshape.geometry import FloatArray
+from qshape.theory.figure import Figure
 
 
 @dataclass(frozen=True)

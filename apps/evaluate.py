@@ -1,0 +1,574 @@
+r"""Evaluate policies (scripted, random, open-loop, checkpoints, your own) on held-out seeds.
+
+Run::
+
+    python -m apps.evaluate --task MosaicDecision6-v0 \\
+        --policies scripted random openloop runs/ppo/model.zip mypkg.mypolicy:Policy [--out out]
+    python -m apps.evaluate --policies scripted random --seeds 1000-1019 \\
+        --env-config pick_place_flat        # a configs/train preset (its env) or an env YAML
+
+With ``--task`` (a rung of `envs.tasks`) the protocol is the task's: its held-out seeds, its
+held-out designs (episodes alternate over them), its episode limit and throughput horizon.
+Otherwise ``--env-config`` (a preset name in ``configs/train/``, a train YAML whose ``env`` is
+used, or an env YAML) plus ``--env KEY=VALUE`` give the base env, ``--seeds`` the seeds.
+Policy names: `agents.policies`. Only the keys that define a policy's spaces change per policy.
+
+Every policy is bound to its env before any episode is played: a checkpoint whose spaces do not
+match, or a name that does not resolve, fails at start-up. Each finished episode is appended
+to ``<out>/episodes.jsonl`` at once; a rerun with the same ``--out`` skips the (policy, seed)
+pairs already there, so results already computed are never lost or recomputed. At the end:
+one table, ``<out>/eval.json``, ``<out>/eval.md`` and ``<out>/eval.png``. Columns (protocol of
+`agents.protocol`): success rate, slots filled, misplaced, dropped (events), lost and stranded
+tiles per episode, tiles/min (correct tiles per simulated minute, to completion or over the
+horizon) and wall seconds per correct tile.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import re
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+
+from agents.policies import (
+    SCRIPTED_IMAGE_SIZE,
+    Policy,
+    PolicyError,
+    Predict,
+    make_policies,
+    parse_pairs,
+)
+from agents.protocol import EpisodeMetrics, tiles_left
+from apps.cli import CommandParser, run_cli
+from configs import ConfigError, load_yaml
+from configs.files import append_line, atomic_path, complete_lines, write_json, write_text
+
+ENV_ID = "envs:MosaicAssembly-v0"
+"""Gymnasium id of the environment."""
+STEPS_PER_SLOT = 2
+"""Default episode step limit per slot of the design (without a task)."""
+HORIZON_S_PER_SLOT = 5.0
+"""Default throughput horizon per slot [s] (two 2.5 s cycles), without a task."""
+DEFAULT_SEEDS = "1000-1019"
+"""Seeds without ``--task`` or ``--seeds``."""
+EPISODES_FILE = "episodes.jsonl"
+"""Per-episode results, appended as they finish."""
+COLUMNS = (
+    ("policy", "policy", "{}"),
+    ("success_rate", "success", "{:.0%}"),
+    ("filled", "slots filled", "{:.0%}"),
+    ("correct", "correct/ep", "{:.2f}"),
+    ("slots", "slots", "{:.0f}"),
+    ("misplaced", "misplaced/ep", "{:.2f}"),
+    ("dropped", "dropped/ep", "{:.2f}"),
+    ("lost", "lost/ep", "{:.2f}"),
+    ("stranded", "stranded/ep", "{:.2f}"),
+    ("left", "left/ep", "{:.2f}"),
+    ("tiles_per_min", "tiles/min (sim)", "{:.1f}"),
+    ("wall_s_per_tile", "wall s/tile", "{:.3f}"),
+)
+"""(key, header, format) of the printed table."""
+
+EvaluateError = PolicyError
+"""A policy name, seed range, task or env configuration that cannot be evaluated."""
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """One episode of one policy.
+
+    Attributes:
+        policy: Policy label.
+        seed: Reset seed.
+        design: Design played.
+        success: Every slot filled correctly.
+        correct: Slots filled correctly.
+        slots: Slots of the design.
+        misplaced: Real tiles on the mesh filling no slot.
+        dropped: Drop events (the pad lost a tile in transit).
+        lost: Tiles lost off the input belt.
+        stranded: Real tiles out of every other state (beside the mesh, tilted).
+        left: Real tiles never placed (on the input belt, held or waiting at the end).
+        steps: Env steps.
+        sim_s: Simulated time [s].
+        span_s: Time the throughput is measured over [s] (to completion, or the horizon).
+        wall_s: Wall time of the policy and the env steps (reset excluded) [s].
+        episode_return: Sum of rewards.
+        left: Real tiles never placed (on the input belt, held or waiting at the end).
+    """
+
+    policy: str
+    seed: int
+    design: str
+    success: bool
+    correct: int
+    slots: int
+    misplaced: int
+    dropped: int
+    lost: int
+    stranded: int
+    steps: int
+    sim_s: float
+    span_s: float
+    wall_s: float
+    episode_return: float
+    left: int = 0
+
+
+@dataclass(frozen=True)
+class PolicyRow:
+    """Aggregate of one policy over the seeds (one table row).
+
+    Attributes:
+        policy: Label.
+        episodes: Episodes played.
+        success_rate: Fraction of successful episodes.
+        filled: Mean fraction of slots filled correctly.
+        correct: Mean slots filled correctly per episode.
+        slots: Mean slots per episode.
+        misplaced: Mean misplaced tiles per episode.
+        dropped: Mean drop events per episode.
+        lost: Mean lost tiles per episode.
+        stranded: Mean stranded tiles per episode.
+        left: Mean tiles never placed per episode.
+        tiles_per_min: Correct tiles per simulated minute over all episodes (each measured to
+            completion or over the horizon).
+        wall_s_per_tile: Wall seconds per correct tile over all episodes (None: no tile).
+        mean_return: Mean episode return.
+        mean_steps: Mean episode length [steps].
+        env: Env overrides the policy ran with.
+    """
+
+    policy: str
+    episodes: int
+    success_rate: float
+    filled: float
+    correct: float
+    slots: float
+    misplaced: float
+    dropped: float
+    lost: float
+    stranded: float
+    left: float
+    tiles_per_min: float
+    wall_s_per_tile: float | None
+    mean_return: float
+    mean_steps: float
+    env: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """Where and how long policies are evaluated.
+
+    Attributes:
+        seeds: Reset seeds (the same for every policy).
+        designs: Designs, episodes alternating over them (empty: the base env's).
+        max_steps: Step limit per episode; 0: `STEPS_PER_SLOT` x slots.
+        horizon_s: Throughput horizon of a failed episode [s]; 0: `HORIZON_S_PER_SLOT` x slots.
+    """
+
+    seeds: tuple[int, ...]
+    designs: tuple[str, ...] = ()
+    max_steps: int = 0
+    horizon_s: float = 0.0
+
+
+def parse_seeds(specs: Sequence[str]) -> list[int]:
+    """Non-negative seeds from ``1000-1019``, ``1,2,3`` or separate numbers.
+
+    Raises:
+        EvaluateError: Not integers or an empty range.
+    """
+    seeds: list[int] = []
+    for spec in specs:
+        for part in filter(None, (p.strip() for p in spec.split(","))):
+            match = re.fullmatch(r"(\d+)(?:-(\d+))?", part)
+            if match is None:
+                raise EvaluateError(f"bad seed {part!r}: use 1000-1019 or 1,2,3")
+            lo = int(match[1])
+            hi = int(match[2]) if match[2] else lo
+            if hi < lo:
+                raise EvaluateError(f"empty seed range {part!r}")
+            seeds.extend(range(lo, hi + 1))
+    if not seeds:
+        raise EvaluateError("no seeds given")
+    return seeds
+
+
+def seed_argument(spec: str) -> list[int]:
+    """``--seeds`` argument type: `parse_seeds` of one spec, a usage error if malformed."""
+    try:
+        return parse_seeds([spec])
+    except EvaluateError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from exc
+
+
+def load_env_overrides(path: str | Path | None, pairs: Sequence[str] = ()) -> dict[str, Any]:
+    """Base env overrides from a train preset, a YAML (env keys or its ``env``) and KEY=VALUE.
+
+    Raises:
+        EvaluateError: Unknown preset or env key, or a malformed pair.
+    """
+    from envs.env_config import load_env_config  # noqa: PLC0415
+
+    data: dict[str, Any] = {}
+    try:
+        if path is not None:
+            raw = load_yaml(path, "train")
+            data = dict(raw["env"]) if isinstance(raw.get("env"), dict) else raw
+        data.update(parse_pairs(pairs))
+        load_env_config(**data)
+    except EvaluateError:
+        raise
+    except ConfigError as exc:
+        raise EvaluateError(str(exc)) from exc
+    return data
+
+
+def task_protocol(task_id: str) -> tuple[dict[str, Any], Protocol]:
+    """Base env overrides and the protocol of a rung of the task ladder (held-out split).
+
+    Raises:
+        EvaluateError: Unknown task (lists the ids).
+    """
+    from envs.tasks import TaskError, get_task  # noqa: PLC0415
+
+    try:
+        task = get_task(task_id)
+    except TaskError as exc:
+        raise EvaluateError(str(exc)) from exc
+    protocol = Protocol(
+        tuple(task.seeds), task.designs("eval"), task.max_episode_steps, task.horizon_s
+    )
+    return task.env_kwargs("eval"), protocol
+
+
+def run_episode(
+    env: gym.Env,
+    predict: Predict,
+    seed: int,
+    max_steps: int,
+    horizon_s: float,
+    *,
+    label: str = "",
+) -> EpisodeResult:
+    """Play one episode from ``reset(seed=seed)`` for at most ``max_steps`` steps."""
+    obs, info = env.reset(seed=seed)
+    env.action_space.seed(seed)
+    total, steps, wall = 0.0, 0, 0.0
+    done = False
+    while not done and steps < max_steps:
+        t0 = time.perf_counter()
+        action = predict(obs, steps == 0)
+        obs, reward, terminated, truncated, info = env.step(action)
+        wall += time.perf_counter() - t0
+        total += float(reward)
+        steps += 1
+        done = terminated or truncated
+    ev = info["evaluation"]
+    m = EpisodeMetrics.of(info, horizon_s)
+    return EpisodeResult(
+        policy=label,
+        seed=seed,
+        design=str(env.unwrapped.config.design),  # type: ignore[attr-defined]
+        success=bool(ev["success"]),
+        correct=int(ev["correct"]),
+        slots=int(ev["slots"]),
+        misplaced=int(ev["misplaced"]),
+        dropped=int(ev["dropped"]),
+        lost=int(ev["lost"]),
+        stranded=int(ev.get("stranded", 0)),
+        left=tiles_left(ev),
+        steps=steps,
+        sim_s=m.sim_s,
+        span_s=m.span_s,
+        wall_s=wall,
+        episode_return=total,
+    )
+
+
+def aggregate(label: str, episodes: Sequence[EpisodeResult], env: dict[str, Any]) -> PolicyRow:
+    """One table row from a policy's episodes."""
+    n = max(len(episodes), 1)
+    correct = sum(e.correct for e in episodes)
+    span = sum(e.span_s for e in episodes)
+    wall = sum(e.wall_s for e in episodes)
+
+    def mean(key: str) -> float:
+        return sum(float(getattr(e, key)) for e in episodes) / n
+
+    return PolicyRow(
+        policy=label,
+        episodes=len(episodes),
+        success_rate=mean("success"),
+        filled=sum(e.correct / max(e.slots, 1) for e in episodes) / n,
+        correct=correct / n,
+        slots=mean("slots"),
+        misplaced=mean("misplaced"),
+        dropped=mean("dropped"),
+        lost=mean("lost"),
+        stranded=mean("stranded"),
+        left=mean("left"),
+        tiles_per_min=60.0 * correct / span if span > 0 else 0.0,
+        wall_s_per_tile=wall / correct if correct else None,
+        mean_return=mean("episode_return"),
+        mean_steps=mean("steps"),
+        env=env,
+    )
+
+
+def _read_done(path: Path | None) -> list[EpisodeResult]:
+    """Episodes already in a JSONL log (none if it does not exist; a torn last line skipped)."""
+    if path is None:
+        return []
+    return [EpisodeResult(**json.loads(line)) for line in complete_lines(path)]
+
+
+def _bind(pol: Policy, designs: Sequence[str]) -> list[tuple[gym.Env, Predict]]:
+    """Build the policy's env for each design and bind it (raises before any episode)."""
+    bound = []
+    for design in designs or [""]:
+        kwargs = {**pol.env_kwargs, "design": design} if design else dict(pol.env_kwargs)
+        try:
+            env = gym.make(ENV_ID, **kwargs)
+        except ConfigError as exc:
+            raise EvaluateError(f"policy {pol.label!r}: {exc}") from exc
+        if pol.wrap is not None:
+            env = pol.wrap(env)
+        try:
+            bound.append((env, pol.factory(env)))
+        except Exception:
+            env.close()
+            for e, _ in bound:
+                e.close()
+            raise
+    return bound
+
+
+def evaluate_policy_set(
+    policies: Sequence[Policy],
+    seeds: Sequence[int] | Protocol,
+    max_steps: int = 0,
+    progress: bool = False,
+    log: Path | None = None,
+) -> tuple[list[PolicyRow], dict[str, list[EpisodeResult]]]:
+    """Play every policy on every seed (see the module docstring).
+
+    Args:
+        policies: From `agents.policies.make_policies`.
+        seeds: Reset seeds, or a `Protocol` (seeds, designs, limits).
+        max_steps: Step limit per episode when ``seeds`` is a list; 0: 2 x slots.
+        progress: Print one line per episode.
+        log: JSONL file the episodes are appended to as they finish (and read back to skip
+            the ones already played); None: not written.
+
+    Returns:
+        (rows, episodes by policy label).
+
+    Raises:
+        EvaluateError: A policy that cannot be bound to its env (before any episode).
+    """
+    proto = seeds if isinstance(seeds, Protocol) else Protocol(tuple(seeds), (), max_steps)
+    done = _read_done(log)
+    envs = []
+    try:
+        for pol in policies:  # bind everything first: a bad policy fails before any episode
+            envs.append(_bind(pol, proto.designs))
+        per: dict[str, list[EpisodeResult]] = {}
+        for pol, bound in zip(policies, envs, strict=True):
+            eps = [e for e in done if e.policy == pol.label and e.seed in proto.seeds]
+            have = {e.seed for e in eps}
+            for i, seed in enumerate(proto.seeds):
+                if seed in have:
+                    continue
+                env, predict = bound[i % len(bound)]
+                slots = len(env.unwrapped.task.slot_class)  # type: ignore[attr-defined]
+                limit = proto.max_steps or STEPS_PER_SLOT * slots
+                horizon = proto.horizon_s or HORIZON_S_PER_SLOT * slots
+                ep = run_episode(env, predict, seed, limit, horizon, label=pol.label)
+                eps.append(ep)
+                if log is not None:
+                    append_line(log, json.dumps(asdict(ep)))
+                if progress:
+                    print(
+                        f"  {pol.label} seed {seed} ({ep.design}): {ep.correct}/{ep.slots} "
+                        f"correct, {ep.misplaced} misplaced, {ep.steps} steps, {ep.wall_s:.2f} s",
+                        flush=True,
+                    )
+            eps.sort(key=lambda e: proto.seeds.index(e.seed))
+            per[pol.label] = eps
+        rows = [aggregate(p.label, per[p.label], p.env_kwargs) for p in policies]
+    finally:
+        for bound in envs:
+            for env, _ in bound:
+                env.close()
+    return rows, per
+
+
+def _fmt(value: Any, spec: str) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "-"
+    return spec.format(value)
+
+
+def markdown_table(rows: Sequence[PolicyRow]) -> str:
+    """The rows as a Markdown table (`COLUMNS`)."""
+    head = "| " + " | ".join(h for _, h, _ in COLUMNS) + " |"
+    sep = "|" + "|".join("---" for _ in COLUMNS) + "|"
+    body = ["| " + " | ".join(_fmt(getattr(r, k), f) for k, _, f in COLUMNS) + " |" for r in rows]
+    return "\n".join([head, sep, *body])
+
+
+def plot(rows: Sequence[PolicyRow], path: Path) -> None:
+    """Bar charts of success rate, slots filled and tiles/min per policy (matplotlib PNG)."""
+    import matplotlib as mpl  # noqa: PLC0415
+
+    mpl.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    labels = [r.policy for r in rows]
+    panels = (
+        ("success rate", [r.success_rate for r in rows]),
+        ("slots filled", [r.filled for r in rows]),
+        ("tiles / min (simulated)", [r.tiles_per_min for r in rows]),
+    )
+    height = 1.2 + 0.45 * len(labels)
+    fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), height), sharey=True)
+    colors = [f"C{i % 10}" for i in range(len(labels))]
+    for ax, (title, values) in zip(axes, panels, strict=True):
+        ax.barh(labels, values, color=colors)
+        ax.set_title(title)
+        ax.invert_yaxis()
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=100)
+    plt.close(fig)
+
+
+def write_outputs(
+    rows: Sequence[PolicyRow],
+    episodes: dict[str, list[EpisodeResult]],
+    seeds: Sequence[int],
+    out: Path,
+    extra: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """Write ``eval.json``, ``eval.md`` and ``eval.png`` under ``out``; return the JSON dict."""
+    out.mkdir(parents=True, exist_ok=True)
+    report = {
+        "date": datetime.now(UTC).isoformat(timespec="seconds"),
+        "machine": {
+            "node": platform.node(),
+            "cpus": os.cpu_count(),
+            "python": platform.python_version(),
+        },
+        "seeds": list(seeds),
+        "columns": [k for k, _, _ in COLUMNS],
+        "rows": [asdict(r) for r in rows],
+        "episodes": {k: [asdict(e) for e in v] for k, v in episodes.items()},
+        **(extra or {}),
+    }
+    write_json(out / "eval.json", report)
+    seed_text = f"{seeds[0]}-{seeds[-1]}" if len(seeds) > 1 else str(seeds[0])
+    md = (
+        f"Evaluation on {len(seeds)} seeds ({seed_text}), {report['date']}\n\n"
+        + markdown_table(rows)
+        + "\n"
+    )
+    write_text(out / "eval.md", md)
+    plot(rows, out / "eval.png")
+    return report
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    """Command line (see the module docstring)."""
+    ap = CommandParser(description=__doc__.splitlines()[0])
+    ap.add_argument(
+        "--policies",
+        nargs="+",
+        required=True,
+        help="scripted, random, openloop, identity, model .zip paths or module:callable, each "
+        "optionally with @KEY=VALUE[,KEY=VALUE] env overrides (scripted@execution=dynamic)",
+    )
+    ap.add_argument("--task", default=None, help="a ladder id (MosaicDecision6-v0): its protocol")
+    ap.add_argument(
+        "--seeds", nargs="+", type=seed_argument, default=None, help="e.g. 1000-1019 or 1,2"
+    )
+    ap.add_argument(
+        "--env-config",
+        default=None,
+        help="configs/train preset name or YAML (its env), or an env YAML",
+    )
+    ap.add_argument("--env", nargs="*", default=[], metavar="KEY=VALUE", help="env overrides")
+    ap.add_argument("--max-steps", type=int, default=0, help="0: the task's, else 2 x slots")
+    ap.add_argument(
+        "--scripted-image-size", type=int, nargs=2, default=SCRIPTED_IMAGE_SIZE, metavar=("H", "W")
+    )
+    ap.add_argument(
+        "--no-calibrate", action="store_true", help="scripted agent uses the true camera model"
+    )
+    ap.add_argument("--out", type=Path, default=Path("out"))
+    ap.add_argument("--quiet", action="store_true")
+    args = ap.parse_args(argv)
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    import torch  # noqa: PLC0415
+
+    torch.set_num_threads(1)
+    if args.task:
+        base, proto = task_protocol(args.task)
+        base.update(load_env_overrides(args.env_config, args.env))
+        if args.seeds:
+            seeds = tuple(s for spec in args.seeds for s in spec)
+            proto = Protocol(seeds, proto.designs, proto.max_steps)
+    else:
+        base = load_env_overrides(args.env_config, args.env)
+        specs = args.seeds or [parse_seeds([DEFAULT_SEEDS])]
+        proto = Protocol(tuple(s for spec in specs for s in spec))
+    if args.max_steps:
+        proto = Protocol(proto.seeds, proto.designs, args.max_steps, proto.horizon_s)
+    policies = make_policies(
+        args.policies, base, tuple(args.scripted_image_size), calibrate=not args.no_calibrate
+    )
+    rows, episodes = evaluate_policy_set(
+        policies, proto, progress=not args.quiet, log=args.out / EPISODES_FILE
+    )
+    extra = {"base_env": base, "task": args.task, "protocol": asdict(proto)}
+    report = write_outputs(rows, episodes, list(proto.seeds), args.out, extra)
+    print(markdown_table(rows))
+    print(f"wrote {args.out / 'eval.json'}, eval.md, eval.png, {EPISODES_FILE}")
+    return report
+
+
+__all__ = [
+    "COLUMNS",
+    "EPISODES_FILE",
+    "EpisodeResult",
+    "EvaluateError",
+    "Policy",
+    "PolicyRow",
+    "Protocol",
+    "aggregate",
+    "evaluate_policy_set",
+    "load_env_overrides",
+    "main",
+    "make_policies",
+    "markdown_table",
+    "parse_seeds",
+    "plot",
+    "run_episode",
+    "task_protocol",
+    "write_outputs",
+]
+
+if __name__ == "__main__":
+    run_cli(main)

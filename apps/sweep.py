@@ -1,0 +1,586 @@
+r"""Sweeps as Ray tasks: tasks x algorithms x training seeds, and the evaluation of policies.
+
+Run::
+
+    python -m apps.sweep --config baselines --out runs/sweep              # local Ray, 2 CPUs
+    python -m apps.sweep --config baselines --out runs/sweep --address auto   # a cluster
+    nice -n 19 python -m apps.sweep --config baselines --num-cpus 1 --niceness 19 \\
+        --tasks MosaicStream-v0 MosaicOneTileJoint-v0   # some rows, one run at a time, niced
+
+A sweep file (``configs/sweeps/*.yaml``, keys of `SweepConfig`) lists entries; a ``train``
+entry trains one run per seed (a ``configs/train`` preset with the seed replaced) and then
+evaluates the final model on its task's held-out protocol; a ``policy`` entry (any name of
+`agents.policies`) is evaluated once. Each (entry, seed) is one Ray task with one CPU; without
+``--address`` a local instance is started (``ray.init(num_cpus=..., include_dashboard=False)``),
+with it the same command runs on a cluster (every node needs the project on ``PYTHONPATH``).
+``--tasks`` keeps the entries of the given tasks only; ``--niceness`` sets every run's
+scheduling niceness (default 0: Ray's workers start at 15 and starve on a busy host; on a host
+shared with others, 19).
+
+Results are written as they finish: ``<out>/<task>/<entry>/seed_<k>/result.json`` (and the
+run's model, monitor CSVs and ``episodes.jsonl``) plus one line per finished run in
+``<out>/results.jsonl``; a rerun skips the runs whose ``result.json`` exists. Every result file
+is written whole or not at all (`configs.files`); a run killed while training has no completion
+marker and is trained again, one killed while evaluating keeps its trained model and the
+episodes already logged. A run whose Ray worker dies is retried (``--max-retries``, default
+`RUN_RETRIES`); a run that still fails is logged with its error, the others finish, and the
+command ends with one ``error:`` line naming the failed runs (exit status 1). At the end:
+``<out>/summary.md`` and ``summary.json`` (per task and entry, the IQM over runs with its 95 %
+stratified-bootstrap interval of every protocol metric, and the compute used) and
+``<out>/curves.png`` (training success and return against steps, mean over seeds with a 95 %
+bootstrap band).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.errors import AgentError
+from agents.protocol import METRICS, aggregate_runs, iqm_ci
+from apps.cli import CommandParser, run_cli
+from configs import ConfigError, from_dict, load_yaml
+from configs.files import append_line, atomic_path, complete_lines, write_json, write_text
+
+RESULT_FILE = "result.json"
+"""Per-run result file."""
+RESULTS_LOG = "results.jsonl"
+"""One line per finished run, appended as runs finish."""
+DEFAULT_CPUS = 2
+"""CPUs of the local Ray instance when no ``--address`` is given."""
+BC_SEED_STRIDE = 10_000
+"""Demonstration reset seeds of a clone run start at its seed x this."""
+WORKER_NICENESS = 0
+"""Default scheduling niceness of a run (Ray's default for workers, 15, starves them on a busy
+host); ``--niceness`` changes it."""
+NICENESS_RANGE = (-20, 19)
+"""Allowed niceness values (POSIX), inclusive."""
+CURVE_BINS = 20
+"""Points of a training curve."""
+CURVE_BOOTSTRAP = 1000
+"""Bootstrap resamples of a curve's band."""
+RUN_RETRIES = 2
+"""Times Ray runs a run again whose worker process died (killed, out of memory) before it is
+reported failed; an error raised by the run itself is not retried (it would fail again)."""
+
+
+class SweepError(ConfigError):
+    """A sweep file or entry that cannot run (unknown key, entry without train or policy)."""
+
+
+class SweepRunsFailed(AgentError):
+    """Some runs of a sweep failed (after their retries); the others finished and are reported."""
+
+
+@dataclass(frozen=True)
+class SweepEntry:
+    """One line of the table.
+
+    Attributes:
+        name: Row label.
+        task: Ladder id the entry is evaluated on (and trains on, unless its preset says).
+        train: A ``configs/train`` preset name or path ("" for a policy entry).
+        policy: A policy name of `agents.policies` ("" for a train entry).
+        timesteps: Override of the preset's ``total_timesteps`` (0: keep).
+        env: Extra env overrides of training and evaluation.
+        bc_episodes: Behaviour cloning: record this many privileged-expert episodes on the
+            task (reset seeds from seed x 10000, never the held-out ones) and clone them
+            (`agents.bc`); 0: not a clone entry.
+    """
+
+    name: str
+    task: str
+    train: str = ""
+    policy: str = ""
+    timesteps: int = 0
+    env: Mapping[str, Any] = field(default_factory=dict)
+    bc_episodes: int = 0
+
+    def __post_init__(self) -> None:
+        if bool(self.train) + bool(self.policy) + bool(self.bc_episodes) != 1:
+            raise SweepError(
+                f"sweep entry {self.name!r}: give exactly one of train, policy or bc_episodes"
+            )
+
+    @property
+    def learned(self) -> bool:
+        """The entry trains one run per seed."""
+        return bool(self.train or self.bc_episodes)
+
+    @property
+    def slug(self) -> str:
+        """File-system name of the entry."""
+        return re.sub(r"[^A-Za-z0-9_.-]+", "_", self.name).strip("_")
+
+
+@dataclass(frozen=True)
+class SweepConfig:
+    """A sweep.
+
+    Attributes:
+        entries: The entries.
+        seeds: Training seeds of every train entry (>= 3 for a reported result).
+        eval_seeds: Override of the tasks' held-out seeds, inclusive (lo, hi); empty: keep.
+    """
+
+    entries: tuple[SweepEntry, ...]
+    seeds: tuple[int, ...] = (0, 1, 2)
+    eval_seeds: tuple[int, ...] = ()
+
+
+def load_sweep(name_or_path: str | Path) -> SweepConfig:
+    """Load a sweep from ``configs/sweeps/`` (by stem) or a path, strictly.
+
+    Raises:
+        ConfigError: Unknown key or bad value.
+    """
+    data = load_yaml(name_or_path, "sweeps")
+    entries = tuple(
+        from_dict(SweepEntry, dict(e), source=str(name_or_path)) for e in data.pop("entries", [])
+    )
+    if not entries:
+        raise SweepError(f"sweep {name_or_path}: no entries")
+    data = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
+    return from_dict(SweepConfig, {**data, "entries": entries}, source=str(name_or_path))
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One Ray task: an entry and a seed (seed -1 for a policy entry).
+
+    Attributes:
+        entry: The entry.
+        seed: Training seed.
+        folder: Output folder of the run.
+        eval_seeds: Evaluation seeds override, inclusive (lo, hi), or ().
+        niceness: Scheduling niceness the run sets for itself.
+    """
+
+    entry: SweepEntry
+    seed: int
+    folder: str
+    eval_seeds: tuple[int, ...] = ()
+    niceness: int = WORKER_NICENESS
+
+
+def select_tasks(cfg: SweepConfig, tasks: Sequence[str]) -> SweepConfig:
+    """The sweep restricted to the entries of ``tasks`` (all entries when empty).
+
+    Raises:
+        SweepError: A task with no entry in the sweep.
+    """
+    if not tasks:
+        return cfg
+    known = {e.task for e in cfg.entries}
+    missing = sorted(set(tasks) - known)
+    if missing:
+        raise SweepError(f"no sweep entry for task(s) {missing}; the sweep has {sorted(known)}")
+    return replace(cfg, entries=tuple(e for e in cfg.entries if e.task in set(tasks)))
+
+
+def plan(cfg: SweepConfig, out: Path, niceness: int = WORKER_NICENESS) -> list[RunSpec]:
+    """Every run of a sweep, in entry order.
+
+    Raises:
+        SweepError: A niceness outside `NICENESS_RANGE`.
+    """
+    lo, hi = NICENESS_RANGE
+    if not lo <= niceness <= hi:
+        raise SweepError(f"niceness must be in [{lo}, {hi}], got {niceness}")
+    runs = []
+    for e in cfg.entries:
+        base = out / e.task / e.slug
+        seeds = cfg.seeds if e.learned else (-1,)
+        for s in seeds:
+            folder = base / (f"seed_{s}" if s >= 0 else "eval")
+            runs.append(RunSpec(e, s, str(folder.resolve()), cfg.eval_seeds, niceness))
+    return runs
+
+
+def execute(spec: RunSpec) -> dict[str, Any]:
+    """Train (train entries) and evaluate one run; writes and returns its result dict."""
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    try:  # Ray starts workers at niceness 15; the run sets the niceness it was planned with
+        os.setpriority(os.PRIO_PROCESS, 0, spec.niceness)
+    except PermissionError:
+        pass
+    import torch  # noqa: PLC0415
+
+    from agents.policies import make_policy  # noqa: PLC0415
+    from apps.evaluate import Protocol, evaluate_policy_set, task_protocol  # noqa: PLC0415
+    from apps.train import load_train_config, train  # noqa: PLC0415
+
+    torch.set_num_threads(1)
+    e, folder = spec.entry, Path(spec.folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    base, proto = task_protocol(e.task)
+    if spec.eval_seeds:
+        lo, hi = spec.eval_seeds
+        proto = Protocol(tuple(range(lo, hi + 1)), proto.designs, proto.max_steps, proto.horizon_s)
+    t0 = time.perf_counter()
+    train_info: dict[str, Any] = {}
+    if e.train:
+        overrides: dict[str, Any] = {"seed": spec.seed, "task": e.task, "progress_bar": False}
+        if e.timesteps:
+            overrides["total_timesteps"] = e.timesteps
+        cfg = load_train_config(e.train, **overrides)
+        if e.env:
+            cfg = replace(cfg, env={**dict(cfg.env), **dict(e.env)})
+        result = _trained(folder) or train(cfg, folder)
+        base = {**base, **dict(cfg.env)}
+        policy_name = str(result.model_path)
+        train_info = {
+            "timesteps": result.timesteps,
+            "train_wall_s": result.wall_s,
+            "steps_per_s": result.steps_per_s,
+            "episodes": result.episodes,
+        }
+    elif e.bc_episodes:
+        from agents.bc import train_bc  # noqa: PLC0415
+        from apps.record_demos import load, record  # noqa: PLC0415
+
+        base = {**base, **dict(e.env)}
+        root, ds = folder / "demos", f"mosaic/{e.slug.lower()}-seed{spec.seed}-v0"
+        rec = record(
+            e.bc_episodes,
+            seed=spec.seed * BC_SEED_STRIDE,
+            root=root,
+            dataset_id=ds,
+            env_kwargs={**dict(e.env), "obs_mode": "state"},
+            expert=True,
+            task=e.task,
+            overwrite=True,
+        )
+        summary = train_bc(load(ds, root), folder, spec.seed)
+        policy_name = summary["model_path"]
+        train_info = {
+            "timesteps": rec.steps,
+            "train_wall_s": summary["wall_s"],
+            "episodes": rec.episodes,
+            "train_accuracy": summary["train_accuracy"],
+        }
+    else:
+        base = {**base, **dict(e.env)}
+        policy_name = e.policy
+    pol = make_policy(policy_name, base, calibrate=True)
+    rows, per = evaluate_policy_set([pol], proto, log=folder / "episodes.jsonl")
+    eps = per[pol.label]
+    runs = {m: float(np.mean([_metric(ep, m) for ep in eps])) for m in METRICS}
+    out = {
+        "entry": e.name,
+        "task": e.task,
+        "seed": spec.seed,
+        "folder": spec.folder,
+        "metrics": runs,
+        "row": asdict(rows[0]),
+        "wall_s": time.perf_counter() - t0,
+        "cpus": 1,
+        **train_info,
+    }
+    write_json(folder / RESULT_FILE, out)
+    return out
+
+
+def _trained(folder: Path) -> Any:
+    """The `TrainResult` of a run folder that finished training already (None otherwise).
+
+    A run whose evaluation failed after training is evaluated again without retraining; a run
+    killed while training has no completion marker (`apps.train.finished_run`) and is trained
+    again from the start.
+    """
+    from apps.train import finished_run  # noqa: PLC0415
+
+    return finished_run(folder)
+
+
+def _metric(ep: Any, name: str) -> float:
+    """A protocol metric of an `apps.evaluate.EpisodeResult`."""
+    if name == "filled":
+        return ep.correct / max(ep.slots, 1)
+    if name == "tiles_per_min":
+        return 60.0 * ep.correct / ep.span_s if ep.span_s > 0 else 0.0
+    return float(getattr(ep, name))
+
+
+def run_sweep(
+    cfg: SweepConfig,
+    out: Path,
+    address: str | None = None,
+    num_cpus: int = DEFAULT_CPUS,
+    *,
+    progress: bool = True,
+    niceness: int = WORKER_NICENESS,
+    max_retries: int = RUN_RETRIES,
+) -> list[dict[str, Any]]:
+    """Run every missing run of a sweep as Ray tasks; return all results (old and new).
+
+    A run whose worker dies is run again up to ``max_retries`` times; a run that still fails
+    (or raises) is logged with its error in ``results.jsonl`` and left out of the summary, and
+    the other runs go on.
+
+    Raises:
+        SweepRunsFailed: After the summary is written, if any run failed.
+    """
+    import ray  # noqa: PLC0415 - heavy import
+
+    if max_retries < 0:
+        raise SweepError(f"max_retries must be >= 0, got {max_retries}")
+    out.mkdir(parents=True, exist_ok=True)
+    runs = plan(cfg, out, niceness)
+    results: list[dict[str, Any]] = []
+    failed: list[dict[str, Any]] = []
+    todo = []
+    for spec in runs:
+        path = Path(spec.folder) / RESULT_FILE
+        if path.is_file():
+            results.append(json.loads(path.read_text(encoding="utf-8")))
+        else:
+            todo.append(spec)
+    if todo:
+        env_vars = {"PYTHONPATH": os.environ.get("PYTHONPATH", str(Path.cwd()))}
+        env_vars["MUJOCO_GL"] = os.environ.get("MUJOCO_GL", "egl")
+        if address:
+            ray.init(address=address, runtime_env={"env_vars": env_vars})
+        else:
+            ray.init(num_cpus=num_cpus, include_dashboard=False, runtime_env={"env_vars": env_vars})
+        try:
+            remote = ray.remote(num_cpus=1, max_retries=max_retries, retry_exceptions=False)(
+                execute
+            )
+            pending = {remote.remote(s): s for s in todo}
+            while pending:
+                ready, _ = ray.wait(list(pending), num_returns=1)
+                for ref in ready:
+                    spec = pending.pop(ref)
+                    try:
+                        res = ray.get(ref)
+                    except Exception as exc:  # noqa: BLE001 - one failed run must not stop others
+                        res = {
+                            "entry": spec.entry.name,
+                            "task": spec.entry.task,
+                            "seed": spec.seed,
+                            "error": repr(exc),
+                        }
+                    append_line(out / RESULTS_LOG, json.dumps(res))
+                    if "error" in res:
+                        failed.append(res)
+                    else:
+                        results.append(res)
+                    if progress:
+                        print(
+                            f"[sweep] done {res['task']} / {res['entry']} seed {res['seed']}: "
+                            f"{res.get('metrics', res.get('error'))}",
+                            flush=True,
+                        )
+        finally:
+            ray.shutdown()
+    summarize(results, out)
+    if failed:
+        names = "; ".join(
+            f"{r['task']} / {r['entry']} seed {r['seed']}: {r['error']}" for r in failed
+        )
+        raise SweepRunsFailed(
+            f"{len(failed)} of {len(runs)} runs failed (see {out / RESULTS_LOG}; a rerun "
+            f"retries them): {names}"
+        )
+    return results
+
+
+def run_return(result: Mapping[str, Any]) -> float | None:
+    """Mean env return of a run's held-out episodes (its ``episodes.jsonl``), or None.
+
+    The return is the env's own reward (a shaped training reward is never in it); on a task
+    with a staged reward it shows how far through the stages a policy gets when no tile is
+    placed.
+    """
+    path = Path(result.get("folder", "")) / "episodes.jsonl"
+    if not path.is_file():
+        return None
+    values = [json.loads(line)["episode_return"] for line in complete_lines(path)]
+    return float(np.mean(values)) if values else None
+
+
+def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
+    """Write ``summary.json``, ``summary.md`` and ``curves.png`` from run results."""
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for r in results:
+        groups.setdefault((r["task"], r["entry"]), []).append(r)
+    summary = []
+    lines = [
+        "| task | policy | runs | success | slots filled | misplaced/ep | dropped/ep | lost/ep | "
+        "stranded/ep | left/ep | tiles/min (sim) | return/ep | training steps | "
+        "train wall s (per run) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for (task, entry), rs in groups.items():
+        est = aggregate_runs([r["metrics"] for r in rs])
+        returns = [run_return(r) for r in rs]
+        ret = iqm_ci([x for x in returns if x is not None]) if None not in returns else None
+        steps = [r.get("timesteps", 0) for r in rs]
+        walls = [r.get("train_wall_s", 0.0) for r in rs]
+        summary.append(
+            {
+                "task": task,
+                "entry": entry,
+                "runs": len(rs),
+                "estimates": {k: asdict(v) for k, v in est.items()},
+                "episode_return": asdict(ret) if ret is not None else None,
+                "timesteps": steps,
+                "train_wall_s": walls,
+            }
+        )
+        lines.append(
+            f"| {task} | {entry} | {len(rs)} | {est['success'].text('{:.2f}')} | "
+            f"{est['filled'].text('{:.2f}')} | {est['misplaced'].text('{:.2f}')} | "
+            f"{est['dropped'].text('{:.2f}')} | {est['lost'].text('{:.2f}')} | "
+            f"{est['stranded'].text('{:.2f}')} | "
+            f"{est['left'].text('{:.2f}')} | {est['tiles_per_min'].text('{:.1f}')} | "
+            f"{ret.text('{:.2f}') if ret is not None else '-'} | "
+            f"{int(np.mean(steps)) if any(steps) else '-'} | "
+            f"{f'{np.mean(walls):.0f}' if any(walls) else '-'} |"
+        )
+    write_json(out / "summary.json", summary)
+    write_text(out / "summary.md", "\n".join(lines) + "\n")
+    plot_curves(results, out / "curves.png")
+    return {"rows": summary}
+
+
+def training_curve(monitor_dir: Path, edges: np.ndarray) -> np.ndarray | None:
+    """Success rate and mean return of a run's training episodes per step bin, shape (2, bins).
+
+    Bins without a finished episode repeat the previous value; None without episodes.
+    """
+    rows = []
+    for path in sorted(monitor_dir.glob("*.monitor.csv")):
+        lines = path.read_text(encoding="utf-8").splitlines()[1:]
+        if len(lines) < 2:
+            continue
+        head = lines[0].split(",")
+        for line in lines[1:]:
+            rec = dict(zip(head, line.split(","), strict=False))
+            ok = rec.get("is_success", "False") in ("True", "1", "1.0")
+            rows.append((float(rec["t"]), float(rec["l"]), float(rec["r"]), float(ok)))
+    if not rows:
+        return None
+    arr = np.array(sorted(rows))
+    steps = np.cumsum(arr[:, 1])
+    out = np.full((2, len(edges) - 1), np.nan)
+    for b in range(len(edges) - 1):
+        sel = (steps > edges[b]) & (steps <= edges[b + 1])
+        if sel.any():
+            out[0, b] = arr[sel, 3].mean()
+            out[1, b] = arr[sel, 2].mean()
+        elif b:
+            out[:, b] = out[:, b - 1]
+    return out
+
+
+def plot_curves(results: Sequence[dict[str, Any]], path: Path) -> None:
+    """Training success and return vs steps per learned entry, mean over seeds, 95 % band."""
+    import matplotlib as mpl  # noqa: PLC0415
+
+    mpl.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    learned: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for r in results:
+        if r.get("timesteps") and (Path(r["folder"]) / "monitor").is_dir():
+            learned.setdefault((r["task"], r["entry"]), []).append(r)
+    if not learned:
+        return
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
+    rng = np.random.default_rng(0)
+    for i, ((task, entry), rs) in enumerate(sorted(learned.items())):
+        top = max(r["timesteps"] for r in rs)
+        edges = np.linspace(0, top, CURVE_BINS + 1)
+        curves = [training_curve(Path(r["folder"]) / "monitor", edges) for r in rs]
+        stack = np.array([c for c in curves if c is not None])
+        if not len(stack):
+            continue
+        x = (edges[1:] + edges[:-1]) / 2
+        for k, ax in enumerate(axes):
+            y = stack[:, k, :]
+            mean = np.nanmean(y, axis=0)
+            boot = y[rng.integers(len(y), size=(CURVE_BOOTSTRAP, len(y)))]
+            lo, hi = np.nanpercentile(np.nanmean(boot, axis=1), [2.5, 97.5], axis=0)
+            color = f"C{i % 10}"
+            ax.plot(x, mean, color=color, label=f"{task.removesuffix('-v0')}: {entry} (n={len(y)})")
+            ax.fill_between(x, lo, hi, color=color, alpha=0.2)
+    axes[0].set_title("training success rate (mean over seeds, 95% CI)")
+    axes[1].set_title("training episode return (mean over seeds, 95% CI)")
+    for ax in axes:
+        ax.set_xlabel("env steps")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=100)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
+    """Command line (see the module docstring)."""
+    ap = CommandParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--config", required=True, help="name in configs/sweeps/ or a YAML path")
+    ap.add_argument("--out", type=Path, default=Path("runs/sweep"))
+    ap.add_argument("--address", default=None, help="Ray cluster address (default: local)")
+    ap.add_argument("--num-cpus", type=int, default=DEFAULT_CPUS, help="local Ray CPUs")
+    ap.add_argument("--summary-only", action="store_true", help="re-summarise finished runs")
+    ap.add_argument("--tasks", nargs="*", default=[], help="only the entries of these tasks")
+    ap.add_argument(
+        "--niceness", type=int, default=WORKER_NICENESS, help="scheduling niceness of each run"
+    )
+    ap.add_argument(
+        "--max-retries",
+        type=int,
+        default=RUN_RETRIES,
+        help="reruns of a run whose worker process died",
+    )
+    args = ap.parse_args(argv)
+    cfg = select_tasks(load_sweep(args.config), args.tasks)
+    if args.summary_only:
+        results = [
+            json.loads((Path(s.folder) / RESULT_FILE).read_text(encoding="utf-8"))
+            for s in plan(cfg, args.out)
+            if (Path(s.folder) / RESULT_FILE).is_file()
+        ]
+        summarize(results, args.out)
+    else:
+        results = run_sweep(
+            cfg,
+            args.out,
+            args.address,
+            args.num_cpus,
+            niceness=args.niceness,
+            max_retries=args.max_retries,
+        )
+    print((args.out / "summary.md").read_text(encoding="utf-8"))
+    return results
+
+
+__all__ = [
+    "RunSpec",
+    "SweepConfig",
+    "SweepEntry",
+    "SweepError",
+    "SweepRunsFailed",
+    "execute",
+    "load_sweep",
+    "main",
+    "plan",
+    "run_return",
+    "run_sweep",
+    "select_tasks",
+    "summarize",
+]
+
+if __name__ == "__main__":
+    run_cli(main)

@@ -1,0 +1,174 @@
+"""Tile feeding: which tiles are on the input belt, and when (``all``, ``stream``, ``batch``).
+
+`TileFeed` owns the feed's episode state (the feed order, the next feed time, a batch's due
+time, the retired tiles) and decides; the `Cell` does the physics (`Cell.place_tiles`,
+`Cell.park_tiles`) and calls `TileFeed.update` after its physics steps.
+
+- ``all``: every tile is laid out at random over the tile area at reset.
+- ``stream``: ``stream_initial`` tiles at reset, then one every ``stream_period`` at the
+  upstream edge of the tile area, as soon as there is room.
+- ``batch``: up to ``batch_size`` tiles over the whole tile area (fewer when it would be too
+  full); the next batch is indexed in ``batch_index_time`` after the input side last held a
+  real tile, and leftover tiles (distractors rightly left) leave with their batch (`retired`).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+from envs.cell.layout import Footprint, layout_capacity, sample_layout
+from envs.errors import CellError
+
+if TYPE_CHECKING:
+    from envs.cell.cell import Cell
+
+STREAM_LOOKAHEAD_RADII = 3
+"""Tiles within this many radii (plus `STREAM_LOOKAHEAD`) of the upstream edge block a spawn."""
+STREAM_LOOKAHEAD = 0.05
+"""Extra distance [m] from the upstream edge within which tiles block a spawn."""
+
+
+class TileFeed:
+    """The feed of one cell (its ``cfg.tiles.feed`` mode).
+
+    Args:
+        cell: The cell whose tiles are fed.
+    """
+
+    def __init__(self, cell: Cell) -> None:
+        self.cell = cell
+        self.cfg = cell.cfg.tiles
+        n = len(cell.tiles)
+        self.retired = np.zeros(n, bool)
+        """Tiles the batch feed took off the belt with their batch (leftover distractors)."""
+        self.order = np.arange(n)
+        """The order tiles are fed in (a random permutation when not all start on the belt)."""
+        self.next_time = np.inf
+        """Simulated time [s] of the next feed decision."""
+        self._batch_due = np.inf
+        self._footprints = [
+            [Footprint.of(t.outline, self.cfg.min_gap) for t in variant]
+            for variant in cell.tile_pool
+        ]
+        """Layout footprint of every built tile, ``[variant][tile]`` (made once)."""
+
+    def footprint(self, i: int) -> Footprint:
+        """Layout footprint of tile ``i`` as shown in this episode."""
+        return self._footprints[int(self.cell.variant[i])][int(i)]
+
+    def initial_count(self) -> int:
+        """Tiles laid out at the start of an episode."""
+        n = len(self.cell.tiles)
+        if self.cfg.feed == "all":
+            return n
+        if self.cfg.feed == "batch":
+            return min(self.cfg.batch_size, n)
+        return min(self.cfg.stream_initial, n)
+
+    def start_episode(self, rng: np.random.Generator) -> None:
+        """Park every tile, then lay out the initial ones (the cell's reset calls this)."""
+        cell = self.cell
+        n = len(cell.tiles)
+        if n:
+            cell.park_tiles(np.arange(n))
+            self.retired[:] = False
+            k = self.initial_count()
+            self.order = rng.permutation(n) if k < n else np.arange(n)
+            if k:
+                self.lay_out(self.order[:k], rng)
+        self._batch_due = np.inf
+        self.next_time = {"stream": self.cfg.stream_period, "batch": 0.0}.get(self.cfg.feed, np.inf)
+
+    def update(self, rng: np.random.Generator) -> None:
+        """Feed what is due now (called after the cell's physics steps)."""
+        cell = self.cell
+        if cell.data.time < self.next_time:
+            return
+        if self.cfg.feed == "batch":
+            self._feed_batch(rng)  # checked every call; forwards only when it lays out
+        else:
+            self._feed_stream(rng)
+            mujoco.mj_forward(cell.model, cell.data)
+
+    def lay_out(self, order: np.ndarray, rng: np.random.Generator) -> None:
+        """Lay tiles ``order`` out at random over the whole tile area, at rest.
+
+        In batch mode the batch ends early where the tile area would be too full.
+        """
+        cell, cfg = self.cell, self.cfg
+        area = tuple(cell.cfg.input_belt.tile_area)
+        shapes = [self.footprint(i) for i in order]
+        if cfg.feed == "batch":
+            k = max(layout_capacity(shapes, area, cfg.min_gap), 1)
+            order, shapes = order[:k], shapes[:k]
+        poses = sample_layout(
+            cell.radii[order],
+            area,
+            cfg.min_gap,
+            cfg.placement_attempts,
+            rng,
+            outlines=shapes,
+            restarts=cfg.placement_restarts,
+        )
+        cell.place_tiles(order, poses)
+
+    def _feed_stream(self, rng: np.random.Generator) -> None:
+        """Spawn the next waiting tile at the upstream edge of the tile area, if there is room."""
+        cell, cfg = self.cell, self.cfg
+        waiting = self.order[~cell.on_stage[self.order]]  # the per-reset order, not the design's
+        if len(waiting) == 0:
+            self.next_time = np.inf
+            return
+        i = int(waiting[0])
+        ta = cell.cfg.input_belt.tile_area
+        r = cell.radii[i]
+        c = cell.geometry.input_centre
+        pos = cell.data.xpos[cell.ids.tile_body]
+        edge = c[0] - ta[0] / 2
+        near = cell.on_stage & (pos[:, 0] < edge + STREAM_LOOKAHEAD_RADII * r + STREAM_LOOKAHEAD)
+        strip = (2 * r + 2 * cfg.min_gap, ta[1])
+        try:
+            pose = sample_layout(
+                cell.radii[[i]],
+                strip,
+                cfg.min_gap,
+                cfg.placement_attempts,
+                rng,
+                occupied=pos[near, :2] - [edge + strip[0] / 2, c[1]],
+                occupied_radii=cell.radii[near],
+            )
+        except CellError:
+            return  # no room yet; try again next step
+        pose[:, 0] += -ta[0] / 2 + strip[0] / 2
+        cell.place_tiles(np.array([i]), pose)
+        self.next_time += cfg.stream_period
+
+    def _feed_batch(self, rng: np.random.Generator) -> None:
+        """Index the next batch in once the input side has held no real tile long enough."""
+        cell = self.cell
+        order = self.order
+        waiting = order[~(cell.on_stage | self.retired)[order]]
+        if len(waiting) == 0:
+            self.next_time = np.inf
+            return
+        side = cell.input_side()
+        if np.any(side & ~cell.is_distractor):
+            self._batch_due = np.inf
+            return
+        if not np.isfinite(self._batch_due):
+            self._batch_due = cell.data.time + self.cfg.batch_index_time
+            return
+        if cell.data.time < self._batch_due:
+            return
+        left = np.flatnonzero(side)
+        cell.park_tiles(left)
+        self.retired[left] = True
+        self.lay_out(waiting[: self.cfg.batch_size], rng)
+        self._batch_due = np.inf
+        mujoco.mj_forward(cell.model, cell.data)
+
+
+__all__ = ["TileFeed"]

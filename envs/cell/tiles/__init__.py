@@ -1,0 +1,1 @@
+"""Tiles of the cell: shapes, physical tiles, per-episode variants and their collision pieces."""

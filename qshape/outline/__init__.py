@@ -1,0 +1,1 @@
+"""Outlines: slope-comparison simplification of dense contours and corner fitting."""

@@ -1,0 +1,1 @@
+"""The qualitative shape theory's core: figures, labels, descriptions, matching and assignment."""

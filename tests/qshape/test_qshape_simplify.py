@@ -1,0 +1,261 @@
+import dataclasses
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+import qshape
+from qshape import Figure, InvalidFigureError, OutlineParams, canonical_key, describe
+from qshape.outline.simplify import simplify_outline
+from qshape.theory.figure import densify
+from qshape.vision.extract import default_params
+
+SEED = 5
+DATA = Path(__file__).parents[1] / "data"
+L_TILE = [[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]]
+
+
+def dense_outline(fig_points, curve_mask, spacing: float, rng, noise: float) -> np.ndarray:
+    """Sample a boundary (arcs included) every ``spacing`` units, with uniform noise."""
+    poly = densify(np.asarray(fig_points, float), np.asarray(curve_mask), per_arc=200)
+    closed = np.vstack([poly, poly[:1]])
+    seg = np.hypot(*np.diff(closed, axis=0).T)
+    cum = np.r_[0.0, np.cumsum(seg)]
+    s = np.arange(0.0, cum[-1], spacing)
+    pts = np.stack([np.interp(s, cum, closed[:, 0]), np.interp(s, cum, closed[:, 1])], 1)
+    start = int(rng.integers(0, len(pts)))
+    return np.roll(pts, start, axis=0) + rng.uniform(-noise, noise, pts.shape)
+
+
+PRIMITIVES = {
+    "square": Figure.rectangle(20, 20),
+    "rectangle": Figure.rectangle(30, 15),
+    "right_triangle": Figure.from_polygon([[0, 0], [20, 0], [0, 20]]),
+    "equilateral": Figure.regular_polygon(3, 12.0),
+    "hexagon": Figure.regular_polygon(6, 12.0),
+    "octagon": Figure.regular_polygon(8, 12.0),
+    "l_tile": Figure.from_polygon(L_TILE),
+    "circle": Figure.circle(10.0),
+    "semicircle": Figure.semicircle(12.0),
+    "ring": Figure.ring(12.0, 5.0),
+}
+
+
+@pytest.mark.parametrize("name", sorted(PRIMITIVES))
+@pytest.mark.parametrize("trial", range(3))
+def test_from_outline_gives_the_primitives_description(name, trial):
+    rng = np.random.default_rng(SEED * 100 + trial)
+    exact = PRIMITIVES[name]
+    angle = rng.uniform(-math.pi, math.pi)
+    c, s = math.cos(angle), math.sin(angle)
+    rot = np.array([[c, s], [-s, c]])
+    dense = dense_outline(exact.points @ rot, exact.curve_mask, 0.25, rng, 0.03)
+    holes = [dense_outline(h.points @ rot, h.curve_mask, 0.25, rng, 0.03) for h in exact.holes]
+    fig = Figure.from_outline(dense, holes, y_down=bool(trial % 2))
+    if trial % 2:  # the same outline read as image coordinates: mirror it back to compare
+        fig = Figure.from_outline(dense * [1, -1], [h * [1, -1] for h in holes], y_down=True)
+    d_exact, d_fig = describe(exact), describe(fig)
+    assert len(fig.points) == len(exact.points)
+    assert d_fig.type_curve == d_exact.type_curve
+    assert canonical_key(d_fig) == canonical_key(d_exact)
+    m = qshape.match(d_exact, d_fig)
+    assert m is not None
+    if not m.continuous:
+        assert min(abs(math.remainder(r + angle, 2 * math.pi)) for r in m.rotations) < 0.05
+    assert fig.area == pytest.approx(exact.area, rel=0.02)
+
+
+def test_pixel_scale_outline_with_default_params():
+    # A 40 px tile traced at one-pixel spacing, half-pixel noise (camera-like).
+    rng = np.random.default_rng(SEED)
+    exact = Figure.rectangle(40, 24)
+    dense = np.round(dense_outline(exact.points + 100, exact.curve_mask, 1.0, rng, 0.3))
+    dense = dense[np.r_[True, np.any(np.diff(dense, axis=0) != 0, axis=1)]]
+    fig = Figure.from_outline(dense, y_down=True)
+    assert canonical_key(describe(fig)) == canonical_key(describe(exact))
+
+
+def test_simplify_returns_points_and_mask():
+    t = np.linspace(0, 2 * math.pi, 300, endpoint=False)
+    pts, mask = simplify_outline(np.stack([np.cos(t), np.sin(t)], 1))
+    assert pts.shape == (4, 2)
+    assert mask.tolist() in ([False, True, False, True], [True, False, True, False])
+
+
+@pytest.mark.parametrize(
+    ("dense", "message"),
+    [
+        ([[0, 0], [1, 1]], "at least 3"),
+        ([[0, 0], [1, 0], [float("nan"), 1]], "finite"),
+        (np.zeros((10, 2)), "at least 3"),
+        ([[0, 0], [1, 1], [2, 2], [3, 3]], "zero area"),
+        (np.zeros((5, 3)), "shape"),
+    ],
+)
+def test_bad_outlines_raise(dense, message):
+    with pytest.raises(InvalidFigureError, match=message):
+        Figure.from_outline(dense)
+
+
+def test_params_are_used():
+    t = np.linspace(0, 2 * math.pi, 400, endpoint=False)
+    circle = np.stack([10 * np.cos(t), 10 * np.sin(t)], 1)
+    three = Figure.from_outline(circle, params=OutlineParams(max_curve_turn_deg=130.0))
+    assert int(three.curve_mask.sum()) == 3
+
+
+def test_refine_corners_is_sub_sample_accurate_on_a_clean_polygon():
+    rng = np.random.default_rng(SEED)
+    tri = np.array([[0.0, 0.0], [100.0, 10.0], [30.0, 60.0]])
+    dense = dense_outline(tri[::-1], np.zeros(3, bool), 0.5, rng, 0.0)
+    plain, _ = simplify_outline(dense)
+    refined, _ = simplify_outline(dense, OutlineParams(refine_corners=True))
+
+    def worst(points: np.ndarray) -> float:
+        return float(np.hypot(*(tri[:, None, :] - points[None]).transpose(2, 0, 1)).min(1).max())
+
+    assert worst(refined) < 1e-6 < worst(plain)
+
+
+@pytest.mark.parametrize(
+    "field", ["arc_turning_deg", "circle_residual", "chamfer_fraction", "missed_corner_ratio"]
+)
+def test_cell_image_fixes_validate(field):
+    with pytest.raises(qshape.ToleranceError, match=field):
+        OutlineParams(**{field: -0.1})
+    assert getattr(OutlineParams(), field) == 0.0  # off for the bundled (vector) outlines
+
+
+def _cell_outline_params(missed_corner_ratio: float) -> OutlineParams:
+    """The bundled pixel-outline parameters with ``missed_corner_ratio`` set."""
+    return dataclasses.replace(default_params().outline, missed_corner_ratio=missed_corner_ratio)
+
+
+def test_shallow_concave_corner_of_a_rendered_tile_is_a_corner_not_a_curve():
+    # A trencadis piece as the cell's input camera rendered it (seed 2): its 34 deg concave
+    # corner sits beside a long pixel staircase, so the window measure misses it and the two
+    # edges came out as one curve (no design slot has that shape: the cell stalled).
+    image = cv2.cvtColor(cv2.imread(str(DATA / "concave_tile_cell.png")), cv2.COLOR_BGR2RGB)
+    params = default_params()
+    (fig,) = qshape.extract(image, params)
+    assert fig.curve_mask.tolist() == [False] * 5
+    nodes = describe(fig, qshape.Tolerances.load(check_size=False)).nodes
+    assert [n.labels[1] for n in nodes].count("concave") == 1
+    assert all(n.kind == "vertex" for n in nodes)
+    off = dataclasses.replace(params, outline=_cell_outline_params(0.0))
+    (missed,) = qshape.extract(image, off)
+    assert missed.curve_mask.any()
+
+
+@pytest.mark.parametrize("arc_deg", [60.0, 90.0, 180.0])
+def test_missed_corner_rule_keeps_arcs_curved(arc_deg):
+    # A circular segment (arc + chord, radius 60 px) traced to whole pixels: the arc must stay
+    # one curve, not become two straight edges.
+    r, a = 60.0, math.radians(arc_deg) / 2
+    t = np.linspace(-a, a, 400)
+    arc = np.stack([r * np.sin(t), r * np.cos(t)], 1)
+    x = np.linspace(r * math.sin(a), -r * math.sin(a), 200)[1:-1]
+    chord = np.stack([x, np.full_like(x, r * math.cos(a))], 1)
+    dense = np.round(np.vstack([arc, chord]) + 100.0)
+    dense = dense[np.r_[True, np.any(np.diff(dense, axis=0) != 0, axis=1)]]
+    _, mask = simplify_outline(dense, _cell_outline_params(0.035))
+    assert mask.tolist().count(True) == 1
+
+
+@pytest.mark.parametrize("sides", [3, 4, 6])
+def test_rough_edges_keep_their_corners(sides: int) -> None:
+    """A chipped, ground edge (~1 px of roughness on a 60 px polygon) is still one edge."""
+    from qshape.synthetic.effects import roughen  # noqa: PLC0415
+    from qshape.vision.extract import ExtractParams  # noqa: PLC0415
+
+    p = ExtractParams.load().outline
+    plain = dataclasses.replace(p, roughness_sigmas=0.0, min_corner_deg=0.0)
+    ang = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
+    v = 60.0 * np.stack([np.cos(ang), np.sin(ang)], axis=1) + 200.0
+    dense = np.concatenate(
+        [
+            v[i] + (v[(i + 1) % sides] - v[i]) * np.linspace(0, 1, 200, endpoint=False)[:, None]
+            for i in range(sides)
+        ]
+    )
+    rng = np.random.default_rng(sides)
+    good = bad_plain = 0
+    for _ in range(10):
+        rough = roughen(dense, 1.0, 2.5, rng)
+        pts, mask = simplify_outline(rough, p)
+        good += len(pts) == sides and not mask.any()
+        pts0, mask0 = simplify_outline(rough, plain)
+        bad_plain += len(pts0) != sides or bool(mask0.any())
+    assert good >= 8
+    assert good >= 10 - bad_plain  # the roughness checks never lose what plain finds
+
+
+def test_batch_cleaning_matches_one_by_one() -> None:
+    """A batch with faulty outlines gives each outline what simplifying it alone gives."""
+    from qshape.outline.simplify import simplify_outlines  # noqa: PLC0415
+
+    rng = np.random.default_rng(SEED)
+    square = dense_outline(L_TILE, [False] * 6, 0.5, rng, 0.05)
+    repeated = np.repeat(square, 2, axis=0)  # every point twice: dropped, same outline
+    bad_nan = square.copy()
+    bad_nan[3, 1] = np.nan
+    batch = [square, repeated, bad_nan, square.tolist(), square[:2], square.astype(np.int64)]
+    got = simplify_outlines(batch)
+    for dense, out in zip(batch, got, strict=True):
+        try:
+            alone = simplify_outline(dense)
+        except InvalidFigureError as exc:
+            assert (
+                isinstance(out, InvalidFigureError)
+                and str(out).split(":", 1)[1] == str(exc).split(":", 1)[1]
+            )
+            continue
+        assert not isinstance(out, InvalidFigureError)
+        # Batched arc lengths are offset per outline: the same points to rounding.
+        np.testing.assert_allclose(out[0], alone[0], rtol=0.0, atol=1e-9)
+        np.testing.assert_array_equal(out[1], alone[1])
+    assert isinstance(got[2], InvalidFigureError) and "finite" in str(got[2])
+    np.testing.assert_allclose(got[1][0], got[0][0], rtol=0.0, atol=1e-9)  # type: ignore[index]
+
+
+def test_corners_of_all_outlines_are_the_greedy_corners_of_each() -> None:
+    """Batched corner picking equals the one-outline greedy rule (strongest first, spaced)."""
+    from qshape.outline.simplify import _corners_many  # noqa: PLC0415
+
+    rng = np.random.default_rng(SEED)
+    n, spacing, threshold = 96, 5, 20.0
+    change = rng.uniform(0.0, 60.0, (7, n))
+    change[2] = 0.0  # no candidate at all
+    change[3, ::7] = 45.0  # ties: the first of equal values wins
+    got = _corners_many(change, threshold, spacing)
+    for row, corners in zip(change, got, strict=True):
+        vals = np.where(row > threshold, row, -np.inf)
+        want = []
+        while np.isfinite(vals.max()):
+            k = int(np.argmax(vals))
+            want.append(k)
+            d = np.abs(np.arange(n) - k)
+            vals[np.minimum(d, n - d) <= spacing] = -np.inf
+        np.testing.assert_array_equal(corners, sorted(want))
+    assert len(got[2]) == 0
+
+
+def test_roll_last_equals_numpy_roll() -> None:
+    from qshape.outline.simplify import _roll_last  # noqa: PLC0415
+
+    a = np.random.default_rng(2).normal(size=(2, 3, 7))
+    for shift in range(-15, 16):
+        np.testing.assert_array_equal(_roll_last(a, shift), np.roll(a, shift, axis=-1))
+    np.testing.assert_array_equal(_roll_last(a[0], 3), np.roll(a[0], 3, axis=1))
+
+
+def test_row_medians_equal_numpy_median() -> None:
+    from qshape.outline.simplify import _row_medians  # noqa: PLC0415
+
+    rng = np.random.default_rng(4)
+    for n in (1, 2, 7, 384, 385):
+        a = np.abs(rng.normal(size=(5, n)))
+        a[0] = 1.0  # ties
+        np.testing.assert_array_equal(_row_medians(a), np.median(a, axis=1))
