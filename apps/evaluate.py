@@ -529,7 +529,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         base.update(load_env_overrides(args.env_config, args.env))
         if args.seeds:
             seeds = tuple(s for spec in args.seeds for s in spec)
-            proto = Protocol(seeds, proto.designs, proto.max_steps)
+            proto = Protocol(seeds, proto.designs, proto.max_steps, proto.horizon_s)
     else:
         base = load_env_overrides(args.env_config, args.env)
         specs = args.seeds or [parse_seeds([DEFAULT_SEEDS])]

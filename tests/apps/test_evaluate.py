@@ -100,3 +100,14 @@ def test_a_rerun_never_takes_another_policys_episodes(tmp_path):
     )
     assert len(log.read_text().splitlines()) == 4
     assert [e.policy for e in again["random"]] == ["random", "random"]
+
+
+def test_seeds_given_with_a_task_keep_its_protocol(tmp_path):
+    from apps.evaluate import main, task_protocol  # noqa: PLC0415
+
+    _, proto = task_protocol("MosaicDecision6-v0")
+    args = ["--policies", "random", "--task", "MosaicDecision6-v0", "--seeds", "1000"]
+    report = main([*args, "--out", str(tmp_path), "--quiet"])
+    assert list(report["protocol"]["seeds"]) == [1000]
+    assert report["protocol"]["max_steps"] == proto.max_steps
+    assert report["protocol"]["horizon_s"] == proto.horizon_s > 0
