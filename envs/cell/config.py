@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
-from functools import cache, partial
+from functools import partial
 from pathlib import Path
 from typing import Any, Literal
 
@@ -58,25 +58,6 @@ class PhysicsConfig:
             )
 
 
-@cache
-def _model_joint_ranges(model_path: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """Lower and upper arm joint ranges [rad], each (6,), of the robot MJCF (read once per file).
-
-    Raises:
-        CellError: The file is no MJCF with the six ranged arm joints.
-    """
-    import mujoco  # noqa: PLC0415 - only a robot config needs the model
-
-    from planners.errors import PlannerError  # noqa: PLC0415
-    from planners.robot import joint_ranges  # noqa: PLC0415
-
-    try:
-        lo, hi = joint_ranges(mujoco.MjModel.from_xml_path(model_path))
-    except (ValueError, PlannerError) as exc:
-        raise CellError(f"RobotConfig.model: {model_path}: {exc}") from exc
-    return tuple(map(float, lo)), tuple(map(float, hi))
-
-
 @dataclass(frozen=True)
 class RobotConfig:
     """The arm (joint ranges and axis speed limits are the model's: `planners.robot`).
@@ -97,14 +78,6 @@ class RobotConfig:
         _positive(self, "base_keepout")
         if not self.model_path.is_file():
             raise CellError(f"RobotConfig.model: no file {self.model_path}")
-        lower, upper = _model_joint_ranges(str(self.model_path))
-        for i, (q, lo, hi) in enumerate(zip(self.home, lower, upper, strict=True)):
-            if not lo <= q <= hi:
-                raise CellError(
-                    f"RobotConfig.home: joint{i + 1} = {q:g} rad is outside its range "
-                    f"[{lo:.4f}, {hi:.4f}] rad in {self.model}; allowed: a home inside every "
-                    "joint's range"
-                )
 
     @property
     def model_path(self) -> Path:
