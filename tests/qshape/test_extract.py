@@ -15,7 +15,8 @@ from qshape.design import Design
 from qshape.errors import QShapeError
 from qshape.synthetic.render import render_design, save_png
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams, ImageError, extract, extract_detailed, read_image
+from qshape.vision.extract import extract, extract_detailed, read_image
+from qshape.vision.params import ExtractParams, ImageError
 
 S = 3.0  # px/mm of the test renderings
 
@@ -414,7 +415,7 @@ def test_label_medians_are_lower_medians(labels: int, count: int) -> None:
     More labels than a byte holds take the float histogram; labels above ``labels`` have no
     sample.
     """
-    from qshape.vision.extract import _label_medians  # noqa: PLC0415
+    from qshape.vision.segment import label_medians as _label_medians  # noqa: PLC0415
 
     rng = np.random.default_rng(11)
     lab = rng.integers(0, labels, 20000)
@@ -432,7 +433,7 @@ def test_label_medians_are_lower_medians(labels: int, count: int) -> None:
 
 def test_crumbs_beyond_a_byte_of_labels_leave_pieces_unchanged() -> None:
     """Regions are the same whether the labels fit a byte (OpenCV look-up) or not (numpy)."""
-    from qshape.vision.extract import _split_regions  # noqa: PLC0415
+    from qshape.vision.segment import _split_regions  # noqa: PLC0415
 
     p = ExtractParams.load()
     img = np.full((200, 300, 3), 60, np.uint8)
@@ -455,7 +456,7 @@ def test_crumbs_beyond_a_byte_of_labels_leave_pieces_unchanged() -> None:
 )
 def test_cell_means_are_opencv_area_means(h: int, w: int, gh: int, gw: int) -> None:
     """The illumination grid's cell means equal OpenCV's area resize (ties within a level)."""
-    from qshape.vision.extract import _cell_means  # noqa: PLC0415
+    from qshape.vision.background import _cell_means  # noqa: PLC0415
 
     rng = np.random.default_rng(5)
     img = cv2.GaussianBlur(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), (0, 0), 2.0)
@@ -469,7 +470,7 @@ def test_cell_means_are_opencv_area_means(h: int, w: int, gh: int, gw: int) -> N
 @pytest.mark.parametrize("sigma", [0.3, 0.5, 0.8, 1.0, 1.5, 2.0])
 def test_trimmed_pre_blur_is_opencvs_blur(sigma: float) -> None:
     """The pre-blur's trimmed kernel gives exactly OpenCV's default-size Gaussian blur."""
-    from qshape.vision.extract import _blur_size  # noqa: PLC0415
+    from qshape.vision.background import blur_size as _blur_size  # noqa: PLC0415
 
     img = np.random.default_rng(3).integers(0, 256, (90, 120, 3), dtype=np.uint8)
     size = _blur_size(sigma)
@@ -479,7 +480,7 @@ def test_trimmed_pre_blur_is_opencvs_blur(sigma: float) -> None:
 
 
 def test_piece_labels_are_16_bit_when_they_fit_else_32_bit() -> None:
-    from qshape.vision.extract import _label_pieces  # noqa: PLC0415
+    from qshape.vision.segment import _label_pieces  # noqa: PLC0415
 
     rng = np.random.default_rng(5)
     blobs = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 3.0)
@@ -502,7 +503,7 @@ def test_piece_labels_are_16_bit_when_they_fit_else_32_bit() -> None:
 def test_reduced_canny_edges_are_blocks_of_the_reduced_pictures_edges(h: int, w: int) -> None:
     """With canny_reduction 2 each edge of the halved picture is a 2 x 2 block (odd sides: none
     in the last row/column), the union over the channels."""
-    from qshape.vision.extract import _color_edges  # noqa: PLC0415
+    from qshape.vision.segment import _color_edges  # noqa: PLC0415
 
     rng = np.random.default_rng(7)
     img = cv2.GaussianBlur(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), (0, 0), 2.0)
@@ -523,7 +524,7 @@ def test_reduced_canny_edges_are_blocks_of_the_reduced_pictures_edges(h: int, w:
 def test_reduced_canny_cut_parts_touching_tiles_at_their_boundary() -> None:
     """Two touching rectangles of different colours: the cut of the halved picture's Canny is
     given back from both sides, so each piece ends within a pixel of the true boundary."""
-    from qshape.vision.extract import _split_regions  # noqa: PLC0415
+    from qshape.vision.segment import _split_regions  # noqa: PLC0415
 
     img = np.full((120, 200, 3), 50, np.uint8)
     img[30:90, 30:101] = (200, 60, 40)  # columns 30..100

@@ -16,9 +16,9 @@ import pytest
 
 from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams
+from qshape.vision.params import ExtractParams
 
-extract_module = importlib.import_module("qshape.vision.extract")
+segment_module = importlib.import_module("qshape.vision.segment")
 
 
 @pytest.mark.parametrize(("design", "seed"), [("hexagon", 1), ("paper_mixed", 4)])
@@ -29,7 +29,7 @@ def test_canny_from_derivatives_equals_canny_on_rendered_channels(design: str, s
     for plane in cv2.split(img):
         want = cv2.Canny(plane, p.canny_low, p.canny_high)
         assert np.count_nonzero(want) > 1000  # the tiles' outlines are there
-        np.testing.assert_array_equal(extract_module._canny(plane, p.canny_low, p.canny_high), want)
+        np.testing.assert_array_equal(segment_module._canny(plane, p.canny_low, p.canny_high), want)
 
 
 def test_canny_from_derivatives_equals_canny_on_noise_up_to_the_border() -> None:
@@ -42,5 +42,5 @@ def test_canny_from_derivatives_equals_canny_on_noise_up_to_the_border() -> None
             plane = cv2.GaussianBlur(plane, (5, 5), 1.5)
         want = cv2.Canny(plane, 30.0, 90.0)
         at_border += bool(want[[0, -1], :].any() or want[:, [0, -1]].any())
-        np.testing.assert_array_equal(extract_module._canny(plane, 30.0, 90.0), want)
+        np.testing.assert_array_equal(segment_module._canny(plane, 30.0, 90.0), want)
     assert at_border > 40  # the border handling was really exercised

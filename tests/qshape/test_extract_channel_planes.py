@@ -16,9 +16,10 @@ import pytest
 
 from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams
+from qshape.vision.params import ExtractParams
 
-extract_module = importlib.import_module("qshape.vision.extract")
+background_module = importlib.import_module("qshape.vision.background")
+segment_module = importlib.import_module("qshape.vision.segment")
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
@@ -28,7 +29,7 @@ def test_channel_sum_equals_numpys_sum_bit_for_bit(dtype: type, shape: tuple[int
     # Values of very different sizes side by side: any change of summation order would show.
     scale = rng.choice([1e-3, 1.0, 255.0, 1e6], size=shape[:-1] + (1,))
     values = (rng.random(shape) * scale).astype(dtype)
-    got = extract_module._channel_sum(values)
+    got = background_module._channel_sum(values)
     assert got.dtype == values.dtype
     np.testing.assert_array_equal(got, values.sum(axis=-1))
 
@@ -59,7 +60,7 @@ def test_dominant_colour_from_planes_matches_the_plain_reductions(design: str, s
     p = ExtractParams.load()
     sp = replace(SynthParams.load(), px_per_mm=1.8)
     img = generate(Design.load(design), 30, seed, sp).image
-    dominant, share, span = extract_module._dominant_color(img, p)
+    dominant, share, span = background_module.dominant_color(img, p)
     ref_dominant, ref_share, ref_span = _dominant_reference(img, p)
     np.testing.assert_array_equal(dominant, ref_dominant)
     assert share == ref_share
@@ -84,12 +85,12 @@ def test_colour_distance_from_planes_equals_the_colour_image_difference() -> Non
     p = ExtractParams.load()
     sp = replace(SynthParams.load(), px_per_mm=1.8)
     img = generate(Design.load("paper_mixed"), 30, 2, sp).image
-    dominant = extract_module._dominant_color(img, p)[0]
-    model, _, gain = extract_module._illumination(cv2.split(img), dominant, p)
-    dist, thr, mask = extract_module._colour_distance(cv2.split(img), model, gain, p)
+    dominant = background_module.dominant_color(img, p)[0]
+    model, _, gain = background_module.illumination(cv2.split(img), dominant, p)
+    dist, thr, mask = segment_module._colour_distance(cv2.split(img), model, gain, p)
     # The definition: the largest channel of |picture - model|, scaled by the shading gain.
     diff = cv2.absdiff(img, cv2.merge(model))
-    want = cv2.multiply(diff.max(axis=2), gain, scale=1.0 / extract_module._GAIN_SCALE)
+    want = cv2.multiply(diff.max(axis=2), gain, scale=1.0 / background_module.GAIN_SCALE)
     np.testing.assert_array_equal(dist, want)
     assert thr > 0.0
     assert 0.05 < np.count_nonzero(mask) / mask.size < 0.9  # tiles found, not everything

@@ -11,15 +11,16 @@ import pytest
 
 from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams, ImageError
+from qshape.vision.params import ExtractParams, ImageError
 
-extract_module = importlib.import_module("qshape.vision.extract")
+background_module = importlib.import_module("qshape.vision.background")
+segment_module = importlib.import_module("qshape.vision.segment")
 
 
 def _distance_inputs(img: np.ndarray, p: ExtractParams) -> tuple:
     planes = cv2.split(cv2.GaussianBlur(img, (3, 3), 0.5))
-    dominant = extract_module._dominant_color(cv2.merge(planes), p)[0]
-    model, _, gain = extract_module._illumination(planes, dominant, p)
+    dominant = background_module.dominant_color(cv2.merge(planes), p)[0]
+    model, _, gain = background_module.illumination(planes, dominant, p)
     return planes, model, gain
 
 
@@ -28,8 +29,8 @@ def test_sampled_otsu_gives_the_same_mask_on_a_rendered_picture() -> None:
     assert p.otsu_sample_step == 2  # the configured value is the one tested
     img = generate(Design.load("paper_mixed"), 30, 8, replace(SynthParams.load(), px_per_mm=1.8))
     planes, model, gain = _distance_inputs(img.image, p)
-    full = extract_module._colour_distance(planes, model, gain, replace(p, otsu_sample_step=1))
-    sampled = extract_module._colour_distance(planes, model, gain, p)
+    full = segment_module._colour_distance(planes, model, gain, replace(p, otsu_sample_step=1))
+    sampled = segment_module._colour_distance(planes, model, gain, p)
     np.testing.assert_array_equal(sampled[0], full[0])
     assert sampled[1] == full[1]
     np.testing.assert_array_equal(sampled[2], full[2])
@@ -45,8 +46,8 @@ def test_sampled_otsu_is_within_a_level_or_two_where_it_decides() -> None:
         sp = replace(SynthParams.load(), px_per_mm=1.8)
         img = generate(Design.load("square_grid"), 24, seed, sp).image
         planes, model, gain = _distance_inputs(img, p)
-        full = extract_module._colour_distance(planes, model, gain, replace(p, otsu_sample_step=1))
-        sampled = extract_module._colour_distance(planes, model, gain, p)
+        full = segment_module._colour_distance(planes, model, gain, replace(p, otsu_sample_step=1))
+        sampled = segment_module._colour_distance(planes, model, gain, p)
         assert p.threshold_min < full[1] < p.threshold_max  # Otsu decides here
         assert abs(sampled[1] - full[1]) <= 2.0
         differ = np.count_nonzero(sampled[2] != full[2])

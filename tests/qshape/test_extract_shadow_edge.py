@@ -20,13 +20,9 @@ from configs import load_config
 from qshape import Tolerances, describe
 from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import (
-    ExtractParams,
-    ImageError,
-    _local_fill,
-    _polynomial_fit,
-    extract_detailed,
-)
+from qshape.vision.background import _local_fill, _polynomial_fit
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams, ImageError
 
 _BELT = np.array([72.0, 77.0, 83.0], np.float32)  # lit belt colour [levels]
 

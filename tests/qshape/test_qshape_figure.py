@@ -176,7 +176,7 @@ def _batch_cases() -> list[tuple[np.ndarray, np.ndarray]]:
 @pytest.mark.parametrize("y_down", [False, True])
 def test_boundaries_validated_in_one_pass_as_one_by_one(y_down: bool) -> None:
     """The one-pass check keeps, orients and refuses exactly as `Boundary.from_simplified`."""
-    from qshape.theory.figure import _boundaries_many  # noqa: PLC0415
+    from qshape.theory.boundary import boundaries_many as _boundaries_many  # noqa: PLC0415
 
     cases = _batch_cases()
     whats = [f"figure {k}" for k in range(len(cases))]
@@ -194,7 +194,7 @@ def test_boundaries_validated_in_one_pass_as_one_by_one(y_down: bool) -> None:
 
 def test_measures_in_one_pass_as_one_by_one() -> None:
     """Areas, centroids and perimeters of the batch equal the per-boundary ones."""
-    from qshape.theory.figure import _measures_many  # noqa: PLC0415
+    from qshape.theory.boundary import measures_many as _measures_many  # noqa: PLC0415
 
     bounds = []
     for (pts, mask), y_down in zip(_batch_cases(), [False, True] * 20, strict=False):

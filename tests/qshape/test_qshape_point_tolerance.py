@@ -11,7 +11,8 @@ from qshape import Description, Figure, Tolerances, describe, match
 from qshape.design import Design
 from qshape.synthetic.effects import CameraEffects
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams, extract_detailed
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams
 
 
 def _best(cand: Description, refs: dict[str, Description], tol: Tolerances) -> str | None:

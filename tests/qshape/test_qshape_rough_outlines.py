@@ -10,7 +10,8 @@ from qshape import Figure, Tolerances, describe, match
 from qshape.design import Design
 from qshape.synthetic.effects import CameraEffects
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams, extract_detailed
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams
 
 
 def _recognised(design: Design, img, ep: ExtractParams, s: float) -> tuple[int, int]:

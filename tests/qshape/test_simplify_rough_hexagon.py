@@ -9,7 +9,7 @@ from qshape import Figure, OutlineParams, Tolerances, describe, match
 from qshape.outline.fit import BendTest, bent_runs, outline_moments
 from qshape.synthetic.effects import roughen
 from qshape.theory.figure import figures_from_outlines
-from qshape.vision.extract import ExtractParams
+from qshape.vision.params import ExtractParams
 
 PX_PER_MM = 2.5  # the synthetic belt camera's scale
 STEP_PX = 0.5  # spacing of the drawn outline samples, as a traced contour gives them
