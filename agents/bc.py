@@ -5,7 +5,7 @@ Trained from Minari demonstrations by ``python -m apps.bc``; see that program fo
 
 from __future__ import annotations
 
-import json
+import pickle
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -15,6 +15,7 @@ import numpy as np
 
 from agents.errors import AgentError
 from configs import load_config
+from configs.files import atomic_path, write_json
 
 STATE_KEYS = ("robot", "tiles", "slots")
 """Observation keys the clone reads, in order."""
@@ -109,15 +110,16 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
         acc = float((net(x).argmax(1) == y).float().mean())
     out.mkdir(parents=True, exist_ok=True)
     path = out / "bc.pt"
-    torch.save(
-        {
-            "state_dict": net.state_dict(),
-            "nvec": nvec.tolist(),
-            "n_in": int(x.shape[1]),
-            "config": asdict(cfg),
-        },
-        path,
-    )
+    with atomic_path(path) as tmp:
+        torch.save(
+            {
+                "state_dict": net.state_dict(),
+                "nvec": nvec.tolist(),
+                "n_in": int(x.shape[1]),
+                "config": asdict(cfg),
+            },
+            tmp,
+        )
     summary = {
         "model_path": str(path),
         "samples": len(x),
@@ -126,7 +128,7 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
         "wall_s": time.perf_counter() - t0,
         "seed": seed,
     }
-    (out / "bc_summary.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
+    write_json(out / "bc_summary.json", summary)
     return summary
 
 
@@ -141,10 +143,27 @@ class BCPolicy:
         import torch  # noqa: PLC0415
         from gymnasium import spaces  # noqa: PLC0415
 
-        blob = torch.load(str(path), map_location="cpu", weights_only=True)
-        self.nvec = np.asarray(blob["nvec"], np.int64)
-        self.net = _network(int(blob["n_in"]), int(np.prod(self.nvec)), BCConfig(**blob["config"]))
-        self.net.load_state_dict(blob["state_dict"])
+        try:
+            blob = torch.load(str(path), map_location="cpu", weights_only=True)
+            self.nvec = np.asarray(blob["nvec"], np.int64)
+            cfg = BCConfig(**blob["config"])
+            self.net = _network(int(blob["n_in"]), int(np.prod(self.nvec)), cfg)
+            self.net.load_state_dict(blob["state_dict"])
+        except (
+            OSError,
+            RuntimeError,
+            KeyError,
+            TypeError,
+            ValueError,
+            EOFError,
+            pickle.UnpicklingError,
+        ) as exc:
+            what = "no such file" if isinstance(exc, FileNotFoundError) else "unreadable"
+            if isinstance(exc, KeyError | TypeError):
+                what = f"missing or wrong entry {exc}"
+            raise AgentError(
+                f"{path} is not a behaviour clone saved by agents.bc ({what}: {type(exc).__name__})"
+            ) from exc
         self.net.eval()
         self.action_space = spaces.MultiDiscrete(self.nvec)
         self.n_in = int(blob["n_in"])

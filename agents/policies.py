@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import zipfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -211,12 +212,15 @@ def load_model(model_path: Path, algo: str = "") -> Any:
     from agents.algorithms import algorithm_class  # noqa: PLC0415
 
     names = [algo] if algo else list(ALGORITHMS)
+    reason = ""
     for name in names:
         try:
             return algorithm_class(name).load(str(model_path), device="cpu")
-        except (ValueError, KeyError, RuntimeError, AttributeError):
-            continue
-    raise PolicyError(f"cannot load {model_path} with any of {names}")
+        except (ValueError, KeyError, RuntimeError, AttributeError, OSError, EOFError) as exc:
+            reason = f"{type(exc).__name__}: {' '.join(str(exc).split())[:200]}"
+        except zipfile.BadZipFile as exc:
+            reason = f"not a complete zip file ({exc})"
+    raise PolicyError(f"cannot load {model_path} with any of {names} ({reason})")
 
 
 def _trained(base: dict[str, Any], model_path: Path) -> Policy:

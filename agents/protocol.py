@@ -62,6 +62,8 @@ class EpisodeMetrics:
         left: Real tiles never placed: on the input belt, held or waiting at the end [count].
         tiles_per_min: Correct tiles per simulated minute (see the module docstring).
         sim_s: Simulated episode time [s].
+        span_s: Time the throughput is measured over [s]: ``sim_s`` for a successful
+            episode, ``max(sim_s, horizon)`` otherwise (the one home of that rule).
     """
 
     success: float
@@ -73,6 +75,7 @@ class EpisodeMetrics:
     left: float
     tiles_per_min: float
     sim_s: float
+    span_s: float
 
     @staticmethod
     def of(info: Mapping[str, Any], horizon_s: float) -> EpisodeMetrics:
@@ -105,6 +108,7 @@ class EpisodeMetrics:
             left=float(ev.on_input + ev.held + ev.waiting),  # never placed
             tiles_per_min=ev.tiles_per_min(sim_s, horizon_s),
             sim_s=sim_s,
+            span_s=ev.throughput_span(sim_s, horizon_s),
         )
 
 

@@ -16,18 +16,18 @@ with cross-entropy on every recorded step (`BCConfig`, ``configs/bc.yaml``). The
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 from typing import Any
 
 from agents.bc import BC_CONFIG, load_bc_config, train_bc
+from apps.cli import CommandParser, run_cli
 from apps.record_demos import DEFAULT_ROOT, load
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line (see the module docstring)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dataset-id", required=True)
     ap.add_argument("--root", type=Path, default=DEFAULT_ROOT)
     ap.add_argument("--out", type=Path, default=Path("runs/bc"))
@@ -44,4 +44,4 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 __all__ = ["main"]
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

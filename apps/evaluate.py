@@ -49,7 +49,9 @@ from agents.policies import (
     parse_pairs,
 )
 from agents.protocol import EpisodeMetrics
+from apps.cli import CommandParser, run_cli
 from configs import ConfigError, load_yaml
+from configs.files import append_line, atomic_path, complete_lines, write_json, write_text
 from envs.task import Evaluation, tiles_per_minute
 
 ENV_ID = "envs:MosaicAssembly-v0"
@@ -58,6 +60,8 @@ STEPS_PER_SLOT = 2
 """Default episode step limit per slot of the design (without a task)."""
 HORIZON_S_PER_SLOT = 5.0
 """Default throughput horizon per slot [s] (two 2.5 s cycles), without a task."""
+DEFAULT_SEEDS = "1000-1019"
+"""Seeds without ``--task`` or ``--seeds``."""
 EPISODES_FILE = "episodes.jsonl"
 """Per-episode results, appended as they finish."""
 COLUMNS = (
@@ -208,6 +212,14 @@ def parse_seeds(specs: Sequence[str]) -> list[int]:
     return seeds
 
 
+def seed_argument(spec: str) -> list[int]:
+    """``--seeds`` argument type: `parse_seeds` of one spec, a usage error if malformed."""
+    try:
+        return parse_seeds([spec])
+    except EvaluateError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from exc
+
+
 def load_env_overrides(path: str | Path | None, pairs: Sequence[str] = ()) -> dict[str, Any]:
     """Base env overrides from a train preset, a YAML (env keys or its ``env``) and KEY=VALUE.
 
@@ -287,7 +299,7 @@ def run_episode(
         left=int(metrics.left),
         steps=steps,
         sim_s=sim,
-        span_s=ev.throughput_span(sim, horizon_s),
+        span_s=metrics.span_s,
         wall_s=wall,
         episode_return=total,
     )
@@ -305,6 +317,7 @@ def episode_metrics(ep: EpisodeResult) -> EpisodeMetrics:
         left=float(ep.left),
         tiles_per_min=ep.tiles_per_min,
         sim_s=ep.sim_s,
+        span_s=ep.span_s,
     )
 
 
@@ -343,14 +356,10 @@ def aggregate(label: str, episodes: Sequence[EpisodeResult], env: dict[str, Any]
 
 
 def _read_done(path: Path | None) -> list[EpisodeResult]:
-    """Episodes already in a JSONL log (none if it does not exist)."""
-    if path is None or not path.is_file():
+    """Episodes already in a JSONL log (none if it does not exist; a torn last line skipped)."""
+    if path is None:
         return []
-    out = []
-    for line in path.read_text(encoding="utf-8").splitlines():
-        if line.strip():
-            out.append(EpisodeResult(**json.loads(line)))
-    return out
+    return [EpisodeResult(**json.loads(line)) for line in complete_lines(path)]
 
 
 def _bind(pol: Policy, designs: Sequence[str]) -> list[tuple[gym.Env, Predict]]:
@@ -417,9 +426,7 @@ def evaluate_policy_set(
                 ep = run_episode(env, predict, seed, limit, horizon, label=pol.label)
                 eps.append(ep)
                 if log is not None:
-                    log.parent.mkdir(parents=True, exist_ok=True)
-                    with log.open("a", encoding="utf-8") as fh:
-                        fh.write(json.dumps(asdict(ep)) + "\n")
+                    append_line(log, json.dumps(asdict(ep)))
                 if progress:
                     print(
                         f"  {pol.label} seed {seed} ({ep.design}): {ep.correct}/{ep.slots} "
@@ -471,7 +478,8 @@ def plot(rows: Sequence[PolicyRow], path: Path) -> None:
         ax.set_title(title)
         ax.invert_yaxis()
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=100)
     plt.close(fig)
 
 
@@ -497,21 +505,21 @@ def write_outputs(
         "episodes": {k: [asdict(e) for e in v] for k, v in episodes.items()},
         **(extra or {}),
     }
-    (out / "eval.json").write_text(json.dumps(report, indent=2), encoding="utf-8")
+    write_json(out / "eval.json", report)
     seed_text = f"{seeds[0]}-{seeds[-1]}" if len(seeds) > 1 else str(seeds[0])
     md = (
         f"Evaluation on {len(seeds)} seeds ({seed_text}), {report['date']}\n\n"
         + markdown_table(rows)
         + "\n"
     )
-    (out / "eval.md").write_text(md, encoding="utf-8")
+    write_text(out / "eval.md", md)
     plot(rows, out / "eval.png")
     return report
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line (see the module docstring)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument(
         "--policies",
         nargs="+",
@@ -520,7 +528,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "optionally with @KEY=VALUE[,KEY=VALUE] env overrides (scripted@execution=dynamic)",
     )
     ap.add_argument("--task", default=None, help="a ladder id (MosaicDecision6-v0): its protocol")
-    ap.add_argument("--seeds", nargs="+", default=None, help="e.g. 1000-1019 or 1,2")
+    ap.add_argument(
+        "--seeds", nargs="+", type=seed_argument, default=None, help="e.g. 1000-1019 or 1,2"
+    )
     ap.add_argument(
         "--env-config",
         default=None,
@@ -545,10 +555,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         base, proto = task_protocol(args.task)
         base.update(load_env_overrides(args.env_config, args.env))
         if args.seeds:
-            proto = Protocol(tuple(parse_seeds(args.seeds)), proto.designs, proto.max_steps)
+            seeds = tuple(s for spec in args.seeds for s in spec)
+            proto = Protocol(seeds, proto.designs, proto.max_steps, proto.horizon_s)
     else:
         base = load_env_overrides(args.env_config, args.env)
-        proto = Protocol(tuple(parse_seeds(args.seeds or ["1000-1019"])))
+        specs = args.seeds or [parse_seeds([DEFAULT_SEEDS])]
+        proto = Protocol(tuple(s for spec in specs for s in spec))
     if args.max_steps:
         proto = Protocol(proto.seeds, proto.designs, args.max_steps, proto.horizon_s)
     policies = make_policies(
@@ -586,4 +598,4 @@ __all__ = [
 ]
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

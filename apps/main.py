@@ -26,8 +26,6 @@ empty mesh at full resolution) and ``output_camera_final.png`` (the assembled mo
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 import shutil
 import subprocess
@@ -43,19 +41,17 @@ import numpy as np
 
 from agents.calibration import calibrate_env_camera
 from agents.config import AgentsConfig, PlacementConfig, RunConfig, load_agents_config
-from agents.errors import AgentError
 from agents.perception import PerceivedTile, Perception, SlotTarget
 from agents.placement import PlacementPlan, Unplaced
 from agents.scripted import ScriptedAgent
-from configs import ConfigError
+from apps.cli import CommandParser, run_cli
+from configs.files import atomic_path, write_image, write_json, write_text
 from envs.cell.accounting import TILE_STATES
 from envs.cell.cameras import CameraModel
 from envs.env_config import FEEDS
 from envs.episode_setup import with_feed_fallback
-from envs.errors import CellError
 from envs.task import Evaluation, GroundTruth
 from envs.task_spec import FeedMode, TaskSpec
-from qshape import QShapeError
 from spatial.angles import yaw_error
 from spatial.units import MM_PER_M
 
@@ -373,9 +369,18 @@ class CellVideo:
         self.frames.append(cv2.cvtColor(out, cv2.COLOR_BGR2RGB))
 
     def write(self, path: Path) -> Path | None:
-        """Encode the frames (ffmpeg H.264, else OpenCV mp4v); returns the file or None."""
+        """Encode the frames (ffmpeg H.264, else OpenCV mp4v); returns the file or None.
+
+        The video is written whole or not at all (encoded under a temporary name, then renamed).
+        """
         if not self.frames:
             return None
+        with atomic_path(path) as tmp:
+            self._encode(tmp)
+        return path
+
+    def _encode(self, path: Path) -> None:
+        """Encode the frames to ``path`` (ffmpeg H.264, else OpenCV mp4v)."""
         h, w = self.frames[0].shape[:2]
         fps = self.cfg.video_fps
         if shutil.which("ffmpeg"):
@@ -388,13 +393,12 @@ class CellVideo:
                 cmd, input=np.stack(self.frames).tobytes(), capture_output=True, check=False
             )
             if proc.returncode == 0:
-                return path
+                return
         fourcc = cv2.VideoWriter_fourcc(*"mp4v")  # type: ignore[attr-defined]
         writer = cv2.VideoWriter(str(path), fourcc, fps, (w, h))
         for f in self.frames:
             writer.write(cv2.cvtColor(f, cv2.COLOR_RGB2BGR))
         writer.release()
-        return path
 
 
 # ------------------------------------------------------------------------------ the run
@@ -513,9 +517,9 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
                 break
         evaluation = Evaluation.from_info(info)
         if first is not None:
-            cv2.imwrite(str(out_dir / "input_camera_annotated.png"), draw_perception(*first, rc))
-        cv2.imwrite(
-            str(out_dir / "output_camera_annotated.png"),
+            write_image(out_dir / "input_camera_annotated.png", draw_perception(*first, rc))
+        write_image(
+            out_dir / "output_camera_annotated.png",
             draw_slots(
                 output_before,
                 out_cam,
@@ -527,8 +531,8 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             ),
         )
         home_obs = env.get_wrapper_attr("move_home")()  # the arm out of the view
-        cv2.imwrite(
-            str(out_dir / "output_camera_final.png"),
+        write_image(
+            out_dir / "output_camera_final.png",
             cv2.cvtColor(home_obs["output_camera"], cv2.COLOR_RGB2BGR),
         )
         video_path = video.write(out_dir / "cell.mp4") if video is not None else None
@@ -576,8 +580,8 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             calibration_input_camera=cal_in,
             calibration_output_camera=cal_out,
         )
-        (out_dir / "report.json").write_text(json.dumps(report.as_dict(), indent=2, default=float))
-        (out_dir / "report.txt").write_text(report_text(report))
+        write_json(out_dir / "report.json", report.as_dict(), default=float)
+        write_text(out_dir / "report.txt", report_text(report))
         return report
     finally:
         bar.close()
@@ -655,7 +659,7 @@ def _num(v: float | None) -> str:
 
 def main(argv: list[str] | None = None) -> dict[str, object]:
     """Command line: run the scripted cell and print the report; returns ``report.json``'s dict."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=__doc__.splitlines()[0])
     parser.add_argument("--config", default="agents", help="bundled name or YAML path")
     parser.add_argument("--design", help="design name or path (default: config)")
     parser.add_argument("--seed", type=int, help="episode seed (default: config)")
@@ -670,43 +674,40 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     parser.add_argument("--out", type=Path, help="output folder (default: config)")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
-    try:
-        cfg = load_agents_config(args.config)
-        run_over: dict[str, Any] = {
-            k: v
-            for k, v in (
-                ("design", args.design),
-                ("seed", args.seed),
-                ("belt_speed", args.belt_speed),
-                ("feed", args.feed),
-                ("distractor_rate", args.distractor_rate),
-                ("max_slots", args.max_slots),
-            )
-            if v is not None
-        }
-        if args.no_execute:
-            run_over["execute"] = False
-        if args.true_camera:
-            run_over["calibrate"] = False
-        place_over: dict[str, Any] = {}
-        if args.greedy:
-            place_over["method"] = "greedy"
-        if args.shape_only:
-            place_over["use_color"] = False
-        cfg = replace(
-            cfg,
-            run=replace(cfg.run, **run_over),
-            placement=replace(cfg.placement, **place_over),
+    cfg = load_agents_config(args.config)
+    run_over: dict[str, Any] = {
+        k: v
+        for k, v in (
+            ("design", args.design),
+            ("seed", args.seed),
+            ("belt_speed", args.belt_speed),
+            ("feed", args.feed),
+            ("distractor_rate", args.distractor_rate),
+            ("max_slots", args.max_slots),
         )
-        out = args.out or Path(cfg.run.out_dir)
-        out = out if out.is_absolute() else ROOT / out
-        report = run(cfg, out, quiet=args.quiet)
-    except (AgentError, QShapeError, ConfigError, CellError) as exc:
-        raise SystemExit(f"error: {exc}") from exc
+        if v is not None
+    }
+    if args.no_execute:
+        run_over["execute"] = False
+    if args.true_camera:
+        run_over["calibrate"] = False
+    place_over: dict[str, Any] = {}
+    if args.greedy:
+        place_over["method"] = "greedy"
+    if args.shape_only:
+        place_over["use_color"] = False
+    cfg = replace(
+        cfg,
+        run=replace(cfg.run, **run_over),
+        placement=replace(cfg.placement, **place_over),
+    )
+    out = args.out or Path(cfg.run.out_dir)
+    out = out if out.is_absolute() else ROOT / out
+    report = run(cfg, out, quiet=args.quiet)
     print(report_text(report), end="")
     print(f"wrote {out / 'report.json'}")
     return report.as_dict()
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

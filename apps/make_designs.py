@@ -9,7 +9,6 @@ ten meshes). Each file is validated by loading it back.
 
 from __future__ import annotations
 
-import argparse
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from apps.cli import CommandParser, run_cli
 from configs import CONFIG_DIR
 from qshape.design import DESIGN_SUBDIR, Design, color_hex
 from qshape.design.mural import MURAL_SUBDIR, Mural
@@ -388,7 +388,7 @@ MURAL_HEADER = """Mural (format: configs/designs/README.md, section Murals). Gen
 
 def main(argv: list[str] | None = None) -> None:
     """Write and validate the bundled designs."""
-    ap = argparse.ArgumentParser(description=__doc__)
+    ap = CommandParser(description=__doc__)
     ap.add_argument("--out", type=Path, default=CONFIG_DIR / DESIGN_SUBDIR)
     ap.add_argument("--murals-out", type=Path, default=CONFIG_DIR / MURAL_SUBDIR)
     args = ap.parse_args(argv)
@@ -432,4 +432,4 @@ def _is_convex(v: np.ndarray) -> bool:
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

@@ -29,7 +29,6 @@ paper's findings:
 
 from __future__ import annotations
 
-import argparse
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,6 +38,8 @@ import cv2
 import numpy as np
 
 import qshape
+from apps.cli import CommandParser, run_cli
+from configs.files import write_image, write_text
 from qshape.design import Design, Slot
 from qshape.synthetic.render import RenderParams, fill_tiles, mm_to_px, render_design
 from qshape.synthetic.synth import place_path
@@ -307,7 +308,7 @@ def design_marks(design: Design, marks: dict[str, int]) -> np.ndarray:
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run the experiment, print the table, write the picture and JSON."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "out")
     args = parser.parse_args(argv)
     r, image, figs = run_experiment()
@@ -322,11 +323,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             cv2.circle(shown, (int(p[0]), int(p[1])), 3, (0, 0, 255), -1, cv2.LINE_AA)
         cv2.putText(shown, str(n), (int(c[0]) - 5, int(c[1]) + 5), cv2.FONT_HERSHEY_SIMPLEX,
                     0.6, (255, 255, 255), 2, cv2.LINE_AA)  # fmt: skip
-    cv2.imwrite(str(args.out / "paper_experiment.png"), shown)
+    write_image(args.out / "paper_experiment.png", shown)
     design = paper_design()
     for suffix, marks in (("shape", r.marks_shape), ("shape_colour", r.marks_color)):
-        cv2.imwrite(
-            str(args.out / f"paper_experiment_design_{suffix}.png"),
+        write_image(
+            args.out / f"paper_experiment_design_{suffix}.png",
             cv2.cvtColor(design_marks(design, marks), cv2.COLOR_RGB2BGR),
         )
     data = {
@@ -334,9 +335,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "marks_shape_colour": r.marks_color,
         "assign": {k: {str(t): s for t, s in v.items()} for k, v in r.assign.items()},
     }
-    (args.out / "paper_experiment.json").write_text(json.dumps(data, indent=2))
+    write_text((args.out / "paper_experiment.json"), json.dumps(data, indent=2))
     return data
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

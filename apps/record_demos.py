@@ -25,7 +25,6 @@ default, which changes pixels).
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import json
 import os
@@ -38,6 +37,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import yaml
+
+from agents.errors import AgentError
+from apps.cli import CommandParser, run_cli
+from configs.files import clear_partials, partial_path, replace_dir, write_json
 
 ENV_ID = "envs:MosaicAssembly-v0"
 """Gymnasium id of the environment."""
@@ -60,9 +63,11 @@ REPLAY_ATOL = 1e-5
 """Tolerance of the replayed state observations and rewards."""
 STEPS_PER_SLOT = 2
 """Episode step limit per slot."""
+STAGING_NAME = "recording"
+"""Stem of the staging folder a dataset is recorded in (``<root>/.recording.partial-<pid>``)."""
 
 
-class DemoError(RuntimeError):
+class DemoError(AgentError, RuntimeError):
     """A dataset that cannot be written or replayed."""
 
 
@@ -160,13 +165,13 @@ def record(
 ) -> RecordResult:
     """Record ``episodes`` scripted episodes (seeds ``seed``, ``seed + 1``...) as a dataset.
 
+    The dataset is recorded in a staging folder under ``root`` and renamed into place when
+    complete: a recording killed part-way leaves no dataset (or the previous one, with
+    ``overwrite``), and its staging folder is removed by the next recording.
+
     Raises:
         DemoError: The dataset exists and ``overwrite`` is False.
     """
-    import minari  # noqa: PLC0415 - optional heavy import
-
-    from agents.scripted import ScriptedAgent  # noqa: PLC0415
-
     env_id = ENV_ID
     kwargs = {**DEFAULT_ENV, **(env_kwargs or {})}
     if task:
@@ -175,72 +180,118 @@ def record(
         env_id = f"envs:{get_task(task).id}"
         kwargs = {"obs_mode": "rgb+state", **(env_kwargs or {})}
     with datasets_root(root):
-        path = Path(os.environ["MINARI_DATASETS_PATH"]) / dataset_id
-        if path.exists():
-            if not overwrite:
-                raise DemoError(f"dataset {dataset_id} exists at {path}; pass --overwrite")
-            shutil.rmtree(path)
-        base = gym.make(env_id, **kwargs)
-        slots = len(base.unwrapped.task.slot_class)  # type: ignore[attr-defined]
-        base.close()
-        env = minari.DataCollector(
-            gym.make(env_id, max_episode_steps=STEPS_PER_SLOT * slots, **kwargs),
-            jpeg_encoding=not lossless,
-        )
-        try:
-            agent: Any = (
-                ExpertAgent(env) if expert else ScriptedAgent.from_env(env, calibrate=calibrate)
-            )
-            seeds = tuple(range(seed, seed + episodes))
-            successes = steps = 0
-            for s in seeds:
-                obs, _ = env.reset(seed=s)
-                done, first = False, True
-                info: dict[str, Any] = {}
-                while not done:
-                    action, _ = agent.predict(obs, episode_start=np.array([first]))
-                    obs, _, terminated, truncated, info = env.step(action)
-                    first, done = False, terminated or truncated
-                    steps += 1
-                successes += bool(info["is_success"])
-            dataset = env.create_dataset(
+        top = Path(os.environ["MINARI_DATASETS_PATH"])
+    path = top / dataset_id
+    if path.exists() and not overwrite:
+        raise DemoError(f"dataset {dataset_id} exists at {path}; pass --overwrite")
+    clear_partials(top / STAGING_NAME)
+    staging = partial_path(top / STAGING_NAME)
+    try:
+        with datasets_root(staging):
+            rec = _collect(
+                episodes,
+                seed,
                 dataset_id=dataset_id,
-                eval_env=env.spec,
-                algorithm_name=type(agent).__name__,
-                author="mosaic-cell project",
-                author_email="n/a",
-                code_permalink="apps/record_demos.py",
-                description=(
-                    (
-                        "Privileged expert (every tile to its slot) "
-                        if expert
-                        else "Scripted mosaic cell (perception + qualitative matching + planner "
-                        "cycles) "
-                    )
-                    + f"on {env_id.removeprefix('envs:')} with {json.dumps(kwargs)}; seeds "
-                    f"{seeds[0]}..{seeds[-1]}."
-                ),
+                env_id=env_id,
+                kwargs=kwargs,
+                calibrate=calibrate,
+                expert=expert,
+                lossless=lossless,
             )
-        finally:
-            env.close()
-        size = sum(f.stat().st_size for f in path.rglob("*") if f.is_file()) / 1e6
-        return RecordResult(
-            dataset_id,
-            path,
-            dataset.total_episodes,
-            dataset.total_steps,
-            seeds,
-            successes / max(episodes, 1),
-            size,
+        replace_dir(staging / dataset_id, path)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    size = sum(f.stat().st_size for f in path.rglob("*") if f.is_file()) / 1e6
+    return RecordResult(dataset_id, path, *rec, size)
+
+
+def _collect(
+    episodes: int,
+    seed: int,
+    *,
+    dataset_id: str,
+    env_id: str,
+    kwargs: dict[str, Any],
+    calibrate: bool,
+    expert: bool,
+    lossless: bool,
+) -> tuple[int, int, tuple[int, ...], float]:
+    """Record the episodes as ``dataset_id`` under ``MINARI_DATASETS_PATH``.
+
+    Returns:
+        (episodes, steps, seeds, success rate).
+    """
+    import minari  # noqa: PLC0415 - optional heavy import
+
+    from agents.scripted import ScriptedAgent  # noqa: PLC0415
+
+    base = gym.make(env_id, **kwargs)
+    slots = len(base.unwrapped.task.slot_class)  # type: ignore[attr-defined]
+    base.close()
+    env = minari.DataCollector(
+        gym.make(env_id, max_episode_steps=STEPS_PER_SLOT * slots, **kwargs),
+        jpeg_encoding=not lossless,
+    )
+    try:
+        agent: Any = (
+            ExpertAgent(env) if expert else ScriptedAgent.from_env(env, calibrate=calibrate)
         )
+        seeds = tuple(range(seed, seed + episodes))
+        successes = steps = 0
+        for s in seeds:
+            obs, _ = env.reset(seed=s)
+            done, first = False, True
+            info: dict[str, Any] = {}
+            while not done:
+                action, _ = agent.predict(obs, episode_start=np.array([first]))
+                obs, _, terminated, truncated, info = env.step(action)
+                first, done = False, terminated or truncated
+                steps += 1
+            successes += bool(info["is_success"])
+        dataset = env.create_dataset(
+            dataset_id=dataset_id,
+            eval_env=env.spec,
+            algorithm_name=type(agent).__name__,
+            author="mosaic-cell project",
+            author_email="n/a",
+            code_permalink="apps/record_demos.py",
+            description=(
+                (
+                    "Privileged expert (every tile to its slot) "
+                    if expert
+                    else "Scripted mosaic cell (perception + qualitative matching + planner "
+                    "cycles) "
+                )
+                + f"on {env_id.removeprefix('envs:')} with {json.dumps(kwargs)}; seeds "
+                f"{seeds[0]}..{seeds[-1]}."
+            ),
+        )
+    finally:
+        env.close()
+    return (
+        dataset.total_episodes,
+        dataset.total_steps,
+        seeds,
+        successes / max(episodes, 1),
+    )
 
 
 def load(dataset_id: str = DEFAULT_ID, root: Path = DEFAULT_ROOT) -> Any:
-    """Load a local dataset (never downloads)."""
+    """Load a local dataset (never downloads).
+
+    Raises:
+        DemoError: No complete dataset ``dataset_id`` under ``root``.
+    """
     import minari  # noqa: PLC0415
 
     with datasets_root(root):
-        return minari.load_dataset(dataset_id, download=False)
+        path = Path(os.environ["MINARI_DATASETS_PATH"]) / dataset_id
+        if not path.is_dir():
+            raise DemoError(f"no dataset {dataset_id!r} under {root} (record it first)")
+        try:
+            return minari.load_dataset(dataset_id, download=False)
+        except (OSError, ValueError, KeyError) as exc:
+            raise DemoError(f"dataset {dataset_id!r} under {root} cannot be read: {exc}") from exc
 
 
 def _state_error(recorded: dict[str, np.ndarray], step: int, obs: dict[str, Any]) -> float:
@@ -300,7 +351,7 @@ def _pairs(pairs: Sequence[str]) -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line (see the module docstring)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument("--episodes", type=int, default=20)
     ap.add_argument("--seed", type=int, default=0, help="first reset seed")
     ap.add_argument("--root", type=Path, default=DEFAULT_ROOT, help="datasets folder")
@@ -339,7 +390,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             f"(state error {rep.max_state_error:.2e}, reward error "
             f"{rep.max_reward_error:.2e}), {rep.replayed_success} successful"
         )
-    (rec.path / "record_report.json").write_text(json.dumps(report, indent=2), encoding="utf-8")
+    write_json(rec.path / "record_report.json", report)
     return report
 
 
@@ -356,4 +407,4 @@ __all__ = [
 ]
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

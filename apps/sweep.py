@@ -19,7 +19,12 @@ shared with others, 19).
 
 Results are written as they finish: ``<out>/<task>/<entry>/seed_<k>/result.json`` (and the
 run's model, monitor CSVs and ``episodes.jsonl``) plus one line per finished run in
-``<out>/results.jsonl``; a rerun skips the runs whose ``result.json`` exists. At the end:
+``<out>/results.jsonl``; a rerun skips the runs whose ``result.json`` exists. Every result file
+is written whole or not at all (`configs.files`); a run killed while training has no completion
+marker and is trained again, one killed while evaluating keeps its trained model and the
+episodes already logged. A run whose Ray worker dies is retried (``--max-retries``, default
+`RUN_RETRIES`); a run that still fails is logged with its error, the others finish, and the
+command ends with one ``error:`` line naming the failed runs (exit status 1). At the end:
 ``<out>/summary.md`` and ``summary.json`` (per task and entry, the IQM over runs with its 95 %
 stratified-bootstrap interval of every protocol metric, and the compute used) and
 ``<out>/curves.png`` (training success and return against steps, mean over seeds with a 95 %
@@ -28,7 +33,6 @@ bootstrap band).
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import re
@@ -40,8 +44,11 @@ from typing import Any
 
 import numpy as np
 
+from agents.errors import AgentError
 from agents.protocol import METRICS, aggregate_runs, iqm_ci
+from apps.cli import CommandParser, run_cli
 from configs import ConfigError, from_dict, load_yaml
+from configs.files import append_line, atomic_path, complete_lines, write_json, write_text
 
 RESULT_FILE = "result.json"
 """Per-run result file."""
@@ -60,10 +67,17 @@ CURVE_BINS = 20
 """Points of a training curve."""
 CURVE_BOOTSTRAP = 1000
 """Bootstrap resamples of a curve's band."""
+RUN_RETRIES = 2
+"""Times Ray runs a run again whose worker process died (killed, out of memory) before it is
+reported failed; an error raised by the run itself is not retried (it would fail again)."""
 
 
 class SweepError(ConfigError):
     """A sweep file or entry that cannot run (unknown key, entry without train or policy)."""
+
+
+class SweepRunsFailed(AgentError):
+    """Some runs of a sweep failed (after their retries); the others finished and are reported."""
 
 
 @dataclass(frozen=True)
@@ -271,23 +285,20 @@ def execute(spec: RunSpec) -> dict[str, Any]:
         "cpus": 1,
         **train_info,
     }
-    (folder / RESULT_FILE).write_text(json.dumps(out, indent=2), encoding="utf-8")
+    write_json(folder / RESULT_FILE, out)
     return out
 
 
 def _trained(folder: Path) -> Any:
     """The `TrainResult` of a run folder that finished training already (None otherwise).
 
-    A run whose evaluation failed after training is evaluated again without retraining.
+    A run whose evaluation failed after training is evaluated again without retraining; a run
+    killed while training has no completion marker (`apps.train.finished_run`) and is trained
+    again from the start.
     """
-    from apps.train import TrainResult  # noqa: PLC0415
+    from apps.train import finished_run  # noqa: PLC0415
 
-    summary = folder / "summary.json"
-    if not (folder / "model.zip").is_file() or not summary.is_file():
-        return None
-    data = json.loads(summary.read_text(encoding="utf-8"))
-    data["out"], data["model_path"] = Path(data["out"]), Path(data["model_path"])
-    return TrainResult(**data)
+    return finished_run(folder)
 
 
 def _metric(ep: Any, name: str) -> float:
@@ -305,13 +316,25 @@ def run_sweep(
     *,
     progress: bool = True,
     niceness: int = WORKER_NICENESS,
+    max_retries: int = RUN_RETRIES,
 ) -> list[dict[str, Any]]:
-    """Run every missing run of a sweep as Ray tasks; return all results (old and new)."""
+    """Run every missing run of a sweep as Ray tasks; return all results (old and new).
+
+    A run whose worker dies is run again up to ``max_retries`` times; a run that still fails
+    (or raises) is logged with its error in ``results.jsonl`` and left out of the summary, and
+    the other runs go on.
+
+    Raises:
+        SweepRunsFailed: After the summary is written, if any run failed.
+    """
     import ray  # noqa: PLC0415 - heavy import
 
+    if max_retries < 0:
+        raise SweepError(f"max_retries must be >= 0, got {max_retries}")
     out.mkdir(parents=True, exist_ok=True)
     runs = plan(cfg, out, niceness)
-    results = []
+    results: list[dict[str, Any]] = []
+    failed: list[dict[str, Any]] = []
     todo = []
     for spec in runs:
         path = Path(spec.folder) / RESULT_FILE
@@ -327,7 +350,9 @@ def run_sweep(
         else:
             ray.init(num_cpus=num_cpus, include_dashboard=False, runtime_env={"env_vars": env_vars})
         try:
-            remote = ray.remote(num_cpus=1, max_retries=0)(execute)
+            remote = ray.remote(num_cpus=1, max_retries=max_retries, retry_exceptions=False)(
+                execute
+            )
             pending = {remote.remote(s): s for s in todo}
             while pending:
                 ready, _ = ray.wait(list(pending), num_returns=1)
@@ -342,9 +367,10 @@ def run_sweep(
                             "seed": spec.seed,
                             "error": repr(exc),
                         }
-                    with (out / RESULTS_LOG).open("a", encoding="utf-8") as fh:
-                        fh.write(json.dumps(res) + "\n")
-                    if "error" not in res:
+                    append_line(out / RESULTS_LOG, json.dumps(res))
+                    if "error" in res:
+                        failed.append(res)
+                    else:
                         results.append(res)
                     if progress:
                         print(
@@ -355,6 +381,14 @@ def run_sweep(
         finally:
             ray.shutdown()
     summarize(results, out)
+    if failed:
+        names = "; ".join(
+            f"{r['task']} / {r['entry']} seed {r['seed']}: {r['error']}" for r in failed
+        )
+        raise SweepRunsFailed(
+            f"{len(failed)} of {len(runs)} runs failed (see {out / RESULTS_LOG}; a rerun "
+            f"retries them): {names}"
+        )
     return results
 
 
@@ -368,7 +402,7 @@ def run_return(result: Mapping[str, Any]) -> float | None:
     path = Path(result.get("folder", "")) / "episodes.jsonl"
     if not path.is_file():
         return None
-    values = [json.loads(line)["episode_return"] for line in path.read_text().splitlines()]
+    values = [json.loads(line)["episode_return"] for line in complete_lines(path)]
     return float(np.mean(values)) if values else None
 
 
@@ -411,8 +445,8 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
             f"{int(np.mean(steps)) if any(steps) else '-'} | "
             f"{f'{np.mean(walls):.0f}' if any(walls) else '-'} |"
         )
-    (out / "summary.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
-    (out / "summary.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_json(out / "summary.json", summary)
+    write_text(out / "summary.md", "\n".join(lines) + "\n")
     plot_curves(results, out / "curves.png")
     return {"rows": summary}
 
@@ -485,13 +519,14 @@ def plot_curves(results: Sequence[dict[str, Any]], path: Path) -> None:
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=100)
     plt.close(fig)
 
 
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     """Command line (see the module docstring)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument("--config", required=True, help="name in configs/sweeps/ or a YAML path")
     ap.add_argument("--out", type=Path, default=Path("runs/sweep"))
     ap.add_argument("--address", default=None, help="Ray cluster address (default: local)")
@@ -500,6 +535,12 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap.add_argument("--tasks", nargs="*", default=[], help="only the entries of these tasks")
     ap.add_argument(
         "--niceness", type=int, default=WORKER_NICENESS, help="scheduling niceness of each run"
+    )
+    ap.add_argument(
+        "--max-retries",
+        type=int,
+        default=RUN_RETRIES,
+        help="reruns of a run whose worker process died",
     )
     args = ap.parse_args(argv)
     cfg = select_tasks(load_sweep(args.config), args.tasks)
@@ -511,7 +552,14 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
         ]
         summarize(results, args.out)
     else:
-        results = run_sweep(cfg, args.out, args.address, args.num_cpus, niceness=args.niceness)
+        results = run_sweep(
+            cfg,
+            args.out,
+            args.address,
+            args.num_cpus,
+            niceness=args.niceness,
+            max_retries=args.max_retries,
+        )
     print((args.out / "summary.md").read_text(encoding="utf-8"))
     return results
 
@@ -521,6 +569,7 @@ __all__ = [
     "SweepConfig",
     "SweepEntry",
     "SweepError",
+    "SweepRunsFailed",
     "execute",
     "load_sweep",
     "main",
@@ -532,4 +581,4 @@ __all__ = [
 ]
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

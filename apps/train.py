@@ -18,7 +18,6 @@ for Dict observations, ``CnnPolicy`` for image Boxes, ``MlpPolicy`` otherwise.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import os
@@ -41,7 +40,9 @@ from agents.wrappers import (
     FlatDiscreteActions,
     ReachShaping,
 )
+from apps.cli import CommandParser, run_cli
 from configs import ConfigError, from_dict, load_yaml
+from configs.files import atomic_path, write_json, write_text
 
 ENV_ID = "envs:MosaicAssembly-v0"
 """Gymnasium id of the environment (the ``envs:`` prefix imports and registers it)."""
@@ -55,6 +56,10 @@ TERMS_FILE = "reward_terms.csv"
 """Per-episode reward-term sums of a run."""
 LOG_WINDOW = 20
 """Recent episodes averaged in a progress line."""
+SUMMARY_FILE = "summary.json"
+"""The run's summary, written last: its presence marks a finished run (`finished_run`)."""
+MODEL_FILE = "model.zip"
+"""The run's final model."""
 
 
 class TrainError(ConfigError):
@@ -263,6 +268,21 @@ class TrainResult:
     last_terms: dict[str, float] = field(default_factory=dict)
 
 
+def finished_run(out: Path) -> TrainResult | None:
+    """The result of the run folder ``out`` if its training finished, else None.
+
+    A run is finished once its `SUMMARY_FILE` exists: it is written (whole, by rename) after
+    the final model, and removed when a run starts in the folder, so a run killed part-way is
+    never taken as finished.
+    """
+    summary, model = out / SUMMARY_FILE, out / MODEL_FILE
+    if not summary.is_file() or not model.is_file():
+        return None
+    data = json.loads(summary.read_text(encoding="utf-8"))
+    data["out"], data["model_path"] = Path(data["out"]), Path(data["model_path"])
+    return TrainResult(**data)
+
+
 def _episode_stats(monitor_dir: Path) -> tuple[int, float, float, float, float]:
     """(episodes, first/last mean return, first/last success rate) from Monitor CSVs."""
     rows: list[tuple[float, float, float]] = []  # (end time, return, success)
@@ -386,16 +406,31 @@ def _log_progress(every_s: float, total: int, terms: TermsLog) -> Any:
     return LogProgress()
 
 
-def train(cfg: TrainConfig, out: Path) -> TrainResult:
-    """Train ``cfg`` and write the run folder ``out`` (see the module docstring)."""
-    import torch  # noqa: PLC0415 - heavy import
+def _atomic_checkpoints(**kwargs: Any) -> Any:
+    """SB3's `CheckpointCallback` whose model files are written whole or not at all."""
     from stable_baselines3.common.callbacks import CheckpointCallback  # noqa: PLC0415
+
+    class AtomicCheckpoint(CheckpointCallback):
+        def _on_step(self) -> bool:
+            if self.n_calls % self.save_freq == 0:
+                with atomic_path(self._checkpoint_path(extension="zip")) as tmp:
+                    self.model.save(str(tmp))
+            return True
+
+    return AtomicCheckpoint(**kwargs)
+
+
+def train(cfg: TrainConfig, out: Path) -> TrainResult:
+    """Train ``cfg`` and write the run folder ``out`` (see the module docstring).
+
+    Every result file is written whole or not at all; ``summary.json`` last (`finished_run`).
+    """
+    import torch  # noqa: PLC0415 - heavy import
 
     torch.set_num_threads(cfg.torch_threads)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "train_config.yaml").write_text(
-        yaml.safe_dump(cfg.to_dict(), sort_keys=False), encoding="utf-8"
-    )
+    (out / SUMMARY_FILE).unlink(missing_ok=True)  # unfinished until the summary is back
+    write_text(out / "train_config.yaml", yaml.safe_dump(cfg.to_dict(), sort_keys=False))
     monitor_dir = out / "monitor"
     venv = make_vec(cfg, monitor_dir)
     try:
@@ -421,7 +456,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             callbacks.append(_wall_clock_stop(cfg.max_wall_s))
         if cfg.checkpoint_freq:
             callbacks.append(
-                CheckpointCallback(
+                _atomic_checkpoints(
                     save_freq=max(cfg.checkpoint_freq // cfg.n_envs, 1),
                     save_path=str(out / "checkpoints"),
                     name_prefix="model",
@@ -435,8 +470,9 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             tb_log_name=cfg.algo,
         )
         wall = time.perf_counter() - t0
-        model_path = out / "model.zip"
-        model.save(str(model_path))
+        model_path = out / MODEL_FILE
+        with atomic_path(model_path) as tmp:
+            model.save(str(tmp))
         steps = int(model.num_timesteps)
     finally:
         venv.close()
@@ -455,13 +491,13 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
         terms.recent(RETURN_WINDOW),
     )
     summary = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(result).items()}
-    (out / "summary.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
+    write_json(out / SUMMARY_FILE, summary)
     return result
 
 
 def main(argv: list[str] | None = None) -> TrainResult:
     """Command line: ``--config`` (required), ``--timesteps N``, ``--out DIR`` (``--help``)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument("--config", required=True, help="YAML path or name in configs/train/")
     ap.add_argument("--timesteps", type=int, default=None, help="override total_timesteps")
     ap.add_argument("--seed", type=int, default=None, help="override seed")
@@ -490,4 +526,4 @@ def main(argv: list[str] | None = None) -> TrainResult:
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

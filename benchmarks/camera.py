@@ -17,7 +17,6 @@ Writes ``out/bench_camera.json``.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import time
@@ -30,7 +29,9 @@ import numpy as np
 
 from agents.config import load_agents_config
 from agents.perception import color_gain, perceive_tiles
+from apps.cli import CommandParser, run_cli
 from benchmarks.design_cell import build_design_cell
+from configs.files import write_image, write_text
 from envs.cell.cell import Cell
 from envs.cell.config import CellConfig, load_cell_config
 from envs.task_spec import work_areas
@@ -122,7 +123,7 @@ def _colour_chart(rows: list[dict[str, Any]]) -> None:
         for j, key in enumerate(("glaze", "rendered")):
             rgb = np.clip(np.asarray(row[key]) * 255, 0, 255).astype(np.uint8)
             chart[i * SWATCH_PX : (i + 1) * SWATCH_PX, j * SWATCH_PX : (j + 1) * SWATCH_PX] = rgb
-    cv2.imwrite(str(OUT / "camera_colour_chart.png"), chart[..., ::-1])
+    write_image(OUT / "camera_colour_chart.png", chart[..., ::-1])
 
 
 def render_cost(design: Design, repeats: int) -> dict[str, Any]:
@@ -153,8 +154,8 @@ def render_cost(design: Design, repeats: int) -> dict[str, Any]:
         ideal = cells["ideal"].render("input_camera")
         lensed = cells["lens"].render("input_camera")
         blurred = cells["blur"].render("input_camera")
-        cv2.imwrite(str(OUT / "camera_lens.png"), np.hstack([ideal, lensed])[..., ::-1])
-        cv2.imwrite(str(OUT / "camera_blur.png"), np.hstack([ideal, blurred])[..., ::-1])
+        write_image(OUT / "camera_lens.png", np.hstack([ideal, lensed])[..., ::-1])
+        write_image(OUT / "camera_blur.png", np.hstack([ideal, blurred])[..., ::-1])
     finally:
         for cell in cells.values():
             cell.close()
@@ -163,7 +164,7 @@ def render_cost(design: Design, repeats: int) -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> None:
     """Print the tables and write ``out/bench_camera.json``."""
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = CommandParser(description=__doc__.splitlines()[0])
     p.add_argument("--design", default="paper_mixed")
     p.add_argument("--repeats", type=int, default=20, help="frames timed per option and size")
     args = p.parse_args(argv)
@@ -182,9 +183,9 @@ def main(argv: list[str] | None = None) -> None:
     for size, row in cost.items():
         print(f"  {size:8s} " + "  ".join(f"{k} {v:.1f}" for k, v in row.items()))
     result = {"colour": colours, "render_ms": cost, "lens": LENS, "exposure_time": EXPOSURE_TIME}
-    (OUT / "bench_camera.json").write_text(json.dumps(result, indent=1))
+    write_text((OUT / "bench_camera.json"), json.dumps(result, indent=1))
     print(f"wrote {OUT / 'bench_camera.json'}")
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

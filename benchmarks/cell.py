@@ -7,7 +7,6 @@ core; both cameras at 128 x 128 >= 100 frames/s in total; 656 x 492 reported.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import platform
@@ -17,6 +16,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from apps.cli import CommandParser, run_cli
+from configs.files import write_text
 from envs.cell.cell import CAMERAS, Cell
 from envs.cell.config import CellConfig, InputBeltConfig, load_cell_config
 from envs.cell.tiles.shapes import basic_shapes
@@ -74,7 +75,7 @@ def _render(cfg: CellConfig, height: int, width: int, frames: int) -> dict[str, 
 
 def main(argv: list[str] | None = None) -> dict:
     """Run the benchmark; returns the figures written to the JSON file."""
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = CommandParser(description=__doc__)
     parser.add_argument("--seconds", type=float, default=20.0, help="simulated seconds")
     parser.add_argument("--frames", type=int, default=400, help="frames per render size")
     parser.add_argument("--out", type=Path, default=Path("out/bench_cell.json"))
@@ -103,10 +104,10 @@ def main(argv: list[str] | None = None) -> dict:
     for key, val in results.items():
         print(f"{key}: {val}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(results, indent=2))
+    write_text(args.out, json.dumps(results, indent=2))
     print(f"wrote {args.out}")
     return results
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

@@ -37,7 +37,6 @@ steps/s; reset of the 16-tile design <= 20 ms.
 
 from __future__ import annotations
 
-import argparse
 import json
 import multiprocessing as mp
 import os
@@ -45,6 +44,7 @@ import platform
 from pathlib import Path
 from typing import Any
 
+from apps.cli import CommandParser, run_cli
 from benchmarks.env_measure import (
     DECISION_IMAGE,
     DESIGN,
@@ -56,6 +56,7 @@ from benchmarks.env_measure import (
     measure_sections,
     measure_task_resets,
 )
+from configs.files import write_text
 
 OUT = Path(__file__).resolve().parents[1] / "out" / "bench_env.json"
 OUT_RESETS = OUT.with_name("bench_env_resets.json")
@@ -108,7 +109,8 @@ def _reset_rows() -> tuple[dict[int, Any], list[dict[str, Any]]]:
         f"{'MET' if cpu <= TARGET_RESET_MS else 'NOT MET'}"
     )
     OUT_RESETS.parent.mkdir(exist_ok=True)
-    OUT_RESETS.write_text(
+    write_text(
+        OUT_RESETS,
         json.dumps(
             {
                 "design": DESIGN,
@@ -117,7 +119,7 @@ def _reset_rows() -> tuple[dict[int, Any], list[dict[str, Any]]]:
                 "task_resets": task_resets,
             },
             indent=2,
-        )
+        ),
     )
     return resets, task_resets
 
@@ -201,7 +203,7 @@ def _targets(
 
 def main() -> None:
     """Run every measurement, print a table, write ``out/bench_env.json``."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=4.0, help="stepping time per case [s]")
     parser.add_argument("--quick", action="store_true", help="1 s per case")
     parser.add_argument(
@@ -268,12 +270,12 @@ def main() -> None:
         "targets": targets,
     }
     OUT.parent.mkdir(exist_ok=True)
-    OUT.write_text(json.dumps(result, indent=2))
+    write_text(OUT, json.dumps(result, indent=2))
     print(f"wrote {OUT}")
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)
 
 
 __all__ = []

@@ -11,7 +11,6 @@ mesh is checked to fit the cell's mesh sheet. Prints one row per mesh and the mu
 
 from __future__ import annotations
 
-import argparse
 import json
 import multiprocessing as mp
 import os
@@ -19,8 +18,10 @@ import time
 from pathlib import Path
 from typing import Any
 
+from apps.cli import CommandParser, run_cli
 from benchmarks.scripted import Episode, Scenario, ScriptedBenchConfig, play, summarise, table
 from configs import load_config
+from configs.files import write_text
 from qshape.design.mural import Mural, MuralError
 from spatial.units import MM_PER_M
 
@@ -83,7 +84,7 @@ def totals(rows: list[dict[str, Any]], episodes: list[Episode], wall_s: float) -
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line: run the selected meshes, print the table, write the JSON."""
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = CommandParser(description=__doc__.splitlines()[0])
     p.add_argument("--mural", default="sunset", help="bundled mural name or YAML path")
     p.add_argument("--meshes", help="comma-separated mesh names (default: every mesh)")
     p.add_argument("--seed", type=int, default=0, help="episode seed of every mesh")
@@ -122,10 +123,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "meshes": rows,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2))
+    write_text(args.out, json.dumps(result, indent=2))
     print(f"wrote {args.out}")
     return result
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

@@ -13,7 +13,6 @@ so that a test can be written for each.
 
 from __future__ import annotations
 
-import argparse
 import json
 import random
 import re
@@ -24,6 +23,9 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+from apps.cli import CommandParser, run_cli
+from configs.files import write_text
 
 ROOT = Path(__file__).resolve().parents[1]
 MODULES = [
@@ -102,7 +104,7 @@ def run_tests(root: Path, timeout: float) -> bool:
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run the mutants; print caught/total and the missed ones."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument("--mutants", type=int, default=40)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--timeout", type=float, default=300.0)
@@ -138,9 +140,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     print(f"caught {n_caught}/{len(results)} mutants ({len(pool)} candidates)")
     out = {"caught": n_caught, "total": len(results), "candidates": len(pool), "mutants": results}
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
+    write_text(args.out, json.dumps(out, indent=2) + "\n")
     return out
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

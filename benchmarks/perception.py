@@ -9,7 +9,6 @@ Writes ``out/bench_perception.json``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import time
@@ -22,7 +21,9 @@ from agents.calibration import calibrate
 from agents.config import load_agents_config
 from agents.perception import balance_colors, perceive_tiles, slot_targets
 from agents.placement import plan_placements
+from apps.cli import CommandParser, run_cli
 from benchmarks.design_cell import build_design_cell, nearest_tile
+from configs.files import write_text
 from envs.cell.calibration_board import render_calibration_views
 from envs.cell.cameras import CameraModel
 from envs.cell.config import load_cell_config
@@ -108,7 +109,7 @@ def bench(
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--true-camera", action="store_true")
     parser.add_argument("--design", default="paper_mixed")
@@ -126,9 +127,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     for f in r["failures"]:
         print("  " + f)
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(r, indent=2))
+    write_text(args.out, json.dumps(r, indent=2))
     return r
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

@@ -25,7 +25,6 @@ ground truth (this benchmarks planning and execution, not vision).
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import platform
@@ -36,7 +35,9 @@ from typing import Any
 
 import numpy as np
 
+from apps.cli import CommandParser, run_cli
 from benchmarks.standard_cycle import standard_cycle_blended_s, standard_cycle_s
+from configs.files import write_text
 from envs.cell.cell import Cell
 from envs.cell.config import CellConfig, load_cell_config
 from envs.cell.scene import build_arm_model
@@ -418,7 +419,7 @@ def cell_config(layout: str, belt_speed: float, stream_period: float) -> CellCon
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run the benchmark and write ``out/planner_bench.json``."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=__doc__.splitlines()[0])
     parser.add_argument("--design", default="paper_mixed")
     parser.add_argument("--kinematic", action="store_true", help="no arm dynamics")
     parser.add_argument("--max-tiles", type=int, default=None)
@@ -469,7 +470,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "results": results,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(report, indent=2, default=float), encoding="utf-8")
+    write_text(args.out, json.dumps(report, indent=2, default=float))
     print(
         f"ABB standard cycle 25/300/25 mm: blended {report['standard_cycle_blended_s']:.3f} s, "
         f"stopping at every corner {report['standard_cycle_s']:.3f} s (ABB: about 0.85 s, "
@@ -480,7 +481,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)
 
 
 __all__ = []

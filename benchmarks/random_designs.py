@@ -30,8 +30,10 @@ from typing import Any
 
 import numpy as np
 
+from apps.cli import CommandParser, run_cli
 from benchmarks.scripted import _seed_range, run_episode
 from configs import ConfigError, load_config
+from configs.files import write_text
 
 OUT = Path("out/bench_random_designs.json")
 """Default output file (pictures go to the folder of the same stem)."""
@@ -307,7 +309,7 @@ def table(levels: list[dict[str, Any]]) -> str:
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line: run every level, print the table and the time, write JSON and pictures."""
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = CommandParser(description=__doc__.splitlines()[0])
     p.add_argument("--config", default="bench_random_designs", help="bundled name or YAML path")
     p.add_argument("--designs", type=_seed_range, help="FIRST-LAST design indices (all levels)")
     p.add_argument("--level", action="append", help="only these levels (by name prefix)")
@@ -385,9 +387,9 @@ def _write(  # noqa: PLR0913, PLR0917
         "pictures": pictures,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2, default=float))
+    write_text(args.out, json.dumps(result, indent=2, default=float))
     return result
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

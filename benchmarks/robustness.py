@@ -13,7 +13,6 @@ Wall-clock times are of one process on a shared machine: read them as orders of 
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import time
@@ -24,6 +23,8 @@ from typing import Any
 import numpy as np
 
 import qshape
+from apps.cli import CommandParser, run_cli
+from configs.files import write_text
 from qshape.limits import default_limits
 from qshape.theory.keys import clear_key_caches
 
@@ -248,7 +249,7 @@ def run() -> list[dict[str, Any]]:
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run the benchmark; print the table and write the JSON file."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("out/bench_robustness.json"))
     args = ap.parse_args(argv)
     rows = run()
@@ -263,9 +264,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     out = {"rows": rows, "worst_seconds": worst, "all_pass": all(r["pass"] for r in rows)}
     print(f"slowest entry point: {worst * 1e3:.1f} ms (target < {TARGET_S * 1e3:.0f} ms)")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
+    write_text(args.out, json.dumps(out, indent=2) + "\n")
     return out
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

@@ -20,7 +20,9 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from apps.cli import CommandParser, UsageError, run_cli
 from configs import ConfigError, load_config
+from configs.files import write_text
 
 OUT = Path("out/bench_scripted.json")
 """Default output file."""
@@ -239,7 +241,7 @@ def _seed_range(text: str) -> tuple[int, int]:
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line: run every scenario, print the table, write the JSON."""
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = CommandParser(description=__doc__.splitlines()[0])
     p.add_argument("--config", default="bench_scripted", help="bundled name or YAML path")
     p.add_argument("--seeds", type=_seed_range, help="FIRST-LAST (default: config)")
     p.add_argument("--scenario", action="append", help="only these scenarios (by name prefix)")
@@ -255,7 +257,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         if not args.scenario or any(s.name.startswith(x) for x in args.scenario)
     ]
     if not scenarios:
-        raise SystemExit(f"error: no scenario matches {args.scenario}")
+        raise UsageError(f"no scenario matches {args.scenario}")
     jobs = [
         (s, seed, cfg.image_size, cfg.steps_per_slot)
         for s in scenarios
@@ -274,10 +276,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "scenarios": rows,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2))
+    write_text(args.out, json.dumps(result, indent=2))
     print(f"wrote {args.out} ({result['wall_s']:.0f} s)")
     return result
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

@@ -10,6 +10,7 @@ from dataclasses import dataclass  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from apps.cli import UsageError
 from qshape import Description, Figure  # noqa: E402
 from qshape.theory.boundary import Boundary  # noqa: E402
 from qshape.theory.description import describe_many  # noqa: E402
@@ -143,7 +144,7 @@ def mix_classes(
     if mix == "zipf20":
         weights = 1.0 / np.arange(1, 21)
         return make_classes(rng, 20), weights / weights.sum()
-    raise SystemExit(f"error: unknown mix {mix!r}; allowed: {', '.join(MIXES)}")
+    raise UsageError(f"unknown mix {mix!r}; allowed: {', '.join(MIXES)}")
 
 
 MIXES = ("balanced", "one_class", "five_colours", "zipf20")

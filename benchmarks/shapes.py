@@ -25,7 +25,9 @@ from __future__ import annotations
 
 import os
 
+from apps.cli import CommandParser, run_cli
 from benchmarks.shape_cases import MIXES, Case, make_case, mix_classes
+from configs.files import write_text
 
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
@@ -246,7 +248,7 @@ def _case_rows(name: str, res: dict, paper: dict) -> list[tuple[str, str]]:
 
 def _parser() -> argparse.ArgumentParser:
     """The command line of ``python -m benchmarks.shapes``."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tiles", type=int, default=10_000)
     ap.add_argument("--classes", type=int, default=50, help="classes of the balanced mix")
     ap.add_argument("--seed", type=int, default=0)
@@ -333,7 +335,7 @@ def main(argv: list[str] | None = None) -> dict:
         "cases": cases,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
+    write_text(args.out, json.dumps(out, indent=2) + "\n")
     width = max(len(r[0]) for r in rows)
     for name, value in rows:
         print(f"{name:<{width}}  {value}")
@@ -342,7 +344,7 @@ def main(argv: list[str] | None = None) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)
 
 
 __all__ = []

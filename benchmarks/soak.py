@@ -17,7 +17,6 @@ Not part of the default test run (it is a benchmark, not a test).
 
 from __future__ import annotations
 
-import argparse
 import json
 import resource
 import time
@@ -29,7 +28,9 @@ from typing import Any
 import gymnasium as gym
 
 import envs  # noqa: F401 - registers the env
+from apps.cli import CommandParser, run_cli
 from configs import load_config
+from configs.files import write_text
 from envs.cell.accounting import TILE_STATES
 
 ENV_ID = "envs:MosaicAssembly-v0"
@@ -143,7 +144,7 @@ def soak(cfg: SoakConfig) -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line: run the soak, print the figures, write the JSON."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument("--config", default="bench_soak", help="bundled name or YAML path")
     ap.add_argument("--episodes", type=int, help="episodes (default: config)")
     ap.add_argument("--out", type=Path, default=Path("out/bench_soak.json"))
@@ -167,10 +168,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ):
         print(f"{key}: {out[key]}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
+    write_text(args.out, json.dumps(out, indent=2) + "\n")
     print(f"wrote {args.out}")
     return out
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

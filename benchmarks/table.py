@@ -17,7 +17,6 @@ perception), ``benchmarks.scripted`` (the scripted cell over 20 seeds per scenar
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import platform
@@ -31,6 +30,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from apps.cli import CommandParser, run_cli
 from benchmarks.figures import (
     Figure,
     cell_figures,
@@ -44,6 +44,7 @@ from benchmarks.figures import (
     scripted_figures,
     vision_figures,
 )
+from configs.files import write_text
 
 OUT_DIR = Path("out")
 """Default folder of the benchmark JSON files."""
@@ -233,7 +234,7 @@ def machine() -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line (see the module docstring)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = CommandParser(description=__doc__.splitlines()[0])
     ap.add_argument("--from-json", action="store_true", help="only collect existing JSON files")
     ap.add_argument("--quick", action="store_true", help="smaller runs of each script")
     ap.add_argument(
@@ -285,9 +286,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     text = table(figures)
     out = args.out or args.out_dir / "bench.json"
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(report, indent=2), encoding="utf-8")
-    out.with_suffix(".md").write_text(
-        f"Benchmark {date} on {mach['node']} ({mach['cpus']} CPUs)\n\n{text}\n", encoding="utf-8"
+    write_text(out, json.dumps(report, indent=2))
+    write_text(
+        out.with_suffix(".md"),
+        f"Benchmark {date} on {mach['node']} ({mach['cpus']} CPUs)\n\n{text}\n",
     )
     print(text)
     print(
@@ -300,4 +302,4 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 __all__ = ["BENCHES", "Bench", "collect", "command", "main", "table"]
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

@@ -31,6 +31,8 @@ from typing import Any
 import cv2
 import numpy as np
 
+from apps.cli import CommandParser, run_cli
+from configs.files import write_text
 from qshape import Boundary, Figure, Tolerances, match_best
 from qshape.design import Design, Slot
 from qshape.geometry import FloatArray, wrap_angle
@@ -408,7 +410,7 @@ def _print_timing(t: dict[str, Any]) -> None:
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run the benchmark, print the table, write ``out/bench_vision.json``."""
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap = CommandParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--images", type=int, default=BenchParams.images)
     ap.add_argument("--designs", nargs="*", default=list(BenchParams.designs))
     ap.add_argument("--out", type=Path, default=Path("out/bench_vision.json"))
@@ -463,10 +465,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     if args.timing_only:  # no accuracy table: nothing written
         return results
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(results, indent=2))
+    write_text(args.out, json.dumps(results, indent=2))
     print(f"wrote {args.out}")
     return results
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

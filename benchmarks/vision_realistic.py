@@ -33,7 +33,9 @@ from typing import Any
 import cv2
 import numpy as np
 
+from apps.cli import CommandParser, run_cli
 from configs import load_config
+from configs.files import atomic_path, write_text
 from qshape import Description, Tolerances, describe, match_best
 from qshape.design import Design
 from qshape.geometry import FloatArray
@@ -336,13 +338,14 @@ def plot(rows: list[dict[str, Any]], path: Path) -> None:
     axes[0, 0].legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run the sweep, print the table, write JSON, markdown and the plot."""
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap = CommandParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--config", default="bench_vision_realistic")
     ap.add_argument("--images", type=int, default=None, help="pictures per design and level")
     ap.add_argument("--target-images", type=int, default=None)
@@ -409,8 +412,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             print("  ", line)
     result = {"date": date, "px_per_mm": sp.px_per_mm, "rows": rows}
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2))
-    args.out.with_suffix(".md").write_text(markdown(rows, date))
+    write_text(args.out, json.dumps(result, indent=2))
+    write_text(args.out.with_suffix(".md"), markdown(rows, date))
     if rows:
         plot(rows, Path(bench.plot))
     print(f"wrote {args.out}, {args.out.with_suffix('.md')}, {bench.plot}")
@@ -418,4 +421,4 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(main)

@@ -15,6 +15,7 @@ Tolerances (bands, margins, thresholds) live in `Tolerances`, defaults in config
 
 from qshape.errors import (
     DesignError,
+    DesignLimitError,
     FigureLimitError,
     InvalidFigureError,
     InvalidHoleError,
@@ -48,6 +49,7 @@ __all__ = [
     "BoundaryDescription",
     "Description",
     "DesignError",
+    "DesignLimitError",
     "FigureLimitError",
     "Figure",
     "HoleDescription",

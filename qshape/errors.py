@@ -51,8 +51,13 @@ class TextLimitError(LimitError, ParseError):
     """A description text exceeds a cap (characters, node count)."""
 
 
+class DesignLimitError(LimitError, DesignError):
+    """A design exceeds a size cap (mesh side, tile outline length)."""
+
+
 __all__ = [
     "DesignError",
+    "DesignLimitError",
     "FigureLimitError",
     "GeneratorError",
     "InvalidFigureError",

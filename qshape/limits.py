@@ -17,7 +17,7 @@ from typing import Any
 
 from configs import ConfigError, check_field_types
 from qshape.config_sections import load_section
-from qshape.errors import FigureLimitError, LimitError, ToleranceError
+from qshape.errors import DesignLimitError, FigureLimitError, LimitError, ToleranceError
 from qshape.geometry import MAX_COORDINATE
 
 
@@ -36,6 +36,10 @@ class Limits:
             as a fraction of the figure's size: a figure so small or so far from the origin
             that its points are rounded more coarsely than this is refused (dimensionless).
         max_text_chars: Longest text `qshape.parse` reads [characters].
+        max_design_mm: Largest design length [mm]: each side of a design's mesh and the
+            length of each tile outline (outer boundary plus holes). Outlines are sampled
+            every fraction of a millimetre, so the work and memory of loading a design grow
+            with these lengths; 10 m covers any wall mosaic the cell could lay.
     """
 
     max_points: int = 1000
@@ -44,6 +48,7 @@ class Limits:
     max_coordinate: float = 1e12
     coordinate_resolution: float = 1e-6
     max_text_chars: int = 1_000_000
+    max_design_mm: float = 10_000.0
 
     def __post_init__(self) -> None:
         """Check types and ranges.
@@ -62,6 +67,10 @@ class Limits:
             raise ToleranceError(
                 f"Limits.max_coordinate must be in (0, {MAX_COORDINATE:g}], got "
                 f"{self.max_coordinate!r}"
+            )
+        if not (math.isfinite(self.max_design_mm) and self.max_design_mm > 0.0):
+            raise ToleranceError(
+                f"Limits.max_design_mm must be a positive finite length, got {self.max_design_mm}"
             )
         if not 0.0 < self.coordinate_resolution < 1.0:
             raise ToleranceError(
@@ -111,6 +120,17 @@ class Limits:
                 f"{magnitude:.6g} cannot be represented: float64 rounds its points by "
                 f"{math.ulp(magnitude):.3g}, more than coordinate_resolution="
                 f"{self.coordinate_resolution:g} of its size; move it nearer the origin"
+            )
+
+    def check_length(self, length_mm: float, what: str) -> None:
+        """Raise `DesignLimitError` when a design length exceeds ``max_design_mm``.
+
+        Call it before sampling or allocating anything of that length.
+        """
+        if not length_mm <= self.max_design_mm:
+            raise DesignLimitError(
+                f"{what}: {length_mm:.6g} mm exceeds the cap max_design_mm="
+                f"{self.max_design_mm:g} mm (configs/qshape.yaml, limits)"
             )
 
 

@@ -8,8 +8,9 @@ import shapely
 from qshape import geometry as geo
 from qshape.design.features import check_small_features
 from qshape.design.fields import DesignFields
-from qshape.errors import DesignError, InvalidFigureError
+from qshape.errors import DesignError, DesignLimitError, InvalidFigureError
 from qshape.geometry import FloatArray
+from qshape.limits import default_limits
 
 
 def validate(design: DesignFields, source: str = "") -> None:
@@ -21,6 +22,7 @@ def validate(design: DesignFields, source: str = "") -> None:
             closer than ``rules.min_gap_fraction`` x joint; arcs below the smallest the camera
             recognises with ``rules.small_features == "refuse"`` (with ``"warn"``: a
             `qshape.errors.SmallFeatureWarning` per slot).
+        DesignLimitError: A mesh side or tile outline above the ``max_design_mm`` cap.
     """
     pre = f"{source}: " if source else f"design {design.name!r}: "
     names = [s.name for s in design.slots]
@@ -28,6 +30,8 @@ def validate(design: DesignFields, source: str = "") -> None:
     if dupes:
         raise DesignError(f"{pre}duplicate slot name(s) {dupes}")
     w, h = design.mesh_size
+    for side, value in (("width", w), ("height", h)):
+        default_limits().check_length(float(value), f"{pre}mesh {side}")
     margin = design.rules.mesh_margin_mm
     outlines = []
     for s in design.slots:
@@ -36,6 +40,8 @@ def validate(design: DesignFields, source: str = "") -> None:
             if geo.self_intersects(dense):
                 raise DesignError("its outline crosses itself")
             s.figure()
+        except DesignLimitError as exc:
+            raise DesignLimitError(f"{pre}{exc}") from exc
         except (DesignError, InvalidFigureError) as exc:
             text = str(exc)
             named = text if text.startswith(f"slot {s.name!r}") else f"slot {s.name!r}: {text}"

@@ -12,6 +12,7 @@ from typing import Any
 
 import yaml
 
+from configs.files import write_text
 from qshape.design.fields import DesignFields
 from qshape.design.rules import DesignRules
 from qshape.design.slot import Slot
@@ -111,7 +112,7 @@ def save(design: DesignFields, path: str | Path, header: str = "") -> None:
     """Write the design as YAML (``header`` lines become leading comments)."""
     text = "".join(f"# {line}\n".replace("# \n", "#\n") for line in header.splitlines())
     text += yaml.safe_dump(to_mapping(design), sort_keys=False, default_flow_style=None, width=100)
-    Path(path).write_text(text, encoding="utf-8")
+    write_text(Path(path), text)
 
 
 __all__ = ["DESIGN_KEYS", "POSE_KEYS", "SLOT_KEYS", "read_fields", "save", "to_mapping"]

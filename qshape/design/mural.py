@@ -19,6 +19,7 @@ from typing import Any
 import yaml
 
 from configs import CONFIG_DIR, ConfigError, load_yaml, resolve_path
+from configs.files import write_text
 from qshape.design import Design, DesignError
 
 MURAL_SUBDIR = "murals"
@@ -224,7 +225,7 @@ class Mural:
         ]
         text = "".join(f"# {line}\n".replace("# \n", "#\n") for line in header.splitlines())
         text += yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
-        path.write_text(text, encoding="utf-8")
+        write_text(path, text)
 
     # ------------------------------------------------------------------------ queries
     @property

@@ -16,6 +16,7 @@ import numpy as np
 from qshape.design.paths import Loop, TilePath
 from qshape.design.values import number as _number
 from qshape.errors import DesignError
+from qshape.limits import default_limits
 
 SHAPE_KEYS: dict[str, tuple[str, ...]] = {
     "polygon": ("vertices",),
@@ -140,8 +141,13 @@ def tile_path(spec: Mapping[str, Any], where: str) -> TilePath:
 
     Raises:
         DesignError: Unknown kind (the message lists the kinds), missing/unknown keys, bad values.
+        DesignLimitError: An outline longer than the ``max_design_mm`` cap (checked before
+            the outline is sampled).
     """
-    return _tile_path(spec, where)
+    path = _tile_path(spec, where)
+    length = sum(float(loop.edge_lengths().sum()) for loop in (path.outer, *path.holes))
+    default_limits().check_length(length, f"{where}: outline length")
+    return path
 
 
 __all__ = ["SHAPE_KEYS", "tile_path"]

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from apps.main import main
+from qshape import QShapeError
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -82,7 +83,7 @@ def test_a_design_that_fails_validation_is_a_clear_error(tmp_path):
         "- name: a\n  shape: {kind: square, size: 40}\n  color: '#ff0000'\n"
         "  pose: {x: 10, y: 10, angle: 0}\n"
     )
-    with pytest.raises(SystemExit, match="error: .*"):
+    with pytest.raises(QShapeError):
         main(["--no-execute", "--quiet", "--design", str(bad), "--out", str(tmp_path)])
 
 

@@ -8,6 +8,7 @@ import pytest
 
 from apps.evaluate import (
     COLUMNS,
+    EPISODES_FILE,
     EpisodeResult,
     EvaluateError,
     aggregate,
@@ -99,3 +100,32 @@ def test_seeds_and_bad_input(tmp_path):
         make_policies(["random@oops"], BASE)
     with pytest.raises(EvaluateError, match="scripted"):
         make_policies([str(tmp_path / "missing.zip")], BASE)
+
+
+def test_a_rerun_never_takes_another_policys_episodes(tmp_path):
+    log = tmp_path / EPISODES_FILE
+    evaluate_policy_set(make_policies(["random"], BASE), [1000, 1001], log=log)
+    _, episodes = evaluate_policy_set(make_policies(["identity"], BASE), [1000, 1001], log=log)
+    assert [(e.policy, e.seed) for e in episodes["identity"]] == [
+        ("identity", 1000),
+        ("identity", 1001),
+    ]
+    logged = [(e["policy"], e["seed"]) for e in map(json.loads, log.read_text().splitlines())]
+    assert logged == [("random", 1000), ("random", 1001), ("identity", 1000), ("identity", 1001)]
+    # And a rerun of both plays nothing again.
+    _, again = evaluate_policy_set(
+        make_policies(["random", "identity"], BASE), [1000, 1001], log=log
+    )
+    assert len(log.read_text().splitlines()) == 4
+    assert [e.policy for e in again["random"]] == ["random", "random"]
+
+
+def test_seeds_given_with_a_task_keep_its_protocol(tmp_path):
+    from apps.evaluate import main, task_protocol  # noqa: PLC0415
+
+    _, proto = task_protocol("MosaicDecision6-v0")
+    args = ["--policies", "random", "--task", "MosaicDecision6-v0", "--seeds", "1000"]
+    report = main([*args, "--out", str(tmp_path), "--quiet"])
+    assert list(report["protocol"]["seeds"]) == [1000]
+    assert report["protocol"]["max_steps"] == proto.max_steps
+    assert report["protocol"]["horizon_s"] == proto.horizon_s > 0

@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import pytest
 
+from agents.protocol import METRICS
 from apps.sweep import (
+    RESULT_FILE,
+    RESULTS_LOG,
     SweepError,
+    SweepRunsFailed,
     load_sweep,
     plan,
     run_return,
@@ -77,3 +82,100 @@ def test_tiny_sweep_on_local_ray(tmp_path) -> None:
     # A rerun finds every result on disk and starts no Ray task.
     again = run_sweep(cfg, tmp_path, num_cpus=2, progress=False)
     assert len(again) == 3 and len((tmp_path / "results.jsonl").read_text().splitlines()) == 3
+
+
+FLAKY_POLICY = '''
+import os
+import signal
+from pathlib import Path
+
+
+class Policy:
+    """A random policy whose worker process dies the first time(s) it is built."""
+
+    deaths = 0
+
+    def __init__(self, env):
+        marker = Path(os.environ["SWEEP_TEST_DIR"]) / f"{type(self).__name__}.deaths"
+        died = int(marker.read_text()) if marker.is_file() else 0
+        if died < self.deaths:
+            marker.write_text(str(died + 1))
+            os.kill(os.getpid(), signal.SIGKILL)  # the Ray worker dies mid-task
+        self.action_space = env.action_space
+
+    def predict(self, obs):
+        return self.action_space.sample()
+
+
+class Flaky(Policy):
+    deaths = 1
+
+
+class Doomed(Policy):
+    deaths = 100
+'''
+
+
+@pytest.mark.slow
+def test_a_dying_worker_is_retried_then_reported_and_the_rest_finish(tmp_path, monkeypatch) -> None:
+    (tmp_path / "dying_policies.py").write_text(FLAKY_POLICY)
+    monkeypatch.setenv("PYTHONPATH", f"{Path.cwd()}{os.pathsep}{tmp_path}")
+    monkeypatch.setenv("SWEEP_TEST_DIR", str(tmp_path))
+    cfg = tmp_path / "dying.yaml"
+    cfg.write_text(
+        "seeds: [0]\neval_seeds: [1000, 1001]\nentries:\n"
+        "  - {name: random, task: MosaicDecision6-v0, policy: random}\n"
+        "  - {name: flaky, task: MosaicDecision6-v0, policy: 'dying_policies:Flaky'}\n"
+        "  - {name: doomed, task: MosaicDecision6-v0, policy: 'dying_policies:Doomed'}\n"
+    )
+    out = tmp_path / "out"
+    with pytest.raises(SweepRunsFailed, match=r"1 of 3 runs failed.*doomed"):
+        run_sweep(load_sweep(cfg), out, num_cpus=2, progress=False, max_retries=2)
+    assert (tmp_path / "Flaky.deaths").read_text() == "1"  # died once, retried, finished
+    assert (tmp_path / "Doomed.deaths").read_text() == "3"  # first try + 2 retries, all died
+    logged = {
+        json.loads(x)["entry"]: json.loads(x) for x in (out / RESULTS_LOG).read_text().splitlines()
+    }
+    assert set(logged) == {"random", "flaky", "doomed"}
+    assert "error" in logged["doomed"] and "metrics" in logged["flaky"]
+    summary = {r["entry"] for r in json.loads((out / "summary.json").read_text())}
+    assert summary == {"random", "flaky"}
+
+
+def test_a_behaviour_cloning_entry_runs_once_per_seed(tmp_path) -> None:
+    cfg = tmp_path / "bc.yaml"
+    cfg.write_text(
+        "seeds: [0, 1, 2]\nentries:\n"
+        "  - {name: clone, task: MosaicDecision6-v0, bc_episodes: 4}\n"
+        "  - {name: random, task: MosaicDecision6-v0, policy: random}\n"
+    )
+    runs = plan(load_sweep(cfg), tmp_path)
+    clone = [r for r in runs if r.entry.name == "clone"]
+    assert [r.seed for r in clone] == [0, 1, 2]
+    assert [Path(r.folder).name for r in clone] == ["seed_0", "seed_1", "seed_2"]
+    assert [(r.seed, Path(r.folder).name) for r in runs if r.entry.policy] == [(-1, "eval")]
+
+
+def test_a_rerun_of_a_finished_sweep_starts_no_ray_task(tmp_path, monkeypatch) -> None:
+    import ray  # noqa: PLC0415
+
+    cfg = load_sweep("tiny")
+    for i, spec in enumerate(plan(cfg, tmp_path)):  # every run finished: its result.json
+        metrics = {m: 0.1 * i for m in METRICS}
+        result = {"entry": spec.entry.name, "task": spec.entry.task, "seed": spec.seed}
+        result |= {"folder": spec.folder, "metrics": metrics}
+        Path(spec.folder).mkdir(parents=True)
+        (Path(spec.folder) / RESULT_FILE).write_text(json.dumps(result))
+
+    def no_ray(*args, **kwargs):
+        raise AssertionError("a finished sweep must not start Ray")
+
+    monkeypatch.setattr(ray, "init", no_ray)
+    results = run_sweep(cfg, tmp_path, num_cpus=2, progress=False)
+    assert sorted((r["entry"], r["seed"]) for r in results) == [
+        ("PPO tiny", 0),
+        ("PPO tiny", 1),
+        ("random", -1),
+    ]
+    summary = {r["entry"]: r["runs"] for r in json.loads((tmp_path / "summary.json").read_text())}
+    assert summary == {"random": 1, "PPO tiny": 2}

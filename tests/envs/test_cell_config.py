@@ -7,6 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from configs import CONFIG_DIR
 from envs.cell.cell import Cell
 from envs.cell.config import (
     CameraConfig,
@@ -146,3 +147,26 @@ def test_configs_are_frozen() -> None:
     cfg = CellConfig()
     with pytest.raises(dataclasses.FrozenInstanceError):
         cfg.layout.belt_top_z = 1.0  # type: ignore[misc]
+
+
+@pytest.mark.parametrize(("joint", "angle"), [(0, 10.0), (2, 1.2), (4, -2.1)])
+def test_a_robot_home_outside_a_joint_range_is_refused_naming_the_joint(
+    tmp_path, joint: int, angle: float
+) -> None:
+    """A cell.yaml whose home leaves a joint's range (the MJCF's) is refused when the cell is built.
+
+    Loading the file does not build the model (``import envs`` loads the bundled cell config
+    and stays free of MuJoCo); building the cell reads the ranges from the model and refuses
+    the home before anything is simulated. Ranges: joint1 +-180 deg, joint3 [-230, 50] deg,
+    joint5 +-115 deg.
+    """
+    home = list(load_cell_config().robot.home)
+    home[joint] = angle
+    text = (CONFIG_DIR / "cell.yaml").read_text()
+    bad = tmp_path / "cell.yaml"
+    bad.write_text(text.replace("home: [0.0, 0.0, 0.0, 0.0, 1.5707963, 0.0]", f"home: {home}"))
+    cfg = load_cell_config(bad)
+    assert cfg.robot.home[joint] == angle
+    pattern = rf"robot.home\[{joint}\] = {angle!r} rad is outside joint {joint + 1}'s range"
+    with pytest.raises(CellError, match=pattern):
+        Cell(cfg, basic_shapes()[:1], seed=0)

@@ -82,3 +82,36 @@ def test_unknown_order_is_a_clear_error() -> None:
 
     with pytest.raises(EnvConfigError, match="tile_order"):
         gym.make("MosaicDecision6-v0", tile_order="sorted")
+
+
+def test_rotation_zero_is_the_smallest_turn_and_r_adds_r_steps(env) -> None:
+    """Rotation r (tile frame) = r steps of 2 pi / bins from the slot pose nearest the tile."""
+    u = env.unwrapped
+    bins = u.config.rotation_bins
+    step = 2 * np.pi / bins
+    worst = 0.0
+    for seed in range(4):
+        env.reset(seed=seed)
+        yaws = u.cell.tile_poses().yaw
+        slot_yaw = u.cell.slot_poses_world()[:, 2]
+        for a_tile in range(len(u.cell.tiles)):
+            for a_slot in range(len(u.cell.slots)):
+                tile, slot, r0 = u.index.decode(np.array([a_tile, a_slot, 0]))
+                turn = np.remainder(yaws[tile] - (slot_yaw[slot] + r0 * step) + np.pi, 2 * np.pi)
+                worst = max(worst, abs(turn - np.pi))
+                r = (a_tile + a_slot) % bins
+                assert u.index.decode(np.array([a_tile, a_slot, r]))[2] == (r0 + r) % bins
+    assert worst <= step / 2 + 1e-9  # no other slot-aligned pose is nearer
+    assert worst > 0.4 * step  # tiles do lie in between (the check has something to catch)
+
+
+def test_mesh_slot_order_is_raster_order_on_the_mesh(env) -> None:
+    """Slot indices run along rows from the top (largest y) down, each row by x ascending."""
+    u = env.unwrapped
+    env.reset(seed=0)
+    xy = u.cell.slot_poses_world()[u.index.slots, :2]
+    rows = np.round(xy[:, 1], 3)
+    assert len(set(rows)) > 1 and len(set(rows)) < len(rows)  # several rows of several slots
+    assert np.all(np.diff(rows) <= 0)  # top row first
+    for y in set(rows):
+        assert np.all(np.diff(xy[rows == y, 0]) > 0)  # left to right

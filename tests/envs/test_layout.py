@@ -17,6 +17,8 @@ from qshape.design import Design
 CFG = load_cell_config()
 AREA = tuple(CFG.input_belt.tile_area)
 GAP = CFG.tiles.min_gap
+LAYOUT_SEEDS = 40
+"""Layouts per design checked for the gap."""
 
 
 def _design_tiles(design: str) -> tuple[list[np.ndarray], np.ndarray]:
@@ -37,10 +39,15 @@ def _polygons(outlines: list[np.ndarray], poses: np.ndarray) -> list[Polygon]:
 
 @pytest.mark.parametrize("design", ["paper_mixed", "trencadis"])
 def test_layouts_keep_the_gap_inside_the_area(design: str) -> None:
-    """Every pair of outlines at least the gap apart, every outline inside the area."""
+    """Every pair of outlines at least the gap apart, every outline inside the area.
+
+    Forty layouts per design (~2 s): a pair close enough to need the exact distance test shows
+    up in a few of them (seeds 6, 9, 15, 16: a bounds pre-filter that ignored the gap let such
+    pairs through; five seeds never met one).
+    """
     outlines, radii = _design_tiles(design)
     area = box(-AREA[0] / 2, -AREA[1] / 2, AREA[0] / 2, AREA[1] / 2)
-    for seed in range(5):
+    for seed in range(LAYOUT_SEEDS):
         poses = sample_layout(
             radii,
             AREA,

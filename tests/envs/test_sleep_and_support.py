@@ -131,3 +131,44 @@ def test_a_kinematic_place_sets_the_tile_down(kinematic: MosaicAssemblyEnv) -> N
     placed = np.array([e.tile for e in cell.events if e.kind == "release"])
     asleep = cell.data.tree_asleep[trees[placed]]
     assert np.all(asleep[:-2] >= 0) and asleep[-2] >= -1 and asleep[-1] < 0
+
+
+def _speeds(cell: Cell) -> np.ndarray:
+    """Largest speed component of each tile [m/s, rad/s x dof length], shape (n,)."""
+    dof = cell.ids.tile_dof_index
+    return (np.abs(cell.data.qvel[dof]) * cell.model.dof_length[dof]).max(axis=1)
+
+
+def test_ending_countdowns_spares_tiles_moving_in_any_direction(cell: Cell) -> None:
+    """Only tiles still in every degree of freedom have their sleep countdown ended.
+
+    Tiles riding a moving belt move along x only; their countdown must keep running. Once the
+    belt stops they come to rest one by one; then exactly the still ones are ended.
+    """
+    trees = _trees(cell)
+    tol = cell.model.opt.sleep_tolerance
+    cell.belt_speed = 0.1
+    cell.reset(seed=4)
+    cell.step(40)
+    riding = cell.on_stage & (cell.data.tree_asleep[trees] < -1)
+    assert riding.sum() >= 5
+    assert np.all(_speeds(cell)[riding] > tol)  # riding: moving along the belt only
+    cell.sleep_still_tiles()
+    assert np.all(cell.data.tree_asleep[trees[riding]] < -1)  # countdowns untouched
+    before = cell.tile_poses().pos
+    cell.step(50)
+    moved = cell.tile_poses().pos[riding, 0] - before[riding, 0]
+    np.testing.assert_allclose(moved, 0.1 * 50 * cell.model.opt.timestep, rtol=0.05)
+    cell.belt_speed = 0.0
+    for _ in range(200):  # step until some tiles rest while others still move
+        cell.step(1)
+        counting = cell.data.tree_asleep[trees] < -1
+        still = counting & (_speeds(cell) < tol)
+        if still.any() and (counting & ~still).any():
+            break
+    else:
+        pytest.fail("no moment with both still and moving tiles counting down")
+    cell.sleep_still_tiles()
+    asleep_now = cell.data.tree_asleep[trees]
+    assert np.all(asleep_now[still] == -1)
+    assert np.all(asleep_now[counting & ~still] < -1)

@@ -128,3 +128,20 @@ def test_one_tile_cartesian_starts_inside_its_box() -> None:
         assert np.linalg.norm(end - start) < 0.002
     finally:
         env.close()
+
+
+def test_the_first_step_pays_only_the_change_since_reset() -> None:
+    """Reset stores the reset state's potentials: standing still earns (almost) nothing."""
+    env = gym.make("MosaicOneTile-v0")
+    try:
+        u = env.unwrapped
+        for seed in (1, 3):
+            env.reset(seed=seed)
+            start = u.task.staged.potentials(u.evaluate())
+            assert start["reach"] > 1e-3  # the pad starts near enough to have a potential
+            still = np.array([0, 0, 0, 0, -1], np.float32)  # no move, no vacuum
+            _, _, _, _, info = env.step(still)
+            for s in STAGES:
+                assert abs(info[f"reward_stage_{s}"]) < 1e-6, (seed, s, info[f"reward_stage_{s}"])
+    finally:
+        env.close()

@@ -11,7 +11,8 @@ import pytest
 
 from qshape import Tolerances, describe, match
 from qshape.design import Design, DesignError, Slot, bundled_designs
-from qshape.errors import QShapeError
+from qshape.errors import DesignLimitError, LimitError, QShapeError
+from qshape.limits import Limits
 from qshape.synthetic.render import render_design, save_png
 
 BUNDLED = ["hexagon", "paper_mixed", "square_grid", "trencadis"]
@@ -313,3 +314,38 @@ def test_arc_samples_lie_on_their_circle(bulge: float) -> None:
     sagitta = abs(bulge) * chord / 2.0  # bulge = 2 sagitta / chord
     mid = 0.5 * (a + b)
     assert np.hypot(*(m - mid)) == pytest.approx(sagitta, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("mutate", "where"),
+    [
+        (lambda d: d["slots"][0]["shape"].update(size=1e12), r"slot 'a'.*outline length: 4e\+12"),
+        (lambda d: d["slots"][1]["shape"].update(radius=1e9), r"slot 'b'.*outline length"),
+        (lambda d: d["mesh"].update(width=1e12), r"mesh width: 1e\+12"),
+    ],
+)
+def test_a_design_above_the_size_cap_is_refused_before_any_allocation(mutate, where) -> None:  # noqa: ANN001
+    import tracemalloc  # noqa: PLC0415
+
+    data = copy.deepcopy(_base())
+    mutate(data)
+    tracemalloc.start()
+    try:
+        with pytest.raises(DesignLimitError, match=where) as exc:
+            Design.from_dict(data)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 10_000_000  # [B]: refused before sampling 4e12 mm of outline (116 TiB)
+    assert "max_design_mm=10000" in str(exc.value)
+    assert isinstance(exc.value, LimitError) and isinstance(exc.value, DesignError)
+
+
+def test_a_design_at_the_size_cap_loads() -> None:
+    cap = Limits.load().max_design_mm
+    data = copy.deepcopy(_base())
+    data["mesh"] = {"width": cap, "height": 100}
+    assert Design.from_dict(data).mesh_size == (cap, 100)
+    with pytest.raises(DesignLimitError):
+        data["mesh"]["width"] = cap * 1.001
+        Design.from_dict(data)
