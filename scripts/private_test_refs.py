@@ -25,7 +25,7 @@ def _is_private(name: str) -> bool:
 
 
 def _is_project(module: str) -> bool:
-    return module.split(".")[0] in PACKAGES
+    return module.split(".", maxsplit=1)[0] in PACKAGES
 
 
 def _is_module(dotted: str) -> bool:
