@@ -22,8 +22,7 @@ YAW_TOL = math.radians(2.0)
 
 
 @pytest.fixture(scope="module")
-def scene():
-    design = Design.load("paper_mixed")
+def scene(design):
     cell, _ = build_design_cell(design, seed=3)
     cell.step(100)
     cam = cell.camera_model("input_camera")

@@ -23,11 +23,6 @@ PLACE = np.array([-0.02, -0.48, 0.207])
 
 
 @pytest.fixture(scope="module")
-def planner() -> PickPlacePlanner:
-    return PickPlacePlanner(IKSolver(config=CFG.ik, limits=CFG.limits), CFG)
-
-
-@pytest.fixture(scope="module")
 def start(planner: PickPlacePlanner) -> JointState:
     return JointState.at_rest(planner.ik.solve(PLACE + [0.05, 0.0, 0.0005], 0.0).q)
 

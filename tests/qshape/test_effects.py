@@ -26,11 +26,6 @@ from qshape.synthetic.synth import SynthParams, generate
 from qshape.vision.extract import extract_detailed
 
 
-@pytest.fixture(scope="module")
-def design() -> Design:
-    return Design.load("paper_mixed")
-
-
 def _square(side: float = 100.0, step: float = 0.5) -> np.ndarray:
     t = np.arange(0.0, side, step)
     z, s = np.zeros_like(t), np.full_like(t, side)

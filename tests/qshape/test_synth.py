@@ -15,11 +15,6 @@ from qshape.synthetic.synth import SynthParams, generate, place_path
 from qshape.vision.extract import extract_detailed
 
 
-@pytest.fixture(scope="module")
-def design() -> Design:
-    return Design.load("paper_mixed")
-
-
 def test_deterministic(design: Design) -> None:
     a = generate(design, 8, 5)
     b = generate(design, 8, 5)
