@@ -1,6 +1,8 @@
-"""Shared fixtures of the envs tests: a cell scene with a red marker the cameras can see.
+"""Shared fixtures of the envs tests: the IK of a cell's arm, and a cell scene with a red marker
+the cameras can see.
 
-Built once per test module (compiling the cell's scene costs about a second).
+Both are built once per test module (compiling a model costs up to a second); the motions that
+use the IK are in `tests.envs.cell_motion`.
 """
 
 from __future__ import annotations
@@ -8,8 +10,10 @@ from __future__ import annotations
 import mujoco
 import pytest
 
+from envs.cell.cell import Cell
 from envs.cell.config import CellConfig
 from envs.cell.scene import build_spec
+from tests.envs.cell_motion import ArmIK, ArmIKFor
 
 MARKER_RADIUS = 0.003
 """Radius of the red marker sphere [m]."""
@@ -25,3 +29,20 @@ def marker_scene() -> tuple[mujoco.MjModel, mujoco.MjData, int]:
     g.contype = g.conaffinity = 0
     model = spec.compile()
     return model, mujoco.MjData(model), model.body("marker").mocapid[0]
+
+
+@pytest.fixture(scope="module")
+def arm_ik() -> ArmIKFor:
+    """The IK of a cell's arm: compiled on first use per cell configuration, then shared.
+
+    The IK keeps no state between solves (each starts from its seeds), so sharing it between
+    tests changes no result.
+    """
+    made: dict[CellConfig, ArmIK] = {}
+
+    def of(cell: Cell) -> ArmIK:
+        if cell.cfg not in made:
+            made[cell.cfg] = ArmIK(cell)
+        return made[cell.cfg]
+
+    return of
