@@ -98,8 +98,8 @@ def test_empty_inputs():
     _ = qshape  # the library stays importable without the simulator in this module's scope
 
 
-def test_distractors_on_the_belt_are_never_placed():
-    full = Design.load("paper_mixed")
+def test_distractors_on_the_belt_are_never_placed(design: Design):
+    full = design
     design = full.with_slots(full.slots[::2])
     base = load_cell_config()
     tiles = replace(base.tiles, distractor_rate=1.0, distractor_kinds=("color", "shape", "broken"))

@@ -65,10 +65,12 @@ def test_config_sweeps_every_effect_and_sizes_the_target_level() -> None:
     assert bench.target_images * len(bench.designs) * 11 >= 1000
 
 
-def test_lensed_pictures_are_undistorted_before_extraction() -> None:
+def test_lensed_pictures_are_undistorted_before_extraction(
+    synth_params: SynthParams, extract_params: ExtractParams
+) -> None:
     bench = _bench()
     lens = Level("lens distortion", "k1 -0.3", effects=CameraEffects(lens_k1=-0.3))
-    sp, ep = SynthParams.load(), ExtractParams.load()
+    sp, ep = synth_params, extract_params
     undist = run_level(lens, 1, bench, sp, ep, np.random.default_rng(3))
     raw = run_level(lens, 1, replace(bench, undistort=False), sp, ep, np.random.default_rng(3))
     assert undist["tiles"] == raw["tiles"] > 0
@@ -77,9 +79,11 @@ def test_lensed_pictures_are_undistorted_before_extraction() -> None:
 
 
 @pytest.mark.slow
-def test_table_and_plot_are_written(tmp_path: Path) -> None:
+def test_table_and_plot_are_written(
+    tmp_path: Path, synth_params: SynthParams, extract_params: ExtractParams
+) -> None:
     bench = _bench()
-    sp, ep = SynthParams.load(), ExtractParams.load()
+    sp, ep = synth_params, extract_params
     rows = [
         run_level(lv, 1, bench, sp, ep, np.random.default_rng(1))
         for lv in (

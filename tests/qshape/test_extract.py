@@ -181,7 +181,7 @@ def test_colour_robust_to_shading(known: tuple[Design, np.ndarray, list[Figure]]
 
 
 @pytest.mark.parametrize("reduction", [1, 2])
-def test_touching_tiles_split_by_canny(reduction: int) -> None:
+def test_touching_tiles_split_by_canny(reduction: int, extract_params: ExtractParams) -> None:
     data = {
         "name": "touch",
         "mesh": {"width": 100, "height": 60},
@@ -206,7 +206,7 @@ def test_touching_tiles_split_by_canny(reduction: int) -> None:
     # Close the 0.5 mm joint: the two tiles touch.
     lo, hi = round(49.5 * S), round(50.5 * S) + 1
     image[:, lo:hi] = image[:, lo - 1 : lo]
-    on = replace(ExtractParams.load(), canny_reduction=reduction)
+    on = replace(extract_params, canny_reduction=reduction)
     assert len(extract(image, on)) == 2
     off = replace(on, split_touching=False)
     assert len(extract(image, off)) == 1
@@ -247,7 +247,7 @@ def test_uniform_noise_gives_no_figures() -> None:
     assert any("no dominant background" in r for r in res.rejected)
 
 
-def test_narrow_hole_filter_uses_twice_area_over_perimeter() -> None:
+def test_narrow_hole_filter_uses_twice_area_over_perimeter(extract_params: ExtractParams) -> None:
     """A hole is kept when 2 x area / perimeter (its width) reaches ``min_hole_width_px``.
 
     The slit's width is measured as extraction traces it; thresholds at 0.7 and 1.3 x that
@@ -265,7 +265,7 @@ def test_narrow_hole_filter_uses_twice_area_over_perimeter() -> None:
     contours, hier = cv2.findContours(fg, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
     hole = next(c for c, h in zip(contours, hier[0], strict=True) if h[3] != -1)
     width = 2.0 * cv2.contourArea(hole) / cv2.arcLength(hole, True)
-    base = ExtractParams.load()
+    base = extract_params
     between = replace(base, min_hole_width_px=0.7 * width, min_hole_area_px=10.0)
     above = replace(base, min_hole_width_px=1.3 * width, min_hole_area_px=10.0)
     assert len(extract(image, between)[0].holes) == 1
@@ -294,8 +294,8 @@ def test_read_image(tmp_path: Path, known: tuple[Design, np.ndarray, list[Figure
         read_image(tmp_path / "junk.png")
 
 
-def test_params_load_and_validate() -> None:
-    p = ExtractParams.load()
+def test_params_load_and_validate(extract_params: ExtractParams) -> None:
+    p = extract_params
     assert p.outline.max_curve_turn_deg >= 200.0
     with pytest.raises(ImageError):
         ExtractParams(threshold_min=50.0, threshold_max=10.0)
@@ -303,9 +303,8 @@ def test_params_load_and_validate() -> None:
         ExtractParams(canny_reduction=0)
 
 
-def test_synthetic_view_matches_slots() -> None:
-    design = Design.load("paper_mixed")
-    sp = SynthParams.load()
+def test_synthetic_view_matches_slots(synth_params: SynthParams, design: Design) -> None:
+    sp = synth_params
     img = generate(design, 10, 11, sp)
     res = extract_detailed(img.image)
     assert len(res.figures) == len(img.tiles)
@@ -367,12 +366,11 @@ def test_coarse_arcs_are_not_split(px_per_mm: float) -> None:
             assert len(fig.points) == 3 and int(fig.curve_mask.sum()) == 1, radius
 
 
-def test_traced_circles_are_two_semicircles() -> None:
+def test_traced_circles_are_two_semicircles(synth_params: SynthParams, design: Design) -> None:
     # Where a traced closed curve is split depends on its noise; two unequal halves would
     # label one arc acute and the other plane (vision.yaml extract.outline.circle_residual).
-    design = Design.load("paper_mixed")
     slots = [s for s in design.slots if s.name in ("ring_orange", "circle_teal")]
-    sp = replace(SynthParams.load(), px_per_mm=CELL_PX_PER_MM)
+    sp = replace(synth_params, px_per_mm=CELL_PX_PER_MM)
     tol = Tolerances(joint_width=design.joint * CELL_PX_PER_MM)
     boundaries = 0
     for seed in range(4):

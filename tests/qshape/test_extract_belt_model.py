@@ -31,9 +31,9 @@ from qshape.vision.extract import (
     _dominant_color,
     _illumination,
     _local_fill,
+    _polynomial_fit,
     extract_detailed,
 )
-from qshape.vision.image_ops import polynomial_fit
 
 
 def _dominant_reference(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, float, int]:
@@ -58,9 +58,11 @@ def _dominant_reference(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, 
 
 
 @pytest.mark.parametrize(("design", "seed"), [("hexagon", 0), ("paper_mixed", 3), ("trencadis", 5)])
-def test_dominant_colour_from_planes_matches_the_plain_reductions(design: str, seed: int) -> None:
-    p = ExtractParams.load()
-    sp = replace(SynthParams.load(), px_per_mm=1.8)
+def test_dominant_colour_from_planes_matches_the_plain_reductions(
+    design: str, seed: int, synth_params: SynthParams, extract_params: ExtractParams
+) -> None:
+    p = extract_params
+    sp = replace(synth_params, px_per_mm=1.8)
     img = generate(Design.load(design), 30, seed, sp).image
     dominant, share, span = _dominant_color(img, p)
     ref_dominant, ref_share, ref_span = _dominant_reference(img, p)
@@ -73,10 +75,12 @@ def test_dominant_colour_from_planes_matches_the_plain_reductions(design: str, s
     assert span > 0
 
 
-def test_colour_distance_from_planes_equals_the_colour_image_difference() -> None:
-    p = ExtractParams.load()
-    sp = replace(SynthParams.load(), px_per_mm=1.8)
-    img = generate(Design.load("paper_mixed"), 30, 2, sp).image
+def test_colour_distance_from_planes_equals_the_colour_image_difference(
+    synth_params: SynthParams, extract_params: ExtractParams, design: Design
+) -> None:
+    p = extract_params
+    sp = replace(synth_params, px_per_mm=1.8)
+    img = generate(design, 30, 2, sp).image
     dominant = _dominant_color(img, p)[0]
     model, _, gain = _illumination(cv2.split(img), dominant, p)
     dist, thr, mask = _colour_distance(cv2.split(img), model, gain, p)
@@ -88,12 +92,14 @@ def test_colour_distance_from_planes_equals_the_colour_image_difference() -> Non
     assert 0.05 < np.count_nonzero(mask) / mask.size < 0.9  # tiles found, not everything
 
 
-def test_sampled_otsu_gives_the_same_extraction_on_a_rendered_picture() -> None:
+def test_sampled_otsu_gives_the_same_extraction_on_a_rendered_picture(
+    synth_params: SynthParams, extract_params: ExtractParams, design: Design
+) -> None:
     """Otsu's threshold from every other pixel per axis is the full histogram's here, and the
     mask (from every pixel) gives the very same outlines and figures."""
-    p = ExtractParams.load()
+    p = extract_params
     assert p.otsu_sample_step == 2  # the configured value is the one tested
-    img = generate(Design.load("paper_mixed"), 30, 8, replace(SynthParams.load(), px_per_mm=1.8))
+    img = generate(design, 30, 8, replace(synth_params, px_per_mm=1.8))
     full = extract_detailed(img.image, replace(p, otsu_sample_step=1))
     sampled = extract_detailed(img.image, p)
     assert sampled.threshold == full.threshold
@@ -103,13 +109,15 @@ def test_sampled_otsu_gives_the_same_extraction_on_a_rendered_picture() -> None:
     assert [f.points.tolist() for f in sampled.figures] == [f.points.tolist() for f in full.figures]
 
 
-def test_sampled_otsu_is_within_a_level_or_two_where_it_decides() -> None:
+def test_sampled_otsu_is_within_a_level_or_two_where_it_decides(
+    synth_params: SynthParams, extract_params: ExtractParams
+) -> None:
     """With the clamp opened wide Otsu's own value sets the threshold: from a quarter of the
     pixels it lands within two levels of the full histogram's, and the tiles found differ only
     on the blurred rims' pixels between the two (areas within 1 %)."""
-    p = replace(ExtractParams.load(), threshold_min=1.0, threshold_max=250.0)
+    p = replace(extract_params, threshold_min=1.0, threshold_max=250.0)
     for seed in range(3):
-        sp = replace(SynthParams.load(), px_per_mm=1.8)
+        sp = replace(synth_params, px_per_mm=1.8)
         img = generate(Design.load("square_grid"), 24, seed, sp).image
         full = extract_detailed(img, replace(p, otsu_sample_step=1))
         sampled = extract_detailed(img, p)
@@ -121,9 +129,9 @@ def test_sampled_otsu_is_within_a_level_or_two_where_it_decides() -> None:
 
 
 @pytest.mark.parametrize("field", ["otsu_sample_step", "edge_sample_step"])
-def test_sample_steps_below_one_are_refused(field: str) -> None:
+def test_sample_steps_below_one_are_refused(field: str, extract_params: ExtractParams) -> None:
     with pytest.raises(ImageError, match=field):
-        replace(ExtractParams.load(), **{field: 0})
+        replace(extract_params, **{field: 0})
 
 
 _BELT = np.array([72.0, 77.0, 83.0], np.float32)  # lit belt colour [levels]
@@ -148,7 +156,7 @@ def _shadowed_grid() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _model(small: np.ndarray, keep: np.ndarray, **overrides: object) -> np.ndarray:
     p = ExtractParams.load(**overrides)
-    base = polynomial_fit(small, keep, p.illumination_degree)
+    base = _polynomial_fit(small, keep, p.illumination_degree)
     assert base is not None
     return _local_fill(small, keep, base, p)
 
@@ -176,10 +184,10 @@ def test_where_the_polynomial_fits_the_model_is_unchanged() -> None:
     assert np.array_equal(_model(small, keep), before)
 
 
-def test_blend_min_change_is_validated() -> None:
+def test_blend_min_change_is_validated(extract_params: ExtractParams) -> None:
     with pytest.raises(ImageError, match="illumination_blend_min_change"):
         ExtractParams.load(illumination_blend_min_change=-1.0)
-    p = ExtractParams.load()
+    p = extract_params
     assert p.illumination_blend and p.illumination_blend_min_change >= 0.0
     assert replace(p, illumination_blend=False).illumination_blend is False
 
@@ -200,10 +208,12 @@ _PICTURE_126 = {
 _DARK_PIECE = "0fe5fb"  # its shape class (key prefix)
 
 
-def test_dark_piece_at_a_shadow_edge_keeps_its_outline() -> None:
+def test_dark_piece_at_a_shadow_edge_keeps_its_outline(
+    synth_params: SynthParams, extract_params: ExtractParams
+) -> None:
     bench = load_config(RealisticBench, "bench_vision_realistic")
     level = next(lv for lv in bench.levels if lv.effect == bench.target_level)
-    sp = SynthParams.load()
+    sp = synth_params
     rng = np.random.default_rng()
     rng.bit_generator.state = _PICTURE_126
     design = Design.load("trencadis")
@@ -235,4 +245,4 @@ def test_dark_piece_at_a_shadow_edge_keeps_its_outline() -> None:
 
     # Before the blend: one of the two pieces lost a third of its outline (no match).
     assert recognised(ExtractParams.load(illumination_blend=False)).count(False) == 1
-    assert all(recognised(ExtractParams.load()))
+    assert all(recognised(extract_params))

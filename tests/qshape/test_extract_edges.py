@@ -16,13 +16,15 @@ from qshape.vision.extract import ExtractParams, _color_edges, _split_regions, e
 
 
 @pytest.mark.parametrize(("h", "w"), [(120, 160), (97, 61)])
-def test_reduced_canny_edges_are_blocks_of_the_reduced_pictures_edges(h: int, w: int) -> None:
+def test_reduced_canny_edges_are_blocks_of_the_reduced_pictures_edges(
+    h: int, w: int, extract_params: ExtractParams
+) -> None:
     """With canny_reduction 2 each edge of the halved picture is a 2 x 2 block (odd sides: none
     in the last row/column), the union over the channels."""
 
     rng = np.random.default_rng(7)
     img = cv2.GaussianBlur(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), (0, 0), 2.0)
-    p = replace(ExtractParams.load(), canny_reduction=2, canny_low=20.0, canny_high=50.0)
+    p = replace(extract_params, canny_reduction=2, canny_low=20.0, canny_high=50.0)
     got = _color_edges(img, p)
     small = cv2.resize(img, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
     want = np.zeros((h // 2, w // 2), np.uint8)
@@ -36,10 +38,12 @@ def test_reduced_canny_edges_are_blocks_of_the_reduced_pictures_edges(h: int, w:
     assert not got[h // 2 * 2 :].any() and not got[:, w // 2 * 2 :].any()
 
 
-def test_crumbs_beyond_a_byte_of_labels_leave_pieces_unchanged() -> None:
+def test_crumbs_beyond_a_byte_of_labels_leave_pieces_unchanged(
+    extract_params: ExtractParams,
+) -> None:
     """Regions are the same whether the labels fit a byte (OpenCV look-up) or not (numpy)."""
 
-    p = ExtractParams.load()
+    p = extract_params
     img = np.full((200, 300, 3), 60, np.uint8)
     mask = np.zeros((200, 300), np.uint8)
     cv2.rectangle(img, (20, 20), (80, 90), (200, 40, 40), -1)
@@ -55,7 +59,9 @@ def test_crumbs_beyond_a_byte_of_labels_leave_pieces_unchanged() -> None:
     np.testing.assert_array_equal(labels2[:100] > 0, labels[:100] > 0)
 
 
-def test_reduced_canny_cut_parts_touching_tiles_at_their_boundary() -> None:
+def test_reduced_canny_cut_parts_touching_tiles_at_their_boundary(
+    extract_params: ExtractParams,
+) -> None:
     """Two touching rectangles of different colours: the cut of the halved picture's Canny is
     given back from both sides, so each piece ends within a pixel of the true boundary."""
 
@@ -65,7 +71,7 @@ def test_reduced_canny_cut_parts_touching_tiles_at_their_boundary() -> None:
     img = cv2.GaussianBlur(img, (0, 0), 0.8)
     mask = np.where(np.abs(img.astype(int) - 50).max(axis=2) > 20, 255, 0).astype(np.uint8)
     for reduction in (1, 2):
-        p = replace(ExtractParams.load(), canny_reduction=reduction)
+        p = replace(extract_params, canny_reduction=reduction)
         count, labels, present, pieces = _split_regions(img, mask, p)
         assert present.sum() == 2
         row = labels[60] * (pieces[60] > 0)
@@ -78,14 +84,16 @@ def test_reduced_canny_cut_parts_touching_tiles_at_their_boundary() -> None:
         assert right.min() - left.max() == 2
 
 
-def test_edge_level_from_every_fourth_pixel_keeps_the_synthetic_figures() -> None:
+def test_edge_level_from_every_fourth_pixel_keeps_the_synthetic_figures(
+    synth_params: SynthParams, extract_params: ExtractParams
+) -> None:
     """A region's median distance from every 4th pixel per axis gives the same figures as from
     every pixel on a camera-like view: the same vertices, most of them bit for bit (a level
     one step off moves a few by about a tenth of a pixel)."""
-    sp = SynthParams.load()
+    sp = synth_params
     img = generate(Design.load("hexagon"), 20, 11, sp).image
-    every = extract_detailed(img, replace(ExtractParams.load(), edge_sample_step=1)).figures
-    fourth = extract_detailed(img, replace(ExtractParams.load(), edge_sample_step=4)).figures
+    every = extract_detailed(img, replace(extract_params, edge_sample_step=1)).figures
+    fourth = extract_detailed(img, replace(extract_params, edge_sample_step=4)).figures
     assert len(fourth) == len(every) >= 15
     for a, b in zip(every, fourth, strict=True):
         assert len(a.points) == len(b.points)

@@ -46,8 +46,10 @@ def _counts(image: np.ndarray, p: ExtractParams, monkeypatch: pytest.MonkeyPatch
     return seen
 
 
-def test_small_tiles_are_resampled_per_traced_pixel(monkeypatch: pytest.MonkeyPatch) -> None:
-    p = ExtractParams.load()
+def test_small_tiles_are_resampled_per_traced_pixel(
+    monkeypatch: pytest.MonkeyPatch, extract_params: ExtractParams
+) -> None:
+    p = extract_params
     assert p.resample_per_px > 0.0
     image = _picture("hexagon", 1.8)
     res = extract_detailed(image, p)
@@ -62,8 +64,9 @@ def test_small_tiles_are_resampled_per_traced_pixel(monkeypatch: pytest.MonkeyPa
 
 def test_large_tiles_keep_the_full_count_and_the_same_figures(
     monkeypatch: pytest.MonkeyPatch,
+    extract_params: ExtractParams,
 ) -> None:
-    p = ExtractParams.load()
+    p = extract_params
     image = _picture("paper_mixed", 2.5)
     assert _counts(image, p, monkeypatch) == [p.outline.resample_points]
     fixed = extract_detailed(image, replace(p, resample_per_px=0.0)).figures
@@ -73,9 +76,9 @@ def test_large_tiles_keep_the_full_count_and_the_same_figures(
         assert np.array_equal(a.points, b.points)
 
 
-def test_small_tiles_keep_their_shape_at_the_lower_count() -> None:
+def test_small_tiles_keep_their_shape_at_the_lower_count(extract_params: ExtractParams) -> None:
     """The same corners (and curves) at 1.8 px/mm with the picture's count as with the cap."""
-    p = ExtractParams.load()
+    p = extract_params
     image = _picture("square_grid", 1.8, seed=9)
     fixed = extract_detailed(image, replace(p, resample_per_px=0.0)).figures
     chosen = extract_detailed(image, p).figures
@@ -88,9 +91,9 @@ def test_small_tiles_keep_their_shape_at_the_lower_count() -> None:
 
 
 @pytest.mark.parametrize("bad", [-1.0, math.nan, math.inf])
-def test_bad_resample_density_is_refused(bad: float) -> None:
+def test_bad_resample_density_is_refused(bad: float, extract_params: ExtractParams) -> None:
     with pytest.raises(ImageError, match="resample_per_px"):
-        replace(ExtractParams.load(), resample_per_px=bad)
+        replace(extract_params, resample_per_px=bad)
 
 
 def test_a_uniform_border_around_a_tile_is_still_read_whole() -> None:

@@ -184,12 +184,11 @@ def test_missed_corner_rule_keeps_arcs_curved(arc_deg):
 
 
 @pytest.mark.parametrize("sides", [3, 4, 6])
-def test_rough_edges_keep_their_corners(sides: int) -> None:
+def test_rough_edges_keep_their_corners(sides: int, extract_params: ExtractParams) -> None:
     """A chipped, ground edge (~1 px of roughness on a 60 px polygon) is still one edge."""
     from qshape.synthetic.effects import roughen  # noqa: PLC0415
-    from qshape.vision.extract import ExtractParams  # noqa: PLC0415
 
-    p = ExtractParams.load().outline
+    p = extract_params.outline
     plain = dataclasses.replace(p, roughness_sigmas=0.0, min_corner_deg=0.0)
     ang = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
     v = 60.0 * np.stack([np.cos(ang), np.sin(ang)], axis=1) + 200.0
@@ -462,16 +461,18 @@ def _recognised(design: Design, img, ep: ExtractParams, s: float) -> tuple[int, 
     return right, wrong
 
 
-def test_rough_hexagons_keep_their_six_corners():
+def test_rough_hexagons_keep_their_six_corners(
+    synth_params: SynthParams, extract_params: ExtractParams
+):
     # 0.4 mm rough edges (1 mm correlation) spread a 60 deg corner over more samples than a
     # 2.5 % window sees: it turned by < 25 deg there, the corner was lost and two sides
     # became an arc (or the whole outline a circle). The bundled, wider window keeps them.
     # The windows are compared without the bent-run test (fit_split_turn_deg), which gives a
     # missed corner back and so rescues some of the narrow window's hexagons too (27 of 28).
-    sp = SynthParams.load()
+    sp = synth_params
     s = sp.px_per_mm
     design = Design.load("hexagon")
-    ep = ExtractParams.load()
+    ep = extract_params
     alone = replace(ep, outline=replace(ep.outline, fit_split_turn_deg=0.0))
     narrow = replace(alone, outline=replace(alone.outline, corner_window=0.025))
     whole = right = right_alone = right_narrow = 0

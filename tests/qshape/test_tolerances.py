@@ -92,12 +92,11 @@ def _best(cand: Description, refs: dict[str, Description], tol: Tolerances) -> s
 
 
 @pytest.fixture(scope="module")
-def trencadis_pictures():
+def trencadis_pictures(synth_params: SynthParams, extract_params: ExtractParams):
     """Drawn trencadis pictures (0.4 mm rough edges, 0.5 mm vertex jitter) and their figures."""
-    sp = SynthParams.load()
+    sp, ep = synth_params, extract_params
     design = Design.load("trencadis")
     params = replace(sp, effects=CameraEffects(edge_roughness_mm=0.4))
-    ep = ExtractParams.load()
     pictures = []
     for seed in (26, 31):
         img = generate(design, 14, np.random.default_rng(seed), params)
