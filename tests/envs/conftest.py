@@ -1,15 +1,19 @@
-"""Shared fixtures of the envs tests: the IK of a cell's arm, and a cell scene with a red marker
-the cameras can see.
+"""Shared fixtures of the envs tests: the kinematic pick_place env, the IK of a cell's arm, and a
+cell scene with a red marker the cameras can see.
 
-Both are built once per test module (compiling a model costs up to a second); the motions that
+Each is built once per test module (compiling a model costs up to a second); the motions that
 use the IK are in `tests.envs.cell_motion`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
+import gymnasium as gym
 import mujoco
 import pytest
 
+import envs
 from envs.cell.cell import Cell
 from envs.cell.config import CellConfig
 from envs.cell.scene import build_spec
@@ -46,3 +50,17 @@ def arm_ik() -> ArmIKFor:
         return made[cell.cfg]
 
     return of
+
+
+@pytest.fixture(scope="module")
+def kinematic_env() -> Iterator[gym.Env]:
+    """``MosaicAssembly-v0``: pick_place actions, kinematic execution, state observations.
+
+    Reset with seed 0; tests that need another start reset it themselves.
+    """
+    env = gym.make(envs.ENV_ID, action_mode="pick_place", obs_mode="state", execution="kinematic")
+    env.reset(seed=0)
+    try:
+        yield env
+    finally:
+        env.close()

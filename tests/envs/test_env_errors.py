@@ -7,7 +7,6 @@ from __future__ import annotations
 import importlib
 import inspect
 import pkgutil
-from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -162,19 +161,8 @@ def test_every_error_class_of_envs_derives_from_env_error():
     assert {"ActionError", "MosaicEnvError", "EnvConfigError", "TaskError", "CellError"} <= names
 
 
-_ENV: dict[str, Any] = {}
-
-
-def _state_env() -> Any:
-    if "env" not in _ENV:
-        env = gym.make(ENV_ID, action_mode="pick_place", obs_mode="state", execution="kinematic")
-        env.reset(seed=0)
-        _ENV["env"] = env
-    return _ENV["env"]
-
-
-def test_complex_actions_are_refused():
-    env = _state_env()
+def test_complex_actions_are_refused(kinematic_env):
+    env = kinematic_env
     with pytest.raises(ActionError, match="not complex"):
         env.step(np.zeros(6, complex) + 0.5j)
 
@@ -193,8 +181,8 @@ _DTYPES = st.sampled_from(
     )
     | st.one_of(st.none(), st.text(max_size=6), st.lists(st.floats(), max_size=7))
 )
-def test_generated_actions_are_refused_with_action_error_or_executed(action):
-    env = _state_env()
+def test_generated_actions_are_refused_with_action_error_or_executed(kinematic_env, action):
+    env = kinematic_env
     try:
         _, _, terminated, truncated, _ = env.step(action)
     except ActionError:
