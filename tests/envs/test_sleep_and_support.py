@@ -102,7 +102,7 @@ def test_a_holed_tile_rests_on_its_hull_and_stacks_on_its_pieces(cell: Cell) -> 
 
 
 def test_a_kinematic_place_sets_the_tile_down(kinematic_env: gym.Env) -> None:
-    env: MosaicAssemblyEnv = kinematic_env.unwrapped  # type: ignore[assignment]
+    env: MosaicAssemblyEnv = kinematic_env.unwrapped
     cell = env.cell
     env.reset(seed=2)
     rest = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2
