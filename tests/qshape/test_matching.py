@@ -1,3 +1,7 @@
+"""Matching descriptions: invariance to rotation, translation, start point and orientation; scale,
+correspondence, concave and holed shapes, symmetric rotations, circles and curve types.
+"""
+
 import math
 
 import numpy as np

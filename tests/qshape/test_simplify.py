@@ -1,6 +1,7 @@
-"""Outline simplification (qshape.outline.simplify): relevant points and curves of dense outlines,
-batched and alone; rough outlines keep their corners (the slope comparison's window) and a rough
-hexagon stays a hexagon (bent runs of two edges are not arcs, fit_split_turn_deg)."""
+"""Outline simplification (`qshape.outline.simplify`): relevant points and curves of dense
+outlines, batched and alone; rough outlines keep their corners (the slope comparison's window)
+and a rough hexagon stays a hexagon (bent runs of two edges are not arcs, ``fit_split_turn_deg``).
+"""
 
 from __future__ import annotations
 
