@@ -14,6 +14,8 @@ from typing import Any, Literal
 
 from agents.errors import AgentError
 from configs import load_config
+from envs.task_spec import FeedMode
+from spatial.units import MM_PER_M
 
 AGENTS_CONFIG = "agents"
 """Bundled config name (``configs/agents.yaml``)."""
@@ -24,7 +26,9 @@ class PerceptionConfig:
     """How camera images become perceived tiles.
 
     Attributes:
-        mm_per_m: Unit of the world figures handed to qshape, [mm/m] (designs are in mm).
+        mm_per_m: Unit of the world figures handed to qshape, [mm/m] (designs are in mm):
+            a unit, not a tuning knob; the default is `spatial.units.MM_PER_M` and the key
+            is left out of the bundled ``configs/agents.yaml`` (still accepted there).
         pad_clearance: A tile is picked at its centroid when the centroid lies at least this
             far inside the tile material; otherwise at its pole of inaccessibility, [m] (half
             the 23 mm pad of the paper: the pad seals on material all round).
@@ -46,7 +50,7 @@ class PerceptionConfig:
     business: ``configs/vision.yaml`` section ``extract``.
     """
 
-    mm_per_m: float = 1000.0
+    mm_per_m: float = MM_PER_M
     pad_clearance: float = 0.0115
     polylabel_tolerance: float = 1e-4
     color_balance: bool = True
@@ -172,7 +176,7 @@ class RunConfig:
     design: str = "paper_mixed"
     seed: int = 0
     belt_speed: float = 0.0
-    feed: Literal["all", "stream", "batch"] = "all"
+    feed: FeedMode = "all"
     distractor_rate: float = 0.0
     max_slots: int = 0
     max_steps_per_slot: int = 2

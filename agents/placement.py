@@ -30,12 +30,12 @@ import qshape
 from agents.config import PlacementConfig
 from agents.perception import PerceivedTile, SlotTarget
 from envs.task_spec import PickPlaceCommand
-from planners.angles import rotate_xy, wrap_angle
 from qshape.theory.assign import feasible_pairs
+from spatial.angles import rotate_xy, wrap_angle
 
 
 def wrap(angle: float) -> float:
-    """Angle wrapped to [-pi, pi) [rad] (`planners.angles.wrap_angle` for one float)."""
+    """Angle wrapped to [-pi, pi) [rad] (`spatial.angles.wrap_angle` for one float)."""
     return float(wrap_angle(angle))
 
 

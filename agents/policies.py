@@ -150,7 +150,7 @@ def _openloop(base: dict[str, Any]) -> Policy:
         u = _need_discrete(env, "openloop")
         env.reset(seed=OPENLOOP_TRAIN_SEED)
         seq = []
-        for i in range(len(u.cell.slots)):
+        for i in range(len(env.get_wrapper_attr("task_spec").slots)):
             a = u.expert_action(i, i)
             seq.append(a)
             *_, term, trunc, _ = env.step(a)
@@ -170,8 +170,8 @@ def _openloop(base: dict[str, Any]) -> Policy:
 
 def _identity(base: dict[str, Any]) -> Policy:
     def factory(env: gym.Env) -> Predict:
-        u = _need_discrete(env, "identity")
-        k = len(u.cell.slots)
+        _need_discrete(env, "identity")
+        k = len(env.get_wrapper_attr("task_spec").slots)
         step = [0]
 
         def predict(obs: dict[str, Any], start: bool) -> np.ndarray:

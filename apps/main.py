@@ -48,11 +48,14 @@ from agents.placement import PlacementPlan, Unplaced
 from agents.scripted import ScriptedAgent
 from configs import ConfigError
 from envs.cell.accounting import TILE_STATES
+from envs.env_config import FEEDS
+from envs.episode_setup import with_feed_fallback
 from envs.errors import CellError
 from envs.task import GroundTruth
 from envs.task_spec import FeedMode, TaskSpec
-from planners.angles import yaw_error
 from qshape import QShapeError
+from spatial.angles import yaw_error
+from spatial.units import MM_PER_M
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV_ID = "envs:MosaicAssembly-v0"
@@ -229,7 +232,7 @@ def draw_slots(
     target: int | None = None,
     scale: float = 1.0,
     recognise: bool = False,
-    mm_per_m: float = 1000.0,
+    mm_per_m: float = MM_PER_M,
 ) -> np.ndarray:
     """An output-camera image with the design's slots projected through ``camera``.
 
@@ -417,13 +420,12 @@ def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
         "distractor_rate": rc.distractor_rate,
         "max_slots": rc.max_slots,
     }
-    try:
-        return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
-    except CellError:
-        if rc.feed != "all":
-            raise
-        over["feed"] = "batch"
-        return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **over)
+
+    def make(feed: FeedMode) -> gym.Env[Any, Any]:
+        kw = {**over, "feed": feed}
+        return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **kw)
+
+    return with_feed_fallback(make, rc.feed)[0]
 
 
 def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
@@ -605,7 +607,7 @@ def recognition(truth: GroundTruth, agent: ScriptedAgent) -> list[RecognitionRow
         class_ok = truth.class_name[i] == truth.slot_class[c.slot] and not truth.distractor[i]
         err = yaw_error(truth.yaw[i] + c.rotation, c.place[2], int(truth.symmetry[i]))
         rows.append(
-            RecognitionRow(c.slot_name, i, bool(class_ok), 1e3 * d, math.degrees(float(err)))
+            RecognitionRow(c.slot_name, i, bool(class_ok), MM_PER_M * d, math.degrees(float(err)))
         )
     return rows
 
@@ -658,7 +660,7 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     parser.add_argument("--design", help="design name or path (default: config)")
     parser.add_argument("--seed", type=int, help="episode seed (default: config)")
     parser.add_argument("--belt-speed", type=float, help="input belt speed [m/s]")
-    parser.add_argument("--feed", choices=("all", "stream", "batch"), help="tile feed")
+    parser.add_argument("--feed", choices=FEEDS, help="tile feed")
     parser.add_argument("--distractor-rate", type=float, help="distractor tiles per real tile")
     parser.add_argument("--max-slots", type=int, help="first k slots of the design only")
     parser.add_argument("--greedy", action="store_true", help="the paper's greedy assignment")

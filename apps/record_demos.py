@@ -134,13 +134,14 @@ class ExpertAgent:
 
     def __init__(self, env: gym.Env) -> None:
         self.env = env.unwrapped
+        self.slots = len(env.get_wrapper_attr("task_spec").slots)
         self.step = 0
 
     def predict(self, obs: Any, episode_start: np.ndarray) -> tuple[np.ndarray, None]:
         """The next expert action (the observation is not needed: the expert is privileged)."""
         del obs
         self.step = 0 if bool(np.asarray(episode_start).ravel()[0]) else self.step + 1
-        i = self.step % len(self.env.cell.slots)  # type: ignore[attr-defined]
+        i = self.step % self.slots
         return self.env.expert_action(i, i), None  # type: ignore[attr-defined]
 
 

@@ -22,6 +22,7 @@ from typing import Any
 from benchmarks.scripted import Episode, Scenario, ScriptedBenchConfig, play, summarise, table
 from configs import load_config
 from qshape.design.mural import Mural, MuralError
+from spatial.units import MM_PER_M
 
 OUT = Path("out/bench_mural.json")
 """Default output file."""
@@ -54,7 +55,7 @@ def mesh_area_mm() -> tuple[float, float]:
     from envs.cell.config import load_cell_config  # noqa: PLC0415 - keep the import light
 
     cell = load_cell_config()
-    return cell.output_belt.mesh_size[0] * 1000.0, cell.output_belt.mesh_size[1] * 1000.0
+    return cell.output_belt.mesh_size[0] * MM_PER_M, cell.output_belt.mesh_size[1] * MM_PER_M
 
 
 def totals(rows: list[dict[str, Any]], episodes: list[Episode], wall_s: float) -> dict[str, Any]:

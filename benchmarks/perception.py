@@ -25,8 +25,8 @@ from agents.placement import plan_placements
 from benchmarks.design_cell import build_design_cell, nearest_tile
 from envs.cell.config import load_cell_config
 from envs.task_spec import work_areas, world_slots
-from planners.angles import yaw_error
 from qshape.design import Design
+from spatial.angles import yaw_error
 
 ROOT = Path(__file__).resolve().parents[1]
 SETTLE_STEPS = 100

@@ -40,14 +40,15 @@ from envs.cell.cell import Cell
 from envs.cell.config import CellConfig, load_cell_config
 from envs.cell.scene import build_arm_model
 from envs.cell.tiles.shapes import tile_shapes_from_design
-from planners.angles import yaw_error
+from envs.episode_setup import build_cell
 from planners.config import PlannerConfig, load_planner_config
 from planners.errors import LimitError, PlannerError
 from planners.executor import TimedEvent, TrajectoryExecutor
-from planners.ik import IKSolver, wrap_angle
+from planners.ik import IKSolver
 from planners.pick_place import CyclePlan, PickPlacePlanner
 from planners.trajectory import JointState, validate
 from qshape.design import Design
+from spatial.angles import wrap_angle, yaw_error
 
 OUT = Path(__file__).resolve().parents[1] / "out" / "planner_bench.json"
 POSITION_TOL = 1e-3
@@ -437,7 +438,7 @@ def run_design(
 
 def _build_cell(cfg: CellConfig, shapes: Any, slots: Any, seed: int) -> Cell:
     """The cell with the first layout seed from ``seed`` on that fits every tile on the belt."""
-    return Cell.first_fitting(cfg, shapes, slots, seed, LAYOUT_SEED_TRIES)
+    return build_cell(cfg, shapes, slots, seed, LAYOUT_SEED_TRIES)
 
 
 def cell_config(layout: str, belt_speed: float, stream_period: float) -> CellConfig:

@@ -110,7 +110,7 @@ def play(job: tuple[Scenario, int, tuple[int, int], int]) -> Episode:
     t0 = time.perf_counter()
     obs, info = env.reset(seed=seed)
     agent.reset()
-    limit = steps_per_slot * len(env.unwrapped.cell.slots)
+    limit = steps_per_slot * len(env.get_wrapper_attr("task_spec").slots)
     steps = failed = 0
     while steps < limit:
         action, _ = agent.predict(obs)

@@ -267,6 +267,17 @@ def check_positive(
                 raise error(f"{where} must be {bound} and finite, got {value!r}")
 
 
+def check_length(obj: object, name: str, n: int, error: type[Exception] = ConfigError) -> None:
+    """Check that a sequence-valued field of a config holds ``n`` values, for ``__post_init__``.
+
+    Raises:
+        error: Another length; the message names the class, the field and the value.
+    """
+    value = getattr(obj, name)
+    if len(value) != n:
+        raise error(f"{type(obj).__name__}.{name} needs {n} values, got {value!r}")
+
+
 def load_config(
     cls: type[T], name_or_path: str | Path | None = None, subdir: str = "", **overrides: Any
 ) -> T:
@@ -294,6 +305,7 @@ __all__ = [
     "CONFIG_DIR",
     "ConfigError",
     "check_field_types",
+    "check_length",
     "check_positive",
     "from_dict",
     "load_config",

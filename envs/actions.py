@@ -25,10 +25,11 @@ from envs.cell.cell import Cell
 from envs.cell.pick_place import ActionResult, PickPlaceExecutor
 from envs.env_config import EnvConfig
 from envs.task_spec import RANGE_SLACK, ActionError, Area, PickPlaceCodec, PickPlaceCommand
-from planners.angles import rotate_xy, wrap_angle
 from planners.errors import PlannerError
 from planners.ik import IKSolver
 from planners.robot import joint_ranges
+from spatial.angles import rotate_xy, wrap_angle
+from spatial.rotations import yaw_from_matrix
 
 N_JOINTS = 6
 
@@ -155,7 +156,7 @@ class CartesianActions(ActionAdapter):
     def reset(self) -> None:
         """Tool target back to the current tool pose."""
         pos, rot = self.cell.tcp_pose()
-        self.pose = np.array([*pos, IKSolver.yaw_of(rot)])
+        self.pose = np.array([*pos, yaw_from_matrix(rot)])
         self.q = self.cell.qpos
 
     def apply(self, action: np.ndarray) -> ActionResult:
@@ -230,12 +231,7 @@ class DiscretePickPlaceActions(ActionAdapter):
         """Run one cycle moving the chosen tile to the chosen slot."""
         tile, slot, rot = (int(v) for v in action)
         cell = self.cell
-        on_input = (
-            cell.on_stage[tile]
-            and not cell.lost[tile]
-            and cell.tile_poses().pos[tile, 1]
-            > cell.geometry.output_centre[1] / 2 + cell.geometry.input_centre[1] / 2
-        )
+        on_input = bool(cell.input_half()[tile])  # the pad holds nothing between cycles
         if tile >= len(cell.tiles) or slot >= len(cell.slots) or not on_input:
             cell.step(self.executor.fail_steps)
             return ActionResult(True, f"tile {tile} is not on the input belt")

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from configs import ConfigError, from_dict, load_yaml, resolve_path
-from envs.cell.config import CellConfig, load_cell_config, section_names
+from envs.cell.config import FEED_MODES, CellConfig, load_cell_config, section_names
 from envs.errors import CellError, EnvError
 
 ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
@@ -37,8 +37,8 @@ REWARD_MODES: tuple[str, ...] = get_args(RewardMode)
 """Allowed ``reward_mode`` values."""
 EXECUTIONS: tuple[str, ...] = get_args(Execution)
 """Allowed ``execution`` values (``pick_place`` modes)."""
-FEEDS = ("all", "stream", "batch")
-"""Allowed ``feed`` values."""
+FEEDS = FEED_MODES
+"""Allowed ``feed`` values (`envs.cell.config.FEED_MODES`)."""
 RENDER_MODES: tuple[str, ...] = get_args(RenderMode)
 """Allowed ``render_mode`` values (or None)."""
 TILE_ORDERS: tuple[str, ...] = get_args(TileOrder)

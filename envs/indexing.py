@@ -57,7 +57,6 @@ class IndexMaps:
         self._rest = np.arange(n)
         self._mesh_order = _raster_order(cell.slot_poses_world()[:, :2]) if k else self.slots
         self._step = 2 * math.pi / config.rotation_bins
-        self._mid_y = float(cell.geometry.output_centre[1] + cell.geometry.input_centre[1]) / 2
 
     def reset(self, rng: np.random.Generator) -> None:
         """Draw the per-reset permutations, then compute the tile order of the first observation."""
@@ -82,9 +81,7 @@ class IndexMaps:
             return
         cell = self.cell
         pos = cell.tile_poses().pos
-        on_input = cell.on_stage & ~cell.lost & (pos[:, 1] > self._mid_y)
-        if cell.held_tile >= 0:
-            on_input[cell.held_tile] = False
+        on_input = cell.input_half()
         idx = np.flatnonzero(on_input)
         first = idx[np.lexsort((pos[idx, 1], -pos[idx, 0]))]
         rest = self._rest[~on_input[self._rest]]

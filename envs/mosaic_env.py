@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -27,10 +26,10 @@ from envs.cell.cameras import CameraModel
 from envs.cell.cell import CAMERAS, Cell
 from envs.cell.pick_place import PickPlaceExecutor
 from envs.cell.scene import build_arm_model
-from envs.cell.tiles.shapes import tile_shapes_from_design
-from envs.cell.tiles.tile import SlotSpec, TileShape
 from envs.env_config import EnvConfig, EnvConfigError, load_env_config
+from envs.episode_setup import build_cell, design_cell_parts
 from envs.errors import EnvError
+from envs.frames import FrameSchedule
 from envs.indexing import IndexMaps
 from envs.observations import Observer
 from envs.task import REWARD_TERMS, Evaluation, GroundTruth, MosaicTask
@@ -44,9 +43,6 @@ from envs.task_spec import (
 )
 from planners.config import PlannerConfig, load_planner_config
 from planners.ik import IKSolver
-
-if TYPE_CHECKING:
-    from qshape.design import Design
 
 DEFAULT_CONTROL_DT = 0.04
 """Default control period [s] (``configs/env.yaml``); the class's ``render_fps`` is 1 / it."""
@@ -204,8 +200,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         cfg = self.config
         self.render_mode = cfg.render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt)}
-        design, shapes, slots = _design(cfg)
-        self.cell = Cell.first_fitting(cfg.cell, shapes, slots, tries=cfg.layout_tries)
+        design, shapes, slots = design_cell_parts(cfg)
+        self.cell = build_cell(cfg.cell, shapes, slots, tries=cfg.layout_tries)
         _check_image_size(cfg, self.cell)
         self.task = MosaicTask(self.cell, cfg)
         self.observer = Observer(self.cell, self.task, cfg)
@@ -224,7 +220,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._needs_reset = True
         self._closed = False
         self._viewer: Any = None
-        self._listeners: list[_FrameListener] = []
+        self._frames = FrameSchedule()
 
     def _adapter(self, pcfg: PlannerConfig) -> ActionAdapter:
         cfg, cell = self.config, self.cell
@@ -252,8 +248,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._t0 = cell.time
         self.actions.reset()
         self.index.reset(rng)
-        for f in self._listeners:
-            f.next_time = cell.time
+        self._frames.restart(cell.time)
         self._needs_reset = False
         evaluation = self.task.last_evaluation  # taken at the episode's set-up; nothing moved
         obs = self._observe(evaluation)
@@ -274,7 +269,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         if self.config.action_mode == "pick_place_discrete":
             a = self.index.decode(a)
         result = self.actions.apply(a)
-        if self._listeners:
+        if self._frames:
             self._tick()
         evaluation = self.task.evaluate()
         terms = self.task.rewards(evaluation, result.failed)
@@ -406,7 +401,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         drop = (geo.input_belt_end + cfg.reject_past_belt_end, geo.input_y)
         cmd = PickPlaceCommand((float(pick_xy[0]), float(pick_xy[1])), float(pick_yaw), drop, 0.0)
         result = self.executor.run(cmd, place_z=geo.belt_top + cfg.reject_release_height)
-        if self._listeners:
+        if self._frames:
             self._tick()
         evaluation = self.task.evaluate()
         terms = self.task.rewards(evaluation, result.failed)
@@ -449,16 +444,12 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         """
         if not (np.isfinite(fps) and fps > 0):
             raise MosaicEnvError(f"fps must be a positive number of frames per second, got {fps}")
-        self._listeners.append(_FrameListener(listener, 1.0 / fps, self.cell.time))
+        self._frames.add(listener, 1.0 / fps, self.cell.time)
         if self.executor is not None:
             self.executor.on_physics_step = self._tick
 
     def _tick(self) -> None:
-        t = self.cell.time + 1e-9
-        for f in self._listeners:
-            if t >= f.next_time:
-                f.callback()
-                f.next_time += f.period * (1 + int((t - f.next_time) / f.period))
+        self._frames.tick(self.cell.time)
 
     # ------------------------------------------------------------------ helpers
     def _observe(self, evaluation: Evaluation) -> dict[str, Any]:
@@ -489,25 +480,6 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def _check_open(self) -> None:
         if self._closed:
             raise MosaicEnvError("the environment is closed; make a new one")
-
-
-@dataclass
-class _FrameListener:
-    """A callback and its simulated-time schedule [s]."""
-
-    callback: Callable[[], None]
-    period: float
-    next_time: float
-
-
-def _design(cfg: EnvConfig) -> tuple[Design, tuple[TileShape, ...], tuple[SlotSpec, ...]]:
-    from qshape.design import Design  # noqa: PLC0415 - keep `import envs` light
-
-    design = Design.load(cfg.design)
-    shapes, slots = tile_shapes_from_design(design)
-    if cfg.max_slots:
-        shapes, slots = shapes[: cfg.max_slots], slots[: cfg.max_slots]
-    return design, shapes, slots
 
 
 def _check_image_size(cfg: EnvConfig, cell: Cell) -> None:

@@ -23,7 +23,7 @@ from gymnasium import spaces
 from envs.cell.cell import CAMERAS, Cell
 from envs.env_config import EnvConfig
 from envs.task import Evaluation, MosaicTask
-from planners.ik import IKSolver
+from spatial.rotations import yaw_from_matrix
 
 ROBOT_DIM = 19
 """Length of the ``robot`` vector."""
@@ -94,7 +94,7 @@ class Observer:
         if self.cfg.obs_noise > 0:
             q = q + rng.normal(0.0, self.cfg.obs_noise, q.shape)
         pos, rot = cell.tcp_pose()
-        yaw = IKSolver.yaw_of(rot)
+        yaw = yaw_from_matrix(rot)
         v = np.concatenate(
             [q, cell.qvel, pos, [np.cos(yaw), np.sin(yaw)], [cell.vacuum_on, cell.tile_held]]
         )

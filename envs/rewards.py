@@ -26,15 +26,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from configs import load_config
-from planners.angles import rotate_xy, yaw_error
-
-if TYPE_CHECKING:
-    from envs.task import Evaluation, MosaicTask
+from envs.cell.cell import Cell
+from spatial.angles import rotate_xy, yaw_error
 
 STAGES = ("reach", "seal", "lift", "transport", "align", "release")
 """Stage names; reward terms are ``stage_<name>`` (``info["reward_stage_<name>"]``)."""
@@ -85,6 +83,40 @@ def load_staged_config(
     return load_config(StagedRewardConfig, name_or_path, **overrides)
 
 
+class SlotProgress(Protocol):
+    """What the staged reward reads of an evaluation (`envs.task.Evaluation` is one)."""
+
+    @property
+    def correct(self) -> int:
+        """Slots filled correctly."""
+
+    @property
+    def slots(self) -> int:
+        """Number of slots."""
+
+    @property
+    def slot_filled(self) -> tuple[bool, ...]:
+        """Per slot: filled correctly."""
+
+
+class ShapedTask(Protocol):
+    """What the staged reward reads of its task (`envs.task.MosaicTask` is one).
+
+    Arrays as the task's: ``distractor``, ``tile_class``, ``symmetry`` one row per tile;
+    ``slot_class`` and ``slot_xyyaw`` (x, y [m], yaw [rad]) one row per slot.
+    """
+
+    cell: Cell
+    distractor: np.ndarray
+    tile_class: np.ndarray
+    symmetry: np.ndarray
+    slot_class: np.ndarray
+    slot_xyyaw: np.ndarray
+
+    def wanted_tiles(self, evaluation: SlotProgress) -> np.ndarray:
+        """Real tiles on the input side whose class fills an open slot, shape (n,) bool."""
+
+
 class StagedReward:
     """Potential-based staged reward terms of one task.
 
@@ -93,7 +125,7 @@ class StagedReward:
         config: Weights and scales.
     """
 
-    def __init__(self, task: MosaicTask, config: StagedRewardConfig) -> None:
+    def __init__(self, task: ShapedTask, config: StagedRewardConfig) -> None:
         self.task = task
         self.cfg = config
         cell = task.cell
@@ -101,19 +133,19 @@ class StagedReward:
         self._lifted = False
         self._prev = dict.fromkeys(STAGES, 0.0)
 
-    def reset(self, evaluation: Evaluation) -> None:
+    def reset(self, evaluation: SlotProgress) -> None:
         """Episode start: potentials of the initial state."""
         self._lifted = False
         self._prev = self.potentials(evaluation)
 
-    def terms(self, evaluation: Evaluation) -> dict[str, float]:
+    def terms(self, evaluation: SlotProgress) -> dict[str, float]:
         """``stage_<name>`` reward terms: weight x change of each potential since the last call."""
         now = self.potentials(evaluation)
         out = {f"stage_{s}": float(getattr(self.cfg, s)) * (now[s] - self._prev[s]) for s in STAGES}
         self._prev = now
         return out
 
-    def potentials(self, evaluation: Evaluation) -> dict[str, float]:
+    def potentials(self, evaluation: SlotProgress) -> dict[str, float]:
         """Potential of each stage in [0, 1] now (see the module docstring)."""
         done = float(evaluation.correct) / max(int(evaluation.slots), 1)
         progress = self._progress(evaluation)
@@ -121,7 +153,7 @@ class StagedReward:
         pot["release"] = done
         return pot
 
-    def _progress(self, evaluation: Evaluation) -> dict[str, float]:
+    def _progress(self, evaluation: SlotProgress) -> dict[str, float]:
         """Progress of each stage on the current target tile, in [0, 1]."""
         task, cfg = self.task, self.cfg
         cell = task.cell
@@ -167,4 +199,11 @@ class StagedReward:
         return near * (1 - err / (math.pi / sym))
 
 
-__all__ = ["STAGES", "StagedReward", "StagedRewardConfig", "load_staged_config"]
+__all__ = [
+    "STAGES",
+    "ShapedTask",
+    "SlotProgress",
+    "StagedReward",
+    "StagedRewardConfig",
+    "load_staged_config",
+]

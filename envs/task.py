@@ -21,12 +21,15 @@ from typing import Any
 import numpy as np
 
 from envs.cell.accounting import ON_INPUT, WAITING, TileFlags, state_counts, tile_states
-from envs.cell.cameras import CameraJitter
+from envs.cell.camera_effects import CameraJitter
 from envs.cell.cell import Cell
 from envs.env_config import EnvConfig
+from envs.episode_setup import retry_layout
 from envs.errors import CellError
-from envs.rewards import STAGES, StagedReward, load_staged_config
-from planners.angles import yaw_error
+from envs.rewards import STAGES, SlotProgress, StagedReward, load_staged_config
+from spatial.angles import yaw_error
+from spatial.rotations import yaw_from_quat
+from spatial.units import MM_PER_M
 
 REWARD_TERMS = (
     "correct",
@@ -44,7 +47,6 @@ REWARD_TERMS = (
 """Names of the reward terms (each is reported in ``info`` as ``reward_<name>``)."""
 
 
-MM_PER_M = 1e3
 SEED_BOUND = 2**63
 """Exclusive bound of the layout seeds drawn from the episode generator at each reset."""
 
@@ -228,13 +230,11 @@ class MosaicTask:
             CellError: No layout draw fits.
         """
         cell, cfg = self.cell, self.cfg
-        for attempt in range(cfg.layout_tries):
-            try:
-                cell.reset(seed=np.random.default_rng(rng.integers(SEED_BOUND)))
-                break
-            except CellError:
-                if attempt == cfg.layout_tries - 1:
-                    raise
+
+        def draw(_attempt: int) -> None:
+            cell.reset(seed=np.random.default_rng(rng.integers(SEED_BOUND)))
+
+        retry_layout(draw, cfg.layout_tries, retry_on=CellError)  # `envs.episode_setup`
         self._randomize(rng)
         cell.belt_speed = cfg.belt_speed
         if self._settle_steps:
@@ -294,8 +294,7 @@ class MosaicTask:
         idx = np.flatnonzero(on_mesh)
         if k and len(idx):
             qi = q[idx]
-            w, qz = qi[:, 3], qi[:, 6]
-            yaw = np.arctan2(2 * (w * qz + qi[:, 4] * qi[:, 5]), 1 - 2 * (qi[:, 5] ** 2 + qz**2))
+            yaw = yaw_from_quat(qi[:, 3:])
             dx = qi[:, :1] - self._slot_x
             dy = qi[:, 1:2] - self._slot_y
             dist = np.sqrt(dx * dx + dy * dy)
@@ -407,7 +406,7 @@ class MosaicTask:
             slot_class=tuple(s.shape.name for s in cell.slots),
         )
 
-    def wanted_tiles(self, evaluation: Evaluation) -> np.ndarray:
+    def wanted_tiles(self, evaluation: SlotProgress) -> np.ndarray:
         """Real tiles on the input side whose class fills an open slot, shape (n,) bool."""
         filled = np.asarray(evaluation.slot_filled, bool)
         open_classes = np.unique(self.slot_class[~filled])

@@ -19,9 +19,10 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from envs.cell.cameras import CameraModel
-from envs.cell.config import CellConfig
+from envs.cell.config import CellConfig, FeedMode
 from envs.errors import EnvError
-from planners.angles import wrap_angle
+from spatial.angles import wrap_angle
+from spatial.units import MM_PER_M
 
 if TYPE_CHECKING:
     from envs.cell.cell import Cell
@@ -31,11 +32,8 @@ if TYPE_CHECKING:
 
 RANGE_SLACK = 1e-6
 """Allowed excess over [-1, 1] for float rounding in normalised actions."""
-MM_PER_M = 1e3
-"""Design units (mm) per world metre."""
 
 CameraName = Literal["input_camera", "output_camera"]
-FeedMode = Literal["all", "stream", "batch"]
 
 
 class ActionError(EnvError, ValueError):

@@ -27,11 +27,13 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from planners.angles import wrap_angle
 from planners.config import N_JOINTS, IKConfig, JointLimits
 from planners.errors import InvalidTargetError, PlannerError, UnreachableError
 from planners.robot import ROBOT_XML
 from planners.trajectory import as_joint_vector
+from spatial.angles import wrap_angle
+from spatial.rotations import yaw_from_matrix
+from spatial.units import MM_PER_M
 
 Array = npt.NDArray[np.float64]
 
@@ -213,11 +215,6 @@ class IKSolver:
             for a, b in self._pairs
         )
 
-    @staticmethod
-    def yaw_of(rotation: Array) -> float:
-        """Yaw [rad] of a rotation's x axis in the world xy plane."""
-        return math.atan2(rotation[1, 0], rotation[0, 0])
-
     def pose_error(self, q: Array, position: Array, yaw: float) -> tuple[float, float]:
         """Position error [m] and orientation error [rad] of ``q`` against a tool-down target."""
         self.fk(q)
@@ -239,9 +236,9 @@ class IKSolver:
         q = 0.5 * (self.lower + self.upper)
         q[1] = q[2] = q[3] = 0.0
         q[4] = 0.5 * math.pi
-        y0 = self.yaw_of(self.fk(q)[1])
+        y0 = yaw_from_matrix(self.fk(q)[1])
         q[5] += 0.1
-        y1 = self.yaw_of(self.fk(q)[1])
+        y1 = yaw_from_matrix(self.fk(q)[1])
         return float(np.sign(wrap_angle(y1 - y0)))
 
     def check_reach(self, position: Array) -> None:
@@ -340,7 +337,7 @@ class IKSolver:
         feats = np.empty((len(candidates), 4))
         for k, c in enumerate(candidates):
             p, r = self.fk(self._in_range(c))
-            feats[k] = p[0], p[1], p[2], self.yaw_of(r)
+            feats[k] = p[0], p[1], p[2], yaw_from_matrix(r)
         order = np.argsort(self._feature_distance(feats, feature), kind="stable")
         yield from (candidates[int(i)] for i in order)
         base = up if exact else candidates[int(order[0])]
@@ -441,8 +438,8 @@ class IKSolver:
         raise UnreachableError(
             f"no tool-down solution at position {np.round(pos, 4).tolist()} m, yaw "
             f"{math.degrees(yaw):.2f} deg after {attempts} attempts: best residual "
-            f"{best[0] * 1e3:.2f} mm / {math.degrees(best[1]):.2f} deg, tolerance "
-            f"{cfg.position_tolerance * 1e3:.2f} mm / {cfg.orientation_tolerance_deg:.2f} deg "
+            f"{best[0] * MM_PER_M:.2f} mm / {math.degrees(best[1]):.2f} deg, tolerance "
+            f"{cfg.position_tolerance * MM_PER_M:.2f} mm / {cfg.orientation_tolerance_deg:.2f} deg "
             "(joint limits, obstacles or a flipped tool)"
         )
 

@@ -62,7 +62,7 @@ import numpy.typing as npt
 
 from planners.config import JointLimits, PlannerConfig
 from planners.errors import InvalidTargetError, PlannerError, TrajectoryError, UnreachableError
-from planners.ik import IKSolver, symmetric_yaws, wrap_angle
+from planners.ik import IKSolver, symmetric_yaws
 from planners.rest_to_rest import rest_to_rest_duration
 from planners.trajectory import (
     JointState,
@@ -80,6 +80,8 @@ from planners.trajectory import (
     unwrap_values,
     window,
 )
+from spatial.angles import wrap_angle
+from spatial.rotations import yaw_from_matrix
 
 Array = npt.NDArray[np.float64]
 
@@ -763,7 +765,7 @@ class PickPlacePlanner:
         c = self.config.cycle
         moving = bool(np.any(belt != 0.0))
         # Tool yaw at the pick: keep the current one (the round pad may pick at any yaw).
-        pick_yaw = IKSolver.yaw_of(self.ik.fk(start.q)[1])
+        pick_yaw = yaw_from_matrix(self.ik.fk(start.q)[1])
         # First guess of the contact time: a direct time-optimal move onto the tile.
         t_contact = 0.0
         if moving:

@@ -1,9 +1,10 @@
 """Plane geometry of qshape: angles, rotations, polygon measures and simplicity tests.
 
-One home per fact: angle wrapping (`wrap_angle`, `wrap_angles`), 2D rotation (`rotate`,
-`rotation_matrix`), signed area and area centroid (`signed_area`, `polygon_centroid`,
-`area_centroid_perimeter`) and the yaw error modulo a rotational symmetry (`yaw_error`,
-`yaw_errors`). Everything else in the project that needs one of these imports it from here.
+One home per fact: 2D rotation (`rotate`, `rotation_matrix`), signed area and area centroid
+(`signed_area`, `polygon_centroid`, `area_centroid_perimeter`). Angle wrapping and the yaw error
+modulo a rotational symmetry live in `spatial.angles` (shared with planners and envs); qshape's
+names for them here (`wrap_angle`, `wrap_angles`: qshape's (-pi, pi] convention; `yaw_error`,
+`yaw_errors`) call it.
 
 Points are arrays of shape (n, 2), in any length unit, in a right-handed frame unless stated.
 Areas and centroids of a polygon far from the origin are computed relative to a reference point
@@ -19,6 +20,8 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike, NDArray
 
+from spatial import angles
+
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
@@ -27,20 +30,18 @@ MAX_COORDINATE = 1e100
 
 The documented, tighter cap is ``Limits.max_coordinate`` (``configs/qshape.yaml``)."""
 
-TWO_PI = 2.0 * math.pi
+TWO_PI = angles.TWO_PI
 
 
 # ------------------------------------------------------------------------------ angles
 def wrap_angle(angle: float) -> float:
-    """Angle wrapped to (-pi, pi], in [rad]."""
-    w = math.remainder(float(angle), TWO_PI)
-    return math.pi if w == -math.pi else w
+    """Angle wrapped to (-pi, pi], in [rad] (`spatial.angles.wrap_angle` with ``include_pi``)."""
+    return float(angles.wrap_angle(float(angle), include_pi=True))
 
 
-def wrap_angles(angles: ArrayLike) -> FloatArray:
+def wrap_angles(values: ArrayLike) -> FloatArray:
     """`wrap_angle` element-wise: any shape, [rad] -> (-pi, pi] [rad]."""
-    w = np.remainder(np.asarray(angles, dtype=np.float64) + math.pi, TWO_PI) - math.pi
-    return np.asarray(np.where(w <= -math.pi, math.pi, w), dtype=np.float64)
+    return angles.wrap_angles(values, include_pi=True)
 
 
 def yaw_error(yaw: float, target: float, symmetry: int) -> float:
@@ -51,16 +52,17 @@ def yaw_error(yaw: float, target: float, symmetry: int) -> float:
         target: Wanted yaw [rad].
         symmetry: Rotational symmetry order (1: none, 4: a square, 0: continuous, error 0).
     """
-    return float(yaw_errors(yaw, target, symmetry))
+    return float(angles.yaw_error(yaw, target, symmetry))
 
 
 def yaw_errors(yaw: ArrayLike, target: ArrayLike, symmetry: ArrayLike) -> FloatArray:
     """`yaw_error` element-wise (broadcasting), in [rad]."""
-    order = np.asarray(symmetry, dtype=np.int64)
-    period = TWO_PI / np.maximum(order, 1)
-    diff = np.asarray(yaw, dtype=np.float64) - np.asarray(target, dtype=np.float64)
-    err = np.abs(np.remainder(diff + 0.5 * period, period) - 0.5 * period)
-    return np.asarray(np.where(order == 0, 0.0, err), dtype=np.float64)
+    err = angles.yaw_error(
+        np.asarray(yaw, dtype=np.float64),
+        np.asarray(target, dtype=np.float64),
+        np.asarray(symmetry, dtype=np.int64),
+    )
+    return np.asarray(err, dtype=np.float64)
 
 
 def rotation_matrix(angle: float) -> FloatArray:

@@ -15,48 +15,30 @@ Typical use::
 
 from __future__ import annotations
 
-import functools
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Sequence
 
 import mujoco
 import numpy as np
 
 from envs.cell.belts import LostTracker, input_speed, set_input_speed
-from envs.cell.cameras import BeltBlur, CameraModel, CameraRig, camera_model
-from envs.cell.config import CameraConfig, CellConfig, load_cell_config
+from envs.cell.cameras import CameraModel
+from envs.cell.config import CellConfig, load_cell_config
 from envs.cell.feed import TileFeed
 from envs.cell.scene import (
     WAKE_FORCE,
     build_scene,
     cell_geometry,
     park_positions,
-    yaw_quat,
 )
+from envs.cell.sleep import end_countdowns, start_asleep
 from envs.cell.suction import Suction, SuctionEvent
 from envs.cell.tiles.shapes import basic_shapes
-from envs.cell.tiles.tile import PhysicalTile, SlotSpec, TileShape, make_tile_pool
+from envs.cell.tiles.tile import PhysicalTile, SlotSpec, TilePoses, TileShape, make_tile_pool
 from envs.cell.tiles.variants import TileVariants
-from envs.errors import CellError, LayoutError
+from envs.cell.views import CAMERAS, CellViews
+from envs.errors import CellError
 from planners.robot import joint_ranges, joint_speed_limits
-
-CAMERAS = ("input_camera", "output_camera")
-"""Names of the observation cameras."""
-
-
-@dataclass(frozen=True, eq=False)
-class TilePoses:
-    """Tile poses at one instant (copies).
-
-    Attributes:
-        pos: Positions of the tiles' area centroids at mid-thickness, shape (n, 3) [m].
-        quat: Orientations (w, x, y, z), shape (n, 4).
-        yaw: Rotation about world z, shape (n,) [rad] (meaningful for tiles lying flat).
-    """
-
-    pos: np.ndarray
-    quat: np.ndarray
-    yaw: np.ndarray
+from spatial.rotations import quat_from_yaw, yaw_from_quat
 
 
 class Cell:
@@ -103,12 +85,9 @@ class Cell:
         self._tile_trees = self.model.body_treeid[self.ids.tile_body]
         """Kinematic tree of each tile, shape (n,)."""
         self.lost_tracker = LostTracker(self.cfg, n)
-        self.cameras = CameraRig(  # renderers open lazily; lenses from the camera configs
-            self.model,
-            self.cfg.render,
-            {CAMERAS[0]: self.cfg.input_camera, CAMERAS[1]: self.cfg.output_camera},
-        )
-        self._blurs: dict[tuple[object, ...], BeltBlur] = {}
+        self.views = CellViews(self.model, self.cfg, self.ids, self.geometry)
+        """Camera models and pictures (`envs.cell.views`)."""
+        self.cameras = self.views.rig
         self.on_stage = np.zeros(n, bool)
         self._wake = np.zeros(n, bool)
         self.feed = TileFeed(self)
@@ -127,37 +106,8 @@ class Cell:
             )
         self._closed = False
         self.layout_seed = seed if isinstance(seed, int) else None
-        """The seed the cell was built with (see `first_fitting`), when an int."""
+        """The seed the cell was built with (see `envs.episode_setup.build_cell`), when an int."""
         self.reset()
-
-    @classmethod
-    def first_fitting(
-        cls,
-        config: CellConfig | None,
-        shapes: Sequence[TileShape] | None,
-        slots: Sequence[SlotSpec] = (),
-        seed: int = 0,
-        tries: int = 20,
-    ) -> Cell:
-        """The cell built with the first seed from ``seed`` on whose layout fits the belt.
-
-        Random layouts of a crowded tile area fail now and then (`LayoutError`); other
-        errors are raised at once. The seed used is ``cell.layout_seed``.
-
-        Raises:
-            LayoutError: No seed in ``[seed, seed + tries)`` fits.
-            CellError: Any other bad input.
-        """
-        for k in range(tries):
-            try:
-                cell = cls(config, shapes, slots, seed=seed + k)
-            except LayoutError:
-                if k == tries - 1:
-                    raise
-                continue
-            cell.layout_seed = seed + k
-            return cell
-        raise LayoutError(f"tries must be >= 1, got {tries}")
 
     # ----------------------------------------------------------------- set-up
     def _select(self, variant: np.ndarray, tiles: Sequence[PhysicalTile]) -> None:
@@ -213,28 +163,12 @@ class Cell:
     def _start_asleep(self) -> None:
         """Start the tiles laid out at rest asleep (parked ones, and on a still belt all).
 
-        A tile laid at its contact height is at rest, but MuJoCo keeps every tree awake for
-        its first sleep countdown, and the tiles' contacts are most of an episode's physics
-        cost. MuJoCo's supported way to start trees asleep is the ``init`` sleep policy,
-        applied by `mj_resetData` at the model's ``qpos0``: both are set for this call only
-        (the layout becomes ``qpos0``), then restored. Tiles on a moving belt stay awake (they
-        must notice the belt's surface speed). A sleeping tile whose pose is written later
-        (picked, fed, parked) is woken by MuJoCo's own check of its positions.
+        Tiles on a moving belt stay awake: they must notice the belt's surface speed.
         """
-        m, d = self.model, self.data
         asleep = ~self.on_stage if self.belt_speed != 0.0 else np.ones(len(self.on_stage), bool)
         if not asleep.any():
             return
-        trees = self._tile_trees[asleep]
-        qpos0, policy, ctrl = m.qpos0.copy(), m.tree_sleep_policy.copy(), d.ctrl.copy()
-        m.qpos0[:] = d.qpos
-        m.tree_sleep_policy[trees] = mujoco.mjtSleepPolicy.mjSLEEP_INIT
-        try:
-            mujoco.mj_resetData(m, d)
-        finally:
-            m.qpos0[:] = qpos0
-            m.tree_sleep_policy[:] = policy
-        d.ctrl[:] = ctrl  # the suction weld is off in qpos0's reset too (built inactive)
+        start_asleep(self.model, self.data, self._tile_trees[asleep])
         self._wake[asleep] = False
 
     def sleep_still_tiles(self) -> None:
@@ -245,16 +179,8 @@ class Cell:
         checks the tolerance again, over each tile's whole contact island, at that step. For
         kinematic execution, whose released tiles are set down within one step.
         """
-        if not self.cfg.physics.sleep:
-            return
-        d, trees = self.data, self._tile_trees
-        counting = np.flatnonzero(d.tree_asleep[trees] < -1)
-        if not len(counting):
-            return
-        dof = self.ids.tile_dof_index[counting]
-        speed = np.abs(d.qvel[dof]) * self.model.dof_length[dof]
-        still = counting[speed.max(axis=1) < self.model.opt.sleep_tolerance]
-        d.tree_asleep[trees[still]] = -1
+        if self.cfg.physics.sleep:
+            end_countdowns(self.model, self.data, self._tile_trees, self.ids.tile_dof_index)
 
     def place_tiles(self, idx: np.ndarray, poses: np.ndarray) -> None:
         """Put tiles at (x, y, yaw) poses relative to the tile area's centre, at rest.
@@ -269,7 +195,7 @@ class Cell:
         self.data.qpos[qadr[:, 0]] = c[0] + poses[:, 0]
         self.data.qpos[qadr[:, 1]] = c[1] + poses[:, 1]
         self.data.qpos[qadr[:, 2]] = z
-        self.data.qpos[qadr[:, 3:]] = yaw_quat(poses[:, 2])
+        self.data.qpos[qadr[:, 3:]] = quat_from_yaw(poses[:, 2])
         self.data.qvel[self.ids.tile_dof_index[idx]] = 0.0
         self.on_stage[idx] = True
         self._wake[idx] = True
@@ -283,7 +209,12 @@ class Cell:
         self.on_stage[idx] = False
 
     def input_side(self) -> np.ndarray:
-        """Tiles on the input belt (fed, not lost, not on the pad), shape (n,) bool."""
+        """Tiles on the input belt (fed, not lost, not on the pad), shape (n,) bool.
+
+        On the belt: the centroid within the belt's half width plus the tile's radius of the
+        belt's centre line. The feed and the tile accounting use it; `input_half` is the
+        coarser test of the decision-level actions and indices.
+        """
         pos = self.data.xpos[self.ids.tile_body]
         half_w = self.cfg.input_belt.width / 2 + self.radii
         side = self.on_stage & ~self.lost_tracker.lost
@@ -291,6 +222,20 @@ class Cell:
         if self.suction.held >= 0:
             side[self.suction.held] = False
         return side
+
+    def input_half(self) -> np.ndarray:
+        """Tiles on the input belt's side of the cell, shape (n,) bool.
+
+        Fed, not lost, not on the pad, with the centroid beyond the midline between the belts
+        (`CellGeometry.midline_y`, strictly). Unlike `input_side` it also holds a tile lying
+        between the belts or beyond the belt's outer edge; the decision-level actions
+        (`envs.actions`) and tile indices (`envs.indexing`) use it.
+        """
+        pos = self.data.qpos[self.ids.tile_qpos_index[:, 1]]
+        half = self.on_stage & ~self.lost_tracker.lost & (pos > self.geometry.midline_y)
+        if self.suction.held >= 0:
+            half[self.suction.held] = False
+        return half
 
     # ------------------------------------------------------------- stepping
     def step(self, n: int = 1) -> list[SuctionEvent]:
@@ -360,17 +305,9 @@ class Cell:
         d.qvel[ids.arm_dof] = 0.0
         d.ctrl[ids.pos_actuators] = q
         d.ctrl[ids.vel_actuators] = 0.0
-        held = self.suction.held
-        if held >= 0:
+        if self.suction.held >= 0:
             mujoco.mj_kinematics(m, d)
-            b1 = ids.pad_body
-            r1 = d.xmat[b1].reshape(3, 3)
-            qa = ids.tile_qpos[held]
-            d.qpos[qa : qa + 3] = d.xpos[b1] + r1 @ m.eq_data[ids.weld, 3:6]
-            quat = np.zeros(4)
-            mujoco.mju_mulQuat(quat, d.xquat[b1], m.eq_data[ids.weld, 6:10])
-            d.qpos[qa + 3 : qa + 7] = quat
-            d.qvel[ids.tile_dof_index[held]] = 0.0
+            self.suction.carry(d)
         if forward:
             mujoco.mj_forward(m, d)
         else:
@@ -427,11 +364,7 @@ class Cell:
         """Poses of all tiles (parked ones included; see `on_stage`)."""
         q = self.data.qpos[self.ids.tile_qpos_index]
         quat = q[:, 3:].copy()
-        yaw = np.arctan2(
-            2 * (quat[:, 0] * quat[:, 3] + quat[:, 1] * quat[:, 2]),
-            1 - 2 * (quat[:, 2] ** 2 + quat[:, 3] ** 2),
-        )
-        return TilePoses(q[:, :3].copy(), quat, yaw)
+        return TilePoses(q[:, :3].copy(), quat, yaw_from_quat(quat))
 
     @property
     def retired(self) -> np.ndarray:
@@ -513,51 +446,7 @@ class Cell:
         Raises:
             CellError: Unknown camera.
         """
-        cam_cfg = self._camera_cfg(name)
-        cid = self.ids.input_camera if name == CAMERAS[0] else self.ids.output_camera
-        return camera_model(
-            self.model,
-            self.data,
-            cid,
-            width or cam_cfg.width,
-            height or cam_cfg.height,
-            distortion=cam_cfg.distortion,
-        )
-
-    def _belt_blur(self, height: int, width: int) -> Callable[[np.ndarray], np.ndarray] | None:
-        """The input camera's motion blur at the belt's current speed (None: a still picture)."""
-        exposure = self.cfg.input_camera.exposure_time
-        if exposure <= 0.0:
-            return None
-        speed = input_speed(self.model, self.ids)
-        if speed <= 0.0:
-            return None
-        cid = self.ids.input_camera
-        key = (height, width, *self.model.cam_pos[cid], *self.model.cam_quat[cid])
-        blur = self._blurs.get(key)
-        if blur is None:
-            g, belt = self.geometry, self.cfg.input_belt
-            x0, x1 = g.input_belt_end - belt.length, g.input_belt_end
-            y0, y1 = g.input_y - belt.width / 2, g.input_y + belt.width / 2
-            corners = np.array(
-                [
-                    [x0, y0, g.belt_top],
-                    [x1, y0, g.belt_top],
-                    [x1, y1, g.belt_top],
-                    [x0, y1, g.belt_top],
-                ]
-            )
-            pinhole = camera_model(self.model, self.data, cid, width, height)
-            blur = BeltBlur(pinhole, corners, np.array([1.0, 0.0, 0.0]))
-            self._blurs = {key: blur}  # one pose at a time (a jittered camera moves per reset)
-        return functools.partial(blur.apply, speed=speed, exposure_time=exposure)
-
-    def _camera_cfg(self, name: str) -> CameraConfig:
-        if name == CAMERAS[0]:
-            return self.cfg.input_camera
-        if name == CAMERAS[1]:
-            return self.cfg.output_camera
-        raise CellError(f"unknown camera {name!r}; allowed: {list(CAMERAS)}")
+        return self.views.camera_model(self.data, name, height, width)
 
     def render(
         self,
@@ -580,20 +469,12 @@ class Cell:
             RGB uint8 (height, width, 3) or depth float32 (height, width).
         """
         self._check_open()
-        if name == "overview":
-            h, w = self.cfg.render.overview_size
-            return self.cameras.render(
-                self.data, "overview", height or h, width or w, depth=depth, out=out
-            )
-        cam_cfg = self._camera_cfg(name)
-        h, w = height or cam_cfg.height, width or cam_cfg.width
-        blur = self._belt_blur(h, w) if name == CAMERAS[0] and not depth else None
-        return self.cameras.render(self.data, name, h, w, depth=depth, out=out, effect=blur)
+        return self.views.render(self.data, name, height, width, depth=depth, out=out)
 
     def close(self) -> None:
         """Free renderers; the cell cannot be stepped afterwards (safe to call twice)."""
         if not self._closed:
-            self.cameras.close()
+            self.views.close()
             self._closed = True
 
     def _check_open(self) -> None:

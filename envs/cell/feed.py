@@ -14,21 +14,49 @@ time, the retired tiles) and decides; the `Cell` does the physics (`Cell.place_t
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import mujoco
 import numpy as np
 
+from envs.cell.config import CellConfig
 from envs.cell.layout import Footprint, layout_capacity, sample_layout
+from envs.cell.scene import CellGeometry, SceneIds
+from envs.cell.tiles.tile import PhysicalTile
 from envs.errors import CellError
-
-if TYPE_CHECKING:
-    from envs.cell.cell import Cell
 
 STREAM_LOOKAHEAD_RADII = 3
 """Tiles within this many radii (plus `STREAM_LOOKAHEAD`) of the upstream edge block a spawn."""
 STREAM_LOOKAHEAD = 0.05
 """Extra distance [m] from the upstream edge within which tiles block a spawn."""
+
+
+class FedCell(Protocol):
+    """What the feed reads and calls of its cell (`envs.cell.cell.Cell` is one).
+
+    Attributes are the cell's (see `Cell`); arrays have one row per tile.
+    """
+
+    cfg: CellConfig
+    tiles: tuple[PhysicalTile, ...]
+    tile_pool: tuple[tuple[PhysicalTile, ...], ...]
+    variant: np.ndarray
+    radii: np.ndarray
+    on_stage: np.ndarray
+    is_distractor: np.ndarray
+    geometry: CellGeometry
+    ids: SceneIds
+    model: mujoco.MjModel
+    data: mujoco.MjData
+
+    def place_tiles(self, idx: np.ndarray, poses: np.ndarray) -> None:
+        """Put tiles at (x, y, yaw) poses relative to the tile area's centre, at rest."""
+
+    def park_tiles(self, idx: np.ndarray) -> None:
+        """Tiles ``idx`` to their parking spots, off the stage."""
+
+    def input_side(self) -> np.ndarray:
+        """Tiles on the input belt, shape (n,) bool."""
 
 
 class TileFeed:
@@ -38,7 +66,7 @@ class TileFeed:
         cell: The cell whose tiles are fed.
     """
 
-    def __init__(self, cell: Cell) -> None:
+    def __init__(self, cell: FedCell) -> None:
         self.cell = cell
         self.cfg = cell.cfg.tiles
         n = len(cell.tiles)
@@ -171,4 +199,4 @@ class TileFeed:
         mujoco.mj_forward(cell.model, cell.data)
 
 
-__all__ = ["TileFeed"]
+__all__ = ["FedCell", "TileFeed"]

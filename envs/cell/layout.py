@@ -25,6 +25,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from envs.errors import CellError, LayoutError
+from spatial.units import MM_PER_M
 
 OUTLINE_FILL = 0.5
 """Largest fraction of a tile area random placement of outlines is asked to fill."""
@@ -173,25 +174,7 @@ def sample_layout(
         extent = np.array([f.half_extent for f in shapes])
     else:
         extent = radii
-    if np.any(extent + gap / 2 > half.min()):
-        k = int(np.argmax(extent))
-        raise CellError(
-            f"tile {k} (size {2 * extent[k] * 1000:.1f} mm) does not fit the tile area "
-            f"{area_size[0] * 1000:.0f} x {area_size[1] * 1000:.0f} mm"
-        )
-    if shapes is not None:
-        need = float(sum(f.area for f in shapes))
-        fill = OUTLINE_FILL
-    else:
-        need = float(np.sum(np.pi * (radii + gap / 2) ** 2))
-        fill = CIRCLE_FILL
-    have = float(area_size[0] * area_size[1])
-    if need > fill * have:
-        raise CellError(
-            f"{len(radii)} tiles need about {need * 1e4:.0f} cm^2 of belt but the tile area is "
-            f"{have * 1e4:.0f} cm^2 (random placement fills at most ~{fill:.0%}); use fewer "
-            "tiles, a larger input_belt.tile_area, or feed='stream' or 'batch'"
-        )
+    _check_fits(radii, area_size, gap, shapes, extent)
 
     def once() -> np.ndarray:
         if shapes is None:
@@ -208,10 +191,45 @@ def sample_layout(
     return once()
 
 
+def _check_fits(
+    radii: np.ndarray,
+    area_size: tuple[float, ...],
+    gap: float,
+    shapes: Sequence[Footprint] | None,
+    extent: np.ndarray,
+) -> None:
+    """Raise `CellError` when a tile is too large or the tiles too many for the area.
+
+    Deterministic (no draw can pass): a tile's half extent plus half the gap beyond the
+    area's half width, or more tile area than random placement fills (`OUTLINE_FILL`,
+    `CIRCLE_FILL`).
+    """
+    half = np.asarray(area_size, dtype=float) / 2
+    if np.any(extent + gap / 2 > half.min()):
+        k = int(np.argmax(extent))
+        raise CellError(
+            f"tile {k} (size {2 * extent[k] * MM_PER_M:.1f} mm) does not fit the tile area "
+            f"{area_size[0] * MM_PER_M:.0f} x {area_size[1] * MM_PER_M:.0f} mm"
+        )
+    if shapes is not None:
+        need = float(sum(f.area for f in shapes))
+        fill = OUTLINE_FILL
+    else:
+        need = float(np.sum(np.pi * (radii + gap / 2) ** 2))
+        fill = CIRCLE_FILL
+    have = float(area_size[0] * area_size[1])
+    if need > fill * have:
+        raise CellError(
+            f"{len(radii)} tiles need about {need * 1e4:.0f} cm^2 of belt but the tile area is "
+            f"{have * 1e4:.0f} cm^2 (random placement fills at most ~{fill:.0%}); use fewer "
+            "tiles, a larger input_belt.tile_area, or feed='stream' or 'batch'"
+        )
+
+
 def _jammed(n: int, half: np.ndarray, attempts: int) -> LayoutError:
     return LayoutError(
         f"could not place {n} tiles without overlap in the tile area "
-        f"{2 * half[0] * 1000:.0f} x {2 * half[1] * 1000:.0f} mm after {attempts} "
+        f"{2 * half[0] * MM_PER_M:.0f} x {2 * half[1] * MM_PER_M:.0f} mm after {attempts} "
         "tries per tile; use fewer tiles, a larger area or feed='stream'"
     )
 

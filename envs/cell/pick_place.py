@@ -29,6 +29,7 @@ from planners.executor import TimedEvent, TrajectoryExecutor
 from planners.ik import IKSolver
 from planners.pick_place import PickPlacePlanner
 from planners.trajectory import JointState, chain
+from spatial.rotations import yaw_from_matrix
 
 AT_TARGET = 1e-6
 """Joint distance [rad] below which `PickPlaceExecutor.move_to` has nothing to move."""
@@ -153,7 +154,7 @@ class PickPlaceExecutor:
     def _kinematic(self, pick: np.ndarray, place: np.ndarray, rotation: float) -> ActionResult:
         cell, c = self.cell, self.pcfg.cycle
         q0 = cell.qpos
-        tool_yaw = IKSolver.yaw_of(cell.tcp_pose()[1])
+        tool_yaw = yaw_from_matrix(cell.tcp_pose()[1])
         q_pick = self.ik.solve(pick - [0.0, 0.0, c.pick_press], tool_yaw, seed=q0).q
         place_yaw = tool_yaw + rotation
         # Set down, not dropped: the tile's bottom on the surface (it hangs pick_press lower).
@@ -211,7 +212,7 @@ class PickPlaceExecutor:
         if np.all(up >= np.asarray(lo)) and np.all(up <= np.asarray(hi)):
             return up
         pos, rot = self.ik.fk(q)
-        return self.ik.solve(pos + twist[:3], IKSolver.yaw_of(rot), seed=q).q
+        return self.ik.solve(pos + twist[:3], yaw_from_matrix(rot), seed=q).q
 
     def _put_arm(self, q: np.ndarray) -> None:
         """Arm joints at ``q`` [rad] at rest, servo holding it, nothing held.

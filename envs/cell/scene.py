@@ -1,11 +1,9 @@
 """Programmatic composition of the cell with MjSpec: robot + belts + bin + mesh + cameras + tiles.
 
-The robot comes from ``assets/irb140/irb140.xml``; everything else is added in code. Names are
-resolved to ids once, into a frozen `SceneIds`.
-
-World layout (see `LayoutConfig`): robot base at the origin; the input belt's centre line at
-y = +belt_separation/2 and the output belt's at y = -belt_separation/2, both running along +x;
-the working areas are centred at x = work_x.
+The robot comes from ``assets/irb140/irb140.xml``; the fixed parts are added by
+`envs.cell.fixtures` (where they are: `envs.cell.geometry`; contact classes:
+`envs.cell.contacts`), the tiles here. Names are resolved to ids once, into a frozen
+`SceneIds`. `CellGeometry`, `cell_geometry` and `extrusion` are re-exported from their modules.
 """
 
 from __future__ import annotations
@@ -16,23 +14,23 @@ from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
-import shapely
 from shapely.geometry import Polygon
 
 from envs.cell.config import CellConfig
+from envs.cell.contacts import (
+    CONTACT_SOLREF,
+    PIECE_CONAFFINITY,
+    SUPPORT_CONAFFINITY,
+    SUPPORT_CONTYPE,
+    TILE_CONAFFINITY,
+    TILE_CONTYPE,
+    WELD_SOLREF,
+)
+from envs.cell.fixtures import add_fixtures, extrusion
+from envs.cell.geometry import CellGeometry, cell_geometry
 from envs.cell.tiles.tile import PhysicalTile, SlotSpec
 from envs.errors import CellError
 
-# Contact bit masks: world/belts 1, tiles 2, arm 4 (the arm's classes set contype 4,
-# conaffinity 1 in irb140.xml), support hulls 8. Tiles touch everything; the arm touches world
-# and tiles. A tile made of several convex pieces touches the world (belts, mesh sheet, floor,
-# bin) with one convex hull instead (`SUPPORT_CONTYPE`), its pieces only tiles and the arm.
-WORLD_CONTYPE, WORLD_CONAFFINITY = 1, 1
-TILE_CONTYPE, TILE_CONAFFINITY = 2, 7
-PIECE_CONAFFINITY = TILE_CONAFFINITY & ~WORLD_CONTYPE
-"""Pieces of a tile with a support hull: tiles and arm, not the world."""
-SUPPORT_CONTYPE, SUPPORT_CONAFFINITY = 8, WORLD_CONTYPE
-"""Support hull of a tile of several pieces: the world only."""
 PARK_SPACING = 0.08
 """Grid spacing of parked (not yet fed) tiles on the floor far from the cell [m]."""
 PARK_ORIGIN = np.array([-6.0, -1.0])
@@ -40,11 +38,6 @@ PARK_ORIGIN = np.array([-6.0, -1.0])
 WAKE_FORCE = 1e-12
 """Negligible force [N] applied for one physics step to wake sleeping tiles (any applied force
 wakes a sleeping tree in MuJoCo; changing qpos or surfacevel does not)."""
-CONTACT_SOLREF = (0.004, 1.0)
-"""Contact time constant [s] and damping ratio of tiles and belts: stiff (2x the default
-timestep) so a tile crushed by the arm sinks at most a few mm into a belt (0.02 s: ~19 mm)."""
-WELD_SOLREF = (0.004, 1.0)
-"""Time constant [s] and damping ratio of the suction weld (stiff: 2x the default timestep)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -131,302 +124,12 @@ def _frozen(a: np.ndarray) -> np.ndarray:
     return a
 
 
-@dataclass(frozen=True)
-class CellGeometry:
-    """Derived positions of the cell's parts [m] (all in the world frame).
-
-    Attributes:
-        input_centre: Centre of the input tile area on the belt top, shape (3,).
-        output_centre: Centre of the mesh sheet's top, shape (3,).
-        input_belt_end: x of the input belt's downstream end.
-        input_belt_start: x of the input belt's upstream end.
-        input_y: y of the input belt's centre line.
-        belt_top: z of both belts' top faces.
-        mesh_top: z of the mesh sheet's top face.
-    """
-
-    input_centre: np.ndarray
-    output_centre: np.ndarray
-    input_belt_end: float
-    input_belt_start: float
-    input_y: float
-    belt_top: float
-    mesh_top: float
-
-
-def cell_geometry(cfg: CellConfig) -> CellGeometry:
-    """Positions of the belts and working areas from the configuration."""
-    lay = cfg.layout
-    top = lay.belt_top_z
-    y_in, y_out = lay.belt_separation / 2, -lay.belt_separation / 2
-    end = lay.work_x + cfg.input_belt.end_offset
-    mesh_top = top + cfg.output_belt.mesh_thickness
-    return CellGeometry(
-        input_centre=np.array([lay.work_x, y_in, top]),
-        output_centre=np.array([lay.work_x, y_out, mesh_top]),
-        input_belt_end=end,
-        input_belt_start=end - cfg.input_belt.length,
-        input_y=y_in,
-        belt_top=top,
-        mesh_top=mesh_top,
-    )
-
-
-def yaw_quat(yaw: np.ndarray | float) -> np.ndarray:
-    """Quaternions (w, x, y, z) of rotations about z, shape (..., 4)."""
-    yaw = np.asarray(yaw, dtype=float)
-    q = np.zeros((*yaw.shape, 4))
-    q[..., 0] = np.cos(yaw / 2)
-    q[..., 3] = np.sin(yaw / 2)
-    return q
-
-
 def park_positions(n: int, thickness: float) -> np.ndarray:
     """Parking positions (on the floor, far away) of tiles not yet fed, shape (n, 3) [m]."""
     cols = max(1, int(np.ceil(np.sqrt(n))))
     k = np.arange(n)
     xy = PARK_ORIGIN + PARK_SPACING * np.stack([k % cols, k // cols], axis=1)
     return np.column_stack([xy, np.full(n, thickness / 2 + 1e-4)])
-
-
-def extrusion(
-    outline: np.ndarray, holes: Sequence[np.ndarray], z0: float, z1: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Closed triangle mesh of a polygon (with holes) extruded from z0 to z1.
-
-    Returns:
-        ``(vertices, faces)``: shapes (v, 3) [m] and (f, 3) vertex indices, outward normals.
-    """
-    rings = [np.asarray(outline, float), *[np.asarray(h, float) for h in holes]]
-    pts2 = np.vstack(rings)
-    n = len(pts2)
-    verts = np.vstack(
-        [np.column_stack([pts2, np.full(n, z0)]), np.column_stack([pts2, np.full(n, z1)])]
-    )
-    index = {(round(float(x), 12), round(float(y), 12)): i for i, (x, y) in enumerate(pts2)}
-    faces = []
-    for tri in shapely.constrained_delaunay_triangles(Polygon(rings[0], rings[1:])).geoms:
-        ids = [
-            index[(round(float(x), 12), round(float(y), 12))] for x, y in tri.exterior.coords[:3]
-        ]
-        a, b, c = pts2[ids]
-        if (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) < 0:
-            ids = ids[::-1]
-        faces.append([ids[0] + n, ids[1] + n, ids[2] + n])  # top, counter-clockwise
-        faces.append([ids[0], ids[2], ids[1]])  # bottom
-    start = 0
-    for ring in rings:
-        m = len(ring)
-        for k in range(m):
-            i, j = start + k, start + (k + 1) % m
-            faces.append([i, j, j + n])
-            faces.append([i, j + n, i + n])
-        start += m
-    return verts, np.asarray(faces, dtype=int)
-
-
-def _box(
-    body: mujoco.MjsBody,
-    name: str,
-    pos: Sequence[float],
-    size: Sequence[float],
-    rgba: Sequence[float],
-    *,
-    collide: bool = True,
-) -> mujoco.MjsGeom:
-    g = body.add_geom()
-    g.name = name
-    g.type = mujoco.mjtGeom.mjGEOM_BOX
-    g.pos = pos
-    g.size = size
-    g.rgba = rgba
-    if collide:
-        g.contype, g.conaffinity = WORLD_CONTYPE, WORLD_CONAFFINITY
-        g.solref = list(CONTACT_SOLREF)
-    else:
-        g.contype, g.conaffinity = 0, 0
-    return g
-
-
-def _add_environment(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotSpec]) -> None:
-    """Floor, light, belts, bin, mesh sheet with slot marks, cameras."""
-    geo = cell_geometry(cfg)
-    wb = spec.worldbody
-    ib, ob, look = cfg.input_belt, cfg.output_belt, cfg.scenery
-    top = geo.belt_top
-    friction = [cfg.tiles.friction, 0.005, 0.0001]
-
-    spec.add_texture(
-        name="floor_tex",
-        type=mujoco.mjtTexture.mjTEXTURE_2D,
-        builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
-        rgb1=list(look.floor_checker[0]),
-        rgb2=list(look.floor_checker[1]),
-        width=look.floor_texture_px,
-        height=look.floor_texture_px,
-    )
-    repeat = look.floor_texture_repeat
-    spec.add_material(
-        name="floor_mat", textures=["", "floor_tex"], texrepeat=[repeat, repeat], texuniform=True
-    )
-    # Rubber belts are matte: MuJoCo's default material (specular 0.5) puts the headlight's
-    # highlight in the middle of each camera image, which the perception's illumination model
-    # (fitted to the belt) would read as brighter light there and so over-correct the tiles
-    # near the image corners.
-    spec.add_material(name="belt_mat", rgba=list(look.belt_rgba), specular=0.0, shininess=0.0)
-    half_floor = look.floor_half_size
-    floor = wb.add_geom(
-        name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[half_floor, half_floor, 0.05]
-    )
-    floor.material = "floor_mat"
-    floor.contype, floor.conaffinity = WORLD_CONTYPE, WORLD_CONAFFINITY
-    floor.solref = list(CONTACT_SOLREF)
-    wb.add_light(
-        name="top_light",
-        pos=list(look.light_pos),
-        dir=[0, 0, -1],
-        type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
-        castshadow=False,
-        diffuse=[look.light_diffuse * look.light_scale] * 3,
-        specular=[look.light_specular] * 3,
-    )
-
-    # Input belt (carries tiles through surfacevel) with its frame and the bin at the end.
-    cx = geo.input_belt_end - ib.length / 2
-    belt = _box(
-        wb,
-        "input_belt",
-        [cx, geo.input_y, top - ib.thickness / 2],
-        [ib.length / 2, ib.width / 2, ib.thickness / 2],
-        look.belt_rgba,
-    )
-    belt.material = "belt_mat"
-    belt.friction = friction
-    belt.surfacevel = [ib.speed, 0.0, 0.0, 0.0, 0.0, 0.0]
-    for side, sign in (("left", 1), ("right", -1)):
-        _box(
-            wb,
-            f"input_rail_{side}",
-            [cx, geo.input_y + sign * (ib.width / 2 + look.rail_gap), top],
-            [ib.length / 2, look.rail_half_width, look.rail_height],
-            look.frame_rgba,
-        )
-    leg = top - ib.thickness
-    inset_x, inset_y = look.stand_inset
-    _box(
-        wb,
-        "input_stand",
-        [cx, geo.input_y, leg / 2],
-        [ib.length / 2 - inset_x, ib.width / 2 - inset_y, leg / 2],
-        look.frame_rgba,
-        collide=False,
-    )
-    bx0 = geo.input_belt_end + look.bin_gap
-    bin_floor = top - ib.bin_depth
-    bw = ib.width / 2 + look.bin_side_margin
-    wall = look.bin_wall
-    _box(
-        wb,
-        "bin_floor",
-        [bx0 + ib.bin_length / 2, geo.input_y, bin_floor - wall],
-        [ib.bin_length / 2, bw, wall],
-        look.bin_floor_rgba,
-    )
-    _box(
-        wb,
-        "bin_far",
-        [bx0 + ib.bin_length + wall, geo.input_y, bin_floor + ib.bin_depth / 2],
-        [wall, bw, ib.bin_depth / 2],
-        look.bin_wall_rgba,
-    )
-    for side, sign in (("left", 1), ("right", -1)):
-        _box(
-            wb,
-            f"bin_{side}",
-            [bx0 + ib.bin_length / 2, geo.input_y + sign * bw, bin_floor + ib.bin_depth / 2],
-            [ib.bin_length / 2, wall, ib.bin_depth / 2],
-            look.bin_wall_rgba,
-        )
-    _box(
-        wb,
-        "bin_stand",
-        [bx0 + ib.bin_length / 2, geo.input_y, (bin_floor - 2 * wall) / 2],
-        [
-            ib.bin_length / 2 - look.bin_stand_inset,
-            bw - look.bin_stand_inset,
-            (bin_floor - 2 * wall) / 2,
-        ],
-        look.frame_rgba,
-        collide=False,
-    )
-
-    # Output belt with the mesh sheet and slot marks.
-    oc = geo.output_centre
-    obelt = _box(
-        wb,
-        "output_belt",
-        [oc[0], oc[1], top - ob.thickness / 2],
-        [ob.length / 2, ob.width / 2, ob.thickness / 2],
-        look.belt_rgba,
-    )
-    obelt.material = "belt_mat"
-    obelt.friction = friction
-    _box(
-        wb,
-        "output_stand",
-        [oc[0], oc[1], leg / 2],
-        [ob.length / 2 - inset_x, ob.width / 2 - inset_y, leg / 2],
-        look.frame_rgba,
-        collide=False,
-    )
-    sheet = _box(
-        wb,
-        "mesh_sheet",
-        [oc[0], oc[1], top + ob.mesh_thickness / 2],
-        [ob.mesh_size[0] / 2, ob.mesh_size[1] / 2, ob.mesh_thickness / 2],
-        look.sheet_rgba,
-    )
-    sheet.friction = friction
-    half = np.asarray(ob.mesh_size) / 2
-    for k, slot in enumerate(slots):
-        x, y, yaw = slot.pose
-        c = slot.shape.polygon.centroid
-        off = np.array([c.x, c.y])
-        outline = slot.shape.outline - off
-        holes = [h - off for h in slot.shape.holes]
-        rot = np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
-        world = outline @ rot.T + [x, y]
-        if np.any(np.abs(world) > half + 1e-9):
-            raise CellError(
-                f"slot {k} ({slot.shape.name}) at pose {slot.pose} extends beyond the mesh "
-                f"({ob.mesh_size[0] * 1000:.0f} x {ob.mesh_size[1] * 1000:.0f} mm, centred at 0)"
-            )
-        verts, faces = extrusion(outline, holes, 0.0, ob.slot_mark_height)
-        mesh = spec.add_mesh(name=f"slot{k}_mark")
-        mesh.uservert = verts.ravel().tolist()
-        mesh.userface = faces.ravel().tolist()
-        mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
-        g = wb.add_geom(name=f"slot{k}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"slot{k}_mark")
-        g.pos = [oc[0] + x, oc[1] + y, geo.mesh_top]
-        g.quat = yaw_quat(yaw)
-        g.contype, g.conaffinity, g.group = 0, 0, 1
-        col = look.slot_white + (1 - look.slot_white) * np.asarray(slot.shape.color)
-        g.rgba = [*col, 1.0]
-
-    # Cameras looking straight down; image right = +x, image up = +y.
-    for name, centre, cam in (
-        ("input_camera", geo.input_centre, cfg.input_camera),
-        ("output_camera", geo.output_centre, cfg.output_camera),
-    ):
-        c = wb.add_camera(name=name)
-        c.pos = [
-            centre[0] + cam.offset[0],
-            centre[1] + cam.offset[1],
-            centre[2] + cam.height_above_belt,
-        ]
-        c.quat = [1, 0, 0, 0]
-        c.fovy = cam.fovy_deg
-    wb.add_camera(name="overview", pos=list(look.overview_pos), xyaxes=list(look.overview_xyaxes))
 
 
 def _configure(spec: mujoco.MjSpec, cfg: CellConfig) -> None:
@@ -573,7 +276,7 @@ def build_spec(
         )
     spec = _robot_spec(cfg)
     _configure(spec, cfg)
-    _add_environment(spec, cfg, slots)
+    add_fixtures(spec, cfg, slots)
     if tiles:
         _add_tiles(spec, cfg, tiles, variants)
         eq = spec.add_equality(name="suction_weld", type=mujoco.mjtEq.mjEQ_WELD)
@@ -721,5 +424,4 @@ __all__ = [
     "resolve_ids",
     "set_tile_rotation_lengths",
     "tile_name",
-    "yaw_quat",
 ]

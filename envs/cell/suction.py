@@ -172,6 +172,21 @@ class Suction:
         self.events.append(SuctionEvent(float(data.time), "grasp", i))
         return i
 
+    def carry(self, data: mujoco.MjData) -> None:
+        """Put the held tile where the weld holds it on the pad, at rest (kinematic moves).
+
+        Reads the pad's pose from ``data`` (call after `mujoco.mj_kinematics`).
+        """
+        m, ids, held = self._model, self._ids, self.held
+        b1 = ids.pad_body
+        r1 = data.xmat[b1].reshape(3, 3)
+        qa = ids.tile_qpos[held]
+        data.qpos[qa : qa + 3] = data.xpos[b1] + r1 @ m.eq_data[ids.weld, 3:6]
+        quat = np.zeros(4)
+        mujoco.mju_mulQuat(quat, data.xquat[b1], m.eq_data[ids.weld, 6:10])
+        data.qpos[qa + 3 : qa + 7] = quat
+        data.qvel[ids.tile_dof_index[held]] = 0.0
+
     def _release(self, data: mujoco.MjData, kind: str) -> None:
         data.eq_active[self._ids.weld] = 0
         self.events.append(SuctionEvent(float(data.time), kind, self.held, self.pull, self.shear))

@@ -21,8 +21,8 @@ import numpy as np
 
 from qshape.errors import QShapeError
 from qshape.geometry import FloatArray
+from spatial.units import MM_PER_M
 
-_MM_PER_M = 1000.0
 _S_PER_MS = 1e-3
 
 
@@ -110,7 +110,7 @@ class CameraEffects:
 
     def blur_px(self, px_per_mm: float) -> float:
         """Motion blur length on the picture, in [px]: belt speed x exposure x scale."""
-        return self.belt_speed_m_s * _MM_PER_M * self.exposure_ms * _S_PER_MS * px_per_mm
+        return self.belt_speed_m_s * MM_PER_M * self.exposure_ms * _S_PER_MS * px_per_mm
 
     def between(self, high: CameraEffects, rng: np.random.Generator) -> CameraEffects:
         """Each field drawn uniformly between this value and ``high``'s (integers rounded)."""

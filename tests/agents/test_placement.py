@@ -15,8 +15,8 @@ from agents.placement import equivalent_yaws, plan_placements, wrap
 from benchmarks.design_cell import build_design_cell, nearest_tile
 from envs.cell.config import load_cell_config
 from envs.task_spec import work_areas, world_slots
-from planners.angles import yaw_error
 from qshape.design import Design
+from spatial.angles import yaw_error
 
 YAW_TOL = math.radians(2.0)
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from envs.cell.tiles.tile import SlotSpec, TileShape
 from envs.errors import CellError
+from spatial.units import M_PER_MM
 
 
 def _loop_points(loop: Any, arc_step_mm: float) -> np.ndarray:
@@ -47,7 +48,7 @@ def tile_shapes_from_design(
     """
     if not arc_step_mm > 0:
         raise CellError(f"arc_step_mm must be positive, got {arc_step_mm}")
-    mm = 1e-3
+    mm = M_PER_MM
     width, height = design.mesh_size
     shapes, slots = [], []
     for slot in design.slots:

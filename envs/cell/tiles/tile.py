@@ -176,6 +176,34 @@ def _wrong_color(color: tuple[float, float, float], rng: np.random.Generator) ->
     return colorsys.hsv_to_rgb(h, s, v)
 
 
+def _broken(
+    outline: np.ndarray, holes: list[np.ndarray], rng: np.random.Generator
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """A tile with a random side broken off (the outline and holes of the larger part, centred).
+
+    A straight cut at a random angle removes 30 % of the tile's extent along it.
+    """
+    poly = Polygon(outline, holes)
+    ang = rng.uniform(0, 2 * np.pi)
+    d = np.array([np.cos(ang), np.sin(ang)])
+    proj = outline @ d
+    cut = proj.max() - 0.3 * (proj.max() - proj.min())
+    big = 10.0 * float(np.max(np.abs(outline))) + 1.0
+    half = shapely.affinity.rotate(
+        box(cut, -big, cut + big, big), float(np.degrees(ang)), origin=(0, 0)
+    )
+    part = poly.difference(half)
+    if part.geom_type == "MultiPolygon":
+        part = max(part.geoms, key=lambda g: g.area)
+    part = shapely.simplify(part, 1e-6)
+    outline = np.asarray(part.exterior.coords)[:-1]
+    holes = [np.asarray(r.coords)[:-1] for r in part.interiors]
+    if signed_area(outline) < 0:
+        outline = outline[::-1]
+    holes = [h[::-1] if signed_area(h) > 0 else h for h in holes]
+    return _centre(outline, holes)
+
+
 def make_tile(
     shape: TileShape,
     cfg: TileConfig,
@@ -204,25 +232,7 @@ def make_tile(
         scale = rng.choice([0.7, 1.35])
         outline, holes = outline * scale, [h * scale for h in holes]
     elif distractor == "broken":
-        poly = Polygon(outline, holes)
-        ang = rng.uniform(0, 2 * np.pi)
-        d = np.array([np.cos(ang), np.sin(ang)])
-        proj = outline @ d
-        cut = proj.max() - 0.3 * (proj.max() - proj.min())
-        big = 10.0 * float(np.max(np.abs(outline))) + 1.0
-        half = shapely.affinity.rotate(
-            box(cut, -big, cut + big, big), float(np.degrees(ang)), origin=(0, 0)
-        )
-        part = poly.difference(half)
-        if part.geom_type == "MultiPolygon":
-            part = max(part.geoms, key=lambda g: g.area)
-        part = shapely.simplify(part, 1e-6)
-        outline = np.asarray(part.exterior.coords)[:-1]
-        holes = [np.asarray(r.coords)[:-1] for r in part.interiors]
-        if signed_area(outline) < 0:
-            outline = outline[::-1]
-        holes = [h[::-1] if signed_area(h) > 0 else h for h in holes]
-        outline, holes = _centre(outline, holes)
+        outline, holes = _broken(outline, holes, rng)
     elif distractor != "":
         raise CellError(f"unknown distractor kind {distractor!r}; allowed: color, broken, shape")
     points, piece_ids = decompose(outline, holes)
@@ -332,7 +342,23 @@ def grasp_point(outline: np.ndarray, holes: Sequence[np.ndarray] = ()) -> np.nda
     return np.array([best.x, best.y])
 
 
+@dataclass(frozen=True, eq=False)
+class TilePoses:
+    """Tile poses at one instant (copies).
+
+    Attributes:
+        pos: Positions of the tiles' area centroids at mid-thickness, shape (n, 3) [m].
+        quat: Orientations (w, x, y, z), shape (n, 4).
+        yaw: Rotation about world z, shape (n,) [rad] (meaningful for tiles lying flat).
+    """
+
+    pos: np.ndarray
+    quat: np.ndarray
+    yaw: np.ndarray
+
+
 __all__ = [
+    "TilePoses",
     "PhysicalTile",
     "SlotSpec",
     "TileShape",

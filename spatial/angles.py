@@ -1,0 +1,72 @@
+"""Planar angles: wrapping, 2D rotation and the yaw error modulo a rotational symmetry.
+
+The one home of these facts (all angles in radians, counter-clockwise seen from above). Two
+conventions exist at the edge of the wrap, both kept from v0 under one function:
+``include_pi=False`` wraps to [-pi, pi) (planners, envs, agents), ``include_pi=True`` to
+(-pi, pi] (qshape's figures and matching).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+Array = npt.NDArray[np.float64]
+
+TWO_PI = 2.0 * math.pi
+"""A full turn [rad]."""
+
+
+def wrap_angle(a: float | Array, *, include_pi: bool = False) -> float | Array:
+    """Angle(s) wrapped to [-pi, pi) [rad], or to (-pi, pi] with ``include_pi``.
+
+    A float (or 0-d array) comes back as a float, wrapped exactly (an angle already in range
+    comes back unchanged); an array comes back as an array of the same shape.
+    """
+    if isinstance(a, float) or np.ndim(a) == 0:
+        x = a if isinstance(a, float) else float(np.asarray(a))
+        w = math.remainder(x, TWO_PI)
+        if include_pi:
+            return math.pi if w == -math.pi else w
+        return -math.pi if w == math.pi else w
+    return wrap_angles(a, include_pi=include_pi)
+
+
+def wrap_angles(a: npt.ArrayLike, *, include_pi: bool = False) -> Array:
+    """`wrap_angle` element-wise, always an array (any shape) [rad]."""
+    w = np.remainder(np.asarray(a, dtype=np.float64) + math.pi, TWO_PI) - math.pi
+    if include_pi:
+        return np.asarray(np.where(w <= -math.pi, math.pi, w), dtype=np.float64)
+    return w
+
+
+def rotate_xy(xy: npt.ArrayLike, yaw: float) -> Array:
+    """Planar vector(s) turned by ``yaw`` [rad] counter-clockwise; shape (2,) or (n, 2)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    v = np.asarray(xy, dtype=float)
+    out: Array = v @ np.array([[c, s], [-s, c]])
+    return out
+
+
+def yaw_error(yaw: float | Array, target: float | Array, symmetry: int | Array) -> float | Array:
+    """|yaw - target| modulo the shape's rotational symmetry [rad].
+
+    Args:
+        yaw: Measured yaw(s) [rad].
+        target: Wanted yaw(s) [rad].
+        symmetry: Rotational symmetry order(s): 1 none, k a k-fold symmetry, 0 continuous
+            (error 0).
+
+    Returns:
+        The error in [0, pi / symmetry]; a float for scalar inputs, else an array.
+    """
+    sym = np.asarray(symmetry)
+    period = np.where(sym > 0, TWO_PI / np.maximum(sym, 1), 1.0)
+    d = np.asarray(yaw, dtype=float) - np.asarray(target, dtype=float)
+    err = np.where(sym > 0, np.abs((d + period / 2) % period - period / 2), 0.0)
+    return float(err) if np.ndim(err) == 0 else np.asarray(err, dtype=np.float64)
+
+
+__all__ = ["TWO_PI", "rotate_xy", "wrap_angle", "wrap_angles", "yaw_error"]
