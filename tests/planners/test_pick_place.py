@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from benchmarks.planner import LAYOUT_SEED_TRIES, CellRunner, cell_config
-from envs.cell.cell import Cell
 from envs.cell.tiles.shapes import basic_shapes
+from envs.episode_setup import build_cell
 from planners.config import load_planner_config
 from planners.errors import InvalidTargetError, UnreachableError
 from planners.ik import IKSolver
@@ -247,9 +247,7 @@ def test_bad_inputs_raise_typed_errors(planner: PickPlacePlanner, start: JointSt
 
 def _sim_cycle(belt_speed: float) -> tuple[CellRunner, int]:
     shapes = basic_shapes()[:2]
-    cell = Cell.first_fitting(
-        cell_config("paper", belt_speed, 30.0), shapes, (), 1, LAYOUT_SEED_TRIES
-    )
+    cell = build_cell(cell_config("paper", belt_speed, 30.0), shapes, (), 1, LAYOUT_SEED_TRIES)
     cell.belt_speed = belt_speed
     return CellRunner(cell, CFG), int(np.flatnonzero(cell.on_stage)[0])
 
@@ -285,7 +283,7 @@ def test_carried_tile_pull_is_its_load_not_the_pad_contact() -> None:
     # contact's internal push on the sealed tile (15-40 x the weight when the weld alone was
     # measured: 2.4 N here, 13 N for a 30 g tile).
     ring = next(s for s in basic_shapes() if s.name == "ring")
-    cell = Cell.first_fitting(cell_config("paper", 0.0, 30.0), [ring], (), 1, LAYOUT_SEED_TRIES)
+    cell = build_cell(cell_config("paper", 0.0, 30.0), [ring], (), 1, LAYOUT_SEED_TRIES)
     runner = CellRunner(cell, CFG)
     pulls: list[tuple[float, float]] = []
     update = cell.suction.update
