@@ -33,7 +33,7 @@ from envs.cell.cameras import distort_normalised
 from envs.task_spec import WorldSlot
 from qshape import Description, Figure
 from qshape.geometry import signed_area
-from qshape.theory.figure import Boundary
+from qshape.theory.boundary import Boundary
 
 
 class CameraLike(Protocol):

@@ -290,7 +290,7 @@ def _draw_figure(
     scale: float,
     colour: tuple[int, int, int],
 ) -> None:
-    from qshape.theory.figure import densify  # noqa: PLC0415
+    from qshape.theory.boundary import densify  # noqa: PLC0415
 
     p = np.asarray(pts, dtype=float)
     m = np.asarray(mask, dtype=bool)

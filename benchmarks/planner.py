@@ -36,17 +36,20 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks.standard_cycle import standard_cycle_blended_s, standard_cycle_s
 from envs.cell.cell import Cell
 from envs.cell.config import CellConfig, load_cell_config
 from envs.cell.scene import build_arm_model
 from envs.cell.tiles.shapes import tile_shapes_from_design
 from envs.episode_setup import build_cell
 from planners.config import PlannerConfig, load_planner_config
+from planners.cycle.plan import CyclePlan
 from planners.errors import LimitError, PlannerError
 from planners.executor import TimedEvent, TrajectoryExecutor
 from planners.ik import IKSolver
-from planners.pick_place import CyclePlan, PickPlacePlanner
-from planners.trajectory import JointState, validate
+from planners.joints import JointState
+from planners.limit_checks import validate
+from planners.pick_place import PickPlacePlanner
 from qshape.design import Design
 from spatial.angles import wrap_angle, yaw_error
 
@@ -233,72 +236,6 @@ class CellRunner:
         return d, math.degrees(float(e))
 
 
-STANDARD_CYCLE = (0.025, 0.300, 0.025)
-"""ABB's standard picking cycle: up 25 mm, 300 mm across, down 25 mm, and back [m]."""
-STANDARD_CYCLE_CENTRE = (0.5, 0.0, 0.3)
-"""Where the standard cycle is planned: its lower midpoint, 0.5 m in front of the base [m]."""
-
-
-def _standard_cycle_ends(
-    planner_config: PlannerConfig,
-) -> tuple[IKSolver, PickPlacePlanner, np.ndarray, np.ndarray, np.ndarray]:
-    """IK, planner, the two lower corners (3,) [m] and the lift (3,) [m] of the standard cycle."""
-    up, across, _ = STANDARD_CYCLE
-    arm = build_arm_model(load_cell_config(), with_cell=False)
-    ik = IKSolver(arm, planner_config.ik, planner_config.limits)
-    planner = PickPlacePlanner(ik, planner_config)
-    cx, cy, cz = STANDARD_CYCLE_CENTRE
-    a, b = np.array([cx, cy - across / 2, cz]), np.array([cx, cy + across / 2, cz])
-    return ik, planner, a, b, np.array([0.0, 0.0, up])
-
-
-def standard_cycle_s(planner_config: PlannerConfig) -> float:
-    """The standard cycle's duration [s] with the planners' limits and a stop at every corner.
-
-    Tool down, up 25 mm, 300 mm sideways, down 25 mm and the same way back, each leg a
-    time-optimal joint-space move from rest to rest. ABB's catalogue figure is for a blended
-    path (1 kg payload), so this stop-everywhere time is no check of the limits: compare
-    `standard_cycle_blended_s`.
-    """
-    ik, planner, a, b, lift = _standard_cycle_ends(planner_config)
-    corners = [a, a + lift, b + lift, b, b + lift, a + lift, a]
-    q = ik.solve(corners[0], 0.0).q
-    total = 0.0
-    for p in corners[1:]:
-        q_next = ik.solve(p, 0.0, seed=q).q
-        move = planner.plan_move(JointState.at_rest(q), q_next)
-        total += move.duration
-        q = move.end.q
-    return total
-
-
-def standard_cycle_blended_s(planner_config: PlannerConfig) -> float:
-    """The standard cycle's duration [s] with the top of the cycle flown through.
-
-    The cell's own pick-and-place planning with the approach points at the cycle's 25 mm height
-    and no vacuum dwell, press or gap: from one lower corner, up, across and down to the other
-    (the vertical legs flown through with the planner's lead, the tool within
-    ``max_lateral_drift`` of vertical below the clearance heights), and back. This is the
-    figure to hold against ABB's (about 0.85 s for the IRB 140, 1 kg, blended path).
-    """
-    up = STANDARD_CYCLE[0]
-    cycle = replace(
-        planner_config.cycle,
-        approach_height=up,
-        pick_dwell=0.0,
-        place_dwell=0.0,
-        belt_match_time=0.0,
-        pick_press=0.0,
-        place_gap=0.0,
-    )
-    ik, planner, a, b, _ = _standard_cycle_ends(replace(planner_config, cycle=cycle))
-    q_b = ik.solve(b, 0.0).q
-    plan = planner.plan_cycle(
-        JointState.at_rest(q_b), a, b, 0.0, start_at_contact=True, end_retreat=False
-    )
-    return plan.duration
-
-
 def _next_tile(runner: CellRunner, todo: list[int], belt_speed: float) -> int | None:
     """The tile to pick next: any on a static belt; the most downstream reachable one moving."""
     cell = runner.cell
@@ -311,6 +248,106 @@ def _next_tile(runner: CellRunner, todo: list[int], belt_speed: float) -> int | 
     on = [i for i in todo if cell.on_stage[i] and not cell.lost[i] and settled[i]]
     # Downstream first; the planner raises for tiles that will be out of reach at contact.
     return max(on, key=lambda i: pos[i, 0]) if on else None
+
+
+def _play_design(
+    runner: CellRunner, n_tiles: int, belt_speed: float
+) -> tuple[list[CycleRun], list[int], list[int]]:
+    """Pick and place every tile in turn; the cycles run, the tiles skipped and missed."""
+    cell = runner.cell
+    todo = list(range(n_tiles))
+    start = JointState.at_rest(cell.qpos)
+    at_contact = False
+    runs: list[CycleRun] = []
+    skipped: list[int] = []
+    missed: list[int] = []
+    waited = 0.0
+    while todo:
+        todo = [k for k in todo if not cell.lost[k]]
+        if not todo:
+            break
+        i = _next_tile(runner, todo, belt_speed)
+        if i is None:
+            if waited > MAX_WAIT_S:
+                break
+            cell.step(int(round(WAIT_STEP_S / runner.dt)))
+            waited += WAIT_STEP_S
+            continue
+        waited = 0.0
+        try:
+            plan = runner.plan(i, i, start, at_contact, last=len(todo) == 1)
+        except PlannerError as exc:
+            print(f"  tile {i}: not planned ({type(exc).__name__}: {exc})")
+            todo.remove(i)
+            skipped.append(i)
+            continue
+        end_x = cell.geometry.input_belt_end - cell.tiles[i].radius - BELT_END_MARGIN
+        if plan.pick_position[0] > end_x:  # would be picked past the belt's end: let it go
+            todo.remove(i)
+            missed.append(i)
+            continue
+        runs.append(runner.execute(plan, i))
+        todo.remove(i)
+        start = JointState.at_rest(plan.end.q)
+        at_contact = not (len(todo) == 0)
+    return runs, skipped, missed
+
+
+def _cycle_figures(
+    runs: list[CycleRun],
+    errs: list[tuple[float, float]],
+    tiles: int,
+    sim: tuple[float, float],
+) -> dict[str, Any]:
+    """The cycle figures of a design's run, in the order of the benchmark's JSON.
+
+    ``sim``: simulated time to the last placement, and with the final retreat [s].
+    """
+    sim_s, sim_total = sim
+    ok = [
+        d <= POSITION_TOL and y <= YAW_TOL_DEG and r.grasped
+        for (d, y), r in zip(errs, runs, strict=True)
+    ]
+    n_ok = int(sum(ok))
+    busy = sum(r.duration for r in runs)
+    # Steady state: cycles between the first (from home) and the last (final retreat).
+    middle = [r.duration for r in runs[1:-1]]
+    steady = float(np.median(middle)) if middle else math.nan
+    bound = sum(r.bound for r in runs)
+    motion_bound = sum(r.motion_bound for r in runs)
+    steady_ratio = (
+        sum(r.duration for r in runs[1:-1]) / sum(r.bound for r in runs[1:-1])
+        if len(runs) > 2
+        else math.nan
+    )
+    return {
+        "tiles": tiles,
+        "cycles": len(runs),
+        "placed_within_tolerance": n_ok,
+        "all_placed_within_tolerance": n_ok == tiles,
+        "tiles_per_min": 60.0 * n_ok / sim_s if sim_s > 0 else 0.0,
+        "sim_s": sim_s,
+        "sim_s_with_final_retreat": sim_total,
+        "cycle_s": busy / max(len(runs), 1),
+        "bound_s": bound / max(len(runs), 1),
+        "ratio": busy / bound if bound > 0 else math.nan,
+        "motion_bound_s": motion_bound / max(len(runs), 1),
+        "ratio_motion": busy / motion_bound if motion_bound > 0 else math.nan,
+        "steady_ratio": steady_ratio,
+        "plan_ms": float(np.median([r.plan_ms for r in runs])) if runs else math.nan,
+        "plan_ms_max": float(np.max([r.plan_ms for r in runs])) if runs else math.nan,
+        "steady_cycle_s": steady,
+        "steady_tiles_per_min": 60.0 / steady if steady > 0 else math.nan,
+        "tcp_speed_max_m_s": max((r.tcp_speed_max for r in runs), default=math.nan),
+        "all_trajectories_within_limits": all(r.limits_ok for r in runs),
+        "tracking_max_mm": 1e3 * max((r.tracking_max for r in runs), default=math.nan),
+        "tracking_rms_mm": 1e3 * float(np.sqrt(np.mean([r.tracking_rms**2 for r in runs])))
+        if runs
+        else math.nan,
+        "place_err_max_mm": 1e3 * max((d for d, _ in errs), default=math.nan),
+        "place_err_median_mm": 1e3 * float(np.median([d for d, _ in errs])) if errs else math.nan,
+        "yaw_err_max_deg": max((y for _, y in errs), default=math.nan),
+    }
 
 
 def run_design(
@@ -334,63 +371,12 @@ def run_design(
         cell.belt_speed = belt_speed
         runner = CellRunner(cell, planner_config, dynamic)
         cell.step(int(round(SETTLE_S / runner.dt)))
-        todo = list(range(len(slots)))
-        start = JointState.at_rest(cell.qpos)
-        at_contact = False
-        runs: list[CycleRun] = []
-        skipped: list[int] = []
-        missed: list[int] = []
         t0 = cell.time
-        waited = 0.0
-        while todo:
-            todo = [k for k in todo if not cell.lost[k]]
-            if not todo:
-                break
-            i = _next_tile(runner, todo, belt_speed)
-            if i is None:
-                if waited > MAX_WAIT_S:
-                    break
-                cell.step(int(round(WAIT_STEP_S / runner.dt)))
-                waited += WAIT_STEP_S
-                continue
-            waited = 0.0
-            try:
-                plan = runner.plan(i, i, start, at_contact, last=len(todo) == 1)
-            except PlannerError as exc:
-                print(f"  tile {i}: not planned ({type(exc).__name__}: {exc})")
-                todo.remove(i)
-                skipped.append(i)
-                continue
-            end_x = cell.geometry.input_belt_end - cell.tiles[i].radius - BELT_END_MARGIN
-            if plan.pick_position[0] > end_x:  # would be picked past the belt's end: let it go
-                todo.remove(i)
-                missed.append(i)
-                continue
-            runs.append(runner.execute(plan, i))
-            todo.remove(i)
-            start = JointState.at_rest(plan.end.q)
-            at_contact = not (len(todo) == 0)
+        runs, skipped, missed = _play_design(runner, len(slots), belt_speed)
         sim_total = cell.time - t0
         cell.step(int(round(SETTLE_S / runner.dt)))
         sim_s = (runs[-1].placed_at - t0) if runs else sim_total
         errs = [runner.placement_errors(r.tile, r.tile) for r in runs]
-        ok = [
-            d <= POSITION_TOL and y <= YAW_TOL_DEG and r.grasped
-            for (d, y), r in zip(errs, runs, strict=True)
-        ]
-        n_ok = int(sum(ok))
-        busy = sum(r.duration for r in runs)
-        # Steady state: cycles between the first (from home) and the last (final retreat).
-        middle = [r.duration for r in runs[1:-1]]
-        steady = float(np.median(middle)) if middle else math.nan
-        bound = sum(r.bound for r in runs)
-        motion_bound = sum(r.motion_bound for r in runs)
-        steady_ratio = (
-            sum(r.duration for r in runs[1:-1]) / sum(r.bound for r in runs[1:-1])
-            if len(runs) > 2
-            else math.nan
-        )
-        tiles = len(slots)
         return {
             "design": design,
             "layout": layout,
@@ -398,34 +384,7 @@ def run_design(
             "work_x_m": LAYOUTS[layout]["work_x"],
             "belt_speed_m_s": belt_speed,
             "execution": "dynamic" if dynamic else "kinematic",
-            "tiles": tiles,
-            "cycles": len(runs),
-            "placed_within_tolerance": n_ok,
-            "all_placed_within_tolerance": n_ok == tiles,
-            "tiles_per_min": 60.0 * n_ok / sim_s if sim_s > 0 else 0.0,
-            "sim_s": sim_s,
-            "sim_s_with_final_retreat": sim_total,
-            "cycle_s": busy / max(len(runs), 1),
-            "bound_s": bound / max(len(runs), 1),
-            "ratio": busy / bound if bound > 0 else math.nan,
-            "motion_bound_s": motion_bound / max(len(runs), 1),
-            "ratio_motion": busy / motion_bound if motion_bound > 0 else math.nan,
-            "steady_ratio": steady_ratio,
-            "plan_ms": float(np.median([r.plan_ms for r in runs])) if runs else math.nan,
-            "plan_ms_max": float(np.max([r.plan_ms for r in runs])) if runs else math.nan,
-            "steady_cycle_s": steady,
-            "steady_tiles_per_min": 60.0 / steady if steady > 0 else math.nan,
-            "tcp_speed_max_m_s": max((r.tcp_speed_max for r in runs), default=math.nan),
-            "all_trajectories_within_limits": all(r.limits_ok for r in runs),
-            "tracking_max_mm": 1e3 * max((r.tracking_max for r in runs), default=math.nan),
-            "tracking_rms_mm": 1e3 * float(np.sqrt(np.mean([r.tracking_rms**2 for r in runs])))
-            if runs
-            else math.nan,
-            "place_err_max_mm": 1e3 * max((d for d, _ in errs), default=math.nan),
-            "place_err_median_mm": 1e3 * float(np.median([d for d, _ in errs]))
-            if errs
-            else math.nan,
-            "yaw_err_max_deg": max((y for _, y in errs), default=math.nan),
+            **_cycle_figures(runs, errs, len(slots), (sim_s, sim_total)),
             "dropped": cell.n_dropped,
             "lost": cell.n_lost,
             "skipped_unreachable": len(skipped),
@@ -522,3 +481,6 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
 if __name__ == "__main__":
     main()
+
+
+__all__ = []

@@ -73,23 +73,18 @@ def wobbly_outline(n: int, radius: float = 200.0) -> np.ndarray:
     return np.stack([r * np.cos(t), r * np.sin(t)], axis=1) + 500.0
 
 
-def run() -> list[dict[str, Any]]:
-    """Every case: name, cap, seconds, outcome, expected outcome, pass."""
-    lim = default_limits()
-    n = lim.max_points - lim.max_points % 2
-    at_cap = qshape.Figure.from_polygon(star(n))
-    d_cap = qshape.describe(at_cap)
-    text = str(d_cap)
-    d_small = qshape.describe(qshape.Figure.rectangle(40.0, 20.0))
-    small = str(d_small)
+_Case = tuple[str, str, Callable[[], Any], str]
+"""One case: entry, input size, the call, the expected outcome (a type name)."""
+
+
+def _figure_cases(lim: Any, n: int) -> list[_Case]:
+    """Figures at and past the point and hole caps."""
     holes = [
         star(8, 1.0, 0.7, 0.0) + [12.0 * math.cos(a), 12.0 * math.sin(a)]
         for a in np.linspace(0.0, 2 * math.pi, lim.max_holes, endpoint=False)
     ]
     disc = qshape.Figure.regular_polygon(64, 20.0).points
-    dense = lim.max_dense_points
-    square = np.array([[0.0, 0.0], [40.0, 0.0], [40.0, 40.0], [0.0, 40.0]])
-    cases: list[tuple[str, str, Callable[[], Any], str]] = [
+    return [
         (
             "Figure.from_polygon, star",
             f"{n} points",
@@ -120,6 +115,17 @@ def run() -> list[dict[str, Any]]:
             lambda: qshape.Figure.from_polygon(disc, [*holes, holes[0] * 0.1]),
             "FigureLimitError",
         ),
+    ]
+
+
+def _query_cases(lim: Any, n: int) -> list[_Case]:
+    """Describe, match, keys, assign and parse at the caps, and parse of hostile text."""
+    at_cap = qshape.Figure.from_polygon(star(n))
+    d_cap = qshape.describe(at_cap)
+    text = str(d_cap)
+    d_small = qshape.describe(qshape.Figure.rectangle(40.0, 20.0))
+    small = str(d_small)
+    return [
         ("describe", f"{n} points", lambda: qshape.describe(at_cap), "Description"),
         ("match (self)", f"{n} points", lambda: qshape.match(d_cap, d_cap), "Match"),
         (
@@ -166,6 +172,14 @@ def run() -> list[dict[str, Any]]:
             lambda: qshape.parse(small.replace("@ (", "@ (" + "1" * 100_000 + "x", 1)),
             "ParseError",
         ),
+    ]
+
+
+def _outline_cases(lim: Any) -> list[_Case]:
+    """Dense outlines at and past their cap, and a square far from the origin."""
+    dense = lim.max_dense_points
+    square = np.array([[0.0, 0.0], [40.0, 0.0], [40.0, 40.0], [0.0, 40.0]])
+    return [
         (
             "Figure.from_outline",
             f"{dense} dense points",
@@ -197,6 +211,14 @@ def run() -> list[dict[str, Any]]:
             "FigureLimitError",
         ),
     ]
+
+
+def run() -> list[dict[str, Any]]:
+    """Every case: name, cap, seconds, outcome, expected outcome, pass."""
+    lim = default_limits()
+    n = lim.max_points - lim.max_points % 2
+    cases = [*_figure_cases(lim, n), *_query_cases(lim, n), *_outline_cases(lim)]
+    square = np.array([[0.0, 0.0], [40.0, 0.0], [40.0, 40.0], [0.0, 40.0]])
     rows = []
     for name, size, fn, expected in cases:
         seconds, outcome = _timed(fn)

@@ -33,12 +33,13 @@ import numpy as np
 
 from qshape import Boundary, Figure, Tolerances, match_best
 from qshape.design import Design, Slot
-from qshape.geometry import wrap_angle
+from qshape.geometry import FloatArray, wrap_angle
 from qshape.synthetic.synth import SynthParams, generate
 from qshape.theory.figure import figures_from_outlines
-from qshape.vision.extract import ExtractParams, extract_detailed
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams
 
-from .table import VISION_CANNY_RATIO
+from .figures import VISION_CANNY_RATIO
 
 
 @dataclass(frozen=True)
@@ -143,6 +144,62 @@ def _rot_error_deg(m: Any, rep_angle_deg: float, tile: Any, angle: float | None 
     return min(abs(math.degrees(math.remainder(r - expected, period))) for r in m.rotations)
 
 
+def _score_tile(
+    c: dict[str, float],
+    rot_errs: list[float],
+    t: Any,
+    found: tuple[Figure, FloatArray],
+    ctx: tuple[_Refs, Tolerances, BenchParams],
+) -> None:
+    """Count (in ``c``, ``rot_errs``) how the figure found on drawn tile ``t`` is classed.
+
+    Also the Hu-moment baseline, and its vertices against the truth and ``approxPolyDP``'s.
+    """
+    fig, outline = found
+    refs, tol, bp = ctx
+    # Shape only.
+    key, m = _classify(fig, refs.shape, refs.fig, tol, use_color=False)
+    ok_shape = key == t.slot.shape_key
+    c["shape_correct"] += ok_shape
+    c["shape_false"] += key is not None and not ok_shape
+    c["shape_none"] += key is None
+    ok_rot = False
+    if ok_shape:
+        err = _rot_error_deg(m, refs.shape[key].angle, t)  # type: ignore[index]
+        rot_errs.append(err)
+        ok_rot = err <= bp.rotation_tol_deg
+    c["shape_and_rotation"] += ok_shape and ok_rot
+    # Shape and colour.
+    key2, _ = _classify(fig, refs.full, refs.fig, tol, use_color=True)
+    ok_full = key2 == t.slot.class_key
+    c["full_correct"] += ok_full
+    c["full_false"] += key2 is not None and not ok_full
+    # Baseline: Hu moments nearest neighbour (shape; shape + colour by colour gate).
+    cnt = outline.astype(np.float32).reshape(-1, 1, 2)
+    hu = {
+        kk: cv2.matchShapes(cnt, ro, cv2.CONTOURS_MATCH_I1, 0.0) for kk, ro in refs.outline.items()
+    }
+    c["hu_shape_correct"] += min(hu, key=hu.__getitem__) == t.slot.shape_key
+    gated = [
+        kk
+        for kk, sl in refs.full.items()
+        if fig.color is not None and math.dist(sl.color, fig.color) <= tol.color_distance
+    ] or list(refs.full)
+    hu_full = min(gated, key=lambda kk: hu[refs.full[kk].shape_key])
+    c["hu_full_correct"] += hu_full == t.slot.class_key
+    # Vertices on tiles without curves (outer boundary).
+    if not t.curve_mask.any():
+        ours = fig.points[~fig.curve_mask]
+        a = _pr(t.points_px, ours, bp.vertex_tol_px)
+        eps = bp.approx_eps_fraction * cv2.arcLength(cnt, True)
+        approx = cv2.approxPolyDP(cnt, eps, True).reshape(-1, 2).astype(np.float64)
+        b = _pr(t.points_px, approx, bp.vertex_tol_px)
+        for name, v in zip(("hit", "true", "conf", "pred"), a, strict=True):
+            c[f"v_{name}"] += v
+        for name, v in zip(("hit", "true", "conf", "pred"), b, strict=True):
+            c[f"dp_{name}"] += v
+
+
 def run_level(  # noqa: PLR0917
     design: Design,
     level: float,
@@ -174,49 +231,7 @@ def run_level(  # noqa: PLR0917
                 c["missed"] += 1
                 continue
             used[k] = True
-            fig, outline = res.figures[k], res.outlines[k]
-            # Shape only.
-            key, m = _classify(fig, refs.shape, refs.fig, tol, use_color=False)
-            ok_shape = key == t.slot.shape_key
-            c["shape_correct"] += ok_shape
-            c["shape_false"] += key is not None and not ok_shape
-            c["shape_none"] += key is None
-            ok_rot = False
-            if ok_shape:
-                err = _rot_error_deg(m, refs.shape[key].angle, t)  # type: ignore[index]
-                rot_errs.append(err)
-                ok_rot = err <= bp.rotation_tol_deg
-            c["shape_and_rotation"] += ok_shape and ok_rot
-            # Shape and colour.
-            key2, _ = _classify(fig, refs.full, refs.fig, tol, use_color=True)
-            ok_full = key2 == t.slot.class_key
-            c["full_correct"] += ok_full
-            c["full_false"] += key2 is not None and not ok_full
-            # Baseline: Hu moments nearest neighbour (shape; shape + colour by colour gate).
-            cnt = outline.astype(np.float32).reshape(-1, 1, 2)
-            hu = {
-                kk: cv2.matchShapes(cnt, ro, cv2.CONTOURS_MATCH_I1, 0.0)
-                for kk, ro in refs.outline.items()
-            }
-            c["hu_shape_correct"] += min(hu, key=hu.__getitem__) == t.slot.shape_key
-            gated = [
-                kk
-                for kk, sl in refs.full.items()
-                if fig.color is not None and math.dist(sl.color, fig.color) <= tol.color_distance
-            ] or list(refs.full)
-            hu_full = min(gated, key=lambda kk: hu[refs.full[kk].shape_key])
-            c["hu_full_correct"] += hu_full == t.slot.class_key
-            # Vertices on tiles without curves (outer boundary).
-            if not t.curve_mask.any():
-                ours = fig.points[~fig.curve_mask]
-                a = _pr(t.points_px, ours, bp.vertex_tol_px)
-                eps = bp.approx_eps_fraction * cv2.arcLength(cnt, True)
-                approx = cv2.approxPolyDP(cnt, eps, True).reshape(-1, 2).astype(np.float64)
-                b = _pr(t.points_px, approx, bp.vertex_tol_px)
-                for name, v in zip(("hit", "true", "conf", "pred"), a, strict=True):
-                    c[f"v_{name}"] += v
-                for name, v in zip(("hit", "true", "conf", "pred"), b, strict=True):
-                    c[f"dp_{name}"] += v
+            _score_tile(c, rot_errs, t, (res.figures[k], res.outlines[k]), (refs, tol, bp))
         c["spurious"] += int((~used).sum())
     n = max(c["tiles"], 1)
     found = max(c["tiles"] - c["missed"], 1)
@@ -248,13 +263,44 @@ def _channel_canny(image: np.ndarray, low: float, high: float) -> np.ndarray:
     """Union of one single-channel ``cv2.Canny`` per colour channel.
 
     Extraction's edge step finds the same edges, from Sobel derivatives it computes itself
-    (see ``qshape.vision.extract._canny``).
+    (see ``qshape.vision.segment._canny``).
     """
     r, g, b = cv2.split(image)
     edges = cv2.Canny(r, low, high)
     cv2.bitwise_or(edges, cv2.Canny(g, low, high), dst=edges)
     cv2.bitwise_or(edges, cv2.Canny(b, low, high), dst=edges)
     return edges
+
+
+def _interleaved(
+    steps: dict[str, Any], repeats: int
+) -> tuple[dict[str, list[float]], dict[str, list[float]]]:
+    """Wall and CPU times [s] of each step over ``repeats`` rounds, after one warm-up call.
+
+    Every step runs once per round, so all of them see the same machine state.
+    """
+    wall: dict[str, list[float]] = {k: [] for k in steps}
+    cpu: dict[str, list[float]] = {k: [] for k in steps}
+    for fn in steps.values():
+        fn()
+    for _ in range(repeats):
+        for name, fn in steps.items():
+            w0, c0 = time.perf_counter(), time.process_time()
+            fn()
+            wall[name].append(time.perf_counter() - w0)
+            cpu[name].append(time.process_time() - c0)
+    return wall, cpu
+
+
+def _median_time(fn: Any, repeats: int) -> float:
+    """Median wall time [s] of ``fn`` over ``repeats`` calls, after one warm-up call."""
+    fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
 
 
 def timing(bp: BenchParams, sp: SynthParams, ep: ExtractParams) -> dict[str, Any]:
@@ -282,41 +328,23 @@ def timing(bp: BenchParams, sp: SynthParams, ep: ExtractParams) -> dict[str, Any
         "canny_channels": lambda: _channel_canny(image, low, high),
     }
     res = extract_detailed(image, ep)
-    wall: dict[str, list[float]] = {k: [] for k in steps}
-    cpu: dict[str, list[float]] = {k: [] for k in steps}
-    for fn in steps.values():
-        fn()
-    # Every step once per round, so all of them see the same machine state.
-    for _ in range(bp.timing_repeats):
-        for name, fn in steps.items():
-            w0, c0 = time.perf_counter(), time.process_time()
-            fn()
-            wall[name].append(time.perf_counter() - w0)
-            cpu[name].append(time.process_time() - c0)
+    wall, cpu = _interleaved(steps, bp.timing_repeats)
     t = {k: float(np.median(v)) for k, v in wall.items()}
     c = {k: float(np.median(v)) for k, v in cpu.items()}
     pairs = np.array(wall["extract"]) / np.array(wall["canny_rgb"])
 
-    def median_time(fn: Any) -> float:
-        fn()
-        times = []
-        for _ in range(bp.timing_repeats):
-            t0 = time.perf_counter()
-            fn()
-            times.append(time.perf_counter() - t0)
-        return float(np.median(times))
-
-    t_outline = median_time(  # one batch, as extract does it
+    t_outline = _median_time(  # one batch, as extract does it
         lambda: figures_from_outlines(
             res.outlines,
             [()] * len(res.outlines),
             [None] * len(res.outlines),
             ep.outline,
             y_down=True,
-        )
+        ),
+        bp.timing_repeats,
     )
     plain = replace(ep, outline=replace(ep.outline, refine_corners=False))
-    t_plain = median_time(lambda: extract_detailed(image, plain))
+    t_plain = _median_time(lambda: extract_detailed(image, plain), bp.timing_repeats)
     return {
         "extract_no_refine_ms": 1e3 * t_plain,
         "ratio_no_refine": t_plain / t["canny_rgb"],
@@ -341,6 +369,41 @@ def timing(bp: BenchParams, sp: SynthParams, ep: ExtractParams) -> dict[str, Any
         "outline_simplify_ms": 1e3 * t_outline,
         "image_stages_ms": 1e3 * (t["extract"] - t_outline),
     }
+
+
+def _row_line(name: str, level: float, r: dict[str, Any]) -> str:
+    """One design and noise level's row of the table."""
+    return (
+        f"{name:12s} {level:5g} {r['tiles']:5d} {r['missed']:4d} "
+        f"{100 * r['shape_accuracy']:6.1f} {100 * r['shape_color_accuracy']:6.1f} "
+        f"{100 * r['class_and_rotation']:7.1f} "
+        f"{r['false_matches_shape'] + r['false_matches_shape_color']:5d} "
+        f"{r['rotation_err_deg_median']:6.2f} {r['rotation_err_deg_p95']:6.2f} "
+        f"{r['rotation_err_deg_max']:6.2f} {100 * r['vertex_precision']:6.1f} "
+        f"{100 * r['vertex_recall']:6.1f} | {100 * r['hu_shape_accuracy']:6.1f} "
+        f"{100 * r['hu_shape_color_accuracy']:6.1f} "
+        f"{100 * r['approxpoly_precision']:6.1f} {100 * r['approxpoly_recall']:6.1f}"
+    )
+
+
+def _print_timing(t: dict[str, Any]) -> None:
+    """Print the timing figures (`timing`)."""
+    print(
+        f"timing on {t['image']} px, {t['figures']} tiles: extract {t['extract_ms']:.2f} ms "
+        f"(image stages {t['image_stages_ms']:.2f} ms + outline simplification and figures "
+        f"{t['outline_simplify_ms']:.2f} ms); cv2.Canny on the RGB picture {t['canny_rgb_ms']:.2f} "
+        f"ms; interleaved: ratio of medians {t['ratio_vs_canny_rgb']:.2f}x, median of pair "
+        f"ratios {t['ratio_vs_canny_rgb_pairs']:.2f}x (target <= {VISION_CANNY_RATIO:g}x); "
+        f"CPU time {t['extract_cpu_ms']:.2f} vs {t['canny_rgb_cpu_ms']:.2f} ms: "
+        f"{t['ratio_vs_canny_rgb_cpu']:.2f}x"
+    )
+    print(
+        f"  other references (CPU time): Canny on the grey picture {t['canny_gray_cpu_ms']:.2f} ms "
+        f"({t['ratio_vs_canny_gray_cpu']:.2f}x), one Canny per channel at full size "
+        f"{t['canny_channels_cpu_ms']:.2f} ms ({t['ratio_vs_canny_channels_cpu']:.2f}x); without "
+        f"corner refinement (wall): extract {t['extract_no_refine_ms']:.2f} ms "
+        f"({t['ratio_no_refine']:.2f}x)"
+    )
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -387,17 +450,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         for level in bp.noise_levels:
             r = run_level(design, level, bp, sp, ep, rng)
             results["levels"][f"{name}@{level:g}"] = r
-            print(
-                f"{name:12s} {level:5g} {r['tiles']:5d} {r['missed']:4d} "
-                f"{100 * r['shape_accuracy']:6.1f} {100 * r['shape_color_accuracy']:6.1f} "
-                f"{100 * r['class_and_rotation']:7.1f} "
-                f"{r['false_matches_shape'] + r['false_matches_shape_color']:5d} "
-                f"{r['rotation_err_deg_median']:6.2f} {r['rotation_err_deg_p95']:6.2f} "
-                f"{r['rotation_err_deg_max']:6.2f} {100 * r['vertex_precision']:6.1f} "
-                f"{100 * r['vertex_recall']:6.1f} | {100 * r['hu_shape_accuracy']:6.1f} "
-                f"{100 * r['hu_shape_color_accuracy']:6.1f} "
-                f"{100 * r['approxpoly_precision']:6.1f} {100 * r['approxpoly_recall']:6.1f}"
-            )
+            print(_row_line(name, level, r))
     print(
         "columns: accuracies in %; false = wrong class chosen (shape + shape/colour runs); "
         "rot in deg modulo symmetry; vP/vR vertex precision/recall within "
@@ -406,22 +459,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     )
     t = timing(bp, sp, ep)
     results["timing"] = t
-    print(
-        f"timing on {t['image']} px, {t['figures']} tiles: extract {t['extract_ms']:.2f} ms "
-        f"(image stages {t['image_stages_ms']:.2f} ms + outline simplification and figures "
-        f"{t['outline_simplify_ms']:.2f} ms); cv2.Canny on the RGB picture {t['canny_rgb_ms']:.2f} "
-        f"ms; interleaved: ratio of medians {t['ratio_vs_canny_rgb']:.2f}x, median of pair "
-        f"ratios {t['ratio_vs_canny_rgb_pairs']:.2f}x (target <= {VISION_CANNY_RATIO:g}x); "
-        f"CPU time {t['extract_cpu_ms']:.2f} vs {t['canny_rgb_cpu_ms']:.2f} ms: "
-        f"{t['ratio_vs_canny_rgb_cpu']:.2f}x"
-    )
-    print(
-        f"  other references (CPU time): Canny on the grey picture {t['canny_gray_cpu_ms']:.2f} ms "
-        f"({t['ratio_vs_canny_gray_cpu']:.2f}x), one Canny per channel at full size "
-        f"{t['canny_channels_cpu_ms']:.2f} ms ({t['ratio_vs_canny_channels_cpu']:.2f}x); without "
-        f"corner refinement (wall): extract {t['extract_no_refine_ms']:.2f} ms "
-        f"({t['ratio_no_refine']:.2f}x)"
-    )
+    _print_timing(t)
     if args.timing_only:  # no accuracy table: nothing written
         return results
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -39,7 +39,8 @@ from qshape.design import Design
 from qshape.geometry import FloatArray
 from qshape.synthetic.effects import CameraEffects, undistort, undistort_points
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams, extract_detailed
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams
 
 from .drawn_rotation import drawn_angle
 from .vision import _Refs, _rot_error_deg, pixel_tolerances
@@ -137,6 +138,82 @@ def synth_for(level: Level, sp: SynthParams, rng: np.random.Generator) -> SynthP
     return replace(sp, effects=e, illumination=ill)
 
 
+@dataclass
+class _Tally:
+    """Counts and errors of one level, gathered tile by tile."""
+
+    c: dict[str, float] = field(default_factory=lambda: defaultdict(float))
+    per_shape: dict[str, list[int]] = field(default_factory=lambda: defaultdict(lambda: [0, 0]))
+    shape_names: dict[str, str] = field(default_factory=dict)
+    rot_errs: list[float] = field(default_factory=list)
+    drawn_errs: list[float] = field(default_factory=list)
+    failures: list[str] = field(default_factory=list)
+
+
+def _score_tile(
+    tally: _Tally,
+    name: str,
+    drawn: tuple[Any, FloatArray],
+    found: tuple[list[Description], FloatArray, np.ndarray],
+    ctx: tuple[DesignClasses, Tolerances, RealisticBench, float],
+) -> None:
+    """Count one drawn tile of design ``name`` (and its truth centre [px]) in ``tally``.
+
+    ``found``: the figures' descriptions, centroids (k, 2) [px] and which are taken (updated);
+    ``ctx``: the classes, tolerances, settings and scale [px/mm].
+    """
+    t, centre = drawn
+    descs, cents, used = found
+    classes, tol, bench, s = ctx
+    c, per_shape, shape_names = tally.c, tally.per_shape, tally.shape_names
+    rot_errs, drawn_errs, failures = tally.rot_errs, tally.drawn_errs, tally.failures
+    near = np.hypot(*(cents - centre).T) if len(cents) else np.zeros(0)
+    limit = bench.associate_fraction * math.sqrt(t.slot.area) * s
+    k = int(np.argmin(near)) if len(near) else -1
+    hit = k >= 0 and near[k] <= limit and not used[k]
+    if hit:
+        used[k] = True
+    if t.partial:
+        c["partial"] += 1
+        if hit and classes.best(descs[k], classes.shape, tol, False)[0] is not None:
+            c["false_partial"] += 1
+            failures.append(f"{name}: border-cut {t.slot.shape_key} taken as whole")
+        return
+    c["tiles"] += 1
+    per_shape[t.slot.shape_key][0] += 1
+    shape_names.setdefault(t.slot.shape_key, f"{name}/{t.slot.shape['kind']}")
+    if not hit:
+        c["missed"] += 1
+        failures.append(f"{name}: {t.slot.shape_key} missed (no figure)")
+        return
+    key, m = classes.best(descs[k], classes.shape, tol, False)
+    ok = key == t.slot.shape_key
+    c["shape_correct"] += ok
+    per_shape[t.slot.shape_key][1] += ok
+    if key is None:
+        c["no_match"] += 1
+        failures.append(f"{name}: {t.slot.shape_key} not matched: {descs[k]}")
+    elif not ok:
+        c["false_class"] += 1
+        failures.append(f"{name}: {t.slot.shape_key} taken for {key}")
+    ok_rot = False
+    if ok:
+        rep_angle = classes.slot[key].angle  # type: ignore[index]
+        err = _rot_error_deg(m, rep_angle, t)
+        rot_errs.append(err)
+        ok_rot = err <= bench.rotation_tol_deg
+        as_drawn = None
+        if t.slot.symmetry != 0 and not m.continuous:
+            as_drawn = drawn_angle(t, s)
+        drawn_err = _rot_error_deg(m, rep_angle, t, as_drawn)
+        drawn_errs.append(drawn_err)
+        c["class_and_rotation_drawn"] += drawn_err <= bench.rotation_tol_deg
+    c["class_and_rotation"] += ok and ok_rot
+    key2, _ = classes.best(descs[k], classes.full, tol, True)
+    c["full_correct"] += key2 == t.slot.class_key
+    c["false_full"] += key2 is not None and key2 != t.slot.class_key
+
+
 def run_level(  # noqa: PLR0914, PLR0915, PLR0917
     level: Level,
     images: int,
@@ -147,12 +224,9 @@ def run_level(  # noqa: PLR0914, PLR0915, PLR0917
 ) -> dict[str, Any]:
     """Figures of one level over every design."""
     s = sp.px_per_mm
-    c: dict[str, float] = defaultdict(float)
-    per_shape: dict[str, list[int]] = defaultdict(lambda: [0, 0])
-    shape_names: dict[str, str] = {}
-    rot_errs: list[float] = []
-    drawn_errs: list[float] = []
-    failures: list[str] = []
+    tally = _Tally()
+    c, per_shape, shape_names = tally.c, tally.per_shape, tally.shape_names
+    rot_errs, drawn_errs, failures = tally.rot_errs, tally.drawn_errs, tally.failures
     for name in bench.designs:
         design = Design.load(name)
         tol = pixel_tolerances(design, s)
@@ -166,51 +240,9 @@ def run_level(  # noqa: PLR0914, PLR0915, PLR0917
             cents = np.array([f.centroid for f in res.figures]).reshape(-1, 2)
             used = np.zeros(len(res.figures), bool)
             for t, centre in zip(img.tiles, centres, strict=True):
-                near = np.hypot(*(cents - centre).T) if len(cents) else np.zeros(0)
-                limit = bench.associate_fraction * math.sqrt(t.slot.area) * s
-                k = int(np.argmin(near)) if len(near) else -1
-                hit = k >= 0 and near[k] <= limit and not used[k]
-                if hit:
-                    used[k] = True
-                if t.partial:
-                    c["partial"] += 1
-                    if hit and classes.best(descs[k], classes.shape, tol, False)[0] is not None:
-                        c["false_partial"] += 1
-                        failures.append(f"{name}: border-cut {t.slot.shape_key} taken as whole")
-                    continue
-                c["tiles"] += 1
-                per_shape[t.slot.shape_key][0] += 1
-                shape_names.setdefault(t.slot.shape_key, f"{name}/{t.slot.shape['kind']}")
-                if not hit:
-                    c["missed"] += 1
-                    failures.append(f"{name}: {t.slot.shape_key} missed (no figure)")
-                    continue
-                key, m = classes.best(descs[k], classes.shape, tol, False)
-                ok = key == t.slot.shape_key
-                c["shape_correct"] += ok
-                per_shape[t.slot.shape_key][1] += ok
-                if key is None:
-                    c["no_match"] += 1
-                    failures.append(f"{name}: {t.slot.shape_key} not matched: {descs[k]}")
-                elif not ok:
-                    c["false_class"] += 1
-                    failures.append(f"{name}: {t.slot.shape_key} taken for {key}")
-                ok_rot = False
-                if ok:
-                    rep_angle = classes.slot[key].angle  # type: ignore[index]
-                    err = _rot_error_deg(m, rep_angle, t)
-                    rot_errs.append(err)
-                    ok_rot = err <= bench.rotation_tol_deg
-                    as_drawn = None
-                    if t.slot.symmetry != 0 and not m.continuous:
-                        as_drawn = drawn_angle(t, s)
-                    drawn_err = _rot_error_deg(m, rep_angle, t, as_drawn)
-                    drawn_errs.append(drawn_err)
-                    c["class_and_rotation_drawn"] += drawn_err <= bench.rotation_tol_deg
-                c["class_and_rotation"] += ok and ok_rot
-                key2, _ = classes.best(descs[k], classes.full, tol, True)
-                c["full_correct"] += key2 == t.slot.class_key
-                c["false_full"] += key2 is not None and key2 != t.slot.class_key
+                _score_tile(
+                    tally, name, (t, centre), (descs, cents, used), (classes, tol, bench, s)
+                )
             for k in np.flatnonzero(~used).tolist():
                 if classes.best(descs[k], classes.shape, tol, False)[0] is not None:
                     c["false_spurious"] += 1

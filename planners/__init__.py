@@ -30,7 +30,8 @@ from planners.errors import (
     TrajectoryError,
     UnreachableError,
 )
-from planners.trajectory import JointState, JointTrajectory
+from planners.joints import JointState
+from planners.trajectory import JointTrajectory
 
 __all__ = [
     "CycleConfig",

@@ -29,8 +29,9 @@ import numpy.typing as npt
 
 from planners.config import N_JOINTS, IKConfig, JointLimits
 from planners.errors import InvalidTargetError, PlannerError, UnreachableError
+from planners.joints import as_joint_vector
 from planners.robot import ROBOT_XML
-from planners.trajectory import as_joint_vector
+from planners.tool_pose import tool_down_rotation
 from spatial.angles import wrap_angle
 from spatial.rotations import yaw_from_matrix
 from spatial.units import MM_PER_M
@@ -38,37 +39,8 @@ from spatial.units import MM_PER_M
 Array = npt.NDArray[np.float64]
 
 _TWO_PI = 2.0 * math.pi
-_DOWN = np.diag([1.0, -1.0, -1.0])
-"""Tool-down orientation at yaw 0: site x along world x, site z along world -z."""
 _REACH_SLACK = 1e-3
 """Geometric reach pre-check slack [m] (the iterative solve decides near the boundary)."""
-
-
-def tool_down_rotation(yaw: float) -> Array:
-    """Rotation matrix (3, 3) of the tool pointing down with its x axis at ``yaw`` [rad]."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    return rz @ _DOWN
-
-
-def symmetric_yaws(yaw: float, order: int) -> Array:
-    """The ``order`` yaws equivalent to ``yaw`` under an ``order``-fold rotational symmetry.
-
-    Args:
-        yaw: One yaw [rad].
-        order: Rotational symmetry order (1: no symmetry, 4: a square).
-
-    Returns:
-        Shape (order,) [rad], ``yaw + 2 pi k / order``.
-
-    Raises:
-        InvalidTargetError: Non-finite yaw or order below 1.
-    """
-    if not math.isfinite(yaw):
-        raise InvalidTargetError(f"yaw must be finite, got {yaw!r}")
-    if order < 1:
-        raise InvalidTargetError(f"symmetry order must be >= 1, got {order!r}")
-    return yaw + _TWO_PI * np.arange(order) / order
 
 
 @dataclass(frozen=True)
@@ -510,11 +482,4 @@ class IKSolver:
         return IKSolution(best_q, best_yaw, pe, oe, sol.iterations, sol.attempts)
 
 
-__all__ = [
-    "ROBOT_XML",
-    "IKSolution",
-    "IKSolver",
-    "symmetric_yaws",
-    "tool_down_rotation",
-    "wrap_angle",
-]
+__all__ = ["IKSolution", "IKSolver", "ROBOT_XML", "wrap_angle"]

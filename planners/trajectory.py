@@ -16,126 +16,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 from ruckig import InputParameter, Result, Ruckig, Trajectory
 
 from planners.config import N_JOINTS, JointLimits
-from planners.errors import InvalidTargetError, LimitError, PlannerError, TrajectoryError
+from planners.errors import LimitError, TrajectoryError
+from planners.joints import Array, JointState, as_joint_vector, check_in_range, unwrap_target
 
-Array = npt.NDArray[np.float64]
-
-_TWO_PI = 2.0 * math.pi
 _OK_RESULTS = (Result.Working, Result.Finished)
 _JOIN_TOLERANCE = 1e-9
 """Largest position [rad] or velocity [rad/s] jump accepted between joined pieces (rounding)."""
-
-
-def as_joint_vector(value: npt.ArrayLike, name: str) -> Array:
-    """A finite joint vector of shape (6,) as float64.
-
-    Raises:
-        InvalidTargetError: Wrong shape or a non-finite entry (the message names ``name``).
-    """
-    arr = np.asarray(value, dtype=np.float64)
-    if arr.shape != (N_JOINTS,):
-        raise InvalidTargetError(f"{name} must have shape ({N_JOINTS},), got {arr.shape}")
-    if not np.isfinite(arr).all():
-        raise InvalidTargetError(f"{name} must be finite, got {arr.tolist()}")
-    return arr
-
-
-def check_in_range(
-    q: Array | list[float], limits: JointLimits, name: str, margin: float = 0.0
-) -> None:
-    """Raise `LimitError` if configuration ``q`` [rad] leaves the joint ranges (plus ``margin``).
-
-    Raises:
-        LimitError: Names the joint, its value and its range in degrees.
-    """
-    values = q.tolist() if isinstance(q, np.ndarray) else q
-    bad = [
-        i
-        for i, (v, lo, hi) in enumerate(zip(values, limits.lower, limits.upper, strict=True))
-        if v < lo - margin or v > hi + margin
-    ]
-    if bad:
-        i = bad[0]
-        raise LimitError(
-            f"{name}: joint {i + 1} at {math.degrees(values[i]):.3f} deg is outside its range "
-            f"[{math.degrees(limits.lower[i]):.1f}, {math.degrees(limits.upper[i]):.1f}] deg"
-        )
-
-
-def unwrap_target(
-    q_from: npt.ArrayLike,
-    q_to: npt.ArrayLike,
-    limits: JointLimits,
-    joints: Sequence[int] = (3, 5),
-) -> Array:
-    """Replace each wrapping joint's target by its equivalent angle nearest to ``q_from``.
-
-    Args:
-        q_from: Start configuration, shape (6,) [rad].
-        q_to: Target configuration, shape (6,) [rad].
-        limits: Joint ranges.
-        joints: Indices of joints whose angle may change by multiples of 2 pi.
-
-    Returns:
-        The target with ``q_to[j] + 2 pi k`` nearest to ``q_from[j]`` inside the range, shape (6,).
-
-    Raises:
-        InvalidTargetError: Non-finite input.
-        LimitError: No equivalent angle of a wrapping joint lies inside its range.
-    """
-    a = as_joint_vector(q_from, "q_from").tolist()
-    b = as_joint_vector(q_to, "q_to").tolist()
-    return np.array(unwrap_values(a, b, limits, joints))
-
-
-def unwrap_values(
-    q_from: list[float], q_to: list[float], limits: JointLimits, joints: Sequence[int] = (3, 5)
-) -> list[float]:
-    """`unwrap_target` on validated plain lists of 6 angles [rad]: returns a new list.
-
-    Raises:
-        LimitError: No equivalent angle of a wrapping joint lies inside its range.
-    """
-    a, b = q_from, list(q_to)
-    for j in joints:
-        lo, hi = limits.lower[j], limits.upper[j]
-        k_lo = math.ceil((lo - b[j]) / _TWO_PI)
-        k_hi = math.floor((hi - b[j]) / _TWO_PI)
-        if k_lo > k_hi:
-            raise LimitError(
-                f"joint {j + 1}: no angle equivalent to {math.degrees(b[j]):.2f} deg inside "
-                f"[{math.degrees(lo):.1f}, {math.degrees(hi):.1f}] deg"
-            )
-        k_near = round((a[j] - b[j]) / _TWO_PI)
-        b[j] += _TWO_PI * min(max(k_near, k_lo), k_hi)
-    return b
-
-
-@dataclass(frozen=True)
-class JointState:
-    """Position, velocity and acceleration of the arm.
-
-    Attributes:
-        q: Joint angles, shape (6,) [rad].
-        qd: Joint velocities, shape (6,) [rad/s].
-        qdd: Joint accelerations, shape (6,) [rad/s^2].
-    """
-
-    q: Array
-    qd: Array = field(default_factory=lambda: np.zeros(N_JOINTS))
-    qdd: Array = field(default_factory=lambda: np.zeros(N_JOINTS))
-
-    @staticmethod
-    def at_rest(q: npt.ArrayLike) -> JointState:
-        """The arm standing still at ``q`` [rad], shape (6,)."""
-        return JointState(as_joint_vector(q, "q"))
 
 
 @dataclass(frozen=True)
@@ -414,38 +307,6 @@ def join(pieces: Sequence[Segment], label: str) -> Segment:
     )
 
 
-def peak_usage(seg: Segment, limits: JointLimits) -> tuple[Array, Array]:
-    """Exact peak |acceleration| and |jerk| of a ruckig segment per joint, as limit fractions.
-
-    Read from ruckig's phase profiles (sampling misses jerk phases shorter than the period).
-
-    Returns:
-        Acceleration and jerk usage, each shape (6,).
-
-    Raises:
-        PlannerError: ``seg`` is not a ruckig segment.
-    """
-    if seg.ruckig is None:
-        raise PlannerError(f"segment {seg.label!r} is not a ruckig segment")
-    acc, jerk = np.zeros(N_JOINTS), np.zeros(N_JOINTS)
-    for dof, prof in enumerate(seg.ruckig.profiles[0]):
-        active = np.asarray(prof.t) > 0.0
-        j = np.abs(np.asarray(prof.j))[active]
-        jerk[dof] = j.max() if j.size else 0.0
-        acc[dof] = np.abs(np.asarray(prof.a)).max()
-    return acc / np.asarray(limits.max_acceleration), jerk / np.asarray(limits.max_jerk)
-
-
-def segment_within_limits(seg: Segment, limits: JointLimits, dt: float, tolerance: float) -> bool:
-    """Whether a segment sampled every ``dt`` [s] stays within every limit (relative slack)."""
-    n = max(2, int(math.ceil(seg.duration / dt)) + 1)
-    times = np.linspace(0.0, seg.duration, n)
-    traj = JointTrajectory(times, *seg.states(times))
-    rep = limit_report(traj, limits)
-    worst = max(rep.velocity.max(), rep.acceleration.max(), rep.jerk.max())
-    return bool(rep.in_range and worst <= 1.0 + tolerance)
-
-
 @dataclass(frozen=True)
 class Piecewise:
     """A chain of segments, each starting where the previous one ends.
@@ -553,87 +414,14 @@ def chain(
     return Piecewise(tuple(segments))
 
 
-@dataclass(frozen=True)
-class LimitReport:
-    """Peak usage of each limit by a sampled trajectory, as fractions of the limit.
-
-    Attributes:
-        velocity: max |qd| / max_velocity per joint, shape (6,).
-        acceleration: max |qdd| / max_acceleration per joint, shape (6,).
-        jerk: max |finite-difference jerk| / max_jerk per joint, shape (6,).
-        in_range: All positions inside the joint ranges.
-    """
-
-    velocity: Array
-    acceleration: Array
-    jerk: Array
-    in_range: bool
-
-
-def limit_report(traj: JointTrajectory, limits: JointLimits) -> LimitReport:
-    """Measure how much of each limit a sampled trajectory uses."""
-    vel = np.max(np.abs(traj.qd), axis=0) / np.asarray(limits.max_velocity)
-    acc = np.max(np.abs(traj.qdd), axis=0) / np.asarray(limits.max_acceleration)
-    if traj.times.size > 2:
-        jerk_fd = np.diff(traj.qdd, axis=0) / np.diff(traj.times)[:, None]
-        jerk = np.max(np.abs(jerk_fd), axis=0) / np.asarray(limits.max_jerk)
-    else:
-        jerk = np.zeros(N_JOINTS)
-    lo, hi = np.asarray(limits.lower), np.asarray(limits.upper)
-    in_range = bool(np.all((traj.q >= lo - 1e-9) & (traj.q <= hi + 1e-9)))
-    return LimitReport(vel, acc, jerk, in_range)
-
-
-def validate(traj: JointTrajectory, limits: JointLimits, tolerance: float = 1e-3) -> None:
-    """Raise `LimitError` if a sampled trajectory breaks a limit by more than ``tolerance``.
-
-    Args:
-        traj: The trajectory.
-        limits: Kinematic limits.
-        tolerance: Relative slack (finite-difference jerk at segment joins is excluded by
-            ruckig's construction; this covers rounding).
-
-    Raises:
-        LimitError: Names the joint, the quantity, the peak and the limit.
-    """
-    if not (np.all(np.isfinite(traj.q)) and np.all(np.isfinite(traj.qd))):
-        raise LimitError("trajectory contains non-finite values")
-    rep = limit_report(traj, limits)
-    if not rep.in_range:
-        outside = (traj.q < np.asarray(limits.lower)) | (traj.q > np.asarray(limits.upper))
-        check_in_range(traj.q[int(np.argmax(np.any(outside, axis=1)))], limits, "trajectory")
-    for name, use, lim in (
-        ("velocity", rep.velocity, limits.max_velocity),
-        ("acceleration", rep.acceleration, limits.max_acceleration),
-        ("jerk", rep.jerk, limits.max_jerk),
-    ):
-        over = np.flatnonzero(use > 1.0 + tolerance)
-        if over.size:
-            i = int(over[0])
-            raise LimitError(
-                f"trajectory: joint {i + 1} {name} peaks at {use[i] * lim[i]:.4f}, "
-                f"limit {lim[i]:.4f} (SI units, rad-based)"
-            )
-
-
 __all__ = [
-    "JointState",
     "JointTrajectory",
-    "LimitReport",
     "Piecewise",
     "Segment",
-    "as_joint_vector",
     "chain",
-    "check_in_range",
     "hold_segment",
     "join",
-    "segment_within_limits",
+    "plan_segment",
     "superpose",
     "window",
-    "limit_report",
-    "peak_usage",
-    "plan_segment",
-    "unwrap_target",
-    "unwrap_values",
-    "validate",
 ]

@@ -26,8 +26,9 @@ from qshape.errors import (
     ToleranceError,
 )
 from qshape.limits import Limits
-from qshape.outline.simplify import OutlineParams
+from qshape.outline.params import OutlineParams
 from qshape.theory.assign import Assignment, assign
+from qshape.theory.boundary import Boundary
 from qshape.theory.description import (
     BoundaryDescription,
     Description,
@@ -36,7 +37,7 @@ from qshape.theory.description import (
     describe,
     describe_many,
 )
-from qshape.theory.figure import Boundary, Figure
+from qshape.theory.figure import Figure
 from qshape.theory.matching import Match, canonical_key, canonical_keys, match, match_best
 from qshape.theory.text_parser import parse
 from qshape.theory.tolerances import Tolerances
@@ -76,14 +77,9 @@ __all__ = [
 # Vision: mosaic designs, rendering, extraction from images (issue 3).
 from qshape.design import Design, Slot  # noqa: E402
 from qshape.synthetic.render import render_design, save_png  # noqa: E402
-from qshape.vision.extract import (  # noqa: E402
-    ExtractParams,
-    ExtractResult,
-    ImageError,
-    extract,
-    extract_detailed,
-)
+from qshape.vision.extract import ExtractResult, extract, extract_detailed
 from qshape.vision.health import ImageHealth, image_health  # noqa: E402
+from qshape.vision.params import ExtractParams, ImageError
 
 __all__ += [
     "Design",

@@ -14,14 +14,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("spatial", "qshape", "planners", "envs", "agents", "apps", "benchmarks", "configs")
 
-KNOWN_CIRCLES: frozenset[frozenset[str]] = frozenset(
-    {
-        # Known, being removed in issue 25's qshape work (a separate change): the design
-        # model and its checks and file format import each other. Delete this entry then.
-        frozenset({"qshape.design.checks", "qshape.design.fileformat", "qshape.design.model"}),
-    }
-)
-"""Circles allowed for now, each as its set of modules; the test fails on any other."""
+KNOWN_CIRCLES: frozenset[frozenset[str]] = frozenset()
+"""Circles allowed for now, each as its set of modules; the test fails on any other (none left)."""
 
 
 def _module_name(path: Path) -> str:

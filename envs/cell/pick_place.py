@@ -27,8 +27,9 @@ from planners.config import PlannerConfig
 from planners.errors import PlannerError
 from planners.executor import TimedEvent, TrajectoryExecutor
 from planners.ik import IKSolver
+from planners.joints import JointState
 from planners.pick_place import PickPlacePlanner
-from planners.trajectory import JointState, chain
+from planners.trajectory import chain
 from spatial.rotations import yaw_from_matrix
 
 AT_TARGET = 1e-6

@@ -2,20 +2,16 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 import shapely
 
 from qshape import geometry as geo
+from qshape.design.fields import DesignFields
 from qshape.errors import DesignError, InvalidFigureError
 from qshape.geometry import FloatArray
 
-if TYPE_CHECKING:
-    from qshape.design.model import Design
 
-
-def validate(design: Design, source: str = "") -> None:
+def validate(design: DesignFields, source: str = "") -> None:
     """Check every slot and the layout.
 
     Raises:

@@ -8,17 +8,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import yaml
 
+from qshape.design.fields import DesignFields
 from qshape.design.rules import DesignRules
 from qshape.design.slot import Slot
 from qshape.design.values import color_hex, number, parse_color, plain, round_mm
 from qshape.errors import DesignError
-
-if TYPE_CHECKING:
-    from qshape.design.model import Design
 
 DESIGN_KEYS = {"name", "description", "mesh", "joint", "grout_color", "slots"}
 SLOT_KEYS = {"name", "shape", "color", "pose"}
@@ -97,7 +95,7 @@ def read_fields(
     }
 
 
-def to_mapping(design: Design) -> dict[str, Any]:
+def to_mapping(design: DesignFields) -> dict[str, Any]:
     """The design as a file mapping (inverse of `read_fields`)."""
     out: dict[str, Any] = {"name": design.name}
     if design.description:
@@ -109,7 +107,7 @@ def to_mapping(design: Design) -> dict[str, Any]:
     return out
 
 
-def save(design: Design, path: str | Path, header: str = "") -> None:
+def save(design: DesignFields, path: str | Path, header: str = "") -> None:
     """Write the design as YAML (``header`` lines become leading comments)."""
     text = "".join(f"# {line}\n".replace("# \n", "#\n") for line in header.splitlines())
     text += yaml.safe_dump(to_mapping(design), sort_keys=False, default_flow_style=None, width=100)

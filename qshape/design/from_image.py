@@ -38,7 +38,7 @@ def design_mapping(
 
     Raises:
         DesignError: Bad scale or joint, or no whole tiles found.
-        qshape.vision.extract.ImageError: Unreadable file or malformed image.
+        qshape.vision.params.ImageError: Unreadable file or malformed image.
     """
     scale = number(mm_per_px, "mm_per_px")
     joint = number(joint_mm, "joint_mm")

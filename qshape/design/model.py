@@ -144,12 +144,12 @@ class Design:
             mm_per_px: Scale, in [mm/px].
             joint_mm: Joint width of the design, in [mm].
             name: Design name.
-            params: `qshape.vision.extract.ExtractParams` (None: ``configs/vision.yaml``).
+            params: `qshape.vision.params.ExtractParams` (None: ``configs/vision.yaml``).
             rules: Validation rules.
 
         Raises:
             DesignError: Unreadable file, bad scale, no tiles, or an invalid resulting design.
-            qshape.vision.extract.ImageError: Malformed image.
+            qshape.vision.params.ImageError: Malformed image.
         """
         data = design_mapping(image, mm_per_px, joint_mm, name=name, params=params, rules=rules)
         return cls.from_dict(data, rules=rules, source=f"design image {name!r}")

@@ -17,7 +17,8 @@ from numpy.typing import ArrayLike
 from qshape import geometry as geo
 from qshape.errors import DesignError
 from qshape.geometry import BoolArray, FloatArray
-from qshape.theory.figure import Boundary, Figure
+from qshape.theory.boundary import Boundary
+from qshape.theory.figure import Figure
 
 
 @dataclass(frozen=True, eq=False)

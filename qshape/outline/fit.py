@@ -274,6 +274,58 @@ class _Ring:
         return lo - shift, mid - shift, hi - shift
 
 
+def _side_fits(
+    moments: FloatArray, f: np.ndarray, sides: tuple[np.ndarray, np.ndarray, np.ndarray]
+) -> tuple[FloatArray, FloatArray]:
+    """Line and arc residuals (3 k,) of the runs before, after and both beside k corners.
+
+    ``f``: each corner's outline; ``sides``: (lo, mid, hi) sample bounds of `_Ring.sides`.
+    """
+    lo, mid, hi = sides
+    k = len(f)
+    # One call per fit over all ranges stacked (runs before, runs after, both): at a few
+    # hundred corners numpy's cost is per call, not per element.
+    at = prefix_at(moments, np.concatenate((f, f, f)), np.concatenate((lo, mid, hi)))
+    s = np.empty((3 * k, 10))
+    np.subtract(at[k:], at[:-k], out=s[: 2 * k])  # runs before, then runs after
+    np.add(s[:k], s[k : 2 * k], out=s[2 * k :])  # both runs
+    line = line_sse(s)
+    arc = arc_sse(s, line)  # the union's arc is used only where a run is curved
+    return line, arc
+
+
+def _unbend(  # noqa: PLR0917
+    moments: FloatArray,
+    f: np.ndarray,
+    sides: tuple[np.ndarray, np.ndarray, np.ndarray],
+    curved: tuple[np.ndarray, np.ndarray],
+    trim: int,
+    bend: BendTest,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Curved runs beside the corners that are two edges instead are no longer curved.
+
+    ``curved``: (run before curved, run after curved) per corner, updated in place. Returns
+    the corners whose run before is bent and that run's best split (sample index).
+    """
+    lo, mid, hi = sides
+    curved_a, curved_b = curved
+    ia, ib = np.flatnonzero(curved_a), np.flatnonzero(curved_b)
+    # Near ends trimmed too: the corner's own rounding stays out of the split's lines.
+    cut_a = np.minimum(trim, (mid[ia] - lo[ia]) // 4)
+    cut_b = np.minimum(trim, (hi[ib] - mid[ib]) // 4)
+    bent, split = bent_runs(
+        moments,
+        np.concatenate((f[ia], f[ib])),
+        np.concatenate((lo[ia], mid[ib] + cut_b)),
+        np.concatenate((mid[ia] - cut_a, hi[ib])),
+        bend,
+    )
+    split_at, split = ia[bent[: len(ia)]], split[: len(ia)][bent[: len(ia)]]
+    curved_a[split_at] = False
+    curved_b[ib[bent[len(ia) :]]] = False
+    return split_at, split
+
+
 def merge_fitted_corners(  # noqa: PLR0913, PLR0917
     moments: FloatArray,
     corners: list[np.ndarray],
@@ -318,34 +370,14 @@ def merge_fitted_corners(  # noqa: PLR0913, PLR0917
         lo, mid, hi = ring.sides(n, trim)
         f = ring.own
         k = len(f)
-        # One call per fit over all ranges stacked (runs before, runs after, both): at a few
-        # hundred corners numpy's cost is per call, not per element.
-        at = prefix_at(moments, np.concatenate((f, f, f)), np.concatenate((lo, mid, hi)))
-        s = np.empty((3 * k, 10))
-        np.subtract(at[k:], at[:-k], out=s[: 2 * k])  # runs before, then runs after
-        np.add(s[:k], s[k : 2 * k], out=s[2 * k :])  # both runs
-        line = line_sse(s)
-        arc = arc_sse(s, line)  # the union's arc is used only where a run is curved
+        line, arc = _side_fits(moments, f, (lo, mid, hi))
         la, lb = line[:k], line[k : 2 * k]
         aa, ab = arc[:k], arc[k : 2 * k]
         lim = limit[f]
         curved_a, curved_b = la - aa > lim, lb - ab > lim
         split_at = split = np.zeros(0, dtype=np.int64)  # corners whose run before is bent
         if bend is not None and (curved_a.any() or curved_b.any()):
-            ia, ib = np.flatnonzero(curved_a), np.flatnonzero(curved_b)
-            # Near ends trimmed too: the corner's own rounding stays out of the split's lines.
-            cut_a = np.minimum(trim, (mid[ia] - lo[ia]) // 4)
-            cut_b = np.minimum(trim, (hi[ib] - mid[ib]) // 4)
-            bent, split = bent_runs(
-                moments,
-                np.concatenate((f[ia], f[ib])),
-                np.concatenate((lo[ia], mid[ib] + cut_b)),
-                np.concatenate((mid[ia] - cut_a, hi[ib])),
-                bend,
-            )
-            split_at, split = ia[bent[: len(ia)]], split[: len(ia)][bent[: len(ia)]]
-            curved_a[split_at] = False
-            curved_b[ib[bent[len(ia) :]]] = False
+            split_at, split = _unbend(moments, f, (lo, mid, hi), (curved_a, curved_b), trim, bend)
         curved = curved_a | curved_b
         union = np.where(curved, arc[2 * k :], line[2 * k :])
         cost = union - aa - ab  # arc_sse <= line_sse: each run's best fit

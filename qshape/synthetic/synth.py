@@ -201,13 +201,10 @@ def generate(
     s = p.px_per_mm
     w, h = p.width_px, p.height_px
     layout = _Layout(np.zeros((h, w), np.uint8), np.zeros((h, w), np.uint8))
-    gap_px = max(1, int(math.ceil(p.gap_mm * s)))
-    step = p.outline_step_px
     truths: list[TileTruth] = []
     drawn: list[tuple[FloatArray, list[FloatArray]]] = []
     colors: list[tuple[float, float, float]] = []
     radii: list[float] = []
-    rp = RenderParams()
     for _ in range(n_tiles):
         idx = int(gen.integers(len(pool)))
         slot = pool[idx]
@@ -215,77 +212,123 @@ def generate(
         _, c = local.area_centroid(slot.rules.outline_step_mm)
         local = local.transformed(0.0, -c)
         radius = float(np.max(np.hypot(*local.outer.dense(1.0).T))) * s
-        mode = "free"
-        if e.touching_probability > 0.0 and truths and gen.random() < e.touching_probability:
-            mode = "touch"
-        elif e.partial_probability > 0.0 and gen.random() < e.partial_probability:
-            mode = "partial"
-        for _attempt in range(p.placement_attempts):
-            angle = float(gen.uniform(-math.pi, math.pi))
-            lo = radius + p.margin_px
-            if w - 2 * lo <= 0 or h - 2 * lo <= 0:
-                break
-            if mode == "touch":
-                found = _touching_pose(local, angle, radius, truths, radii, layout, p, gen)
-                if found is None:
-                    continue
-                center, placed, outline = found
-                local_mask = _tile_mask(outline, 0, w, h)
-            else:
-                if mode == "partial":
-                    center = _border_center(radius, w, h, gen)
-                else:
-                    center = np.array([gen.uniform(lo, w - lo), gen.uniform(lo, h - lo)])
-                placed = place_path(local, angle, center, s)
-                outline = placed.outer.dense(step)
-                local_mask = _tile_mask(outline, gap_px, w, h)
-                if local_mask is None or layout.hits(local_mask, layout.occupied):
-                    continue
-            solid = _tile_mask(outline, 0, w, h)
-            if local_mask is None or solid is None:
-                continue
-            layout.add(local_mask, solid)
-            color = np.clip(np.array(slot.color) + gen.normal(0.0, p.color_jitter, 3), 0, 1)
-            rgb = (float(color[0]), float(color[1]), float(color[2]))
-            pts, mask = placed.outer.relevant(slot.rules.max_arc_deg)
-            hole_rel = [hl.relevant(slot.rules.max_arc_deg) for hl in placed.holes]
-            holes = [hl.dense(step) for hl in placed.holes]
-            worn, holes = _worn_edges(placed, outline, holes, e, s, gen)
-            truths.append(
-                TileTruth(
-                    slot=slot,
-                    slot_index=idx,
-                    angle=angle,
-                    rotation=wrap_angle(math.radians(slot.angle) - angle),
-                    center_px=center,
-                    points_px=pts,
-                    curve_mask=mask,
-                    hole_points_px=tuple(hp for hp, _ in hole_rel),
-                    hole_curve_masks=tuple(hm for _, hm in hole_rel),
-                    color=rgb,
-                    partial=_cut_by_border(outline, w, h),
-                    outline_px=worn,
-                )
-            )
-            drawn.append((worn, holes))
-            colors.append(rgb)
-            radii.append(radius)
-            break
+        mode = _placement_mode(e, truths, gen)
+        pose = _place(local, radius, mode, (truths, radii, layout), p, gen)
+        if pose is None:
+            continue
+        truth, worn, holes = _tile_truth(slot, idx, pose, p, gen)
+        truths.append(truth)
+        drawn.append((worn, holes))
+        colors.append(truth.color)
+        radii.append(radius)
     image = np.empty((h, w, 3), np.uint8)
     image[:] = [round(255 * v) for v in p.belt_color]
-    fill_tiles(image, drawn, colors, rp)
-    glaze = None
-    if e.highlight_strength > 0.0 and e.highlight_probability > 0.0:
-        glaze = np.zeros((h, w), np.uint8)
-        rings = [np.round(o).astype(np.int32) for o, _ in drawn]
-        cv2.fillPoly(glaze, rings, 1)
-        for _, hs in drawn:
-            if hs:
-                cv2.fillPoly(glaze, [np.round(hh).astype(np.int32) for hh in hs], 0)
-    picture = _camera(image, gen, p, glaze, [t.center_px for t in truths], radii)
+    fill_tiles(image, drawn, colors, RenderParams())
+    picture = _camera(image, gen, p, _glaze(drawn, e, h, w), [t.center_px for t in truths], radii)
     if e.lens_k1 != 0.0 or e.lens_k2 != 0.0:
         truths = [_distorted_truth(t, e, w, h) for t in truths]
     return SynthImage(picture, truths, s)
+
+
+_Pose = tuple[float, FloatArray, TilePath, FloatArray]
+"""A drawn tile's angle [rad], centre (2,) [px], placed path and dense outline (k, 2) [px]."""
+
+
+def _placement_mode(e: fx.CameraEffects, truths: list[TileTruth], gen: np.random.Generator) -> str:
+    """How the next tile is laid: "touch" (a laid tile), "partial" (the border) or "free"."""
+    if e.touching_probability > 0.0 and truths and gen.random() < e.touching_probability:
+        return "touch"
+    if e.partial_probability > 0.0 and gen.random() < e.partial_probability:
+        return "partial"
+    return "free"
+
+
+def _place(  # noqa: PLR0917
+    local: TilePath,
+    radius: float,
+    mode: str,
+    laid: tuple[list[TileTruth], list[float], _Layout],
+    p: SynthParams,
+    gen: np.random.Generator,
+) -> _Pose | None:
+    """A pose for one tile, marked in the layout; None when none fits in the attempts.
+
+    ``laid``: the tiles laid so far, their radii [px] and the layout's masks.
+    """
+    truths, radii, layout = laid
+    w, h = p.width_px, p.height_px
+    gap_px = max(1, int(math.ceil(p.gap_mm * p.px_per_mm)))
+    for _attempt in range(p.placement_attempts):
+        angle = float(gen.uniform(-math.pi, math.pi))
+        lo = radius + p.margin_px
+        if w - 2 * lo <= 0 or h - 2 * lo <= 0:
+            return None
+        if mode == "touch":
+            found = _touching_pose(local, angle, radius, truths, radii, layout, p, gen)
+            if found is None:
+                continue
+            center, placed, outline = found
+            local_mask = _tile_mask(outline, 0, w, h)
+        else:
+            if mode == "partial":
+                center = _border_center(radius, w, h, gen)
+            else:
+                center = np.array([gen.uniform(lo, w - lo), gen.uniform(lo, h - lo)])
+            placed = place_path(local, angle, center, p.px_per_mm)
+            outline = placed.outer.dense(p.outline_step_px)
+            local_mask = _tile_mask(outline, gap_px, w, h)
+            if local_mask is None or layout.hits(local_mask, layout.occupied):
+                continue
+        solid = _tile_mask(outline, 0, w, h)
+        if local_mask is None or solid is None:
+            continue
+        layout.add(local_mask, solid)
+        return angle, center, placed, outline
+    return None
+
+
+def _tile_truth(
+    slot: Slot, idx: int, pose: _Pose, p: SynthParams, gen: np.random.Generator
+) -> tuple[TileTruth, FloatArray, list[FloatArray]]:
+    """The truth of a placed tile, its worn outline and its holes (dense, [px])."""
+    angle, center, placed, outline = pose
+    s, step = p.px_per_mm, p.outline_step_px
+    color = np.clip(np.array(slot.color) + gen.normal(0.0, p.color_jitter, 3), 0, 1)
+    rgb = (float(color[0]), float(color[1]), float(color[2]))
+    pts, mask = placed.outer.relevant(slot.rules.max_arc_deg)
+    hole_rel = [hl.relevant(slot.rules.max_arc_deg) for hl in placed.holes]
+    holes = [hl.dense(step) for hl in placed.holes]
+    worn, holes = _worn_edges(placed, outline, holes, p.effects, s, gen)
+    truth = TileTruth(
+        slot=slot,
+        slot_index=idx,
+        angle=angle,
+        rotation=wrap_angle(math.radians(slot.angle) - angle),
+        center_px=center,
+        points_px=pts,
+        curve_mask=mask,
+        hole_points_px=tuple(hp for hp, _ in hole_rel),
+        hole_curve_masks=tuple(hm for _, hm in hole_rel),
+        color=rgb,
+        partial=_cut_by_border(outline, p.width_px, p.height_px),
+        outline_px=worn,
+    )
+    return truth, worn, holes
+
+
+def _glaze(
+    drawn: list[tuple[FloatArray, list[FloatArray]]], e: fx.CameraEffects, h: int, w: int
+) -> np.ndarray | None:
+    """Where glaze highlights may fall (uint8 (h, w), 1 on tiles less their holes), or None."""
+    if not (e.highlight_strength > 0.0 and e.highlight_probability > 0.0):
+        return None
+    glaze = np.zeros((h, w), np.uint8)
+    rings = [np.round(o).astype(np.int32) for o, _ in drawn]
+    cv2.fillPoly(glaze, rings, 1)
+    for _, hs in drawn:
+        if hs:
+            cv2.fillPoly(glaze, [np.round(hh).astype(np.int32) for hh in hs], 0)
+    return glaze
 
 
 @dataclass

@@ -19,7 +19,8 @@ import numpy as np
 from qshape.errors import InvalidFigureError
 from qshape.geometry import BoolArray, FloatArray
 from qshape.theory import labels as lb
-from qshape.theory.figure import Color, Figure, densify
+from qshape.theory.boundary import densify
+from qshape.theory.figure import Color, Figure
 from qshape.theory.labels import CodeArray
 from qshape.theory.tolerances import Tolerances, default_tolerances, resolve_tolerances  # noqa: F401
 

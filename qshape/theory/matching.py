@@ -46,22 +46,12 @@ from qshape.errors import MatchError
 from qshape.geometry import wrap_angle
 from qshape.theory import labels as lb
 from qshape.theory.description import ONLY_CURVES, Description, describe
-from qshape.theory.evaluator import (
-    BlockResult,
-    Pack,
-    cyclic_compat_by_offset,
-    equivalent_entries,
-    evaluate_block,
-    evaluate_pairs,
-    pack,
-    prefilter,
-    self_residuals,
-    take,
-)
+from qshape.theory.evaluator import BlockResult, equivalent_entries, evaluate_block, evaluate_pairs
 from qshape.theory.figure import Figure
 from qshape.theory.keys import canonical_key, canonical_keys, clear_key_caches, coarse_key
 from qshape.theory.labels import CodeArray
 from qshape.theory.neighbours import neighbours
+from qshape.theory.pack import Pack, cyclic_compat_by_offset, pack, prefilter, self_residuals, take
 from qshape.theory.tolerances import Tolerances, resolve_tolerances
 
 K = TypeVar("K")

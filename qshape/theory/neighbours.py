@@ -29,8 +29,9 @@ import numpy as np
 
 from qshape.errors import InvalidFigureError
 from qshape.geometry import BoolArray, FloatArray, cross2
+from qshape.theory.boundary import Boundary
 from qshape.theory.description import Description, describe
-from qshape.theory.figure import Boundary, Figure
+from qshape.theory.figure import Figure
 from qshape.theory.tolerances import Tolerances
 
 

@@ -26,7 +26,8 @@ from scipy.sparse import coo_matrix, vstack
 from qshape.errors import MatchError
 from qshape.geometry import FloatArray
 from qshape.theory.description import Description
-from qshape.theory.evaluator import Pack, evaluate_pairs, pack, take
+from qshape.theory.evaluator import evaluate_pairs
+from qshape.theory.pack import Pack, pack, take
 from qshape.theory.tolerances import Tolerances
 
 IntArray = NDArray[np.int64]

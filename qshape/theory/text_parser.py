@@ -167,16 +167,7 @@ def parse(text: str) -> Description:
             f"line 2: type must be '<without holes|with holes>, <without curves|with curves|"
             f"only curves>', got {_clip(lines[1])!r}"
         )
-    ctext = _value(lines[2], "color", "line 3")
-    color: Color | None = None
-    if ctext != "none":
-        parts = ctext.split()
-        if len(parts) != 3:
-            raise ParseError(f"line 3: color must be 'none' or three numbers, got {_clip(ctext)!r}")
-        rgb = [_float(p, "color", "line 3") for p in parts]
-        if not all(0.0 <= v <= 1.0 for v in rgb):
-            raise ParseError(f"line 3: color components must be in [0, 1], got {_clip(ctext)!r}")
-        color = (rgb[0], rgb[1], rgb[2])
+    color = _color(_value(lines[2], "color", "line 3"))
     area = _float(_value(lines[3], "area", "line 4"), "area", "line 4")
     perimeter = _float(_value(lines[4], "perimeter", "line 5"), "perimeter", "line 5")
     if area <= 0.0 or perimeter <= 0.0:
@@ -190,37 +181,54 @@ def parse(text: str) -> Description:
     at = 6 + count
     holes: list[HoleDescription] = []
     while at < len(lines):
-        m = _HOLE_RE.match(lines[at])
-        if not m:
-            raise ParseError(
-                f"line {at + 1}: expected 'hole: CIi [cones] <type_curve>, nodes: n'"
-                f", got {_clip(lines[at])!r}"
-            )
-        rel, pos, hcurve, hcount = m.groups()
-        if rel != CIi:
-            raise ParseError(f"line {at + 1}: hole relation must be {CIi!r}, got {rel!r}")
-        position = tuple(p.strip() for p in pos.split(",") if p.strip())
-        allowed = (*CONES, CENTRE)
-        if (
-            not position
-            or any(p not in allowed for p in position)
-            or (CENTRE in position and len(position) > 1)
-        ):
-            raise ParseError(
-                f"line {at + 1}: position must be 'C' or cones from {', '.join(CONES)}, got [{pos}]"
-            )
-        hcount_int = _int(hcount, f"line {at + 1}")
-        boundary = _parse_boundary(lines, at + 1, hcount_int, f"hole {len(holes)}")
-        if boundary.type_curve != hcurve:
-            raise ParseError(
-                f"line {at + 1}: hole type says {hcurve!r} but its nodes are "
-                f"{boundary.type_curve!r}"
-            )
-        holes.append(HoleDescription(position, boundary, rel))
-        at += 1 + hcount_int
+        hole, at = _hole(lines, at, len(holes))
+        holes.append(hole)
     if (types[0] == WITH_HOLES) != bool(holes):
         raise ParseError(f"line 2: type says {types[0]!r} but {len(holes)} holes follow")
     return Description(types[0], types[1], color, area, perimeter, outer, tuple(holes))
+
+
+def _color(ctext: str) -> Color | None:
+    """The colour line's value: 'none' or three numbers in [0, 1]."""
+    if ctext == "none":
+        return None
+    parts = ctext.split()
+    if len(parts) != 3:
+        raise ParseError(f"line 3: color must be 'none' or three numbers, got {_clip(ctext)!r}")
+    rgb = [_float(p, "color", "line 3") for p in parts]
+    if not all(0.0 <= v <= 1.0 for v in rgb):
+        raise ParseError(f"line 3: color components must be in [0, 1], got {_clip(ctext)!r}")
+    return (rgb[0], rgb[1], rgb[2])
+
+
+def _hole(lines: list[str], at: int, index: int) -> tuple[HoleDescription, int]:
+    """Hole ``index`` whose header is line ``at`` (0-based), and the line after its nodes."""
+    m = _HOLE_RE.match(lines[at])
+    if not m:
+        raise ParseError(
+            f"line {at + 1}: expected 'hole: CIi [cones] <type_curve>, nodes: n'"
+            f", got {_clip(lines[at])!r}"
+        )
+    rel, pos, hcurve, hcount = m.groups()
+    if rel != CIi:
+        raise ParseError(f"line {at + 1}: hole relation must be {CIi!r}, got {rel!r}")
+    position = tuple(p.strip() for p in pos.split(",") if p.strip())
+    allowed = (*CONES, CENTRE)
+    if (
+        not position
+        or any(p not in allowed for p in position)
+        or (CENTRE in position and len(position) > 1)
+    ):
+        raise ParseError(
+            f"line {at + 1}: position must be 'C' or cones from {', '.join(CONES)}, got [{pos}]"
+        )
+    hcount_int = _int(hcount, f"line {at + 1}")
+    boundary = _parse_boundary(lines, at + 1, hcount_int, f"hole {index}")
+    if boundary.type_curve != hcurve:
+        raise ParseError(
+            f"line {at + 1}: hole type says {hcurve!r} but its nodes are {boundary.type_curve!r}"
+        )
+    return HoleDescription(position, boundary, rel), at + 1 + hcount_int
 
 
 def _int(text: str, where: str) -> int:

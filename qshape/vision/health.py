@@ -18,7 +18,8 @@ import cv2
 import numpy as np
 
 from qshape.design import load_section
-from qshape.vision.extract import ImageError, check_image, default_params
+from qshape.vision.extract import check_image
+from qshape.vision.params import ImageError, default_params
 
 Verdict = Literal["ok", "uniform", "dark", "overexposed"]
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import pytest
 
 from qshape.synthetic.synth import SynthParams
-from qshape.vision.extract import ExtractParams
+from qshape.vision.params import ExtractParams
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import json
 
-from benchmarks.table import BENCHES, collect, command, fig, main, table
+from benchmarks.figures import fig
+from benchmarks.table import BENCHES, collect, command, main, table
 
 
 def _write(folder, name, data):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from benchmarks.figures import scripted_figures
 from benchmarks.scripted import (
     Episode,
     Scenario,
@@ -12,7 +13,6 @@ from benchmarks.scripted import (
     play,
     summarise,
 )
-from benchmarks.table import scripted_figures
 from configs import ConfigError, load_config
 
 

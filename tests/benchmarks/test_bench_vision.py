@@ -15,7 +15,7 @@ from benchmarks.vision_realistic import Level, RealisticBench, markdown, plot, r
 from configs import load_config
 from qshape.synthetic.effects import CameraEffects
 from qshape.synthetic.synth import SynthParams
-from qshape.vision.extract import ExtractParams
+from qshape.vision.params import ExtractParams
 
 
 def test_pictures_at_another_scale(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

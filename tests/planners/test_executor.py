@@ -7,8 +7,9 @@ import numpy as np
 
 from planners.config import load_planner_config
 from planners.executor import TimedEvent, TrajectoryExecutor
+from planners.joints import JointState
 from planners.robot import ROBOT_XML
-from planners.trajectory import JointState, chain
+from planners.trajectory import chain
 
 
 def test_tracks_a_move_and_fires_events_on_their_step() -> None:

@@ -15,7 +15,8 @@ from scipy.spatial.transform import Rotation
 from envs.cell.scene import build_arm_model
 from planners.config import IKConfig, load_planner_config
 from planners.errors import InvalidTargetError, PlannerError, UnreachableError
-from planners.ik import ROBOT_XML, IKSolver, symmetric_yaws, tool_down_rotation
+from planners.ik import ROBOT_XML, IKSolver
+from planners.tool_pose import symmetric_yaws, tool_down_rotation
 from spatial.angles import wrap_angle
 
 CFG = load_planner_config()

@@ -12,10 +12,12 @@ from benchmarks.planner import LAYOUT_SEED_TRIES, CellRunner, cell_config
 from envs.cell.tiles.shapes import basic_shapes
 from envs.episode_setup import build_cell
 from planners.config import load_planner_config
+from planners.cycle.plan import CyclePlan
 from planners.errors import InvalidTargetError, UnreachableError
 from planners.ik import IKSolver
-from planners.pick_place import CyclePlan, PickPlacePlanner, relative_rotation
-from planners.trajectory import JointState, validate
+from planners.joints import JointState
+from planners.limit_checks import validate
+from planners.pick_place import PickPlacePlanner, relative_rotation
 from spatial.rotations import yaw_from_matrix
 
 CFG = load_planner_config()

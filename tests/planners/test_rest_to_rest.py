@@ -10,9 +10,10 @@ from ruckig import InputParameter, Ruckig, Trajectory
 
 from planners.config import JointLimits, load_planner_config
 from planners.errors import LimitError
+from planners.joints import JointState, unwrap_target
 from planners.pick_place import PickPlacePlanner
 from planners.rest_to_rest import axis_duration, rest_to_rest_duration
-from planners.trajectory import JointState, hold_segment, plan_segment, unwrap_target
+from planners.trajectory import hold_segment, plan_segment
 
 CFG = load_planner_config()
 LIMITS = CFG.limits

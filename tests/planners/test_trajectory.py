@@ -10,17 +10,15 @@ import pytest
 from configs import ConfigError
 from planners.config import JointLimits, PlannerConfig, load_planner_config
 from planners.errors import InvalidTargetError, LimitError, PlannerError, TrajectoryError
+from planners.joints import JointState, unwrap_target
+from planners.limit_checks import limit_report, validate
 from planners.trajectory import (
-    JointState,
     Piecewise,
     chain,
     hold_segment,
     join,
-    limit_report,
     plan_segment,
     superpose,
-    unwrap_target,
-    validate,
     window,
 )
 

@@ -10,7 +10,7 @@ import pytest
 
 from qshape.design import Design
 from qshape.synthetic.synth import SynthParams
-from qshape.vision.extract import ExtractParams
+from qshape.vision.params import ExtractParams
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,8 @@ from qshape.design import Design
 from qshape.errors import QShapeError
 from qshape.synthetic.render import render_design, save_png
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams, ImageError, extract, extract_detailed, read_image
+from qshape.vision.extract import extract, extract_detailed, read_image
+from qshape.vision.params import ExtractParams, ImageError
 
 S = 3.0  # px/mm of the test renderings
 

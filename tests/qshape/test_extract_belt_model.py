@@ -23,17 +23,16 @@ from configs import load_config
 from qshape import Tolerances, describe
 from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import (
-    _GAIN_SCALE,
-    ExtractParams,
-    ImageError,
-    _colour_distance,
-    _dominant_color,
-    _illumination,
+from qshape.vision.background import (
+    GAIN_SCALE,
     _local_fill,
     _polynomial_fit,
-    extract_detailed,
+    dominant_color,
+    illumination,
 )
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams, ImageError
+from qshape.vision.segment import _colour_distance
 
 
 def _dominant_reference(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, float, int]:
@@ -64,7 +63,7 @@ def test_dominant_colour_from_planes_matches_the_plain_reductions(
     p = extract_params
     sp = replace(synth_params, px_per_mm=1.8)
     img = generate(Design.load(design), 30, seed, sp).image
-    dominant, share, span = _dominant_color(img, p)
+    dominant, share, span = dominant_color(img, p)
     ref_dominant, ref_share, ref_span = _dominant_reference(img, p)
     np.testing.assert_array_equal(dominant, ref_dominant)
     assert share == ref_share
@@ -81,12 +80,12 @@ def test_colour_distance_from_planes_equals_the_colour_image_difference(
     p = extract_params
     sp = replace(synth_params, px_per_mm=1.8)
     img = generate(design, 30, 2, sp).image
-    dominant = _dominant_color(img, p)[0]
-    model, _, gain = _illumination(cv2.split(img), dominant, p)
+    dominant = dominant_color(img, p)[0]
+    model, _, gain = illumination(cv2.split(img), dominant, p)
     dist, thr, mask = _colour_distance(cv2.split(img), model, gain, p)
     # The definition: the largest channel of |picture - model|, scaled by the shading gain.
     diff = cv2.absdiff(img, cv2.merge(model))
-    want = cv2.multiply(diff.max(axis=2), gain, scale=1.0 / _GAIN_SCALE)
+    want = cv2.multiply(diff.max(axis=2), gain, scale=1.0 / GAIN_SCALE)
     np.testing.assert_array_equal(dist, want)
     assert thr > 0.0
     assert 0.05 < np.count_nonzero(mask) / mask.size < 0.9  # tiles found, not everything

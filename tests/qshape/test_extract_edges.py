@@ -12,7 +12,9 @@ import pytest
 
 from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams, _color_edges, _split_regions, extract_detailed
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams
+from qshape.vision.segment import _color_edges, _split_regions
 
 
 @pytest.mark.parametrize(("h", "w"), [(120, 160), (97, 61)])

@@ -19,17 +19,15 @@ import pytest
 
 from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import (
-    ExtractParams,
-    _blur_size,
-    _canny,
+from qshape.vision.background import (
     _cell_means,
     _channel_sum,
-    _label_medians,
-    _label_pieces,
     _polynomial_basis,
     _polynomial_fit,
+    blur_size,
 )
+from qshape.vision.params import ExtractParams
+from qshape.vision.segment import _canny, _label_pieces, label_medians
 
 
 @pytest.mark.parametrize(("design", "seed"), [("hexagon", 1), ("paper_mixed", 4)])
@@ -127,7 +125,7 @@ def test_label_medians_are_lower_medians(labels: int, count: int) -> None:
     both = np.concatenate(
         [rng.integers(0, 256, (20000, 3)), rng.integers(0, 9, (20000, 1))], axis=1
     ).astype(np.uint8)
-    medians, seen = _label_medians(lab, [both[:, c] for c in range(4)], count)
+    medians, seen = label_medians(lab, [both[:, c] for c in range(4)], count)
     assert medians.shape == (count, 4)
     for k in range(count):
         rows = np.sort(both[lab == k], axis=0)
@@ -156,7 +154,7 @@ def test_trimmed_pre_blur_is_opencvs_blur(sigma: float) -> None:
     """The pre-blur's trimmed kernel gives exactly OpenCV's default-size Gaussian blur."""
 
     img = np.random.default_rng(3).integers(0, 256, (90, 120, 3), dtype=np.uint8)
-    size = _blur_size(sigma)
+    size = blur_size(sigma)
     assert size % 2 == 1 and size <= (round(6 * sigma + 1) | 1)
     want = cv2.GaussianBlur(img, (0, 0), sigma)
     np.testing.assert_array_equal(cv2.GaussianBlur(img, (size, size), sigma), want)

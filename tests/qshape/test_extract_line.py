@@ -17,7 +17,8 @@ from qshape.synthetic.effects import (
     undistort_points,
 )
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams, ImageError, extract_detailed
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams, ImageError
 
 BELT = (61, 66, 71)
 RED = (200, 60, 40)

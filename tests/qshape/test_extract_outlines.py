@@ -17,7 +17,8 @@ import pytest
 
 from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams, ImageError, extract_detailed
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams, ImageError
 
 extract_module = importlib.import_module("qshape.vision.extract")
 

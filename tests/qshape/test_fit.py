@@ -16,8 +16,8 @@ from qshape.outline.fit import (
     range_sums,
 )
 from qshape.synthetic.effects import roughen
-from qshape.theory.figure import densify
-from qshape.vision.extract import ExtractParams
+from qshape.theory.boundary import densify
+from qshape.vision.params import ExtractParams
 
 PX_PER_MM = 2.5  # the synthetic belt camera's scale
 ROUGH_LENGTH_MM = 1.0  # correlation length of the drawn edge roughness

@@ -10,7 +10,7 @@ from qshape.outline import simplify
 from qshape.outline.simplify import simplify_outlines
 from qshape.synthetic.effects import roughen
 from qshape.theory.figure import figures_from_outlines
-from qshape.vision.extract import ExtractParams
+from qshape.vision.params import ExtractParams
 
 STEP_PX = 0.5  # spacing of the drawn outline samples, as a traced contour gives them
 
@@ -168,7 +168,7 @@ def test_round_holes_stay_round_with_the_wider_window(
     params = extract_params.outline
     new = _rings_recognised(params, 30)
     old = _rings_recognised(dataclasses.replace(params, hole_corner_window=0.0), 30)
-    monkeypatch.setattr(simplify, "_FULL_TURN_OVER_WINDOWS", 0.0)
+    monkeypatch.setattr(simplify, "FULL_TURN_OVER_WINDOWS", 0.0)
     flat = _rings_recognised(params, 30)
     assert new >= 17, f"{new} of 30 (figure's window {old}, angle not raised {flat})"
     assert new > old

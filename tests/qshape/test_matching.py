@@ -303,7 +303,7 @@ def test_true_symmetries_stay_equivalent():
 
 def test_zero_width_bearing_interval_covers_its_cone() -> None:
     # Pinned by mutation testing: a point-like interval is one cone, not "no constraint".
-    from qshape.theory.evaluator import _cone_bits  # noqa: PLC0415
+    from qshape.theory.pack import cone_bits as _cone_bits  # noqa: PLC0415
 
     bits = _cone_bits(np.array([10.0, 90.0, 10.0]), np.array([10.0, 90.0, 5.0]), 0.0)
     assert bits.tolist() == [1, 1 << 2, 0]  # N, E, and an empty (reversed) interval

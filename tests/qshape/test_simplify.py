@@ -29,8 +29,10 @@ from qshape.outline.fit import BendTest, bent_runs, outline_moments
 from qshape.outline.simplify import simplify_outline
 from qshape.synthetic.effects import CameraEffects, roughen
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.theory.figure import densify, figures_from_outlines
-from qshape.vision.extract import ExtractParams, default_params, extract_detailed
+from qshape.theory.boundary import densify
+from qshape.theory.figure import figures_from_outlines
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams, default_params
 
 SEED = 5
 DATA = Path(__file__).parents[1] / "data"
@@ -241,7 +243,7 @@ def test_batch_cleaning_matches_one_by_one() -> None:
 
 def test_corners_of_all_outlines_are_the_greedy_corners_of_each() -> None:
     """Batched corner picking equals the one-outline greedy rule (strongest first, spaced)."""
-    from qshape.outline.simplify import _corners_many  # noqa: PLC0415
+    from qshape.outline.corners import _corners_many  # noqa: PLC0415
 
     rng = np.random.default_rng(SEED)
     n, spacing, threshold = 96, 5, 20.0
@@ -262,22 +264,22 @@ def test_corners_of_all_outlines_are_the_greedy_corners_of_each() -> None:
 
 
 def test_roll_last_equals_numpy_roll() -> None:
-    from qshape.outline.simplify import _roll_last  # noqa: PLC0415
+    from qshape.outline.samples import roll_last  # noqa: PLC0415
 
     a = np.random.default_rng(2).normal(size=(2, 3, 7))
     for shift in range(-15, 16):
-        np.testing.assert_array_equal(_roll_last(a, shift), np.roll(a, shift, axis=-1))
-    np.testing.assert_array_equal(_roll_last(a[0], 3), np.roll(a[0], 3, axis=1))
+        np.testing.assert_array_equal(roll_last(a, shift), np.roll(a, shift, axis=-1))
+    np.testing.assert_array_equal(roll_last(a[0], 3), np.roll(a[0], 3, axis=1))
 
 
 def test_row_medians_equal_numpy_median() -> None:
-    from qshape.outline.simplify import _row_medians  # noqa: PLC0415
+    from qshape.outline.samples import row_medians  # noqa: PLC0415
 
     rng = np.random.default_rng(4)
     for n in (1, 2, 7, 384, 385):
         a = np.abs(rng.normal(size=(5, n)))
         a[0] = 1.0  # ties
-        np.testing.assert_array_equal(_row_medians(a), np.median(a, axis=1))
+        np.testing.assert_array_equal(row_medians(a), np.median(a, axis=1))
 
 
 PX_PER_MM = 2.5  # the synthetic belt camera's scale

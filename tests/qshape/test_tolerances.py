@@ -13,7 +13,8 @@ from qshape import Description, Figure, OutlineParams, ToleranceError, Tolerance
 from qshape.design import Design
 from qshape.synthetic.effects import CameraEffects
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.extract import ExtractParams, extract_detailed
+from qshape.vision.extract import extract_detailed
+from qshape.vision.params import ExtractParams
 
 
 def test_bundled_defaults_match_dataclass_defaults():

@@ -1,0 +1,1 @@
+"""The pick-and-place cycle's parts: the arm's moves and the leads at the approach points."""
