@@ -25,14 +25,14 @@ from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
 from qshape.vision.background import (
     GAIN_SCALE,
-    _local_fill,
-    _polynomial_fit,
     dominant_color,
     illumination,
+    local_fill,
+    polynomial_fit,
 )
 from qshape.vision.extract import extract_detailed
 from qshape.vision.params import ExtractParams, ImageError
-from qshape.vision.segment import _colour_distance
+from qshape.vision.segment import colour_distance
 
 
 def _dominant_reference(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, float, int]:
@@ -82,7 +82,7 @@ def test_colour_distance_from_planes_equals_the_colour_image_difference(
     img = generate(design, 30, 2, sp).image
     dominant = dominant_color(img, p)[0]
     model, _, gain = illumination(cv2.split(img), dominant, p)
-    dist, thr, mask = _colour_distance(cv2.split(img), model, gain, p)
+    dist, thr, mask = colour_distance(cv2.split(img), model, gain, p)
     # The definition: the largest channel of |picture - model|, scaled by the shading gain.
     diff = cv2.absdiff(img, cv2.merge(model))
     want = cv2.multiply(diff.max(axis=2), gain, scale=1.0 / GAIN_SCALE)
@@ -155,9 +155,9 @@ def _shadowed_grid() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _model(small: np.ndarray, keep: np.ndarray, **overrides: object) -> np.ndarray:
     p = ExtractParams.load(**overrides)
-    base = _polynomial_fit(small, keep, p.illumination_degree)
+    base = polynomial_fit(small, keep, p.illumination_degree)
     assert base is not None
-    return _local_fill(small, keep, base, p)
+    return local_fill(small, keep, base, p)
 
 
 def test_far_cells_beside_a_shadow_take_the_shadowed_belt() -> None:

@@ -14,7 +14,7 @@ from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
 from qshape.vision.extract import extract_detailed
 from qshape.vision.params import ExtractParams
-from qshape.vision.segment import _color_edges, _split_regions
+from qshape.vision.segment import color_edges, split_regions
 
 
 @pytest.mark.parametrize(("h", "w"), [(120, 160), (97, 61)])
@@ -27,7 +27,7 @@ def test_reduced_canny_edges_are_blocks_of_the_reduced_pictures_edges(
     rng = np.random.default_rng(7)
     img = cv2.GaussianBlur(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), (0, 0), 2.0)
     p = replace(extract_params, canny_reduction=2, canny_low=20.0, canny_high=50.0)
-    got = _color_edges(img, p)
+    got = color_edges(img, p)
     small = cv2.resize(img, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
     want = np.zeros((h // 2, w // 2), np.uint8)
     for c in range(3):
@@ -51,11 +51,11 @@ def test_crumbs_beyond_a_byte_of_labels_leave_pieces_unchanged(
     cv2.rectangle(img, (20, 20), (80, 90), (200, 40, 40), -1)
     cv2.rectangle(img, (81, 20), (140, 90), (40, 200, 40), -1)  # touching, other colour
     cv2.rectangle(mask, (20, 20), (140, 90), 255, -1)
-    count, labels, present, pieces = _split_regions(img, mask, p)
+    count, labels, present, pieces = split_regions(img, mask, p)
     assert count <= 256 and present.sum() == 2
     crumbs = mask.copy()
     crumbs[120::3, ::3] = 255  # 700 one-pixel crumbs below the tiles
-    many, labels2, present2, pieces2 = _split_regions(img, crumbs, p)
+    many, labels2, present2, pieces2 = split_regions(img, crumbs, p)
     assert many > 256 and present2.sum() == 2
     np.testing.assert_array_equal(pieces2, pieces)
     np.testing.assert_array_equal(labels2[:100] > 0, labels[:100] > 0)
@@ -74,7 +74,7 @@ def test_reduced_canny_cut_parts_touching_tiles_at_their_boundary(
     mask = np.where(np.abs(img.astype(int) - 50).max(axis=2) > 20, 255, 0).astype(np.uint8)
     for reduction in (1, 2):
         p = replace(extract_params, canny_reduction=reduction)
-        count, labels, present, pieces = _split_regions(img, mask, p)
+        count, labels, present, pieces = split_regions(img, mask, p)
         assert present.sum() == 2
         row = labels[60] * (pieces[60] > 0)
         left, right = (np.flatnonzero(row == k) for k in np.flatnonzero(present))

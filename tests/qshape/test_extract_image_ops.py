@@ -20,14 +20,14 @@ import pytest
 from qshape.design import Design
 from qshape.synthetic.synth import SynthParams, generate
 from qshape.vision.background import (
-    _cell_means,
-    _channel_sum,
-    _polynomial_basis,
-    _polynomial_fit,
     blur_size,
+    cell_means,
+    channel_sum,
+    polynomial_basis,
+    polynomial_fit,
 )
 from qshape.vision.params import ExtractParams
-from qshape.vision.segment import _canny, _label_pieces, label_medians
+from qshape.vision.segment import canny, label_medians, label_pieces
 
 
 @pytest.mark.parametrize(("design", "seed"), [("hexagon", 1), ("paper_mixed", 4)])
@@ -40,7 +40,7 @@ def test_canny_from_derivatives_equals_canny_on_rendered_channels(
     for plane in cv2.split(img):
         want = cv2.Canny(plane, p.canny_low, p.canny_high)
         assert np.count_nonzero(want) > 1000  # the tiles' outlines are there
-        np.testing.assert_array_equal(_canny(plane, p.canny_low, p.canny_high), want)
+        np.testing.assert_array_equal(canny(plane, p.canny_low, p.canny_high), want)
 
 
 def test_canny_from_derivatives_equals_canny_on_noise_up_to_the_border() -> None:
@@ -53,7 +53,7 @@ def test_canny_from_derivatives_equals_canny_on_noise_up_to_the_border() -> None
             plane = cv2.GaussianBlur(plane, (5, 5), 1.5)
         want = cv2.Canny(plane, 30.0, 90.0)
         at_border += bool(want[[0, -1], :].any() or want[:, [0, -1]].any())
-        np.testing.assert_array_equal(_canny(plane, 30.0, 90.0), want)
+        np.testing.assert_array_equal(canny(plane, 30.0, 90.0), want)
     assert at_border > 40  # the border handling was really exercised
 
 
@@ -64,7 +64,7 @@ def test_channel_sum_equals_numpys_sum_bit_for_bit(dtype: type, shape: tuple[int
     # Values of very different sizes side by side: any change of summation order would show.
     scale = rng.choice([1e-3, 1.0, 255.0, 1e6], size=shape[:-1] + (1,))
     values = (rng.random(shape) * scale).astype(dtype)
-    got = _channel_sum(values)
+    got = channel_sum(values)
     assert got.dtype == values.dtype
     np.testing.assert_array_equal(got, values.sum(axis=-1))
 
@@ -81,7 +81,7 @@ def test_belt_model_resized_plane_by_plane_equals_the_colour_resize(size: tuple[
 
 def _lstsq_model(small: np.ndarray, keep: np.ndarray, degree: int) -> np.ndarray:
     gh, gw = keep.shape
-    basis = _polynomial_basis(gh, gw, degree)
+    basis = polynomial_basis(gh, gw, degree)
     flat = keep.ravel()
     coef = np.linalg.lstsq(basis[flat], small.reshape(-1, 3)[flat], rcond=None)[0]
     return (basis @ coef).reshape(gh, gw, 3)
@@ -96,7 +96,7 @@ def test_polynomial_fit_over_scattered_belt_cells_equals_least_squares() -> None
         np.float32
     )
     keep = rng.random((30, 41)) > 0.4
-    got = _polynomial_fit(small, keep, 3)
+    got = polynomial_fit(small, keep, 3)
     np.testing.assert_allclose(got, _lstsq_model(small, keep, 3), rtol=0.0, atol=1e-8)
     assert np.abs(got[..., 0] - light).max() < 3.0  # it models the light, not the noise
 
@@ -106,7 +106,7 @@ def test_polynomial_fit_over_one_row_of_belt_cells_stays_finite_and_fits_it() ->
     small = (100.0 + rng.normal(0.0, 1.0, (30, 41, 3))).astype(np.float32)
     keep = np.zeros((30, 41), dtype=bool)
     keep[7, :] = True  # every monomial in v is undetermined: lstsq's minimum-norm solution
-    got = _polynomial_fit(small, keep, 3)
+    got = polynomial_fit(small, keep, 3)
     assert np.isfinite(got).all()
     np.testing.assert_allclose(got, _lstsq_model(small, keep, 3), rtol=0.0, atol=1e-6)
     assert np.abs(got[7] - 100.0).max() < 3.0
@@ -143,7 +143,7 @@ def test_cell_means_are_opencv_area_means(h: int, w: int, gh: int, gw: int) -> N
     rng = np.random.default_rng(5)
     img = cv2.GaussianBlur(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), (0, 0), 2.0)
     want = cv2.resize(img, (gw, gh), interpolation=cv2.INTER_AREA).astype(np.float32)
-    got = _cell_means(cv2.split(img), gh, gw)
+    got = cell_means(cv2.split(img), gh, gw)
     assert got.shape == want.shape and got.dtype == np.float32
     diff = np.abs(got - want)
     assert diff.max() <= 1.0 and (diff > 0).mean() < 0.01  # off by one only at a tie
@@ -165,7 +165,7 @@ def test_piece_labels_are_16_bit_when_they_fit_else_32_bit() -> None:
     rng = np.random.default_rng(5)
     blobs = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 3.0)
     mask = np.where(blobs > 128, 255, 0).astype(np.uint8)
-    count, labels = _label_pieces(mask)
+    count, labels = label_pieces(mask)
     want_count, want = cv2.connectedComponents(mask, connectivity=4)
     assert labels.dtype == np.uint16
     assert count == want_count > 10
@@ -173,7 +173,7 @@ def test_piece_labels_are_16_bit_when_they_fit_else_32_bit() -> None:
     # A checkerboard of 492 x 656 px: 161377 labels in 4-connectivity do not fit 16 bits.
     yy, xx = np.mgrid[0:492, 0:656]
     board = (((yy + xx) % 2) * 255).astype(np.uint8)
-    count, labels = _label_pieces(board)
+    count, labels = label_pieces(board)
     assert labels.dtype == np.int32
     assert count == 492 * 656 // 2 + 1
     assert int(labels.max()) == count - 1

@@ -243,14 +243,14 @@ def test_batch_cleaning_matches_one_by_one() -> None:
 
 def test_corners_of_all_outlines_are_the_greedy_corners_of_each() -> None:
     """Batched corner picking equals the one-outline greedy rule (strongest first, spaced)."""
-    from qshape.outline.corners import _corners_many  # noqa: PLC0415
+    from qshape.outline.corners import corners_many  # noqa: PLC0415
 
     rng = np.random.default_rng(SEED)
     n, spacing, threshold = 96, 5, 20.0
     change = rng.uniform(0.0, 60.0, (7, n))
     change[2] = 0.0  # no candidate at all
     change[3, ::7] = 45.0  # ties: the first of equal values wins
-    got = _corners_many(change, threshold, spacing)
+    got = corners_many(change, threshold, spacing)
     for row, corners in zip(change, got, strict=True):
         vals = np.where(row > threshold, row, -np.inf)
         want = []
