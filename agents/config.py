@@ -45,6 +45,13 @@ class PerceptionConfig:
         color_min_samples: Fewer colours in the history than this (the first pictures of a
             streamed belt): one brightness gain for all channels, which keeps each colour's
             hue, instead of a gain per channel.
+        retry_outline: `qshape.OutlineParams` fields changed for a second simplification of a
+            tile whose figure matches no open slot's shape (empty: no retry). The bundled
+            outline parameters keep rough edges straight with a noise floor of 6 x the measured
+            edge roughness and a corner window of 3.25 % of the perimeter; an edge's own small
+            curved feature (a bite or bulge on part of an edge) raises that roughness measure
+            and falls below the floor. The retry uses the clean-outline values; the first
+            figure is kept when the retry matches nothing either.
 
     How outlines become figures (corner threshold, circles, chamfered corners) is qshape's
     business: ``configs/vision.yaml`` section ``extract``.
@@ -58,6 +65,7 @@ class PerceptionConfig:
     max_color_gain: float = 2.0
     color_history: int = 64
     color_min_samples: int = 6
+    retry_outline: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""

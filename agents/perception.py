@@ -114,6 +114,8 @@ class PerceivedTile:
             ``pad_clearance`` inside the material, else the pole of inaccessibility.
         color: Measured RGB in [0, 1].
         area: Area on the plane [m^2].
+        outline_px: The traced outer outline the figure was simplified from, shape (k, 2)
+            [px], y down (None: not kept).
     """
 
     index: int
@@ -125,6 +127,7 @@ class PerceivedTile:
     grasp: np.ndarray
     color: tuple[float, float, float]
     area: float
+    outline_px: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -256,25 +259,18 @@ def perceive_tiles(
         return Perception((), (), (f"image not usable: {exc}",), z)
     world: list[Figure] = []
     unrecognised = list(res.rejected)
-    kept_px: list[Figure] = []
+    kept_px: list[tuple[Figure, np.ndarray]] = []
     for k, fig in enumerate(res.figures):
         try:
             world.append(figure_to_world(camera, fig, z, cfg))
-            kept_px.append(fig)
+            kept_px.append((fig, res.outlines[k]))
         except qshape.QShapeError as exc:
             unrecognised.append(f"figure {k}: not mapped to the belt plane: {exc}")
     descs = qshape.describe_many(world, tolerances) if world else []
-    s = 1.0 / cfg.mm_per_m
-    tiles = []
-    for k, (fpx, fw, d) in enumerate(zip(kept_px, world, descs, strict=True)):
-        centre = np.asarray(fw.centroid) * s
-        ray = unproject(camera, np.asarray(fpx.centroid)[None], z)[0, :2]
-        color = fw.color if fw.color is not None else (0.0, 0.0, 0.0)
-        tiles.append(
-            PerceivedTile(
-                k, fpx, fw, d, centre, ray, grasp_point(fw, centre, cfg), color, fw.area * s * s
-            )
-        )
+    tiles = [
+        _perceived(k, fpx, fw, d, camera, z, cfg, outline)
+        for k, ((fpx, outline), fw, d) in enumerate(zip(kept_px, world, descs, strict=True))
+    ]
     partial = tuple(
         PartialRegion(
             unproject(camera, np.asarray(p.centroid)[None], z)[0, :2],
@@ -284,6 +280,66 @@ def perceive_tiles(
         for p in res.partial
     )
     return Perception(tuple(tiles), partial, tuple(unrecognised), z)
+
+
+def _perceived(  # noqa: PLR0913, PLR0917
+    k: int,
+    fpx: Figure,
+    fw: Figure,
+    d: qshape.Description,
+    camera: CameraLike,
+    z: float,
+    cfg: PerceptionConfig,
+    outline: np.ndarray | None,
+) -> PerceivedTile:
+    s = 1.0 / cfg.mm_per_m
+    centre = np.asarray(fw.centroid) * s
+    ray = unproject(camera, np.asarray(fpx.centroid)[None], z)[0, :2]
+    color = fw.color if fw.color is not None else (0.0, 0.0, 0.0)
+    grasp = grasp_point(fw, centre, cfg)
+    return PerceivedTile(k, fpx, fw, d, centre, ray, grasp, color, fw.area * s * s, outline)
+
+
+def refigured(
+    tile: PerceivedTile,
+    camera: CameraLike,
+    z: float,
+    outline_params: qshape.OutlineParams,
+    *,
+    cfg: PerceptionConfig | None = None,
+    tolerances: qshape.Tolerances | None = None,
+) -> PerceivedTile | None:
+    """The tile with its traced outline simplified again with other outline parameters.
+
+    The holes, colour and index stay those of the first figure. None when the tile kept no
+    traced outline or the new simplification gives no valid figure.
+
+    Args:
+        tile: A perceived tile (``outline_px`` kept).
+        camera: The camera model of its image.
+        z: Plane height of its relevant points [m].
+        outline_params: The simplification parameters of the retry.
+        cfg: Perception settings (bundled defaults when None).
+        tolerances: qshape tolerances for the description (bundled when None).
+    """
+    if tile.outline_px is None:
+        return None
+    cfg = cfg or PerceptionConfig()
+    try:
+        color = tile.figure_px.color
+        outer = Figure.from_outline(tile.outline_px, (), color, params=outline_params, y_down=True)
+        fpx = Figure.from_polygon(
+            outer.outer.points,
+            list(tile.figure_px.holes),
+            color,
+            curve_mask=outer.outer.curve_mask,
+            y_down=True,
+        )
+        fw = figure_to_world(camera, fpx, z, cfg)
+        d = qshape.describe(fw, tolerances)
+    except qshape.QShapeError:
+        return None
+    return _perceived(tile.index, fpx, fw, d, camera, z, cfg, tile.outline_px)
 
 
 def color_gain(
@@ -448,6 +504,7 @@ __all__ = [
     "color_gain",
     "figure_to_world",
     "grasp_point",
+    "refigured",
     "perceive_tiles",
     "project",
     "slot_targets",

@@ -22,13 +22,14 @@ accepted)::
 
 from __future__ import annotations
 
+import dataclasses
 from collections import deque
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from agents.calibration import calibrate_cell_camera
+from agents.calibration import CalibrationResult, calibrate_cell_camera
 from agents.config import AgentsConfig, load_agents_config
 from agents.errors import AgentError
 from agents.perception import (
@@ -37,10 +38,12 @@ from agents.perception import (
     Perception,
     balance_colors,
     perceive_tiles,
+    refigured,
     slot_targets,
 )
 from agents.placement import PickPlace, PlacementPlan, Unplaced, plan_placements
 from envs.task_spec import PickPlaceCodec, PickPlaceCommand, TaskSpec
+from qshape import ExtractParams, OutlineParams
 from qshape.theory.assign import feasible_pairs
 from qshape.theory.tolerances import default_tolerances
 
@@ -63,6 +66,8 @@ class ScriptedAgent:
         replan_every_step: Take a new picture before every command (tiles move on a moving
             belt, new ones arrive with a stream feed) instead of once per batch of commands
             (the paper's static loop). None: every step when the belt moves or tiles stream.
+        calibration: An earlier calibration of this cell's input camera at this image size,
+            used as it is (another design in the same cell: the camera is the same).
 
     Raises:
         AgentError: Wrong action mode.
@@ -74,6 +79,8 @@ class ScriptedAgent:
         config: AgentsConfig | None = None,
         calibrate: bool = True,
         replan_every_step: bool | None = None,
+        *,
+        calibration: CalibrationResult | None = None,
     ) -> None:
         self.cfg = config or load_agents_config()
         if spec.codec is None:
@@ -89,8 +96,10 @@ class ScriptedAgent:
             else replan_every_step
         )
         self.camera: CameraLike
-        self.calibration = None
-        if calibrate:
+        self.calibration = calibration
+        if calibration is not None:
+            self.camera = calibration.camera
+        elif calibrate:
             self.calibration = calibrate_cell_camera(
                 spec.cell, "input_camera", self.cfg.calibration, spec.image_size
             )
@@ -98,6 +107,12 @@ class ScriptedAgent:
         else:
             self.camera = spec.camera("input_camera")
         self.slots = slot_targets(spec.slots)
+        retry = self.cfg.perception.retry_outline
+        self.retry_params: OutlineParams | None = (
+            OutlineParams(**{**dataclasses.asdict(ExtractParams.load().outline), **retry})
+            if retry
+            else None
+        )
         self.tile_top = spec.pick.tile_top_z
         self.palette = np.array([s.color for s in self.slots])
         self.queue: deque[PickPlace] = deque()
@@ -119,6 +134,8 @@ class ScriptedAgent:
         config: AgentsConfig | None = None,
         calibrate: bool = True,
         replan_every_step: bool | None = None,
+        *,
+        calibration: CalibrationResult | None = None,
     ) -> ScriptedAgent:
         """The agent of a `MosaicAssembly-v0` env (wrapped or not), from its task description.
 
@@ -132,7 +149,7 @@ class ScriptedAgent:
         if not isinstance(obs_space, gym.spaces.Dict) or "input_camera" not in obs_space.spaces:
             raise AgentError("the scripted agent needs the input_camera observation (obs_mode rgb)")
         spec: TaskSpec = env.get_wrapper_attr("task_spec")
-        return cls(spec, config, calibrate, replan_every_step)
+        return cls(spec, config, calibrate, replan_every_step, calibration=calibration)
 
     def reset(self) -> None:
         """Forget the episode (open slots, queued commands, measured colours)."""
@@ -162,6 +179,8 @@ class ScriptedAgent:
                 per, self.palette, pcfg, history=np.array(self.colors), per_channel=many
             )
         plan = self._assign(per)
+        if self.retry_params is not None and any(u.reason == "shape_absent" for u in plan.unplaced):
+            per, plan = self._retry_unmatched(per, plan)
         taken = [u.tile for u in plan.unplaced if u.reason == "slots_taken"]
         if taken and self._reopen([per.tiles[k] for k in taken]):
             plan = self._assign(per)
@@ -170,6 +189,41 @@ class ScriptedAgent:
         self.last_plan = plan
         self.unplaced = plan.unplaced
         return plan
+
+    def _retry_unmatched(
+        self, per: Perception, plan: PlacementPlan
+    ) -> tuple[Perception, PlacementPlan]:
+        """Simplify the outlines of tiles matching no open slot's shape again (finer).
+
+        A tile's retried figure replaces its first one only when it then matches; the plan is
+        made again when any did.
+        """
+        assert self.retry_params is not None
+        absent = {u.tile for u in plan.unplaced if u.reason == "shape_absent"}
+        tiles = list(per.tiles)
+        open_slots = [s for s in self.slots if s.index not in self.filled]
+        changed = False
+        for pos, t in enumerate(tiles):
+            if t.index not in absent:
+                continue
+            again = refigured(
+                t, self.camera, per.plane_z, self.retry_params, cfg=self.cfg.perception
+            )
+            if again is None:
+                continue
+            _, slots, _, _ = feasible_pairs(
+                [again.description],
+                [s.description for s in open_slots],
+                default_tolerances(),
+                self.cfg.placement.use_color,
+            )
+            if len(slots):
+                tiles[pos] = again
+                changed = True
+        if not changed:
+            return per, plan
+        per = dataclasses.replace(per, tiles=tuple(tiles))
+        return per, self._assign(per)
 
     def _assign(self, per: Perception) -> PlacementPlan:
         open_slots = [s for s in self.slots if s.index not in self.filled]

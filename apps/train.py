@@ -460,7 +460,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
 
 
 def main(argv: list[str] | None = None) -> TrainResult:
-    """Command line: ``python -m apps.train --config ... [--timesteps N] [--out DIR]``."""
+    """Command line: ``--config`` (required), ``--timesteps N``, ``--out DIR`` (``--help``)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--config", required=True, help="YAML path or name in configs/train/")
     ap.add_argument("--timesteps", type=int, default=None, help="override total_timesteps")

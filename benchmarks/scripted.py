@@ -15,6 +15,7 @@ import json
 import multiprocessing as mp
 import os
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -107,6 +108,31 @@ def play(job: tuple[Scenario, int, tuple[int, int], int]) -> Episode:
         )
         _ENVS[scenario.name] = (env, ScriptedAgent.from_env(env))
     env, agent = _ENVS[scenario.name]
+    return run_episode(scenario.name, env, agent, seed, steps_per_slot)[0]
+
+
+def run_episode(
+    name: str,
+    env: Any,
+    agent: Any,
+    seed: int,
+    steps_per_slot: int,
+    *,
+    observer: Callable[[Any, dict[str, Any]], None] | None = None,
+) -> tuple[Episode, dict[str, Any]]:
+    """One episode of ``agent`` (a `ScriptedAgent`) in ``env``, up to the step limit.
+
+    Args:
+        name: Scenario label of the returned `Episode`.
+        env: A ``pick_place`` `MosaicAssembly-v0` env.
+        agent: The agent, built for ``env``.
+        seed: Reset seed.
+        steps_per_slot: Step limit per slot.
+        observer: Called after every step with the observation and info.
+
+    Returns:
+        (the episode's figures, the last step's info).
+    """
     t0 = time.perf_counter()
     obs, info = env.reset(seed=seed)
     agent.reset()
@@ -117,11 +143,13 @@ def play(job: tuple[Scenario, int, tuple[int, int], int]) -> Episode:
         obs, _, terminated, truncated, info = env.step(action)
         steps += 1
         failed += int(info["action_failed"])
+        if observer is not None:
+            observer(obs, info)
         if terminated or truncated:
             break
     e = info["evaluation"]
-    return Episode(
-        scenario.name,
+    episode = Episode(
+        name,
         seed,
         int(e["slots"]),
         int(e["correct"]),
@@ -135,6 +163,7 @@ def play(job: tuple[Scenario, int, tuple[int, int], int]) -> Episode:
         float(info["tiles_per_min"]),
         time.perf_counter() - t0,
     )
+    return episode, info
 
 
 def close_envs() -> None:

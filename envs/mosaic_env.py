@@ -66,6 +66,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     ## Action Space
     Chosen by ``action_mode`` (continuous ones are Box in [-1, 1] float32):
+
     - ``joint``: Box(7): joint target deltas scaled by each axis' speed limit times
       ``control_dt``, then vacuum (> 0: on). One step = ``control_dt`` of simulated time.
     - ``cartesian``: Box(5): tool dx, dy, dz (x ``tool_speed * control_dt``) and dyaw
@@ -172,15 +173,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     (stair-stepped edges, cheaper still).
 
     ## Version History
-    - v0: initial version; manufacturing noise re-drawn per reset (``tile_variants``).
-      ``pick_place``'s last action entry is the tile's rotation (it was the place yaw, which
-      the env differenced with the pick yaw); ``info["evaluation"]`` has ``failure``.
-      Decision-level indices carry no answer by default (``tile_order: belt``, ``slot_order:
-      mesh``, ``rotation_frame: tile``; ``design``/``design``/``slot`` restore the old,
-      leaking encoding). The task ladder (`envs.tasks`) registers frozen presets of it.
-      ``cartesian``: the tool target's box also holds the tool's home position (an episode
-      starts inside it; the carry can swing round in front of the base); it was the tile area
-      and the mesh only, so the first step clipped the target 0.3 m away.
+    Every id is at ``-v0``. The changes of each id, and the rule for when an id's version
+    changes (a change of its spaces or of its results), are in ``CHANGELOG.md``.
     """
 
     metadata = {  # noqa: RUF012 - Gymnasium convention

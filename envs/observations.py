@@ -1,6 +1,7 @@
 """Observations of `MosaicAssembly-v0`: a Dict space built from the cell's sensors.
 
 Keys (by ``obs_mode``):
+
 - ``input_camera``, ``output_camera`` (``rgb``, ``rgb+state``): RGB uint8, (H, W, 3).
 - ``input_depth``, ``output_depth`` (with ``depth=True``): float32 (H, W, 1) [m].
 - ``robot`` (always): float32 (19,) = joint positions (6) [rad], joint velocities (6) [rad/s],

@@ -191,7 +191,7 @@ class TaskSpec:
         tile_thickness: Tile thickness [m] (``place.tile_top_z - place.surface_z``).
         mesh_centre: World (x, y) of the mesh centre [m], shape (2,).
         belt_speed: Input belt speed [m/s] along +x.
-        feed: How tiles arrive: ``all`` at reset, a ``stream`` or ``batch``es.
+        feed: How tiles arrive: ``all`` at reset, a ``stream`` or in batches (``batch``).
         action_mode: The env's action mode.
         image_size: Observation image (height, width) [px].
         cameras: Camera models at ``image_size``, by name.

@@ -31,6 +31,14 @@ class DesignError(QShapeError):
     """A design file or design value is malformed; the message names the slot and the problem."""
 
 
+class GeneratorError(DesignError):
+    """A design generator parameter is out of range; the message names it and what is allowed."""
+
+
+class SmallFeatureWarning(UserWarning):
+    """A design slot holds a curved feature below what the camera recognises (named in it)."""
+
+
 class LimitError(QShapeError):
     """An input exceeds a documented cap (``limits`` of configs/qshape.yaml), named in it."""
 
@@ -46,12 +54,14 @@ class TextLimitError(LimitError, ParseError):
 __all__ = [
     "DesignError",
     "FigureLimitError",
+    "GeneratorError",
     "InvalidFigureError",
     "LimitError",
     "InvalidHoleError",
     "MatchError",
     "ParseError",
     "QShapeError",
+    "SmallFeatureWarning",
     "TextLimitError",
     "ToleranceError",
 ]

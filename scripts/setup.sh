@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Idempotent set-up on a fresh Debian machine: system libraries for headless rendering,
-# a virtual environment in .venv, and the project with its pinned dependencies.
+# a virtual environment in .venv with the exact dependency versions of requirements.lock.
 # Re-running is cheap: each step is skipped when already done.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -23,14 +23,17 @@ if [ ! -x .venv/bin/python ]; then
   "$PY" -m venv .venv
 fi
 
+# The exact versions of requirements.lock (every dependency of pyproject.toml with its dev and
+# docs extras, torch the CPU 2.13.0 wheel of this machine's wheel folder; bash scripts/lock.sh
+# re-resolves it). The project itself runs from this checkout (every command is `python -m`
+# from the repository root), so it is not installed: an editable install of this flat layout is
+# what made setuptools warn that folders of the working directory shadow installed packages.
 stamp=.venv/.mosaic-installed
-want=$(cat pyproject.toml | sha256sum | cut -d' ' -f1)
+want=$(cat requirements.lock | sha256sum | cut -d' ' -f1)
 if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
-  echo "[setup] installing Python dependencies (first run takes a few minutes)"
-  .venv/bin/python -m pip install -q --upgrade pip
-  # The CPU wheel of torch 2.13.0 lies on this machine's local wheel folder; pinning it first
-  # keeps stable-baselines3 from pulling a multi-GB CUDA build of torch.
-  .venv/bin/python -m pip install -q torch==2.13.0
-  .venv/bin/python -m pip install -q -e ".[dev]"
+  echo "[setup] installing the locked Python dependencies (first run takes a few minutes)"
+  # -qq: pip's own warnings about this machine's package indexes are not the project's.
+  .venv/bin/python -m pip install -qq --disable-pip-version-check -r requirements.lock
   echo "$want" > "$stamp"
+  echo "[setup] done: $(.venv/bin/python -m pip list --disable-pip-version-check 2>/dev/null | tail -n +3 | wc -l) packages in .venv"
 fi

@@ -6,6 +6,7 @@ import numpy as np
 import shapely
 
 from qshape import geometry as geo
+from qshape.design.features import check_small_features
 from qshape.design.fields import DesignFields
 from qshape.errors import DesignError, InvalidFigureError
 from qshape.geometry import FloatArray
@@ -17,7 +18,9 @@ def validate(design: DesignFields, source: str = "") -> None:
     Raises:
         DesignError: Duplicate names, degenerate or self-crossing outlines, bad holes,
             slots outside the mesh (by more than ``rules.mesh_margin_mm``), or two slots
-            closer than ``rules.min_gap_fraction`` x joint.
+            closer than ``rules.min_gap_fraction`` x joint; arcs below the smallest the camera
+            recognises with ``rules.small_features == "refuse"`` (with ``"warn"``: a
+            `qshape.errors.SmallFeatureWarning` per slot).
     """
     pre = f"{source}: " if source else f"design {design.name!r}: "
     names = [s.name for s in design.slots]
@@ -44,6 +47,7 @@ def validate(design: DesignFields, source: str = "") -> None:
                 f"{lo[0]:.1f}..{hi[0]:.1f}, y {lo[1]:.1f}..{hi[1]:.1f} mm; margin {margin} mm)"
             )
         outlines.append(dense)
+    check_small_features(design.slots, design.rules, pre)
     min_gap = design.rules.min_gap_fraction * design.joint
     centres = np.array([d.mean(axis=0) for d in outlines])
     radii = np.array(

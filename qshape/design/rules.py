@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from qshape.config_sections import load_section
 from qshape.errors import DesignError
@@ -33,6 +33,14 @@ class DesignRules:
             within this fraction of sqrt(area) of the outline (dimensionless).
         max_symmetry_order: Largest finite rotational symmetry order looked for.
         symmetry_samples: Outline samples used for the symmetry test.
+        min_arc_sagitta_mm: Smallest arc depth (sagitta) the cell's camera recognises, in
+            [mm]; arcs turning less than 180 deg only (circles and semicircles are recognised
+            as such). Measured at the default input camera (2.05 px/mm on the tile tops):
+            ``docs/random_designs.md``.
+        min_arc_chord_mm: Smallest arc chord the camera recognises, in [mm] (as above).
+        small_features: What loading does with a slot holding a smaller arc: ``warn`` (a
+            `SmallFeatureWarning` per slot naming the slot and the arc), ``refuse`` (a
+            `DesignError`) or ``ignore``.
     """
 
     outline_step_mm: float = 0.25
@@ -43,6 +51,9 @@ class DesignRules:
     symmetry_tolerance: float = 0.01
     max_symmetry_order: int = 12
     symmetry_samples: int = 512
+    min_arc_sagitta_mm: float = 5.0
+    min_arc_chord_mm: float = 20.0
+    small_features: Literal["warn", "refuse", "ignore"] = "warn"
 
     def __post_init__(self) -> None:
         """Raise `DesignError` on out-of-range values."""
@@ -56,6 +67,12 @@ class DesignRules:
             raise DesignError("symmetry_tolerance must be > 0")
         if self.max_symmetry_order < 1 or self.symmetry_samples < 16:
             raise DesignError("max_symmetry_order must be >= 1 and symmetry_samples >= 16")
+        if not (self.min_arc_sagitta_mm >= 0.0 and self.min_arc_chord_mm >= 0.0):
+            raise DesignError("min_arc_sagitta_mm and min_arc_chord_mm must be >= 0")
+        if self.small_features not in ("warn", "refuse", "ignore"):
+            raise DesignError(
+                f"small_features {self.small_features!r}; allowed: 'warn', 'refuse', 'ignore'"
+            )
 
     @classmethod
     def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> DesignRules:

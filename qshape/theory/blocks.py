@@ -253,7 +253,12 @@ def _evaluate_entries(
         counts = np.diff(np.r_[starts, len(pair)])
         group = np.repeat(np.arange(len(starts)), counts)
         equiv = equivalent_entries(
-            group, res.k, res.score, block.spack.self_residual[res.si[starts]], tol
+            group,
+            res.k,
+            res.score,
+            block.spack.self_residual[res.si[starts]],
+            tol,
+            hole_turn=res.hole_turn,
         )
         key = np.full(len(pair), np.inf)
         key[equiv] = np.abs(np.arctan2(res.cross[equiv], res.dot[equiv]))

@@ -36,6 +36,7 @@ class BlockResult:
         score: (P,) residual score (see `Match.score`).
         dot: (P,) sum of dot products of corresponding centred points.
         cross: (P,) sum of cross products; the rotation is atan2(cross, dot).
+        hole_turn: (P,) `hole_turn_residuals` of each entry (0 without straight-edged holes).
     """
 
     ti: NDArray[np.int64]
@@ -44,6 +45,7 @@ class BlockResult:
     score: FloatArray
     dot: FloatArray
     cross: FloatArray
+    hole_turn: FloatArray | None = None
 
     @property
     def theta(self) -> FloatArray:
@@ -120,11 +122,14 @@ def evaluate_block(
             )
     if measured:
         dot, crs = turn_sums(ref, cand, (ti, si, k), tol, (dot, crs))
+    turn = np.zeros(len(ti))
     if ref.hole_codes:
-        ok, hole_score = _holes(ref, cand, (ti, si, np.arctan2(crs, dot)), tol)
+        theta = np.arctan2(crs, dot)
+        ok, hole_score = _holes(ref, cand, (ti, si, theta), tol)
         sc = sc + hole_score
-        ti, si, k, sc, dot, crs = ti[ok], si[ok], k[ok], sc[ok], dot[ok], crs[ok]
-    return BlockResult(ti, si, k, sc, dot, crs)
+        turn = hole_turn_residuals(ref, cand, (ti, si, theta))
+        ti, si, k, sc, dot, crs, turn = (ti[ok], si[ok], k[ok], sc[ok], dot[ok], crs[ok], turn[ok])
+    return BlockResult(ti, si, k, sc, dot, crs, turn)
 
 
 def loose_codes(cand: Pack, rows: NDArray[np.int64], tol: Tolerances) -> NDArray[np.int64]:
@@ -230,12 +235,14 @@ def evaluate_pairs(
     )
     sc = _alignment_score(cand.sumsq[pi] + ref.sumsq[pi], dot, crs, n * ref.area[pi])
     theta = np.arctan2(crs, dot)
+    turn = None
     if ref.hole_codes:
         hok, hole_score = _holes(ref, cand, (pi, pi, theta), tol)
+        turn = hole_turn_residuals(ref, cand, (pi, pi, theta))[hok]
         pi, k, sc, theta = pi[hok], k[hok], (sc + hole_score)[hok], theta[hok]
     ok = np.zeros(count, dtype=bool)
     ok[pi] = True
-    equiv = equivalent_entries(pi, k, sc, ref.self_residual, tol)
+    equiv = equivalent_entries(pi, k, sc, ref.self_residual, tol, hole_turn=turn)
     mag = np.where(equiv, np.abs(theta), np.inf)
     low = np.full(count, np.inf)
     np.minimum.at(low, pi, mag)
@@ -253,8 +260,16 @@ def equivalent_entries(
     score: FloatArray,
     self_residual: FloatArray,
     tol: Tolerances,
+    *,
+    hole_turn: FloatArray | None = None,
 ) -> NDArray[np.bool_]:
-    """Entries equivalent to their pair's best one: a symmetry of the reference apart.
+    """Entries equivalent to their pair's best one: a symmetry of the whole figure apart.
+
+    The qualitative description leaves a turn open where the outline is symmetric and a hole
+    sits at the centre (its qualitative position, the centre, is the same at every turn): the
+    hole's own orientation then decides (``hole_turn``, a quantitative step after the
+    description's match). An entry's turn counts as a symmetry only when the outline is
+    symmetric under it and the holes fit as well as at the best entry.
 
     Args:
         pair: (E,) pair of each entry, also the row of ``self_residual`` (its reference).
@@ -262,14 +277,18 @@ def equivalent_entries(
         score: (E,) residual of each entry.
         self_residual: (P, n) `self_residuals` of each pair's reference.
         tol: ``symmetry_residual`` and ``symmetry_tolerance``.
+        hole_turn: (E,) `hole_turn_residuals` of each entry (None: no holes to compare).
 
     Returns:
-        (E,) True where the score is within ``symmetry_residual`` of the pair's best and the
-        reference is symmetric (``symmetry_tolerance``) under the shift from the best offset.
+        (E,) True where the score is within ``symmetry_residual`` of the pair's best, the
+        reference's outline is symmetric (``symmetry_tolerance``) under the shift from the best
+        offset, and the holes' turn residual within ``symmetry_tolerance`` of the best's. The
+        best entry is the one of least score plus hole turn residual.
     """
     if len(pair) == 0:
         return np.zeros(0, dtype=bool)
-    order = np.lexsort((score, pair))  # per pair, its best entry first
+    turn = np.zeros(len(pair)) if hole_turn is None else hole_turn
+    order = np.lexsort((score + turn, pair))  # per pair, its best entry first
     first = order[np.r_[True, pair[order][1:] != pair[order][:-1]]]
     best_of = np.zeros(int(pair.max()) + 1, dtype=np.int64)
     best_of[pair[first]] = first
@@ -279,6 +298,53 @@ def equivalent_entries(
     return np.asarray(
         (score <= score[b] + tol.symmetry_residual)
         & (self_residual[pair, shift] <= tol.symmetry_tolerance)
+        & (turn <= turn[b] + tol.symmetry_tolerance)
+    )
+
+
+def hole_turn_residuals(
+    ref: Pack,
+    cand: Pack,
+    entries: tuple[NDArray[np.int64], NDArray[np.int64], FloatArray],
+) -> FloatArray:
+    """How far a candidate's holes, turned by each entry's rotation, lie from the reference's.
+
+    Per (candidate ti, reference si, rotation theta) entry: the RMS distance between the
+    relevant points of each hole of the candidate, turned by theta about the centroid, and
+    those of the reference's hole in the same place (best cyclic correspondence), over the
+    holes with straight edges only, divided by sqrt(reference area). A hole with a curve (a
+    circle) gives no orientation and is left out; 0 where no hole is compared.
+
+    Returns:
+        (E,) residual, as `Match.score` measures it.
+    """
+    ti, si, theta = entries
+    total = np.zeros(theta.shape)
+    used = np.zeros(theta.shape)
+    c, s = np.cos(theta), np.sin(theta)
+    for h in range(min(len(ref.hole_pts), len(cand.hole_pts))):
+        rp, cp = ref.hole_pts[h][si], cand.hole_pts[h][ti]  # (E, m, 2)
+        m = rp.shape[1]
+        if cp.shape[1] != m or m == 0:
+            continue
+        straight = ~(
+            ((ref.hole_codes[h][si] & lb.KIND_BIT) != 0).any(axis=1)
+            | ((cand.hole_codes[h][ti] & lb.KIND_BIT) != 0).any(axis=1)
+        )
+        turned = np.stack(
+            [
+                c[:, None] * cp[..., 0] - s[:, None] * cp[..., 1],
+                s[:, None] * cp[..., 0] + c[:, None] * cp[..., 1],
+            ],
+            axis=-1,
+        )
+        idx = (np.arange(m)[:, None] + np.arange(m)[None, :]) % m  # (shift, i)
+        diff = turned[:, idx, :] - rp[:, None, :, :]  # (E, shift, m, 2)
+        sq = np.einsum("esmd,esmd->es", diff, diff).min(axis=1) / m
+        total += np.where(straight, sq, 0.0)
+        used += straight
+    return np.asarray(
+        np.sqrt(total / np.maximum(used, 1.0)) / np.sqrt(np.maximum(ref.area[si], 1e-300))
     )
 
 
@@ -379,6 +445,7 @@ __all__ = [
     "equivalent_entries",
     "evaluate_block",
     "evaluate_pairs",
+    "hole_turn_residuals",
     "loose_codes",
     "relaxed_entries",
 ]

@@ -202,7 +202,12 @@ def match(
     scores = res.score
     thetas = [wrap_angle(float(t)) for t in res.theta]
     same = equivalent_entries(
-        np.zeros(len(scores), dtype=np.int64), res.k, scores, ref_pack.self_residual, tol
+        np.zeros(len(scores), dtype=np.int64),
+        res.k,
+        scores,
+        ref_pack.self_residual,
+        tol,
+        hole_turn=res.hole_turn,
     )
     chosen = min(np.flatnonzero(same).tolist(), key=lambda j: abs(thetas[j]))
     # Listed too: rotations the residual barely tells from it (a nearly symmetric shape).

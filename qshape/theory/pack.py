@@ -41,6 +41,7 @@ class Pack:
     hole_centroid: FloatArray  # (G, H, 2)
     hole_interval: FloatArray  # (G, H, 2) CCW angle interval [deg]; NaN when around centroid
     self_residual: FloatArray  # (G, n) `self_residuals` of the outer points
+    hole_pts: tuple[FloatArray, ...] = ()  # per hole (G, m_h, 2), centred as ``pts``
 
 
 def take(p: Pack, idx: NDArray[np.int64]) -> Pack:
@@ -57,6 +58,7 @@ def take(p: Pack, idx: NDArray[np.int64]) -> Pack:
         hole_centroid=p.hole_centroid[idx],
         hole_interval=p.hole_interval[idx],
         self_residual=p.self_residual[idx],
+        hole_pts=tuple(h[idx] for h in p.hole_pts),
     )
 
 
@@ -145,8 +147,10 @@ def pack(descs: Sequence[Description]) -> Pack:
     )
     hc = np.zeros((len(descs), nholes, 2))
     hi = np.full((len(descs), nholes, 2), np.nan)
+    hole_pts = []
     for h in range(nholes):  # every description's hole h at once
         hp = np.concatenate([d.holes[h].boundary.points for d in descs]).reshape(g, -1, 2)
+        hole_pts.append(hp)
         hc[:, h] = hp.mean(axis=1)
         kinds, inv = np.unique(hole_codes[h] & lb.KIND_BIT, axis=0, return_inverse=True)
         inv = inv.ravel()
@@ -168,6 +172,7 @@ def pack(descs: Sequence[Description]) -> Pack:
         hole_centroid=hc,
         hole_interval=hi,
         self_residual=self_residuals(pts, area),
+        hole_pts=tuple(hole_pts),
     )
 
 

@@ -1,0 +1,137 @@
+"""The front page and the documentation site: snippets run, generated pages match the code."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import re
+import sys
+import tomllib
+from pathlib import Path
+from types import ModuleType
+
+import pytest
+import yaml
+from sybil import Sybil
+from sybil.parsers.myst import PythonCodeBlockParser, SkipParser
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+README_MAX_BYTES = 12 * 1024
+SNIPPET_FILES = sorted(
+    [ROOT / "README.md", *DOCS.glob("*.md")], key=lambda p: p.relative_to(ROOT).as_posix()
+)
+
+
+def _load(name: str) -> ModuleType:
+    """A script of ``docs/`` as a module (``docs`` is not a package)."""
+    spec = importlib.util.spec_from_file_location(f"docs_{name}", DOCS / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def _has_python(path: Path) -> bool:
+    return "```python" in path.read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize(
+    "path",
+    [p for p in SNIPPET_FILES if _has_python(p)],
+    ids=lambda p: p.relative_to(ROOT).as_posix(),
+)
+def test_python_snippets_run(path: Path) -> None:
+    """Every Python block of the README and the docs pages runs (Sybil; skip comments kept)."""
+    document = Sybil(parsers=[PythonCodeBlockParser(), SkipParser()]).parse(path)
+    examples = list(document.examples())
+    assert examples, f"{path.name}: no Python block found"
+    for example in examples:
+        example.evaluate()
+
+
+def test_snippet_files_are_found() -> None:
+    names = {p.relative_to(ROOT).as_posix() for p in SNIPPET_FILES if _has_python(p)}
+    assert {"README.md", "docs/environment.md", "docs/qshape.md"} <= names
+
+
+def test_readme_is_a_front_page() -> None:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert len(text.encode()) <= README_MAX_BYTES
+    first_block = text.split("```bash\n", 1)[1].split("```", 1)[0]
+    assert first_block.splitlines()[0].startswith("bash scripts/main.sh")
+    assert first_block.splitlines()[1].startswith("bash scripts/test.sh")
+    assert text.index("```bash") < text.index("\n## ")
+    assert not re.search(r"\b20\d\d-\d\d-\d\d\b|\b\d\d:\d\d UTC\b", text), "dates belong in docs"
+    for target in re.findall(r"\]\(([^)#]+)\)", text):
+        assert (ROOT / target).exists(), f"README links to a missing {target}"
+
+
+def test_task_pages_match_the_registry() -> None:
+    """The committed gallery has one up-to-date page and picture per registered id, no others."""
+    gen = _load("gen_tasks")
+    expected, _ = gen.pages(render=False)
+    assert gen.stale(expected) == []
+    ids = gen.registered_ids()
+    assert "MosaicAssembly-v0" in ids and "MosaicDecision6-v0" in ids
+    assert {p.path.stem for p in expected} == {*ids, "index"}
+
+
+def test_benchmark_page_renders_the_committed_json(tmp_path: Path) -> None:
+    bench = _load("bench_page")
+    report = json.loads((DOCS / "bench.json").read_text(encoding="utf-8"))
+    out = bench.write_bench_table(DOCS / "bench.json", tmp_path / "table.md")
+    text = out.read_text(encoding="utf-8")
+    assert report["date"] in text.splitlines()[0]
+    assert f"{report['machine']['cpus']} CPUs" in text.splitlines()[0]
+    rows = [line for line in text.splitlines() if line.startswith("| ") and "---" not in line]
+    assert len(rows) == len(report["figures"]) + 1  # header
+
+
+def test_lock_pins_every_dependency() -> None:
+    """``requirements.lock`` pins every dependency of pyproject.toml (with the extras)."""
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    wanted = list(project["dependencies"])
+    for extra in project["optional-dependencies"].values():
+        wanted += extra
+    lock = (ROOT / "requirements.lock").read_text(encoding="utf-8")
+    pinned = {
+        m.group(1).lower().replace("_", "-"): m.group(2)
+        for m in re.finditer(r"^([A-Za-z0-9_.\-]+)==(\S+)", lock, re.MULTILINE)
+    }
+    for req in wanted:
+        name = re.split(r"[\[<>=!~; ]", req, maxsplit=1)[0].lower().replace("_", "-")
+        assert name in pinned, f"{name} is not pinned in requirements.lock"
+    assert pinned["torch"] == "2.13.0+cpu"
+    assert pinned["mujoco"] == "3.17.0"
+
+
+def test_api_reference_lists_every_package() -> None:
+    """The API reference walks every top-level package that pyproject.toml ships."""
+    find = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["tool"]
+    patterns = find["setuptools"]["packages"]["find"]["include"]
+    packages = {p.rstrip("*") for p in patterns}
+    listed = set((DOCS / "api.md").read_text(encoding="utf-8").split())
+    assert packages <= listed, f"missing from docs/api.md: {sorted(packages - listed)}"
+
+
+def test_license_and_citation() -> None:
+    license_text = (ROOT / "LICENSE").read_text(encoding="utf-8")
+    assert "Apache License" in license_text and "Version 2.0, January 2004" in license_text
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    assert project["license"] == "Apache-2.0"
+    assert project["license-files"] == ["LICENSE"]
+    cff = yaml.safe_load((ROOT / "CITATION.cff").read_text(encoding="utf-8"))
+    assert cff["cff-version"] == "1.2.0" and cff["license"] == "Apache-2.0"
+    titles = [r["title"] for r in cff["references"]]
+    assert "2D qualitative shape matching applied to ceramic mosaic assembly" in titles
+
+
+def test_changelog_states_the_version_rule() -> None:
+    text = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
+    assert "## When an id's version changes" in text
+    gen = _load("gen_tasks")
+    for env_id in gen.registered_ids():
+        assert env_id.rsplit("-", 1)[1] == "v0"
+        assert f"`{env_id}`" in text, f"{env_id} has no entry in the changelog"
