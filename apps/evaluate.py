@@ -362,7 +362,7 @@ def _read_done(path: Path | None) -> list[EpisodeResult]:
     return [EpisodeResult(**json.loads(line)) for line in complete_lines(path)]
 
 
-def _bind(pol: Policy, designs: Sequence[str]) -> list[tuple[gym.Env, Predict]]:
+def bind(pol: Policy, designs: Sequence[str]) -> list[tuple[gym.Env, Predict]]:
     """Build the policy's env for each design and bind it (raises before any episode)."""
     bound = []
     for design in designs or [""]:
@@ -411,7 +411,7 @@ def evaluate_policy_set(
     envs = []
     try:
         for pol in policies:  # bind everything first: a bad policy fails before any episode
-            envs.append(_bind(pol, proto.designs))
+            envs.append(bind(pol, proto.designs))
         per: dict[str, list[EpisodeResult]] = {}
         for pol, bound in zip(policies, envs, strict=True):
             eps = [e for e in done if e.policy == pol.label and e.seed in proto.seeds]

@@ -265,7 +265,7 @@ def _channel_canny(image: np.ndarray, low: float, high: float) -> np.ndarray:
     """Union of one single-channel ``cv2.Canny`` per colour channel.
 
     Extraction's edge step finds the same edges, from Sobel derivatives it computes itself
-    (see ``qshape.vision.segment._canny``).
+    (see ``qshape.vision.segment.canny``).
     """
     r, g, b = cv2.split(image)
     edges = cv2.Canny(r, low, high)

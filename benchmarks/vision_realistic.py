@@ -101,7 +101,7 @@ class RealisticBench:
     levels: tuple[Level, ...] = ()
 
 
-class _Classes:
+class DesignClasses:
     """Descriptions of one design's classes (shape only; shape and colour), in pixels."""
 
     def __init__(self, design: Design, s: float, tol: Tolerances) -> None:
@@ -114,11 +114,14 @@ class _Classes:
     def best(
         cand: Description, refs: dict[str, Description], tol: Tolerances, use_color: bool
     ) -> tuple[str | None, Any]:
+        """The best-matching class key of ``cand`` among ``refs`` and its match, or Nones."""
         best = match_best(refs, cand, tol, use_color)
         return (None, None) if best is None else best
 
 
-def _seen(img: Any, e: CameraEffects, bench: RealisticBench) -> tuple[np.ndarray, FloatArray]:
+def seen_picture(
+    img: Any, e: CameraEffects, bench: RealisticBench
+) -> tuple[np.ndarray, FloatArray]:
     """The picture extraction gets and the truth centres (k, 2) [px] in it."""
     centres = np.array([t.center_px for t in img.tiles], dtype=np.float64).reshape(-1, 2)
     if not bench.undistort or (e.lens_k1 == 0.0 and e.lens_k2 == 0.0):
@@ -127,7 +130,11 @@ def _seen(img: Any, e: CameraEffects, bench: RealisticBench) -> tuple[np.ndarray
     return undistort(img.image, e), undistort_points(centres, e, w, h)
 
 
-def _synth_for(level: Level, sp: SynthParams, rng: np.random.Generator) -> SynthParams:
+def synth_for(level: Level, sp: SynthParams, rng: np.random.Generator) -> SynthParams:
+    """The picture parameters of one picture of ``level`` on top of ``sp``.
+
+    Its effects (drawn from the level's range with ``rng`` where it has one) and illumination.
+    """
     e = level.effects if level.high is None else level.effects.between(level.high, rng)
     ill = sp.illumination if level.illumination is None else level.illumination
     return replace(sp, effects=e, illumination=ill)
@@ -150,7 +157,7 @@ def _score_tile(
     name: str,
     drawn: tuple[Any, FloatArray],
     found: tuple[list[Description], FloatArray, np.ndarray],
-    ctx: tuple[_Classes, Tolerances, RealisticBench, float],
+    ctx: tuple[DesignClasses, Tolerances, RealisticBench, float],
 ) -> None:
     """Count one drawn tile of design ``name`` (and its truth centre [px]) in ``tally``.
 
@@ -225,11 +232,11 @@ def run_level(  # noqa: PLR0914, PLR0915, PLR0917
     for name in bench.designs:
         design = Design.load(name)
         tol = pixel_tolerances(design, s)
-        classes = _Classes(design, s, tol)
+        classes = DesignClasses(design, s, tol)
         for _ in range(images):
-            params = _synth_for(level, sp, rng)
+            params = synth_for(level, sp, rng)
             img = generate(design, bench.tiles_per_image, rng, params)
-            picture, centres = _seen(img, params.effects, bench)
+            picture, centres = seen_picture(img, params.effects, bench)
             res = extract_detailed(picture, ep)
             descs = [describe(f, tol) for f in res.figures]
             cents = np.array([f.centroid for f in res.figures]).reshape(-1, 2)

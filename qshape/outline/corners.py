@@ -73,7 +73,7 @@ def window_corners(  # noqa: PLR0917
     change[flat] = 0.0
     if p.arc_turning_deg > 0.0:
         change = _excess_turning(change, w, p.arc_turning_deg)
-    return _corners_many(change, angle, spacing), ext
+    return corners_many(change, angle, spacing), ext
 
 
 FULL_TURN_OVER_WINDOWS = 720.0
@@ -102,7 +102,7 @@ def _circular_band(n: int, spacing: int) -> BoolArray:
     return band
 
 
-def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np.ndarray]:
+def corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np.ndarray]:
     """Corners of each row of ``change`` (F, n), all rows at once.
 
     Greedy, as the slope comparison wants: the strongest remaining sample above ``threshold``
@@ -136,4 +136,4 @@ def _corners_many(change: FloatArray, threshold: float, spacing: int) -> list[np
     return [flat[a:b] for a, b in zip([0, *ends[:-1]], ends, strict=True)]  # np.split, faster
 
 
-__all__ = ["FULL_TURN_OVER_WINDOWS", "hole_windows", "window_corners"]
+__all__ = ["FULL_TURN_OVER_WINDOWS", "corners_many", "hole_windows", "window_corners"]

@@ -43,7 +43,7 @@ def blur_size(sigma: float) -> int:
     return min(default, 2 * int(np.flatnonzero(share >= _BLUR_TAP_MIN)[-1]) + 1)
 
 
-def _channel_max(values: np.ndarray) -> np.ndarray:
+def channel_max(values: np.ndarray) -> np.ndarray:
     """Maximum over the last axis of (..., 3) values, from the three planes.
 
     numpy's reduction over an axis of 3 costs ~45 us on the (30, 41, 3) cell grid, the planes
@@ -53,7 +53,7 @@ def _channel_max(values: np.ndarray) -> np.ndarray:
     return out
 
 
-def _channel_sum(values: np.ndarray) -> np.ndarray:
+def channel_sum(values: np.ndarray) -> np.ndarray:
     """Sum over the last axis of (..., 3) values, from the three planes.
 
     The same sums as ``values.sum(axis=-1)`` (numpy adds three values left to right too), at
@@ -90,13 +90,13 @@ def dominant_color(img: np.ndarray, p: ExtractParams) -> tuple[np.ndarray, float
     # Channel-major (3, N): numpy reduces an axis of 3 many times slower than three planes.
     planes = np.ascontiguousarray(sample.T)
     off = np.abs(planes - dominant[:, None])
-    near = _channel_max(off.T) <= p.background_tolerance
+    near = channel_max(off.T) <= p.background_tolerance
     span = int((planes.max(axis=1).astype(np.int32) - planes.min(axis=1)).max())
     return dominant, float(near.mean()), span
 
 
 @functools.cache
-def _polynomial_basis(gh: int, gw: int, degree: int) -> np.ndarray:
+def polynomial_basis(gh: int, gw: int, degree: int) -> np.ndarray:
     """Monomials u^i v^j (i + j <= degree) of the cell centres of a (gh, gw) grid, (gh*gw, terms).
 
     u, v are the centres' positions in [-0.5, 0.5]; depends only on the grid and the degree,
@@ -111,13 +111,13 @@ def _polynomial_basis(gh: int, gw: int, degree: int) -> np.ndarray:
     return basis
 
 
-def _polynomial_fit(small: np.ndarray, keep: np.ndarray, degree: int) -> np.ndarray | None:
+def polynomial_fit(small: np.ndarray, keep: np.ndarray, degree: int) -> np.ndarray | None:
     """Per-channel polynomial of the cell grid (gh, gw, 3) fitted on ``keep`` cells, or None."""
     gh, gw = keep.shape
     terms = (degree + 1) * (degree + 2) // 2
     if degree <= 0 or int(keep.sum()) < 2 * terms:
         return None
-    basis = _polynomial_basis(gh, gw, degree)
+    basis = polynomial_basis(gh, gw, degree)
     flat = keep.ravel()
     used, values = basis[flat], small.reshape(-1, 3)[flat]
     # Least squares by the normal equations where they are well conditioned: the monomials of
@@ -147,7 +147,7 @@ def box_kernel(size: int) -> np.ndarray:
     return kernel
 
 
-def _local_fill(
+def local_fill(
     small: np.ndarray, keep: np.ndarray, base: np.ndarray, p: ExtractParams
 ) -> np.ndarray:
     """Background colour of every cell from the ``keep`` cells near it (normalised convolution).
@@ -188,7 +188,7 @@ def _blend_far(
     """
     w0 = p.illumination_min_weight
     blended = (acc + (w0 - weight)[..., None] * out) * (1.0 / w0)
-    moved = far & (_channel_max(np.abs(blended - out)) > p.illumination_blend_min_change)
+    moved = far & (channel_max(np.abs(blended - out)) > p.illumination_blend_min_change)
     out[moved] = blended[moved]
 
 
@@ -199,7 +199,7 @@ def _grid_at(size: int, cells: int) -> tuple[np.ndarray, np.ndarray]:
     return whole, edge - whole
 
 
-def _cell_means(planes: Sequence[np.ndarray], gh: int, gw: int) -> np.ndarray:
+def cell_means(planes: Sequence[np.ndarray], gh: int, gw: int) -> np.ndarray:
     """Mean colour of each cell of a (gh, gw) grid over the image, (gh, gw, 3) float32 levels.
 
     The area average of ``cv2.resize(..., INTER_AREA)`` (a pixel on a cell edge counts by the
@@ -245,16 +245,16 @@ def illumination(
     """
     h, w = planes[0].shape[:2]
     gh, gw = max(2, h // p.illumination_cell_px), max(2, w // p.illumination_cell_px)
-    small = _cell_means(planes, gh, gw)
+    small = cell_means(planes, gh, gw)
     dom = dominant.astype(np.float32)
     # The belt under any light is the dominant colour times a gain: compare each cell with
     # the dominant colour brought to the cell's brightness (a tile differs in hue, a shadow
     # only in brightness).
-    ratio = _channel_sum(small) / max(float(dom.sum()), 1.0)
-    shaded = _channel_max(np.abs(small - ratio[..., None] * dom))
+    ratio = channel_sum(small) / max(float(dom.sum()), 1.0)
+    shaded = channel_max(np.abs(small - ratio[..., None] * dom))
     # Darker than the dominant colour: any shadow down to belt_gain_min; brighter: only
     # within background_tolerance (a grey tile is the belt's hue, but much brighter).
-    brighter_ok = _channel_max(np.abs(small - dom)) <= p.background_tolerance
+    brighter_ok = channel_max(np.abs(small - dom)) <= p.background_tolerance
     is_bg = (
         (shaded <= p.background_chroma_tolerance)
         & (ratio >= p.belt_gain_min)
@@ -263,12 +263,12 @@ def illumination(
     # Cells beside a non-background cell are partly tile (mixed colours): not trusted.
     core = cv2.erode(is_bg, box_kernel(3), borderType=cv2.BORDER_REPLICATE)
     keep = core.view(bool) if int(core.sum()) >= p.illumination_min_cells else is_bg.view(bool)
-    poly = _polynomial_fit(small, keep, p.illumination_degree)
+    poly = polynomial_fit(small, keep, p.illumination_degree)
     model = np.broadcast_to(dominant, small.shape) if poly is None else poly
     if p.illumination_local_sigma_cells > 0.0 and keep.any():
-        model = _local_fill(small, keep, model, p)
+        model = local_fill(small, keep, model, p)
     model = np.asarray(model, dtype=np.float32)
-    light = _channel_sum(model)
+    light = channel_sum(model)
     lit = float(np.percentile(light, p.lit_percentile))
     gain = lit / np.maximum(light, 1.0)
     if not p.normalize_shading:
@@ -288,7 +288,13 @@ __all__ = [
     "GAIN_SCALE",
     "blur_size",
     "box_kernel",
+    "cell_means",
+    "channel_max",
     "channel_span",
+    "channel_sum",
     "dominant_color",
     "illumination",
+    "local_fill",
+    "polynomial_basis",
+    "polynomial_fit",
 ]

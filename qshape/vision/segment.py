@@ -122,7 +122,7 @@ def _at_half_contrast(
     return cv2.bitwise_and(pieces, keep)
 
 
-def _canny(plane: np.ndarray, low: float, high: float) -> np.ndarray:
+def canny(plane: np.ndarray, low: float, high: float) -> np.ndarray:
     """``cv2.Canny`` of one uint8 channel, given the 3 x 3 Sobel derivatives it would take.
 
     Canny's image path computes those derivatives itself, with the border replicated; its
@@ -136,7 +136,7 @@ def _canny(plane: np.ndarray, low: float, high: float) -> np.ndarray:
     return cv2.Canny(dx[1:-1, 1:-1], dy[1:-1, 1:-1], low, high)
 
 
-def _color_edges(
+def color_edges(
     img: np.ndarray, p: ExtractParams, planes: Sequence[np.ndarray] | None = None
 ) -> np.ndarray:
     """Canny edges of any channel: the union of one single-channel Canny per channel, uint8.
@@ -155,9 +155,9 @@ def _color_edges(
     small = img if f == 1 else cv2.resize(img, (w // f, h // f), interpolation=cv2.INTER_AREA)
     low, high = p.canny_low, p.canny_high
     r, g, b = planes if f == 1 and planes is not None else cv2.split(small)
-    edges = _canny(r, low, high)
-    cv2.bitwise_or(edges, _canny(g, low, high), dst=edges)
-    cv2.bitwise_or(edges, _canny(b, low, high), dst=edges)
+    edges = canny(r, low, high)
+    cv2.bitwise_or(edges, canny(g, low, high), dst=edges)
+    cv2.bitwise_or(edges, canny(b, low, high), dst=edges)
     if f == 1:
         return edges
     full = np.zeros((h, w), np.uint8)
@@ -189,7 +189,7 @@ class Segmentation:
     pieces: np.ndarray
 
 
-def _colour_distance(
+def colour_distance(
     planes: Sequence[np.ndarray], model: Sequence[np.ndarray], gain: np.ndarray, p: ExtractParams
 ) -> tuple[np.ndarray, float, np.ndarray]:
     """Colour distance to the belt model (uint8), its threshold, and the opened foreground mask.
@@ -214,7 +214,7 @@ def _colour_distance(
     return dist, thr, mask
 
 
-def _label_pieces(cut: np.ndarray) -> tuple[int, np.ndarray]:
+def label_pieces(cut: np.ndarray) -> tuple[int, np.ndarray]:
     """4-connected scan-order labels of a uint8 mask: (count, labels (H, W) uint16 or int32).
 
     16-bit labels when they fit (OpenCV writes them about a quarter faster); OpenCV refuses
@@ -227,7 +227,7 @@ def _label_pieces(cut: np.ndarray) -> tuple[int, np.ndarray]:
         return cv2.connectedComponentsWithAlgorithm(cut, 4, cv2.CV_32S, cv2.CCL_SAUF)
 
 
-def _split_regions(
+def split_regions(
     img: np.ndarray, mask: np.ndarray, p: ExtractParams, planes: Sequence[np.ndarray] | None = None
 ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """Label the foreground, touching tiles of different colours apart.
@@ -246,10 +246,10 @@ def _split_regions(
         present = np.ones(count, bool)
         present[0] = False
         return count, labels, present, mask
-    edges = _color_edges(img, p, planes)
+    edges = color_edges(img, p, planes)
     cut = cv2.bitwise_and(mask, cv2.bitwise_not(edges))
     # Scan-order labels as connectedComponents gives them; its 4-connected default is slower.
-    count, labels = _label_pieces(cut)
+    count, labels = label_pieces(cut)
     # Up to 256 labels fit a byte: histogram, look-up and dilations in OpenCV's uint8 paths
     # (a dilation of labels is a maximum filter: the same in any type that holds them).
     small = count <= 256  # noqa: PLR2004
@@ -294,11 +294,22 @@ def segment(
 
     ``planes``: the picture's channels; ``model``: the belt model's.
     """
-    dist, thr, mask = _colour_distance(planes, model, gain, p)
-    count, labels, present, pieces = _split_regions(img, mask, p, planes)
+    dist, thr, mask = colour_distance(planes, model, gain, p)
+    count, labels, present, pieces = split_regions(img, mask, p, planes)
     if p.edge_fraction > 0.0:
         pieces = _at_half_contrast(pieces, labels, dist, present, thr=thr, p=p)
     return Segmentation(dist, thr, labels, count, present, pieces)
 
 
-__all__ = ["Segmentation", "compact_labels", "label_medians", "samples", "segment"]
+__all__ = [
+    "Segmentation",
+    "canny",
+    "color_edges",
+    "colour_distance",
+    "compact_labels",
+    "label_medians",
+    "label_pieces",
+    "samples",
+    "segment",
+    "split_regions",
+]

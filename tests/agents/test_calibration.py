@@ -52,8 +52,7 @@ def test_corner_order_matches_the_board(views, cfg, result):
     np.testing.assert_allclose(views.true_camera.project(world), corners, atol=0.5)
 
 
-def test_calibrated_camera_locates_tiles_within_2mm(result):
-    design = Design.load("paper_mixed")
+def test_calibrated_camera_locates_tiles_within_2mm(result, design: Design):
     cell, _ = build_design_cell(design, seed=0)
     try:
         cell.step(100)

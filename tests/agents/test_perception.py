@@ -17,14 +17,12 @@ from benchmarks.design_cell import build_design_cell, nearest_tile
 from benchmarks.perception import bench
 from envs.errors import CellError
 from envs.task_spec import work_areas, world_slots
-from qshape.design import Design
 
 POS_TOL = 0.002  # m
 
 
 @pytest.fixture(scope="module")
-def scene():
-    design = Design.load("paper_mixed")
+def scene(design):
     cell, _ = build_design_cell(design, seed=0)
     cell.step(100)
     img = cell.render("input_camera")

@@ -22,8 +22,7 @@ YAW_TOL = math.radians(2.0)
 
 
 @pytest.fixture(scope="module")
-def scene():
-    design = Design.load("paper_mixed")
+def scene(design):
     cell, _ = build_design_cell(design, seed=3)
     cell.step(100)
     cam = cell.camera_model("input_camera")
@@ -99,8 +98,8 @@ def test_empty_inputs():
     _ = qshape  # the library stays importable without the simulator in this module's scope
 
 
-def test_distractors_on_the_belt_are_never_placed():
-    full = Design.load("paper_mixed")
+def test_distractors_on_the_belt_are_never_placed(design: Design):
+    full = design
     design = full.with_slots(full.slots[::2])
     base = load_cell_config()
     tiles = replace(base.tiles, distractor_rate=1.0, distractor_kinds=("color", "shape", "broken"))

@@ -135,12 +135,12 @@ CHECKPOINTS = Path(__file__).resolve().parents[2] / "checkpoints"
 )
 def test_committed_checkpoints_bind_to_their_task(path: str) -> None:
     """Every SB3 checkpoint in the repository loads and acts on its task's held-out env."""
-    from apps.evaluate import _bind, task_protocol  # noqa: PLC0415
+    from apps.evaluate import bind, task_protocol  # noqa: PLC0415
 
     task = Path(path).parts[-4]
     base, proto = task_protocol(task)
     pol = make_policy(path, base)
-    [(env, predict)] = _bind(pol, proto.designs[:1])
+    [(env, predict)] = bind(pol, proto.designs[:1])
     try:
         obs, _ = env.reset(seed=proto.seeds[0])
         action = predict(obs, True)

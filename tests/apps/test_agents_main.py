@@ -76,9 +76,8 @@ def test_full_run_places_every_tile(tmp_path):
     assert (tmp_path / "cell.mp4").is_file()
 
 
-def test_a_design_that_fails_validation_is_a_clear_error(tmp_path):
-    bad = tmp_path / "bad.yaml"
-    bad.write_text(
+def test_a_design_that_fails_validation_is_a_clear_error(tmp_path, yaml_file):
+    bad = yaml_file(
         "name: bad\nmesh: {width: 50, height: 50}\njoint: 2\nslots:\n"
         "- name: a\n  shape: {kind: square, size: 40}\n  color: '#ff0000'\n"
         "  pose: {x: 10, y: 10, angle: 0}\n"

@@ -23,9 +23,8 @@ from apps.sweep import (
 from envs.tasks import bundled_tasks
 
 
-def test_sweep_files_are_strict(tmp_path) -> None:
-    bad = tmp_path / "bad.yaml"
-    bad.write_text("entries:\n  - {name: x, task: MosaicDecision6-v0}\n")
+def test_sweep_files_are_strict(tmp_path, yaml_file) -> None:
+    bad = yaml_file("entries:\n  - {name: x, task: MosaicDecision6-v0}\n")
     with pytest.raises(SweepError, match="exactly one of train, policy or bc_episodes"):
         load_sweep(bad)
     cfg = load_sweep("baselines")

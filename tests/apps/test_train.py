@@ -61,12 +61,11 @@ def test_model_reloads_and_predicts(run):
         env.close()
 
 
-def test_config_is_strict(tmp_path):
-    bad = tmp_path / "bad.yaml"
-    bad.write_text("algo: PPO\nlearning_rate: 0.1\n")
+def test_config_is_strict(yaml_file):
+    bad = yaml_file("algo: PPO\nlearning_rate: 0.1\n")
     with pytest.raises(ConfigError, match="unknown key"):
         load_train_config(bad)
-    bad.write_text("env: {action_mod: joint}\n")
+    bad = yaml_file("env: {action_mod: joint}\n")
     with pytest.raises(ConfigError, match="action_mod"):
         load_train_config(bad)
     with pytest.raises(AlgorithmError, match="known"):

@@ -1,9 +1,13 @@
 """Test helpers: a small Jacobian IK and straight-down pick/place motions for the cell.
 
-Only for tests and benchmarks of the cell; the real planners (mink, ruckig) live in `planners/`.
+Only for the cell's tests; the real planners (mink, ruckig) live in `planners/`. The IK of a
+cell comes from the ``arm_ik`` fixture (``conftest.py``), which compiles the arm model once per
+test module and cell configuration.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -76,6 +80,10 @@ class ArmIK:
                 dq *= 0.3 / step
             q = np.clip(q + dq, self.lo, self.hi)
         return None
+
+
+ArmIKFor = Callable[[Cell], ArmIK]
+"""The ``arm_ik`` fixture's type: the IK of a cell's arm, built once per configuration."""
 
 
 def move(cell: Cell, q_to: np.ndarray, speed_scale: float = 0.9, settle: float = 0.05) -> float:

@@ -25,7 +25,7 @@ from envs.cell.config import (
     SceneryConfig,
     load_cell_config,
 )
-from envs.cell.scene import build_spec, cell_geometry
+from envs.cell.scene import cell_geometry
 from envs.cell.tiles.shapes import basic_shapes
 from envs.errors import CellError
 from envs.task_spec import work_areas
@@ -40,17 +40,6 @@ SIZE = (492, 656)
 def _with_lens(cfg: CellConfig, lens: tuple[float, ...], exposure: float = 0.0) -> CellConfig:
     cam = dataclasses.replace(cfg.input_camera, distortion=lens, exposure_time=exposure)
     return dataclasses.replace(cfg, input_camera=cam)
-
-
-@pytest.fixture(scope="module")
-def marker_scene() -> tuple[mujoco.MjModel, mujoco.MjData, int]:
-    spec = build_spec(CellConfig())
-    body = spec.worldbody.add_body(name="marker", mocap=True)
-    g = body.add_geom(name="marker", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.003, 0, 0])
-    g.rgba = [1, 0, 0, 1]
-    g.contype = g.conaffinity = 0
-    model = spec.compile()
-    return model, mujoco.MjData(model), model.body("marker").mocapid[0]
 
 
 def _red_centroid(img: np.ndarray) -> np.ndarray:

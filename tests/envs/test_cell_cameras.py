@@ -14,25 +14,9 @@ import pytest
 from envs.cell.cameras import CameraRig, camera_model
 from envs.cell.cell import Cell
 from envs.cell.config import CellConfig, RenderConfig
-from envs.cell.scene import build_spec, cell_geometry
+from envs.cell.scene import cell_geometry
 from envs.cell.tiles.shapes import basic_shapes
 from envs.errors import CellError
-
-MARKER_RADIUS = 0.003
-
-
-@pytest.fixture(scope="module")
-def marker_scene() -> tuple[mujoco.MjModel, mujoco.MjData, int]:
-    cfg = CellConfig()
-    spec = build_spec(cfg)
-    body = spec.worldbody.add_body(name="marker", mocap=True)
-    g = body.add_geom(name="marker", type=mujoco.mjtGeom.mjGEOM_SPHERE)
-    g.size = [MARKER_RADIUS, 0, 0]
-    g.rgba = [1, 0, 0, 1]
-    g.contype = g.conaffinity = 0
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    return model, data, model.body("marker").mocapid[0]
 
 
 def _red_centroid(img: np.ndarray) -> np.ndarray:

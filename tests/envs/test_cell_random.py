@@ -8,7 +8,7 @@ import pytest
 from envs.cell.cell import Cell
 from envs.cell.config import CellConfig, InputBeltConfig
 from envs.cell.tiles.shapes import basic_shapes
-from tests.envs.cell_motion import ArmIK, tool_down
+from tests.envs.cell_motion import ArmIKFor, tool_down
 
 CONTROL_STEPS = 5
 SIM_SECONDS = 60.0
@@ -43,13 +43,13 @@ def _inside_slab(cell: Cell, pos: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.parametrize("speed", [0.0, 0.05])
-def test_random_controls_for_a_minute(speed: float) -> None:
+def test_random_controls_for_a_minute(speed: float, arm_ik: ArmIKFor) -> None:
     cfg = CellConfig(input_belt=InputBeltConfig(speed=speed))
     cell = Cell(cfg, basic_shapes() * 3, seed=11)
     rng = np.random.default_rng(12)
     lo, hi = cell.model.jnt_range[:6, 0], cell.model.jnt_range[:6, 1]
     vmax = cell.max_joint_speed
-    ik = ArmIK(cell)
+    ik = arm_ik(cell)
     # Half the targets scatter around a pose with the pad on the tiles, to stir them up.
     q_belt = ik.solve(cell.geometry.input_centre + [0, 0, 0.005], tool_down(0.0), cell.qpos)
     start = cell.tile_poses().pos

@@ -8,7 +8,7 @@ import pytest
 from envs.cell.cell import Cell
 from envs.cell.config import CellConfig, SuctionConfig
 from envs.cell.tiles.shapes import basic_shapes
-from tests.envs.cell_motion import ArmIK, move, pick, tool_down, world_grasp
+from tests.envs.cell_motion import ArmIK, ArmIKFor, move, pick, tool_down, world_grasp
 
 SHAPES = {s.name: s for s in basic_shapes()}
 
@@ -31,9 +31,9 @@ def _hover(
     move(cell, ik.solve(p + [0, 0, height], tilt @ tool_down(yaw), q), speed_scale=0.3)
 
 
-def test_sensors_and_seal_only_when_close_and_flat() -> None:
+def test_sensors_and_seal_only_when_close_and_flat(arm_ik: ArmIKFor) -> None:
     cell = _cell()
-    ik = ArmIK(cell)
+    ik = arm_ik(cell)
     try:
         assert not cell.vacuum_on and not cell.tile_held
         _hover(cell, ik, 0, height=0.01)  # 10 mm above: no seal
@@ -57,9 +57,9 @@ def test_sensors_and_seal_only_when_close_and_flat() -> None:
         cell.close()
 
 
-def test_no_seal_over_a_hole() -> None:
+def test_no_seal_over_a_hole(arm_ik: ArmIKFor) -> None:
     cell = _cell()
-    ik = ArmIK(cell)
+    ik = arm_ik(cell)
     try:
         _hover(cell, ik, 1, height=0.0005, at_origin=True)  # ring: centroid is in the hole
         cell.vacuum(True)
@@ -71,9 +71,9 @@ def test_no_seal_over_a_hole() -> None:
         cell.close()
 
 
-def test_descending_with_vacuum_on_seals_on_contact() -> None:
+def test_descending_with_vacuum_on_seals_on_contact(arm_ik: ArmIKFor) -> None:
     cell = _cell()
-    ik = ArmIK(cell)
+    ik = arm_ik(cell)
     try:
         _hover(cell, ik, 0, height=0.02)
         cell.vacuum(True)
@@ -85,11 +85,11 @@ def test_descending_with_vacuum_on_seals_on_contact() -> None:
         cell.close()
 
 
-def test_over_limit_acceleration_drops_the_tile_and_is_reported() -> None:
+def test_over_limit_acceleration_drops_the_tile_and_is_reported(arm_ik: ArmIKFor) -> None:
     # 300 Pa x 23 mm pad = 0.125 N: holds the 4.8 g tile (0.047 N) at rest and in a slow move,
     # not through a full-speed move.
     cell = _cell(vacuum_pressure=300.0)
-    ik = ArmIK(cell)
+    ik = arm_ik(cell)
     try:
         assert cell.suction.holding_force == pytest.approx(0.1246, abs=1e-3)
         assert pick(cell, ik, 0)
@@ -110,9 +110,9 @@ def test_over_limit_acceleration_drops_the_tile_and_is_reported() -> None:
         cell.close()
 
 
-def test_default_vacuum_holds_through_full_speed() -> None:
+def test_default_vacuum_holds_through_full_speed(arm_ik: ArmIKFor) -> None:
     cell = _cell()
-    ik = ArmIK(cell)
+    ik = arm_ik(cell)
     try:
         assert pick(cell, ik, 0)
         target = ik.solve(cell.geometry.output_centre + [0, 0, 0.06], tool_down(0.0), cell.qpos)

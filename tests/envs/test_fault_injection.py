@@ -59,7 +59,8 @@ def test_a_tile_stranded_beside_the_mesh_is_counted_and_ends_the_episode():
     half = np.asarray(cell.cfg.output_belt.mesh_size) / 2
     beside = geo.output_centre[:2] + [half[0] + 0.03, 0.0]  # on the output belt, off the mesh
     real = int(np.flatnonzero(~cell.is_distractor)[0])
-    _move_tile(env, real, [*beside, env.unwrapped.task._rest_z])
+    rest_z = geo.mesh_top + cell.cfg.tiles.thickness / 2  # a tile's centre lying on the mesh
+    _move_tile(env, real, [*beside, rest_z])
     ev = env.unwrapped.task.evaluate()
     assert ev.stranded == 1
     assert ev.on_input == 0

@@ -9,7 +9,6 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import envs
 from envs.cell.cell import Cell
 from envs.cell.scene import SUPPORT_CONTYPE
 from envs.cell.tiles.shapes import basic_shapes
@@ -102,17 +101,9 @@ def test_a_holed_tile_rests_on_its_hull_and_stacks_on_its_pieces(cell: Cell) -> 
     assert cell.warnings() == 0
 
 
-@pytest.fixture(scope="module")
-def kinematic() -> Iterator[MosaicAssemblyEnv]:
-    e = gym.make(envs.ENV_ID, action_mode="pick_place", execution="kinematic", obs_mode="state")
-    try:
-        yield e.unwrapped
-    finally:
-        e.close()
-
-
-def test_a_kinematic_place_sets_the_tile_down(kinematic: MosaicAssemblyEnv) -> None:
-    env, cell = kinematic, kinematic.cell
+def test_a_kinematic_place_sets_the_tile_down(kinematic_env: gym.Env) -> None:
+    env: MosaicAssemblyEnv = kinematic_env.unwrapped
+    cell = env.cell
     env.reset(seed=2)
     rest = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2
     trees = _trees(cell)

@@ -75,7 +75,7 @@ def test_staged_reward_telescopes_to_the_stage_weights() -> None:
     try:
         u = env.unwrapped
         env.reset(seed=3)
-        start = dict(u.task.staged._prev)
+        start = u.task.staged.potentials(u.task.evaluate())  # the potentials at the reset
         _, r, term, _, info = env.step(u.expert_action(0, 0))
         cfg = u.task.staged.cfg
         assert term and info["is_success"]

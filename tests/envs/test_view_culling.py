@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 import pytest
 
 import envs
 from envs.cell.cell import CAMERAS
+from envs.cell.view_culling import ViewCuller
 
 SIZES = ((72, 96), (120, 160), (492, 656))  # the last: frustum test only
 
@@ -57,9 +59,12 @@ def test_culling_leaves_geoms_out(pair) -> None:
     env = pair[0]
     env.reset(seed=1)
     cell = env.unwrapped.cell
-    rig = cell.cameras
     cam = cell.model.camera("input_camera").id
-    hidden = rig._culler.hidden(rig._renderer(72, 96, False), cell.data, cam)
+    renderer = mujoco.Renderer(cell.model, 72, 96)
+    try:
+        hidden = ViewCuller(cell.model).hidden(renderer, cell.data, cam)
+    finally:
+        renderer.close()
     assert hidden[cell.model.geom("floor").id]
     assert hidden[cell.model.geom("output_belt").id]
     assert not hidden[cell.model.geom("input_belt").id]

@@ -24,11 +24,6 @@ POS_TOL = 5e-4  # m, issue target
 ORI_TOL = math.radians(0.5)
 
 
-@pytest.fixture(scope="module")
-def ik() -> IKSolver:
-    return IKSolver(config=CFG.ik, limits=CFG.limits)
-
-
 def _grid() -> list[tuple[np.ndarray, float]]:
     """Tool-down targets over both working areas (belts 0.5 and 1 m apart), several yaws."""
     targets = []

@@ -8,8 +8,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from benchmarks.planner import CellRunner, _build_cell, cell_config
+from benchmarks.planner import LAYOUT_SEED_TRIES, CellRunner, cell_config
 from envs.cell.tiles.shapes import basic_shapes
+from envs.episode_setup import build_cell
 from planners.config import load_planner_config
 from planners.cycle.plan import CyclePlan
 from planners.errors import InvalidTargetError, UnreachableError
@@ -22,11 +23,6 @@ from spatial.rotations import yaw_from_matrix
 CFG = load_planner_config()
 PICK = np.array([0.03, 0.52, 0.205])
 PLACE = np.array([-0.02, -0.48, 0.207])
-
-
-@pytest.fixture(scope="module")
-def planner() -> PickPlacePlanner:
-    return PickPlacePlanner(IKSolver(config=CFG.ik, limits=CFG.limits), CFG)
 
 
 @pytest.fixture(scope="module")
@@ -253,7 +249,7 @@ def test_bad_inputs_raise_typed_errors(planner: PickPlacePlanner, start: JointSt
 
 def _sim_cycle(belt_speed: float) -> tuple[CellRunner, int]:
     shapes = basic_shapes()[:2]
-    cell = _build_cell(cell_config("paper", belt_speed, 30.0), shapes, (), seed=1)
+    cell = build_cell(cell_config("paper", belt_speed, 30.0), shapes, (), 1, LAYOUT_SEED_TRIES)
     cell.belt_speed = belt_speed
     return CellRunner(cell, CFG), int(np.flatnonzero(cell.on_stage)[0])
 
@@ -289,7 +285,7 @@ def test_carried_tile_pull_is_its_load_not_the_pad_contact() -> None:
     # contact's internal push on the sealed tile (15-40 x the weight when the weld alone was
     # measured: 2.4 N here, 13 N for a 30 g tile).
     ring = next(s for s in basic_shapes() if s.name == "ring")
-    cell = _build_cell(cell_config("paper", 0.0, 30.0), [ring], (), seed=1)
+    cell = build_cell(cell_config("paper", 0.0, 30.0), [ring], (), 1, LAYOUT_SEED_TRIES)
     runner = CellRunner(cell, CFG)
     pulls: list[tuple[float, float]] = []
     update = cell.suction.update

@@ -10,7 +10,6 @@ from ruckig import InputParameter, Ruckig, Trajectory
 
 from planners.config import JointLimits, load_planner_config
 from planners.errors import LimitError
-from planners.ik import IKSolver
 from planners.joints import JointState, unwrap_target
 from planners.pick_place import PickPlacePlanner
 from planners.rest_to_rest import axis_duration, rest_to_rest_duration
@@ -76,11 +75,6 @@ def test_limits_below_a_squared_over_j_reach_velocity_without_full_acceleration(
         q0, q1 = rng.uniform(-1.5, 1.5, 6), rng.uniform(-1.5, 1.5, 6)
         expected = _ruckig_duration(q0, q1, [0.5] * 6, [5.0] * 6, [10.0] * 6)
         assert rest_to_rest_duration(q0, q1, limits) == pytest.approx(expected, abs=TOL)
-
-
-@pytest.fixture(scope="module")
-def planner() -> PickPlacePlanner:
-    return PickPlacePlanner(IKSolver(config=CFG.ik, limits=CFG.limits), CFG)
 
 
 def _by_ruckig(planner: PickPlacePlanner, start: np.ndarray, *targets: np.ndarray) -> float:

@@ -26,11 +26,6 @@ from qshape.synthetic.synth import SynthParams, generate
 from qshape.vision.extract import extract_detailed
 
 
-@pytest.fixture(scope="module")
-def design() -> Design:
-    return Design.load("paper_mixed")
-
-
 def _square(side: float = 100.0, step: float = 0.5) -> np.ndarray:
     t = np.arange(0.0, side, step)
     z, s = np.zeros_like(t), np.full_like(t, side)
@@ -126,15 +121,15 @@ def test_between_draws_inside_the_range() -> None:
         assert 75 <= e.jpeg_quality <= 95 and isinstance(e.jpeg_quality, int)
 
 
-def test_effects_off_leave_pictures_unchanged(design: Design) -> None:
-    sp = SynthParams.load()
+def test_effects_off_leave_pictures_unchanged(design: Design, synth_params: SynthParams) -> None:
+    sp = synth_params
     a = generate(design, 8, 4, sp)
     b = generate(design, 8, 4, replace(sp, effects=CameraEffects()))
     np.testing.assert_array_equal(a.image, b.image)
 
 
-def test_touching_and_partial_tiles(design: Design) -> None:
-    sp = SynthParams.load()
+def test_touching_and_partial_tiles(design: Design, synth_params: SynthParams) -> None:
+    sp = synth_params
     e = CameraEffects(touching_probability=1.0)
     img = generate(design, 8, 5, replace(sp, effects=e, noise_std=0.0))
     assert len(img.tiles) >= 4
@@ -152,8 +147,8 @@ def test_touching_and_partial_tiles(design: Design) -> None:
             assert np.hypot(*(f.centroid - t.center_px)) > 0.3 * np.sqrt(t.slot.area) * 2.5
 
 
-def test_lens_truth_follows_the_picture(design: Design) -> None:
-    sp = SynthParams.load()
+def test_lens_truth_follows_the_picture(design: Design, synth_params: SynthParams) -> None:
+    sp = synth_params
     e = CameraEffects(lens_k1=-0.2)
     plain = generate(design, 6, 8, sp)
     bent = generate(design, 6, 8, replace(sp, effects=e))

@@ -182,7 +182,7 @@ def test_colour_robust_to_shading(known: tuple[Design, np.ndarray, list[Figure]]
 
 
 @pytest.mark.parametrize("reduction", [1, 2])
-def test_touching_tiles_split_by_canny(reduction: int) -> None:
+def test_touching_tiles_split_by_canny(reduction: int, extract_params: ExtractParams) -> None:
     data = {
         "name": "touch",
         "mesh": {"width": 100, "height": 60},
@@ -207,7 +207,7 @@ def test_touching_tiles_split_by_canny(reduction: int) -> None:
     # Close the 0.5 mm joint: the two tiles touch.
     lo, hi = round(49.5 * S), round(50.5 * S) + 1
     image[:, lo:hi] = image[:, lo - 1 : lo]
-    on = replace(ExtractParams.load(), canny_reduction=reduction)
+    on = replace(extract_params, canny_reduction=reduction)
     assert len(extract(image, on)) == 2
     off = replace(on, split_touching=False)
     assert len(extract(image, off)) == 1
@@ -248,7 +248,7 @@ def test_uniform_noise_gives_no_figures() -> None:
     assert any("no dominant background" in r for r in res.rejected)
 
 
-def test_narrow_hole_filter_uses_twice_area_over_perimeter() -> None:
+def test_narrow_hole_filter_uses_twice_area_over_perimeter(extract_params: ExtractParams) -> None:
     """A hole is kept when 2 x area / perimeter (its width) reaches ``min_hole_width_px``.
 
     The slit's width is measured as extraction traces it; thresholds at 0.7 and 1.3 x that
@@ -266,7 +266,7 @@ def test_narrow_hole_filter_uses_twice_area_over_perimeter() -> None:
     contours, hier = cv2.findContours(fg, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
     hole = next(c for c, h in zip(contours, hier[0], strict=True) if h[3] != -1)
     width = 2.0 * cv2.contourArea(hole) / cv2.arcLength(hole, True)
-    base = ExtractParams.load()
+    base = extract_params
     between = replace(base, min_hole_width_px=0.7 * width, min_hole_area_px=10.0)
     above = replace(base, min_hole_width_px=1.3 * width, min_hole_area_px=10.0)
     assert len(extract(image, between)[0].holes) == 1
@@ -295,8 +295,8 @@ def test_read_image(tmp_path: Path, known: tuple[Design, np.ndarray, list[Figure
         read_image(tmp_path / "junk.png")
 
 
-def test_params_load_and_validate() -> None:
-    p = ExtractParams.load()
+def test_params_load_and_validate(extract_params: ExtractParams) -> None:
+    p = extract_params
     assert p.outline.max_curve_turn_deg >= 200.0
     with pytest.raises(ImageError):
         ExtractParams(threshold_min=50.0, threshold_max=10.0)
@@ -304,9 +304,8 @@ def test_params_load_and_validate() -> None:
         ExtractParams(canny_reduction=0)
 
 
-def test_synthetic_view_matches_slots() -> None:
-    design = Design.load("paper_mixed")
-    sp = SynthParams.load()
+def test_synthetic_view_matches_slots(synth_params: SynthParams, design: Design) -> None:
+    sp = synth_params
     img = generate(design, 10, 11, sp)
     res = extract_detailed(img.image)
     assert len(res.figures) == len(img.tiles)
@@ -368,12 +367,11 @@ def test_coarse_arcs_are_not_split(px_per_mm: float) -> None:
             assert len(fig.points) == 3 and int(fig.curve_mask.sum()) == 1, radius
 
 
-def test_traced_circles_are_two_semicircles() -> None:
+def test_traced_circles_are_two_semicircles(synth_params: SynthParams, design: Design) -> None:
     # Where a traced closed curve is split depends on its noise; two unequal halves would
     # label one arc acute and the other plane (vision.yaml extract.outline.circle_residual).
-    design = Design.load("paper_mixed")
     slots = [s for s in design.slots if s.name in ("ring_orange", "circle_teal")]
-    sp = replace(SynthParams.load(), px_per_mm=CELL_PX_PER_MM)
+    sp = replace(synth_params, px_per_mm=CELL_PX_PER_MM)
     tol = Tolerances(joint_width=design.joint * CELL_PX_PER_MM)
     boundaries = 0
     for seed in range(4):
@@ -406,156 +404,3 @@ def test_square_hole_corners_are_single_vertices(px_per_mm: float) -> None:
     for fig in figs:
         assert len(fig.points) == 4 and len(fig.holes) == 1
         assert len(fig.holes[0].points) == 4 and not fig.holes[0].curve_mask.any()
-
-
-@pytest.mark.parametrize(("labels", "count"), [(7, 8), (300, 310)])
-def test_label_medians_are_lower_medians(labels: int, count: int) -> None:
-    """The histogram medians equal sorted lower medians, per label and channel.
-
-    More labels than a byte holds take the float histogram; labels above ``labels`` have no
-    sample.
-    """
-    from qshape.vision.segment import label_medians as _label_medians  # noqa: PLC0415
-
-    rng = np.random.default_rng(11)
-    lab = rng.integers(0, labels, 20000)
-    both = np.concatenate(
-        [rng.integers(0, 256, (20000, 3)), rng.integers(0, 9, (20000, 1))], axis=1
-    ).astype(np.uint8)
-    medians, seen = _label_medians(lab, [both[:, c] for c in range(4)], count)
-    assert medians.shape == (count, 4)
-    for k in range(count):
-        rows = np.sort(both[lab == k], axis=0)
-        assert seen[k] == (len(rows) > 0)
-        want = rows[(len(rows) - 1) // 2] if len(rows) else np.zeros(4)
-        np.testing.assert_array_equal(medians[k], want)
-
-
-def test_crumbs_beyond_a_byte_of_labels_leave_pieces_unchanged() -> None:
-    """Regions are the same whether the labels fit a byte (OpenCV look-up) or not (numpy)."""
-    from qshape.vision.segment import _split_regions  # noqa: PLC0415
-
-    p = ExtractParams.load()
-    img = np.full((200, 300, 3), 60, np.uint8)
-    mask = np.zeros((200, 300), np.uint8)
-    cv2.rectangle(img, (20, 20), (80, 90), (200, 40, 40), -1)
-    cv2.rectangle(img, (81, 20), (140, 90), (40, 200, 40), -1)  # touching, other colour
-    cv2.rectangle(mask, (20, 20), (140, 90), 255, -1)
-    count, labels, present, pieces = _split_regions(img, mask, p)
-    assert count <= 256 and present.sum() == 2
-    crumbs = mask.copy()
-    crumbs[120::3, ::3] = 255  # 700 one-pixel crumbs below the tiles
-    many, labels2, present2, pieces2 = _split_regions(img, crumbs, p)
-    assert many > 256 and present2.sum() == 2
-    np.testing.assert_array_equal(pieces2, pieces)
-    np.testing.assert_array_equal(labels2[:100] > 0, labels[:100] > 0)
-
-
-@pytest.mark.parametrize(
-    ("h", "w", "gh", "gw"), [(492, 656, 30, 41), (64, 80, 4, 5), (97, 61, 7, 3)]
-)
-def test_cell_means_are_opencv_area_means(h: int, w: int, gh: int, gw: int) -> None:
-    """The illumination grid's cell means equal OpenCV's area resize (ties within a level)."""
-    from qshape.vision.background import _cell_means  # noqa: PLC0415
-
-    rng = np.random.default_rng(5)
-    img = cv2.GaussianBlur(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), (0, 0), 2.0)
-    want = cv2.resize(img, (gw, gh), interpolation=cv2.INTER_AREA).astype(np.float32)
-    got = _cell_means(cv2.split(img), gh, gw)
-    assert got.shape == want.shape and got.dtype == np.float32
-    diff = np.abs(got - want)
-    assert diff.max() <= 1.0 and (diff > 0).mean() < 0.01  # off by one only at a tie
-
-
-@pytest.mark.parametrize("sigma", [0.3, 0.5, 0.8, 1.0, 1.5, 2.0])
-def test_trimmed_pre_blur_is_opencvs_blur(sigma: float) -> None:
-    """The pre-blur's trimmed kernel gives exactly OpenCV's default-size Gaussian blur."""
-    from qshape.vision.background import blur_size as _blur_size  # noqa: PLC0415
-
-    img = np.random.default_rng(3).integers(0, 256, (90, 120, 3), dtype=np.uint8)
-    size = _blur_size(sigma)
-    assert size % 2 == 1 and size <= (round(6 * sigma + 1) | 1)
-    want = cv2.GaussianBlur(img, (0, 0), sigma)
-    np.testing.assert_array_equal(cv2.GaussianBlur(img, (size, size), sigma), want)
-
-
-def test_piece_labels_are_16_bit_when_they_fit_else_32_bit() -> None:
-    from qshape.vision.segment import _label_pieces  # noqa: PLC0415
-
-    rng = np.random.default_rng(5)
-    blobs = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (0, 0), 3.0)
-    mask = np.where(blobs > 128, 255, 0).astype(np.uint8)
-    count, labels = _label_pieces(mask)
-    want_count, want = cv2.connectedComponents(mask, connectivity=4)
-    assert labels.dtype == np.uint16
-    assert count == want_count > 10
-    np.testing.assert_array_equal(labels, want)
-    # A checkerboard of 492 x 656 px: 161377 labels in 4-connectivity do not fit 16 bits.
-    yy, xx = np.mgrid[0:492, 0:656]
-    board = (((yy + xx) % 2) * 255).astype(np.uint8)
-    count, labels = _label_pieces(board)
-    assert labels.dtype == np.int32
-    assert count == 492 * 656 // 2 + 1
-    assert int(labels.max()) == count - 1
-
-
-@pytest.mark.parametrize(("h", "w"), [(120, 160), (97, 61)])
-def test_reduced_canny_edges_are_blocks_of_the_reduced_pictures_edges(h: int, w: int) -> None:
-    """With canny_reduction 2 each edge of the halved picture is a 2 x 2 block (odd sides: none
-    in the last row/column), the union over the channels."""
-    from qshape.vision.segment import _color_edges  # noqa: PLC0415
-
-    rng = np.random.default_rng(7)
-    img = cv2.GaussianBlur(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), (0, 0), 2.0)
-    p = replace(ExtractParams.load(), canny_reduction=2, canny_low=20.0, canny_high=50.0)
-    got = _color_edges(img, p)
-    small = cv2.resize(img, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
-    want = np.zeros((h // 2, w // 2), np.uint8)
-    for c in range(3):
-        want |= cv2.Canny(np.ascontiguousarray(small[..., c]), 20.0, 50.0)
-    assert got.shape == (h, w) and want.any()
-    blocks = got[: h // 2 * 2, : w // 2 * 2].reshape(h // 2, 2, w // 2, 2)
-    for dy in range(2):
-        for dx in range(2):
-            np.testing.assert_array_equal(blocks[:, dy, :, dx], want)
-    assert not got[h // 2 * 2 :].any() and not got[:, w // 2 * 2 :].any()
-
-
-def test_reduced_canny_cut_parts_touching_tiles_at_their_boundary() -> None:
-    """Two touching rectangles of different colours: the cut of the halved picture's Canny is
-    given back from both sides, so each piece ends within a pixel of the true boundary."""
-    from qshape.vision.segment import _split_regions  # noqa: PLC0415
-
-    img = np.full((120, 200, 3), 50, np.uint8)
-    img[30:90, 30:101] = (200, 60, 40)  # columns 30..100
-    img[30:90, 101:170] = (60, 180, 60)  # columns 101..169, touching
-    img = cv2.GaussianBlur(img, (0, 0), 0.8)
-    mask = np.where(np.abs(img.astype(int) - 50).max(axis=2) > 20, 255, 0).astype(np.uint8)
-    for reduction in (1, 2):
-        p = replace(ExtractParams.load(), canny_reduction=reduction)
-        count, labels, present, pieces = _split_regions(img, mask, p)
-        assert present.sum() == 2
-        row = labels[60] * (pieces[60] > 0)
-        left, right = (np.flatnonzero(row == k) for k in np.flatnonzero(present))
-        if left.mean() > right.mean():
-            left, right = right, left
-        # The colours change between columns 100 and 101; one pixel on the cut is dropped
-        # (it borders the other piece): the gap is within a pixel of the change.
-        assert 98 <= left.max() <= 100 and 100 <= right.min() <= 102
-        assert right.min() - left.max() == 2
-
-
-def test_edge_level_from_every_fourth_pixel_keeps_the_synthetic_figures() -> None:
-    """A region's median distance from every 4th pixel per axis gives the same figures as from
-    every pixel on a camera-like view: the same vertices, most of them bit for bit (a level
-    one step off moves a few by about a tenth of a pixel)."""
-    sp = SynthParams.load()
-    img = generate(Design.load("hexagon"), 20, 11, sp).image
-    every = extract_detailed(img, replace(ExtractParams.load(), edge_sample_step=1)).figures
-    fourth = extract_detailed(img, replace(ExtractParams.load(), edge_sample_step=4)).figures
-    assert len(fourth) == len(every) >= 15
-    for a, b in zip(every, fourth, strict=True):
-        assert len(a.points) == len(b.points)
-        np.testing.assert_allclose(a.points, b.points, atol=0.25)
-    same = [np.array_equal(a.points, b.points) for a, b in zip(every, fourth, strict=True)]
-    assert sum(same) >= len(same) - 3

@@ -42,12 +42,14 @@ def _blob(img: np.ndarray, centre: tuple[int, int], jag: float, rng: np.random.G
     cv2.fillPoly(img, [np.round(pts).astype(np.int32)], RED)
 
 
-def test_region_whose_outline_is_mostly_noise_gives_no_figure() -> None:
+def test_region_whose_outline_is_mostly_noise_gives_no_figure(
+    extract_params: ExtractParams,
+) -> None:
     rng = np.random.default_rng(3)
     img = _belt()
     _blob(img, (100, 100), 0.0, rng)  # a clean disc
     _blob(img, (260, 160), 0.25, rng)  # a ragged splash of the same size
-    res = extract_detailed(_noisy(img), ExtractParams.load())
+    res = extract_detailed(_noisy(img), extract_params)
     assert len(res.figures) == 1
     assert np.allclose(res.figures[0].centroid, (100, 100), atol=1.5)
     assert any("mostly noise" in why for why in res.rejected)
@@ -56,19 +58,21 @@ def test_region_whose_outline_is_mostly_noise_gives_no_figure() -> None:
     assert len(loose.figures) == 2
 
 
-def test_rough_tile_edges_are_not_noise() -> None:
-    sp = SynthParams.load()
+def test_rough_tile_edges_are_not_noise(synth_params: SynthParams, design: Design) -> None:
+    sp = synth_params
     rough = replace(sp, effects=CameraEffects(edge_roughness_mm=0.6))
-    img = generate(Design.load("paper_mixed"), 12, 4, rough)
+    img = generate(design, 12, 4, rough)
     res = extract_detailed(img.image)
     assert not any("mostly noise" in why for why in res.rejected)
     assert len(res.figures) == sum(not t.partial for t in img.tiles)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_every_tile_found_under_a_soft_shadow(seed: int) -> None:
-    sp = replace(SynthParams.load(), effects=CameraEffects(shadow_strength=0.35))
-    img = generate(Design.load("paper_mixed"), 14, seed, sp)
+def test_every_tile_found_under_a_soft_shadow(
+    seed: int, synth_params: SynthParams, design: Design
+) -> None:
+    sp = replace(synth_params, effects=CameraEffects(shadow_strength=0.35))
+    img = generate(design, 14, seed, sp)
     res = extract_detailed(img.image)
     whole = [t for t in img.tiles if not t.partial]
     cents = np.array([f.centroid for f in res.figures])
@@ -87,8 +91,8 @@ def _half_shadow() -> np.ndarray:
     return _noisy(img.astype(np.uint8))
 
 
-def test_belt_model_follows_a_shadow() -> None:
-    res = extract_detailed(_half_shadow(), ExtractParams.load())
+def test_belt_model_follows_a_shadow(extract_params: ExtractParams) -> None:
+    res = extract_detailed(_half_shadow(), extract_params)
     assert len(res.figures) == 2
     lit, shaded = sorted(res.figures, key=lambda f: f.centroid[0])
     # Both colours corrected to one light: the same glaze reads the same in and out of shadow.
@@ -122,13 +126,13 @@ def test_dark_glaze_dip_is_not_a_hole() -> None:
     assert [len(f.holes) for f in sorted(loose.figures, key=lambda f: f.centroid[0])] == [1, 1]
 
 
-def test_undistortion_inverts_the_lens() -> None:
+def test_undistortion_inverts_the_lens(synth_params: SynthParams) -> None:
     e = CameraEffects(lens_k1=-0.15, lens_k2=0.02)
     w, h = 656, 492
     pts = np.array([[10.0, 12.0], [328.0, 246.0], [600.0, 50.0], [640.0, 480.0]])
     back = undistort_points(distort_points(pts, e, w, h), e, w, h)
     assert np.allclose(back, pts, atol=0.05)
-    sp = replace(SynthParams.load(), effects=CameraEffects())
+    sp = replace(synth_params, effects=CameraEffects())
     ideal = generate(Design.load("square_grid"), 10, 2, sp).image
     seen = lens_distort(ideal, e)
     again = undistort(seen, e)

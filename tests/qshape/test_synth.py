@@ -15,11 +15,6 @@ from qshape.synthetic.synth import SynthParams, generate, place_path
 from qshape.vision.extract import extract_detailed
 
 
-@pytest.fixture(scope="module")
-def design() -> Design:
-    return Design.load("paper_mixed")
-
-
 def test_deterministic(design: Design) -> None:
     a = generate(design, 8, 5)
     b = generate(design, 8, 5)
@@ -31,8 +26,8 @@ def test_deterministic(design: Design) -> None:
     assert not np.array_equal(a.image, c.image)
 
 
-def test_image_and_truth(design: Design) -> None:
-    sp = SynthParams.load()
+def test_image_and_truth(design: Design, synth_params: SynthParams) -> None:
+    sp = synth_params
     img = generate(design, 12, 1, sp)
     assert img.image.shape == (492, 656, 3) and img.image.dtype == np.uint8
     assert 8 <= len(img.tiles) <= 12
@@ -49,8 +44,8 @@ def test_image_and_truth(design: Design) -> None:
             assert not points_in_polygon(a.points_px, b.points_px).any()
 
 
-def test_truth_matches_rendered_tiles(design: Design) -> None:
-    sp = SynthParams.load().noise_level(0.0)
+def test_truth_matches_rendered_tiles(design: Design, synth_params: SynthParams) -> None:
+    sp = synth_params.noise_level(0.0)
     img = generate(design, 10, 2, sp)
     res = extract_detailed(img.image)
     assert len(res.figures) == len(img.tiles)
@@ -82,14 +77,14 @@ def test_truth_matches_rendered_tiles(design: Design) -> None:
             assert err < 1e-3, t.slot.name
 
 
-def test_noise_levels(design: Design) -> None:
-    clean = generate(design, 4, 3, SynthParams.load().noise_level(0.0))
-    belt = np.round(255 * np.array(SynthParams.load().belt_color))
+def test_noise_levels(design: Design, synth_params: SynthParams) -> None:
+    clean = generate(design, 4, 3, synth_params.noise_level(0.0))
+    belt = np.round(255 * np.array(synth_params.belt_color))
     corner = clean.image[:3, :3].reshape(-1, 3)
     np.testing.assert_array_equal(corner, np.broadcast_to(belt, corner.shape))
-    noisy = generate(design, 4, 3, SynthParams.load().noise_level(3.0))
+    noisy = generate(design, 4, 3, synth_params.noise_level(3.0))
     assert noisy.image[:40, :40].std() > clean.image[:40, :40].std()
-    p = SynthParams.load().noise_level(2.0)
+    p = synth_params.noise_level(2.0)
     assert p.vertex_jitter_mm == pytest.approx(1.0)
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib
 import math
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 import pytest
@@ -27,42 +28,48 @@ def _picture(design: str, px_per_mm: float, seed: int = 4) -> np.ndarray:
     return generate(Design.load(design), 10, seed, replace(sp, px_per_mm=px_per_mm)).image
 
 
-def _counts(image: np.ndarray, p: ExtractParams) -> list[int]:
-    """The resample count extraction chose for each batch of outlines (spied, not altered)."""
+def _counts(image: np.ndarray, p: ExtractParams, monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    """The resample count extraction chose for each batch of outlines.
+
+    Read from the outline parameters extraction hands `qshape.figures_from_outlines` (spied,
+    not altered).
+    """
     seen: list[int] = []
-    real = extract_module._outline_params
+    real = extract_module.figures_from_outlines
 
-    def spy(todo: list, q: ExtractParams):  # noqa: ANN202
-        chosen = real(todo, q)
-        seen.append(chosen.resample_points)
-        return chosen
+    def spy(*args: Any, **kwargs: Any) -> Any:  # noqa: ANN401
+        seen.append(args[3].resample_points)
+        return real(*args, **kwargs)
 
-    extract_module._outline_params = spy
-    try:
+    with monkeypatch.context() as patch:
+        patch.setattr(extract_module, "figures_from_outlines", spy)
         extract_detailed(image, p)
-    finally:
-        extract_module._outline_params = real
     return seen
 
 
-def test_small_tiles_are_resampled_per_traced_pixel() -> None:
-    p = ExtractParams.load()
+def test_small_tiles_are_resampled_per_traced_pixel(
+    monkeypatch: pytest.MonkeyPatch, extract_params: ExtractParams
+) -> None:
+    p = extract_params
     assert p.resample_per_px > 0.0
     image = _picture("hexagon", 1.8)
     res = extract_detailed(image, p)
     longest = max(
         float(np.hypot(*np.diff(np.vstack([o, o[:1]]), axis=0).T).sum()) for o in res.outlines
     )
-    (n,) = _counts(image, p)
+    (n,) = _counts(image, p, monkeypatch)
     # The traced length counts a diagonal pixel step as sqrt(2): within 1 % of the outline's.
     assert n < p.outline.resample_points
     assert n == pytest.approx(p.resample_per_px * longest, rel=0.01)
 
 
-def test_large_tiles_keep_the_full_count_and_the_same_figures() -> None:
-    p = ExtractParams.load()
+def test_large_tiles_keep_the_full_count_and_the_same_figures(
+    monkeypatch: pytest.MonkeyPatch,
+    extract_params: ExtractParams,
+) -> None:
+    p = extract_params
     image = _picture("paper_mixed", 2.5)
-    assert _counts(image, p) == [p.outline.resample_points]
+    assert _counts(image, p, monkeypatch) == [p.outline.resample_points]
     fixed = extract_detailed(image, replace(p, resample_per_px=0.0)).figures
     chosen = extract_detailed(image, p).figures
     assert len(chosen) == len(fixed) > 0
@@ -70,9 +77,9 @@ def test_large_tiles_keep_the_full_count_and_the_same_figures() -> None:
         assert np.array_equal(a.points, b.points)
 
 
-def test_small_tiles_keep_their_shape_at_the_lower_count() -> None:
+def test_small_tiles_keep_their_shape_at_the_lower_count(extract_params: ExtractParams) -> None:
     """The same corners (and curves) at 1.8 px/mm with the picture's count as with the cap."""
-    p = ExtractParams.load()
+    p = extract_params
     image = _picture("square_grid", 1.8, seed=9)
     fixed = extract_detailed(image, replace(p, resample_per_px=0.0)).figures
     chosen = extract_detailed(image, p).figures
@@ -85,9 +92,9 @@ def test_small_tiles_keep_their_shape_at_the_lower_count() -> None:
 
 
 @pytest.mark.parametrize("bad", [-1.0, math.nan, math.inf])
-def test_bad_resample_density_is_refused(bad: float) -> None:
+def test_bad_resample_density_is_refused(bad: float, extract_params: ExtractParams) -> None:
     with pytest.raises(ImageError, match="resample_per_px"):
-        replace(ExtractParams.load(), resample_per_px=bad)
+        replace(extract_params, resample_per_px=bad)
 
 
 def test_a_uniform_border_around_a_tile_is_still_read_whole() -> None:

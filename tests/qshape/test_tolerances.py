@@ -1,4 +1,5 @@
-"""Matching through the point tolerance, on drawn and extracted tiles."""
+"""Tolerances: loading and validation, and matching through the point tolerance on drawn and
+extracted tiles."""
 
 from __future__ import annotations
 
@@ -7,12 +8,79 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from qshape import Description, Figure, Tolerances, describe, match
+from configs import ConfigError
+from qshape import Description, Figure, OutlineParams, ToleranceError, Tolerances, describe, match
 from qshape.design import Design
 from qshape.synthetic.effects import CameraEffects
 from qshape.synthetic.synth import SynthParams, generate
 from qshape.vision.extract import extract_detailed
 from qshape.vision.params import ExtractParams
+
+
+def test_bundled_defaults_match_dataclass_defaults():
+    assert Tolerances.load() == Tolerances()
+    assert OutlineParams.load() == OutlineParams()
+
+
+def test_overrides_and_paths(tmp_path):
+    tol = Tolerances.load(color_distance=0.3, right_angle_deg=[80, 100])
+    assert tol.color_distance == 0.3
+    assert tol.right_angle_deg == (80.0, 100.0)
+    path = tmp_path / "t.yaml"
+    path.write_text("tolerances:\n  joint_width: 3.0\n")
+    assert Tolerances.load(path).joint_width == 3.0
+    flat = tmp_path / "flat.yaml"
+    flat.write_text("joint_width: 1.5\n")
+    assert Tolerances.load(flat).joint_width == 1.5
+
+
+def test_unknown_key_is_an_error():
+    with pytest.raises(ConfigError, match="allowed"):
+        Tolerances.load(colour_distance=0.3)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"right_angle_deg": (95.0, 85.0)},
+        {"right_angle_deg": (85.0,)},
+        {"right_angle_deg": (-5.0, 95.0)},
+        {"equal_length_ratio": (1.2, 0.8)},
+        {"semicircle_ratio": (0.0, 1.1)},
+        {"angle_margin_deg": -1.0},
+        {"angle_margin_deg": 5.0},  # as wide as half the right-angle band
+        {"length_margin": 0.3},
+        {"semicircle_margin": 0.12},
+        {"color_distance": 0.0},
+        {"joint_width": float("nan")},
+        {"size_area_threshold": -1.0},
+        {"cone_margin_deg": 30.0},
+        {"max_key_variants": 0},
+    ],
+)
+def test_invalid_tolerances_raise(kwargs):
+    with pytest.raises(ToleranceError):
+        Tolerances(**kwargs)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"resample_points": 4},
+        {"corner_angle_deg": 0.0},
+        {"max_curve_turn_deg": 45.0},
+        {"corner_window": 0.0},
+        {"merge_fraction": 0.7},
+    ],
+)
+def test_invalid_outline_params_raise(kwargs):
+    with pytest.raises(ToleranceError):
+        OutlineParams(**kwargs)
+
+
+def test_tolerance_error_is_a_value_error():
+    with pytest.raises(ValueError):
+        Tolerances(color_distance=-1.0)
 
 
 def _best(cand: Description, refs: dict[str, Description], tol: Tolerances) -> str | None:
@@ -25,12 +93,11 @@ def _best(cand: Description, refs: dict[str, Description], tol: Tolerances) -> s
 
 
 @pytest.fixture(scope="module")
-def trencadis_pictures():
+def trencadis_pictures(synth_params: SynthParams, extract_params: ExtractParams):
     """Drawn trencadis pictures (0.4 mm rough edges, 0.5 mm vertex jitter) and their figures."""
-    sp = SynthParams.load()
+    sp, ep = synth_params, extract_params
     design = Design.load("trencadis")
     params = replace(sp, effects=CameraEffects(edge_roughness_mm=0.4))
-    ep = ExtractParams.load()
     pictures = []
     for seed in (26, 31):
         img = generate(design, 14, np.random.default_rng(seed), params)

@@ -1,3 +1,7 @@
+"""Descriptions of figures: labels of squares, rectangles, L tiles, triangles, curves and holes;
+invariance to start vertex, orientation, translation and scale; the batch equals one by one.
+"""
+
 import math
 
 import numpy as np

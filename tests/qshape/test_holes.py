@@ -36,11 +36,13 @@ def _dense(poly: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.parametrize("cut", [6.0, 8.0, 10.0])
-def test_a_small_holes_cut_corner_is_one_corner_of_the_figure(cut: float) -> None:
+def test_a_small_holes_cut_corner_is_one_corner_of_the_figure(
+    cut: float, extract_params: ExtractParams
+) -> None:
     """The holed square's 45 px hole with a corner cut 8.5-14 px long (as blur and rough edges
     cut it) is a square: the cut is under 3 % of the figure's perimeter (15 px), though over
     3 % of the hole's own (5.4 px), which alone keeps it as an edge."""
-    params = ExtractParams.load().outline
+    params = extract_params.outline
     outer = _dense(_square((125.0, 125.0), 125.0))
     hole = _dense(_square((100.0, 100.0), 45.0, cut))
     (fig,) = figures_from_outlines([outer], [[hole]], [None], params, y_down=True)
@@ -52,9 +54,9 @@ def test_a_small_holes_cut_corner_is_one_corner_of_the_figure(cut: float) -> Non
     assert len(alone[0]) == 5
 
 
-def test_a_holes_edge_longer_than_the_figures_limit_stays() -> None:
+def test_a_holes_edge_longer_than_the_figures_limit_stays(extract_params: ExtractParams) -> None:
     """A cut 17 px long (over 3 % of the figure's 500 px) is an edge of the hole."""
-    params = ExtractParams.load().outline
+    params = extract_params.outline
     outer = _dense(_square((125.0, 125.0), 125.0))
     hole = _dense(_square((100.0, 100.0), 45.0, 12.0))
     (fig,) = figures_from_outlines([outer], [[hole]], [None], params, y_down=True)
@@ -62,9 +64,9 @@ def test_a_holes_edge_longer_than_the_figures_limit_stays() -> None:
     assert len(fig.holes[0].points) == 5
 
 
-def test_parents_leave_outer_outlines_alone() -> None:
+def test_parents_leave_outer_outlines_alone(extract_params: ExtractParams) -> None:
     """Outer outlines simplify the same with or without the hole's parent given."""
-    params = ExtractParams.load().outline
+    params = extract_params.outline
     outer = _dense(_square((125.0, 125.0), 125.0, 5.0))
     hole = _dense(_square((100.0, 100.0), 45.0))
     plain = simplify_outlines([outer, hole], params)
@@ -126,9 +128,9 @@ def _holed_squares_recognised(params: OutlineParams, count: int) -> int:
     return good
 
 
-def test_small_holes_use_a_wider_corner_window() -> None:
+def test_small_holes_use_a_wider_corner_window(extract_params: ExtractParams) -> None:
     """Measured: 37 of 40 with the bundled hole window, 34 with the figure's fraction."""
-    params = ExtractParams.load().outline
+    params = extract_params.outline
     new = _holed_squares_recognised(params, 40)
     old = _holed_squares_recognised(dataclasses.replace(params, hole_corner_window=0.0), 40)
     assert new >= 37, f"{new} of 40 (figure's window: {old})"
@@ -154,14 +156,16 @@ def _rings_recognised(params: OutlineParams, count: int) -> int:
     return good
 
 
-def test_round_holes_stay_round_with_the_wider_window(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_round_holes_stay_round_with_the_wider_window(
+    monkeypatch: pytest.MonkeyPatch, extract_params: ExtractParams
+) -> None:
     """A circle turns by 720 deg x the window fraction over its two windows: the hole's wider
     window raises its corner angle by as much, so a rough round hole gains no corners.
 
     Measured (30 rings, 0.6 mm): 18 recognised; 9 with the figure's window fraction, 11 with
     the wider window but the corner angle not raised.
     """
-    params = ExtractParams.load().outline
+    params = extract_params.outline
     new = _rings_recognised(params, 30)
     old = _rings_recognised(dataclasses.replace(params, hole_corner_window=0.0), 30)
     monkeypatch.setattr(simplify, "FULL_TURN_OVER_WINDOWS", 0.0)

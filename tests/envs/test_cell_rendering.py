@@ -1,16 +1,42 @@
-"""`CameraRig`: small images supersampled instead of multisampled; buffers sized per renderer."""
+"""Rendering the cell's pictures: multisampling (anti-aliased edges or not), small images
+supersampled instead of multisampled, buffers sized per renderer (`CameraRig`)."""
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 
+import gymnasium as gym
 import mujoco
 import numpy as np
 import pytest
 
+import envs
 from envs.cell.cameras import CameraRig
 from envs.cell.cell import CAMERAS, Cell
 from envs.cell.config import load_cell_config
+
+
+def test_samples_set_the_models_multisampling_and_smooth_edges() -> None:
+    """Without multisampling an edge pixel takes one surface's colour: far fewer colours."""
+    colours = {}
+    for samples in (4, 0):
+        env = gym.make(
+            envs.ENV_ID,
+            action_mode="pick_place_discrete",
+            execution="kinematic",
+            obs_mode="rgb",
+            cell={"render": {"samples": samples}},
+        )
+        try:
+            obs, _ = env.reset(seed=0)
+            assert env.unwrapped.cell.model.vis.quality.offsamples == samples
+            img = obs["input_camera"]
+            colours[samples] = len(np.unique(img.reshape(-1, 3), axis=0))
+        finally:
+            env.close()
+    assert colours[0] < colours[4] / 2
+
 
 SMALL = (72, 96)
 LARGE = (240, 320)  # over supersample_max_pixels: multisampled
@@ -47,16 +73,18 @@ def test_default_supersamples_small_images(cell) -> None:
 def test_supersampled_image_is_close_to_multisampled_and_smooth(cell, camera) -> None:
     """Against the 4-sample image: small mean difference, and far more edge colours than
     without anti-aliasing (stair-stepped edges have only the surfaces' colours)."""
+    single = copy.deepcopy(cell.model)
+    single.vis.quality.offsamples = 0  # the same scene without anti-aliasing
     ssaa, msaa = _rig(cell), _rig(cell, supersample=1)
+    plain = CameraRig(single, dataclasses.replace(cell.cfg.render, supersample=1))
     try:
         img = ssaa.render(cell.data, camera, *SMALL)
         ref = msaa.render(cell.data, camera, *SMALL)
-        r = msaa._renderer(*SMALL, False, 0)  # the same scene without anti-aliasing
-        msaa._update_scene(r, cell.data, camera)
-        aliased = r.render()
+        aliased = plain.render(cell.data, camera, *SMALL)
     finally:
         ssaa.close()
         msaa.close()
+        plain.close()
     assert img.shape == ref.shape == (*SMALL, 3) and img.dtype == np.uint8
     diff = np.abs(img.astype(int) - ref.astype(int)).mean()
     assert diff < MAX_MEAN_DIFF

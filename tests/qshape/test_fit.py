@@ -165,12 +165,14 @@ def _recognised(params, sigma_mm: float, tiles: int) -> int:
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("sigma_mm", "least"), [(0.25, 59), (0.4, 56)])
-def test_rough_tiles_are_recognised(sigma_mm: float, least: int) -> None:
+def test_rough_tiles_are_recognised(
+    sigma_mm: float, least: int, extract_params: ExtractParams
+) -> None:
     """Rough edges (0.25 and 0.4 mm) keep the bundled kinds of tile their class.
 
     Measured: 59 and 57 of 60 (the corners before fits: 59 and 47).
     """
-    p = ExtractParams.load().outline
+    p = extract_params.outline
     tiles = 15
     new = _recognised(p, sigma_mm, tiles)
     old = _recognised(dataclasses.replace(p, **OLD_CORNERS), sigma_mm, tiles)

@@ -19,8 +19,8 @@ def _turn_error_deg(a: float, b: float, symmetry: int) -> float:
     return math.degrees(math.remainder(a - b, 2.0 * math.pi / max(symmetry, 1)))
 
 
-def test_a_tile_drawn_as_designed_is_at_its_drawing_angle() -> None:
-    sp = SynthParams.load()
+def test_a_tile_drawn_as_designed_is_at_its_drawing_angle(synth_params: SynthParams) -> None:
+    sp = synth_params
     clean = replace(sp, vertex_jitter_mm=0.0, bulge_jitter=0.0)
     for name in ("hexagon", "trencadis"):
         img = generate(Design.load(name), 6, 4, clean)
@@ -30,8 +30,8 @@ def test_a_tile_drawn_as_designed_is_at_its_drawing_angle() -> None:
             assert abs(err) < 0.01, (name, err)
 
 
-def test_an_outline_drawn_turned_is_found_turned() -> None:
-    sp = SynthParams.load()
+def test_an_outline_drawn_turned_is_found_turned(synth_params: SynthParams) -> None:
+    sp = synth_params
     img = generate(Design.load("trencadis"), 4, 7, sp)
     turn = math.radians(1.5)
     for t in img.tiles:
@@ -43,9 +43,9 @@ def test_an_outline_drawn_turned_is_found_turned() -> None:
         assert _turn_error_deg(after - before, turn, 1) == pytest.approx(0.0, abs=0.01)
 
 
-def test_rough_edges_turn_a_tile_as_drawn() -> None:
+def test_rough_edges_turn_a_tile_as_drawn(synth_params: SynthParams) -> None:
     """With 0.4 mm rough edges the drawn outline is no longer at the drawing angle."""
-    sp = SynthParams.load()
+    sp = synth_params
     rough = replace(sp, effects=CameraEffects(edge_roughness_mm=0.4))
     img = generate(Design.load("hexagon"), 10, 2, rough)
     errs = [
@@ -56,8 +56,8 @@ def test_rough_edges_turn_a_tile_as_drawn() -> None:
     assert max(errs) < 3.0
 
 
-def test_a_tile_without_its_outline_is_refused() -> None:
-    sp = SynthParams.load()
+def test_a_tile_without_its_outline_is_refused(synth_params: SynthParams) -> None:
+    sp = synth_params
     t = generate(Design.load("hexagon"), 1, 1, sp).tiles[0]
     with pytest.raises(ValueError, match="outline_px"):
         drawn_angle(replace(t, outline_px=None), sp.px_per_mm)

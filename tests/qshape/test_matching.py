@@ -1,3 +1,7 @@
+"""Matching descriptions: invariance to rotation, translation, start point and orientation; scale,
+correspondence, concave and holed shapes, symmetric rotations, circles and curve types.
+"""
+
 import math
 
 import numpy as np
@@ -252,18 +256,16 @@ def test_fig3_in_image_coordinates():
     assert angle_diff(m.rotation, 1.1) < 1e-9
 
 
-def test_symmetry_comes_from_geometry_not_labels():
+def test_symmetry_comes_from_geometry_not_labels(synth_params, design):
     # An isosceles triangle (base 44, height 40) has three "equal" edges by the length band
     # but one true rotation: qshape must report it, not the smallest of three turns.
     from dataclasses import replace  # noqa: PLC0415
 
-    from qshape.design import Design  # noqa: PLC0415
-    from qshape.synthetic.synth import SynthParams, generate  # noqa: PLC0415
+    from qshape.synthetic.synth import generate  # noqa: PLC0415
     from qshape.vision.extract import extract  # noqa: PLC0415
 
-    design = Design.load("paper_mixed")
     iso = design.slot("iso_blue")
-    sp = SynthParams.load()
+    sp = synth_params
     s = sp.px_per_mm
     ref = Figure.from_polygon(iso.figure().points * s, color=iso.color)
     tol = Tolerances(joint_width=design.joint * s)

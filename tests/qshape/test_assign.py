@@ -1,3 +1,7 @@
+"""Assignment of tiles to slots (greedy and optimal), feasible pairs against pairwise matching,
+slot classes; qshape's public API names and its imports (no simulator).
+"""
+
 import math
 import subprocess
 import sys

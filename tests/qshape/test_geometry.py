@@ -1,3 +1,7 @@
+"""Plane geometry helpers: signed area and orientation, centroids, self-intersection, points in a
+polygon, arc areas.
+"""
+
 import math
 
 import numpy as np

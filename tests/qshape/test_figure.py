@@ -1,3 +1,7 @@
+"""Figures and boundaries: measures and orientation, primitives, holes, immutability, bad input
+refused; the one-pass boundary checks and measures equal the one-by-one ones.
+"""
+
 import math
 
 import numpy as np
@@ -176,11 +180,11 @@ def _batch_cases() -> list[tuple[np.ndarray, np.ndarray]]:
 @pytest.mark.parametrize("y_down", [False, True])
 def test_boundaries_validated_in_one_pass_as_one_by_one(y_down: bool) -> None:
     """The one-pass check keeps, orients and refuses exactly as `Boundary.from_simplified`."""
-    from qshape.theory.boundary import boundaries_many as _boundaries_many  # noqa: PLC0415
+    from qshape.theory.boundary import boundaries_many  # noqa: PLC0415
 
     cases = _batch_cases()
     whats = [f"figure {k}" for k in range(len(cases))]
-    batch = _boundaries_many(cases, y_down=y_down, whats=whats)
+    batch = boundaries_many(cases, y_down=y_down, whats=whats)
     for (pts, mask), what, got in zip(cases, whats, batch, strict=True):
         try:
             want = Boundary.from_simplified(pts, mask, y_down=y_down, what=what)
@@ -194,7 +198,7 @@ def test_boundaries_validated_in_one_pass_as_one_by_one(y_down: bool) -> None:
 
 def test_measures_in_one_pass_as_one_by_one() -> None:
     """Areas, centroids and perimeters of the batch equal the per-boundary ones."""
-    from qshape.theory.boundary import measures_many as _measures_many  # noqa: PLC0415
+    from qshape.theory.boundary import measures_many  # noqa: PLC0415
 
     bounds = []
     for (pts, mask), y_down in zip(_batch_cases(), [False, True] * 20, strict=False):
@@ -204,7 +208,7 @@ def test_measures_in_one_pass_as_one_by_one() -> None:
             continue
     bounds.append(Figure.circle(5.0, center=(3.0, 4.0)).outer)  # an arc: measured alone
     assert len(bounds) >= 10
-    for b, (area, centroid, perimeter) in zip(bounds, _measures_many(bounds), strict=True):
+    for b, (area, centroid, perimeter) in zip(bounds, measures_many(bounds), strict=True):
         a, c, p = b.measures()
         assert area == pytest.approx(a, rel=1e-12)
         assert perimeter == pytest.approx(p, rel=1e-12)
