@@ -31,7 +31,7 @@ import shutil
 import subprocess
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -434,6 +434,21 @@ def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
     return with_feed_fallback(make, rc.feed)[0]
 
 
+@dataclass
+class _Episode:
+    """What the main job's loop saw, for the report (counts, messages, the first picture)."""
+
+    feed: FeedMode
+    info: dict[str, Any] = field(default_factory=dict)
+    first: tuple[np.ndarray, Perception, PlacementPlan] | None = None
+    rec: list[RecognitionRow] = field(default_factory=list)
+    steps: int = 0
+    failed: int = 0
+    waits: int = 0
+    rejects: list[str] = field(default_factory=list)
+    failures: list[str] = field(default_factory=list)
+
+
 def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
     """Run the scripted cell for one episode and write the report, images and video.
 
@@ -468,117 +483,11 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
             env.get_wrapper_attr("add_frame_listener")(video.capture, rc.video_fps)
             video.capture()
         bar.set_postfix_str("picking and placing")
-        first: tuple[np.ndarray, Perception, PlacementPlan] | None = None
-        steps = failed = waits = idle = 0
-        rejects: list[str] = []
-        feed: FeedMode = env.get_wrapper_attr("config").cell.tiles.feed
-        failures: list[str] = []
-        rec: list[RecognitionRow] = []
-        limit = rc.max_steps_per_slot * max(1, len(spec.slots))
-        while steps < limit:
-            action, _ = agent.predict(obs)
-            if first is None and agent.last_perception is not None and agent.last_plan:
-                first = (obs["input_camera"], agent.last_perception, agent.last_plan)
-                rec = recognition(env.get_wrapper_attr("ground_truth")(), agent)
-            if not rc.execute:
-                break  # vision only
-            if agent.last_command is None:
-                # Nothing to place in this picture: an empty belt before the next streamed
-                # tile, or a picture not usable. Wait one cycle and look again; the env ends
-                # the episode once nothing placeable is left.
-                idle += 1
-                if idle > rc.max_idle_steps:
-                    break
-            else:
-                idle = 0
-            stuck = _tile_to_reject(agent, feed, idle, rc.reject_after_idle)
-            if stuck is not None:
-                obs, _, terminated, truncated, info = env.get_wrapper_attr("reject")(stuck.grasp)
-                rejects.append(
-                    f"tile at ({stuck.centre[0]:.3f}, {stuck.centre[1]:.3f}) m: "
-                    + ("rejected" if not info["action_failed"] else info["action_error"])
-                )
-                idle = 0
-                if terminated or truncated:
-                    break
-                continue
-            obs, _, terminated, truncated, info = env.step(action)
-            if agent.last_command is None:
-                waits += 1
-                if terminated or truncated:
-                    break
-                continue
-            steps += 1
-            if info["action_failed"]:
-                failed += 1
-                failures.append(f"{agent.last_command.slot_name}: {info['action_error']}")
-            bar.update(info["tiles_placed"] - bar.n)
-            if terminated or truncated:
-                break
-        evaluation = Evaluation.from_info(info)
-        if first is not None:
-            write_image(out_dir / "input_camera_annotated.png", draw_perception(*first, rc))
-        write_image(
-            out_dir / "output_camera_annotated.png",
-            draw_slots(
-                output_before,
-                out_cam,
-                agent.slots,
-                spec.place.surface_z,
-                rc,
-                recognise=True,
-                mm_per_m=cfg.perception.mm_per_m,
-            ),
-        )
-        home_obs = env.get_wrapper_attr("move_home")()  # the arm out of the view
-        write_image(
-            out_dir / "output_camera_final.png",
-            cv2.cvtColor(home_obs["output_camera"], cv2.COLOR_RGB2BGR),
-        )
+        ep = _play(env, agent, spec, rc, obs, info, bar)
+        _write_pictures(env, agent, spec, cfg, out_dir, ep, output_before, out_cam)
         video_path = video.write(out_dir / "cell.mp4") if video is not None else None
-        n = evaluation.slots
-        rec_ok = sum(1 for r in rec if r.class_ok)
-        last = agent.last_perception
-        report = RunReport(
-            design=spec.design,
-            seed=rc.seed,
-            tiles_total=n,
-            correct=evaluation.correct,
-            misplaced=evaluation.misplaced,
-            dropped=evaluation.dropped,
-            lost=evaluation.lost,
-            distractors_placed=evaluation.distractors_placed,
-            success=evaluation.success,
-            tiles_per_min=evaluation.tiles_per_min(float(info["sim_time"])),
-            sim_s=float(info["sim_time"]),
-            wall_s=time.perf_counter() - t_wall,
-            executed=rc.execute,
-            belt_speed=rc.belt_speed,
-            feed=feed,
-            steps=steps,
-            waits=waits,
-            rejects=tuple(rejects),
-            tile_states={s: int(getattr(evaluation, s)) for s in TILE_STATES},
-            failed_actions=failed,
-            failures=tuple(failures),
-            pictures=agent.pictures,
-            position_error_mm_max=evaluation.position_error_mm_max,
-            yaw_error_deg_max=evaluation.yaw_error_deg_max,
-            recognition=tuple(rec),
-            recognised_tiles=len(rec),
-            recognised_correct_class=rec_ok,
-            recognition_accuracy=rec_ok / n if n else 0.0,
-            pick_error_max_mm=max((r.pick_error_mm for r in rec), default=math.nan),
-            yaw_error_max_deg=max((r.yaw_error_deg for r in rec), default=math.nan),
-            unplaced=agent.unplaced,
-            unrecognised=last.unrecognised if last else (),
-            open_slots=tuple(
-                s.name for s, ok in zip(agent.slots, evaluation.slot_filled, strict=True) if not ok
-            ),
-            placement=cfg.placement,
-            video=str(video_path) if video_path else None,
-            calibration_input_camera=cal_in,
-            calibration_output_camera=cal_out,
+        report = _report(
+            agent, spec, cfg, ep, time.perf_counter() - t_wall, video_path, (cal_in, cal_out)
         )
         write_json(out_dir / "report.json", report.as_dict(), default=float)
         write_text(out_dir / "report.txt", report_text(report))
@@ -586,6 +495,155 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
     finally:
         bar.close()
         env.close()
+
+
+def _play(  # noqa: PLR0913, PLR0917
+    env: gym.Env[Any, Any],
+    agent: ScriptedAgent,
+    spec: TaskSpec,
+    rc: RunConfig,
+    obs: dict[str, np.ndarray],
+    info: dict[str, Any],
+    bar: Any,
+) -> _Episode:
+    """The episode's loop: one pick-and-place (or wait, or reject) per step."""
+    ep = _Episode(feed=env.get_wrapper_attr("config").cell.tiles.feed, info=info)
+    idle = 0
+    limit = rc.max_steps_per_slot * max(1, len(spec.slots))
+    while ep.steps < limit:
+        action, _ = agent.predict(obs)
+        if ep.first is None and agent.last_perception is not None and agent.last_plan:
+            ep.first = (obs["input_camera"], agent.last_perception, agent.last_plan)
+            ep.rec = recognition(env.get_wrapper_attr("ground_truth")(), agent)
+        if not rc.execute:
+            break  # vision only
+        if agent.last_command is None:
+            # Nothing to place in this picture: an empty belt before the next streamed
+            # tile, or a picture not usable. Wait one cycle and look again; the env ends
+            # the episode once nothing placeable is left.
+            idle += 1
+            if idle > rc.max_idle_steps:
+                break
+        else:
+            idle = 0
+        stuck = _tile_to_reject(agent, ep.feed, idle, rc.reject_after_idle)
+        if stuck is not None:
+            obs, _, terminated, truncated, ep.info = env.get_wrapper_attr("reject")(stuck.grasp)
+            ep.rejects.append(
+                f"tile at ({stuck.centre[0]:.3f}, {stuck.centre[1]:.3f}) m: "
+                + ("rejected" if not ep.info["action_failed"] else ep.info["action_error"])
+            )
+            idle = 0
+            if terminated or truncated:
+                break
+            continue
+        obs, _, terminated, truncated, ep.info = env.step(action)
+        if agent.last_command is None:
+            ep.waits += 1
+            if terminated or truncated:
+                break
+            continue
+        ep.steps += 1
+        if ep.info["action_failed"]:
+            ep.failed += 1
+            ep.failures.append(f"{agent.last_command.slot_name}: {ep.info['action_error']}")
+        bar.update(ep.info["tiles_placed"] - bar.n)
+        if terminated or truncated:
+            break
+    return ep
+
+
+def _write_pictures(  # noqa: PLR0913, PLR0917
+    env: gym.Env[Any, Any],
+    agent: ScriptedAgent,
+    spec: TaskSpec,
+    cfg: AgentsConfig,
+    out_dir: Path,
+    ep: _Episode,
+    output_before: np.ndarray,
+    out_cam: CameraModel,
+) -> None:
+    """The annotated first pictures of both cameras and the assembled mosaic."""
+    rc = cfg.run
+    if ep.first is not None:
+        write_image(out_dir / "input_camera_annotated.png", draw_perception(*ep.first, rc))
+    write_image(
+        out_dir / "output_camera_annotated.png",
+        draw_slots(
+            output_before,
+            out_cam,
+            agent.slots,
+            spec.place.surface_z,
+            rc,
+            recognise=True,
+            mm_per_m=cfg.perception.mm_per_m,
+        ),
+    )
+    home_obs = env.get_wrapper_attr("move_home")()  # the arm out of the view
+    write_image(
+        out_dir / "output_camera_final.png",
+        cv2.cvtColor(home_obs["output_camera"], cv2.COLOR_RGB2BGR),
+    )
+
+
+def _report(  # noqa: PLR0913, PLR0917
+    agent: ScriptedAgent,
+    spec: TaskSpec,
+    cfg: AgentsConfig,
+    ep: _Episode,
+    wall_s: float,
+    video_path: Path | None,
+    calibrations: tuple[dict[str, float | int] | None, dict[str, float | int] | None],
+) -> RunReport:
+    """The run's report from the episode's last evaluation (`Evaluation.from_info`)."""
+    rc = cfg.run
+    evaluation = Evaluation.from_info(ep.info)
+    sim_s = float(ep.info["sim_time"])
+    n = evaluation.slots
+    rec = ep.rec
+    rec_ok = sum(1 for r in rec if r.class_ok)
+    last = agent.last_perception
+    return RunReport(
+        design=spec.design,
+        seed=rc.seed,
+        tiles_total=n,
+        correct=evaluation.correct,
+        misplaced=evaluation.misplaced,
+        dropped=evaluation.dropped,
+        lost=evaluation.lost,
+        distractors_placed=evaluation.distractors_placed,
+        success=evaluation.success,
+        tiles_per_min=evaluation.tiles_per_min(sim_s),
+        sim_s=sim_s,
+        wall_s=wall_s,
+        executed=rc.execute,
+        belt_speed=rc.belt_speed,
+        feed=ep.feed,
+        steps=ep.steps,
+        waits=ep.waits,
+        rejects=tuple(ep.rejects),
+        tile_states={s: int(getattr(evaluation, s)) for s in TILE_STATES},
+        failed_actions=ep.failed,
+        failures=tuple(ep.failures),
+        pictures=agent.pictures,
+        position_error_mm_max=evaluation.position_error_mm_max,
+        yaw_error_deg_max=evaluation.yaw_error_deg_max,
+        recognition=tuple(rec),
+        recognised_tiles=len(rec),
+        recognised_correct_class=rec_ok,
+        recognition_accuracy=rec_ok / n if n else 0.0,
+        pick_error_max_mm=max((r.pick_error_mm for r in rec), default=math.nan),
+        yaw_error_max_deg=max((r.yaw_error_deg for r in rec), default=math.nan),
+        unplaced=agent.unplaced,
+        unrecognised=last.unrecognised if last else (),
+        open_slots=tuple(
+            s.name for s, ok in zip(agent.slots, evaluation.slot_filled, strict=True) if not ok
+        ),
+        placement=cfg.placement,
+        video=str(video_path) if video_path else None,
+        calibration_input_camera=calibrations[0],
+        calibration_output_camera=calibrations[1],
+    )
 
 
 def _tile_to_reject(agent: ScriptedAgent, feed: str, idle: int, after: int) -> PerceivedTile | None:

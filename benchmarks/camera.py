@@ -28,7 +28,8 @@ import mujoco
 import numpy as np
 
 from agents.config import load_agents_config
-from agents.perception import color_gain, perceive_tiles
+from agents.perception import perceive_tiles
+from agents.white_balance import color_gain
 from apps.cli import CommandParser, run_cli
 from benchmarks.design_cell import build_design_cell
 from configs.files import write_image, write_text

@@ -155,7 +155,8 @@ def play_design(job: Job) -> dict[str, Any]:
     import gymnasium as gym  # noqa: PLC0415 - workers import the stack themselves
 
     from agents.scripted import ScriptedAgent  # noqa: PLC0415
-    from qshape.design.generator import DesignGenerator, GeneratorConfig  # noqa: PLC0415
+    from qshape.design.generator import DesignGenerator  # noqa: PLC0415
+    from qshape.design.generator_config import GeneratorConfig  # noqa: PLC0415
 
     level, index, cfg, folder = job
     gen_cfg = GeneratorConfig.load(cfg.generator, **cfg.generator_overrides)

@@ -9,10 +9,10 @@ from agents.config import PerceptionConfig
 from agents.errors import PerceptionError
 from agents.perception import (
     balance_colors,
-    color_gain,
     perceive_tiles,
     slot_targets,
 )
+from agents.white_balance import color_gain
 from benchmarks.design_cell import build_design_cell, nearest_tile
 from benchmarks.perception import bench
 from envs.errors import CellError

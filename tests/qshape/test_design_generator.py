@@ -15,12 +15,8 @@ from hypothesis import strategies as st
 from configs import ConfigError
 from qshape.design import Design, TilePath
 from qshape.design.features import edge_features, small_arcs
-from qshape.design.generator import (
-    SHAPE_FAMILIES,
-    DesignGenerator,
-    GeneratorConfig,
-    random_design,
-)
+from qshape.design.generator import DesignGenerator, random_design
+from qshape.design.generator_config import SHAPE_FAMILIES, GeneratorConfig
 from qshape.design.rules import DesignRules
 from qshape.errors import DesignError, GeneratorError, SmallFeatureWarning
 
