@@ -216,7 +216,6 @@ def execute(spec: RunSpec) -> dict[str, Any]:
 
     from agents.policies import make_policy  # noqa: PLC0415
     from apps.evaluate import Protocol, evaluate_policy_set, task_protocol  # noqa: PLC0415
-    from apps.train import load_train_config, train  # noqa: PLC0415
 
     torch.set_num_threads(1)
     e, folder = spec.entry, Path(spec.folder)
@@ -226,50 +225,12 @@ def execute(spec: RunSpec) -> dict[str, Any]:
         lo, hi = spec.eval_seeds
         proto = Protocol(tuple(range(lo, hi + 1)), proto.designs, proto.max_steps, proto.horizon_s)
     t0 = time.perf_counter()
-    train_info: dict[str, Any] = {}
     if e.train:
-        overrides: dict[str, Any] = {"seed": spec.seed, "task": e.task, "progress_bar": False}
-        if e.timesteps:
-            overrides["total_timesteps"] = e.timesteps
-        cfg = load_train_config(e.train, **overrides)
-        if e.env:
-            cfg = replace(cfg, env={**dict(cfg.env), **dict(e.env)})
-        result = _trained(folder) or train(cfg, folder)
-        base = {**base, **dict(cfg.env)}
-        policy_name = str(result.model_path)
-        train_info = {
-            "timesteps": result.timesteps,
-            "train_wall_s": result.wall_s,
-            "steps_per_s": result.steps_per_s,
-            "episodes": result.episodes,
-        }
+        base, policy_name, train_info = _train_sb3(spec, folder, base)
     elif e.bc_episodes:
-        from agents.bc import train_bc  # noqa: PLC0415
-        from apps.record_demos import load, record  # noqa: PLC0415
-
-        base = {**base, **dict(e.env)}
-        root, ds = folder / "demos", f"mosaic/{e.slug.lower()}-seed{spec.seed}-v0"
-        rec = record(
-            e.bc_episodes,
-            seed=spec.seed * BC_SEED_STRIDE,
-            root=root,
-            dataset_id=ds,
-            env_kwargs={**dict(e.env), "obs_mode": "state"},
-            expert=True,
-            task=e.task,
-            overwrite=True,
-        )
-        summary = train_bc(load(ds, root), folder, spec.seed)
-        policy_name = summary["model_path"]
-        train_info = {
-            "timesteps": rec.steps,
-            "train_wall_s": summary["wall_s"],
-            "episodes": rec.episodes,
-            "train_accuracy": summary["train_accuracy"],
-        }
+        base, policy_name, train_info = _train_bc(spec, folder, base)
     else:
-        base = {**base, **dict(e.env)}
-        policy_name = e.policy
+        base, policy_name, train_info = {**base, **dict(e.env)}, e.policy, {}
     pol = make_policy(policy_name, base, calibrate=True)
     rows, per = evaluate_policy_set([pol], proto, log=folder / "episodes.jsonl")
     eps = per[pol.label]
@@ -287,6 +248,58 @@ def execute(spec: RunSpec) -> dict[str, Any]:
     }
     write_json(folder / RESULT_FILE, out)
     return out
+
+
+def _train_sb3(
+    spec: RunSpec, folder: Path, base: dict[str, Any]
+) -> tuple[dict[str, Any], str, dict[str, Any]]:
+    """Train an SB3 entry (or take its finished training): (env kwargs, model path, figures)."""
+    from apps.train import load_train_config, train  # noqa: PLC0415
+
+    e = spec.entry
+    overrides: dict[str, Any] = {"seed": spec.seed, "task": e.task, "progress_bar": False}
+    if e.timesteps:
+        overrides["total_timesteps"] = e.timesteps
+    cfg = load_train_config(e.train, **overrides)
+    if e.env:
+        cfg = replace(cfg, env={**dict(cfg.env), **dict(e.env)})
+    result = _trained(folder) or train(cfg, folder)
+    info = {
+        "timesteps": result.timesteps,
+        "train_wall_s": result.wall_s,
+        "steps_per_s": result.steps_per_s,
+        "episodes": result.episodes,
+    }
+    return {**base, **dict(cfg.env)}, str(result.model_path), info
+
+
+def _train_bc(
+    spec: RunSpec, folder: Path, base: dict[str, Any]
+) -> tuple[dict[str, Any], str, dict[str, Any]]:
+    """Record expert demos and clone them: (env kwargs, clone path, figures)."""
+    from agents.bc import train_bc  # noqa: PLC0415
+    from apps.record_demos import load, record  # noqa: PLC0415
+
+    e = spec.entry
+    root, ds = folder / "demos", f"mosaic/{e.slug.lower()}-seed{spec.seed}-v0"
+    rec = record(
+        e.bc_episodes,
+        seed=spec.seed * BC_SEED_STRIDE,
+        root=root,
+        dataset_id=ds,
+        env_kwargs={**dict(e.env), "obs_mode": "state"},
+        expert=True,
+        task=e.task,
+        overwrite=True,
+    )
+    summary = train_bc(load(ds, root), folder, spec.seed)
+    info = {
+        "timesteps": rec.steps,
+        "train_wall_s": summary["wall_s"],
+        "episodes": rec.episodes,
+        "train_accuracy": summary["train_accuracy"],
+    }
+    return {**base, **dict(e.env)}, summary["model_path"], info
 
 
 def _trained(folder: Path) -> Any:
@@ -327,15 +340,13 @@ def run_sweep(
     Raises:
         SweepRunsFailed: After the summary is written, if any run failed.
     """
-    import ray  # noqa: PLC0415 - heavy import
-
     if max_retries < 0:
         raise SweepError(f"max_retries must be >= 0, got {max_retries}")
     out.mkdir(parents=True, exist_ok=True)
     runs = plan(cfg, out, niceness)
     results: list[dict[str, Any]] = []
     failed: list[dict[str, Any]] = []
-    todo = []
+    todo: list[RunSpec] = []
     for spec in runs:
         path = Path(spec.folder) / RESULT_FILE
         if path.is_file():
@@ -343,43 +354,8 @@ def run_sweep(
         else:
             todo.append(spec)
     if todo:
-        env_vars = {"PYTHONPATH": os.environ.get("PYTHONPATH", str(Path.cwd()))}
-        env_vars["MUJOCO_GL"] = os.environ.get("MUJOCO_GL", "egl")
-        if address:
-            ray.init(address=address, runtime_env={"env_vars": env_vars})
-        else:
-            ray.init(num_cpus=num_cpus, include_dashboard=False, runtime_env={"env_vars": env_vars})
-        try:
-            remote = ray.remote(num_cpus=1, max_retries=max_retries, retry_exceptions=False)(
-                execute
-            )
-            pending = {remote.remote(s): s for s in todo}
-            while pending:
-                ready, _ = ray.wait(list(pending), num_returns=1)
-                for ref in ready:
-                    spec = pending.pop(ref)
-                    try:
-                        res = ray.get(ref)
-                    except Exception as exc:  # noqa: BLE001 - one failed run must not stop others
-                        res = {
-                            "entry": spec.entry.name,
-                            "task": spec.entry.task,
-                            "seed": spec.seed,
-                            "error": repr(exc),
-                        }
-                    append_line(out / RESULTS_LOG, json.dumps(res))
-                    if "error" in res:
-                        failed.append(res)
-                    else:
-                        results.append(res)
-                    if progress:
-                        print(
-                            f"[sweep] done {res['task']} / {res['entry']} seed {res['seed']}: "
-                            f"{res.get('metrics', res.get('error'))}",
-                            flush=True,
-                        )
-        finally:
-            ray.shutdown()
+        new, failed = _run_on_ray(todo, out, address, num_cpus, max_retries, progress)
+        results += new
     summarize(results, out)
     if failed:
         names = "; ".join(
@@ -390,6 +366,57 @@ def run_sweep(
             f"retries them): {names}"
         )
     return results
+
+
+def _run_on_ray(  # noqa: PLR0913, PLR0917
+    todo: list[RunSpec],
+    out: Path,
+    address: str | None,
+    num_cpus: int,
+    max_retries: int,
+    progress: bool,
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """Run ``todo`` as Ray tasks, logging each result as it comes: (results, failed runs)."""
+    import ray  # noqa: PLC0415 - heavy import
+
+    results: list[dict[str, Any]] = []
+    failed: list[dict[str, Any]] = []
+    env_vars = {"PYTHONPATH": os.environ.get("PYTHONPATH", str(Path.cwd()))}
+    env_vars["MUJOCO_GL"] = os.environ.get("MUJOCO_GL", "egl")
+    if address:
+        ray.init(address=address, runtime_env={"env_vars": env_vars})
+    else:
+        ray.init(num_cpus=num_cpus, include_dashboard=False, runtime_env={"env_vars": env_vars})
+    try:
+        remote = ray.remote(num_cpus=1, max_retries=max_retries, retry_exceptions=False)(execute)
+        pending = {remote.remote(s): s for s in todo}
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            for ref in ready:
+                spec = pending.pop(ref)
+                try:
+                    res = ray.get(ref)
+                except Exception as exc:  # noqa: BLE001 - one failed run must not stop others
+                    res = {
+                        "entry": spec.entry.name,
+                        "task": spec.entry.task,
+                        "seed": spec.seed,
+                        "error": repr(exc),
+                    }
+                append_line(out / RESULTS_LOG, json.dumps(res))
+                if "error" in res:
+                    failed.append(res)
+                else:
+                    results.append(res)
+                if progress:
+                    print(
+                        f"[sweep] done {res['task']} / {res['entry']} seed {res['seed']}: "
+                        f"{res.get('metrics', res.get('error'))}",
+                        flush=True,
+                    )
+    finally:
+        ray.shutdown()
+    return results, failed
 
 
 def run_return(result: Mapping[str, Any]) -> float | None:
