@@ -23,15 +23,16 @@ from envs.actions import (
     transfer_poses,
 )
 from envs.cell.cameras import CameraModel
-from envs.cell.cell import CAMERAS, Cell
+from envs.cell.cell import CAMERAS
 from envs.cell.pick_place import PickPlaceExecutor
 from envs.cell.scene import build_arm_model
-from envs.env_config import EnvConfig, EnvConfigError, load_env_config
+from envs.env_config import EnvConfig, load_env_config
 from envs.episode_setup import build_cell, design_cell_parts
 from envs.errors import EnvError
 from envs.frames import FrameSchedule
 from envs.indexing import IndexMaps
-from envs.observations import Observer
+from envs.masks import action_mask, check_allowed
+from envs.observations import Observer, check_image_size
 from envs.task import REWARD_TERMS, Evaluation, GroundTruth, MosaicTask
 from envs.task_spec import (
     ActionError,
@@ -196,7 +197,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt)}
         design, shapes, slots = design_cell_parts(cfg)
         self.cell = build_cell(cfg.cell, shapes, slots, tries=cfg.layout_tries)
-        _check_image_size(cfg, self.cell)
+        check_image_size(cfg, self.cell)
         self.task = MosaicTask(self.cell, cfg)
         self.observer = Observer(self.cell, self.task, cfg)
         self.index = IndexMaps(self.cell, cfg)
@@ -217,6 +218,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._closed = False
         self._viewer: Any = None
         self._frames = FrameSchedule()
+        self._mask: np.ndarray | None = None
 
     def _adapter(self, pcfg: PlannerConfig) -> ActionAdapter:
         cfg, cell = self.config, self.cell
@@ -257,12 +259,12 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             MosaicEnvError: Called before `reset` or after `close`.
             ActionError: Wrong shape, NaN/inf or out-of-range action.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("step() called before reset(): call env.reset() first")
+        self._check_ready("step")
         a = self.actions.validate(action)
         a = self.actions.noisy(a, self.np_random)
-        if self.config.action_mode == "pick_place_discrete":
+        if self._mask is not None:
+            if self.config.invalid_actions == "refuse":
+                check_allowed(a, self._mask, self.action_space.nvec)  # type: ignore[attr-defined]
             a = self.index.decode(a)
         result = self.actions.apply(a)
         if self._frames:
@@ -320,6 +322,17 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._closed = True
 
     # ------------------------------------------------------------------ extras
+    def action_masks(self) -> np.ndarray:
+        """Allowed ``pick_place_discrete`` indices now (`envs.masks`), as ``info["action_mask"]``.
+
+        Raises:
+            MosaicEnvError: Another action mode, before `reset` or after `close`.
+        """
+        if (mode := self.config.action_mode) != "pick_place_discrete":
+            raise MosaicEnvError(f"action_masks() needs pick_place_discrete, not {mode!r}")
+        self._check_ready("action_masks")
+        return self._mask.copy()  # type: ignore[union-attr] # set at reset
+
     def evaluate(self) -> Evaluation:
         """The task's evaluation now (see `envs.task.Evaluation`)."""
         return self.task.evaluate()
@@ -388,9 +401,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         Raises:
             MosaicEnvError: Not a pick_place mode, before `reset` or after `close`.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("reject() called before reset(): call env.reset() first")
+        self._check_ready("reject")
         if self.executor is None:
             raise MosaicEnvError(f"reject needs a pick_place mode, not {self.config.action_mode!r}")
         cfg, geo = self.config, self.cell.geometry
@@ -402,8 +413,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         evaluation = self.task.evaluate()
         terms = self.task.rewards(evaluation, result.failed)
         terminated = evaluation.success or evaluation.failure
-        info = self._info(evaluation, terms, result.failed, result.reason)
         obs = self._observe(evaluation)
+        info = self._info(evaluation, terms, result.failed, result.reason)
         return obs, float(sum(terms.values())), terminated, False, info
 
     def move_home(self) -> dict[str, Any]:
@@ -416,9 +427,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         Raises:
             MosaicEnvError: Called before `reset` or after `close`.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("move_home() called before reset(): call env.reset() first")
+        self._check_ready("move_home")
         home = np.asarray(self.cell.cfg.robot.home, float)
         if self.executor is not None:
             self.executor.move_to(home)
@@ -451,6 +460,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def _observe(self, evaluation: Evaluation) -> dict[str, Any]:
         """The observation, privileged rows in the agent's index order (`envs.indexing`)."""
         self.index.update()
+        if self.config.action_mode == "pick_place_discrete":
+            nvec = self.action_space.nvec  # type: ignore[attr-defined]
+            self._mask = action_mask(self.cell, self.index, np.array(evaluation.slot_filled), nvec)
         obs = self.observer.observe(self.np_random, evaluation)
         if "tiles" in obs:
             obs["tiles"], obs["slots"] = self.index.permute_state(obs["tiles"], obs["slots"])
@@ -471,24 +483,18 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             "action_error": reason,
         }
         info.update({f"reward_{k}": float(v) for k, v in terms.items()})
+        if self._mask is not None:
+            info["action_mask"] = self._mask.copy()
         return info
 
     def _check_open(self) -> None:
         if self._closed:
             raise MosaicEnvError("the environment is closed; make a new one")
 
-
-def _check_image_size(cfg: EnvConfig, cell: Cell) -> None:
-    """Refuse an observation image larger than the model's offscreen render buffer."""
-    if cfg.obs_mode == "state":
-        return
-    vis = cell.model.vis.global_
-    h, w = cfg.image_size
-    if h > vis.offheight or w > vis.offwidth:
-        raise EnvConfigError(
-            f"image_size {(h, w)} exceeds the offscreen render buffer "
-            f"({vis.offheight}, {vis.offwidth}) px (height, width); allowed: up to that size"
-        )
+    def _check_ready(self, name: str) -> None:
+        self._check_open()
+        if self._needs_reset:
+            raise MosaicEnvError(f"{name}() called before reset(): call env.reset() first")
 
 
 __all__ = ["ActionError", "MosaicAssemblyEnv", "MosaicEnvError"]

@@ -22,7 +22,7 @@ import numpy as np
 from gymnasium import spaces
 
 from envs.cell.cell import CAMERAS, Cell
-from envs.env_config import EnvConfig
+from envs.env_config import EnvConfig, EnvConfigError
 from envs.task import Evaluation, MosaicTask
 from spatial.rotations import yaw_from_matrix
 
@@ -36,6 +36,23 @@ DEPTH_MAX = 10.0
 """Upper bound of depth values [m] (the far plane is well below)."""
 BIG = 1e3
 """Bound of unbounded float features (positions [m], velocities [rad/s])."""
+
+
+def check_image_size(cfg: EnvConfig, cell: Cell) -> None:
+    """Refuse an observation image larger than the model's offscreen render buffer.
+
+    Raises:
+        EnvConfigError: ``image_size`` exceeds the buffer (the message gives the allowed size).
+    """
+    if cfg.obs_mode == "state":
+        return
+    vis = cell.model.vis.global_
+    h, w = cfg.image_size
+    if h > vis.offheight or w > vis.offwidth:
+        raise EnvConfigError(
+            f"image_size {(h, w)} exceeds the offscreen render buffer "
+            f"({vis.offheight}, {vis.offwidth}) px (height, width); allowed: up to that size"
+        )
 
 
 class Observer:
@@ -128,4 +145,4 @@ def _depth_key(camera: str) -> str:
     return camera.replace("_camera", "_depth")
 
 
-__all__ = ["ROBOT_DIM", "SLOT_DIM", "TILE_DIM", "Observer"]
+__all__ = ["ROBOT_DIM", "SLOT_DIM", "TILE_DIM", "Observer", "check_image_size"]
