@@ -524,7 +524,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "--policies",
         nargs="+",
         required=True,
-        help="scripted, random, openloop, identity, model .zip paths or module:callable, each "
+        help="scripted, random, openloop, identity, model .zip paths, behaviour-clone .pt paths "
+        "(apps.bc) or module:callable, each "
         "optionally with @KEY=VALUE[,KEY=VALUE] env overrides (scripted@execution=dynamic)",
     )
     ap.add_argument("--task", default=None, help="a ladder id (MosaicDecision6-v0): its protocol")
