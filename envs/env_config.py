@@ -98,6 +98,9 @@ class EnvConfig:
         depth: Add depth images [m] to the observation.
         reward_mode: One of `REWARD_MODES`.
         execution: One of `EXECUTIONS` (pick_place modes only).
+        pick_yaw_entry: ``pick_place`` actions carry the tile's yaw at the pick: Box(6), the
+            ``-v0`` layout (the entry changes nothing: no grasp offset for it to turn); False:
+            Box(5) = pick x, y, place x, y, rotation (the ``-v1`` ids).
         chain_cycles: Dynamic pick_place: a step's cycle ends at rest at the place contact
             (vacuum off, pad 0.5 mm above the released tile) and the next step's cycle leaves
             it vertically, blended into its move to the pick, as a real cell chains its
@@ -162,6 +165,7 @@ class EnvConfig:
     depth: bool = False
     reward_mode: RewardMode = "sparse"
     execution: Execution = "dynamic"
+    pick_yaw_entry: bool = True
     chain_cycles: bool = True
     color_randomization: float = 0.0
     light_randomization: float = 0.0

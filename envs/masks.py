@@ -19,6 +19,8 @@ the mask and ``info["action_mask"]`` holds it after reset and each step. With
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from envs.cell.cell import Cell
@@ -27,7 +29,7 @@ from envs.task_spec import ActionError
 
 
 def action_mask(
-    cell: Cell, index: IndexMaps, slot_filled: np.ndarray, nvec: np.ndarray
+    cell: Cell, index: IndexMaps, slot_filled: Sequence[bool] | np.ndarray, nvec: np.ndarray
 ) -> np.ndarray:
     """The flat mask of a MultiDiscrete([tiles, slots, rotations]) action space.
 

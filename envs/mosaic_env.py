@@ -75,8 +75,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     - ``pick_place``: Box(6): pick x, y, the tile's yaw, place x, y, the rotation. x, y map
       linearly onto the input tile area (pick) and the mesh (place), see
       ``task_spec.codec``; angles onto [-pi, pi]. The pad goes to the pick point and then to
-      the place point; the tile turns by the rotation (the tile's yaw only picks among
-      symmetric wrist solutions). One step = one full time-optimal cycle planned by the planners;
+      the place point; the tile turns by the rotation (the tile's yaw changes nothing; ``-v1``
+      is Box(5) without it). One step = one full time-optimal cycle planned by the planners;
       with ``chain_cycles`` (default) a dynamic cycle ends at rest at the place contact and
       the next one leaves it vertically, blended into its move (as a real cell chains them).
       ``task_spec.codec.encode(PickPlaceCommand(...))`` normalises a world command;
@@ -87,7 +87,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
       indices name carries no answer (`envs.indexing`): by default tile i is the i-th tile on
       the input belt from its downstream end (then the others), slot j the j-th slot in raster
       order on the mesh, and r counts from the slot-aligned pose nearest to how the tile lies
-      (``tile_order``, ``slot_order``, ``rotation_frame``).
+      (``tile_order``, ``slot_order``, ``rotation_frame``). ``action_masks()`` (`envs.masks`).
 
     ``execution`` (pick_place modes): ``dynamic`` tracks the planned trajectory with the
     servo actuators at every physics step (full physics, suction weld). ``kinematic`` puts the
@@ -157,7 +157,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ## Info
     ``sim_time`` [s since reset], ``tiles_placed`` (slots filled correctly), ``tiles_per_min``
     (per simulated minute), ``evaluation`` (the `evaluate()` dict), ``reward_<term>``,
-    ``action_failed`` and ``action_error`` (why), ``is_success``.
+    ``action_failed`` and ``action_error`` (why), ``is_success``, ``action_mask`` (discrete).
 
     ## Rendering
     ``rgb_array``: the overview camera (left) beside the input and output cameras (right),
@@ -174,8 +174,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     (stair-stepped edges, cheaper still).
 
     ## Version History
-    Every id is at ``-v0``. The changes of each id, and the rule for when an id's version
-    changes (a change of its spaces or of its results), are in ``CHANGELOG.md``.
+    ``-v1`` (every id): ``pick_place`` is Box(5) without the pick-yaw entry that did nothing;
+    ``pick_place_discrete`` refuses masked actions (`ActionError`). ``-v0`` stays registered.
+    Details, and the rule for a version change (spaces or results): ``CHANGELOG.md``.
     """
 
     metadata = {  # noqa: RUF012 - Gymnasium convention
@@ -204,7 +205,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         pcfg = load_planner_config(cfg.planner)
         self.ik = IKSolver(build_arm_model(self.cell.cfg, with_cell=False), pcfg.ik, pcfg.limits)
         self.pick_area, self.place_area = work_areas(self.cell, cfg)
-        self.codec = PickPlaceCodec(self.pick_area, self.place_area)
+        self.codec = PickPlaceCodec(self.pick_area, self.place_area, cfg.pick_yaw_entry)
         self.task_spec: TaskSpec = build_task_spec(self.cell, cfg, design)
         """What agents may know besides the observations (see `envs.task_spec`)."""
         self.calibration_views = self.cell.views.calibration_views
@@ -264,7 +265,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         a = self.actions.noisy(a, self.np_random)
         if self._mask is not None:
             if self.config.invalid_actions == "refuse":
-                check_allowed(a, self._mask, self.action_space.nvec)  # type: ignore[attr-defined]
+                check_allowed(a, self._mask, self.actions.space.nvec)  # type: ignore[attr-defined]
             a = self.index.decode(a)
         result = self.actions.apply(a)
         if self._frames:
@@ -460,9 +461,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def _observe(self, evaluation: Evaluation) -> dict[str, Any]:
         """The observation, privileged rows in the agent's index order (`envs.indexing`)."""
         self.index.update()
-        if self.config.action_mode == "pick_place_discrete":
-            nvec = self.action_space.nvec  # type: ignore[attr-defined]
-            self._mask = action_mask(self.cell, self.index, np.array(evaluation.slot_filled), nvec)
+        if isinstance(space := self.action_space, gym.spaces.MultiDiscrete):
+            self._mask = action_mask(self.cell, self.index, evaluation.slot_filled, space.nvec)
         obs = self.observer.observe(self.np_random, evaluation)
         if "tiles" in obs:
             obs["tiles"], obs["slots"] = self.index.permute_state(obs["tiles"], obs["slots"])
