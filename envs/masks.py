@@ -10,8 +10,10 @@ space the mask is one flat boolean vector, the per-dimension masks concatenated,
 - slot ``j`` is allowed while it is open (not yet filled correctly);
 - every rotation is allowed.
 
-A dimension with nothing allowed (no tile on the input belt, every slot filled) is all False;
-the episode has ended then or waits for the feed. ``MosaicAssemblyEnv.action_masks()`` returns
+While no tile lies on the input belt (a ``stream`` or ``batch`` feed between arrivals) every
+tile index is allowed: the action is the one way to wait (it fails as "not on the input belt",
+costing ``failed_action_time`` and the failed-action penalty, under either setting). With every
+slot filled the episode has ended (the slot mask is all False). ``MosaicAssemblyEnv.action_masks()`` returns
 the mask and ``info["action_mask"]`` holds it after reset and each step. With
 ``invalid_actions="refuse"`` a step whose tile or slot the mask forbids raises `ActionError`
 (`check_allowed`) before any time passes; with ``fail`` (the default) it fails as before.
@@ -47,6 +49,8 @@ def action_mask(
     tiles = np.zeros(n, bool)
     on_input = cell.input_half()
     tiles[: len(index.tiles)] = on_input[index.tiles]
+    if not tiles.any():  # nothing to pick: any tile index waits
+        tiles[: len(index.tiles)] = True
     slots = np.zeros(k, bool)
     slots[: len(index.slots)] = ~np.asarray(slot_filled, bool)[index.slots]
     return np.concatenate([tiles, slots, np.ones(bins, bool)])
