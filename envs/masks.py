@@ -13,8 +13,10 @@ space the mask is one flat boolean vector, the per-dimension masks concatenated,
 While no tile lies on the input belt (a ``stream`` or ``batch`` feed between arrivals) every
 tile index is allowed: the action is the one way to wait (it fails as "not on the input belt",
 costing ``failed_action_time`` and the failed-action penalty, under either setting). With every
-slot filled the episode has ended (the slot mask is all False). ``MosaicAssemblyEnv.action_masks()`` returns
-the mask and ``info["action_mask"]`` holds it after reset and each step. With
+slot filled the episode has ended (the slot mask is all False).
+
+``MosaicAssemblyEnv.action_masks()`` returns the mask and ``info["action_mask"]`` holds it after
+reset and each step. With
 ``invalid_actions="refuse"`` a step whose tile or slot the mask forbids raises `ActionError`
 (`check_allowed`) before any time passes; with ``fail`` (the default) it fails as before.
 """
