@@ -38,7 +38,9 @@ for _id, _kwargs in ((ENV_ID, {}), (ENV_ID_V1, V1_CHANGES)):
 
 from envs.tasks import register_tasks  # noqa: E402 - after MUJOCO_GL is set
 
-TASK_IDS = tuple(register_tasks())
-"""Registered ids of the task ladder (`envs.tasks`), easiest first."""
+ALL_TASK_IDS = tuple(register_tasks())
+"""Registered ids of every version of the task ladder (`envs.tasks`): the -v0s, then the -v1s."""
+TASK_IDS = tuple(task_id for task_id in ALL_TASK_IDS if task_id.endswith("-v0"))
+"""Registered ids of the task ladder at -v0 (`envs.tasks`), easiest first."""
 
-__all__ = ["ENV_ID", "ENV_ID_V1", "MAX_EPISODE_STEPS", "TASK_IDS", "V1_CHANGES"]
+__all__ = ["ALL_TASK_IDS", "ENV_ID", "ENV_ID_V1", "MAX_EPISODE_STEPS", "TASK_IDS", "V1_CHANGES"]
