@@ -22,7 +22,8 @@ from envs.cell.config import FEED_MODES, CellConfig, load_cell_config, section_n
 from envs.errors import CellError, EnvError
 
 ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
-ObsMode = Literal["rgb", "state", "rgb+state"]
+ObsMode = Literal["rgb", "state", "rgb+state", "objects"]
+ObjectsSource = Literal["privileged"]
 RewardMode = Literal["sparse", "dense", "staged"]
 Execution = Literal["dynamic", "kinematic"]
 RenderMode = Literal["rgb_array", "human"]
@@ -33,6 +34,10 @@ ACTION_MODES: tuple[str, ...] = get_args(ActionMode)
 """Allowed ``action_mode`` values."""
 OBS_MODES: tuple[str, ...] = get_args(ObsMode)
 """Allowed ``obs_mode`` values."""
+OBJECTS_SOURCES: tuple[str, ...] = get_args(ObjectsSource)
+"""Allowed ``objects_source`` values."""
+OBJECTS_POINTS_RANGE = (8, 256)
+"""Allowed ``objects_points`` (inclusive)."""
 REWARD_MODES: tuple[str, ...] = get_args(RewardMode)
 """Allowed ``reward_mode`` values."""
 EXECUTIONS: tuple[str, ...] = get_args(Execution)
@@ -87,7 +92,15 @@ class EnvConfig:
             ``feed="stream"``, ...) still set them.
         planner: Planner configuration: bundled name or path (``configs/planner.yaml``).
         action_mode: One of `ACTION_MODES`.
-        obs_mode: One of `OBS_MODES` (``state`` = robot + privileged state, no images).
+        obs_mode: One of `OBS_MODES` (``state`` = robot + privileged state, no images;
+            ``objects`` = robot + entity rows without class ids, `envs.objects`).
+        objects_points: ``objects``: outline points per row, in `OBJECTS_POINTS_RANGE`.
+        objects_rows: ``objects``: rows of ``tiles`` and of ``slots`` (padded with zero rows,
+            ``valid`` 0); None: the episode's tile and slot counts.
+        objects_noise_mm: ``objects``: std of Gaussian noise on each tile outline point [mm]
+            (0: off).
+        objects_source: ``objects``: where the rows come from, one of `OBJECTS_SOURCES`
+            (``privileged``: the simulator's poses and the built outlines).
         image_size: Observation image (height, width) [px]; an int gives a square image. The
             default 72 x 96 keeps the cameras' 4:3 aspect: a square image narrows the
             horizontal field (fixed vertical field of view) and crops the ends of the tile
@@ -152,6 +165,10 @@ class EnvConfig:
     planner: str = "planner"
     action_mode: ActionMode = "pick_place"
     obs_mode: ObsMode = "rgb"
+    objects_points: int = 32
+    objects_rows: int | None = None
+    objects_noise_mm: float = 0.0
+    objects_source: ObjectsSource = "privileged"
     image_size: tuple[int, int] = (72, 96)
     depth: bool = False
     reward_mode: RewardMode = "sparse"
@@ -206,6 +223,7 @@ class EnvConfig:
         for name, allowed in (
             ("action_mode", ACTION_MODES),
             ("obs_mode", OBS_MODES),
+            ("objects_source", OBJECTS_SOURCES),
             ("reward_mode", REWARD_MODES),
             ("execution", EXECUTIONS),
             ("tile_order", TILE_ORDERS),
@@ -244,10 +262,12 @@ class EnvConfig:
             "reset_settle",
             "pick_margin",
             "place_margin",
+            "objects_noise_mm",
         )
         for name in nonneg:
             if not getattr(self, name) >= 0:
                 raise EnvConfigError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+        self._check_objects()
         lo_hi = tuple(self.tool_z_range)
         if len(lo_hi) != 2 or not 0 <= lo_hi[0] < lo_hi[1]:  # noqa: PLR2004 - (low, high)
             raise EnvConfigError(
@@ -257,6 +277,15 @@ class EnvConfig:
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise EnvConfigError(f"{name} must be an int >= 1, got {value!r}")
+
+    def _check_objects(self) -> None:
+        lo, hi = OBJECTS_POINTS_RANGE
+        p = self.objects_points
+        if not isinstance(p, int) or isinstance(p, bool) or not lo <= p <= hi:
+            raise EnvConfigError(f"objects_points must be an int in [{lo}, {hi}], got {p!r}")
+        r = self.objects_rows
+        if r is not None and (not isinstance(r, int) or isinstance(r, bool) or r < 1):
+            raise EnvConfigError(f"objects_rows must be None or an int >= 1, got {r!r}")
 
     @property
     def belt_speed(self) -> float:
@@ -406,12 +435,15 @@ def load_env_config(config: EnvConfig | str | Path | None = "env", **overrides: 
 __all__ = [
     "ActionMode",
     "Execution",
+    "ObjectsSource",
     "ObsMode",
     "RenderMode",
     "RewardMode",
     "ACTION_MODES",
     "EXECUTIONS",
     "FEEDS",
+    "OBJECTS_POINTS_RANGE",
+    "OBJECTS_SOURCES",
     "OBS_MODES",
     "RENDER_MODES",
     "REWARD_MODES",

@@ -102,7 +102,10 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     (H, W, 3) at ``image_size`` (``rgb``/``rgb+state``; depth (H, W, 1) float32 [m] with
     ``depth``), ``robot`` float32 (19,) (joint pos/vel, tool pose, vacuum, held), and with
     ``state``/``rgb+state`` the privileged ``tiles`` (n * 7,) and ``slots`` (k * 6,), rows in the
-    same index order as the discrete actions. Camera
+    same index order as the discrete actions. With ``objects`` (no images), ``robot`` and
+    ``tiles`` (rows, D), ``slots`` (rows, D) float32: one entity row per tile / slot in the
+    same index order, without class ids (outline points [mm], colour, area, hole area, position,
+    yaw, pickable / filled flag, valid), columns named by `envs.objects.OBJECT_FIELDS`. Camera
     intrinsics/extrinsics at the observation size: ``task_spec.cameras``.
 
     ## Task description
@@ -480,7 +483,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
 
 def _check_image_size(cfg: EnvConfig, cell: Cell) -> None:
     """Refuse an observation image larger than the model's offscreen render buffer."""
-    if cfg.obs_mode == "state":
+    if cfg.obs_mode in ("state", "objects"):
         return
     vis = cell.model.vis.global_
     h, w = cfg.image_size
