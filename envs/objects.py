@@ -32,19 +32,20 @@ points      11:11+2P                outer outline as P points (x, y) [mm] flatte
                                     counter-clockwise at equal arc length.
 =========== ======================= ==========================================================
 
-Start point of ``points``: where the outline crosses the world +x ray from the centroid (polar
-angle 0, angles counted in [0, 2 pi)), i.e. the point of smallest polar angle in the world
-frame; when the outline does not cross that ray (the centroid outside a concave tile), the
-sampled point of smallest polar angle. Turning a tile turns its points (and moves the start
-along the outline continuously, except where the ray is tangent to it), so a tile lying as its
-slot wants it gives nearly the slot's points whatever its body frame.
+Start point of ``points``: of `OVERSAMPLE` x P samples at equal arc length along the outline
+(fixed on the body), the one of smallest polar angle in the world frame, angles counted
+counter-clockwise from the world +x axis in [0, 2 pi) about the centroid; the P points are
+then every `OVERSAMPLE`-th sample from it. So turning a tile turns its points, the start moves
+along the outline in steps of 1 / `OVERSAMPLE` of the point spacing (about 0.25 mm on a
+paper_mixed tile at P = 32), every point lies on the built outline, and a tile lying as its
+slot wants it gives the slot's points (within that step and the tile's manufacturing noise)
+whatever its body frame or symmetry.
 
-Cost: per episode the outlines are resampled once in the body frame (`OVERSAMPLE` x P points
-at equal arc length, shapely); per step they are only rotated, the start found and every
-`OVERSAMPLE`-th point taken (linear interpolation between neighbours for the start's
-fraction, so a point next to a corner may cut it by up to the sagitta of one fine spacing:
-under 0.1 mm for the bundled tiles at P = 32). ``objects_noise_mm`` adds Gaussian noise [mm] to each tile's P points at every
-observation (from the env's ``np_random``); slot outlines come from the design and carry none.
+Cost: per episode the outlines are resampled once in the body frame (shapely) and their polar
+angles sorted; per observation one search per entity finds the start, one gather takes the
+points and one complex multiplication turns them. ``objects_noise_mm`` adds Gaussian noise
+[mm] to each tile's P points at every observation (from the env's ``np_random``); slot
+outlines come from the design and carry none.
 """
 
 from __future__ import annotations
@@ -77,12 +78,13 @@ SCALAR_DIM = sum(w for _, w in SCALAR_FIELDS)
 """Columns before ``points`` (11)."""
 DEFAULT_POINTS = 32
 """Default ``objects_points``."""
-OVERSAMPLE = 8
+OVERSAMPLE = 16
 """Body-frame samples per observed point (the start point's resolution along the outline)."""
 CM2_PER_M2 = 1e4
 """Square centimetres per square metre."""
 BOUND = 1e3
 """Bound of the Box (positions [m] and points [mm] lie well inside)."""
+TWO_PI = 2 * np.pi
 
 
 def object_fields(points: int = DEFAULT_POINTS) -> dict[str, slice]:
@@ -109,17 +111,24 @@ OBJECT_DIM = object_dim()
 
 @dataclass(frozen=True)
 class EntityGeometry:
-    """What does not change in an episode, per entity (tile or slot).
+    """What does not change in an episode, per entity (tile or slot); m entities, P points.
 
     Attributes:
-        fine: Outer outline in the body frame about the area centroid, counter-clockwise at
-            equal arc length from vertex 0, shape (m, OVERSAMPLE * P, 2) [mm].
+        fine: Outer outline in the body frame about the area centroid as complex x + iy
+            [mm], counter-clockwise at equal arc length from vertex 0, twice round (so P
+            points from any start are contiguous), shape (m, 2 * OVERSAMPLE * P) complex.
+        ranked: Each entity's sample polar angles in the body frame, sorted, plus its
+            smallest + 2 pi at the end, plus 4 pi times the entity's index; flattened, shape
+            (m * (OVERSAMPLE * P + 1),) [rad], increasing: one search finds every start.
+        order: The sample index of each ``ranked`` entry, same shape.
         rgb: Colours, shape (m, 3) in [0, 1].
         area: Areas with holes subtracted, shape (m,) [cm^2].
         hole_area: Summed hole areas, shape (m,) [cm^2].
     """
 
     fine: np.ndarray
+    ranked: np.ndarray
+    order: np.ndarray
     rgb: np.ndarray
     area: np.ndarray
     hole_area: np.ndarray
@@ -157,53 +166,61 @@ def entity_geometry(
         colors: Each entity's RGB in [0, 1].
         points: Observed points per outline (P).
     """
-    m = len(outlines)
-    fine = np.zeros((m, OVERSAMPLE * points, 2))
+    m, count = len(outlines), OVERSAMPLE * points
+    fine = np.zeros((m, count), complex)
     area, hole_area = np.zeros(m), np.zeros(m)
     for i, (outer, inner) in enumerate(zip(outlines, holes, strict=True)):
         poly = Polygon(outer, list(inner))
         c = np.array([poly.centroid.x, poly.centroid.y])
-        fine[i] = (resample_outline(np.asarray(outer) - c, OVERSAMPLE * points)) * MM_PER_M
+        xy = resample_outline(np.asarray(outer) - c, count) * MM_PER_M
+        fine[i] = xy[:, 0] + 1j * xy[:, 1]
         area[i] = poly.area * CM2_PER_M2
         hole_area[i] = sum(Polygon(h).area for h in inner) * CM2_PER_M2
+    angle = np.angle(fine) % TWO_PI
+    order = np.argsort(angle, axis=1, kind="stable")
+    order = np.concatenate([order, order[:, :1]], axis=1)
+    ranked = np.take_along_axis(angle, order, 1)
+    ranked[:, -1] += TWO_PI
+    ranked += 2 * TWO_PI * np.arange(m)[:, None]
     rgb = np.asarray(colors, float).reshape(m, 3)
-    return EntityGeometry(fine, rgb, area, hole_area)
+    twice = np.concatenate([fine, fine], axis=1)
+    return EntityGeometry(twice, ranked.ravel(), order.ravel(), rgb, area, hole_area)
 
 
-def oriented_points(fine: np.ndarray, yaw: np.ndarray, points: int) -> np.ndarray:
+def oriented_points(
+    geometry: EntityGeometry, turn: np.ndarray, yaw: np.ndarray, points: int
+) -> np.ndarray:
     """Body-frame outlines turned by ``yaw``, P points from the world-frame start point.
 
     Args:
-        fine: Body-frame outlines, shape (m, OVERSAMPLE * P, 2).
+        geometry: The entities' precomputed outlines (``fine``, ``ranked``, ``order``).
+        turn: ``exp(i yaw)`` of each entity, shape (m,) complex.
         yaw: Yaw of each entity, shape (m,) [rad].
         points: P.
 
     Returns:
-        Shape (m, P, 2), in the same unit as ``fine`` (see the module docstring's start rule).
+        Shape (m, P) complex x + iy [mm] (see the module docstring's start rule).
     """
-    m, count = fine.shape[0], fine.shape[1]
-    if m == 0:
-        return np.zeros((0, points, 2))
-    c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
-    x = c * fine[..., 0] - s * fine[..., 1]
-    y = s * fine[..., 0] + c * fine[..., 1]
-    k0 = np.argmin(np.arctan2(y, x) % (2 * np.pi), axis=1)
+    m, count = len(yaw), geometry.fine.shape[1] // 2
     rows = np.arange(m)
-    y_prev, y_k0 = y[rows, k0 - 1], y[rows, k0]
-    crossing = (y_prev < 0) & (y_k0 >= 0)
-    frac = np.where(crossing, y_prev / np.where(crossing, y_prev - y_k0, 1.0), 1.0)
-    start = k0 - 1 + frac  # fractional sample index of the start point
-    lo = np.floor(start).astype(int)
-    w = (start - lo)[:, None]
-    idx = (lo[:, None] + OVERSAMPLE * np.arange(points)[None, :]) % count
-    nxt = (idx + 1) % count
-    px = (1 - w) * np.take_along_axis(x, idx, 1) + w * np.take_along_axis(x, nxt, 1)
-    py = (1 - w) * np.take_along_axis(y, idx, 1) + w * np.take_along_axis(y, nxt, 1)
-    return np.stack([px, py], axis=-1)
+    # the first body angle at or after the world +x ray's (-yaw), wrapping round
+    pos = np.searchsorted(geometry.ranked, np.mod(-yaw, TWO_PI) + 2 * TWO_PI * rows)
+    start = geometry.order[pos] + rows * (2 * count)
+    idx = start[:, None] + OVERSAMPLE * np.arange(points)
+    return geometry.fine.ravel()[idx] * turn[:, None]
+
+
+def as_xy(z: np.ndarray) -> np.ndarray:
+    """Complex points (m, P) -> float (m, 2 * P): (x0, y0, x1, y1, ...) per row."""
+    return np.ascontiguousarray(z).view(np.float64).reshape(len(z), -1)
 
 
 class ObjectRows:
     """Builds the ``objects`` rows of one cell (cell order; the env permutes them).
+
+    Per episode it builds row templates (colour, areas, valid; the slots' poses and points
+    too, as slots do not move); per observation it fills in the tiles' poses, points and flags
+    and the slots' flags.
 
     Args:
         cell: The cell.
@@ -233,11 +250,15 @@ class ObjectRows:
         self.slot_rows = k if rows is None else rows
         self._tiles_seen: tuple[Any, ...] | None = None
         self._tile_geometry = entity_geometry([], [], np.zeros((0, 3)), self.points)
-        self._slot_geometry = entity_geometry(
-            [s.shape.outline for s in cell.slots],
-            [s.shape.holes for s in cell.slots],
-            [s.shape.color for s in cell.slots],
-            self.points,
+        self._tile_template = np.zeros((self.tile_rows, self.dim), np.float32)
+        self._slots_seen: tuple[Any, ...] | None = None
+        self._slot_template = np.zeros((self.slot_rows, self.dim), np.float32)
+        f = self.fields
+        self._flag, self._xy, self._yaw, self._points = (
+            f["flag"].start,
+            f["xy"],
+            f["yaw"],
+            f["points"],
         )
 
     def spaces(self) -> dict[str, spaces.Box]:
@@ -258,57 +279,60 @@ class ObjectRows:
         """
         cell = self.cell
         if cell.tiles is not self._tiles_seen:  # a reset drew new variants or colours
-            self._tiles_seen = cell.tiles
-            self._tile_geometry = entity_geometry(
-                [t.outline for t in cell.tiles],
-                [t.holes for t in cell.tiles],
-                [t.color for t in cell.tiles],
-                self.points,
-            )
+            self._start_tiles()
+        if cell.slots is not self._slots_seen:
+            self._start_slots()
+        n, k = len(cell.tiles), len(cell.slots)
         poses = cell.tile_poses()
-        tile_pts = oriented_points(self._tile_geometry.fine, poses.yaw, self.points)
+        turn = np.exp(1j * poses.yaw)
+        pts = as_xy(oriented_points(self._tile_geometry, turn, poses.yaw, self.points))
         if self.noise_mm > 0:
-            tile_pts = tile_pts + rng.normal(0.0, self.noise_mm, tile_pts.shape)
-        tiles = self._rows(
-            self.tile_rows,
-            self._tile_geometry,
-            tile_pts,
-            poses.pos[:, :2],
-            poses.yaw,
-            cell.input_half(),
-        )
-        s = self.task.slot_xyyaw
-        slot_pts = oriented_points(self._slot_geometry.fine, s[:, 2], self.points)
-        slots = self._rows(
-            self.slot_rows,
-            self._slot_geometry,
-            slot_pts,
-            s[:, :2],
-            s[:, 2],
-            np.asarray(evaluation.slot_filled, bool),
-        )
+            pts = pts + rng.normal(0.0, self.noise_mm, pts.shape)
+        tiles = self._tile_template.copy()
+        tiles[:n, self._xy] = poses.pos[:, :2]
+        tiles[:n, self._yaw] = as_xy(turn[:, None])
+        tiles[:n, self._flag] = cell.input_half()
+        tiles[:n, self._points] = pts
+        slots = self._slot_template.copy()
+        slots[:k, self._flag] = evaluation.slot_filled
         return tiles, slots
 
-    def _rows(
-        self,
-        rows: int,
-        geometry: EntityGeometry,
-        pts: np.ndarray,
-        xy: np.ndarray,
-        yaw: np.ndarray,
-        flag: np.ndarray,
-    ) -> np.ndarray:
-        f, m = self.fields, len(pts)
+    def _start_tiles(self) -> None:
+        tiles = self.cell.tiles
+        self._tiles_seen = tiles
+        self._tile_geometry = entity_geometry(
+            [t.outline for t in tiles],
+            [t.holes for t in tiles],
+            [t.color for t in tiles],
+            self.points,
+        )
+        self._tile_template = self._template(self.tile_rows, self._tile_geometry)
+
+    def _start_slots(self) -> None:
+        slots = self.cell.slots
+        self._slots_seen = slots
+        geometry = entity_geometry(
+            [s.shape.outline for s in slots],
+            [s.shape.holes for s in slots],
+            [s.shape.color for s in slots],
+            self.points,
+        )
+        rows = self._template(self.slot_rows, geometry)
+        xyyaw, k = self.task.slot_xyyaw, len(slots)
+        rows[:k, self._xy] = xyyaw[:, :2]
+        turn = np.exp(1j * xyyaw[:, 2])
+        rows[:k, self._yaw] = as_xy(turn[:, None])
+        rows[:k, self._points] = as_xy(oriented_points(geometry, turn, xyyaw[:, 2], self.points))
+        self._slot_template = rows
+
+    def _template(self, rows: int, geometry: EntityGeometry) -> np.ndarray:
+        """Rows with what does not move: colour, areas, valid (the rest zero)."""
+        f, m = self.fields, len(geometry.fine)
         out = np.zeros((rows, self.dim), np.float32)
         out[:m, f["rgb"]] = geometry.rgb
         out[:m, f["area"].start] = geometry.area
         out[:m, f["hole_area"].start] = geometry.hole_area
-        out[:m, f["xy"]] = np.clip(xy, -BOUND, BOUND)
-        out[:m, f["yaw"].start] = np.cos(yaw)
-        out[:m, f["yaw"].start + 1] = np.sin(yaw)
-        out[:m, f["flag"].start] = flag
         out[:m, f["valid"].start] = 1.0
-        out[:m, f["points"]] = pts.reshape(m, -1)
         return out
 
 
@@ -319,6 +343,7 @@ __all__ = [
     "OVERSAMPLE",
     "SCALAR_FIELDS",
     "EntityGeometry",
+    "as_xy",
     "ObjectRows",
     "entity_geometry",
     "object_dim",

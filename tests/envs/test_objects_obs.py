@@ -14,15 +14,22 @@ import envs  # noqa: F401 - registers the ids
 from envs.cell.cell import Cell
 from envs.cell.tiles.tile import SlotSpec, TileShape
 from envs.env_config import EnvConfigError, load_env_config
-from envs.objects import OBJECT_DIM, OBJECT_FIELDS, object_fields, oriented_points
+from envs.objects import (
+    OBJECT_DIM,
+    OBJECT_FIELDS,
+    OVERSAMPLE,
+    as_xy,
+    entity_geometry,
+    object_fields,
+    oriented_points,
+)
 from envs.observations import Observer
 from envs.task import MosaicTask
 
 F = OBJECT_FIELDS
 SEED = 3
-CHORD_MM = 0.15
-"""Points lie on the outline within this [mm]: the start's interpolation between neighbouring
-body-frame samples can cut a corner by up to their spacing's sagitta."""
+ON_OUTLINE_MM = 1e-3
+"""Points lie on the built outline within this [mm] (float32 rows)."""
 
 
 @pytest.fixture(scope="module")
@@ -67,26 +74,29 @@ def test_space_shape_dtype_and_rows_follow_the_action_indices(env: gym.Env) -> N
     assert np.all(obs["tiles"][:, F["valid"]] == 1)
 
 
-def test_points_lie_on_the_turned_outline_and_start_on_the_x_ray() -> None:
-    rect = np.array([[-20.0, -10.0], [20.0, -10.0], [20.0, 10.0], [-20.0, 10.0]])
-    from envs.objects import OVERSAMPLE, resample_outline  # noqa: PLC0415
-
-    fine = resample_outline(rect, 16 * OVERSAMPLE)[None]
-    ring = LinearRing(rect)
-    for yaw in (0.0, 0.3, math.pi / 2, 2.0, -2.5):
-        pts = oriented_points(fine, np.array([yaw]), 16)[0]
+def test_points_lie_on_the_turned_outline_and_start_at_the_smallest_polar_angle() -> None:
+    rect = np.array([[-20.0, -10.0], [20.0, -10.0], [20.0, 10.0], [-20.0, 10.0]]) / 1000
+    geometry = entity_geometry([rect], [[]], [(0.5, 0.5, 0.5)], 16)
+    samples = geometry.fine[0, : OVERSAMPLE * 16]
+    ring = LinearRing(rect * 1000)
+    for yaw in (0.0, 0.3, math.pi / 2, 2.0, -2.5, 7.0):
+        turn = np.exp(1j * np.array([yaw]))
+        z = oriented_points(geometry, turn, np.array([yaw]), 16)[0]
+        pts = as_xy(z[None])[0].reshape(-1, 2)
         back = _turn(pts, -yaw)  # into the body frame
         assert max(ring.distance(Point(p)) for p in back) < 1e-9
-        assert abs(pts[0, 1]) < 1e-9 and pts[0, 0] > 0  # start: the world +x ray
+        angles = np.angle(samples * turn) % (2 * math.pi)
+        assert np.angle(z[0]) % (2 * math.pi) == pytest.approx(angles.min(), abs=1e-12)
         steps = np.linalg.norm(np.diff(np.vstack([pts, pts[:1]]), axis=0), axis=1)
         assert np.all(steps <= ring.length / 16 + 1e-9)  # equal arc length (chords <= arcs)
         nxt = np.roll(pts, -1, axis=0)
         assert np.sum(pts[:, 0] * nxt[:, 1] - pts[:, 1] * nxt[:, 0]) > 0  # counter-clockwise
-    # lying as at yaw 0 turned by a half turn, a rectangle shows the same points
-    np.testing.assert_allclose(
-        oriented_points(fine, np.array([math.pi]), 16), oriented_points(fine, np.zeros(1), 16),
-        atol=1e-9,
+    # a half turn of a rectangle shows the same points (start included)
+    half, none = (
+        oriented_points(geometry, np.exp(1j * np.array([y])), np.array([y]), 16)
+        for y in (math.pi, 0.0)
     )
+    np.testing.assert_allclose(as_xy(half), as_xy(none), atol=1e-9)
 
 
 def test_turning_a_tile_turns_its_points(env: gym.Env) -> None:
@@ -101,7 +111,7 @@ def test_turning_a_tile_turns_its_points(env: gym.Env) -> None:
     assert rows[1][F["yaw"]] == pytest.approx([math.cos(0.7), math.sin(0.7)], abs=1e-6)
     ring = LinearRing(u.cell.tiles[0].outline * 1000.0)  # body frame, about the centroid [mm]
     for yaw, row in zip((0.0, 0.7), rows, strict=True):
-        assert max(ring.distance(Point(p)) for p in _turn(_points(row), -yaw)) < CHORD_MM
+        assert max(ring.distance(Point(p)) for p in _turn(_points(row), -yaw)) < ON_OUTLINE_MM
     assert not np.allclose(_points(rows[0]), _points(rows[1]), atol=1.0)
     np.testing.assert_allclose(_points(rows[1]).mean(axis=0), 0.0, atol=1.0)  # about centroid
 
@@ -169,7 +179,7 @@ def test_no_class_id_equal_shapes_and_colours_give_equal_rows() -> None:
     ring = LinearRing(cell.tiles[0].outline * 1000.0)  # about the centroid [mm]
     for i in range(2):  # both rows: the same outline, turned as each tile lies
         body = _turn(_points(tiles[i]), -float(yaw[i]))
-        assert max(ring.distance(Point(p)) for p in body) < CHORD_MM
+        assert max(ring.distance(Point(p)) for p in body) < ON_OUTLINE_MM
 
 
 @pytest.mark.parametrize("task_id", ["MosaicDecision6-v0", "MosaicDecision16-v0"])
