@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -27,6 +27,7 @@ import numpy as np
 import envs  # noqa: F401 - registers the ids
 from apps.cli import CommandParser, run_cli
 from configs.files import write_text
+from envs.mosaic_env import MosaicAssemblyEnv
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out"
@@ -38,7 +39,7 @@ TARGET_MS = 0.1
 
 def _expert_steps(env: gym.Env, steps: int, seed: int) -> float:
     """CPU seconds of ``steps`` expert steps (resets excluded)."""
-    u = env.unwrapped
+    u = cast(MosaicAssemblyEnv, env.unwrapped)
     spent, done, episode = 0.0, 0, seed
     while done < steps:
         env.reset(seed=episode)
@@ -60,7 +61,7 @@ def _expert_steps(env: gym.Env, steps: int, seed: int) -> float:
 
 def _observe_cost(env: gym.Env, repeats: int) -> float:
     """CPU seconds of ``repeats`` observations of one state (rows permuted as the env does)."""
-    u = env.unwrapped
+    u = cast(MosaicAssemblyEnv, env.unwrapped)
     env.reset(seed=0)
     evaluation = u.task.evaluate()
     rng = np.random.default_rng(0)

@@ -154,7 +154,7 @@ def resample_outline(outline: np.ndarray, count: int) -> np.ndarray:
 def entity_geometry(
     outlines: Sequence[np.ndarray],
     holes: Sequence[Sequence[np.ndarray]],
-    colors: Sequence[Sequence[float]],
+    colors: Sequence[Sequence[float]] | np.ndarray,
     points: int,
 ) -> EntityGeometry:
     """Precompute the body-frame rows of entities (at reset).
