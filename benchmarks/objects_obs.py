@@ -1,7 +1,8 @@
 """Benchmark of the ``objects`` observation against ``state`` on ``MosaicDecision6-v0``.
 
 Run ``python -m benchmarks.objects_obs``. Two figures per obs mode, measured in one process
-with the modes alternated block by block (a shared machine's load falls on both alike):
+with the modes alternated block by block, each first in every other block (a shared
+machine's load falls on both alike):
 
 - ``step``: steps/s and ms/step of the whole env (kinematic ``pick_place_discrete``), driven by
   the privileged expert (every step a full cycle that fills a slot; the reset after each
@@ -79,7 +80,7 @@ def measure(blocks: int, steps: int, repeats: int) -> dict[str, Any]:
     step_ms: dict[str, list[float]] = {m: [] for m in MODES}
     obs_ms: dict[str, list[float]] = {m: [] for m in MODES}
     for b in range(blocks):
-        for m in MODES:
+        for m in MODES if b % 2 == 0 else MODES[::-1]:  # each mode first in every other block
             step_ms[m].append(1e3 * _expert_steps(made[m], steps, seed=100 * b) / steps)
             obs_ms[m].append(1e3 * _observe_cost(made[m], repeats) / repeats)
     for e in made.values():

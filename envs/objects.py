@@ -41,7 +41,7 @@ paper_mixed tile at P = 32), every point lies on the built outline, and a tile l
 slot wants it gives the slot's points (within that step and the tile's manufacturing noise)
 whatever its body frame or symmetry.
 
-Cost: per episode the outlines are resampled once in the body frame (shapely) and their polar
+Cost: per episode the outlines are resampled once in the body frame and their polar
 angles sorted; per observation one search per entity finds the start, one gather takes the
 points and one complex multiplication turns them. ``objects_noise_mm`` adds Gaussian noise
 [mm] to each tile's P points at every observation (from the env's ``np_random``); slot
@@ -55,7 +55,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import shapely
 from gymnasium import spaces
 from shapely.geometry import LinearRing, Polygon
 
@@ -144,11 +143,15 @@ def resample_outline(outline: np.ndarray, count: int) -> np.ndarray:
     Returns:
         Shape (count, 2), starting at the counter-clockwise outline's first vertex.
     """
-    ring = LinearRing(outline)
-    if not ring.is_ccw:
-        ring = LinearRing(np.asarray(outline)[::-1])
-    distances = np.linspace(0.0, ring.length, count, endpoint=False)
-    return shapely.get_coordinates(shapely.line_interpolate_point(ring, distances))
+    pts = np.asarray(outline, float)
+    if not LinearRing(pts).is_ccw:
+        pts = pts[::-1]
+    closed = np.vstack([pts, pts[:1]])
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(closed, axis=0).T))])
+    distances = np.linspace(0.0, along[-1], count, endpoint=False)
+    return np.column_stack(
+        [np.interp(distances, along, closed[:, 0]), np.interp(distances, along, closed[:, 1])]
+    )
 
 
 def entity_geometry(
