@@ -187,7 +187,8 @@ def pick_policy(policy: str, observation_space: spaces.Space) -> str:
 def make_env_fn(cfg: TrainConfig, index: int = 0) -> Any:
     """A zero-argument factory of training env ``index`` (``gym.make`` with the overrides).
 
-    With a ``task``: the task's id, its training design ``index`` mod count, then ``env``.
+    With a ``task``: the task's id, its training design ``index`` mod count (``procedural``:
+    the procedural design source, `envs.tasks.BenchmarkTask.design_kwargs`), then ``env``.
     """
     kwargs: dict[str, Any] = dict(cfg.env)
     env_id = ENV_ID
@@ -196,7 +197,7 @@ def make_env_fn(cfg: TrainConfig, index: int = 0) -> Any:
 
         task = get_task(cfg.task)
         env_id = f"envs:{task.id}"
-        kwargs = {"design": task.env_kwargs("train", index)["design"], **kwargs}
+        kwargs = {**task.design_kwargs("train", index), **kwargs}
     if cfg.max_episode_steps:
         kwargs["max_episode_steps"] = cfg.max_episode_steps
 
