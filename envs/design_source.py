@@ -85,6 +85,8 @@ class ProceduralDesigns:
         self.generator: DesignGenerator = DesignGenerator(gen_cfg)
         self.exclusion: ClassExclusion = ClassExclusion(excluded)
         self.tries = config.design_tries
+        self.last: Design | None = None
+        """The design drawn last (the current episode's after a reset)."""
 
     def draw(self, rng: np.random.Generator) -> Design:
         """A design of ``max_slots`` slots holding no excluded class, drawn from ``rng``.
@@ -97,9 +99,10 @@ class ProceduralDesigns:
         from qshape.errors import GeneratorError  # noqa: PLC0415
 
         try:
-            return draw_excluding(self.generator, rng, self.exclusion, self.tries, PROCEDURAL)
+            self.last = draw_excluding(self.generator, rng, self.exclusion, self.tries, PROCEDURAL)
         except GeneratorError as exc:
             raise DesignSourceError(f"procedural design source: {exc}") from exc
+        return self.last
 
 
 def _classes(classes: tuple[int, int], k: int) -> tuple[int, int]:
