@@ -142,7 +142,10 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     the flat `EnvConfig` fields: design, max_slots, action_mode, obs_mode, image_size, depth,
     belt_speed, reward_mode, execution, feed, distractor_rate, tile_variants, noise and
     randomisation levels, tolerances, reward weights. Unknown keys raise `EnvConfigError`
-    listing the allowed ones.
+    listing the allowed ones. ``design_source="procedural"`` (with ``design_generator``,
+    ``exclude_designs``, ``design_tries``) draws a new design of ``max_slots`` slots at every
+    reset from ``np_random``, never one holding a class of ``exclude_designs``, and rebuilds the
+    cell for it (`envs.design_source`); the spaces stay the same.
 
     ## Info
     ``sim_time`` [s since reset], ``tiles_placed`` (slots filled correctly), ``tiles_per_min``
