@@ -187,8 +187,7 @@ def pick_policy(policy: str, observation_space: spaces.Space) -> str:
 def make_env_fn(cfg: TrainConfig, index: int = 0) -> Any:
     """A zero-argument factory of training env ``index`` (``gym.make`` with the overrides).
 
-    With a ``task``: the task's id, its training design ``index`` mod count (``procedural``:
-    the procedural design source, `envs.tasks.BenchmarkTask.design_kwargs`), then ``env``.
+    With a ``task``: the task's id, its training design ``index`` mod count, then ``env``.
     """
     kwargs: dict[str, Any] = dict(cfg.env)
     env_id = ENV_ID

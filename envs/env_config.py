@@ -270,6 +270,10 @@ class EnvConfig:
             raise EnvConfigError(
                 f"tool_z_range must be (low, high) [m] with 0 <= low < high, got {lo_hi!r}"
             )
+        if self.design_source == "fixed" and self.exclude_designs:
+            raise EnvConfigError(
+                "exclude_designs needs design_source 'procedural' (a fixed design is not drawn)"
+            )
         if self.design_source == "procedural" and self.max_slots < 1:
             raise EnvConfigError(
                 "design_source 'procedural' needs max_slots >= 1 (the spaces are built for "

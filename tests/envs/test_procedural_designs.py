@@ -13,6 +13,7 @@ import pytest
 import yaml
 
 import envs
+from apps.train import TrainConfig, make_env_fn
 from envs.design_source import DesignSourceError
 from envs.env_config import EnvConfigError
 from envs.tasks import BenchmarkTask, TaskError, get_task
@@ -147,6 +148,7 @@ def test_held_out_classes_are_never_drawn(tmp_path: Path) -> None:
         ({**PROCEDURAL, "exclude_designs": ["nope"]}, "exclude_designs: .*allowed: bundled"),
         ({**PROCEDURAL, "max_slots": 7}, "draws 6-6 slots; the env draws exactly max_slots=7"),
         ({**PROCEDURAL, "design_tries": 0}, "design_tries must be an int >= 1"),
+        ({"exclude_designs": ["hexagon"]}, "exclude_designs needs design_source 'procedural'"),
     ],
 )
 def test_bad_options_are_refused_with_what_is_allowed(
@@ -168,3 +170,16 @@ def test_a_task_asks_for_procedural_designs_by_name() -> None:
     assert envs  # the ids are registered on import
     with pytest.raises(TaskError, match="'procedural' is allowed in train_designs only"):
         BenchmarkTask("T-v0", "t", 2, 1.0, (0, 1), eval_designs=("procedural",))
+
+
+def test_a_training_vector_makes_its_procedural_entry_procedural() -> None:
+    cfg = TrainConfig(task=HELD_OUT, n_envs=3)
+    made = [make_env_fn(cfg, i)() for i in (1, 2)]
+    try:
+        square, drawn = (e.unwrapped for e in made)
+        assert square.designs is None and square.config.design == "square_grid"
+        assert drawn.designs is not None
+        assert drawn.designs.exclusion.designs == ("hexagon", "trencadis")
+    finally:
+        for e in made:
+            e.close()
