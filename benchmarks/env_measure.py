@@ -167,9 +167,7 @@ def measure_task_resets(queue: mp.Queue) -> None:
     os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
     import gymnasium as gym  # noqa: PLC0415
 
-    from envs.tasks import register_tasks  # noqa: PLC0415
-
-    from envs.tasks import PROCEDURAL, get_task  # noqa: PLC0415
+    from envs.tasks import PROCEDURAL, get_task, register_tasks  # noqa: PLC0415
 
     rows = []
     for task_id in register_tasks():
