@@ -24,6 +24,7 @@ reset and each step. With
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -64,20 +65,23 @@ def split_mask(mask: np.ndarray, nvec: np.ndarray) -> list[np.ndarray]:
     return list(np.split(np.asarray(mask, bool), cuts))
 
 
-def check_allowed(action: np.ndarray, mask: np.ndarray, nvec: np.ndarray) -> None:
-    """Refuse a (tile, slot, rotation) action the mask forbids.
+def check_allowed(action: np.ndarray, mask: np.ndarray, space: Any, invalid_actions: str) -> None:
+    """Refuse a (tile, slot, rotation) action the mask forbids (``invalid_actions="refuse"``).
 
     Args:
         action: Validated agent action, shape (3,) int.
         mask: The current flat mask (`action_mask`).
-        nvec: The space's sizes.
+        space: The MultiDiscrete action space (its sizes ``nvec``).
+        invalid_actions: ``refuse`` checks; ``fail`` lets the action fail when applied.
 
     Raises:
         ActionError: The tile or slot index is forbidden now; the message names it and the
             indices allowed now.
     """
+    if invalid_actions != "refuse":
+        return
     names = ("tile", "slot", "rotation")
-    for name, value, allowed in zip(names, action, split_mask(mask, nvec), strict=True):
+    for name, value, allowed in zip(names, action, split_mask(mask, space.nvec), strict=True):
         if not allowed[int(value)]:
             why = "is not on the input belt" if name == "tile" else "is filled already"
             raise ActionError(
