@@ -30,6 +30,7 @@ RenderMode = Literal["rgb_array", "human"]
 TileOrder = Literal["belt", "shuffled", "design"]
 SlotOrder = Literal["mesh", "shuffled", "design"]
 RotationFrame = Literal["tile", "slot"]
+DesignSource = Literal["fixed", "procedural"]
 ACTION_MODES: tuple[str, ...] = get_args(ActionMode)
 """Allowed ``action_mode`` values."""
 OBS_MODES: tuple[str, ...] = get_args(ObsMode)
@@ -52,6 +53,8 @@ SLOT_ORDERS: tuple[str, ...] = get_args(SlotOrder)
 """Allowed ``slot_order`` values (see `envs.indexing`)."""
 ROTATION_FRAMES: tuple[str, ...] = get_args(RotationFrame)
 """Allowed ``rotation_frame`` values (see `envs.indexing`)."""
+DESIGN_SOURCES: tuple[str, ...] = get_args(DesignSource)
+"""Allowed ``design_source`` values (see `envs.design_source`)."""
 
 
 CELL_KEYS: dict[str, tuple[str, str]] = {
@@ -84,6 +87,15 @@ class EnvConfig:
     Attributes:
         design: Bundled design name (``configs/designs``) or path to a design YAML.
         max_slots: Use only the first ``max_slots`` slots (and their tiles); 0 uses all.
+        design_source: One of `DESIGN_SOURCES`: ``fixed`` builds ``design`` once;
+            ``procedural`` draws a new design of exactly ``max_slots`` slots (>= 1 required)
+            at every reset from the env's ``np_random`` (`envs.design_source`).
+        design_generator: ``procedural``: the design generator's parameters, a bundled name
+            (``configs/``) or path of a `qshape.design.generator_config.GeneratorConfig` file.
+        exclude_designs: ``procedural``: designs (bundled names or paths) whose tile classes a
+            drawn design never holds (`qshape.design.exclusion`).
+        design_tries: ``procedural``: draws per reset before a design free of excluded
+            classes is given up (`envs.design_source.DesignSourceError`).
         cell: The cell (`envs.cell.config.CellConfig`), nested: in YAML a bundled name or
             path, or a mapping ``{config: <name or path>, <section>: {<key>: value}}`` that
             changes sections of that cell file key by key. The input belt's speed, the tile
@@ -166,6 +178,10 @@ class EnvConfig:
 
     design: str = "paper_mixed"
     max_slots: int = 0
+    design_source: DesignSource = "fixed"
+    design_generator: str = "design_generator_train"
+    exclude_designs: tuple[str, ...] = ()
+    design_tries: int = 50
     cell: CellConfig = field(default_factory=lambda: _env_cell("cell", ENV_CELL_CHANGES))
     planner: str = "planner"
     action_mode: ActionMode = "pick_place"
@@ -236,6 +252,7 @@ class EnvConfig:
             ("tile_order", TILE_ORDERS),
             ("slot_order", SLOT_ORDERS),
             ("rotation_frame", ROTATION_FRAMES),
+            ("design_source", DESIGN_SOURCES),
         ):
             value = getattr(self, name)
             if value not in allowed:
@@ -280,7 +297,16 @@ class EnvConfig:
             raise EnvConfigError(
                 f"tool_z_range must be (low, high) [m] with 0 <= low < high, got {lo_hi!r}"
             )
-        for name in ("rotation_bins", "layout_tries"):
+        if self.design_source == "fixed" and self.exclude_designs:
+            raise EnvConfigError(
+                "exclude_designs needs design_source 'procedural' (a fixed design is not drawn)"
+            )
+        if self.design_source == "procedural" and self.max_slots < 1:
+            raise EnvConfigError(
+                "design_source 'procedural' needs max_slots >= 1 (the spaces are built for "
+                f"that many tiles and slots), got max_slots={self.max_slots!r}"
+            )
+        for name in ("rotation_bins", "layout_tries", "design_tries"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise EnvConfigError(f"{name} must be an int >= 1, got {value!r}")
@@ -453,12 +479,14 @@ def load_env_config(config: EnvConfig | str | Path | None = "env", **overrides: 
 
 __all__ = [
     "ActionMode",
+    "DesignSource",
     "Execution",
     "ObjectsSource",
     "ObsMode",
     "RenderMode",
     "RewardMode",
     "ACTION_MODES",
+    "DESIGN_SOURCES",
     "EXECUTIONS",
     "FEEDS",
     "OBJECTS_POINTS_RANGE",
