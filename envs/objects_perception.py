@@ -169,7 +169,7 @@ class PerceivedTiles:
             template: Zero rows of the right shape (only its shape and dtype are used).
         """
         cell = self.cell
-        if cell.tiles is not self._shapes_seen:
+        if cell.slots is not self._shapes_seen:  # a reset drew another design
             self._start_episode()
         image = cell.render("input_camera", *self.size)
         figs = self.figures(image)
@@ -225,7 +225,7 @@ class PerceivedTiles:
     def _start_episode(self) -> None:
         """The design's distinct shape outlines, about their area centroids (the references)."""
         cell = self.cell
-        self._shapes_seen = cell.tiles
+        self._shapes_seen = cell.slots
         shapes = {s.shape.name: s.shape for s in cell.slots}
         refs = []
         for shape in shapes.values():
