@@ -30,6 +30,7 @@ RenderMode = Literal["rgb_array", "human"]
 TileOrder = Literal["belt", "shuffled", "design"]
 SlotOrder = Literal["mesh", "shuffled", "design"]
 RotationFrame = Literal["tile", "slot"]
+InvalidActions = Literal["fail", "refuse"]
 DesignSource = Literal["fixed", "procedural"]
 ACTION_MODES: tuple[str, ...] = get_args(ActionMode)
 """Allowed ``action_mode`` values."""
@@ -53,6 +54,8 @@ SLOT_ORDERS: tuple[str, ...] = get_args(SlotOrder)
 """Allowed ``slot_order`` values (see `envs.indexing`)."""
 ROTATION_FRAMES: tuple[str, ...] = get_args(RotationFrame)
 """Allowed ``rotation_frame`` values (see `envs.indexing`)."""
+INVALID_ACTIONS: tuple[str, ...] = get_args(InvalidActions)
+"""Allowed ``invalid_actions`` values (see `envs.masks`)."""
 DESIGN_SOURCES: tuple[str, ...] = get_args(DesignSource)
 """Allowed ``design_source`` values (see `envs.design_source`)."""
 
@@ -125,6 +128,9 @@ class EnvConfig:
         depth: Add depth images [m] to the observation.
         reward_mode: One of `REWARD_MODES`.
         execution: One of `EXECUTIONS` (pick_place modes only).
+        pick_yaw_entry: ``pick_place`` actions carry the tile's yaw at the pick: Box(6), the
+            ``-v0`` layout (the entry changes nothing: no grasp offset for it to turn); False:
+            Box(5) = pick x, y, place x, y, rotation (the ``-v1`` ids).
         chain_cycles: Dynamic pick_place: a step's cycle ends at rest at the place contact
             (vacuum off, pad 0.5 mm above the released tile) and the next step's cycle leaves
             it vertically, blended into its move to the pick, as a real cell chains its
@@ -150,6 +156,9 @@ class EnvConfig:
             the mesh.
         rotation_frame: What a rotation index counts from: one of `ROTATION_FRAMES`;
             ``tile``: the slot-aligned pose nearest to how the tile lies.
+        invalid_actions: What a ``pick_place_discrete`` action its mask forbids does (one of
+            `INVALID_ACTIONS`, `envs.masks`): ``fail`` charges ``failed_action_time`` and the
+            failed-action penalty; ``refuse`` raises `ActionError` (no time passes).
         kinematic_settle: Physics settling time after a kinematic place [s].
         failed_action_time: Simulated time charged for an action that cannot execute [s].
         reject_past_belt_end: How far past the input belt's end `MosaicAssemblyEnv.reject`
@@ -196,6 +205,7 @@ class EnvConfig:
     depth: bool = False
     reward_mode: RewardMode = "sparse"
     execution: Execution = "dynamic"
+    pick_yaw_entry: bool = True
     chain_cycles: bool = True
     color_randomization: float = 0.0
     light_randomization: float = 0.0
@@ -213,6 +223,7 @@ class EnvConfig:
     tile_order: TileOrder = "belt"
     slot_order: SlotOrder = "mesh"
     rotation_frame: RotationFrame = "tile"
+    invalid_actions: InvalidActions = "fail"
     kinematic_settle: float = 0.01
     failed_action_time: float = 0.04
     reject_past_belt_end: float = 0.08
@@ -252,6 +263,7 @@ class EnvConfig:
             ("tile_order", TILE_ORDERS),
             ("slot_order", SLOT_ORDERS),
             ("rotation_frame", ROTATION_FRAMES),
+            ("invalid_actions", INVALID_ACTIONS),
             ("design_source", DESIGN_SOURCES),
         ):
             value = getattr(self, name)
