@@ -4,7 +4,9 @@ Run::
 
     python -m apps.record_demos --task MosaicDecision6-v0 --expert --lossless --episodes 200 \\
         --dataset-id mosaic/decision6-expert-rgb96-v0 --env obs_mode=rgb 'image_size=[96,128]'
-    python -m benchmarks.camera_bc --demos 200 50 10 --seeds 0 1 2 --out runs/camera_bc
+    python -m benchmarks.camera_bc --demos 200 --seeds 0 1 2 --out runs/camera_bc
+    python -m benchmarks.camera_bc --demos 50 10 --seeds 0 1 2 --out runs/camera_bc \\
+        --set steps=500
 
 Each run trains `apps.camera_bc` on the first ``N`` episodes of the dataset (its curve with
 ``--curve-episodes`` validation episodes per point, seeds from `apps.camera_bc.CURVE_SEED`),
@@ -24,7 +26,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from agents.policies import make_policies
+from agents.camera_policy import CAMERA_BC_CONFIG, CameraBCConfig, load_camera_bc_config
+from agents.policies import make_policies, parse_pairs
 from agents.protocol import iqm_ci
 from apps.camera_bc import train
 from apps.cli import CommandParser, run_cli
@@ -54,7 +57,7 @@ def evaluate_run(model: Path) -> dict[str, dict[str, float]]:
         if name.endswith("seeds2000"):
             proto = Protocol(EXTRA_SEEDS, proto.designs, proto.max_steps, proto.horizon_s)
         rows, _ = evaluate_policy_set(make_policies([str(model)], base), proto)
-        out[name] = {"filled": rows[0].filled, "success": rows[0].success}
+        out[name] = {"filled": rows[0].filled, "success": rows[0].success_rate}
     return out
 
 
@@ -66,6 +69,7 @@ def run_all(
     dataset_id: str = DATASET,
     root: Path = DEFAULT_ROOT,
     curve_episodes: int = 5,
+    cfg: CameraBCConfig | None = None,
 ) -> dict[str, Any]:
     """Train and evaluate every (demonstrations, seed) run, then aggregate over seeds."""
     runs: list[dict[str, Any]] = []
@@ -83,6 +87,7 @@ def run_all(
                     env_kwargs={"image_size": IMAGE_SIZE},
                     demos=n,
                     seed=seed,
+                    cfg=cfg,
                     curve_episodes=curve_episodes,
                 )
             eval_path = folder / "camera_eval.json"
@@ -156,6 +161,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--dataset-id", default=DATASET)
     ap.add_argument("--root", type=Path, default=DEFAULT_ROOT)
     ap.add_argument("--curve-episodes", type=int, default=5)
+    ap.add_argument("--config", default=CAMERA_BC_CONFIG, help="name in configs/ or a YAML path")
+    ap.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", help="config overrides")
     args = ap.parse_args(argv)
     os.environ.setdefault("MUJOCO_GL", "egl")
     result = run_all(
@@ -165,6 +172,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         dataset_id=args.dataset_id,
         root=args.root,
         curve_episodes=args.curve_episodes,
+        cfg=load_camera_bc_config(args.config, **parse_pairs(args.set)),
     )
     print(json.dumps(result["table"], indent=2))
     return result
