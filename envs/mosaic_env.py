@@ -9,40 +9,31 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
 
-from envs.actions import (
-    ActionAdapter,
-    CartesianActions,
-    DiscretePickPlaceActions,
-    JointActions,
-    PickPlaceActions,
-    transfer_poses,
-)
+from envs.actions import transfer_poses
 from envs.cell.cameras import CameraModel
-from envs.cell.cell import CAMERAS, Cell
-from envs.cell.pick_place import PickPlaceExecutor
+from envs.cell.cell import CAMERAS
 from envs.cell.scene import build_arm_model
-from envs.env_config import EnvConfig, EnvConfigError, load_env_config
-from envs.episode_setup import build_cell, design_cell_parts
+from envs.design_source import FIRST_DRAW_SEED, design_source, source_config
+from envs.env_config import EnvConfig, load_env_config
+from envs.env_parts import build_parts
 from envs.errors import EnvError
 from envs.frames import FrameSchedule
-from envs.indexing import IndexMaps
-from envs.observations import Observer
-from envs.task import REWARD_TERMS, Evaluation, GroundTruth, MosaicTask
+from envs.task import REWARD_TERMS, SEED_BOUND, Evaluation, GroundTruth
 from envs.task_spec import (
     ActionError,
-    PickPlaceCodec,
     PickPlaceCommand,
     TaskSpec,
-    build_task_spec,
-    work_areas,
 )
-from planners.config import PlannerConfig, load_planner_config
+from planners.config import load_planner_config
 from planners.ik import IKSolver
+
+if TYPE_CHECKING:
+    from qshape.design import Design
 
 DEFAULT_CONTROL_DT = 0.04
 """Default control period [s] (``configs/env.yaml``); the class's ``render_fps`` is 1 / it."""
@@ -102,7 +93,10 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     (H, W, 3) at ``image_size`` (``rgb``/``rgb+state``; depth (H, W, 1) float32 [m] with
     ``depth``), ``robot`` float32 (19,) (joint pos/vel, tool pose, vacuum, held), and with
     ``state``/``rgb+state`` the privileged ``tiles`` (n * 7,) and ``slots`` (k * 6,), rows in the
-    same index order as the discrete actions. Camera
+    same index order as the discrete actions. With ``objects`` (no images), ``robot`` and
+    ``tiles`` (rows, D), ``slots`` (rows, D) float32: one entity row per tile / slot in the
+    same index order, without class ids (outline points [mm], colour, area, hole area, position,
+    yaw, pickable / filled flag, valid), columns named by `envs.objects.OBJECT_FIELDS`. Camera
     intrinsics/extrinsics at the observation size: ``task_spec.cameras``.
 
     ## Task description
@@ -151,7 +145,10 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     the flat `EnvConfig` fields: design, max_slots, action_mode, obs_mode, image_size, depth,
     belt_speed, reward_mode, execution, feed, distractor_rate, tile_variants, noise and
     randomisation levels, tolerances, reward weights. Unknown keys raise `EnvConfigError`
-    listing the allowed ones.
+    listing the allowed ones. ``design_source="procedural"`` (with ``design_generator``,
+    ``exclude_designs``, ``design_tries``) draws a new design of ``max_slots`` slots at every
+    reset from ``np_random``, never one holding a class of ``exclude_designs``, and rebuilds the
+    cell for it (`envs.design_source`); the spaces stay the same.
 
     ## Info
     ``sim_time`` [s since reset], ``tiles_placed`` (slots filled correctly), ``tiles_per_min``
@@ -190,47 +187,54 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ) -> None:
         if render_mode is not None:
             overrides["render_mode"] = render_mode
-        self.config = load_env_config("env" if config is None else config, **overrides)
+        self.config = source_config(
+            load_env_config("env" if config is None else config, **overrides)
+        )
         cfg = self.config
         self.render_mode = cfg.render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt)}
-        design, shapes, slots = design_cell_parts(cfg)
-        self.cell = build_cell(cfg.cell, shapes, slots, tries=cfg.layout_tries)
-        _check_image_size(cfg, self.cell)
-        self.task = MosaicTask(self.cell, cfg)
-        self.observer = Observer(self.cell, self.task, cfg)
-        self.index = IndexMaps(self.cell, cfg)
-        pcfg = load_planner_config(cfg.planner)
-        self.ik = IKSolver(build_arm_model(self.cell.cfg, with_cell=False), pcfg.ik, pcfg.limits)
-        self.pick_area, self.place_area = work_areas(self.cell, cfg)
-        self.codec = PickPlaceCodec(self.pick_area, self.place_area)
-        self.task_spec: TaskSpec = build_task_spec(self.cell, cfg, design)
-        """What agents may know besides the observations (see `envs.task_spec`)."""
-        self.calibration_views = self.cell.views.calibration_views
-        """Checkerboard pictures to calibrate a camera (`envs.cell.views.CellViews`)."""
-        self.executor: PickPlaceExecutor | None = None
-        self.actions = self._adapter(pcfg)
+        self.designs = design_source(cfg)
+        """The procedural design source (``design_source: procedural``), else None."""
+        first = None
+        if self.designs is not None:
+            first = self.designs.draw(np.random.default_rng(FIRST_DRAW_SEED))
+        self._pcfg = load_planner_config(cfg.planner)
+        self.ik = IKSolver(
+            build_arm_model(cfg.cell, with_cell=False), self._pcfg.ik, self._pcfg.limits
+        )
+        self._frames = FrameSchedule()
+        self._viewer: Any = None
+        self._build(first, seed=0)
         self.action_space = self.actions.space
         self.observation_space = self.observer.space
         self._t0 = 0.0
         self._needs_reset = True
         self._closed = False
-        self._viewer: Any = None
-        self._frames = FrameSchedule()
 
-    def _adapter(self, pcfg: PlannerConfig) -> ActionAdapter:
-        cfg, cell = self.config, self.cell
-        if cfg.action_mode == "joint":
-            return JointActions(cell, cfg)
-        if cfg.action_mode == "cartesian":
-            return CartesianActions(cell, cfg, self.ik, self.pick_area, self.place_area)
-        executor = PickPlaceExecutor(
-            cell, cfg, pcfg, self.ik, pick=self.pick_area, place=self.place_area
-        )
-        self.executor = executor
-        if cfg.action_mode == "pick_place":
-            return PickPlaceActions(cell, cfg, executor, self.codec)
-        return DiscretePickPlaceActions(cell, cfg, executor)
+    def _build(self, drawn: Design | None, seed: int) -> None:
+        """Build the cell of a design (None: ``design``) and its parts (`envs.env_parts`)."""
+        p = build_parts(self.config, drawn, seed, self.ik, self._pcfg)
+        self.cell, self.task, self.observer, self.index = p.cell, p.task, p.observer, p.index
+        self.pick_area, self.place_area, self.codec = p.pick_area, p.place_area, p.codec
+        self.executor, self.actions = p.executor, p.actions
+        self.task_spec: TaskSpec = p.task_spec
+        """What agents may know besides the observations (see `envs.task_spec`); with a
+        procedural design source, of the current episode's design."""
+        self.calibration_views = self.cell.views.calibration_views
+        """Checkerboard pictures to calibrate a camera (`envs.cell.views.CellViews`)."""
+        if self.executor is not None and self._frames:
+            self.executor.on_physics_step = self._tick
+
+    def _draw_design(self, rng: np.random.Generator) -> None:
+        """Procedural source: replace the cell by one of a design drawn from ``rng``."""
+        assert self.designs is not None
+        design = self.designs.draw(rng)
+        seed = int(rng.integers(SEED_BOUND))
+        if self._viewer is not None:
+            self._viewer.close()
+            self._viewer = None
+        self.cell.close()
+        self._build(design, seed)
 
     # ------------------------------------------------------------------ Gymnasium API
     def reset(
@@ -239,6 +243,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         """Start an episode: new tile layout (and colours/lights if enabled), arm at home."""
         self._check_open()
         super().reset(seed=seed)
+        if self.designs is not None:
+            self._draw_design(self.np_random)
         cell, rng = self.cell, self.np_random
         self.task.initialize_episode(rng)
         self._t0 = cell.time
@@ -476,19 +482,6 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def _check_open(self) -> None:
         if self._closed:
             raise MosaicEnvError("the environment is closed; make a new one")
-
-
-def _check_image_size(cfg: EnvConfig, cell: Cell) -> None:
-    """Refuse an observation image larger than the model's offscreen render buffer."""
-    if cfg.obs_mode == "state":
-        return
-    vis = cell.model.vis.global_
-    h, w = cfg.image_size
-    if h > vis.offheight or w > vis.offwidth:
-        raise EnvConfigError(
-            f"image_size {(h, w)} exceeds the offscreen render buffer "
-            f"({vis.offheight}, {vis.offwidth}) px (height, width); allowed: up to that size"
-        )
 
 
 __all__ = ["ActionError", "MosaicAssemblyEnv", "MosaicEnvError"]

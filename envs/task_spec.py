@@ -184,7 +184,8 @@ class TaskSpec:
     """What an agent may know about an env besides its observations.
 
     Attributes:
-        design: The design's name or path (as configured).
+        design: The design's name or path (as configured); ``procedural`` and the reset's
+            draw with a procedural design source.
         slots: The design's slots in the world, in slot order.
         pick: The pick area (input belt side).
         place: The place area (mesh side).
@@ -280,7 +281,7 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
     codec = PickPlaceCodec(pick, place) if config.action_mode == "pick_place" else None
     feed: FeedMode = cell.cfg.tiles.feed
     return TaskSpec(
-        design=config.design,
+        design=config.design if config.design_source == "fixed" else design.name,
         slots=world_slots(cell, design),
         pick=pick,
         place=place,

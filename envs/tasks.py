@@ -30,6 +30,10 @@ ENTRY_POINT = "envs.mosaic_env:MosaicAssemblyEnv"
 """Every rung is the one environment class with its preset."""
 SPLITS = ("train", "eval")
 """Allowed ``split`` values of `BenchmarkTask.env_kwargs`."""
+PROCEDURAL = "procedural"
+"""Training design name meaning the procedural design source (`envs.design_source`)."""
+DESIGN_KEYS = ("design", "design_source", "exclude_designs")
+"""`EnvConfig` keys `BenchmarkTask.design_kwargs` sets for one design of a split."""
 
 
 class TaskError(ConfigError, EnvError):
@@ -50,8 +54,12 @@ class BenchmarkTask:
             with an explicit seed in it.
         env: `EnvConfig` overrides (flat keys of ``configs/env.yaml``).
         train_designs: Designs to train on (env i of a vector uses design i mod len); empty:
-            ``env["design"]``.
-        eval_designs: Held-out designs to evaluate on; empty: the training designs.
+            ``env["design"]``. The name ``procedural`` (`envs.design_source.PROCEDURAL`)
+            gives that env a new procedural design at every reset, never holding a tile
+            class of the evaluation designs (``design_source: procedural`` with
+            ``exclude_designs`` = the evaluation designs; `design_kwargs`).
+        eval_designs: Held-out designs to evaluate on; empty: the training designs
+            (``procedural`` excluded: evaluation designs are fixed).
     """
 
     id: str
@@ -69,6 +77,11 @@ class BenchmarkTask:
         lo, hi = self.eval_seeds
         if not 0 <= lo <= hi:
             raise TaskError(f"{self.id}: eval_seeds must be a range lo <= hi of seeds >= 0")
+        if PROCEDURAL in self.eval_designs or PROCEDURAL == self.env.get("design"):
+            raise TaskError(
+                f"{self.id}: {PROCEDURAL!r} is allowed in train_designs only (evaluation "
+                "designs and env.design are fixed designs)"
+            )
         from envs.env_config import load_env_config  # noqa: PLC0415 - validates the keys
 
         load_env_config(**dict(self.env))
@@ -87,12 +100,26 @@ class BenchmarkTask:
         if split not in SPLITS:
             raise TaskError(f"unknown split {split!r}; allowed: {list(SPLITS)}")
         train = self.train_designs or (str(self.env.get("design", "paper_mixed")),)
-        return train if split == "train" else (self.eval_designs or train)
+        fixed = tuple(d for d in train if d != PROCEDURAL) or (
+            str(self.env.get("design", "paper_mixed")),
+        )
+        return train if split == "train" else (self.eval_designs or fixed)
+
+    def design_kwargs(self, split: str = "train", design_index: int = 0) -> dict[str, Any]:
+        """The `DESIGN_KEYS` overrides of one design of a split.
+
+        A fixed design gives ``{"design": name}``; the training name ``procedural`` gives
+        ``{"design_source": "procedural", "exclude_designs": <the eval designs>}``.
+        """
+        designs = self.designs(split)
+        name = designs[design_index % len(designs)]
+        if name != PROCEDURAL:
+            return {"design": name}
+        return {"design_source": PROCEDURAL, "exclude_designs": list(self.designs("eval"))}
 
     def env_kwargs(self, split: str = "train", design_index: int = 0) -> dict[str, Any]:
         """`MosaicAssembly-v0` overrides of this rung for one design of a split."""
-        designs = self.designs(split)
-        return {**dict(self.env), "design": designs[design_index % len(designs)]}
+        return {**dict(self.env), **self.design_kwargs(split, design_index)}
 
 
 def load_task(name_or_path: str | Path) -> BenchmarkTask:
@@ -158,7 +185,9 @@ def register_tasks() -> list[str]:
 
 
 __all__ = [
+    "DESIGN_KEYS",
     "LADDER",
+    "PROCEDURAL",
     "BenchmarkTask",
     "TaskError",
     "bundled_tasks",
