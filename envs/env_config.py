@@ -23,13 +23,14 @@ from envs.errors import CellError, EnvError
 
 ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
 ObsMode = Literal["rgb", "state", "rgb+state", "objects"]
-ObjectsSource = Literal["privileged"]
+ObjectsSource = Literal["privileged", "perception"]
 RewardMode = Literal["sparse", "dense", "staged"]
 Execution = Literal["dynamic", "kinematic"]
 RenderMode = Literal["rgb_array", "human"]
 TileOrder = Literal["belt", "shuffled", "design"]
 SlotOrder = Literal["mesh", "shuffled", "design"]
 RotationFrame = Literal["tile", "slot"]
+InvalidActions = Literal["fail", "refuse"]
 DesignSource = Literal["fixed", "procedural"]
 ACTION_MODES: tuple[str, ...] = get_args(ActionMode)
 """Allowed ``action_mode`` values."""
@@ -53,6 +54,8 @@ SLOT_ORDERS: tuple[str, ...] = get_args(SlotOrder)
 """Allowed ``slot_order`` values (see `envs.indexing`)."""
 ROTATION_FRAMES: tuple[str, ...] = get_args(RotationFrame)
 """Allowed ``rotation_frame`` values (see `envs.indexing`)."""
+INVALID_ACTIONS: tuple[str, ...] = get_args(InvalidActions)
+"""Allowed ``invalid_actions`` values (see `envs.masks`)."""
 DESIGN_SOURCES: tuple[str, ...] = get_args(DesignSource)
 """Allowed ``design_source`` values (see `envs.design_source`)."""
 
@@ -112,7 +115,12 @@ class EnvConfig:
         objects_noise_mm: ``objects``: std of Gaussian noise on each tile outline point [mm]
             (0: off).
         objects_source: ``objects``: where the rows come from, one of `OBJECTS_SOURCES`
-            (``privileged``: the simulator's poses and the built outlines).
+            (``privileged``: the simulator's poses and the built outlines; ``perception``: the
+            tile rows from the input camera's picture, `envs.objects_perception`).
+        objects_image_size: ``objects`` with ``perception``: (height, width) [px] the input
+            camera is rendered at for the extraction (independent of ``image_size``).
+        objects_gate_mm: ``objects`` with ``perception``: a perceived figure fills tile ``i``'s
+            row only when its centroid lies within this distance [mm] of tile ``i``'s.
         image_size: Observation image (height, width) [px]; an int gives a square image. The
             default 72 x 96 keeps the cameras' 4:3 aspect: a square image narrows the
             horizontal field (fixed vertical field of view) and crops the ends of the tile
@@ -120,6 +128,9 @@ class EnvConfig:
         depth: Add depth images [m] to the observation.
         reward_mode: One of `REWARD_MODES`.
         execution: One of `EXECUTIONS` (pick_place modes only).
+        pick_yaw_entry: ``pick_place`` actions carry the tile's yaw at the pick: Box(6), the
+            ``-v0`` layout (the entry changes nothing: no grasp offset for it to turn); False:
+            Box(5) = pick x, y, place x, y, rotation (the ``-v1`` ids).
         chain_cycles: Dynamic pick_place: a step's cycle ends at rest at the place contact
             (vacuum off, pad 0.5 mm above the released tile) and the next step's cycle leaves
             it vertically, blended into its move to the pick, as a real cell chains its
@@ -145,6 +156,9 @@ class EnvConfig:
             the mesh.
         rotation_frame: What a rotation index counts from: one of `ROTATION_FRAMES`;
             ``tile``: the slot-aligned pose nearest to how the tile lies.
+        invalid_actions: What a ``pick_place_discrete`` action its mask forbids does (one of
+            `INVALID_ACTIONS`, `envs.masks`): ``fail`` charges ``failed_action_time`` and the
+            failed-action penalty; ``refuse`` raises `ActionError` (no time passes).
         kinematic_settle: Physics settling time after a kinematic place [s].
         failed_action_time: Simulated time charged for an action that cannot execute [s].
         reject_past_belt_end: How far past the input belt's end `MosaicAssemblyEnv.reject`
@@ -185,10 +199,13 @@ class EnvConfig:
     objects_rows: int | None = None
     objects_noise_mm: float = 0.0
     objects_source: ObjectsSource = "privileged"
+    objects_image_size: tuple[int, int] = (492, 656)
+    objects_gate_mm: float = 5.0
     image_size: tuple[int, int] = (72, 96)
     depth: bool = False
     reward_mode: RewardMode = "sparse"
     execution: Execution = "dynamic"
+    pick_yaw_entry: bool = True
     chain_cycles: bool = True
     color_randomization: float = 0.0
     light_randomization: float = 0.0
@@ -206,6 +223,7 @@ class EnvConfig:
     tile_order: TileOrder = "belt"
     slot_order: SlotOrder = "mesh"
     rotation_frame: RotationFrame = "tile"
+    invalid_actions: InvalidActions = "fail"
     kinematic_settle: float = 0.01
     failed_action_time: float = 0.04
     reject_past_belt_end: float = 0.08
@@ -245,6 +263,7 @@ class EnvConfig:
             ("tile_order", TILE_ORDERS),
             ("slot_order", SLOT_ORDERS),
             ("rotation_frame", ROTATION_FRAMES),
+            ("invalid_actions", INVALID_ACTIONS),
             ("design_source", DESIGN_SOURCES),
         ):
             value = getattr(self, name)
@@ -312,6 +331,18 @@ class EnvConfig:
         r = self.objects_rows
         if r is not None and (not isinstance(r, int) or isinstance(r, bool) or r < 1):
             raise EnvConfigError(f"objects_rows must be None or an int >= 1, got {r!r}")
+        raw: Any = self.objects_image_size
+        size = tuple(raw) if isinstance(raw, (tuple, list)) else (raw,)
+        if len(size) != 2 or not all(  # noqa: PLR2004 - (height, width)
+            isinstance(v, int) and not isinstance(v, bool) and v >= 1 for v in size
+        ):
+            raise EnvConfigError(
+                f"objects_image_size must be (height, width), ints >= 1 px, got {raw!r}"
+            )
+        object.__setattr__(self, "objects_image_size", size)
+        g = self.objects_gate_mm
+        if isinstance(g, bool) or not isinstance(g, (int, float)) or not g > 0:
+            raise EnvConfigError(f"objects_gate_mm must be a number > 0 [mm], got {g!r}")
 
     @property
     def belt_speed(self) -> float:

@@ -23,6 +23,7 @@ from envs.env_config import EnvConfig, load_env_config
 from envs.env_parts import build_parts
 from envs.errors import EnvError
 from envs.frames import FrameSchedule
+from envs.masks import action_mask, check_allowed
 from envs.task import REWARD_TERMS, SEED_BOUND, Evaluation, GroundTruth
 from envs.task_spec import (
     ActionError,
@@ -65,8 +66,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     - ``pick_place``: Box(6): pick x, y, the tile's yaw, place x, y, the rotation. x, y map
       linearly onto the input tile area (pick) and the mesh (place), see
       ``task_spec.codec``; angles onto [-pi, pi]. The pad goes to the pick point and then to
-      the place point; the tile turns by the rotation (the tile's yaw only picks among
-      symmetric wrist solutions). One step = one full time-optimal cycle planned by the planners;
+      the place point; the tile turns by the rotation (the tile's yaw changes nothing; ``-v1``
+      is Box(5) without it). One step = one full time-optimal cycle planned by the planners;
       with ``chain_cycles`` (default) a dynamic cycle ends at rest at the place contact and
       the next one leaves it vertically, blended into its move (as a real cell chains them).
       ``task_spec.codec.encode(PickPlaceCommand(...))`` normalises a world command;
@@ -77,7 +78,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
       indices name carries no answer (`envs.indexing`): by default tile i is the i-th tile on
       the input belt from its downstream end (then the others), slot j the j-th slot in raster
       order on the mesh, and r counts from the slot-aligned pose nearest to how the tile lies
-      (``tile_order``, ``slot_order``, ``rotation_frame``).
+      (``tile_order``, ``slot_order``, ``rotation_frame``). ``action_masks()`` (`envs.masks`).
 
     ``execution`` (pick_place modes): ``dynamic`` tracks the planned trajectory with the
     servo actuators at every physics step (full physics, suction weld). ``kinematic`` puts the
@@ -153,7 +154,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ## Info
     ``sim_time`` [s since reset], ``tiles_placed`` (slots filled correctly), ``tiles_per_min``
     (per simulated minute), ``evaluation`` (the `evaluate()` dict), ``reward_<term>``,
-    ``action_failed`` and ``action_error`` (why), ``is_success``.
+    ``action_failed`` and ``action_error`` (why), ``is_success``, ``action_mask`` (discrete).
 
     ## Rendering
     ``rgb_array``: the overview camera (left) beside the input and output cameras (right),
@@ -170,8 +171,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     (stair-stepped edges, cheaper still).
 
     ## Version History
-    Every id is at ``-v0``. The changes of each id, and the rule for when an id's version
-    changes (a change of its spaces or of its results), are in ``CHANGELOG.md``.
+    ``-v1``: ``pick_place`` is Box(5) without the pick-yaw entry that did nothing; discrete ids
+    refuse masked actions (`ActionError`). ``-v0`` stays. Details and the rule: ``CHANGELOG.md``.
     """
 
     metadata = {  # noqa: RUF012 - Gymnasium convention
@@ -210,6 +211,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._t0 = 0.0
         self._needs_reset = True
         self._closed = False
+        self._mask: np.ndarray | None = None
 
     def _build(self, drawn: Design | None, seed: int) -> None:
         """Build the cell of a design (None: ``design``) and its parts (`envs.env_parts`)."""
@@ -263,12 +265,11 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             MosaicEnvError: Called before `reset` or after `close`.
             ActionError: Wrong shape, NaN/inf or out-of-range action.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("step() called before reset(): call env.reset() first")
+        self._check_ready("step")
         a = self.actions.validate(action)
         a = self.actions.noisy(a, self.np_random)
-        if self.config.action_mode == "pick_place_discrete":
+        if self._mask is not None:
+            check_allowed(a, self._mask, self.action_space, self.config.invalid_actions)
             a = self.index.decode(a)
         result = self.actions.apply(a)
         if self._frames:
@@ -326,6 +327,13 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._closed = True
 
     # ------------------------------------------------------------------ extras
+    def action_masks(self) -> np.ndarray:
+        """Allowed discrete indices now (`envs.masks`); `MosaicEnvError` in other action modes."""
+        if (mode := self.config.action_mode) != "pick_place_discrete":
+            raise MosaicEnvError(f"action_masks() needs pick_place_discrete, not {mode!r}")
+        self._check_ready("action_masks")
+        return self._mask.copy()  # type: ignore[union-attr] # set at reset
+
     def evaluate(self) -> Evaluation:
         """The task's evaluation now (see `envs.task.Evaluation`)."""
         return self.task.evaluate()
@@ -394,9 +402,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         Raises:
             MosaicEnvError: Not a pick_place mode, before `reset` or after `close`.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("reject() called before reset(): call env.reset() first")
+        self._check_ready("reject")
         if self.executor is None:
             raise MosaicEnvError(f"reject needs a pick_place mode, not {self.config.action_mode!r}")
         cfg, geo = self.config, self.cell.geometry
@@ -408,8 +414,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         evaluation = self.task.evaluate()
         terms = self.task.rewards(evaluation, result.failed)
         terminated = evaluation.success or evaluation.failure
-        info = self._info(evaluation, terms, result.failed, result.reason)
         obs = self._observe(evaluation)
+        info = self._info(evaluation, terms, result.failed, result.reason)
         return obs, float(sum(terms.values())), terminated, False, info
 
     def move_home(self) -> dict[str, Any]:
@@ -422,9 +428,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         Raises:
             MosaicEnvError: Called before `reset` or after `close`.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("move_home() called before reset(): call env.reset() first")
+        self._check_ready("move_home")
         home = np.asarray(self.cell.cfg.robot.home, float)
         if self.executor is not None:
             self.executor.move_to(home)
@@ -457,6 +461,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def _observe(self, evaluation: Evaluation) -> dict[str, Any]:
         """The observation, privileged rows in the agent's index order (`envs.indexing`)."""
         self.index.update()
+        if isinstance(space := self.action_space, gym.spaces.MultiDiscrete):
+            self._mask = action_mask(self.cell, self.index, evaluation.slot_filled, space.nvec)
         obs = self.observer.observe(self.np_random, evaluation)
         if "tiles" in obs:
             obs["tiles"], obs["slots"] = self.index.permute_state(obs["tiles"], obs["slots"])
@@ -477,11 +483,18 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             "action_error": reason,
         }
         info.update({f"reward_{k}": float(v) for k, v in terms.items()})
+        if self._mask is not None:
+            info["action_mask"] = self._mask.copy()
         return info
 
     def _check_open(self) -> None:
         if self._closed:
             raise MosaicEnvError("the environment is closed; make a new one")
+
+    def _check_ready(self, name: str) -> None:
+        self._check_open()
+        if self._needs_reset:
+            raise MosaicEnvError(f"{name}() called before reset(): call env.reset() first")
 
 
 __all__ = ["ActionError", "MosaicAssemblyEnv", "MosaicEnvError"]
