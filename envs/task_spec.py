@@ -196,6 +196,9 @@ class TaskSpec:
         image_size: Observation image (height, width) [px].
         cameras: Camera models at ``image_size``, by name.
         codec: The ``pick_place`` action codec (None in the other action modes).
+        tool_step: ``cartesian``: the tool move of a full action (1.0) in one control period,
+            (dx, dy, dz, dyaw) [m, m, m, rad] (tool speed and yaw rate x the period); None in
+            the other action modes.
     """
 
     design: str
@@ -210,6 +213,7 @@ class TaskSpec:
     image_size: tuple[int, int]
     cameras: dict[str, CameraModel]
     codec: PickPlaceCodec | None
+    tool_step: tuple[float, float, float, float] | None = None
 
     def camera(self, name: CameraName) -> CameraModel:
         """The camera model of ``name`` at the observation size.
@@ -279,6 +283,12 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
     cameras = {name: cell.camera_model(name, h, w) for name in ("input_camera", "output_camera")}
     codec = PickPlaceCodec(pick, place) if config.action_mode == "pick_place" else None
     feed: FeedMode = cell.cfg.tiles.feed
+    tool_step = None
+    if config.action_mode == "cartesian":
+        dt = float(cell.model.opt.timestep)
+        period = max(1, round(config.control_dt / dt)) * dt
+        step = config.tool_speed * period
+        tool_step = (step, step, step, config.tool_yaw_rate * period)
     return TaskSpec(
         design=config.design,
         slots=world_slots(cell, design),
@@ -292,6 +302,7 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
         image_size=(int(h), int(w)),
         cameras=cameras,
         codec=codec,
+        tool_step=tool_step,
     )
 
 
