@@ -34,6 +34,7 @@ import yaml
 from gymnasium import spaces
 
 from agents.algorithms import algorithm_class
+from agents.demos import DEFAULT_ROOT as DEMO_ROOT
 from agents.wrappers import (
     EPISODE_TERMS_KEY,
     EpisodeRewardTerms,
@@ -41,6 +42,13 @@ from agents.wrappers import (
     ReachShaping,
 )
 from apps.cli import CommandParser, run_cli
+from apps.train_extras import (
+    clone_before_learning,
+    cpu_time_stop,
+    process_cpu_s,
+    resolve_algo_kwargs,
+    resolve_named,
+)
 from configs import ConfigError, from_dict, load_yaml
 from configs.files import atomic_path, write_json, write_text
 
@@ -100,6 +108,13 @@ class TrainConfig:
         reach_shaping: Weight of `agents.wrappers.ReachShaping` on the training envs [1/m]
             (reward per metre the tool approaches the nearest tile; state observations);
             0: off. Evaluation always uses the env's own reward.
+        max_cpu_s: Stop ``learn`` after this much process CPU time [s] (0: no limit).
+        demos: Minari dataset id of demonstrations (``out/minari``) for ``bc_epochs``.
+        bc_epochs: Epochs of behaviour cloning of the actor on ``demos`` before learning
+            (SAC; `agents.rlpd.clone_actor`); 0: none.
+
+    ``policy`` and the ``algo_kwargs`` keys ending in ``_class`` may name an object as
+    ``module:attr`` (`apps.train_extras.resolve_named`), e.g. ``agents.rlpd:LayerNormSACPolicy``.
     """
 
     algo: str = "PPO"
@@ -123,17 +138,24 @@ class TrainConfig:
     task: str = ""
     log_every_s: float = 30.0
     reach_shaping: float = 0.0
+    max_cpu_s: float = 0.0
+    demos: str = ""
+    bc_epochs: int = 0
 
     def __post_init__(self) -> None:
         if self.vec_env not in VEC_ENVS:
             raise TrainError(f"unknown vec_env {self.vec_env!r}; allowed: {list(VEC_ENVS)}")
-        if self.policy not in POLICIES:
-            raise TrainError(f"unknown policy {self.policy!r}; allowed: {list(POLICIES)}")
+        if self.policy not in POLICIES and ":" not in self.policy:
+            raise TrainError(
+                f"unknown policy {self.policy!r}; allowed: {list(POLICIES)} or module:attr"
+            )
         for name in ("total_timesteps", "n_envs", "torch_threads"):
             if getattr(self, name) < 1:
                 raise TrainError(f"{name} must be >= 1, got {getattr(self, name)}")
         if min(self.max_episode_steps, self.checkpoint_freq, self.max_wall_s) < 0:
             raise TrainError("max_episode_steps, checkpoint_freq and max_wall_s must be >= 0")
+        if self.bc_epochs and not self.demos:
+            raise TrainError("bc_epochs needs demos (a dataset id)")
         if self.reach_shaping < 0:
             raise TrainError(f"reach_shaping must be >= 0 [1/m], got {self.reach_shaping}")
         from envs.env_config import load_env_config  # noqa: PLC0415 - validates env keys
@@ -172,10 +194,10 @@ def load_train_config(path: str | Path, **overrides: Any) -> TrainConfig:
     return from_dict(TrainConfig, data, source=str(path))
 
 
-def pick_policy(policy: str, observation_space: spaces.Space) -> str:
-    """Resolve ``auto`` from the observation space (Dict -> MultiInputPolicy)."""
+def pick_policy(policy: str, observation_space: spaces.Space) -> Any:
+    """Resolve ``auto`` from the observation space (Dict -> MultiInputPolicy), ``module:attr``."""
     if policy != "auto":
-        return policy
+        return resolve_named(policy)
     if isinstance(observation_space, spaces.Dict):
         return "MultiInputPolicy"
     shape = getattr(observation_space, "shape", None) or ()
@@ -266,6 +288,10 @@ class TrainResult:
     first_success: float
     last_success: float
     last_terms: dict[str, float] = field(default_factory=dict)
+    cpu_s: float = float("nan")
+    """Process CPU time of cloning and ``learn`` (children included) [s]."""
+    gradient_steps: int = 0
+    """Gradient steps of ``learn`` (off-policy algorithms' ``_n_updates``; 0 if not kept)."""
 
 
 def finished_run(out: Path) -> TrainResult | None:
@@ -435,7 +461,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
     venv = make_vec(cfg, monitor_dir)
     try:
         algo = algorithm_class(cfg.algo)
-        kwargs: dict[str, Any] = dict(cfg.algo_kwargs)
+        kwargs: dict[str, Any] = resolve_algo_kwargs(dict(cfg.algo_kwargs))
         if cfg.policy_kwargs:
             kwargs["policy_kwargs"] = dict(cfg.policy_kwargs)
         model = algo(
@@ -454,6 +480,11 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps, terms))
         if cfg.max_wall_s:
             callbacks.append(_wall_clock_stop(cfg.max_wall_s))
+        cpu0 = process_cpu_s()
+        if cfg.max_cpu_s:
+            callbacks.append(cpu_time_stop(cfg.max_cpu_s))
+        if cfg.bc_epochs:
+            clone_before_learning(model, cfg.demos, DEMO_ROOT, cfg.bc_epochs, cfg.seed)
         if cfg.checkpoint_freq:
             callbacks.append(
                 _atomic_checkpoints(
@@ -470,6 +501,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             tb_log_name=cfg.algo,
         )
         wall = time.perf_counter() - t0
+        cpu = process_cpu_s() - cpu0
         model_path = out / MODEL_FILE
         with atomic_path(model_path) as tmp:
             model.save(str(tmp))
@@ -489,6 +521,8 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
         s0,
         s1,
         terms.recent(RETURN_WINDOW),
+        cpu,
+        int(getattr(model, "_n_updates", 0)),
     )
     summary = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(result).items()}
     write_json(out / SUMMARY_FILE, summary)

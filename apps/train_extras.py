@@ -1,0 +1,95 @@
+"""Pieces of ``apps.train`` for learning from demonstrations and CPU budgets.
+
+- `resolve_named`: a ``module:attr`` string in a training YAML (``policy``, an
+  ``algo_kwargs`` key ending in ``_class``) becomes the object it names, so a config can use a
+  policy or replay buffer class of the project (`agents.rlpd`) without code.
+- `cpu_time_stop`: a callback that ends ``learn`` after a budget of process CPU time (the
+  budgets of the baseline table are CPU minutes: wall time is inflated on a shared machine).
+- `clone_before_learning`: behaviour cloning of a SAC actor on a demonstration dataset before
+  (or instead of) reinforcement learning.
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+from pathlib import Path
+from typing import Any
+
+from configs import ConfigError
+
+CLASS_SUFFIX = "_class"
+"""``algo_kwargs`` keys whose ``module:attr`` string values are resolved."""
+
+
+def resolve_named(value: Any) -> Any:
+    """The object a ``module:attr`` string names; any other value unchanged.
+
+    Raises:
+        ConfigError: The module or the attribute does not exist.
+    """
+    if not isinstance(value, str) or ":" not in value:
+        return value
+    module, _, attr = value.partition(":")
+    try:
+        return getattr(importlib.import_module(module), attr)
+    except (ImportError, AttributeError) as exc:
+        raise ConfigError(f"cannot resolve {value!r} (module:attr): {exc}") from exc
+
+
+def resolve_algo_kwargs(kwargs: dict[str, Any]) -> dict[str, Any]:
+    """``algo_kwargs`` with every ``*_class`` string resolved (`resolve_named`)."""
+    return {k: resolve_named(v) if k.endswith(CLASS_SUFFIX) else v for k, v in kwargs.items()}
+
+
+def process_cpu_s() -> float:
+    """CPU time of this process and its finished children [s]."""
+    import resource  # noqa: PLC0415 - POSIX only
+
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return time.process_time() + kids.ru_utime + kids.ru_stime
+
+
+def cpu_time_stop(limit_s: float) -> Any:
+    """A callback that ends ``learn`` once ``limit_s`` CPU seconds have passed since its start."""
+    from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
+
+    class CpuTimeStop(BaseCallback):
+        def _on_training_start(self) -> None:
+            self.t0 = process_cpu_s()
+
+        def _on_step(self) -> bool:
+            return process_cpu_s() - self.t0 < limit_s
+
+    return CpuTimeStop()
+
+
+def clone_before_learning(
+    model: Any, dataset_id: str, root: str | Path, epochs: int, seed: int
+) -> list[float]:
+    """Fit ``model``'s actor to the dataset's demonstrations (`agents.rlpd.clone_actor`).
+
+    Returns:
+        The negative log-likelihood of each epoch.
+
+    Raises:
+        ConfigError: The model has no SAC-style actor.
+        DemoSpaceError: The dataset's spaces differ from the model's.
+    """
+    from agents.demos import load_demos  # noqa: PLC0415
+    from agents.rlpd import clone_actor  # noqa: PLC0415
+
+    if not hasattr(model, "actor"):
+        raise ConfigError(f"bc_epochs needs an actor-critic with an actor (SAC), got {model}")
+    demos = load_demos(dataset_id, model.observation_space, model.action_space, Path(root))
+    return clone_actor(model, demos, epochs=epochs, seed=seed)
+
+
+__all__ = [
+    "CLASS_SUFFIX",
+    "clone_before_learning",
+    "cpu_time_stop",
+    "process_cpu_s",
+    "resolve_algo_kwargs",
+    "resolve_named",
+]
