@@ -100,8 +100,6 @@ class Transitions:
         next_observations: Per key, the observation after each action, shape (n, *key shape).
         terminations: 1.0 where the episode terminated (not truncated) at that step, shape (n,).
         episodes: Episodes read.
-        successes: Episodes that ended in success (``is_success`` of the last step's info;
-            0 when the dataset stores no infos).
     """
 
     observations: dict[str, np.ndarray]
@@ -110,7 +108,6 @@ class Transitions:
     next_observations: dict[str, np.ndarray]
     terminations: np.ndarray
     episodes: int
-    successes: int
 
     def __len__(self) -> int:
         return len(self.actions)
@@ -125,7 +122,7 @@ def transitions(dataset: Any) -> Transitions:
     obs: dict[str, list[np.ndarray]] = {}
     nxt: dict[str, list[np.ndarray]] = {}
     actions, rewards, terms = [], [], []
-    episodes = successes = 0
+    episodes = 0
     for ep in dataset.iterate_episodes():
         episodes += 1
         o = ep.observations if isinstance(ep.observations, dict) else {"obs": ep.observations}
@@ -136,8 +133,6 @@ def transitions(dataset: Any) -> Transitions:
         actions.append(np.asarray(ep.actions))
         rewards.append(np.asarray(ep.rewards, np.float32))
         terms.append(np.asarray(ep.terminations, np.float32))
-        success = np.asarray((ep.infos or {}).get("is_success", [False])).ravel()
-        successes += bool(success[-1]) if len(success) else 0
     if not actions:
         raise DemoDatasetError("the dataset holds no episodes")
     return Transitions(
@@ -147,7 +142,6 @@ def transitions(dataset: Any) -> Transitions:
         {k: np.concatenate(v) for k, v in nxt.items()},
         np.concatenate(terms),
         episodes,
-        successes,
     )
 
 

@@ -536,6 +536,7 @@ def main(argv: list[str] | None = None) -> TrainResult:
     ap.add_argument("--timesteps", type=int, default=None, help="override total_timesteps")
     ap.add_argument("--seed", type=int, default=None, help="override seed")
     ap.add_argument("--n-envs", type=int, default=None, help="override n_envs")
+    ap.add_argument("--max-cpu-s", type=float, default=None, help="override max_cpu_s [s]")
     ap.add_argument("--out", type=Path, default=None, help="run folder (default runs/<config>)")
     ap.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = ap.parse_args(argv)
@@ -544,6 +545,7 @@ def main(argv: list[str] | None = None) -> TrainResult:
         "total_timesteps": args.timesteps,
         "seed": args.seed,
         "n_envs": args.n_envs,
+        "max_cpu_s": args.max_cpu_s,
     }
     if args.no_progress:
         overrides["progress_bar"] = False

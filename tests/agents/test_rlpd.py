@@ -1,0 +1,123 @@
+"""Low-level demonstrations as transitions, their space check, RLPD's batches and learning."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+
+pytest.importorskip("minari")
+pytest.importorskip("jax")
+
+import envs  # noqa: E402,F401 - registers the ids
+from agents.demos import DemoSpaceError, load_demos  # noqa: E402
+from agents.rlpd import DemoMixReplayBuffer, LayerNormSACPolicy, clone_actor  # noqa: E402
+from apps.record_demos import record  # noqa: E402
+
+DATASET = "test/one-tile-lowlevel-v0"
+TASK = "MosaicOneTile-v0"
+
+
+@pytest.fixture(scope="module")
+def demo_root(tmp_path_factory):
+    """Two low-level expert episodes (seeds 0, 1) recorded as a Minari dataset."""
+    root = tmp_path_factory.mktemp("minari")
+    rec = record(2, seed=0, root=root, dataset_id=DATASET, lowlevel=True)
+    assert rec.success_rate == 1.0
+    return root
+
+
+def test_demos_load_as_transitions(demo_root):
+    env = gym.make(TASK)
+    demos = load_demos(DATASET, env.observation_space, env.action_space, demo_root)
+    assert demos.episodes == 2
+    assert len(demos) == len(demos.rewards) == len(demos.next_observations["robot"])
+    assert demos.terminations.sum() == 2  # each episode ends by success (terminated)
+    # the next observation of step t is the observation of step t + 1 within an episode
+    assert np.array_equal(demos.next_observations["robot"][0], demos.observations["robot"][1])
+    env.close()
+
+
+def test_demos_with_other_spaces_are_refused_naming_both(demo_root):
+    joint = gym.make("MosaicOneTileJoint-v0")
+    with pytest.raises(DemoSpaceError) as err:
+        load_demos(DATASET, joint.observation_space, joint.action_space, demo_root)
+    text = str(err.value)
+    assert "action space" in text and "(5,)" in text and "(7,)" in text
+    joint.close()
+
+
+def _model(env, demo_root, **kwargs):
+    from stable_baselines3 import SAC  # noqa: PLC0415
+
+    return SAC(
+        LayerNormSACPolicy,
+        env,
+        seed=0,
+        device="cpu",
+        batch_size=64,
+        learning_starts=50,
+        gradient_steps=2,
+        policy_kwargs={"net_arch": [64, 64]},
+        replay_buffer_class=DemoMixReplayBuffer,
+        replay_buffer_kwargs={"dataset_id": DATASET, "root": demo_root, "demo_fraction": 0.5},
+        **kwargs,
+    )
+
+
+def test_batches_are_half_demonstrations(demo_root):
+    env = gym.make(TASK)
+    model = _model(env, demo_root)
+    model.learn(60)
+    buf = model.replay_buffer
+    assert isinstance(buf, DemoMixReplayBuffer)
+    batch = buf.sample(64)
+    demo_actions = {tuple(a) for a in buf.demos.actions.round(5)}
+    from_demos = sum(tuple(a) in demo_actions for a in batch.actions.numpy().round(5))
+    assert from_demos == 32
+    assert any("LayerNorm" in type(m).__name__ for m in model.critic.modules())
+    env.close()
+
+
+def _td_error(model, demos) -> float:
+    """Mean squared TD error of the critic on every demonstration transition."""
+    obs, _ = model.policy.obs_to_tensor(demos.observations)
+    nxt, _ = model.policy.obs_to_tensor(demos.next_observations)
+    act = torch.as_tensor(demos.actions, dtype=torch.float32)
+    with torch.no_grad():
+        next_act, _ = model.actor.action_log_prob(nxt)
+        target = torch.min(*model.critic_target(nxt, next_act)).squeeze(1)
+        y = torch.as_tensor(demos.rewards) + model.gamma * (
+            1 - torch.as_tensor(demos.terminations)
+        ) * target
+        q = model.critic(obs, act)[0].squeeze(1)
+    return float(((q - y) ** 2).mean())
+
+
+def test_rlpd_critic_learns_the_demonstrations(demo_root):
+    torch.manual_seed(0)
+    env = gym.make(TASK)
+    model = _model(env, demo_root)
+    demos = model.replay_buffer.demos
+    before = _td_error(model, demos)
+    model.learn(300)  # 250 env steps after learning_starts, 500 gradient steps
+    after = _td_error(model, demos)
+    assert after < 0.5 * before, (before, after)
+    env.close()
+
+
+def test_behaviour_cloning_moves_the_actor_towards_the_expert(demo_root):
+    env = gym.make(TASK)
+    model = _model(env, demo_root)
+    demos = model.replay_buffer.demos
+
+    def action_error() -> float:
+        pred, _ = model.predict(demos.observations, deterministic=True)
+        return float(np.abs(pred - demos.actions).mean())
+
+    before = action_error()
+    losses = clone_actor(model, demos, epochs=30, batch_size=64)
+    assert losses[-1] < losses[0]
+    assert action_error() < 0.5 * before
+    env.close()
