@@ -291,7 +291,7 @@ class TrainResult:
     cpu_s: float = float("nan")
     """Process CPU time of cloning and ``learn`` (children included) [s]."""
     gradient_steps: int = 0
-    """Gradient steps of ``learn`` (off-policy algorithms' ``_n_updates``; 0 if not kept)."""
+    """Gradient steps of behaviour cloning and ``learn`` (``_n_updates``; 0 if not kept)."""
 
 
 def finished_run(out: Path) -> TrainResult | None:
@@ -446,6 +446,26 @@ def _atomic_checkpoints(**kwargs: Any) -> Any:
     return AtomicCheckpoint(**kwargs)
 
 
+def _callbacks(cfg: TrainConfig, out: Path, terms: TermsLog, show_bar: bool) -> list[Any]:
+    """The callbacks of ``learn``: reward terms, progress lines, time limits, checkpoints."""
+    callbacks = [_log_terms(terms)]
+    if not show_bar and cfg.log_every_s > 0:
+        callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps, terms))
+    if cfg.max_wall_s:
+        callbacks.append(_wall_clock_stop(cfg.max_wall_s))
+    if cfg.max_cpu_s:
+        callbacks.append(cpu_time_stop(cfg.max_cpu_s))
+    if cfg.checkpoint_freq:
+        callbacks.append(
+            _atomic_checkpoints(
+                save_freq=max(cfg.checkpoint_freq // cfg.n_envs, 1),
+                save_path=str(out / "checkpoints"),
+                name_prefix="model",
+            )
+        )
+    return callbacks
+
+
 def train(cfg: TrainConfig, out: Path) -> TrainResult:
     """Train ``cfg`` and write the run folder ``out`` (see the module docstring).
 
@@ -474,25 +494,12 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             **kwargs,
         )
         terms = TermsLog(out / TERMS_FILE)
-        callbacks = [_log_terms(terms)]
         show_bar = cfg.progress_bar and sys.stdout.isatty()
-        if not show_bar and cfg.log_every_s > 0:
-            callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps, terms))
-        if cfg.max_wall_s:
-            callbacks.append(_wall_clock_stop(cfg.max_wall_s))
+        callbacks = _callbacks(cfg, out, terms, show_bar)
         cpu0 = process_cpu_s()
-        if cfg.max_cpu_s:
-            callbacks.append(cpu_time_stop(cfg.max_cpu_s))
+        bc_steps = 0
         if cfg.bc_epochs:
-            clone_before_learning(model, cfg.demos, DEMO_ROOT, cfg.bc_epochs, cfg.seed)
-        if cfg.checkpoint_freq:
-            callbacks.append(
-                _atomic_checkpoints(
-                    save_freq=max(cfg.checkpoint_freq // cfg.n_envs, 1),
-                    save_path=str(out / "checkpoints"),
-                    name_prefix="model",
-                )
-            )
+            bc_steps = clone_before_learning(model, cfg.demos, DEMO_ROOT, cfg.bc_epochs, cfg.seed)
         t0 = time.perf_counter()
         model.learn(
             total_timesteps=cfg.total_timesteps,
@@ -522,7 +529,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
         s1,
         terms.recent(RETURN_WINDOW),
         cpu,
-        int(getattr(model, "_n_updates", 0)),
+        bc_steps + int(getattr(model, "_n_updates", 0)),
     )
     summary = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(result).items()}
     write_json(out / SUMMARY_FILE, summary)

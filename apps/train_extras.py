@@ -12,12 +12,15 @@
 from __future__ import annotations
 
 import importlib
+import math
 import time
 from pathlib import Path
 from typing import Any
 
 from configs import ConfigError
 
+BC_BATCH = 256
+"""Transitions per behaviour-cloning gradient step."""
 CLASS_SUFFIX = "_class"
 """``algo_kwargs`` keys whose ``module:attr`` string values are resolved."""
 
@@ -66,11 +69,11 @@ def cpu_time_stop(limit_s: float) -> Any:
 
 def clone_before_learning(
     model: Any, dataset_id: str, root: str | Path, epochs: int, seed: int
-) -> list[float]:
+) -> int:
     """Fit ``model``'s actor to the dataset's demonstrations (`agents.rlpd.clone_actor`).
 
     Returns:
-        The negative log-likelihood of each epoch.
+        The gradient steps taken.
 
     Raises:
         ConfigError: The model has no SAC-style actor.
@@ -82,10 +85,12 @@ def clone_before_learning(
     if not hasattr(model, "actor"):
         raise ConfigError(f"bc_epochs needs an actor-critic with an actor (SAC), got {model}")
     demos = load_demos(dataset_id, model.observation_space, model.action_space, Path(root))
-    return clone_actor(model, demos, epochs=epochs, seed=seed)
+    clone_actor(model, demos, epochs=epochs, batch_size=BC_BATCH, seed=seed)
+    return epochs * math.ceil(len(demos) / BC_BATCH)
 
 
 __all__ = [
+    "BC_BATCH",
     "CLASS_SUFFIX",
     "clone_before_learning",
     "cpu_time_stop",

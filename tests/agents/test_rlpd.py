@@ -88,9 +88,10 @@ def _td_error(model, demos) -> float:
     with torch.no_grad():
         next_act, _ = model.actor.action_log_prob(nxt)
         target = torch.min(*model.critic_target(nxt, next_act)).squeeze(1)
-        y = torch.as_tensor(demos.rewards) + model.gamma * (
-            1 - torch.as_tensor(demos.terminations)
-        ) * target
+        y = (
+            torch.as_tensor(demos.rewards)
+            + model.gamma * (1 - torch.as_tensor(demos.terminations)) * target
+        )
         q = model.critic(obs, act)[0].squeeze(1)
     return float(((q - y) ** 2).mean())
 
