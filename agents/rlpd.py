@@ -207,6 +207,28 @@ def clone_actor(
     return losses
 
 
+def portable_checkpoint(src: str | Path, dst: str | Path) -> None:
+    """Save a SAC model trained with `DemoMixReplayBuffer` so that it loads without its dataset.
+
+    A model file records its replay buffer class and arguments, and loading rebuilds the
+    buffer: a `DemoMixReplayBuffer` would read its dataset again. The copy at ``dst`` records
+    SB3's plain `DictReplayBuffer` of one transition instead (policy, critics and optimisers
+    unchanged): it plays, and trains on, without the demonstrations.
+    """
+    from stable_baselines3 import SAC  # noqa: PLC0415
+
+    model = SAC.load(
+        str(src),
+        device="cpu",
+        custom_objects={
+            "replay_buffer_class": DictReplayBuffer,
+            "replay_buffer_kwargs": {},
+            "buffer_size": 1,
+        },
+    )
+    model.save(str(dst))
+
+
 __all__ = [
     "DEMO_FRACTION",
     "DemoMixReplayBuffer",
@@ -214,4 +236,5 @@ __all__ = [
     "LayerNormSACPolicy",
     "clone_actor",
     "layer_norm_mlp",
+    "portable_checkpoint",
 ]
