@@ -141,7 +141,7 @@ class LayerNormCritic(ContinuousCritic):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
-        action_dim = int(np.prod(self.action_space.shape))
+        action_dim = int(np.prod(self.action_space.shape or (1,)))
         net_arch = list(kwargs["net_arch"])
         activation = kwargs.get("activation_fn", nn.ReLU)
         in_dim = int(kwargs["features_dim"]) + action_dim

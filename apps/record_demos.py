@@ -229,8 +229,10 @@ def _collect(
     base = gym.make(env_id, **kwargs)
     slots = len(base.unwrapped.task.slot_class)  # type: ignore[attr-defined]
     base.close()
-    limit = {} if expert == "lowlevel" else {"max_episode_steps": STEPS_PER_SLOT * slots}
-    env = minari.DataCollector(gym.make(env_id, **limit, **kwargs), jpeg_encoding=not lossless)
+    limit = None if expert == "lowlevel" else STEPS_PER_SLOT * slots  # None: the env's own
+    env = minari.DataCollector(
+        gym.make(env_id, max_episode_steps=limit, **kwargs), jpeg_encoding=not lossless
+    )
     try:
         agent: Any
         if expert == "lowlevel":

@@ -12,7 +12,12 @@ pytest.importorskip("jax")
 
 import envs  # noqa: E402,F401 - registers the ids
 from agents.demos import DemoSpaceError, load_demos  # noqa: E402
-from agents.rlpd import DemoMixReplayBuffer, LayerNormSACPolicy, clone_actor  # noqa: E402
+from agents.rlpd import (  # noqa: E402
+    DemoMixReplayBuffer,
+    LayerNormSACPolicy,
+    clone_actor,
+    portable_checkpoint,
+)
 from apps.record_demos import record  # noqa: E402
 
 DATASET = "test/one-tile-lowlevel-v0"
@@ -22,6 +27,7 @@ TASK = "MosaicOneTile-v0"
 @pytest.fixture(scope="module")
 def demo_root(tmp_path_factory):
     """Two low-level expert episodes (seeds 0, 1) recorded as a Minari dataset."""
+    torch.set_num_threads(1)  # the machine's cores are shared; results do not depend on it
     root = tmp_path_factory.mktemp("minari")
     rec = record(2, seed=0, root=root, dataset_id=DATASET, lowlevel=True)
     assert rec.success_rate == 1.0
@@ -66,7 +72,7 @@ def _model(env, demo_root, **kwargs):
     )
 
 
-def test_batches_are_half_demonstrations(demo_root):
+def test_batches_are_half_demonstrations(demo_root, tmp_path):
     env = gym.make(TASK)
     model = _model(env, demo_root)
     model.learn(60)
@@ -77,6 +83,17 @@ def test_batches_are_half_demonstrations(demo_root):
     from_demos = sum(tuple(a) in demo_actions for a in batch.actions.numpy().round(5))
     assert from_demos == 32
     assert any("LayerNorm" in type(m).__name__ for m in model.critic.modules())
+    # the shipped copy loads without the dataset and acts as the trained model does
+    from stable_baselines3 import SAC  # noqa: PLC0415
+
+    model.save(tmp_path / "trained.zip")
+    portable_checkpoint(tmp_path / "trained.zip", tmp_path / "portable.zip")
+    loaded = SAC.load(tmp_path / "portable.zip", device="cpu")
+    assert not isinstance(loaded.replay_buffer, DemoMixReplayBuffer)
+    obs = {k: v[:8] for k, v in buf.demos.observations.items()}
+    assert np.allclose(
+        loaded.predict(obs, deterministic=True)[0], model.predict(obs, deterministic=True)[0]
+    )
     env.close()
 
 
