@@ -49,12 +49,19 @@ def _episodes(eval_dir: Path) -> dict[str, list[float]]:
     return out
 
 
+def _steps(folder: Path) -> int:
+    """Env steps of a run (its ``summary.json``)."""
+    return int(json.loads((folder / "summary.json").read_text(encoding="utf-8"))["timesteps"])
+
+
 def table(runs: dict[str, list[Path]], eval_dir: Path) -> list[dict[str, Any]]:
     """One row per name: success IQM [95 % CI], episodes, env steps, gradient steps, CPU min."""
     episodes = _episodes(eval_dir)
     rows = []
     for name, folders in runs.items():
-        labels = [f.name if f.name != "seed_0" else f.parent.name for f in folders]
+        labels = [  # as agents.policies names a checkpoint's run folder
+            f"{f.parent.name}/{f.name}" if f.name.startswith("seed_") else f.name for f in folders
+        ]
         scores = [episodes.get(label, []) for label in labels]
         if not all(scores):
             raise ConfigError(f"{name}: no evaluated episodes of {labels} in {eval_dir}")
@@ -94,7 +101,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
             f"{r['gradient_steps']} | {r['cpu_min']} |"
         )
     results = [
-        {"task": args.task, "entry": name, "folder": str(f), "timesteps": 1}
+        {"task": args.task, "entry": name, "folder": str(f), "timesteps": _steps(f)}
         for name, folders in runs.items()
         for f in folders
     ]
