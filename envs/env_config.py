@@ -23,7 +23,7 @@ from envs.errors import CellError, EnvError
 
 ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
 ObsMode = Literal["rgb", "state", "rgb+state", "objects"]
-ObjectsSource = Literal["privileged"]
+ObjectsSource = Literal["privileged", "perception"]
 RewardMode = Literal["sparse", "dense", "staged"]
 Execution = Literal["dynamic", "kinematic"]
 RenderMode = Literal["rgb_array", "human"]
@@ -115,7 +115,12 @@ class EnvConfig:
         objects_noise_mm: ``objects``: std of Gaussian noise on each tile outline point [mm]
             (0: off).
         objects_source: ``objects``: where the rows come from, one of `OBJECTS_SOURCES`
-            (``privileged``: the simulator's poses and the built outlines).
+            (``privileged``: the simulator's poses and the built outlines; ``perception``: the
+            tile rows from the input camera's picture, `envs.objects_perception`).
+        objects_image_size: ``objects`` with ``perception``: (height, width) [px] the input
+            camera is rendered at for the extraction (independent of ``image_size``).
+        objects_gate_mm: ``objects`` with ``perception``: a perceived figure fills tile ``i``'s
+            row only when its centroid lies within this distance [mm] of tile ``i``'s.
         image_size: Observation image (height, width) [px]; an int gives a square image. The
             default 72 x 96 keeps the cameras' 4:3 aspect: a square image narrows the
             horizontal field (fixed vertical field of view) and crops the ends of the tile
@@ -194,6 +199,8 @@ class EnvConfig:
     objects_rows: int | None = None
     objects_noise_mm: float = 0.0
     objects_source: ObjectsSource = "privileged"
+    objects_image_size: tuple[int, int] = (492, 656)
+    objects_gate_mm: float = 5.0
     image_size: tuple[int, int] = (72, 96)
     depth: bool = False
     reward_mode: RewardMode = "sparse"
@@ -324,6 +331,18 @@ class EnvConfig:
         r = self.objects_rows
         if r is not None and (not isinstance(r, int) or isinstance(r, bool) or r < 1):
             raise EnvConfigError(f"objects_rows must be None or an int >= 1, got {r!r}")
+        raw: Any = self.objects_image_size
+        size = tuple(raw) if isinstance(raw, (tuple, list)) else (raw,)
+        if len(size) != 2 or not all(  # noqa: PLR2004 - (height, width)
+            isinstance(v, int) and not isinstance(v, bool) and v >= 1 for v in size
+        ):
+            raise EnvConfigError(
+                f"objects_image_size must be (height, width), ints >= 1 px, got {raw!r}"
+            )
+        object.__setattr__(self, "objects_image_size", size)
+        g = self.objects_gate_mm
+        if isinstance(g, bool) or not isinstance(g, (int, float)) or not g > 0:
+            raise EnvConfigError(f"objects_gate_mm must be a number > 0 [mm], got {g!r}")
 
     @property
     def belt_speed(self) -> float:

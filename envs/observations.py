@@ -13,6 +13,8 @@ Keys (by ``obs_mode``):
 - ``tiles`` and ``slots`` (``objects``; no class ids): float32 (rows, D), one entity row per
   tile / slot (outline points [mm], colour, area, hole area, position, yaw, flag, valid),
   laid out by `envs.objects.OBJECT_FIELDS`; rows past the episode's counts are zero padding.
+  With ``objects_source="perception"`` the tile rows come from the input camera's picture
+  (`envs.objects_perception`): a tile not seen there is a masked row of zeros.
 
 Every observation is a fresh array (no memory shared between steps).
 """
@@ -27,6 +29,7 @@ from gymnasium import spaces
 from envs.cell.cell import CAMERAS, Cell
 from envs.env_config import EnvConfig
 from envs.objects import ObjectRows
+from envs.objects_perception import PerceivedTiles
 from envs.task import Evaluation, MosaicTask
 from spatial.rotations import yaw_from_matrix
 
@@ -59,6 +62,11 @@ class Observer:
         self.images = config.obs_mode in ("rgb", "rgb+state")
         self.state = config.obs_mode in ("state", "rgb+state")
         self.objects = ObjectRows(cell, task, config) if config.obs_mode == "objects" else None
+        self.perceived = (
+            PerceivedTiles(cell, config, self.objects.fields, self.objects.dim)
+            if self.objects is not None and config.objects_source == "perception"
+            else None
+        )
         h, w = config.image_size
         d: dict[str, spaces.Space] = {}
         if self.images:
@@ -97,6 +105,8 @@ class Observer:
             obs["tiles"], obs["slots"] = self._state(evaluation)
         if self.objects is not None:
             obs["tiles"], obs["slots"] = self.objects.observe(rng, evaluation)
+            if self.perceived is not None:  # tile rows from the input picture instead
+                obs["tiles"] = self.perceived.observe(obs["tiles"])
         return obs
 
     def _robot(self, rng: np.random.Generator) -> np.ndarray:

@@ -138,7 +138,7 @@ def test_padded_rows_are_zero_and_invalid() -> None:
         ("objects_points", 4, "[8, 256]"),
         ("objects_points", 300, "[8, 256]"),
         ("objects_noise_mm", -0.1, ">= 0"),
-        ("objects_source", "perception", "privileged"),
+        ("objects_source", "camera", "perception"),
         ("objects_rows", 0, ">= 1"),
         ("obs_mode", "entities", "objects"),
     ],

@@ -1,0 +1,151 @@
+"""``objects_source="perception"``: tile rows from the input picture (`envs.objects_perception`)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any, cast
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+import pytest
+
+import envs  # noqa: F401 - registers the ids
+from envs.env_config import EnvConfigError, load_env_config
+from envs.mosaic_env import MosaicAssemblyEnv
+from envs.objects import OBJECT_FIELDS as F
+from envs.objects_perception import register
+
+TASK = "MosaicDecision6-v0"
+SEED = 1000
+CENTROID_MM = 2.0
+YAW_DEG = 3.0
+AREA_PCT = 5.0
+"""Tolerances of a perceived row against the privileged one."""
+
+
+def _make(**kw: Any) -> gym.Env:
+    return gym.make(TASK, obs_mode="objects", disable_env_checker=True, **kw)
+
+
+@pytest.fixture(scope="module")
+def perceived() -> Iterator[gym.Env]:
+    e = _make(objects_source="perception")
+    yield e
+    e.close()
+
+
+def _rows(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
+    """Privileged and perceived tile rows of the current state, cell order."""
+    u = cast(MosaicAssemblyEnv, env.unwrapped)
+    objects, per = u.observer.objects, u.observer.perceived
+    assert objects is not None and per is not None
+    priv, _ = objects.observe(np.random.default_rng(0), u.task.evaluate())
+    return priv, per.observe(priv)
+
+
+def _yaw_error_deg(a: np.ndarray, b: np.ndarray, symmetry: int) -> float:
+    if symmetry == 0:
+        return 0.0
+    period = 2 * np.pi / symmetry
+    d = (np.arctan2(a[1], a[0]) - np.arctan2(b[1], b[0])) % period
+    return float(np.degrees(min(d, period - d)))
+
+
+def test_perceived_rows_agree_with_privileged(perceived: gym.Env) -> None:
+    obs, _ = perceived.reset(seed=SEED)
+    u = cast(MosaicAssemblyEnv, perceived.unwrapped)
+    priv, per = _rows(perceived)
+    n = len(u.cell.tiles)
+    assert np.all(per[:n, F["valid"]] == 1.0)
+    assert np.all(per[:n, F["flag"]] == priv[:n, F["flag"]])
+    for i, tile in enumerate(u.cell.tiles):
+        centroid = np.linalg.norm(per[i, F["xy"]] - priv[i, F["xy"]]) * 1e3
+        assert centroid < CENTROID_MM
+        yaw = _yaw_error_deg(per[i, F["yaw"]], priv[i, F["yaw"]], tile.shape.symmetry)
+        assert yaw < YAW_DEG
+        area = abs(per[i, F["area"]][0] / priv[i, F["area"]][0] - 1) * 100
+        assert area < AREA_PCT
+        # points about the centroid, world-oriented, the same start rule: close point by point
+        diff = per[i, F["points"]] - priv[i, F["points"]]
+        assert np.median(np.hypot(diff[0::2], diff[1::2])) < CENTROID_MM
+    # the env's observation holds the same rows, permuted into the action indices
+    tiles, _ = u.index.permute_state(per, priv)
+    np.testing.assert_array_equal(obs["tiles"], tiles)
+
+
+def test_spaces_identical_to_privileged(perceived: gym.Env) -> None:
+    privileged = _make()
+    try:
+        assert perceived.observation_space == privileged.observation_space
+        assert perceived.action_space == privileged.action_space
+        obs, _ = perceived.reset(seed=SEED)
+        assert perceived.observation_space.contains(obs)
+    finally:
+        privileged.close()
+
+
+def test_tile_off_the_picture_or_cut_by_its_border_is_masked(perceived: gym.Env) -> None:
+    perceived.reset(seed=SEED)
+    u = cast(MosaicAssemblyEnv, perceived.unwrapped)
+    cell = u.cell
+    h, w = load_env_config().objects_image_size
+    z = cell.geometry.input_centre[2]
+    border = cell.camera_model("input_camera", h, w).unproject_to_plane(
+        np.array([[0.0, h / 2]]), z
+    )[0]
+    c = cell.geometry.input_centre
+    off = np.array([[0.0, 0.5, 0.0]])  # 0.5 m beside the tile area: out of view
+    cut = np.array([[border[0] - c[0], border[1] - c[1], 0.0]])  # centre on the left border
+    cell.place_tiles(np.array([0]), off)
+    cell.place_tiles(np.array([1]), cut)
+    mujoco.mj_forward(cell.model, cell.data)
+    _, per = _rows(perceived)
+    assert not per[0].any() and not per[1].any()  # masked: valid 0, all zeros
+    assert np.all(per[2 : len(cell.tiles), F["valid"]] == 1.0)
+
+
+def test_unfed_tiles_are_masked() -> None:
+    env = _make(objects_source="perception", feed="stream")
+    try:
+        env.reset(seed=SEED)
+        u = cast(MosaicAssemblyEnv, env.unwrapped)
+        _, per = _rows(env)
+        fed = u.cell.on_stage
+        assert 0 < fed.sum() < len(fed)
+        assert np.all(per[fed, F["valid"]] == 1.0)
+        assert not per[~fed].any()
+    finally:
+        env.close()
+
+
+def test_register_finds_the_turn_of_a_sampled_outline() -> None:
+    k = np.arange(64)
+    square = np.exp(1j * (np.pi / 4 + np.pi / 2 * (k // 16))) * 10  # corners only, coarse
+    ref = np.stack([np.roll(square, 3), np.exp(2j * np.pi * k / 64) * 7])
+    turned = np.roll(square, 5) * np.exp(0.3j)
+    r, angle, rms = register(turned, ref)
+    assert r == 0
+    assert rms < 1e-9
+    assert abs((angle - 0.3 + np.pi / 4) % (np.pi / 2) - np.pi / 4) < 1e-9
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "needle"),
+    [
+        ("objects_source", "camera", "objects_source"),
+        ("objects_image_size", [492], "objects_image_size"),
+        ("objects_image_size", [0, 656], "objects_image_size"),
+        ("objects_image_size", [True, 656], "objects_image_size"),
+        ("objects_gate_mm", 0.0, "objects_gate_mm"),
+        ("objects_gate_mm", -1.0, "objects_gate_mm"),
+    ],
+)
+def test_bad_perception_config_is_refused(key: str, value: object, needle: str) -> None:
+    with pytest.raises(EnvConfigError, match=needle):
+        load_env_config(**{key: value})
+
+
+def test_image_size_outside_the_extraction_limits_is_refused() -> None:
+    with pytest.raises(EnvConfigError, match="objects_image_size 8 x 656"):
+        _make(objects_source="perception", objects_image_size=[8, 656])
