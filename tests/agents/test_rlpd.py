@@ -97,31 +97,29 @@ def test_batches_are_half_demonstrations(demo_root, tmp_path):
     env.close()
 
 
-def _td_error(model, demos) -> float:
-    """Mean squared TD error of the critic on every demonstration transition."""
+def _value_error(model, demos) -> float:
+    """Mean absolute difference of the critic's Q and the demonstrations' discounted returns."""
+    returns = np.zeros(len(demos), np.float32)
+    future = 0.0
+    for t in range(len(demos) - 1, -1, -1):  # episodes end where terminated
+        future = demos.rewards[t] + model.gamma * future * (1 - demos.terminations[t])
+        returns[t] = future
     obs, _ = model.policy.obs_to_tensor(demos.observations)
-    nxt, _ = model.policy.obs_to_tensor(demos.next_observations)
     act = torch.as_tensor(demos.actions, dtype=torch.float32)
     with torch.no_grad():
-        next_act, _ = model.actor.action_log_prob(nxt)
-        target = torch.min(*model.critic_target(nxt, next_act)).squeeze(1)
-        y = (
-            torch.as_tensor(demos.rewards)
-            + model.gamma * (1 - torch.as_tensor(demos.terminations)) * target
-        )
-        q = model.critic(obs, act)[0].squeeze(1)
-    return float(((q - y) ** 2).mean())
+        q = torch.min(*model.critic(obs, act)).squeeze(1).numpy()
+    return float(np.abs(q - returns).mean())
 
 
-def test_rlpd_critic_learns_the_demonstrations(demo_root):
+def test_rlpd_critic_learns_the_value_of_the_demonstrations(demo_root):
     torch.manual_seed(0)
     env = gym.make(TASK)
     model = _model(env, demo_root)
     demos = model.replay_buffer.demos
-    before = _td_error(model, demos)
+    before = _value_error(model, demos)
     model.learn(300)  # 250 env steps after learning_starts, 500 gradient steps
-    after = _td_error(model, demos)
-    assert after < 0.5 * before, (before, after)
+    after = _value_error(model, demos)
+    assert after < 0.7 * before, (before, after)
     env.close()
 
 
@@ -135,7 +133,7 @@ def test_behaviour_cloning_moves_the_actor_towards_the_expert(demo_root):
         return float(np.abs(pred - demos.actions).mean())
 
     before = action_error()
-    losses = clone_actor(model, demos, epochs=30, batch_size=64)
+    losses = clone_actor(model, demos, epochs=150, batch_size=64)
     assert losses[-1] < losses[0]
     assert action_error() < 0.5 * before
     env.close()
