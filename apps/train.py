@@ -19,6 +19,7 @@ for Dict observations, ``CnnPolicy`` for image Boxes, ``MlpPolicy`` otherwise.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import json
 import os
 import sys
@@ -36,6 +37,8 @@ from gymnasium import spaces
 from agents.algorithms import algorithm_class
 from agents.wrappers import (
     EPISODE_TERMS_KEY,
+    EpisodeProgress,
+    cpu_seconds,
     EpisodeRewardTerms,
     FlatDiscreteActions,
     ReachShaping,
@@ -58,6 +61,9 @@ LOG_WINDOW = 20
 """Recent episodes averaged in a progress line."""
 SUMMARY_FILE = "summary.json"
 """The run's summary, written last: its presence marks a finished run (`finished_run`)."""
+MONITORED = ("is_success", "filled", "cpu_s")
+"""``info`` entries of an episode's last step written to the Monitor CSVs (success, fraction of
+slots filled, CPU seconds of the training process then: `agents.wrappers.EpisodeProgress`)."""
 MODEL_FILE = "model.zip"
 """The run's final model."""
 
@@ -73,7 +79,8 @@ class TrainConfig:
     Attributes:
         algo: stable-baselines3 algorithm class name (``PPO``, ``A2C``, ``DQN``, ``SAC``,
             ``TD3``, ``DDPG``; ``sb3_contrib`` ones too when installed).
-        policy: One of `POLICIES` (``auto`` picks from the observation space).
+        policy: One of `POLICIES` (``auto`` picks from the observation space), or a policy
+            class as ``module:Class`` (``agents.pair_policy:PairScorerPolicy``).
         total_timesteps: Env steps over all envs.
         n_envs: Parallel envs.
         vec_env: ``dummy`` (one process) or ``subproc`` (one process per env).
@@ -92,6 +99,7 @@ class TrainConfig:
             -> one Discrete over all combinations).
         max_wall_s: Stop ``learn`` after this wall time [s] even before ``total_timesteps``;
             0: no limit (the final model is saved either way).
+        max_cpu_s: The same limit in CPU time of the training process [s] (children included).
         task: A rung of the task ladder (``MosaicDecision6-v0``, `envs.tasks`): the envs are
             made from its id (its preset and episode limit; env i trains on its training
             design i mod count) and ``env`` overrides on top; "" uses `MosaicAssembly-v0`.
@@ -120,6 +128,7 @@ class TrainConfig:
     verbose: int = 0
     flatten_actions: bool = False
     max_wall_s: float = 0.0
+    max_cpu_s: float = 0.0
     task: str = ""
     log_every_s: float = 30.0
     reach_shaping: float = 0.0
@@ -127,13 +136,17 @@ class TrainConfig:
     def __post_init__(self) -> None:
         if self.vec_env not in VEC_ENVS:
             raise TrainError(f"unknown vec_env {self.vec_env!r}; allowed: {list(VEC_ENVS)}")
-        if self.policy not in POLICIES:
-            raise TrainError(f"unknown policy {self.policy!r}; allowed: {list(POLICIES)}")
+        if self.policy not in POLICIES and ":" not in self.policy:
+            raise TrainError(
+                f"unknown policy {self.policy!r}; allowed: {list(POLICIES)} or module:Class"
+            )
         for name in ("total_timesteps", "n_envs", "torch_threads"):
             if getattr(self, name) < 1:
                 raise TrainError(f"{name} must be >= 1, got {getattr(self, name)}")
-        if min(self.max_episode_steps, self.checkpoint_freq, self.max_wall_s) < 0:
-            raise TrainError("max_episode_steps, checkpoint_freq and max_wall_s must be >= 0")
+        if min(self.max_episode_steps, self.checkpoint_freq, self.max_wall_s, self.max_cpu_s) < 0:
+            raise TrainError(
+                "max_episode_steps, checkpoint_freq, max_wall_s and max_cpu_s must be >= 0"
+            )
         if self.reach_shaping < 0:
             raise TrainError(f"reach_shaping must be >= 0 [1/m], got {self.reach_shaping}")
         from envs.env_config import load_env_config  # noqa: PLC0415 - validates env keys
@@ -172,8 +185,18 @@ def load_train_config(path: str | Path, **overrides: Any) -> TrainConfig:
     return from_dict(TrainConfig, data, source=str(path))
 
 
-def pick_policy(policy: str, observation_space: spaces.Space) -> str:
-    """Resolve ``auto`` from the observation space (Dict -> MultiInputPolicy)."""
+def pick_policy(policy: str, observation_space: spaces.Space) -> Any:
+    """Resolve ``auto`` from the observation space (Dict -> MultiInputPolicy), import a class.
+
+    Raises:
+        TrainError: A ``module:Class`` that cannot be imported.
+    """
+    if ":" in policy:
+        module, _, name = policy.partition(":")
+        try:
+            return getattr(importlib.import_module(module), name)
+        except (ImportError, AttributeError) as exc:
+            raise TrainError(f"cannot import policy {policy!r}: {exc}") from exc
     if policy != "auto":
         return policy
     if isinstance(observation_space, spaces.Dict):
@@ -224,7 +247,7 @@ def make_vec(cfg: TrainConfig, monitor_dir: Path | None) -> Any:
             env = make()
             env.action_space.seed(cfg.seed + i)
             path = str(monitor_dir / str(i)) if monitor_dir is not None else None
-            return Monitor(EpisodeRewardTerms(env), path, info_keywords=("is_success",))
+            return Monitor(EpisodeRewardTerms(EpisodeProgress(env)), path, info_keywords=MONITORED)
 
         return build
 
@@ -253,6 +276,7 @@ class TrainResult:
         last_success: Success rate of the last episodes.
         last_terms: Mean per-episode sum of each named reward term over the last
             `RETURN_WINDOW` episodes ({} if the env names none).
+        cpu_s: CPU time of ``learn`` [s] (this process and its children).
     """
 
     out: Path
@@ -266,6 +290,7 @@ class TrainResult:
     first_success: float
     last_success: float
     last_terms: dict[str, float] = field(default_factory=dict)
+    cpu_s: float = 0.0
 
 
 def finished_run(out: Path) -> TrainResult | None:
@@ -310,16 +335,16 @@ def _episode_stats(monitor_dir: Path) -> tuple[int, float, float, float, float]:
     )
 
 
-def _wall_clock_stop(limit_s: float) -> Any:
-    """A callback that ends ``learn`` once ``limit_s`` wall seconds have passed."""
+def _wall_clock_stop(limit_s: float, clock: Any = time.perf_counter) -> Any:
+    """A callback that ends ``learn`` once ``limit_s`` seconds of ``clock`` have passed."""
     from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
 
     class WallClockStop(BaseCallback):
         def _on_training_start(self) -> None:
-            self.t0 = time.perf_counter()
+            self.t0 = clock()
 
         def _on_step(self) -> bool:
-            return time.perf_counter() - self.t0 < limit_s
+            return clock() - self.t0 < limit_s
 
     return WallClockStop()
 
@@ -454,6 +479,8 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps, terms))
         if cfg.max_wall_s:
             callbacks.append(_wall_clock_stop(cfg.max_wall_s))
+        if cfg.max_cpu_s:
+            callbacks.append(_wall_clock_stop(cfg.max_cpu_s, cpu_seconds))
         if cfg.checkpoint_freq:
             callbacks.append(
                 _atomic_checkpoints(
@@ -462,14 +489,14 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
                     name_prefix="model",
                 )
             )
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), cpu_seconds()
         model.learn(
             total_timesteps=cfg.total_timesteps,
             callback=callbacks,
             progress_bar=show_bar,
             tb_log_name=cfg.algo,
         )
-        wall = time.perf_counter() - t0
+        wall, cpu = time.perf_counter() - t0, cpu_seconds() - c0
         model_path = out / MODEL_FILE
         with atomic_path(model_path) as tmp:
             model.save(str(tmp))
@@ -489,6 +516,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
         s0,
         s1,
         terms.recent(RETURN_WINDOW),
+        cpu,
     )
     summary = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(result).items()}
     write_json(out / SUMMARY_FILE, summary)

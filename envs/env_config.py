@@ -31,6 +31,7 @@ TileOrder = Literal["belt", "shuffled", "design"]
 SlotOrder = Literal["mesh", "shuffled", "design"]
 RotationFrame = Literal["tile", "slot"]
 DesignSource = Literal["fixed", "procedural"]
+InvalidActions = Literal["fail", "refuse"]
 ACTION_MODES: tuple[str, ...] = get_args(ActionMode)
 """Allowed ``action_mode`` values."""
 OBS_MODES: tuple[str, ...] = get_args(ObsMode)
@@ -55,6 +56,8 @@ ROTATION_FRAMES: tuple[str, ...] = get_args(RotationFrame)
 """Allowed ``rotation_frame`` values (see `envs.indexing`)."""
 DESIGN_SOURCES: tuple[str, ...] = get_args(DesignSource)
 """Allowed ``design_source`` values (see `envs.design_source`)."""
+INVALID_ACTIONS: tuple[str, ...] = get_args(InvalidActions)
+"""Allowed ``invalid_actions`` values (see `envs.masks`)."""
 
 
 CELL_KEYS: dict[str, tuple[str, str]] = {
@@ -145,6 +148,9 @@ class EnvConfig:
             the mesh.
         rotation_frame: What a rotation index counts from: one of `ROTATION_FRAMES`;
             ``tile``: the slot-aligned pose nearest to how the tile lies.
+        invalid_actions: What a ``pick_place_discrete`` action its mask forbids does (one of
+            `INVALID_ACTIONS`, `envs.masks`): ``fail`` charges ``failed_action_time`` and the
+            failed-action penalty; ``refuse`` raises `ActionError` (no time passes).
         kinematic_settle: Physics settling time after a kinematic place [s].
         failed_action_time: Simulated time charged for an action that cannot execute [s].
         reject_past_belt_end: How far past the input belt's end `MosaicAssemblyEnv.reject`
@@ -206,6 +212,7 @@ class EnvConfig:
     tile_order: TileOrder = "belt"
     slot_order: SlotOrder = "mesh"
     rotation_frame: RotationFrame = "tile"
+    invalid_actions: InvalidActions = "fail"
     kinematic_settle: float = 0.01
     failed_action_time: float = 0.04
     reject_past_belt_end: float = 0.08
@@ -246,6 +253,7 @@ class EnvConfig:
             ("slot_order", SLOT_ORDERS),
             ("rotation_frame", ROTATION_FRAMES),
             ("design_source", DESIGN_SOURCES),
+            ("invalid_actions", INVALID_ACTIONS),
         ):
             value = getattr(self, name)
             if value not in allowed:

@@ -24,6 +24,7 @@ from envs.env_parts import build_parts
 from envs.errors import EnvError
 from envs.frames import FrameSchedule
 from envs.task import REWARD_TERMS, SEED_BOUND, Evaluation, GroundTruth
+from envs.masks import action_mask, check_allowed
 from envs.task_spec import (
     ActionError,
     PickPlaceCommand,
@@ -210,6 +211,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._t0 = 0.0
         self._needs_reset = True
         self._closed = False
+        self._mask: np.ndarray | None = None
 
     def _build(self, drawn: Design | None, seed: int) -> None:
         """Build the cell of a design (None: ``design``) and its parts (`envs.env_parts`)."""
@@ -263,12 +265,12 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             MosaicEnvError: Called before `reset` or after `close`.
             ActionError: Wrong shape, NaN/inf or out-of-range action.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("step() called before reset(): call env.reset() first")
+        self._check_ready("step")
         a = self.actions.validate(action)
         a = self.actions.noisy(a, self.np_random)
-        if self.config.action_mode == "pick_place_discrete":
+        if self._mask is not None:
+            if self.config.invalid_actions == "refuse":
+                check_allowed(a, self._mask, self.action_space.nvec)  # type: ignore[attr-defined]
             a = self.index.decode(a)
         result = self.actions.apply(a)
         if self._frames:
@@ -326,6 +328,17 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._closed = True
 
     # ------------------------------------------------------------------ extras
+    def action_masks(self) -> np.ndarray:
+        """Allowed ``pick_place_discrete`` indices now (`envs.masks`), as ``info["action_mask"]``.
+
+        Raises:
+            MosaicEnvError: Another action mode, before `reset` or after `close`.
+        """
+        if (mode := self.config.action_mode) != "pick_place_discrete":
+            raise MosaicEnvError(f"action_masks() needs pick_place_discrete, not {mode!r}")
+        self._check_ready("action_masks")
+        return self._mask.copy()  # type: ignore[union-attr] # set at reset
+
     def evaluate(self) -> Evaluation:
         """The task's evaluation now (see `envs.task.Evaluation`)."""
         return self.task.evaluate()
@@ -394,9 +407,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         Raises:
             MosaicEnvError: Not a pick_place mode, before `reset` or after `close`.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("reject() called before reset(): call env.reset() first")
+        self._check_ready("reject")
         if self.executor is None:
             raise MosaicEnvError(f"reject needs a pick_place mode, not {self.config.action_mode!r}")
         cfg, geo = self.config, self.cell.geometry
@@ -408,8 +419,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         evaluation = self.task.evaluate()
         terms = self.task.rewards(evaluation, result.failed)
         terminated = evaluation.success or evaluation.failure
-        info = self._info(evaluation, terms, result.failed, result.reason)
         obs = self._observe(evaluation)
+        info = self._info(evaluation, terms, result.failed, result.reason)
         return obs, float(sum(terms.values())), terminated, False, info
 
     def move_home(self) -> dict[str, Any]:
@@ -422,9 +433,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         Raises:
             MosaicEnvError: Called before `reset` or after `close`.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("move_home() called before reset(): call env.reset() first")
+        self._check_ready("move_home")
         home = np.asarray(self.cell.cfg.robot.home, float)
         if self.executor is not None:
             self.executor.move_to(home)
@@ -457,6 +466,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def _observe(self, evaluation: Evaluation) -> dict[str, Any]:
         """The observation, privileged rows in the agent's index order (`envs.indexing`)."""
         self.index.update()
+        if self.config.action_mode == "pick_place_discrete":
+            nvec = self.action_space.nvec  # type: ignore[attr-defined]
+            self._mask = action_mask(self.cell, self.index, np.array(evaluation.slot_filled), nvec)
         obs = self.observer.observe(self.np_random, evaluation)
         if "tiles" in obs:
             obs["tiles"], obs["slots"] = self.index.permute_state(obs["tiles"], obs["slots"])
@@ -477,11 +489,18 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             "action_error": reason,
         }
         info.update({f"reward_{k}": float(v) for k, v in terms.items()})
+        if self._mask is not None:
+            info["action_mask"] = self._mask.copy()
         return info
 
     def _check_open(self) -> None:
         if self._closed:
             raise MosaicEnvError("the environment is closed; make a new one")
+
+    def _check_ready(self, name: str) -> None:
+        self._check_open()
+        if self._needs_reset:
+            raise MosaicEnvError(f"{name}() called before reset(): call env.reset() first")
 
 
 __all__ = ["ActionError", "MosaicAssemblyEnv", "MosaicEnvError"]

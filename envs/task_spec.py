@@ -37,7 +37,10 @@ CameraName = Literal["input_camera", "output_camera"]
 
 
 class ActionError(EnvError, ValueError):
-    """An action the space does not allow (wrong shape, dtype, NaN/inf, out of range)."""
+    """An action the space does not allow (wrong shape, dtype, NaN/inf, out of range).
+
+    Also a ``pick_place_discrete`` action its mask forbids, with ``invalid_actions="refuse"``.
+    """
 
 
 @dataclass(frozen=True, eq=False)
