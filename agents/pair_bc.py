@@ -129,7 +129,10 @@ class PairBCPolicy:
         """The most likely allowed (tile, slot, rotation) for one observation."""
         tiles = np.asarray(obs["tiles"], np.float32)
         slots = np.asarray(obs["slots"], np.float32)
-        n, k = len(tiles) // TILE_DIM, len(slots) // SLOT_DIM
+        if tiles.ndim == 2:  # noqa: PLR2004 - objects entity rows (rows, D)
+            n, k = len(tiles), len(slots)
+        else:
+            n, k = len(tiles) // TILE_DIM, len(slots) // SLOT_DIM
         if (n, k) != (int(self.nvec[0]), int(self.nvec[1])):
             raise AgentError(
                 f"clone expects {self.nvec[0]} tiles and {self.nvec[1]} slots, got {n} and {k}"
