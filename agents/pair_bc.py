@@ -42,8 +42,10 @@ def demo_arrays(dataset: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nd
         acts.append(np.asarray(ep.actions, np.int64))
     nvec = np.asarray(getattr(dataset.spec.action_space, "nvec", []), np.int64)
     if nvec.size != 3:
-        raise AgentError(f"pair-scorer cloning needs MultiDiscrete([tiles, slots, rotations]), "
-                         f"got {dataset.spec.action_space}")
+        raise AgentError(
+            f"pair-scorer cloning needs MultiDiscrete([tiles, slots, rotations]), "
+            f"got {dataset.spec.action_space}"
+        )
     flat = np.ravel_multi_index(np.concatenate(acts).T, nvec)
     return np.concatenate(tiles), np.concatenate(slots), flat, nvec
 

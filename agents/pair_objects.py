@@ -22,12 +22,13 @@ filled while its flag is 0.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import torch
 
 from agents.pair_scorer import PairRows
 
-FIELDS = {
+FIELDS: dict[str, Any] = {
     "rgb": slice(0, 3),
     "area": 3,
     "hole_area": 4,
@@ -116,7 +117,9 @@ def objects_rows(tiles: torch.Tensor, slots: torch.Tensor) -> PairRows:
     s = slots.float() if slots.dim() == 3 else slots.float()[None]  # noqa: PLR2004
     chamfer = torch.cat(
         [
-            turned_chamfer(t[i : i + CHUNK], s[i : i + CHUNK], bin_turns(t[i : i + CHUNK], s[i : i + CHUNK]))
+            turned_chamfer(
+                t[i : i + CHUNK], s[i : i + CHUNK], bin_turns(t[i : i + CHUNK], s[i : i + CHUNK])
+            )
             for i in range(0, len(t), CHUNK)
         ]
     )

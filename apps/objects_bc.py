@@ -72,7 +72,7 @@ def record_expert(
     nvec = np.asarray(envs[0].action_space.nvec, np.int64)  # type: ignore[attr-defined]
     for env in envs:
         env.close()
-    flat = np.ravel_multi_index(np.asarray(acts, np.int64).T, nvec)
+    flat = np.asarray(np.ravel_multi_index(np.asarray(acts, np.int64).T, nvec), np.int64)
     demos = ObjectDemos(np.stack(tiles), np.stack(slots), flat, nvec, episodes)
     return demos, steps
 

@@ -38,10 +38,10 @@ from agents.algorithms import algorithm_class
 from agents.wrappers import (
     EPISODE_TERMS_KEY,
     EpisodeProgress,
-    cpu_seconds,
     EpisodeRewardTerms,
     FlatDiscreteActions,
     ReachShaping,
+    cpu_seconds,
 )
 from apps.cli import CommandParser, run_cli
 from configs import ConfigError, from_dict, load_yaml

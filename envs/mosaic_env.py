@@ -23,8 +23,8 @@ from envs.env_config import EnvConfig, load_env_config
 from envs.env_parts import build_parts
 from envs.errors import EnvError
 from envs.frames import FrameSchedule
-from envs.task import REWARD_TERMS, SEED_BOUND, Evaluation, GroundTruth
 from envs.masks import action_mask, check_allowed
+from envs.task import REWARD_TERMS, SEED_BOUND, Evaluation, GroundTruth
 from envs.task_spec import (
     ActionError,
     PickPlaceCommand,
