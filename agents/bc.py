@@ -198,6 +198,12 @@ class BCPolicy:
         self.action_space = spaces.MultiDiscrete(self.nvec)
         self.n_in = int(blob["n_in"])
 
+    @property
+    def env_overrides(self) -> dict[str, Any]:
+        """Env keys the clone's observation needs: ``obs_mode="objects"`` for an objects clone."""
+        adapter = getattr(self._pair, "adapter_name", "state") if self._pair else "state"
+        return {"obs_mode": adapter} if adapter == "objects" else {}
+
     def predict(self, obs: dict[str, Any]) -> tuple[np.ndarray, None]:
         """The most likely (tile, slot, rotation) for a state observation."""
         import torch  # noqa: PLC0415

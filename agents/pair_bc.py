@@ -120,7 +120,8 @@ class PairBCPolicy:
     def __init__(self, blob: dict[str, Any]) -> None:
         from gymnasium import spaces  # noqa: PLC0415
 
-        self.adapter = ADAPTERS[blob["adapter"]]
+        self.adapter_name = str(blob["adapter"])
+        self.adapter = ADAPTERS[self.adapter_name]
         self.nvec = np.asarray(blob["nvec"], np.int64)
         self.net = PairScorer(PairScorerConfig(**blob["scorer"]))
         self.net.load_state_dict(blob["state_dict"])

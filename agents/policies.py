@@ -248,10 +248,11 @@ def _clone(base: dict[str, Any], path: Path) -> Policy:
     if not path.is_file():
         raise PolicyError(f"unknown policy {str(path)!r}: no such behaviour-clone file")
     label = checkpoint_label(path)
+    from agents.bc import BCPolicy  # noqa: PLC0415
+
+    overrides = BCPolicy(path).env_overrides  # an objects clone plays on objects rows
 
     def factory(env: gym.Env) -> Predict:
-        from agents.bc import BCPolicy  # noqa: PLC0415
-
         clone = BCPolicy(path)
         check_spaces(label, env, None, clone.action_space)
 
@@ -261,7 +262,7 @@ def _clone(base: dict[str, Any], path: Path) -> Policy:
 
         return predict
 
-    return Policy(label, dict(base), factory)
+    return Policy(label, {**base, **overrides}, factory)
 
 
 def _user(base: dict[str, Any], spec: str) -> Policy:
