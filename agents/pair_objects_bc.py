@@ -40,6 +40,7 @@ class ObjectDemos:
         actions: Flat (tile, slot, rotation) index of each step, shape (N,) int64.
         nvec: The MultiDiscrete sizes (tiles, slots, rotation bins), shape (3,).
         episodes: Episodes recorded.
+        robot: The ``robot`` observation of each step, shape (N, 19) (the flat MLP reads it).
     """
 
     tiles: np.ndarray
@@ -47,6 +48,7 @@ class ObjectDemos:
     actions: np.ndarray
     nvec: np.ndarray
     episodes: int
+    robot: np.ndarray | None = None
 
 
 def _take(rows: PairRows, idx: torch.Tensor) -> PairRows:
@@ -110,4 +112,70 @@ def train_objects_bc(demos: ObjectDemos, out: Path, seed: int, cfg: Any) -> dict
     return summary
 
 
-__all__ = ["ADAPTER", "ObjectDemos", "train_objects_bc"]
+def train_objects_mlp(demos: ObjectDemos, out: Path, seed: int, cfg: Any) -> dict[str, Any]:
+    """The ablation: the flat MLP of `agents.bc` over robot + tile + slot rows, concatenated.
+
+    Writes ``out/bc.pt`` in `agents.bc.BCPolicy`'s layout (``arch: mlp``, ``obs_mode:
+    objects``) and ``bc_summary.json``.
+    """
+    from agents.bc import _network  # noqa: PLC0415 - the same network as agents.bc's MLP
+
+    cpu0 = time.process_time()
+    assert demos.robot is not None, "the flat MLP needs the recorded robot observations"
+    x = torch.as_tensor(
+        np.concatenate(
+            [
+                demos.robot,
+                demos.tiles.reshape(len(demos.tiles), -1),
+                demos.slots.reshape(len(demos.slots), -1),
+            ],
+            axis=1,
+        ),
+        dtype=torch.float32,
+    )
+    y = torch.as_tensor(demos.actions)
+    torch.manual_seed(seed)
+    net = _network(x.shape[1], int(np.prod(demos.nvec)), cfg)
+    opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
+    gen = torch.Generator().manual_seed(seed)
+    steps, curve = 0, []
+    for _ in range(cfg.epochs):
+        perm = torch.randperm(len(y), generator=gen)
+        total = 0.0
+        for i in range(0, len(y), cfg.batch_size):
+            idx = perm[i : i + cfg.batch_size]
+            loss = torch.nn.functional.cross_entropy(net(x[idx]), y[idx])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            steps += 1
+            total += float(loss.detach()) * len(idx)
+        curve.append({"gradient_steps": steps, "loss": total / len(y)})
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "bc.pt"
+    blob = {
+        "arch": "mlp",
+        "obs_mode": "objects",
+        "nvec": demos.nvec.tolist(),
+        "n_in": int(x.shape[1]),
+        "config": asdict(cfg),
+    }
+    with atomic_path(path) as tmp:
+        torch.save({**blob, "state_dict": net.state_dict()}, tmp)
+    summary = {
+        "model_path": str(path),
+        "arch": "mlp",
+        "adapter": "flat",
+        "episodes": demos.episodes,
+        "samples": len(y),
+        "parameters": sum(p.numel() for p in net.parameters()),
+        "gradient_steps": steps,
+        "train_cpu_s": time.process_time() - cpu0,
+        "seed": seed,
+        "curve": curve,
+    }
+    write_json(out / "bc_summary.json", summary)
+    return summary
+
+
+__all__ = ["ADAPTER", "ObjectDemos", "train_objects_bc", "train_objects_mlp"]

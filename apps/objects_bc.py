@@ -12,7 +12,9 @@ its slot, encoded in the discrete action's current index maps) on the task's tra
 turn (``train_designs``; ``procedural`` draws a new design at every reset, never one of the eval
 designs' classes), with ``obs_mode="objects"``; reset seeds are ``seed * SEED_STRIDE + episode``,
 disjoint from the evaluation seeds. The steps are cloned into the pair scorer on outlines and
-colours (`agents.pair_objects_bc`, ``configs/bc_objects.yaml``). ``--env KEY=VALUE`` adds env
+colours (`agents.pair_objects_bc`, ``configs/bc_objects.yaml``); ``--arch mlp --config bc``
+clones them into the flat MLP of `agents.bc` instead (the ablation: one network over the
+concatenated rows). ``--env KEY=VALUE`` adds env
 overrides to the recorded episodes (``objects_noise_mm=0.5``). The summary gives env steps,
 gradient steps and CPU seconds of recording and of training (process time).
 """
@@ -28,7 +30,7 @@ import gymnasium as gym
 import numpy as np
 
 from agents.bc import load_bc_config
-from agents.pair_objects_bc import ObjectDemos, train_objects_bc
+from agents.pair_objects_bc import ObjectDemos, train_objects_bc, train_objects_mlp
 from apps.cli import CommandParser, run_cli
 from apps.evaluate import parse_pairs
 from configs.files import write_json
@@ -55,13 +57,14 @@ def record_expert(
         gym.make(ENV_ID, **{**task.env_kwargs("train", i), "obs_mode": "objects", **overrides})
         for i in range(designs)
     ]
-    tiles, slots, acts, steps = [], [], [], 0
+    robot, tiles, slots, acts, steps = [], [], [], [], 0
     for ep in range(episodes):
         env = envs[ep % designs]
         obs, _ = env.reset(seed=seed * SEED_STRIDE + ep)
         u: Any = env.unwrapped
         for i in range(len(u.task_spec.slots)):
             action = u.expert_action(i, i)
+            robot.append(obs["robot"].copy())
             tiles.append(obs["tiles"].copy())
             slots.append(obs["slots"].copy())
             acts.append(action)
@@ -73,7 +76,7 @@ def record_expert(
     for env in envs:
         env.close()
     flat = np.asarray(np.ravel_multi_index(np.asarray(acts, np.int64).T, nvec), np.int64)
-    demos = ObjectDemos(np.stack(tiles), np.stack(slots), flat, nvec, episodes)
+    demos = ObjectDemos(np.stack(tiles), np.stack(slots), flat, nvec, episodes, np.stack(robot))
     return demos, steps
 
 
@@ -85,6 +88,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--seed", type=int, default=0, help="training seed (weights, reset seeds)")
     ap.add_argument("--out", type=Path, default=Path("runs/objects_bc"))
     ap.add_argument("--config", default=CONFIG, help="name in configs/ or a YAML path")
+    ap.add_argument("--arch", choices=("pair", "mlp"), default=None, help="override the config's")
     ap.add_argument("--env", nargs="*", default=[], metavar="KEY=VALUE", help="env overrides")
     args = ap.parse_args(argv)
     import torch  # noqa: PLC0415 - heavy import
@@ -93,7 +97,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     cpu0 = time.process_time()
     demos, env_steps = record_expert(args.task, args.episodes, args.seed, parse_pairs(args.env))
     record_cpu = time.process_time() - cpu0
-    summary = train_objects_bc(demos, args.out, args.seed, load_bc_config(args.config))
+    cfg = load_bc_config(args.config, **({"arch": args.arch} if args.arch else {}))
+    train = train_objects_bc if cfg.arch == "pair" else train_objects_mlp
+    summary = train(demos, args.out, args.seed, cfg)
     summary.update({"task": args.task, "env_steps": env_steps, "record_cpu_s": record_cpu})
     write_json(args.out / "bc_summary.json", summary)
     print(json.dumps({k: v for k, v in summary.items() if k != "curve"}, indent=2))
