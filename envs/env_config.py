@@ -30,8 +30,8 @@ RenderMode = Literal["rgb_array", "human"]
 TileOrder = Literal["belt", "shuffled", "design"]
 SlotOrder = Literal["mesh", "shuffled", "design"]
 RotationFrame = Literal["tile", "slot"]
-DesignSource = Literal["fixed", "procedural"]
 InvalidActions = Literal["fail", "refuse"]
+DesignSource = Literal["fixed", "procedural"]
 ACTION_MODES: tuple[str, ...] = get_args(ActionMode)
 """Allowed ``action_mode`` values."""
 OBS_MODES: tuple[str, ...] = get_args(ObsMode)
@@ -54,10 +54,10 @@ SLOT_ORDERS: tuple[str, ...] = get_args(SlotOrder)
 """Allowed ``slot_order`` values (see `envs.indexing`)."""
 ROTATION_FRAMES: tuple[str, ...] = get_args(RotationFrame)
 """Allowed ``rotation_frame`` values (see `envs.indexing`)."""
-DESIGN_SOURCES: tuple[str, ...] = get_args(DesignSource)
-"""Allowed ``design_source`` values (see `envs.design_source`)."""
 INVALID_ACTIONS: tuple[str, ...] = get_args(InvalidActions)
 """Allowed ``invalid_actions`` values (see `envs.masks`)."""
+DESIGN_SOURCES: tuple[str, ...] = get_args(DesignSource)
+"""Allowed ``design_source`` values (see `envs.design_source`)."""
 
 
 CELL_KEYS: dict[str, tuple[str, str]] = {
@@ -123,6 +123,9 @@ class EnvConfig:
         depth: Add depth images [m] to the observation.
         reward_mode: One of `REWARD_MODES`.
         execution: One of `EXECUTIONS` (pick_place modes only).
+        pick_yaw_entry: ``pick_place`` actions carry the tile's yaw at the pick: Box(6), the
+            ``-v0`` layout (the entry changes nothing: no grasp offset for it to turn); False:
+            Box(5) = pick x, y, place x, y, rotation (the ``-v1`` ids).
         chain_cycles: Dynamic pick_place: a step's cycle ends at rest at the place contact
             (vacuum off, pad 0.5 mm above the released tile) and the next step's cycle leaves
             it vertically, blended into its move to the pick, as a real cell chains its
@@ -195,6 +198,7 @@ class EnvConfig:
     depth: bool = False
     reward_mode: RewardMode = "sparse"
     execution: Execution = "dynamic"
+    pick_yaw_entry: bool = True
     chain_cycles: bool = True
     color_randomization: float = 0.0
     light_randomization: float = 0.0
@@ -252,8 +256,8 @@ class EnvConfig:
             ("tile_order", TILE_ORDERS),
             ("slot_order", SLOT_ORDERS),
             ("rotation_frame", ROTATION_FRAMES),
-            ("design_source", DESIGN_SOURCES),
             ("invalid_actions", INVALID_ACTIONS),
+            ("design_source", DESIGN_SOURCES),
         ):
             value = getattr(self, name)
             if value not in allowed:

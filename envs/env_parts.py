@@ -61,7 +61,7 @@ def build_parts(
     check_image_size(cfg, cell)
     task = MosaicTask(cell, cfg)
     pick, place = work_areas(cell, cfg)
-    codec = PickPlaceCodec(pick, place)
+    codec = PickPlaceCodec(pick, place, cfg.pick_yaw_entry)
     executor = None
     actions: ActionAdapter
     if cfg.action_mode == "joint":

@@ -10,14 +10,21 @@ space the mask is one flat boolean vector, the per-dimension masks concatenated,
 - slot ``j`` is allowed while it is open (not yet filled correctly);
 - every rotation is allowed.
 
-A dimension with nothing allowed (no tile on the input belt, every slot filled) is all False;
-the episode has ended then or waits for the feed. ``MosaicAssemblyEnv.action_masks()`` returns
-the mask and ``info["action_mask"]`` holds it after reset and each step. With
+While no tile lies on the input belt (a ``stream`` or ``batch`` feed between arrivals) every
+tile index is allowed: the action is the one way to wait (it fails as "not on the input belt",
+costing ``failed_action_time`` and the failed-action penalty, under either setting). With every
+slot filled the episode has ended (the slot mask is all False).
+
+``MosaicAssemblyEnv.action_masks()`` returns the mask and ``info["action_mask"]`` holds it after
+reset and each step. With
 ``invalid_actions="refuse"`` a step whose tile or slot the mask forbids raises `ActionError`
 (`check_allowed`) before any time passes; with ``fail`` (the default) it fails as before.
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -27,7 +34,7 @@ from envs.task_spec import ActionError
 
 
 def action_mask(
-    cell: Cell, index: IndexMaps, slot_filled: np.ndarray, nvec: np.ndarray
+    cell: Cell, index: IndexMaps, slot_filled: Sequence[bool] | np.ndarray, nvec: np.ndarray
 ) -> np.ndarray:
     """The flat mask of a MultiDiscrete([tiles, slots, rotations]) action space.
 
@@ -45,6 +52,8 @@ def action_mask(
     tiles = np.zeros(n, bool)
     on_input = cell.input_half()
     tiles[: len(index.tiles)] = on_input[index.tiles]
+    if not tiles.any():  # nothing to pick: any tile index waits
+        tiles[: len(index.tiles)] = True
     slots = np.zeros(k, bool)
     slots[: len(index.slots)] = ~np.asarray(slot_filled, bool)[index.slots]
     return np.concatenate([tiles, slots, np.ones(bins, bool)])
@@ -56,20 +65,23 @@ def split_mask(mask: np.ndarray, nvec: np.ndarray) -> list[np.ndarray]:
     return list(np.split(np.asarray(mask, bool), cuts))
 
 
-def check_allowed(action: np.ndarray, mask: np.ndarray, nvec: np.ndarray) -> None:
-    """Refuse a (tile, slot, rotation) action the mask forbids.
+def check_allowed(action: np.ndarray, mask: np.ndarray, space: Any, invalid_actions: str) -> None:
+    """Refuse a (tile, slot, rotation) action the mask forbids (``invalid_actions="refuse"``).
 
     Args:
         action: Validated agent action, shape (3,) int.
         mask: The current flat mask (`action_mask`).
-        nvec: The space's sizes.
+        space: The MultiDiscrete action space (its sizes ``nvec``).
+        invalid_actions: ``refuse`` checks; ``fail`` lets the action fail when applied.
 
     Raises:
         ActionError: The tile or slot index is forbidden now; the message names it and the
             indices allowed now.
     """
+    if invalid_actions != "refuse":
+        return
     names = ("tile", "slot", "rotation")
-    for name, value, allowed in zip(names, action, split_mask(mask, nvec), strict=True):
+    for name, value, allowed in zip(names, action, split_mask(mask, space.nvec), strict=True):
         if not allowed[int(value)]:
             why = "is not on the input belt" if name == "tile" else "is filled already"
             raise ActionError(

@@ -66,8 +66,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     - ``pick_place``: Box(6): pick x, y, the tile's yaw, place x, y, the rotation. x, y map
       linearly onto the input tile area (pick) and the mesh (place), see
       ``task_spec.codec``; angles onto [-pi, pi]. The pad goes to the pick point and then to
-      the place point; the tile turns by the rotation (the tile's yaw only picks among
-      symmetric wrist solutions). One step = one full time-optimal cycle planned by the planners;
+      the place point; the tile turns by the rotation (the tile's yaw changes nothing; ``-v1``
+      is Box(5) without it). One step = one full time-optimal cycle planned by the planners;
       with ``chain_cycles`` (default) a dynamic cycle ends at rest at the place contact and
       the next one leaves it vertically, blended into its move (as a real cell chains them).
       ``task_spec.codec.encode(PickPlaceCommand(...))`` normalises a world command;
@@ -78,7 +78,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
       indices name carries no answer (`envs.indexing`): by default tile i is the i-th tile on
       the input belt from its downstream end (then the others), slot j the j-th slot in raster
       order on the mesh, and r counts from the slot-aligned pose nearest to how the tile lies
-      (``tile_order``, ``slot_order``, ``rotation_frame``).
+      (``tile_order``, ``slot_order``, ``rotation_frame``). ``action_masks()`` (`envs.masks`).
 
     ``execution`` (pick_place modes): ``dynamic`` tracks the planned trajectory with the
     servo actuators at every physics step (full physics, suction weld). ``kinematic`` puts the
@@ -154,7 +154,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ## Info
     ``sim_time`` [s since reset], ``tiles_placed`` (slots filled correctly), ``tiles_per_min``
     (per simulated minute), ``evaluation`` (the `evaluate()` dict), ``reward_<term>``,
-    ``action_failed`` and ``action_error`` (why), ``is_success``.
+    ``action_failed`` and ``action_error`` (why), ``is_success``, ``action_mask`` (discrete).
 
     ## Rendering
     ``rgb_array``: the overview camera (left) beside the input and output cameras (right),
@@ -171,8 +171,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     (stair-stepped edges, cheaper still).
 
     ## Version History
-    Every id is at ``-v0``. The changes of each id, and the rule for when an id's version
-    changes (a change of its spaces or of its results), are in ``CHANGELOG.md``.
+    ``-v1``: ``pick_place`` is Box(5) without the pick-yaw entry that did nothing; discrete ids
+    refuse masked actions (`ActionError`). ``-v0`` stays. Details and the rule: ``CHANGELOG.md``.
     """
 
     metadata = {  # noqa: RUF012 - Gymnasium convention
@@ -269,8 +269,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         a = self.actions.validate(action)
         a = self.actions.noisy(a, self.np_random)
         if self._mask is not None:
-            if self.config.invalid_actions == "refuse":
-                check_allowed(a, self._mask, self.action_space.nvec)  # type: ignore[attr-defined]
+            check_allowed(a, self._mask, self.action_space, self.config.invalid_actions)
             a = self.index.decode(a)
         result = self.actions.apply(a)
         if self._frames:
@@ -329,11 +328,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     # ------------------------------------------------------------------ extras
     def action_masks(self) -> np.ndarray:
-        """Allowed ``pick_place_discrete`` indices now (`envs.masks`), as ``info["action_mask"]``.
-
-        Raises:
-            MosaicEnvError: Another action mode, before `reset` or after `close`.
-        """
+        """Allowed discrete indices now (`envs.masks`); `MosaicEnvError` in other action modes."""
         if (mode := self.config.action_mode) != "pick_place_discrete":
             raise MosaicEnvError(f"action_masks() needs pick_place_discrete, not {mode!r}")
         self._check_ready("action_masks")
@@ -466,9 +461,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def _observe(self, evaluation: Evaluation) -> dict[str, Any]:
         """The observation, privileged rows in the agent's index order (`envs.indexing`)."""
         self.index.update()
-        if self.config.action_mode == "pick_place_discrete":
-            nvec = self.action_space.nvec  # type: ignore[attr-defined]
-            self._mask = action_mask(self.cell, self.index, np.array(evaluation.slot_filled), nvec)
+        if isinstance(space := self.action_space, gym.spaces.MultiDiscrete):
+            self._mask = action_mask(self.cell, self.index, evaluation.slot_filled, space.nvec)
         obs = self.observer.observe(self.np_random, evaluation)
         if "tiles" in obs:
             obs["tiles"], obs["slots"] = self.index.permute_state(obs["tiles"], obs["slots"])

@@ -65,6 +65,23 @@ def test_the_mask_opens_every_belt_tile_and_slot_at_reset_and_closes_what_is_use
     assert 0 not in unwrapped.index.tiles[tiles]
 
 
+def test_an_empty_input_belt_allows_every_tile_index_as_a_wait():
+    env = gym.make("MosaicStream-v1", stream_initial=1, stream_period=30.0)
+    try:
+        env.reset(seed=1000)
+        u = env.unwrapped
+        first = int(np.flatnonzero(u.cell.input_half())[0])  # the one tile fed so far
+        env.step(u.expert_action(first, first))
+        assert not u.cell.input_half().any()
+        tiles, _, _ = split_mask(masks(env), env.action_space.nvec)
+        assert tiles.all()
+        t0 = u.cell.time
+        _, _, _, _, info = env.step(np.array([0, 1, 0]))
+        assert info["action_failed"] and u.cell.time > t0
+    finally:
+        env.close()
+
+
 def test_a_forbidden_action_fails_at_v0_and_costs_time(failing):
     failing.reset(seed=1001)
     u = failing.unwrapped
@@ -138,7 +155,8 @@ def test_the_mask_allows_exactly_what_the_env_accepts(refusing, seed, actions):
             assert refusing.unwrapped.cell.time == t0
             np.testing.assert_array_equal(masks(refusing), mask)
             continue
+        waiting = not refusing.unwrapped.cell.input_half().any()
         _, _, terminated, _, info = refusing.step(action)
-        assert "not on the input belt" not in info["action_error"]
+        assert waiting or "not on the input belt" not in info["action_error"]
         if terminated:
             break
