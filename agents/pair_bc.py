@@ -46,7 +46,7 @@ def demo_arrays(dataset: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nd
             f"pair-scorer cloning needs MultiDiscrete([tiles, slots, rotations]), "
             f"got {dataset.spec.action_space}"
         )
-    flat = np.ravel_multi_index(np.concatenate(acts).T, nvec)
+    flat = np.asarray(np.ravel_multi_index(np.concatenate(acts).T, nvec), np.int64)
     return np.concatenate(tiles), np.concatenate(slots), flat, nvec
 
 

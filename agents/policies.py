@@ -253,10 +253,13 @@ def _trained(base: dict[str, Any], model_path: Path) -> Policy:
     def factory(env: gym.Env) -> Predict:
         model = load_model(model_path, str(run.get("algo", "")))
         check_spaces(label, env, model.observation_space, model.action_space, sb3_view=True)
+        # A maskable model (sb3-contrib's MaskablePPO) plays with the env's action masks.
+        masked = "action_masks" in inspect.signature(model.predict).parameters
 
         def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
             del start
-            return np.asarray(model.predict(obs, deterministic=True)[0])
+            kw = {"action_masks": env.get_wrapper_attr("action_masks")()} if masked else {}
+            return np.asarray(model.predict(obs, deterministic=True, **kw)[0])
 
         return predict
 

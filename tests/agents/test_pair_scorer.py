@@ -34,10 +34,23 @@ def clone(tmp_path_factory: pytest.TempPathFactory) -> str:
     """A pair scorer cloned from 10 expert episodes of MosaicDecision6-v0 (seeds 0-9)."""
     root = tmp_path_factory.mktemp("pair")
     torch.manual_seed(0)
-    record(10, root=root, dataset_id="mosaic/pair-v0", env_kwargs={"obs_mode": "state"},
-           expert=True, task=TASK)
-    cfg = BCConfig(arch="pair", hidden=32, layers=2, epochs=60, batch_size=8, learning_rate=3e-3,
-                   weight_decay=0.0)
+    record(
+        10,
+        root=root,
+        dataset_id="mosaic/pair-v0",
+        env_kwargs={"obs_mode": "state"},
+        expert=True,
+        task=TASK,
+    )
+    cfg = BCConfig(
+        arch="pair",
+        hidden=32,
+        layers=2,
+        epochs=60,
+        batch_size=8,
+        learning_rate=3e-3,
+        weight_decay=0.0,
+    )
     summary = train_bc(load("mosaic/pair-v0", root), root / "run", 0, cfg)
     assert summary["samples"] == 60 and summary["arch"] == "pair"
     return str(summary["model_path"])
