@@ -28,6 +28,11 @@ CURVE_DIR = re.compile(r"ep(\d+)_seed_(\d+)$")
 """Name of a curve run folder: demonstration episodes and training seed."""
 
 
+def seed_dirs(runs: Path) -> list[Path]:
+    """The ``seed_<s>`` run folders under ``runs``, sorted."""
+    return sorted(p for p in runs.glob("seed_*") if p.is_dir())
+
+
 def run_figures(folder: Path, evaluation: str) -> dict[str, float]:
     """Mean filled fraction and success of one run's evaluation (episode-weighted over designs)."""
     rows = json.loads((folder / evaluation / "eval.json").read_text())["rows"]
@@ -40,7 +45,7 @@ def run_figures(folder: Path, evaluation: str) -> dict[str, float]:
 
 def summarize(runs: Path) -> dict[str, Any]:
     """IQM [95 % CI] over seeds per evaluation, and the compute per run."""
-    seeds = sorted(p for p in runs.glob("seed_*") if p.is_dir())
+    seeds = seed_dirs(runs)
     out: dict[str, Any] = {"seeds": len(seeds)}
     for ev in EVALS:
         figs = [run_figures(s, ev) for s in seeds]
@@ -61,17 +66,17 @@ def plot(runs: Path, curve: Path, path: Path) -> None:
     import matplotlib.pyplot as plt  # noqa: PLC0415
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.6))
-    for s in sorted(runs.glob("seed_*")):
+    for s in seed_dirs(runs):
         c = json.loads((s / "bc_summary.json").read_text())["curve"]
         ax1.plot([p["gradient_steps"] for p in c], [p["loss"] for p in c], label=s.name)
     ax1.set(xlabel="gradient steps", ylabel="cross-entropy (train)", title="cloning loss")
     ax1.legend(fontsize=7)
     points: dict[int, list[float]] = {}
-    for d in curve.glob("ep*_seed_*"):
+    for d in (p for p in curve.glob("ep*_seed_*") if p.is_dir()):
         m = CURVE_DIR.search(d.name)
         if m and (d / "eval1000" / "eval.json").is_file():
             points.setdefault(int(m[1]), []).append(run_figures(d, "eval1000")["filled"])
-    for s in sorted(runs.glob("seed_*")):
+    for s in seed_dirs(runs):
         episodes = json.loads((s / "bc_summary.json").read_text())["episodes"]
         points.setdefault(episodes, []).append(run_figures(s, "eval1000")["filled"])
     xs = sorted(points)
@@ -105,7 +110,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     return summary
 
 
-__all__ = ["main", "plot", "run_figures", "summarize"]
+__all__ = ["main", "plot", "run_figures", "seed_dirs", "summarize"]
 
 if __name__ == "__main__":
     run_cli(main)
