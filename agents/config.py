@@ -53,6 +53,12 @@ class PerceptionConfig:
             curved feature (a bite or bulge on part of an edge) raises that roughness measure
             and falls below the floor. The retry uses the clean-outline values; the first
             figure is kept when the retry matches nothing either.
+        seen_slots: Describe each design slot a second time as the pictures' outline
+            simplification sees its outline (at the input camera's scale on the tile tops),
+            and let a tile matching neither the slot's own description nor another slot's
+            match that seen description (`agents.perception.SlotTarget.seen`): a design's
+            corner that turns too little to show in a picture (a rounded corner's tangent
+            ends) is a relevant point the measured figure never has.
 
     How outlines become figures (corner threshold, circles, chamfered corners) is qshape's
     business: ``configs/vision.yaml`` section ``extract``.
@@ -67,6 +73,7 @@ class PerceptionConfig:
     color_history: int = 64
     color_min_samples: int = 6
     retry_outline: dict[str, float] = field(default_factory=dict)
+    seen_slots: bool = False
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""

@@ -17,6 +17,7 @@ Only the camera model (what a calibrated cell knows) and the image are used: no 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -34,6 +35,8 @@ from envs.task_spec import WorldSlot
 from qshape import Description, Figure
 from qshape.geometry import signed_area
 from qshape.theory.boundary import Boundary
+from qshape.vision.seen import seen_figure
+from spatial.units import MM_PER_M
 
 _BLACK = (0.0, 0.0, 0.0)
 """Colour of a figure extracted without one."""
@@ -55,6 +58,19 @@ def _unproject(camera: CameraModel, uv: np.ndarray, z: float) -> np.ndarray:
         return camera.unproject_to_plane(uv, z)
     except CellError as exc:
         raise PerceptionError(str(exc)) from exc
+
+
+def camera_scale(camera: CameraModel, z: float) -> float:
+    """The camera's scale on the plane at height ``z`` at the image centre, [px/mm].
+
+    Raises:
+        PerceptionError: The plane not in view (see `_unproject`).
+    """
+    c = np.array([[camera.width / 2.0, camera.height / 2.0]])
+    step = 10.0  # [px] a span measured across the image centre
+    ends = _unproject(camera, np.vstack([c - step / 2.0, c + step / 2.0]), z)
+    span_mm = float(np.linalg.norm(ends[1, :2] - ends[0, :2])) * MM_PER_M
+    return step * math.sqrt(2.0) / span_mm
 
 
 @dataclass(frozen=True, eq=False)
@@ -372,6 +388,21 @@ def _pixel_area_to_plane(camera: CameraModel, outline_px: np.ndarray, z: float) 
 
 
 @dataclass(frozen=True, eq=False)
+class SeenSlot:
+    """A slot's outline as a picture's outline simplification sees it.
+
+    Attributes:
+        figure: `qshape.vision.seen.seen_figure` of the slot's figure (mesh millimetres, y up,
+            the slot's frame): its relevant points are where a picture puts them, its area
+            and centroid those of its arcs through three points, not the design's.
+        description: Its qshape description.
+    """
+
+    figure: Figure
+    description: Description
+
+
+@dataclass(frozen=True, eq=False)
 class SlotTarget:
     """One design slot in the world.
 
@@ -383,6 +414,11 @@ class SlotTarget:
         pose: World x, y [m] of the slot's area centroid and its yaw [rad] (the design angle).
         symmetry: Rotational symmetry order (1: none, 0: continuous).
         color: Design RGB in [0, 1].
+        seen: The slot's outline as the camera's outline simplification sees it, when its
+            description matches no turn of ``description``: a design corner turning too
+            little for a picture to show (a rounded corner's tangent ends, an arc edge nearly
+            continuing its neighbour, a short edge between opposite turns). None when the
+            two agree.
     """
 
     index: int
@@ -392,21 +428,37 @@ class SlotTarget:
     pose: np.ndarray
     symmetry: int
     color: tuple[float, float, float]
+    seen: SeenSlot | None = None
+
+    @property
+    def descriptions(self) -> tuple[Description, ...]:
+        """The design's description, then the seen one when there is one."""
+        if self.seen is None:
+            return (self.description,)
+        return (self.description, self.seen.description)
 
 
 def slot_targets(
-    slots: Sequence[WorldSlot], tolerances: qshape.Tolerances | None = None
+    slots: Sequence[WorldSlot],
+    tolerances: qshape.Tolerances | None = None,
+    *,
+    seen: tuple[qshape.OutlineParams, float] | None = None,
 ) -> tuple[SlotTarget, ...]:
     """Describe the env's world slots (``TaskSpec.slots``) for matching.
 
     Args:
         slots: The slots in the world (figures in design millimetres).
         tolerances: qshape tolerances (bundled when None).
+        seen: (the pictures' outline parameters, the camera's scale on the tile tops
+            [px/mm]): each slot also gets the description of its outline as a picture's
+            simplification sees it, where that differs from its own (`SlotTarget.seen`).
+            None: no seen descriptions.
 
     Returns:
         One `SlotTarget` per slot, in the given order.
     """
     descs = qshape.describe_many([s.figure for s in slots], tolerances) if slots else []
+    seen_descs = _seen_descriptions(slots, descs, tolerances, seen)
     return tuple(
         SlotTarget(
             s.index,
@@ -416,9 +468,45 @@ def slot_targets(
             np.array([s.xy[0], s.xy[1], s.yaw]),
             s.symmetry,
             s.color,
+            sd,
         )
-        for s, d in zip(slots, descs, strict=True)
+        for s, d, sd in zip(slots, descs, seen_descs, strict=True)
     )
+
+
+def _seen_descriptions(
+    slots: Sequence[WorldSlot],
+    descs: Sequence[Description],
+    tolerances: qshape.Tolerances | None,
+    seen: tuple[qshape.OutlineParams, float] | None,
+) -> list[SeenSlot | None]:
+    """Per slot, its seen outline where it matches no turn of the design's (else None).
+
+    Each slot's own (its figure is turned by its yaw, and a match's rotation is read off it).
+    """
+    if seen is None:
+        return [None] * len(slots)
+    params, px_per_mm = seen
+    return [
+        _seen_one(s.figure, d, params, px_per_mm, tolerances)
+        for s, d in zip(slots, descs, strict=True)
+    ]
+
+
+def _seen_one(
+    figure: Figure,
+    desc: Description,
+    params: qshape.OutlineParams,
+    px_per_mm: float,
+    tolerances: qshape.Tolerances | None,
+) -> SeenSlot | None:
+    """The seen outline of one slot figure, None when it matches the design's."""
+    try:
+        fig = seen_figure(figure, params, px_per_mm)
+        sd = qshape.describe(fig, tolerances)
+    except qshape.QShapeError:
+        return None
+    return None if qshape.match(desc, sd, tolerances) is not None else SeenSlot(fig, sd)
 
 
 __all__ = [
@@ -426,8 +514,10 @@ __all__ = [
     "PerceivedTile",
     "Perception",
     "WhiteBalance",
+    "SeenSlot",
     "SlotTarget",
     "balance_colors",
+    "camera_scale",
     "figure_to_world",
     "grasp_point",
     "refigured",
