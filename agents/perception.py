@@ -488,7 +488,7 @@ def _seen_descriptions(
         return [None] * len(slots)
     params, px_per_mm = seen
     return [
-        _seen_one(s.figure, d, params, px_per_mm, tolerances)
+        _seen_one(s.figure, d, s.symmetry, (params, px_per_mm), tolerances)
         for s, d in zip(slots, descs, strict=True)
     ]
 
@@ -496,17 +496,29 @@ def _seen_descriptions(
 def _seen_one(
     figure: Figure,
     desc: Description,
-    params: qshape.OutlineParams,
-    px_per_mm: float,
+    symmetry: int,
+    seen: tuple[qshape.OutlineParams, float],
     tolerances: qshape.Tolerances | None,
 ) -> SeenSlot | None:
-    """The seen outline of one slot figure, None when it matches the design's."""
+    """The seen outline of one slot figure; None when it matches the design's description.
+
+    None too when the seen figure has more turns onto itself than the design's ``symmetry``
+    (1: none, 0: continuous): a random octagon whose corners all turn too little is seen as a
+    circle, and a match with it would leave the tile's turn open where the slot's is not.
+    """
     try:
-        fig = seen_figure(figure, params, px_per_mm)
+        fig = seen_figure(figure, *seen)
         sd = qshape.describe(fig, tolerances)
+        if qshape.match(desc, sd, tolerances) is not None:
+            return None
+        itself = qshape.match(sd, sd, tolerances)
     except qshape.QShapeError:
         return None
-    return None if qshape.match(desc, sd, tolerances) is not None else SeenSlot(fig, sd)
+    if itself is None or (itself.continuous and symmetry != 0):
+        return None
+    if symmetry != 0 and len(itself.rotations) > symmetry:
+        return None
+    return SeenSlot(fig, sd)
 
 
 __all__ = [
