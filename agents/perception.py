@@ -35,7 +35,7 @@ from envs.task_spec import WorldSlot
 from qshape import Description, Figure
 from qshape.geometry import signed_area
 from qshape.theory.boundary import Boundary
-from qshape.vision.seen import seen_figure
+from qshape.vision.seen import near_turns, seen_figure
 from spatial.units import MM_PER_M
 
 _BLACK = (0.0, 0.0, 0.0)
@@ -442,7 +442,7 @@ def slot_targets(
     slots: Sequence[WorldSlot],
     tolerances: qshape.Tolerances | None = None,
     *,
-    seen: tuple[qshape.OutlineParams, float] | None = None,
+    seen: tuple[qshape.OutlineParams, float, float] | None = None,
 ) -> tuple[SlotTarget, ...]:
     """Describe the env's world slots (``TaskSpec.slots``) for matching.
 
@@ -450,9 +450,9 @@ def slot_targets(
         slots: The slots in the world (figures in design millimetres).
         tolerances: qshape tolerances (bundled when None).
         seen: (the pictures' outline parameters, the camera's scale on the tile tops
-            [px/mm]): each slot also gets the description of its outline as a picture's
-            simplification sees it, where that differs from its own (`SlotTarget.seen`).
-            None: no seen descriptions.
+            [px/mm], the near-turn residual of `_seen_one`): each slot also gets the
+            description of its outline as a picture's simplification sees it, where that
+            differs from its own (`SlotTarget.seen`). None: no seen descriptions.
 
     Returns:
         One `SlotTarget` per slot, in the given order.
@@ -478,7 +478,7 @@ def _seen_descriptions(
     slots: Sequence[WorldSlot],
     descs: Sequence[Description],
     tolerances: qshape.Tolerances | None,
-    seen: tuple[qshape.OutlineParams, float] | None,
+    seen: tuple[qshape.OutlineParams, float, float] | None,
 ) -> list[SeenSlot | None]:
     """Per slot, its seen outline where it matches no turn of the design's (else None).
 
@@ -486,9 +486,8 @@ def _seen_descriptions(
     """
     if seen is None:
         return [None] * len(slots)
-    params, px_per_mm = seen
     return [
-        _seen_one(s.figure, d, s.symmetry, (params, px_per_mm), tolerances)
+        _seen_one(s.figure, d, s.symmetry, seen, tolerances)
         for s, d in zip(slots, descs, strict=True)
     ]
 
@@ -497,17 +496,20 @@ def _seen_one(
     figure: Figure,
     desc: Description,
     symmetry: int,
-    seen: tuple[qshape.OutlineParams, float],
+    seen: tuple[qshape.OutlineParams, float, float],
     tolerances: qshape.Tolerances | None,
 ) -> SeenSlot | None:
     """The seen outline of one slot figure; None when it matches the design's description.
 
     None too when the seen figure has more turns onto itself than the design's ``symmetry``
-    (1: none, 0: continuous): a random octagon whose corners all turn too little is seen as a
-    circle, and a match with it would leave the tile's turn open where the slot's is not.
+    (1: none, 0: continuous), by its description or nearly (`near_turns` within
+    ``turn_residual``): a random octagon whose corners all turn too little is seen as a
+    circle, a seven-point arc polygon as four points nearly two-fold symmetric, and a match
+    with it would leave the tile's turn open where the slot's is not.
     """
+    params, px_per_mm, turn_residual = seen
     try:
-        fig = seen_figure(figure, *seen)
+        fig = seen_figure(figure, params, px_per_mm)
         sd = qshape.describe(fig, tolerances)
         if qshape.match(desc, sd, tolerances) is not None:
             return None
@@ -516,7 +518,7 @@ def _seen_one(
         return None
     if itself is None or (itself.continuous and symmetry != 0):
         return None
-    if symmetry != 0 and len(itself.rotations) > symmetry:
+    if symmetry != 0 and max(len(itself.rotations), near_turns(fig, turn_residual)) > symmetry:
         return None
     return SeenSlot(fig, sd)
 

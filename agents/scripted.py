@@ -99,7 +99,11 @@ class ScriptedAgent:
         self.tile_top = spec.pick.tile_top_z
         outline = ExtractParams.load().outline
         seen = (
-            (outline, camera_scale(self.camera, self.tile_top))
+            (
+                outline,
+                camera_scale(self.camera, self.tile_top),
+                self.cfg.perception.seen_turn_residual,
+            )
             if self.cfg.perception.seen_slots
             else None
         )

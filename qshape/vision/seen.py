@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from qshape.errors import InvalidFigureError
 from qshape.outline.params import OutlineParams
 from qshape.theory.figure import Figure
@@ -59,4 +61,33 @@ def seen_figure(figure: Figure, params: OutlineParams, px_per_mm: float) -> Figu
     )
 
 
-__all__ = ["seen_figure"]
+def near_turns(figure: Figure, residual: float) -> int:
+    """How many turns bring ``figure``'s outer relevant points nearly onto themselves.
+
+    A turn is a cyclic shift of the points that keeps every point's kind (vertex, curve
+    point), aligned by the best rotation about the points' mean; it counts when the RMS
+    distance left is at most ``residual`` x sqrt(area). The identity counts, so a figure with
+    no near symmetry gives 1. A seen figure has fewer points than its design: it may be nearly
+    symmetric where the design is not, and a tile matched to it may then be turned wrongly.
+
+    Args:
+        figure: A figure (any unit).
+        residual: Largest RMS distance left, as a fraction of sqrt(area). Dimensionless.
+    """
+    pts = figure.points - figure.points.mean(axis=0)
+    z = pts[:, 0] + 1j * pts[:, 1]
+    mask = figure.curve_mask
+    n = len(z)
+    own = float(np.sum(np.abs(z) ** 2))
+    count = 1
+    for k in range(1, n):
+        if not np.array_equal(np.roll(mask, k), mask):
+            continue
+        q = np.roll(z, k)
+        rss = 2.0 * own - 2.0 * abs(complex(np.sum(np.conj(q) * z)))
+        if math.sqrt(max(rss, 0.0) / (n * figure.area)) <= residual:
+            count += 1
+    return count
+
+
+__all__ = ["near_turns", "seen_figure"]
