@@ -10,7 +10,7 @@ from qshape.design import Design
 from qshape.design.shape_maps import rounded_polygon_shape
 from qshape.errors import InvalidFigureError
 from qshape.synthetic.synth import SynthParams, generate
-from qshape.vision.seen import seen_figure
+from qshape.vision.seen import near_turns, seen_figure
 
 PX_PER_MM = 2.05  # the default input camera's scale on the tile tops
 BUNDLED = ("paper_mixed", "square_grid", "hexagon", "trencadis")
@@ -100,3 +100,13 @@ def test_the_scale_must_be_positive(scale: float) -> None:
     square = Figure.rectangle(40.0, 40.0)
     with pytest.raises(InvalidFigureError, match="px_per_mm"):
         seen_figure(square, ExtractParams.load().outline, scale)
+
+
+def test_near_turns_count_the_turns_a_figure_nearly_has() -> None:
+    assert near_turns(Figure.rectangle(40.0, 40.0), 0.01) == 4
+    assert near_turns(Figure.rectangle(40.0, 30.0), 0.01) == 2
+    scalene = Figure.from_polygon([[0.0, 0.0], [0.0, 30.0], [44.0, 0.0]])
+    assert near_turns(scalene, 0.05) == 1
+    # A rectangle of 40 x 38 mm is a square within a residual of about 0.02.
+    assert near_turns(Figure.rectangle(40.0, 38.0), 0.01) == 2
+    assert near_turns(Figure.rectangle(40.0, 38.0), 0.05) == 4
