@@ -17,7 +17,6 @@ Only the camera model (what a calibrated cell knows) and the image are used: no 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -28,6 +27,7 @@ from shapely.geometry import Point, Polygon
 import qshape
 from agents.config import PerceptionConfig
 from agents.errors import PerceptionError
+from agents.seen_slots import SeenSlot, seen_outlines
 from agents.white_balance import color_gain, recolour
 from envs.cell.cameras import CameraModel
 from envs.errors import CellError
@@ -35,8 +35,6 @@ from envs.task_spec import WorldSlot
 from qshape import Description, Figure
 from qshape.geometry import signed_area
 from qshape.theory.boundary import Boundary
-from qshape.vision.seen import near_turns, seen_figure
-from spatial.units import MM_PER_M
 
 _BLACK = (0.0, 0.0, 0.0)
 """Colour of a figure extracted without one."""
@@ -58,19 +56,6 @@ def _unproject(camera: CameraModel, uv: np.ndarray, z: float) -> np.ndarray:
         return camera.unproject_to_plane(uv, z)
     except CellError as exc:
         raise PerceptionError(str(exc)) from exc
-
-
-def camera_scale(camera: CameraModel, z: float) -> float:
-    """The camera's scale on the plane at height ``z`` at the image centre, [px/mm].
-
-    Raises:
-        PerceptionError: The plane not in view (see `_unproject`).
-    """
-    c = np.array([[camera.width / 2.0, camera.height / 2.0]])
-    step = 10.0  # [px] a span measured across the image centre
-    ends = _unproject(camera, np.vstack([c - step / 2.0, c + step / 2.0]), z)
-    span_mm = float(np.linalg.norm(ends[1, :2] - ends[0, :2])) * MM_PER_M
-    return step * math.sqrt(2.0) / span_mm
 
 
 @dataclass(frozen=True, eq=False)
@@ -388,21 +373,6 @@ def _pixel_area_to_plane(camera: CameraModel, outline_px: np.ndarray, z: float) 
 
 
 @dataclass(frozen=True, eq=False)
-class SeenSlot:
-    """A slot's outline as a picture's outline simplification sees it.
-
-    Attributes:
-        figure: `qshape.vision.seen.seen_figure` of the slot's figure (mesh millimetres, y up,
-            the slot's frame): its relevant points are where a picture puts them, its area
-            and centroid those of its arcs through three points, not the design's.
-        description: Its qshape description.
-    """
-
-    figure: Figure
-    description: Description
-
-
-@dataclass(frozen=True, eq=False)
 class SlotTarget:
     """One design slot in the world.
 
@@ -458,7 +428,7 @@ def slot_targets(
         One `SlotTarget` per slot, in the given order.
     """
     descs = qshape.describe_many([s.figure for s in slots], tolerances) if slots else []
-    seen_descs = _seen_descriptions(slots, descs, tolerances, seen)
+    seen_descs = seen_outlines(slots, descs, tolerances, seen)
     return tuple(
         SlotTarget(
             s.index,
@@ -474,64 +444,13 @@ def slot_targets(
     )
 
 
-def _seen_descriptions(
-    slots: Sequence[WorldSlot],
-    descs: Sequence[Description],
-    tolerances: qshape.Tolerances | None,
-    seen: tuple[qshape.OutlineParams, float, float] | None,
-) -> list[SeenSlot | None]:
-    """Per slot, its seen outline where it matches no turn of the design's (else None).
-
-    Each slot's own (its figure is turned by its yaw, and a match's rotation is read off it).
-    """
-    if seen is None:
-        return [None] * len(slots)
-    return [
-        _seen_one(s.figure, d, s.symmetry, seen, tolerances)
-        for s, d in zip(slots, descs, strict=True)
-    ]
-
-
-def _seen_one(
-    figure: Figure,
-    desc: Description,
-    symmetry: int,
-    seen: tuple[qshape.OutlineParams, float, float],
-    tolerances: qshape.Tolerances | None,
-) -> SeenSlot | None:
-    """The seen outline of one slot figure; None when it matches the design's description.
-
-    None too when the seen figure has more turns onto itself than the design's ``symmetry``
-    (1: none, 0: continuous), by its description or nearly (`near_turns` within
-    ``turn_residual``): a random octagon whose corners all turn too little is seen as a
-    circle, a seven-point arc polygon as four points nearly two-fold symmetric, and a match
-    with it would leave the tile's turn open where the slot's is not.
-    """
-    params, px_per_mm, turn_residual = seen
-    try:
-        fig = seen_figure(figure, params, px_per_mm)
-        sd = qshape.describe(fig, tolerances)
-        if qshape.match(desc, sd, tolerances) is not None:
-            return None
-        itself = qshape.match(sd, sd, tolerances)
-    except qshape.QShapeError:
-        return None
-    if itself is None or (itself.continuous and symmetry != 0):
-        return None
-    if symmetry != 0 and max(len(itself.rotations), near_turns(fig, turn_residual)) > symmetry:
-        return None
-    return SeenSlot(fig, sd)
-
-
 __all__ = [
     "PartialRegion",
     "PerceivedTile",
     "Perception",
     "WhiteBalance",
-    "SeenSlot",
     "SlotTarget",
     "balance_colors",
-    "camera_scale",
     "figure_to_world",
     "grasp_point",
     "refigured",

@@ -35,14 +35,9 @@ import numpy as np
 from agents.calibration import CalibrationResult, calibrate_env_camera
 from agents.config import AgentsConfig, load_agents_config
 from agents.errors import AgentError
-from agents.perception import (
-    Perception,
-    camera_scale,
-    perceive_tiles,
-    refigured,
-    slot_targets,
-)
+from agents.perception import Perception, perceive_tiles, refigured, slot_targets
 from agents.placement import FeasiblePairs, PickPlace, PlacementPlan, Unplaced, plan_placements
+from agents.seen_slots import camera_scale
 from agents.white_balance import color_gain
 from envs.cell.cameras import CameraModel
 from envs.task_spec import PickPlaceCodec, PickPlaceCommand, TaskSpec

@@ -7,8 +7,9 @@ import math
 import numpy as np
 
 from agents.config import load_agents_config
-from agents.perception import camera_scale, figure_to_world, perceive_tiles, slot_targets
+from agents.perception import figure_to_world, perceive_tiles, slot_targets
 from agents.placement import FeasiblePairs, plan_placements
+from agents.seen_slots import camera_scale
 from benchmarks.design_cell import build_design_cell
 from envs.task_spec import work_areas, world_slots
 from qshape import ExtractParams, Figure
