@@ -6,7 +6,9 @@ its spaces need, an optional wrapper, and a factory that binds it to a built env
 
 - ``scripted``: the scripted cell from camera images (`agents.scripted.ScriptedAgent`),
   ``pick_place`` actions at ``scripted_image_size``.
-- ``random``: uniform samples of the env's action space (seeded per episode).
+- ``random``: uniform samples of the env's action space (seeded per episode); where the env
+  offers action masks (``action_masks()``, the discrete modes) only among the allowed actions
+  (``action_space.sample(mask=...)``), so it plays the ``-v1`` ids, which refuse the others.
 - ``openloop``: the best open-loop sequence: the privileged expert's actions recorded on one
   training seed, replayed on every episode without looking (shows whether the encoding leaks).
 - ``identity``: the open-loop sequence ``(i, i, 0)`` (decision level).
@@ -34,6 +36,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import yaml
+from gymnasium import spaces
 
 from agents.wrappers import FlatDiscreteActions
 from configs import ConfigError
@@ -130,13 +133,31 @@ def _scripted(base: dict[str, Any], image_size: tuple[int, int], calibrate: bool
 
 def _random(base: dict[str, Any]) -> Policy:
     def factory(env: gym.Env) -> Predict:
+        space = env.action_space
+        masked = isinstance(space, spaces.Discrete | spaces.MultiDiscrete) and _has_masks(env)
+
         def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
             del obs, start
-            return np.asarray(env.action_space.sample())
+            if not masked:
+                return np.asarray(space.sample())
+            mask = np.asarray(env.get_wrapper_attr("action_masks")(), np.int8)
+            if isinstance(space, spaces.MultiDiscrete):
+                cuts = np.cumsum(space.nvec.ravel())[:-1]
+                return np.asarray(space.sample(mask=tuple(np.split(mask, cuts))))
+            return np.asarray(space.sample(mask=mask))
 
         return predict
 
     return Policy("random", dict(base), factory)
+
+
+def _has_masks(env: gym.Env) -> bool:
+    """The env (or a wrapper) has ``action_masks`` (sb3-contrib's convention)."""
+    try:
+        env.get_wrapper_attr("action_masks")
+    except AttributeError:
+        return False
+    return True
 
 
 def _need_discrete(env: gym.Env, name: str) -> Any:

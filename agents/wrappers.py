@@ -60,6 +60,22 @@ class FlatDiscreteActions(gym.ActionWrapper):
         """The flat index of a MultiDiscrete action (inverse of `action`)."""
         return int(np.ravel_multi_index(tuple(int(a) for a in action), self.nvec))
 
+    def action_masks(self) -> np.ndarray:
+        """The joint mask over the flat actions, shape (prod(nvec),) bool.
+
+        The outer product of the wrapped env's per-dimension masks (its ``action_masks()``,
+        tiles + slots + rotations concatenated), flattened row-major as `action` reads an index:
+        flat action ``a`` is allowed when its tile, its slot and its rotation all are.
+
+        Raises:
+            EnvError: The wrapped env offers no masks (e.g. a continuous action mode).
+        """
+        flat = np.asarray(self.env.get_wrapper_attr("action_masks")(), bool)
+        joint = np.ones((), bool)
+        for part in np.split(flat, np.cumsum(self.nvec)[:-1]):
+            joint = np.multiply.outer(joint, part)
+        return joint.reshape(-1)
+
 
 REWARD_TERM_PREFIX = "reward_"
 """Prefix of the env's per-term reward entries in ``info``."""

@@ -524,10 +524,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "--policies",
         nargs="+",
         required=True,
-        help="scripted, random, openloop, identity, model .zip paths or module:callable, each "
-        "optionally with @KEY=VALUE[,KEY=VALUE] env overrides (scripted@execution=dynamic)",
+        help="scripted, random, openloop, identity, SB3 model .zip paths, behaviour clone .pt "
+        "paths (apps.bc) or module:callable, each optionally with @KEY=VALUE[,KEY=VALUE] env "
+        "overrides (scripted@execution=dynamic)",
     )
-    ap.add_argument("--task", default=None, help="a ladder id (MosaicDecision6-v0): its protocol")
+    ap.add_argument(
+        "--task", default=None, help="a ladder id (MosaicDecision6-v0, ...-v1): its protocol"
+    )
     ap.add_argument(
         "--seeds", nargs="+", type=seed_argument, default=None, help="e.g. 1000-1019 or 1,2"
     )

@@ -25,7 +25,9 @@ marker and is trained again, one killed while evaluating keeps its trained model
 episodes already logged. A run whose Ray worker dies is retried (``--max-retries``, default
 `RUN_RETRIES`); a run that still fails is logged with its error, the others finish, and the
 command ends with one ``error:`` line naming the failed runs (exit status 1). At the end:
-``<out>/summary.md`` and ``summary.json`` (per task and entry, the IQM over runs with its 95 %
+``<out>/summary.md`` and ``summary.json`` (per task and entry, labelled with what ran: the id and
+the env keys a training preset or the entry changed, e.g. ``MosaicDecision6-v0 (max_slots=2)``;
+the IQM over runs with its 95 %
 stratified-bootstrap interval of every protocol metric, and the compute used) and
 ``<out>/curves.png`` (training success and return against steps, mean over seeds with a 95 %
 bootstrap band).
@@ -221,6 +223,7 @@ def execute(spec: RunSpec) -> dict[str, Any]:
     e, folder = spec.entry, Path(spec.folder)
     folder.mkdir(parents=True, exist_ok=True)
     base, proto = task_protocol(e.task)
+    preset = dict(base)
     if spec.eval_seeds:
         lo, hi = spec.eval_seeds
         proto = Protocol(tuple(range(lo, hi + 1)), proto.designs, proto.max_steps, proto.horizon_s)
@@ -238,6 +241,7 @@ def execute(spec: RunSpec) -> dict[str, Any]:
     out = {
         "entry": e.name,
         "task": e.task,
+        "ran": ran_label(e.task, preset, base),
         "seed": spec.seed,
         "folder": spec.folder,
         "metrics": runs,
@@ -248,6 +252,15 @@ def execute(spec: RunSpec) -> dict[str, Any]:
     }
     write_json(folder / RESULT_FILE, out)
     return out
+
+
+def ran_label(task: str, preset: Mapping[str, Any], ran: Mapping[str, Any]) -> str:
+    """What a run played: the task id, with the env keys that differ from its preset.
+
+    E.g. ``MosaicDecision6-v0 (max_slots=2)`` for a training preset that shrinks the design.
+    """
+    changed = {k: v for k, v in ran.items() if preset.get(k) != v}
+    return f"{task} ({', '.join(f'{k}={v}' for k, v in changed.items())})" if changed else task
 
 
 def _train_sb3(
@@ -437,7 +450,7 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
     """Write ``summary.json``, ``summary.md`` and ``curves.png`` from run results."""
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for r in results:
-        groups.setdefault((r["task"], r["entry"]), []).append(r)
+        groups.setdefault((r.get("ran", r["task"]), r["entry"]), []).append(r)
     summary = []
     lines = [
         "| task | policy | runs | success | slots filled | misplaced/ep | dropped/ep | lost/ep | "
@@ -453,7 +466,8 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
         walls = [r.get("train_wall_s", 0.0) for r in rs]
         summary.append(
             {
-                "task": task,
+                "task": rs[0]["task"],
+                "ran": task,
                 "entry": entry,
                 "runs": len(rs),
                 "estimates": {k: asdict(v) for k, v in est.items()},
@@ -518,7 +532,7 @@ def plot_curves(results: Sequence[dict[str, Any]], path: Path) -> None:
     learned: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for r in results:
         if r.get("timesteps") and (Path(r["folder"]) / "monitor").is_dir():
-            learned.setdefault((r["task"], r["entry"]), []).append(r)
+            learned.setdefault((r.get("ran", r["task"]), r["entry"]), []).append(r)
     if not learned:
         return
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))

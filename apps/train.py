@@ -196,7 +196,7 @@ def make_env_fn(cfg: TrainConfig, index: int = 0) -> Any:
 
         task = get_task(cfg.task)
         env_id = f"envs:{task.id}"
-        kwargs = {"design": task.env_kwargs("train", index)["design"], **kwargs}
+        kwargs = {**task.design_kwargs("train", index), **kwargs}
     if cfg.max_episode_steps:
         kwargs["max_episode_steps"] = cfg.max_episode_steps
 

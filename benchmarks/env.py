@@ -22,7 +22,8 @@ Run ``python -m benchmarks.env`` (``--quick`` for shorter runs); prints the figu
 - ``reset``: `reset` time [ms] of the 16-tile design and of its first 6 slots (mean, median
   and worst over seeds 0..``RESET_SEEDS`` - 1, CPU and wall), decision level with images (the
   reset renders its observation); ``task_resets``: the same CPU figures for every registered
-  rung of the task ladder (`envs.tasks`) as bundled. CPU time is the figure to read on a
+  rung of the task ladder (`envs.tasks`) as bundled, and of a rung's ``procedural`` training
+  entry (a design drawn and its cell built at every reset). CPU time is the figure to read on a
   shared machine (wall time includes waiting for the core).
 - ``sections``: where a step's CPU time goes [ms per step], kinematic ``pick_place`` (state)
   and the decision level with images: physics (`Cell.step`), IK, the planners' lower bound,

@@ -167,12 +167,17 @@ def measure_task_resets(queue: mp.Queue) -> None:
     os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
     import gymnasium as gym  # noqa: PLC0415
 
-    from envs.tasks import register_tasks  # noqa: PLC0415
+    from envs.tasks import PROCEDURAL, get_task, register_tasks  # noqa: PLC0415
 
     rows = []
     for task_id in register_tasks():
         row = _time_resets(gym.make(task_id))
         rows.append({"task": task_id, **row})
+        task = get_task(task_id)
+        if PROCEDURAL in task.train_designs:  # its training entry drawing a design per reset
+            kwargs = task.design_kwargs("train", task.train_designs.index(PROCEDURAL))
+            row = _time_resets(gym.make(task_id, **kwargs))
+            rows.append({"task": f"{task_id} ({PROCEDURAL})", **row})
     queue.put(rows)
 
 

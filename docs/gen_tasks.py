@@ -4,7 +4,9 @@ Each page has the id's description, a picture of the cell at its first observati
 (``env.render()`` after ``reset(seed=0)``: the overview camera beside the input and output
 cameras), its registration (episode limit, preset keywords, held-out seeds and designs) and
 tables of its live action and observation spaces. ``MosaicAssembly-v0``'s page carries the
-environment class's docstring. ``tasks/index.md`` is the ladder's table.
+environment class's docstring. ``tasks/index.md`` is the ladder's table. A later version of an
+id (``-v1``) starts like its ``-v0`` (the same scene), so its page shows the ``-v0`` picture and
+says what the version changes.
 
 Run from the repository root (headless rendering through EGL)::
 
@@ -71,6 +73,13 @@ def registered_ids() -> list[str]:
     ]
 
 
+def picture_id(env_id: str) -> str:
+    """The id whose picture a page shows: a later version's ``-v0`` when registered."""
+    name, _, version = env_id.rpartition("-")
+    base = f"{name}-v0"
+    return base if version != "v0" and base in gym.registry else env_id
+
+
 def _bounds(values: np.ndarray) -> str:
     lo, hi = float(np.min(values)), float(np.max(values))
     return f"{lo:g}" if lo == hi else f"{lo:g} to {hi:g}"
@@ -118,8 +127,8 @@ def _seeds(lo: int, hi: int) -> str:
 def task_page(env_id: str, env: gym.Env[Any, Any]) -> str:
     """The Markdown page of one id, from its registry entry and a live env."""
     spec = gym.spec(env_id)
-    tasks = bundled_tasks()
-    picture = f"![{env_id} at its first observation](img/{env_id}.png)"
+    tasks = bundled_tasks(all_versions=True)
+    picture = f"![{env_id} at its first observation](img/{picture_id(env_id)}.png)"
     caption = (
         f"*`env.render()` after `reset(seed={PICTURE_SEED})`: the overview camera, the input "
         "camera (tiles on the input belt) and the output camera (the mesh with the design's "
@@ -132,9 +141,13 @@ def task_page(env_id: str, env: gym.Env[Any, Any]) -> str:
     ]
     if env_id in tasks:
         task = tasks[env_id]
-        preset = {load_task(p).id: p.name for p in PRESETS_DIR.glob("*.yaml")}[env_id]
+        base = picture_id(env_id)
+        preset = {load_task(p).id: p.name for p in PRESETS_DIR.glob("*.yaml")}[base]
+        preset = f"`configs/tasks/{preset}`"
+        if base != env_id:
+            preset += f" with its `versions: {task.version}` changes"
         rows += [
-            ("preset", f"`configs/tasks/{preset}`"),
+            ("preset", preset),
             ("held-out seeds", _seeds(*task.eval_seeds)),
             ("training designs", ", ".join(f"`{d}`" for d in task.designs("train"))),
             ("held-out designs", ", ".join(f"`{d}`" for d in task.designs("eval"))),
@@ -145,6 +158,21 @@ def task_page(env_id: str, env: gym.Env[Any, Any]) -> str:
             f"a frozen preset of [`MosaicAssembly-v0`](MosaicAssembly-v0.md), whose page has "
             "the environment's full description. Keyword arguments of `gym.make` override "
             "the preset."
+        )
+        if base != env_id:
+            changes = ", ".join(
+                f"`{k}={v!r}`" for k, v in task.env.items() if k not in tasks[base].env
+            )
+            intro += (
+                f" This is [`{base}`]({base}.md) at version {task.version}, which changes "
+                f"{changes} (see the changelog)."
+            )
+        doc = ""
+    elif picture_id(env_id) != env_id:
+        changes = ", ".join(f"`{k}={v!r}`" for k, v in spec.kwargs.items())
+        intro = (
+            f"[`{picture_id(env_id)}`]({picture_id(env_id)}.md) at its next version: the "
+            f"fully configurable environment with {changes} (see the changelog)."
         )
         doc = ""
     else:
@@ -173,7 +201,7 @@ def _docstring_markdown(cls: type) -> str:
 
 def index_page(ids: list[str]) -> str:
     """The gallery's index: the ladder's table, each id linked to its page."""
-    tasks = bundled_tasks()
+    tasks = bundled_tasks(all_versions=True)
     lines = [
         f"{HEADER}# Task gallery\n",
         "`import envs` registers these ids (`gymnasium.registry`); each page shows the id's "
@@ -193,6 +221,8 @@ def index_page(ids: list[str]) -> str:
         else:
             what, seeds = "every option open (the full cell)", "-"
             modes = "any (defaults `joint` / `rgb`)"
+        if picture_id(env_id) != env_id:
+            what = f"{what}; version {env_id.rpartition('-')[2]} (see its page)"
         lines.append(
             f"| [{env_id}]({env_id}.md) | {what} | {modes} | {spec.max_episode_steps} | {seeds} |"
         )
@@ -212,7 +242,7 @@ def pages(render: bool = False) -> tuple[list[Page], dict[str, np.ndarray]]:
     for env_id in ids:
         env = _make(env_id, render)
         try:
-            if render:
+            if render and picture_id(env_id) == env_id:
                 env.reset(seed=PICTURE_SEED)
                 pictures[env_id] = np.asarray(env.render())
             out.append(Page(TASKS_DIR / f"{env_id}.md", task_page(env_id, env)))
@@ -234,11 +264,12 @@ def stale(expected: list[Page]) -> list[str]:
         if path not in wanted:
             problems.append(f"unregistered {path.relative_to(ROOT)}")
     ids = registered_ids()
-    for env_id in ids:
+    pictured = {picture_id(env_id) for env_id in ids}
+    for env_id in sorted(pictured):
         if not (IMG_DIR / f"{env_id}.png").is_file():
             problems.append(f"missing picture docs/tasks/img/{env_id}.png")
     for png in sorted(IMG_DIR.glob("*.png")):
-        if png.stem not in ids:
+        if png.stem not in pictured:
             problems.append(f"unregistered picture {png.relative_to(ROOT)}")
     return problems
 

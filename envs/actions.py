@@ -8,8 +8,9 @@ to the `Cell`, advancing simulated time. Continuous spaces are Box in [-1, 1] fl
 - `CartesianActions` (``cartesian``): tool (dx, dy, dz, dyaw) scaled by the tool speed and yaw
   rate times the control period, tool kept pointing down through the planners' IK, plus vacuum.
 - `PickPlaceActions` (``pick_place``): pick (x, y, yaw) over the input tile area and place
-  (x, y, yaw) over the mesh, normalised to [-1, 1] (see `envs.task_spec.PickPlaceCodec`); one
-  full cycle run by `envs.cell.pick_place.PickPlaceExecutor`.
+  (x, y, yaw) over the mesh, normalised to [-1, 1] (see `envs.task_spec.PickPlaceCodec`; the
+  ``-v1`` layout has no pick yaw); one full cycle run by
+  `envs.cell.pick_place.PickPlaceExecutor`.
 - `DiscretePickPlaceActions` (``pick_place_discrete``): MultiDiscrete (tile, slot, rotation).
 """
 
@@ -180,11 +181,13 @@ class CartesianActions(ActionAdapter):
 
 
 class PickPlaceActions(ActionAdapter):
-    """``pick_place``: Box(6) in [-1, 1]: pick (x, y, yaw), place (x, y, yaw).
+    """``pick_place``: Box(6) in [-1, 1]: pick (x, y, yaw), place (x, y, yaw); Box(5) without yaw.
 
     x, y map linearly onto the codec's areas (pick: the input tile area; place: the mesh), yaw
     onto [-pi, pi]. The pad goes to the pick point, then to the place point; the tile turns by
-    the action's rotation (its last entry; the third is the tile's yaw at the pick).
+    the action's rotation (its last entry). In the Box(6) layout (``pick_yaw_entry``, the
+    ``-v0`` ids) the third entry is the tile's yaw at the pick, which changes nothing; Box(5)
+    (``-v1``) leaves it out.
     """
 
     def __init__(
@@ -193,7 +196,7 @@ class PickPlaceActions(ActionAdapter):
         super().__init__(cell, config)
         self.executor = executor
         self.codec = codec
-        self.space = spaces.Box(-1.0, 1.0, (6,), np.float32)
+        self.space = spaces.Box(-1.0, 1.0, (codec.size,), np.float32)
 
     def reset(self) -> None:
         """Episode start (the executor forgets the last contact)."""

@@ -22,17 +22,24 @@ from envs.cell.config import FEED_MODES, CellConfig, load_cell_config, section_n
 from envs.errors import CellError, EnvError
 
 ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
-ObsMode = Literal["rgb", "state", "rgb+state"]
+ObsMode = Literal["rgb", "state", "rgb+state", "objects"]
+ObjectsSource = Literal["privileged"]
 RewardMode = Literal["sparse", "dense", "staged"]
 Execution = Literal["dynamic", "kinematic"]
 RenderMode = Literal["rgb_array", "human"]
 TileOrder = Literal["belt", "shuffled", "design"]
 SlotOrder = Literal["mesh", "shuffled", "design"]
 RotationFrame = Literal["tile", "slot"]
+InvalidActions = Literal["fail", "refuse"]
+DesignSource = Literal["fixed", "procedural"]
 ACTION_MODES: tuple[str, ...] = get_args(ActionMode)
 """Allowed ``action_mode`` values."""
 OBS_MODES: tuple[str, ...] = get_args(ObsMode)
 """Allowed ``obs_mode`` values."""
+OBJECTS_SOURCES: tuple[str, ...] = get_args(ObjectsSource)
+"""Allowed ``objects_source`` values."""
+OBJECTS_POINTS_RANGE = (8, 256)
+"""Allowed ``objects_points`` (inclusive)."""
 REWARD_MODES: tuple[str, ...] = get_args(RewardMode)
 """Allowed ``reward_mode`` values."""
 EXECUTIONS: tuple[str, ...] = get_args(Execution)
@@ -47,6 +54,10 @@ SLOT_ORDERS: tuple[str, ...] = get_args(SlotOrder)
 """Allowed ``slot_order`` values (see `envs.indexing`)."""
 ROTATION_FRAMES: tuple[str, ...] = get_args(RotationFrame)
 """Allowed ``rotation_frame`` values (see `envs.indexing`)."""
+INVALID_ACTIONS: tuple[str, ...] = get_args(InvalidActions)
+"""Allowed ``invalid_actions`` values (see `envs.masks`)."""
+DESIGN_SOURCES: tuple[str, ...] = get_args(DesignSource)
+"""Allowed ``design_source`` values (see `envs.design_source`)."""
 
 
 CELL_KEYS: dict[str, tuple[str, str]] = {
@@ -79,6 +90,15 @@ class EnvConfig:
     Attributes:
         design: Bundled design name (``configs/designs``) or path to a design YAML.
         max_slots: Use only the first ``max_slots`` slots (and their tiles); 0 uses all.
+        design_source: One of `DESIGN_SOURCES`: ``fixed`` builds ``design`` once;
+            ``procedural`` draws a new design of exactly ``max_slots`` slots (>= 1 required)
+            at every reset from the env's ``np_random`` (`envs.design_source`).
+        design_generator: ``procedural``: the design generator's parameters, a bundled name
+            (``configs/``) or path of a `qshape.design.generator_config.GeneratorConfig` file.
+        exclude_designs: ``procedural``: designs (bundled names or paths) whose tile classes a
+            drawn design never holds (`qshape.design.exclusion`).
+        design_tries: ``procedural``: draws per reset before a design free of excluded
+            classes is given up (`envs.design_source.DesignSourceError`).
         cell: The cell (`envs.cell.config.CellConfig`), nested: in YAML a bundled name or
             path, or a mapping ``{config: <name or path>, <section>: {<key>: value}}`` that
             changes sections of that cell file key by key. The input belt's speed, the tile
@@ -87,7 +107,15 @@ class EnvConfig:
             ``feed="stream"``, ...) still set them.
         planner: Planner configuration: bundled name or path (``configs/planner.yaml``).
         action_mode: One of `ACTION_MODES`.
-        obs_mode: One of `OBS_MODES` (``state`` = robot + privileged state, no images).
+        obs_mode: One of `OBS_MODES` (``state`` = robot + privileged state, no images;
+            ``objects`` = robot + entity rows without class ids, `envs.objects`).
+        objects_points: ``objects``: outline points per row, in `OBJECTS_POINTS_RANGE`.
+        objects_rows: ``objects``: rows of ``tiles`` and of ``slots`` (padded with zero rows,
+            ``valid`` 0); None: the episode's tile and slot counts.
+        objects_noise_mm: ``objects``: std of Gaussian noise on each tile outline point [mm]
+            (0: off).
+        objects_source: ``objects``: where the rows come from, one of `OBJECTS_SOURCES`
+            (``privileged``: the simulator's poses and the built outlines).
         image_size: Observation image (height, width) [px]; an int gives a square image. The
             default 72 x 96 keeps the cameras' 4:3 aspect: a square image narrows the
             horizontal field (fixed vertical field of view) and crops the ends of the tile
@@ -95,6 +123,9 @@ class EnvConfig:
         depth: Add depth images [m] to the observation.
         reward_mode: One of `REWARD_MODES`.
         execution: One of `EXECUTIONS` (pick_place modes only).
+        pick_yaw_entry: ``pick_place`` actions carry the tile's yaw at the pick: Box(6), the
+            ``-v0`` layout (the entry changes nothing: no grasp offset for it to turn); False:
+            Box(5) = pick x, y, place x, y, rotation (the ``-v1`` ids).
         chain_cycles: Dynamic pick_place: a step's cycle ends at rest at the place contact
             (vacuum off, pad 0.5 mm above the released tile) and the next step's cycle leaves
             it vertically, blended into its move to the pick, as a real cell chains its
@@ -120,6 +151,9 @@ class EnvConfig:
             the mesh.
         rotation_frame: What a rotation index counts from: one of `ROTATION_FRAMES`;
             ``tile``: the slot-aligned pose nearest to how the tile lies.
+        invalid_actions: What a ``pick_place_discrete`` action its mask forbids does (one of
+            `INVALID_ACTIONS`, `envs.masks`): ``fail`` charges ``failed_action_time`` and the
+            failed-action penalty; ``refuse`` raises `ActionError` (no time passes).
         kinematic_settle: Physics settling time after a kinematic place [s].
         failed_action_time: Simulated time charged for an action that cannot execute [s].
         reject_past_belt_end: How far past the input belt's end `MosaicAssemblyEnv.reject`
@@ -148,14 +182,23 @@ class EnvConfig:
 
     design: str = "paper_mixed"
     max_slots: int = 0
+    design_source: DesignSource = "fixed"
+    design_generator: str = "design_generator_train"
+    exclude_designs: tuple[str, ...] = ()
+    design_tries: int = 50
     cell: CellConfig = field(default_factory=lambda: _env_cell("cell", ENV_CELL_CHANGES))
     planner: str = "planner"
     action_mode: ActionMode = "pick_place"
     obs_mode: ObsMode = "rgb"
+    objects_points: int = 32
+    objects_rows: int | None = None
+    objects_noise_mm: float = 0.0
+    objects_source: ObjectsSource = "privileged"
     image_size: tuple[int, int] = (72, 96)
     depth: bool = False
     reward_mode: RewardMode = "sparse"
     execution: Execution = "dynamic"
+    pick_yaw_entry: bool = True
     chain_cycles: bool = True
     color_randomization: float = 0.0
     light_randomization: float = 0.0
@@ -173,6 +216,7 @@ class EnvConfig:
     tile_order: TileOrder = "belt"
     slot_order: SlotOrder = "mesh"
     rotation_frame: RotationFrame = "tile"
+    invalid_actions: InvalidActions = "fail"
     kinematic_settle: float = 0.01
     failed_action_time: float = 0.04
     reject_past_belt_end: float = 0.08
@@ -206,11 +250,14 @@ class EnvConfig:
         for name, allowed in (
             ("action_mode", ACTION_MODES),
             ("obs_mode", OBS_MODES),
+            ("objects_source", OBJECTS_SOURCES),
             ("reward_mode", REWARD_MODES),
             ("execution", EXECUTIONS),
             ("tile_order", TILE_ORDERS),
             ("slot_order", SLOT_ORDERS),
             ("rotation_frame", ROTATION_FRAMES),
+            ("invalid_actions", INVALID_ACTIONS),
+            ("design_source", DESIGN_SOURCES),
         ):
             value = getattr(self, name)
             if value not in allowed:
@@ -244,19 +291,39 @@ class EnvConfig:
             "reset_settle",
             "pick_margin",
             "place_margin",
+            "objects_noise_mm",
         )
         for name in nonneg:
             if not getattr(self, name) >= 0:
                 raise EnvConfigError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+        self._check_objects()
         lo_hi = tuple(self.tool_z_range)
         if len(lo_hi) != 2 or not 0 <= lo_hi[0] < lo_hi[1]:  # noqa: PLR2004 - (low, high)
             raise EnvConfigError(
                 f"tool_z_range must be (low, high) [m] with 0 <= low < high, got {lo_hi!r}"
             )
-        for name in ("rotation_bins", "layout_tries"):
+        if self.design_source == "fixed" and self.exclude_designs:
+            raise EnvConfigError(
+                "exclude_designs needs design_source 'procedural' (a fixed design is not drawn)"
+            )
+        if self.design_source == "procedural" and self.max_slots < 1:
+            raise EnvConfigError(
+                "design_source 'procedural' needs max_slots >= 1 (the spaces are built for "
+                f"that many tiles and slots), got max_slots={self.max_slots!r}"
+            )
+        for name in ("rotation_bins", "layout_tries", "design_tries"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise EnvConfigError(f"{name} must be an int >= 1, got {value!r}")
+
+    def _check_objects(self) -> None:
+        lo, hi = OBJECTS_POINTS_RANGE
+        p = self.objects_points
+        if not isinstance(p, int) or isinstance(p, bool) or not lo <= p <= hi:
+            raise EnvConfigError(f"objects_points must be an int in [{lo}, {hi}], got {p!r}")
+        r = self.objects_rows
+        if r is not None and (not isinstance(r, int) or isinstance(r, bool) or r < 1):
+            raise EnvConfigError(f"objects_rows must be None or an int >= 1, got {r!r}")
 
     @property
     def belt_speed(self) -> float:
@@ -405,13 +472,18 @@ def load_env_config(config: EnvConfig | str | Path | None = "env", **overrides: 
 
 __all__ = [
     "ActionMode",
+    "DesignSource",
     "Execution",
+    "ObjectsSource",
     "ObsMode",
     "RenderMode",
     "RewardMode",
     "ACTION_MODES",
+    "DESIGN_SOURCES",
     "EXECUTIONS",
     "FEEDS",
+    "OBJECTS_POINTS_RANGE",
+    "OBJECTS_SOURCES",
     "OBS_MODES",
     "RENDER_MODES",
     "REWARD_MODES",

@@ -91,12 +91,15 @@ def with_feed_fallback(make: Callable[[FeedMode], T], feed: FeedMode) -> tuple[T
 
 
 def design_cell_parts(
-    config: EnvConfig,
+    config: EnvConfig, design: Design | None = None
 ) -> tuple[Design, tuple[TileShape, ...], tuple[SlotSpec, ...]]:
-    """The env's design with its tile shapes and slots (the first ``max_slots`` when set)."""
+    """A design with its tile shapes and slots (the first ``max_slots`` when set).
+
+    ``design`` None: the env's ``design`` (loaded); else that design (a procedural draw).
+    """
     from qshape.design import Design  # noqa: PLC0415 - keep `import envs` light
 
-    design = Design.load(config.design)
+    design = Design.load(config.design) if design is None else design
     shapes, slots = tile_shapes_from_design(design)
     if config.max_slots:
         shapes, slots = shapes[: config.max_slots], slots[: config.max_slots]

@@ -114,8 +114,15 @@ class IndexMaps:
         )
 
     def permute_state(self, tiles: np.ndarray, slots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Flat privileged ``tiles`` (n * d,) and ``slots`` (k * e,) rows in agent order."""
+        """Privileged ``tiles`` and ``slots`` rows in agent order.
+
+        Flat ``state`` rows (n * d,) and (k * e,) stay flat; ``objects`` rows (rows, D) stay
+        2-D, their first n (k) rows permuted and the zero padding after them kept.
+        """
         n, k = len(self.tiles), len(self.slots)
+        if tiles.ndim == 2:  # noqa: PLR2004 - objects rows
+            tiles[:n], slots[:k] = tiles[self.tiles], slots[self.slots]
+            return tiles, slots
         t = tiles.reshape(n, -1)[self.tiles].reshape(-1) if n else tiles
         s = slots.reshape(k, -1)[self.slots].reshape(-1) if k else slots
         return t, s

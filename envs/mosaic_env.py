@@ -9,40 +9,32 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
 
-from envs.actions import (
-    ActionAdapter,
-    CartesianActions,
-    DiscretePickPlaceActions,
-    JointActions,
-    PickPlaceActions,
-    transfer_poses,
-)
+from envs.actions import transfer_poses
 from envs.cell.cameras import CameraModel
-from envs.cell.cell import CAMERAS, Cell
-from envs.cell.pick_place import PickPlaceExecutor
+from envs.cell.cell import CAMERAS
 from envs.cell.scene import build_arm_model
-from envs.env_config import EnvConfig, EnvConfigError, load_env_config
-from envs.episode_setup import build_cell, design_cell_parts
+from envs.design_source import FIRST_DRAW_SEED, design_source, source_config
+from envs.env_config import EnvConfig, load_env_config
+from envs.env_parts import build_parts
 from envs.errors import EnvError
 from envs.frames import FrameSchedule
-from envs.indexing import IndexMaps
-from envs.observations import Observer
-from envs.task import REWARD_TERMS, Evaluation, GroundTruth, MosaicTask
+from envs.masks import action_mask, check_allowed
+from envs.task import REWARD_TERMS, SEED_BOUND, Evaluation, GroundTruth
 from envs.task_spec import (
     ActionError,
-    PickPlaceCodec,
     PickPlaceCommand,
     TaskSpec,
-    build_task_spec,
-    work_areas,
 )
-from planners.config import PlannerConfig, load_planner_config
+from planners.config import load_planner_config
 from planners.ik import IKSolver
+
+if TYPE_CHECKING:
+    from qshape.design import Design
 
 DEFAULT_CONTROL_DT = 0.04
 """Default control period [s] (``configs/env.yaml``); the class's ``render_fps`` is 1 / it."""
@@ -74,8 +66,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     - ``pick_place``: Box(6): pick x, y, the tile's yaw, place x, y, the rotation. x, y map
       linearly onto the input tile area (pick) and the mesh (place), see
       ``task_spec.codec``; angles onto [-pi, pi]. The pad goes to the pick point and then to
-      the place point; the tile turns by the rotation (the tile's yaw only picks among
-      symmetric wrist solutions). One step = one full time-optimal cycle planned by the planners;
+      the place point; the tile turns by the rotation (the tile's yaw changes nothing; ``-v1``
+      is Box(5) without it). One step = one full time-optimal cycle planned by the planners;
       with ``chain_cycles`` (default) a dynamic cycle ends at rest at the place contact and
       the next one leaves it vertically, blended into its move (as a real cell chains them).
       ``task_spec.codec.encode(PickPlaceCommand(...))`` normalises a world command;
@@ -86,7 +78,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
       indices name carries no answer (`envs.indexing`): by default tile i is the i-th tile on
       the input belt from its downstream end (then the others), slot j the j-th slot in raster
       order on the mesh, and r counts from the slot-aligned pose nearest to how the tile lies
-      (``tile_order``, ``slot_order``, ``rotation_frame``).
+      (``tile_order``, ``slot_order``, ``rotation_frame``). ``action_masks()`` (`envs.masks`).
 
     ``execution`` (pick_place modes): ``dynamic`` tracks the planned trajectory with the
     servo actuators at every physics step (full physics, suction weld). ``kinematic`` puts the
@@ -102,7 +94,10 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     (H, W, 3) at ``image_size`` (``rgb``/``rgb+state``; depth (H, W, 1) float32 [m] with
     ``depth``), ``robot`` float32 (19,) (joint pos/vel, tool pose, vacuum, held), and with
     ``state``/``rgb+state`` the privileged ``tiles`` (n * 7,) and ``slots`` (k * 6,), rows in the
-    same index order as the discrete actions. Camera
+    same index order as the discrete actions. With ``objects`` (no images), ``robot`` and
+    ``tiles`` (rows, D), ``slots`` (rows, D) float32: one entity row per tile / slot in the
+    same index order, without class ids (outline points [mm], colour, area, hole area, position,
+    yaw, pickable / filled flag, valid), columns named by `envs.objects.OBJECT_FIELDS`. Camera
     intrinsics/extrinsics at the observation size: ``task_spec.cameras``.
 
     ## Task description
@@ -151,12 +146,15 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     the flat `EnvConfig` fields: design, max_slots, action_mode, obs_mode, image_size, depth,
     belt_speed, reward_mode, execution, feed, distractor_rate, tile_variants, noise and
     randomisation levels, tolerances, reward weights. Unknown keys raise `EnvConfigError`
-    listing the allowed ones.
+    listing the allowed ones. ``design_source="procedural"`` (with ``design_generator``,
+    ``exclude_designs``, ``design_tries``) draws a new design of ``max_slots`` slots at every
+    reset from ``np_random``, never one holding a class of ``exclude_designs``, and rebuilds the
+    cell for it (`envs.design_source`); the spaces stay the same.
 
     ## Info
     ``sim_time`` [s since reset], ``tiles_placed`` (slots filled correctly), ``tiles_per_min``
     (per simulated minute), ``evaluation`` (the `evaluate()` dict), ``reward_<term>``,
-    ``action_failed`` and ``action_error`` (why), ``is_success``.
+    ``action_failed`` and ``action_error`` (why), ``is_success``, ``action_mask`` (discrete).
 
     ## Rendering
     ``rgb_array``: the overview camera (left) beside the input and output cameras (right),
@@ -173,8 +171,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     (stair-stepped edges, cheaper still).
 
     ## Version History
-    Every id is at ``-v0``. The changes of each id, and the rule for when an id's version
-    changes (a change of its spaces or of its results), are in ``CHANGELOG.md``.
+    ``-v1``: ``pick_place`` is Box(5) without the pick-yaw entry that did nothing; discrete ids
+    refuse masked actions (`ActionError`). ``-v0`` stays. Details and the rule: ``CHANGELOG.md``.
     """
 
     metadata = {  # noqa: RUF012 - Gymnasium convention
@@ -190,47 +188,55 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ) -> None:
         if render_mode is not None:
             overrides["render_mode"] = render_mode
-        self.config = load_env_config("env" if config is None else config, **overrides)
+        self.config = source_config(
+            load_env_config("env" if config is None else config, **overrides)
+        )
         cfg = self.config
         self.render_mode = cfg.render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / cfg.control_dt)}
-        design, shapes, slots = design_cell_parts(cfg)
-        self.cell = build_cell(cfg.cell, shapes, slots, tries=cfg.layout_tries)
-        _check_image_size(cfg, self.cell)
-        self.task = MosaicTask(self.cell, cfg)
-        self.observer = Observer(self.cell, self.task, cfg)
-        self.index = IndexMaps(self.cell, cfg)
-        pcfg = load_planner_config(cfg.planner)
-        self.ik = IKSolver(build_arm_model(self.cell.cfg, with_cell=False), pcfg.ik, pcfg.limits)
-        self.pick_area, self.place_area = work_areas(self.cell, cfg)
-        self.codec = PickPlaceCodec(self.pick_area, self.place_area)
-        self.task_spec: TaskSpec = build_task_spec(self.cell, cfg, design)
-        """What agents may know besides the observations (see `envs.task_spec`)."""
-        self.calibration_views = self.cell.views.calibration_views
-        """Checkerboard pictures to calibrate a camera (`envs.cell.views.CellViews`)."""
-        self.executor: PickPlaceExecutor | None = None
-        self.actions = self._adapter(pcfg)
+        self.designs = design_source(cfg)
+        """The procedural design source (``design_source: procedural``), else None."""
+        first = None
+        if self.designs is not None:
+            first = self.designs.draw(np.random.default_rng(FIRST_DRAW_SEED))
+        self._pcfg = load_planner_config(cfg.planner)
+        self.ik = IKSolver(
+            build_arm_model(cfg.cell, with_cell=False), self._pcfg.ik, self._pcfg.limits
+        )
+        self._frames = FrameSchedule()
+        self._viewer: Any = None
+        self._build(first, seed=0)
         self.action_space = self.actions.space
         self.observation_space = self.observer.space
         self._t0 = 0.0
         self._needs_reset = True
         self._closed = False
-        self._viewer: Any = None
-        self._frames = FrameSchedule()
+        self._mask: np.ndarray | None = None
 
-    def _adapter(self, pcfg: PlannerConfig) -> ActionAdapter:
-        cfg, cell = self.config, self.cell
-        if cfg.action_mode == "joint":
-            return JointActions(cell, cfg)
-        if cfg.action_mode == "cartesian":
-            return CartesianActions(cell, cfg, self.ik, self.pick_area, self.place_area)
-        executor = PickPlaceExecutor(
-            cell, cfg, pcfg, self.ik, pick=self.pick_area, place=self.place_area
-        )
-        self.executor = executor
-        if cfg.action_mode == "pick_place":
-            return PickPlaceActions(cell, cfg, executor, self.codec)
-        return DiscretePickPlaceActions(cell, cfg, executor)
+    def _build(self, drawn: Design | None, seed: int) -> None:
+        """Build the cell of a design (None: ``design``) and its parts (`envs.env_parts`)."""
+        p = build_parts(self.config, drawn, seed, self.ik, self._pcfg)
+        self.cell, self.task, self.observer, self.index = p.cell, p.task, p.observer, p.index
+        self.pick_area, self.place_area, self.codec = p.pick_area, p.place_area, p.codec
+        self.executor, self.actions = p.executor, p.actions
+        self.task_spec: TaskSpec = p.task_spec
+        """What agents may know besides the observations (see `envs.task_spec`); with a
+        procedural design source, of the current episode's design."""
+        self.calibration_views = self.cell.views.calibration_views
+        """Checkerboard pictures to calibrate a camera (`envs.cell.views.CellViews`)."""
+        if self.executor is not None and self._frames:
+            self.executor.on_physics_step = self._tick
+
+    def _draw_design(self, rng: np.random.Generator) -> None:
+        """Procedural source: replace the cell by one of a design drawn from ``rng``."""
+        assert self.designs is not None
+        design = self.designs.draw(rng)
+        seed = int(rng.integers(SEED_BOUND))
+        if self._viewer is not None:
+            self._viewer.close()
+            self._viewer = None
+        self.cell.close()
+        self._build(design, seed)
 
     # ------------------------------------------------------------------ Gymnasium API
     def reset(
@@ -239,6 +245,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         """Start an episode: new tile layout (and colours/lights if enabled), arm at home."""
         self._check_open()
         super().reset(seed=seed)
+        if self.designs is not None:
+            self._draw_design(self.np_random)
         cell, rng = self.cell, self.np_random
         self.task.initialize_episode(rng)
         self._t0 = cell.time
@@ -257,12 +265,11 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             MosaicEnvError: Called before `reset` or after `close`.
             ActionError: Wrong shape, NaN/inf or out-of-range action.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("step() called before reset(): call env.reset() first")
+        self._check_ready("step")
         a = self.actions.validate(action)
         a = self.actions.noisy(a, self.np_random)
-        if self.config.action_mode == "pick_place_discrete":
+        if self._mask is not None:
+            check_allowed(a, self._mask, self.action_space, self.config.invalid_actions)
             a = self.index.decode(a)
         result = self.actions.apply(a)
         if self._frames:
@@ -320,6 +327,13 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._closed = True
 
     # ------------------------------------------------------------------ extras
+    def action_masks(self) -> np.ndarray:
+        """Allowed discrete indices now (`envs.masks`); `MosaicEnvError` in other action modes."""
+        if (mode := self.config.action_mode) != "pick_place_discrete":
+            raise MosaicEnvError(f"action_masks() needs pick_place_discrete, not {mode!r}")
+        self._check_ready("action_masks")
+        return self._mask.copy()  # type: ignore[union-attr] # set at reset
+
     def evaluate(self) -> Evaluation:
         """The task's evaluation now (see `envs.task.Evaluation`)."""
         return self.task.evaluate()
@@ -388,9 +402,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         Raises:
             MosaicEnvError: Not a pick_place mode, before `reset` or after `close`.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("reject() called before reset(): call env.reset() first")
+        self._check_ready("reject")
         if self.executor is None:
             raise MosaicEnvError(f"reject needs a pick_place mode, not {self.config.action_mode!r}")
         cfg, geo = self.config, self.cell.geometry
@@ -402,8 +414,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         evaluation = self.task.evaluate()
         terms = self.task.rewards(evaluation, result.failed)
         terminated = evaluation.success or evaluation.failure
-        info = self._info(evaluation, terms, result.failed, result.reason)
         obs = self._observe(evaluation)
+        info = self._info(evaluation, terms, result.failed, result.reason)
         return obs, float(sum(terms.values())), terminated, False, info
 
     def move_home(self) -> dict[str, Any]:
@@ -416,9 +428,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         Raises:
             MosaicEnvError: Called before `reset` or after `close`.
         """
-        self._check_open()
-        if self._needs_reset:
-            raise MosaicEnvError("move_home() called before reset(): call env.reset() first")
+        self._check_ready("move_home")
         home = np.asarray(self.cell.cfg.robot.home, float)
         if self.executor is not None:
             self.executor.move_to(home)
@@ -451,6 +461,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def _observe(self, evaluation: Evaluation) -> dict[str, Any]:
         """The observation, privileged rows in the agent's index order (`envs.indexing`)."""
         self.index.update()
+        if isinstance(space := self.action_space, gym.spaces.MultiDiscrete):
+            self._mask = action_mask(self.cell, self.index, evaluation.slot_filled, space.nvec)
         obs = self.observer.observe(self.np_random, evaluation)
         if "tiles" in obs:
             obs["tiles"], obs["slots"] = self.index.permute_state(obs["tiles"], obs["slots"])
@@ -471,24 +483,18 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             "action_error": reason,
         }
         info.update({f"reward_{k}": float(v) for k, v in terms.items()})
+        if self._mask is not None:
+            info["action_mask"] = self._mask.copy()
         return info
 
     def _check_open(self) -> None:
         if self._closed:
             raise MosaicEnvError("the environment is closed; make a new one")
 
-
-def _check_image_size(cfg: EnvConfig, cell: Cell) -> None:
-    """Refuse an observation image larger than the model's offscreen render buffer."""
-    if cfg.obs_mode == "state":
-        return
-    vis = cell.model.vis.global_
-    h, w = cfg.image_size
-    if h > vis.offheight or w > vis.offwidth:
-        raise EnvConfigError(
-            f"image_size {(h, w)} exceeds the offscreen render buffer "
-            f"({vis.offheight}, {vis.offwidth}) px (height, width); allowed: up to that size"
-        )
+    def _check_ready(self, name: str) -> None:
+        self._check_open()
+        if self._needs_reset:
+            raise MosaicEnvError(f"{name}() called before reset(): call env.reset() first")
 
 
 __all__ = ["ActionError", "MosaicAssemblyEnv", "MosaicEnvError"]

@@ -10,6 +10,9 @@ Keys (by ``obs_mode``):
   MultiInputPolicy wants vectors): float32 (n * 7,), per tile
   x, y, z [m], cos yaw, sin yaw, class index, present (on the belts and not lost); float32
   (k * 6,), per slot x, y [m], cos yaw, sin yaw, class index, filled correctly.
+- ``tiles`` and ``slots`` (``objects``; no class ids): float32 (rows, D), one entity row per
+  tile / slot (outline points [mm], colour, area, hole area, position, yaw, flag, valid),
+  laid out by `envs.objects.OBJECT_FIELDS`; rows past the episode's counts are zero padding.
 
 Every observation is a fresh array (no memory shared between steps).
 """
@@ -23,6 +26,7 @@ from gymnasium import spaces
 
 from envs.cell.cell import CAMERAS, Cell
 from envs.env_config import EnvConfig
+from envs.objects import ObjectRows
 from envs.task import Evaluation, MosaicTask
 from spatial.rotations import yaw_from_matrix
 
@@ -44,7 +48,8 @@ class Observer:
     Args:
         cell: The cell.
         task: The task (slot fill and classes).
-        config: Environment configuration (obs_mode, image_size, depth, obs_noise).
+        config: Environment configuration (obs_mode, image_size, depth, obs_noise, the
+            ``objects_*`` keys).
     """
 
     def __init__(self, cell: Cell, task: MosaicTask, config: EnvConfig) -> None:
@@ -53,6 +58,7 @@ class Observer:
         self.cfg = config
         self.images = config.obs_mode in ("rgb", "rgb+state")
         self.state = config.obs_mode in ("state", "rgb+state")
+        self.objects = ObjectRows(cell, task, config) if config.obs_mode == "objects" else None
         h, w = config.image_size
         d: dict[str, spaces.Space] = {}
         if self.images:
@@ -65,6 +71,8 @@ class Observer:
             n, k = len(cell.tiles), len(cell.slots)
             d["tiles"] = spaces.Box(-BIG, BIG, (n * TILE_DIM,), np.float32)
             d["slots"] = spaces.Box(-BIG, BIG, (k * SLOT_DIM,), np.float32)
+        if self.objects is not None:
+            d.update(self.objects.spaces())
         self.space = spaces.Dict(d)
 
     def observe(self, rng: np.random.Generator, evaluation: Evaluation) -> dict[str, Any]:
@@ -87,6 +95,8 @@ class Observer:
         obs["robot"] = self._robot(rng)
         if self.state:
             obs["tiles"], obs["slots"] = self._state(evaluation)
+        if self.objects is not None:
+            obs["tiles"], obs["slots"] = self.objects.observe(rng, evaluation)
         return obs
 
     def _robot(self, rng: np.random.Generator) -> np.ndarray:

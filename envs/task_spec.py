@@ -37,7 +37,10 @@ CameraName = Literal["input_camera", "output_camera"]
 
 
 class ActionError(EnvError, ValueError):
-    """An action the space does not allow (wrong shape, dtype, NaN/inf, out of range)."""
+    """An action the space does not allow (wrong shape, dtype, NaN/inf, out of range).
+
+    Also a ``pick_place_discrete`` action its mask forbids, with ``invalid_actions="refuse"``.
+    """
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,23 +135,35 @@ class PickPlaceCommand:
 
 @dataclass(frozen=True, eq=False)
 class PickPlaceCodec:
-    """Normalised ``pick_place`` action (6,) in [-1, 1] <-> `PickPlaceCommand`.
+    """Normalised ``pick_place`` action in [-1, 1] <-> `PickPlaceCommand`.
 
-    Layout: pick (x, y) over ``pick`` (linear), the tile's yaw / pi, place (x, y) over
-    ``place``, the rotation / pi.
+    Layout with ``pick_yaw`` (the ``-v0`` ids), shape (6,): pick (x, y) over ``pick``
+    (linear), the tile's yaw / pi, place (x, y) over ``place``, the rotation / pi. Without it
+    (``-v1``), shape (5,): pick (x, y), place (x, y), the rotation / pi; decoded commands have
+    ``pick_yaw`` 0 (the executor has no use for it: it would only turn a grasp offset, which is
+    always zero) and `encode` drops a command's ``pick_yaw``.
 
     Attributes:
         pick: The pick area (input tile area grown by the pick margin; up to the belt's end
             when the belt moves).
         place: The place area (the mesh grown by the place margin).
+        pick_yaw: The layout carries the pick-yaw entry (``pick_yaw_entry`` of the env).
     """
 
     pick: Area
     place: Area
+    pick_yaw: bool = True
+
+    @property
+    def size(self) -> int:
+        """Entries of an action: 6 with the pick-yaw entry, else 5."""
+        return 6 if self.pick_yaw else 5
 
     def decode(self, action: np.ndarray) -> PickPlaceCommand:
-        """Normalised (6,) action -> world command."""
+        """Normalised action (`size`,) -> world command."""
         a = np.asarray(action, float)
+        if not self.pick_yaw:
+            a = np.insert(a, 2, 0.0)
         p = self.pick.from_unit(a[:2])
         q = self.place.from_unit(a[3:5])
         return PickPlaceCommand(
@@ -159,7 +174,7 @@ class PickPlaceCodec:
         )
 
     def encode(self, cmd: PickPlaceCommand) -> np.ndarray:
-        """World command -> the normalised (6,) float32 action (angles wrapped).
+        """World command -> the normalised (`size`,) float32 action (angles wrapped).
 
         Raises:
             ActionError: A position outside its area.
@@ -176,6 +191,8 @@ class PickPlaceCodec:
         yaw = float(wrap_angle(cmd.pick_yaw)) / math.pi
         turn = float(wrap_angle(cmd.rotation)) / math.pi
         out = np.array([p[0], p[1], yaw, q[0], q[1], turn])
+        if not self.pick_yaw:
+            out = np.delete(out, 2)
         return np.clip(out, -1, 1).astype(np.float32)
 
 
@@ -184,7 +201,8 @@ class TaskSpec:
     """What an agent may know about an env besides its observations.
 
     Attributes:
-        design: The design's name or path (as configured).
+        design: The design's name or path (as configured); ``procedural`` and the reset's
+            draw with a procedural design source.
         slots: The design's slots in the world, in slot order.
         pick: The pick area (input belt side).
         place: The place area (mesh side).
@@ -277,10 +295,14 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
     pick, place = work_areas(cell, config)
     h, w = config.image_size
     cameras = {name: cell.camera_model(name, h, w) for name in ("input_camera", "output_camera")}
-    codec = PickPlaceCodec(pick, place) if config.action_mode == "pick_place" else None
+    codec = (
+        PickPlaceCodec(pick, place, config.pick_yaw_entry)
+        if config.action_mode == "pick_place"
+        else None
+    )
     feed: FeedMode = cell.cfg.tiles.feed
     return TaskSpec(
-        design=config.design,
+        design=config.design if config.design_source == "fixed" else design.name,
         slots=world_slots(cell, design),
         pick=pick,
         place=place,

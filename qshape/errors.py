@@ -35,6 +35,10 @@ class GeneratorError(DesignError):
     """A design generator parameter is out of range; the message names it and what is allowed."""
 
 
+class ExcludedClassError(GeneratorError):
+    """No design free of excluded tile classes was drawn in the tries allowed (names the clash)."""
+
+
 class SmallFeatureWarning(UserWarning):
     """A design slot holds a curved feature below what the camera recognises (named in it)."""
 
@@ -59,6 +63,7 @@ __all__ = [
     "DesignError",
     "DesignLimitError",
     "FigureLimitError",
+    "ExcludedClassError",
     "GeneratorError",
     "InvalidFigureError",
     "LimitError",

@@ -147,3 +147,26 @@ def test_committed_checkpoints_bind_to_their_task(path: str) -> None:
         assert env.action_space.contains(action.astype(env.action_space.dtype))
     finally:
         env.close()
+
+
+def test_random_samples_only_allowed_actions_where_the_env_refuses_the_others() -> None:
+    """On ``invalid_actions="refuse"`` (the ``-v1`` ids) every random action is accepted."""
+    refuse = {**BASE, "max_slots": 6, "invalid_actions": "refuse"}
+    rows, _ = evaluate_policy_set(
+        make_policies(["random"], refuse), Protocol((1000, 1001, 1002), (), 6)
+    )
+    assert rows[0].episodes == 3
+    env = gym.make("MosaicDecision6-v1")
+    try:
+        predict = make_policy("random", dict(refuse)).factory(env)
+        env.reset(seed=5)
+        env.action_space.seed(5)
+        for _ in range(6):
+            action = predict({}, False)
+            mask = env.get_wrapper_attr("action_masks")()
+            assert mask[action[0]] and mask[6 + action[1]]
+            _, _, terminated, _, _ = env.step(action)
+            if terminated:
+                break
+    finally:
+        env.close()

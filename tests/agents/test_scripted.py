@@ -185,3 +185,22 @@ def test_a_tile_dropped_over_the_input_belt_is_picked_again_and_placed():
         assert not cell.was_dropped[tile]
     finally:
         env.close()
+
+
+def test_the_scripted_agent_places_tiles_on_v1_unchanged():
+    """``MosaicAssembly-v1``'s Box(5) pick_place layout: the agent encodes through the codec."""
+    e = gym.make("envs:MosaicAssembly-v1", image_size=FULL, execution="kinematic", max_slots=2)
+    try:
+        assert e.action_space.shape == (5,)
+        agent = ScriptedAgent.from_env(e, calibrate=False)
+        obs, _ = e.reset(seed=0)
+        info = {}
+        for step in range(6):
+            action, _ = agent.predict(obs, episode_start=np.array([step == 0]))
+            assert action.shape == (5,)
+            obs, _, terminated, truncated, info = e.step(action)
+            if terminated or truncated:
+                break
+        assert info["evaluation"]["correct"] == 2
+    finally:
+        e.close()

@@ -90,3 +90,37 @@ def test_reach_shaping_pays_the_approach_and_telescopes() -> None:
         env.close()
     with pytest.raises(AgentError, match="weight > 0"):
         ReachShaping(gym.make("MosaicOneTileJoint-v0"), weight=0.0)
+
+
+def test_flat_discrete_masks_are_the_outer_product_of_the_env_masks() -> None:
+    from sb3_contrib.common.maskable.utils import get_action_masks  # noqa: PLC0415
+    from stable_baselines3.common.vec_env import DummyVecEnv  # noqa: PLC0415
+
+    from agents.wrappers import FlatDiscreteActions  # noqa: PLC0415
+
+    flat = FlatDiscreteActions(gym.make("MosaicDecision6-v0"))
+    flat.reset(seed=1003)
+    flat.step(flat.flat(flat.unwrapped.expert_action(3, 3)))  # type: ignore[attr-defined]
+    vec = DummyVecEnv([lambda: flat])
+    joint = get_action_masks(vec)[0]
+    n, k, bins = (int(v) for v in flat.nvec)
+    assert joint.shape == (n * k * bins,) and joint.dtype == bool
+    per_dim = np.asarray(flat.env.get_wrapper_attr("action_masks")(), bool)
+    tiles, slots = per_dim[:n], per_dim[n : n + k]
+    for a in range(joint.size):
+        t, s, _ = flat.action(a)
+        assert joint[a] == (tiles[t] and slots[s])
+    assert joint.sum() == (n - 1) * (k - 1) * bins
+    vec.close()
+
+
+def test_flat_discrete_masks_need_an_env_with_masks() -> None:
+    from agents.wrappers import FlatDiscreteActions  # noqa: PLC0415
+    from envs.mosaic_env import MosaicEnvError  # noqa: PLC0415
+
+    env = gym.make("MosaicAssembly-v0", max_slots=1, action_mode="joint", obs_mode="state")
+    env.action_space = gym.spaces.MultiDiscrete([2, 2])  # a MultiDiscrete env without masks
+    flat = FlatDiscreteActions(env)
+    with pytest.raises(MosaicEnvError, match="needs pick_place_discrete"):
+        flat.action_masks()
+    env.close()

@@ -178,3 +178,12 @@ def test_a_rerun_of_a_finished_sweep_starts_no_ray_task(tmp_path, monkeypatch) -
     ]
     summary = {r["entry"]: r["runs"] for r in json.loads((tmp_path / "summary.json").read_text())}
     assert summary == {"random": 1, "PPO tiny": 2}
+
+
+def test_a_row_says_what_ran() -> None:
+    from apps.sweep import ran_label  # noqa: PLC0415
+
+    preset = {"max_slots": 6, "obs_mode": "state"}
+    assert ran_label("MosaicDecision6-v0", preset, dict(preset)) == "MosaicDecision6-v0"
+    shrunk = {**preset, "max_slots": 2}
+    assert ran_label("MosaicDecision6-v0", preset, shrunk) == "MosaicDecision6-v0 (max_slots=2)"

@@ -51,15 +51,18 @@ def tile_shapes_from_design(
     mm = M_PER_MM
     width, height = design.mesh_size
     shapes, slots = [], []
+    by_class: dict[str, TileShape] = {}  # the slots of a class share one shape (built once)
     for slot in design.slots:
-        path = slot.local_path
-        shape = TileShape(
-            _loop_points(path.outer, arc_step_mm) * mm,
-            holes=tuple(_loop_points(h, arc_step_mm) * mm for h in path.holes),
-            color=tuple(slot.color),
-            name=slot.class_key,
-            symmetry=int(slot.symmetry),
-        )
+        shape = by_class.get(slot.class_key)
+        if shape is None:
+            path = slot.local_path
+            shape = by_class[slot.class_key] = TileShape(
+                _loop_points(path.outer, arc_step_mm) * mm,
+                holes=tuple(_loop_points(h, arc_step_mm) * mm for h in path.holes),
+                color=tuple(slot.color),
+                name=slot.class_key,
+                symmetry=int(slot.symmetry),
+            )
         pose = ((slot.x - width / 2) * mm, (slot.y - height / 2) * mm, math.radians(slot.angle))
         shapes.append(shape)
         slots.append(SlotSpec(shape, pose, slot.name))

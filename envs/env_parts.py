@@ -1,0 +1,108 @@
+"""The parts of `MosaicAssembly-v0` made from one design's cell: `EnvParts` and `build_parts`.
+
+The env builds them once at construction, and again at every reset when its design source is
+procedural (`envs.design_source`); the IK solver (the arm alone) and the spaces are built once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from envs.actions import (
+    ActionAdapter,
+    CartesianActions,
+    DiscretePickPlaceActions,
+    JointActions,
+    PickPlaceActions,
+)
+from envs.cell.cell import Cell
+from envs.cell.pick_place import PickPlaceExecutor
+from envs.env_config import EnvConfig, EnvConfigError
+from envs.episode_setup import build_cell, design_cell_parts
+from envs.indexing import IndexMaps
+from envs.observations import Observer
+from envs.task import MosaicTask
+from envs.task_spec import Area, PickPlaceCodec, TaskSpec, build_task_spec, work_areas
+from planners.config import PlannerConfig
+from planners.ik import IKSolver
+
+if TYPE_CHECKING:
+    from qshape.design import Design
+
+
+@dataclass(frozen=True)
+class EnvParts:
+    """Everything of the env that depends on the cell (see `MosaicAssemblyEnv` for each)."""
+
+    cell: Cell
+    task: MosaicTask
+    observer: Observer
+    index: IndexMaps
+    pick_area: Area
+    place_area: Area
+    codec: PickPlaceCodec
+    task_spec: TaskSpec
+    executor: PickPlaceExecutor | None
+    actions: ActionAdapter
+
+
+def build_parts(
+    cfg: EnvConfig, design: Design | None, seed: int, ik: IKSolver, pcfg: PlannerConfig
+) -> EnvParts:
+    """The cell of ``design`` (None: ``cfg.design``) built with ``seed``, and its parts.
+
+    Raises:
+        CellError: The tiles do not fit (`envs.episode_setup.build_cell`).
+        EnvConfigError: An observation image larger than the render buffer.
+    """
+    design, shapes, slots = design_cell_parts(cfg, design)
+    cell = build_cell(cfg.cell, shapes, slots, seed=seed, tries=cfg.layout_tries)
+    check_image_size(cfg, cell)
+    task = MosaicTask(cell, cfg)
+    pick, place = work_areas(cell, cfg)
+    codec = PickPlaceCodec(pick, place, cfg.pick_yaw_entry)
+    executor = None
+    actions: ActionAdapter
+    if cfg.action_mode == "joint":
+        actions = JointActions(cell, cfg)
+    elif cfg.action_mode == "cartesian":
+        actions = CartesianActions(cell, cfg, ik, pick, place)
+    else:
+        executor = PickPlaceExecutor(cell, cfg, pcfg, ik, pick=pick, place=place)
+        if cfg.action_mode == "pick_place":
+            actions = PickPlaceActions(cell, cfg, executor, codec)
+        else:
+            actions = DiscretePickPlaceActions(cell, cfg, executor)
+    return EnvParts(
+        cell=cell,
+        task=task,
+        observer=Observer(cell, task, cfg),
+        index=IndexMaps(cell, cfg),
+        pick_area=pick,
+        place_area=place,
+        codec=codec,
+        task_spec=build_task_spec(cell, cfg, design),
+        executor=executor,
+        actions=actions,
+    )
+
+
+def check_image_size(cfg: EnvConfig, cell: Cell) -> None:
+    """Refuse an observation image larger than the model's offscreen render buffer.
+
+    Raises:
+        EnvConfigError: ``image_size`` beyond the buffer (names the allowed size).
+    """
+    if cfg.obs_mode in ("state", "objects"):
+        return
+    vis = cell.model.vis.global_
+    h, w = cfg.image_size
+    if h > vis.offheight or w > vis.offwidth:
+        raise EnvConfigError(
+            f"image_size {(h, w)} exceeds the offscreen render buffer "
+            f"({vis.offheight}, {vis.offwidth}) px (height, width); allowed: up to that size"
+        )
+
+
+__all__ = ["EnvParts", "build_parts", "check_image_size"]

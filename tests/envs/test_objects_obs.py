@@ -1,0 +1,244 @@
+"""The ``objects`` observation: entity rows without class ids (`envs.objects`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from shapely.geometry import LinearRing, Point
+
+import envs  # noqa: F401 - registers the ids
+from envs.cell.cell import Cell
+from envs.cell.tiles.tile import SlotSpec, TileShape
+from envs.env_config import EnvConfigError, load_env_config
+from envs.objects import (
+    OBJECT_DIM,
+    OBJECT_FIELDS,
+    OVERSAMPLE,
+    as_xy,
+    entity_geometry,
+    object_fields,
+    oriented_points,
+)
+from envs.observations import Observer
+from envs.task import MosaicTask
+
+F = OBJECT_FIELDS
+SEED = 3
+ON_OUTLINE_MM = 1e-3
+"""Points lie on the built outline within this [mm] (float32 rows)."""
+
+
+@pytest.fixture(scope="module")
+def env() -> Iterator[gym.Env]:
+    e = gym.make("MosaicDecision6-v0", obs_mode="objects")
+    yield e
+    e.close()
+
+
+def _points(row: np.ndarray, fields: dict[str, slice] = F) -> np.ndarray:
+    return row[fields["points"]].reshape(-1, 2).astype(float)
+
+
+def _turn(p: np.ndarray, yaw: float) -> np.ndarray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return p @ np.array([[c, s], [-s, c]])
+
+
+def test_layout_is_a_table_of_named_slices() -> None:
+    assert OBJECT_DIM == 75
+    assert F["rgb"] == slice(0, 3) and F["valid"] == slice(10, 11)
+    assert F["points"] == slice(11, 75)
+    assert object_fields(8)["points"] == slice(11, 27)
+    covered = sorted(i for s in F.values() for i in range(s.start, s.stop))
+    assert covered == list(range(OBJECT_DIM))  # no gap, no overlap
+
+
+def test_space_shape_dtype_and_rows_follow_the_action_indices(env: gym.Env) -> None:
+    obs, _ = env.reset(seed=SEED)
+    space = env.observation_space
+    assert set(space.spaces) == {"robot", "tiles", "slots"}
+    for key in ("tiles", "slots"):
+        assert space[key].shape == (6, OBJECT_DIM) and space[key].dtype == np.float32
+        assert obs[key].shape == (6, OBJECT_DIM) and obs[key].dtype == np.float32
+    assert space.contains(obs)
+    u = env.unwrapped
+    pos = u.cell.tile_poses().pos[:, :2]
+    np.testing.assert_allclose(obs["tiles"][:, F["xy"]], pos[u.index.tiles], atol=1e-6)
+    slots = u.cell.slot_poses_world()[:, :2]
+    np.testing.assert_allclose(obs["slots"][:, F["xy"]], slots[u.index.slots], atol=1e-6)
+    np.testing.assert_array_equal(obs["tiles"][:, F["flag"]].ravel(), u.cell.input_half())
+    assert np.all(obs["tiles"][:, F["valid"]] == 1)
+
+
+def test_points_lie_on_the_turned_outline_and_start_at_the_smallest_polar_angle() -> None:
+    rect = np.array([[-20.0, -10.0], [20.0, -10.0], [20.0, 10.0], [-20.0, 10.0]]) / 1000
+    geometry = entity_geometry([rect], [[]], [(0.5, 0.5, 0.5)], 16)
+    samples = geometry.fine[0, : OVERSAMPLE * 16]
+    ring = LinearRing(rect * 1000)
+    for yaw in (0.0, 0.3, math.pi / 2, 2.0, -2.5, 7.0):
+        turn = np.exp(1j * np.array([yaw]))
+        z = oriented_points(geometry, turn, np.array([yaw]), 16)[0]
+        pts = as_xy(z[None])[0].reshape(-1, 2)
+        back = _turn(pts, -yaw)  # into the body frame
+        assert max(ring.distance(Point(p)) for p in back) < 1e-9
+        angles = np.angle(samples * turn) % (2 * math.pi)
+        assert np.angle(z[0]) % (2 * math.pi) == pytest.approx(angles.min(), abs=1e-12)
+        steps = np.linalg.norm(np.diff(np.vstack([pts, pts[:1]]), axis=0), axis=1)
+        assert np.all(steps <= ring.length / 16 + 1e-9)  # equal arc length (chords <= arcs)
+        nxt = np.roll(pts, -1, axis=0)
+        assert np.sum(pts[:, 0] * nxt[:, 1] - pts[:, 1] * nxt[:, 0]) > 0  # counter-clockwise
+    # a half turn of a rectangle shows the same points (start included)
+    half, none = (
+        oriented_points(geometry, np.exp(1j * np.array([y])), np.array([y]), 16)
+        for y in (math.pi, 0.0)
+    )
+    np.testing.assert_allclose(as_xy(half), as_xy(none), atol=1e-9)
+
+
+def test_turning_a_tile_turns_its_points(env: gym.Env) -> None:
+    env.reset(seed=SEED)
+    u = env.unwrapped
+    rng = np.random.default_rng(0)
+    rows = []
+    for yaw in (0.0, 0.7):
+        u.cell.place_tiles(np.array([0]), np.array([[0.0, 0.0, yaw]]))
+        obs_tiles, _ = u.observer.objects.observe(rng, u.task.evaluate())  # cell order
+        rows.append(obs_tiles[0].astype(float))
+    assert rows[1][F["yaw"]] == pytest.approx([math.cos(0.7), math.sin(0.7)], abs=1e-6)
+    ring = LinearRing(u.cell.tiles[0].outline * 1000.0)  # body frame, about the centroid [mm]
+    for yaw, row in zip((0.0, 0.7), rows, strict=True):
+        assert max(ring.distance(Point(p)) for p in _turn(_points(row), -yaw)) < ON_OUTLINE_MM
+    assert not np.allclose(_points(rows[0]), _points(rows[1]), atol=1.0)
+    np.testing.assert_allclose(_points(rows[1]).mean(axis=0), 0.0, atol=1.0)  # about centroid
+
+
+def test_padded_rows_are_zero_and_invalid() -> None:
+    e = gym.make("MosaicDecision6-v0", obs_mode="objects", objects_rows=10)
+    obs, _ = e.reset(seed=SEED)
+    assert e.observation_space["tiles"].shape == (10, OBJECT_DIM)
+    u = e.unwrapped
+    tile, slot = next(i for i in range(6) if u.cell.input_half()[i]), 0
+    obs, *_ = e.step(u.expert_action(tile, slot))
+    for key in ("tiles", "slots"):
+        assert obs[key].shape == (10, OBJECT_DIM)
+        np.testing.assert_array_equal(obs[key][:, F["valid"]].ravel(), [1] * 6 + [0] * 4)
+        assert not obs[key][6:].any()
+        assert np.all(obs[key][:6, F["area"]] > 0)
+    assert e.observation_space.contains(obs)
+    e.close()
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "allowed"),
+    [
+        ("objects_points", 4, "[8, 256]"),
+        ("objects_points", 300, "[8, 256]"),
+        ("objects_noise_mm", -0.1, ">= 0"),
+        ("objects_source", "perception", "privileged"),
+        ("objects_rows", 0, ">= 1"),
+        ("obs_mode", "entities", "objects"),
+    ],
+)
+def test_bad_options_are_typed_errors_naming_what_is_allowed(
+    key: str, value: object, allowed: str
+) -> None:
+    with pytest.raises(EnvConfigError, match=key) as err:
+        load_env_config(**{"obs_mode": "objects", key: value})
+    assert allowed in str(err.value)
+
+
+def test_too_few_rows_for_the_episode_is_an_error() -> None:
+    with pytest.raises(EnvConfigError, match=r"objects_rows 3 .*>= 6"):
+        gym.make("MosaicDecision6-v0", obs_mode="objects", objects_rows=3)
+
+
+def test_no_class_id_equal_shapes_and_colours_give_equal_rows() -> None:
+    """Two classes of the same shape and colour: rows equal apart from pose (and flags)."""
+    cfg = load_env_config(
+        obs_mode="objects", vertex_jitter=0.0, tile_color_jitter=0.0, tile_variants=1
+    )
+    outline = np.array([[0.0, 0.0], [0.04, 0.0], [0.04, 0.02], [0.01, 0.03]])
+    a = TileShape(outline, color=(0.2, 0.5, 0.7), name="a")
+    b = TileShape(outline, color=(0.2, 0.5, 0.7), name="b")
+    slots = (SlotSpec(a, (-0.05, 0.0, 0.4)), SlotSpec(b, (0.05, 0.0, 0.4)))
+    cell = Cell(cfg.cell, (a, b), slots, seed=SEED)
+    task = MosaicTask(cell, cfg)
+    assert list(task.tile_class) == [0, 1] and list(task.slot_class) == [0, 1]
+    obs = Observer(cell, task, cfg).observe(np.random.default_rng(0), task.evaluate())
+    tiles, slot_rows = obs["tiles"], obs["slots"]
+    shape_cols = [F["rgb"], F["area"], F["hole_area"], F["points"]]
+    for col in shape_cols:
+        np.testing.assert_array_equal(slot_rows[0, col], slot_rows[1, col])
+    for col in (F["rgb"], F["area"], F["hole_area"]):
+        np.testing.assert_allclose(tiles[0, col], tiles[1, col], rtol=1e-6)
+    yaw = np.arctan2(tiles[:, F["yaw"].start + 1], tiles[:, F["yaw"].start])
+    ring = LinearRing(cell.tiles[0].outline * 1000.0)  # about the centroid [mm]
+    for i in range(2):  # both rows: the same outline, turned as each tile lies
+        body = _turn(_points(tiles[i]), -float(yaw[i]))
+        assert max(ring.distance(Point(p)) for p in body) < ON_OUTLINE_MM
+
+
+@pytest.mark.parametrize("task_id", ["MosaicDecision6-v0", "MosaicDecision16-v0"])
+def test_no_column_equals_the_class_index(task_id: str) -> None:
+    e = gym.make(task_id, obs_mode="objects")
+    obs, _ = e.reset(seed=SEED)
+    u = e.unwrapped
+    tile_class = u.task.tile_class[u.index.tiles]
+    slot_class = u.task.slot_class[u.index.slots]
+    for rows, classes in ((obs["tiles"], tile_class), (obs["slots"], slot_class)):
+        for col in range(rows.shape[1]):
+            assert not np.array_equal(rows[:, col], classes.astype(np.float32)), col
+    e.close()
+
+
+def test_a_privileged_step_fills_a_slot_and_its_flag_turns_one(env: gym.Env) -> None:
+    obs, _ = env.reset(seed=SEED)
+    u = env.unwrapped
+    assert not obs["slots"][:, F["flag"]].any()
+    tile = next(i for i in range(6) if u.cell.input_half()[i])
+    action = u.expert_action(tile, tile)  # cell tile i is made for design slot i
+    obs, reward, *_ = env.step(action)
+    assert reward > 0
+    row = int(action[1])
+    assert obs["slots"][row, F["flag"].start] == 1
+    assert obs["slots"][:, F["flag"]].sum() == 1
+    assert obs["tiles"][:, F["flag"]].sum() == 5  # the placed tile left the input belt
+
+
+def test_outline_noise_is_seeded_and_only_on_tiles() -> None:
+    def rows(noise: float) -> dict[str, np.ndarray]:
+        e = gym.make("MosaicDecision6-v0", obs_mode="objects", objects_noise_mm=noise)
+        obs, _ = e.reset(seed=SEED)
+        e.close()
+        return obs
+
+    clean, noisy, again = rows(0.0), rows(0.5), rows(0.5)
+    np.testing.assert_array_equal(noisy["tiles"], again["tiles"])
+    np.testing.assert_array_equal(noisy["slots"], clean["slots"])
+    d = noisy["tiles"][:, F["points"]] - clean["tiles"][:, F["points"]]
+    assert 0.3 < float(np.std(d)) < 0.7
+    np.testing.assert_array_equal(
+        noisy["tiles"][:, : F["points"].start], clean["tiles"][:, : F["points"].start]
+    )
+
+
+def test_objects_keys_leave_the_state_observation_alone() -> None:
+    actions = [np.array([0, 1, 2]), np.array([1, 0, 0]), np.array([0, 3, 1])]
+
+    def rollout(**kw: object) -> list[np.ndarray]:
+        e = gym.make("MosaicDecision6-v0", **kw)
+        obs, _ = e.reset(seed=SEED)
+        out = [obs["tiles"], obs["slots"], obs["robot"]]
+        for a in actions:
+            obs, *_ = e.step(a)
+            out += [obs["tiles"], obs["slots"], obs["robot"]]
+        e.close()
+        return out
+
+    changed = rollout(objects_noise_mm=1.0, objects_points=64, objects_rows=9)
+    for a, b in zip(rollout(), changed, strict=True):
+        np.testing.assert_array_equal(a, b)
