@@ -21,6 +21,8 @@ STATE_KEYS = ("robot", "tiles", "slots")
 """Observation keys the clone reads, in order."""
 BC_CONFIG = "bc"
 """Bundled config name (``configs/bc.yaml``)."""
+ARCHS = ("mlp", "pair")
+"""Allowed ``BCConfig.arch`` values."""
 
 
 @dataclass(frozen=True)
@@ -34,6 +36,8 @@ class BCConfig:
         batch_size: Steps per gradient step.
         learning_rate: Adam step size.
         weight_decay: Adam L2 penalty.
+        arch: ``mlp`` (one network over the concatenated observation) or ``pair`` (the pair
+            scorer of `agents.pair_scorer`, shared weights per (tile, slot) pair).
     """
 
     hidden: int = 256
@@ -42,6 +46,11 @@ class BCConfig:
     batch_size: int = 64
     learning_rate: float = 1e-3
     weight_decay: float = 1e-4
+    arch: str = "mlp"
+
+    def __post_init__(self) -> None:
+        if self.arch not in ARCHS:
+            raise AgentError(f"unknown behaviour-cloning arch {self.arch!r}; allowed: {ARCHS}")
 
 
 def load_bc_config(name_or_path: str | Path = BC_CONFIG, **overrides: Any) -> BCConfig:
@@ -54,7 +63,7 @@ def _features(obs: dict[str, Any]) -> np.ndarray:
     parts = [np.asarray(obs[k], np.float32) for k in STATE_KEYS]
     if parts[0].ndim == 1:
         parts = [p[None] for p in parts]
-    return np.concatenate(parts, axis=1)
+    return np.concatenate([p.reshape(len(p), -1) for p in parts], axis=1)  # objects rows: flat
 
 
 def _network(n_in: int, n_out: int, cfg: BCConfig) -> Any:
@@ -78,6 +87,11 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
     import torch  # noqa: PLC0415
 
     cfg = cfg or load_bc_config()
+    if cfg.arch == "pair":
+        from agents.pair_bc import train_pair_bc  # noqa: PLC0415
+
+        return train_pair_bc(dataset, out, seed, cfg)
+    cpu0 = time.process_time()
     xs, ys = [], []
     nvec: np.ndarray | None = None
     for ep in dataset.iterate_episodes():
@@ -97,7 +111,7 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
     opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
     gen = torch.Generator().manual_seed(seed)
     t0 = time.perf_counter()
-    loss = torch.tensor(0.0)
+    loss, steps = torch.tensor(0.0), 0
     for _ in range(cfg.epochs):
         perm = torch.randperm(len(x), generator=gen)
         for i in range(0, len(x), cfg.batch_size):
@@ -106,6 +120,7 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
             opt.zero_grad()
             loss.backward()
             opt.step()
+            steps += 1
     with torch.no_grad():
         acc = float((net(x).argmax(1) == y).float().mean())
     out.mkdir(parents=True, exist_ok=True)
@@ -117,15 +132,20 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
                 "nvec": nvec.tolist(),
                 "n_in": int(x.shape[1]),
                 "config": asdict(cfg),
+                "arch": "mlp",
             },
             tmp,
         )
     summary = {
         "model_path": str(path),
+        "arch": "mlp",
         "samples": len(x),
+        "parameters": sum(p.numel() for p in net.parameters()),
+        "gradient_steps": steps,
         "train_accuracy": acc,
         "final_loss": float(loss.detach()),
         "wall_s": time.perf_counter() - t0,
+        "cpu_s": time.process_time() - cpu0,
         "seed": seed,
     }
     write_json(out / "bc_summary.json", summary)
@@ -134,6 +154,8 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
 
 class BCPolicy:
     """A trained clone as a policy (``predict(obs) -> (action, None)``).
+
+    A pair-scorer clone (``arch: pair`` in the file) is played by `agents.pair_bc.PairBCPolicy`.
 
     Args:
         path: A ``bc.pt`` file from `train_bc`.
@@ -145,6 +167,14 @@ class BCPolicy:
 
         try:
             blob = torch.load(str(path), map_location="cpu", weights_only=True)
+            if blob.get("arch") == "pair":
+                from agents.pair_bc import PairBCPolicy  # noqa: PLC0415
+
+                self._pair: Any = PairBCPolicy(blob)
+                self.action_space = self._pair.action_space
+                return
+            self._pair = None
+            self._obs_mode = str(blob.get("obs_mode", "state"))
             self.nvec = np.asarray(blob["nvec"], np.int64)
             cfg = BCConfig(**blob["config"])
             self.net = _network(int(blob["n_in"]), int(np.prod(self.nvec)), cfg)
@@ -156,6 +186,7 @@ class BCPolicy:
             TypeError,
             ValueError,
             EOFError,
+            AttributeError,
             pickle.UnpicklingError,
         ) as exc:
             what = "no such file" if isinstance(exc, FileNotFoundError) else "unreadable"
@@ -168,10 +199,21 @@ class BCPolicy:
         self.action_space = spaces.MultiDiscrete(self.nvec)
         self.n_in = int(blob["n_in"])
 
+    @property
+    def env_overrides(self) -> dict[str, Any]:
+        """Env keys the clone's observation needs: ``obs_mode="objects"`` for an objects clone."""
+        if self._pair is not None:
+            mode = self._pair.adapter_name
+        else:
+            mode = self._obs_mode
+        return {"obs_mode": mode} if mode == "objects" else {}
+
     def predict(self, obs: dict[str, Any]) -> tuple[np.ndarray, None]:
         """The most likely (tile, slot, rotation) for a state observation."""
         import torch  # noqa: PLC0415
 
+        if self._pair is not None:
+            return self._pair.predict(obs)
         x = _features(obs)
         if x.shape[1] != self.n_in:
             raise AgentError(f"clone expects {self.n_in} state features, got {x.shape[1]}")
@@ -180,4 +222,4 @@ class BCPolicy:
         return np.array(np.unravel_index(k, self.nvec), np.int64), None
 
 
-__all__ = ["BCConfig", "BCPolicy", "load_bc_config", "train_bc"]
+__all__ = ["ARCHS", "BCConfig", "BCPolicy", "load_bc_config", "train_bc"]

@@ -12,7 +12,8 @@ its spaces need, an optional wrapper, and a factory that binds it to a built env
 - ``openloop``: the best open-loop sequence: the privileged expert's actions recorded on one
   training seed, replayed on every episode without looking (shows whether the encoding leaks).
 - ``identity``: the open-loop sequence ``(i, i, 0)`` (decision level).
-- a ``.pt`` path: a behaviour clone of `agents.bc`.
+- a ``.pt`` path: a camera policy of `agents.camera_policy` (its file's ``kind`` says so;
+  played on ``rgb`` observations at its image size) or a behaviour clone of `agents.bc`.
 - a path to an SB3 ``.zip``: loaded with the algorithm of its run's ``train_config.yaml``;
   its observation and action spaces must equal the env's, checked when it is bound.
 - ``module:attr``: a user's object. If ``attr`` has ``predict``, ``predict(obs)`` is called
@@ -253,10 +254,13 @@ def _trained(base: dict[str, Any], model_path: Path) -> Policy:
     def factory(env: gym.Env) -> Predict:
         model = load_model(model_path, str(run.get("algo", "")))
         check_spaces(label, env, model.observation_space, model.action_space, sb3_view=True)
+        # A maskable model (sb3-contrib's MaskablePPO) plays with the env's action masks.
+        masked = "action_masks" in inspect.signature(model.predict).parameters
 
         def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
             del start
-            return np.asarray(model.predict(obs, deterministic=True)[0])
+            kw = {"action_masks": env.get_wrapper_attr("action_masks")()} if masked else {}
+            return np.asarray(model.predict(obs, deterministic=True, **kw)[0])
 
         return predict
 
@@ -265,14 +269,19 @@ def _trained(base: dict[str, Any], model_path: Path) -> Policy:
 
 
 def _clone(base: dict[str, Any], path: Path) -> Policy:
-    """A behaviour clone (`agents.bc.BCPolicy`) saved as ``bc.pt``."""
+    """A ``.pt`` policy: a camera policy (by the file's ``kind``) or a behaviour clone."""
     if not path.is_file():
         raise PolicyError(f"unknown policy {str(path)!r}: no such behaviour-clone file")
+    from agents.camera_policy import KIND, read_policy_file  # noqa: PLC0415
+
+    if read_policy_file(path).get("kind") == KIND:
+        return _camera(base, path)
     label = checkpoint_label(path)
+    from agents.bc import BCPolicy  # noqa: PLC0415
+
+    overrides = BCPolicy(path).env_overrides  # an objects clone plays on objects rows
 
     def factory(env: gym.Env) -> Predict:
-        from agents.bc import BCPolicy  # noqa: PLC0415
-
         clone = BCPolicy(path)
         check_spaces(label, env, None, clone.action_space)
 
@@ -282,7 +291,28 @@ def _clone(base: dict[str, Any], path: Path) -> Policy:
 
         return predict
 
-    return Policy(label, dict(base), factory)
+    return Policy(label, {**base, **overrides}, factory)
+
+
+def _camera(base: dict[str, Any], path: Path) -> Policy:
+    """A camera policy: ``rgb`` observations at the image size it was trained on."""
+    from agents.camera_policy import CameraPolicy  # noqa: PLC0415
+
+    policy = CameraPolicy.load(path)
+    env_kwargs = {**base, "obs_mode": "rgb", "image_size": list(policy.image_size)}
+
+    def factory(env: gym.Env) -> Predict:
+        _need_discrete(env, checkpoint_label(path))
+        spec = [env.get_wrapper_attr("task_spec")]
+
+        def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
+            if start:
+                spec[0] = env.get_wrapper_attr("task_spec")
+            return policy.predict(obs, spec[0])[0]
+
+        return predict
+
+    return Policy(checkpoint_label(path), env_kwargs, factory)
 
 
 def _user(base: dict[str, Any], spec: str) -> Policy:

@@ -24,6 +24,7 @@ starting at home sees almost no gradient towards the tile.
 
 from __future__ import annotations
 
+import resource
 from typing import Any
 
 import gymnasium as gym
@@ -75,6 +76,34 @@ class FlatDiscreteActions(gym.ActionWrapper):
         for part in np.split(flat, np.cumsum(self.nvec)[:-1]):
             joint = np.multiply.outer(joint, part)
         return joint.reshape(-1)
+
+
+def cpu_seconds() -> float:
+    """CPU time of this process and its finished children so far [s] (user + system)."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+class EpisodeProgress(gym.Wrapper):
+    """Puts an episode's fill and the training process's CPU time into its last ``info``.
+
+    The step that ends an episode gets ``info["filled"]`` (slots filled correctly / slots,
+    from ``info["evaluation"]``) and ``info["cpu_s"]`` (`cpu_seconds` then), so a `Monitor`
+    can log learning curves against CPU time as well as env steps.
+
+    Args:
+        env: A `MosaicAssembly-v0` env (any wrapper).
+    """
+
+    def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict[str, Any]]:
+        """Step the env; add the two entries at the episode's end."""
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        if terminated or truncated:
+            ev = info.get("evaluation") or {}
+            filled = float(ev.get("correct", 0)) / max(float(ev.get("slots", 0)), 1.0)
+            info = {**info, "filled": filled, "cpu_s": cpu_seconds()}
+        return obs, reward, terminated, truncated, info
 
 
 REWARD_TERM_PREFIX = "reward_"
@@ -211,8 +240,10 @@ class RecordCycleVideo(gym.wrappers.RecordVideo):
 __all__ = [
     "EPISODE_TERMS_KEY",
     "REWARD_TERM_PREFIX",
+    "EpisodeProgress",
     "EpisodeRewardTerms",
     "FlatDiscreteActions",
     "ReachShaping",
     "RecordCycleVideo",
+    "cpu_seconds",
 ]

@@ -6,6 +6,12 @@ Run::
         --dataset-id mosaic/decision6-expert-v0
     python -m apps.bc --dataset-id mosaic/decision6-expert-v0 --out runs/bc [--seed 0]
     python -m apps.evaluate --task MosaicDecision6-v0 --policies runs/bc/bc.pt
+    python -m apps.bc --dataset-id mosaic/decision6-expert-v0 --config bc_pair --out runs/pair
+
+``--arch pair`` (or ``arch: pair`` in the config, ``configs/bc_pair.yaml``) clones into the
+pair scorer of `agents.pair_scorer` instead: one network with shared weights applied to every
+(tile row, slot row) pair, one logit per (tile, slot, rotation), forbidden pairs masked from
+the observation's own flags (`agents.pair_state`).
 
 A multilayer perceptron maps the state observation (``robot``, ``tiles``, ``slots``
 concatenated) to one categorical over the flat ``(tile, slot, rotation)`` actions, trained
@@ -20,7 +26,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from agents.bc import BC_CONFIG, load_bc_config, train_bc
+from agents.bc import ARCHS, BC_CONFIG, load_bc_config, train_bc
 from apps.cli import CommandParser, run_cli
 from apps.record_demos import DEFAULT_ROOT, load
 
@@ -33,9 +39,17 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--out", type=Path, default=Path("runs/bc"))
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--config", default=BC_CONFIG, help="name in configs/ or a YAML path")
+    ap.add_argument("--arch", choices=ARCHS, default=None, help="override the config's arch")
     args = ap.parse_args(argv)
+    import torch  # noqa: PLC0415 - heavy import
+
+    torch.set_num_threads(1)
+    overrides = {"arch": args.arch} if args.arch else {}
     summary = train_bc(
-        load(args.dataset_id, args.root), args.out, args.seed, load_bc_config(args.config)
+        load(args.dataset_id, args.root),
+        args.out,
+        args.seed,
+        load_bc_config(args.config, **overrides),
     )
     print(json.dumps(summary, indent=2))
     return summary

@@ -96,6 +96,8 @@ class SweepEntry:
         bc_episodes: Behaviour cloning: record this many privileged-expert episodes on the
             task (reset seeds from seed x 10000, never the held-out ones) and clone them
             (`agents.bc`); 0: not a clone entry.
+        bc_config: The clone's `agents.bc.BCConfig` (a name in ``configs/`` or a path):
+            ``bc`` the flat MLP, ``bc_pair`` the pair scorer.
     """
 
     name: str
@@ -105,6 +107,7 @@ class SweepEntry:
     timesteps: int = 0
     env: Mapping[str, Any] = field(default_factory=dict)
     bc_episodes: int = 0
+    bc_config: str = "bc"
 
     def __post_init__(self) -> None:
         if bool(self.train) + bool(self.policy) + bool(self.bc_episodes) != 1:
@@ -280,6 +283,7 @@ def _train_sb3(
     info = {
         "timesteps": result.timesteps,
         "train_wall_s": result.wall_s,
+        "train_cpu_s": result.cpu_s,
         "steps_per_s": result.steps_per_s,
         "episodes": result.episodes,
     }
@@ -290,7 +294,7 @@ def _train_bc(
     spec: RunSpec, folder: Path, base: dict[str, Any]
 ) -> tuple[dict[str, Any], str, dict[str, Any]]:
     """Record expert demos and clone them: (env kwargs, clone path, figures)."""
-    from agents.bc import train_bc  # noqa: PLC0415
+    from agents.bc import load_bc_config, train_bc  # noqa: PLC0415
     from apps.record_demos import load, record  # noqa: PLC0415
 
     e = spec.entry
@@ -305,10 +309,12 @@ def _train_bc(
         task=e.task,
         overwrite=True,
     )
-    summary = train_bc(load(ds, root), folder, spec.seed)
+    summary = train_bc(load(ds, root), folder, spec.seed, load_bc_config(e.bc_config))
     info = {
         "timesteps": rec.steps,
-        "train_wall_s": summary["wall_s"],
+        "train_wall_s": summary.get("wall_s", 0.0),
+        "train_cpu_s": summary["cpu_s"],
+        "gradient_steps": summary["gradient_steps"],
         "episodes": rec.episodes,
         "train_accuracy": summary["train_accuracy"],
     }
@@ -455,8 +461,8 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
     lines = [
         "| task | policy | runs | success | slots filled | misplaced/ep | dropped/ep | lost/ep | "
         "stranded/ep | left/ep | tiles/min (sim) | return/ep | training steps | "
-        "train wall s (per run) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "train wall s (per run) | train CPU min (per run) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for (task, entry), rs in groups.items():
         est = aggregate_runs([r["metrics"] for r in rs])
@@ -464,6 +470,7 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
         ret = iqm_ci([x for x in returns if x is not None]) if None not in returns else None
         steps = [r.get("timesteps", 0) for r in rs]
         walls = [r.get("train_wall_s", 0.0) for r in rs]
+        cpus = [r.get("train_cpu_s", 0.0) / 60 for r in rs]
         summary.append(
             {
                 "task": rs[0]["task"],
@@ -474,6 +481,7 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
                 "episode_return": asdict(ret) if ret is not None else None,
                 "timesteps": steps,
                 "train_wall_s": walls,
+                "train_cpu_min": cpus,
             }
         )
         lines.append(
@@ -484,7 +492,8 @@ def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
             f"{est['left'].text('{:.2f}')} | {est['tiles_per_min'].text('{:.1f}')} | "
             f"{ret.text('{:.2f}') if ret is not None else '-'} | "
             f"{int(np.mean(steps)) if any(steps) else '-'} | "
-            f"{f'{np.mean(walls):.0f}' if any(walls) else '-'} |"
+            f"{f'{np.mean(walls):.0f}' if any(walls) else '-'} | "
+            f"{f'{np.mean(cpus):.2f}' if any(cpus) else '-'} |"
         )
     write_json(out / "summary.json", summary)
     write_text(out / "summary.md", "\n".join(lines) + "\n")

@@ -19,6 +19,7 @@ for Dict observations, ``CnnPolicy`` for image Boxes, ``MlpPolicy`` otherwise.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import json
 import os
 import sys
@@ -37,18 +38,14 @@ from agents.algorithms import algorithm_class
 from agents.demos import DEFAULT_ROOT as DEMO_ROOT
 from agents.wrappers import (
     EPISODE_TERMS_KEY,
+    EpisodeProgress,
     EpisodeRewardTerms,
     FlatDiscreteActions,
     ReachShaping,
+    cpu_seconds,
 )
 from apps.cli import CommandParser, run_cli
-from apps.train_extras import (
-    clone_before_learning,
-    cpu_time_stop,
-    process_cpu_s,
-    resolve_algo_kwargs,
-    resolve_named,
-)
+from apps.train_extras import clone_before_learning, resolve_algo_kwargs
 from configs import ConfigError, from_dict, load_yaml
 from configs.files import atomic_path, write_json, write_text
 
@@ -66,6 +63,9 @@ LOG_WINDOW = 20
 """Recent episodes averaged in a progress line."""
 SUMMARY_FILE = "summary.json"
 """The run's summary, written last: its presence marks a finished run (`finished_run`)."""
+MONITORED = ("is_success", "filled", "cpu_s")
+"""``info`` entries of an episode's last step written to the Monitor CSVs (success, fraction of
+slots filled, CPU seconds of the training process then: `agents.wrappers.EpisodeProgress`)."""
 MODEL_FILE = "model.zip"
 """The run's final model."""
 
@@ -81,7 +81,8 @@ class TrainConfig:
     Attributes:
         algo: stable-baselines3 algorithm class name (``PPO``, ``A2C``, ``DQN``, ``SAC``,
             ``TD3``, ``DDPG``; ``sb3_contrib`` ones too when installed).
-        policy: One of `POLICIES` (``auto`` picks from the observation space).
+        policy: One of `POLICIES` (``auto`` picks from the observation space), or a policy
+            class as ``module:Class`` (``agents.pair_policy:PairScorerPolicy``).
         total_timesteps: Env steps over all envs.
         n_envs: Parallel envs.
         vec_env: ``dummy`` (one process) or ``subproc`` (one process per env).
@@ -100,6 +101,12 @@ class TrainConfig:
             -> one Discrete over all combinations).
         max_wall_s: Stop ``learn`` after this wall time [s] even before ``total_timesteps``;
             0: no limit (the final model is saved either way).
+        max_cpu_s: The same limit in CPU time of the training process [s] (children included).
+        demos: Minari dataset id of demonstrations (``out/minari``) for ``bc_epochs``.
+        bc_epochs: Epochs of behaviour cloning of the actor on ``demos`` before learning
+            (SAC; `agents.rlpd.clone_actor`); 0: none. ``algo_kwargs`` keys ending in
+            ``_class`` may name a class as ``module:attr`` (`apps.train_extras`), e.g.
+            ``replay_buffer_class: agents.rlpd:DemoMixReplayBuffer``.
         task: A rung of the task ladder (``MosaicDecision6-v0``, `envs.tasks`): the envs are
             made from its id (its preset and episode limit; env i trains on its training
             design i mod count) and ``env`` overrides on top; "" uses `MosaicAssembly-v0`.
@@ -108,13 +115,6 @@ class TrainConfig:
         reach_shaping: Weight of `agents.wrappers.ReachShaping` on the training envs [1/m]
             (reward per metre the tool approaches the nearest tile; state observations);
             0: off. Evaluation always uses the env's own reward.
-        max_cpu_s: Stop ``learn`` after this much process CPU time [s] (0: no limit).
-        demos: Minari dataset id of demonstrations (``out/minari``) for ``bc_epochs``.
-        bc_epochs: Epochs of behaviour cloning of the actor on ``demos`` before learning
-            (SAC; `agents.rlpd.clone_actor`); 0: none.
-
-    ``policy`` and the ``algo_kwargs`` keys ending in ``_class`` may name an object as
-    ``module:attr`` (`apps.train_extras.resolve_named`), e.g. ``agents.rlpd:LayerNormSACPolicy``.
     """
 
     algo: str = "PPO"
@@ -135,10 +135,10 @@ class TrainConfig:
     verbose: int = 0
     flatten_actions: bool = False
     max_wall_s: float = 0.0
+    max_cpu_s: float = 0.0
     task: str = ""
     log_every_s: float = 30.0
     reach_shaping: float = 0.0
-    max_cpu_s: float = 0.0
     demos: str = ""
     bc_epochs: int = 0
 
@@ -147,13 +147,15 @@ class TrainConfig:
             raise TrainError(f"unknown vec_env {self.vec_env!r}; allowed: {list(VEC_ENVS)}")
         if self.policy not in POLICIES and ":" not in self.policy:
             raise TrainError(
-                f"unknown policy {self.policy!r}; allowed: {list(POLICIES)} or module:attr"
+                f"unknown policy {self.policy!r}; allowed: {list(POLICIES)} or module:Class"
             )
         for name in ("total_timesteps", "n_envs", "torch_threads"):
             if getattr(self, name) < 1:
                 raise TrainError(f"{name} must be >= 1, got {getattr(self, name)}")
-        if min(self.max_episode_steps, self.checkpoint_freq, self.max_wall_s) < 0:
-            raise TrainError("max_episode_steps, checkpoint_freq and max_wall_s must be >= 0")
+        if min(self.max_episode_steps, self.checkpoint_freq, self.max_wall_s, self.max_cpu_s) < 0:
+            raise TrainError(
+                "max_episode_steps, checkpoint_freq, max_wall_s and max_cpu_s must be >= 0"
+            )
         if self.bc_epochs and not self.demos:
             raise TrainError("bc_epochs needs demos (a dataset id)")
         if self.reach_shaping < 0:
@@ -195,9 +197,19 @@ def load_train_config(path: str | Path, **overrides: Any) -> TrainConfig:
 
 
 def pick_policy(policy: str, observation_space: spaces.Space) -> Any:
-    """Resolve ``auto`` from the observation space (Dict -> MultiInputPolicy), ``module:attr``."""
+    """Resolve ``auto`` from the observation space (Dict -> MultiInputPolicy), import a class.
+
+    Raises:
+        TrainError: A ``module:Class`` that cannot be imported.
+    """
+    if ":" in policy:
+        module, _, name = policy.partition(":")
+        try:
+            return getattr(importlib.import_module(module), name)
+        except (ImportError, AttributeError) as exc:
+            raise TrainError(f"cannot import policy {policy!r}: {exc}") from exc
     if policy != "auto":
-        return resolve_named(policy)
+        return policy
     if isinstance(observation_space, spaces.Dict):
         return "MultiInputPolicy"
     shape = getattr(observation_space, "shape", None) or ()
@@ -246,7 +258,7 @@ def make_vec(cfg: TrainConfig, monitor_dir: Path | None) -> Any:
             env = make()
             env.action_space.seed(cfg.seed + i)
             path = str(monitor_dir / str(i)) if monitor_dir is not None else None
-            return Monitor(EpisodeRewardTerms(env), path, info_keywords=("is_success",))
+            return Monitor(EpisodeRewardTerms(EpisodeProgress(env)), path, info_keywords=MONITORED)
 
         return build
 
@@ -275,6 +287,7 @@ class TrainResult:
         last_success: Success rate of the last episodes.
         last_terms: Mean per-episode sum of each named reward term over the last
             `RETURN_WINDOW` episodes ({} if the env names none).
+        cpu_s: CPU time of ``learn`` [s] (this process and its children).
     """
 
     out: Path
@@ -288,8 +301,7 @@ class TrainResult:
     first_success: float
     last_success: float
     last_terms: dict[str, float] = field(default_factory=dict)
-    cpu_s: float = float("nan")
-    """Process CPU time of cloning and ``learn`` (children included) [s]."""
+    cpu_s: float = 0.0
     gradient_steps: int = 0
     """Gradient steps of behaviour cloning and ``learn`` (``_n_updates``; 0 if not kept)."""
 
@@ -336,16 +348,16 @@ def _episode_stats(monitor_dir: Path) -> tuple[int, float, float, float, float]:
     )
 
 
-def _wall_clock_stop(limit_s: float) -> Any:
-    """A callback that ends ``learn`` once ``limit_s`` wall seconds have passed."""
+def _wall_clock_stop(limit_s: float, clock: Any = time.perf_counter) -> Any:
+    """A callback that ends ``learn`` once ``limit_s`` seconds of ``clock`` have passed."""
     from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
 
     class WallClockStop(BaseCallback):
         def _on_training_start(self) -> None:
-            self.t0 = time.perf_counter()
+            self.t0 = clock()
 
         def _on_step(self) -> bool:
-            return time.perf_counter() - self.t0 < limit_s
+            return clock() - self.t0 < limit_s
 
     return WallClockStop()
 
@@ -446,26 +458,6 @@ def _atomic_checkpoints(**kwargs: Any) -> Any:
     return AtomicCheckpoint(**kwargs)
 
 
-def _callbacks(cfg: TrainConfig, out: Path, terms: TermsLog, show_bar: bool) -> list[Any]:
-    """The callbacks of ``learn``: reward terms, progress lines, time limits, checkpoints."""
-    callbacks = [_log_terms(terms)]
-    if not show_bar and cfg.log_every_s > 0:
-        callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps, terms))
-    if cfg.max_wall_s:
-        callbacks.append(_wall_clock_stop(cfg.max_wall_s))
-    if cfg.max_cpu_s:
-        callbacks.append(cpu_time_stop(cfg.max_cpu_s))
-    if cfg.checkpoint_freq:
-        callbacks.append(
-            _atomic_checkpoints(
-                save_freq=max(cfg.checkpoint_freq // cfg.n_envs, 1),
-                save_path=str(out / "checkpoints"),
-                name_prefix="model",
-            )
-        )
-    return callbacks
-
-
 def train(cfg: TrainConfig, out: Path) -> TrainResult:
     """Train ``cfg`` and write the run folder ``out`` (see the module docstring).
 
@@ -494,21 +486,33 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             **kwargs,
         )
         terms = TermsLog(out / TERMS_FILE)
+        callbacks = [_log_terms(terms)]
         show_bar = cfg.progress_bar and sys.stdout.isatty()
-        callbacks = _callbacks(cfg, out, terms, show_bar)
-        cpu0 = process_cpu_s()
+        if not show_bar and cfg.log_every_s > 0:
+            callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps, terms))
+        if cfg.max_wall_s:
+            callbacks.append(_wall_clock_stop(cfg.max_wall_s))
+        if cfg.max_cpu_s:
+            callbacks.append(_wall_clock_stop(cfg.max_cpu_s, cpu_seconds))
+        if cfg.checkpoint_freq:
+            callbacks.append(
+                _atomic_checkpoints(
+                    save_freq=max(cfg.checkpoint_freq // cfg.n_envs, 1),
+                    save_path=str(out / "checkpoints"),
+                    name_prefix="model",
+                )
+            )
+        t0, c0 = time.perf_counter(), cpu_seconds()
         bc_steps = 0
         if cfg.bc_epochs:
             bc_steps = clone_before_learning(model, cfg.demos, DEMO_ROOT, cfg.bc_epochs, cfg.seed)
-        t0 = time.perf_counter()
         model.learn(
             total_timesteps=cfg.total_timesteps,
             callback=callbacks,
             progress_bar=show_bar,
             tb_log_name=cfg.algo,
         )
-        wall = time.perf_counter() - t0
-        cpu = process_cpu_s() - cpu0
+        wall, cpu = time.perf_counter() - t0, cpu_seconds() - c0
         model_path = out / MODEL_FILE
         with atomic_path(model_path) as tmp:
             model.save(str(tmp))

@@ -55,7 +55,7 @@ class IndexMaps:
         self.tiles = np.arange(n)
         self.slots = np.arange(k)
         self._rest = np.arange(n)
-        self._mesh_order = _raster_order(cell.slot_poses_world()[:, :2]) if k else self.slots
+        self._mesh_order = raster_order(cell.slot_poses_world()[:, :2]) if k else self.slots
         self._step = 2 * math.pi / config.rotation_bins
 
     def reset(self, rng: np.random.Generator) -> None:
@@ -135,10 +135,10 @@ class IndexMaps:
         return round(d / self._step) % self.cfg.rotation_bins
 
 
-def _raster_order(xy: np.ndarray) -> np.ndarray:
+def raster_order(xy: np.ndarray) -> np.ndarray:
     """Indices of points in raster order: rows by y descending, each row by x ascending."""
     rows = -np.round(xy[:, 1], ROW_DECIMALS)
     return np.lexsort((xy[:, 0], rows)).astype(int)
 
 
-__all__ = ["IndexMaps"]
+__all__ = ["IndexMaps", "raster_order"]
