@@ -3,8 +3,6 @@
 - `resolve_named`: a ``module:attr`` string in a training YAML (``policy``, an
   ``algo_kwargs`` key ending in ``_class``) becomes the object it names, so a config can use a
   policy or replay buffer class of the project (`agents.rlpd`) without code.
-- `cpu_time_stop`: a callback that ends ``learn`` after a budget of process CPU time (the
-  budgets of the baseline table are CPU minutes: wall time is inflated on a shared machine).
 - `clone_before_learning`: behaviour cloning of a SAC actor on a demonstration dataset before
   (or instead of) reinforcement learning.
 """
@@ -13,7 +11,6 @@ from __future__ import annotations
 
 import importlib
 import math
-import time
 from pathlib import Path
 from typing import Any
 
@@ -45,28 +42,6 @@ def resolve_algo_kwargs(kwargs: dict[str, Any]) -> dict[str, Any]:
     return {k: resolve_named(v) if k.endswith(CLASS_SUFFIX) else v for k, v in kwargs.items()}
 
 
-def process_cpu_s() -> float:
-    """CPU time of this process and its finished children [s]."""
-    import resource  # noqa: PLC0415 - POSIX only
-
-    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return time.process_time() + kids.ru_utime + kids.ru_stime
-
-
-def cpu_time_stop(limit_s: float) -> Any:
-    """A callback that ends ``learn`` once ``limit_s`` CPU seconds have passed since its start."""
-    from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
-
-    class CpuTimeStop(BaseCallback):
-        def _on_training_start(self) -> None:
-            self.t0 = process_cpu_s()
-
-        def _on_step(self) -> bool:
-            return process_cpu_s() - self.t0 < limit_s
-
-    return CpuTimeStop()
-
-
 def clone_before_learning(
     model: Any, dataset_id: str, root: str | Path, epochs: int, seed: int
 ) -> int:
@@ -93,8 +68,6 @@ __all__ = [
     "BC_BATCH",
     "CLASS_SUFFIX",
     "clone_before_learning",
-    "cpu_time_stop",
-    "process_cpu_s",
     "resolve_algo_kwargs",
     "resolve_named",
 ]
