@@ -63,7 +63,7 @@ def _features(obs: dict[str, Any]) -> np.ndarray:
     parts = [np.asarray(obs[k], np.float32) for k in STATE_KEYS]
     if parts[0].ndim == 1:
         parts = [p[None] for p in parts]
-    return np.concatenate(parts, axis=1)
+    return np.concatenate([p.reshape(len(p), -1) for p in parts], axis=1)  # objects rows: flat
 
 
 def _network(n_in: int, n_out: int, cfg: BCConfig) -> Any:
@@ -174,6 +174,7 @@ class BCPolicy:
                 self.action_space = self._pair.action_space
                 return
             self._pair = None
+            self._obs_mode = str(blob.get("obs_mode", "state"))
             self.nvec = np.asarray(blob["nvec"], np.int64)
             cfg = BCConfig(**blob["config"])
             self.net = _network(int(blob["n_in"]), int(np.prod(self.nvec)), cfg)
@@ -197,6 +198,15 @@ class BCPolicy:
         self.net.eval()
         self.action_space = spaces.MultiDiscrete(self.nvec)
         self.n_in = int(blob["n_in"])
+
+    @property
+    def env_overrides(self) -> dict[str, Any]:
+        """Env keys the clone's observation needs: ``obs_mode="objects"`` for an objects clone."""
+        if self._pair is not None:
+            mode = self._pair.adapter_name
+        else:
+            mode = self._obs_mode
+        return {"obs_mode": mode} if mode == "objects" else {}
 
     def predict(self, obs: dict[str, Any]) -> tuple[np.ndarray, None]:
         """The most likely (tile, slot, rotation) for a state observation."""

@@ -53,6 +53,17 @@ class PerceptionConfig:
             curved feature (a bite or bulge on part of an edge) raises that roughness measure
             and falls below the floor. The retry uses the clean-outline values; the first
             figure is kept when the retry matches nothing either.
+        seen_slots: Describe each design slot a second time as the pictures' outline
+            simplification sees its outline (at the input camera's scale on the tile tops),
+            and let a tile matching neither the slot's own description nor another slot's
+            match that seen description (`agents.perception.SlotTarget.seen`): a design's
+            corner that turns too little to show in a picture (a rounded corner's tangent
+            ends) is a relevant point the measured figure never has.
+        seen_turn_residual: A seen outline turning nearly onto itself (RMS residual at most
+            this fraction of sqrt(area), `qshape.vision.seen.near_turns`) more often than the
+            slot's symmetry is not used: a tile matched to it might be set down turned.
+            Twice qshape's ``uncertainty_residual``: a tile within that residual of one turn
+            may be as near the other (dimensionless).
 
     How outlines become figures (corner threshold, circles, chamfered corners) is qshape's
     business: ``configs/vision.yaml`` section ``extract``.
@@ -67,11 +78,17 @@ class PerceptionConfig:
     color_history: int = 64
     color_min_samples: int = 6
     retry_outline: dict[str, float] = field(default_factory=dict)
+    seen_slots: bool = False
+    seen_turn_residual: float = 0.1
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""
         if not (self.mm_per_m > 0 and self.pad_clearance >= 0 and self.polylabel_tolerance > 0):
             raise AgentError("perception: mm_per_m, polylabel_tolerance > 0, pad_clearance >= 0")
+        if not self.seen_turn_residual >= 0.0:
+            raise AgentError(
+                f"perception: seen_turn_residual must be >= 0, got {self.seen_turn_residual!r}"
+            )
         if self.color_history < 1 or self.color_min_samples < 1:
             raise AgentError(
                 "perception: color_history and color_min_samples must be >= 1, got "

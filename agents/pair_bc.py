@@ -120,7 +120,8 @@ class PairBCPolicy:
     def __init__(self, blob: dict[str, Any]) -> None:
         from gymnasium import spaces  # noqa: PLC0415
 
-        self.adapter = ADAPTERS[blob["adapter"]]
+        self.adapter_name = str(blob["adapter"])
+        self.adapter = ADAPTERS[self.adapter_name]
         self.nvec = np.asarray(blob["nvec"], np.int64)
         self.net = PairScorer(PairScorerConfig(**blob["scorer"]))
         self.net.load_state_dict(blob["state_dict"])
@@ -131,7 +132,10 @@ class PairBCPolicy:
         """The most likely allowed (tile, slot, rotation) for one observation."""
         tiles = np.asarray(obs["tiles"], np.float32)
         slots = np.asarray(obs["slots"], np.float32)
-        n, k = len(tiles) // TILE_DIM, len(slots) // SLOT_DIM
+        if tiles.ndim == 2:  # noqa: PLR2004 - objects entity rows (rows, D)
+            n, k = len(tiles), len(slots)
+        else:
+            n, k = len(tiles) // TILE_DIM, len(slots) // SLOT_DIM
         if (n, k) != (int(self.nvec[0]), int(self.nvec[1])):
             raise AgentError(
                 f"clone expects {self.nvec[0]} tiles and {self.nvec[1]} slots, got {n} and {k}"

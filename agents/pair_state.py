@@ -23,6 +23,12 @@ from __future__ import annotations
 
 import torch
 
+from agents.pair_objects import (
+    OBJECTS_PAIR_FEATURES,
+    OBJECTS_SLOT_FEATURES,
+    OBJECTS_TILE_FEATURES,
+    objects_rows,
+)
 from agents.pair_scorer import PairRows
 
 TILE_DIM = 7
@@ -69,9 +75,12 @@ def state_rows(tiles: torch.Tensor, slots: torch.Tensor) -> PairRows:
     )
 
 
-ADAPTERS = {"state": state_rows}
+ADAPTERS = {"state": state_rows, "objects": objects_rows}
 """Adapters by observation mode: (tiles, slots) tensors -> `PairRows`."""
-FEATURE_DIMS = {"state": (STATE_TILE_FEATURES, STATE_SLOT_FEATURES, STATE_PAIR_FEATURES)}
+FEATURE_DIMS = {
+    "state": (STATE_TILE_FEATURES, STATE_SLOT_FEATURES, STATE_PAIR_FEATURES),
+    "objects": (OBJECTS_TILE_FEATURES, OBJECTS_SLOT_FEATURES, OBJECTS_PAIR_FEATURES),
+}
 """(tile_dim, slot_dim, pair_dim) of each adapter's rows."""
 
 

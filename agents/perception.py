@@ -27,6 +27,7 @@ from shapely.geometry import Point, Polygon
 import qshape
 from agents.config import PerceptionConfig
 from agents.errors import PerceptionError
+from agents.seen_slots import SeenSlot, seen_outlines
 from agents.white_balance import color_gain, recolour
 from envs.cell.cameras import CameraModel
 from envs.errors import CellError
@@ -383,6 +384,11 @@ class SlotTarget:
         pose: World x, y [m] of the slot's area centroid and its yaw [rad] (the design angle).
         symmetry: Rotational symmetry order (1: none, 0: continuous).
         color: Design RGB in [0, 1].
+        seen: The slot's outline as the camera's outline simplification sees it, when its
+            description matches no turn of ``description``: a design corner turning too
+            little for a picture to show (a rounded corner's tangent ends, an arc edge nearly
+            continuing its neighbour, a short edge between opposite turns). None when the
+            two agree.
     """
 
     index: int
@@ -392,21 +398,37 @@ class SlotTarget:
     pose: np.ndarray
     symmetry: int
     color: tuple[float, float, float]
+    seen: SeenSlot | None = None
+
+    @property
+    def descriptions(self) -> tuple[Description, ...]:
+        """The design's description, then the seen one when there is one."""
+        if self.seen is None:
+            return (self.description,)
+        return (self.description, self.seen.description)
 
 
 def slot_targets(
-    slots: Sequence[WorldSlot], tolerances: qshape.Tolerances | None = None
+    slots: Sequence[WorldSlot],
+    tolerances: qshape.Tolerances | None = None,
+    *,
+    seen: tuple[qshape.OutlineParams, float, float] | None = None,
 ) -> tuple[SlotTarget, ...]:
     """Describe the env's world slots (``TaskSpec.slots``) for matching.
 
     Args:
         slots: The slots in the world (figures in design millimetres).
         tolerances: qshape tolerances (bundled when None).
+        seen: (the pictures' outline parameters, the camera's scale on the tile tops
+            [px/mm], the near-turn residual of `_seen_one`): each slot also gets the
+            description of its outline as a picture's simplification sees it, where that
+            differs from its own (`SlotTarget.seen`). None: no seen descriptions.
 
     Returns:
         One `SlotTarget` per slot, in the given order.
     """
     descs = qshape.describe_many([s.figure for s in slots], tolerances) if slots else []
+    seen_descs = seen_outlines(slots, descs, tolerances, seen)
     return tuple(
         SlotTarget(
             s.index,
@@ -416,8 +438,9 @@ def slot_targets(
             np.array([s.xy[0], s.xy[1], s.yaw]),
             s.symmetry,
             s.color,
+            sd,
         )
-        for s, d in zip(slots, descs, strict=True)
+        for s, d, sd in zip(slots, descs, seen_descs, strict=True)
     )
 
 

@@ -17,6 +17,7 @@ symmetry) and ``yaw_place`` as the slot's yaw. ``place_yaws`` lists every equiva
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -32,6 +33,7 @@ from agents.perception import PerceivedTile, SlotTarget
 from envs.task_spec import PickPlaceCommand
 from qshape.theory.assign import feasible_pairs
 from spatial.angles import rotate_xy, wrap_angle
+from spatial.units import MM_PER_M
 
 
 def wrap(angle: float) -> float:
@@ -189,7 +191,9 @@ class FeasiblePairs:
     """Which tiles of one picture could fill which design slots: found once per colour mode.
 
     `qshape.theory.assign.feasible_pairs` of every perceived tile against every slot given,
-    run at most once with colour and once without for the picture, on first use. Whether a
+    run at most once with colour and once without for the picture, on first use. A slot with
+    a seen description (`SlotTarget.seen`) matches a tile that either of its descriptions
+    matches. Whether a
     pair matches depends on that tile and that slot alone, so every subset a caller asks about
     (the tiles left out against the open and filled slots, a tile against the filled slots)
     reads the same answer as a run on that subset.
@@ -207,8 +211,10 @@ class FeasiblePairs:
         tolerances: qshape.Tolerances | None = None,
     ) -> None:
         self._tiles = [t.description for t in tiles]
-        self._slots = [s.description for s in slots]
-        self._slot_index = np.array([s.index for s in slots], dtype=np.int64)
+        self._slots = [d for s in slots for d in s.descriptions]
+        self._slot_index = np.array(
+            [s.index for s in slots for _ in s.descriptions], dtype=np.int64
+        )
         self._tol = _tol(tolerances)
         self._found: dict[bool, dict[int, set[int]]] = {}
 
@@ -259,10 +265,10 @@ def plan_placements(
         qshape.MatchError: Unknown method.
     """
     cfg = cfg or PlacementConfig()
-    tdesc = [t.description for t in tiles]
-    sdesc = [s.description for s in slots]
-    result = qshape.assign(tdesc, sdesc, tolerances, cfg.method, cfg.use_color)
-    commands = tuple(_command(tiles[a.tile], slots[a.slot], a, cfg) for a in result)
+    result, by_seen = _assigned(tiles, slots, cfg, tolerances)
+    commands = tuple(
+        _command(tiles[a.tile], slots[a.slot], a, cfg, seen=a.tile in by_seen) for a in result
+    )
     assigned = {a.tile for a in result}
     left = [k for k in range(len(tiles)) if k not in assigned]
     unplaced: tuple[Unplaced, ...] = ()
@@ -278,28 +284,82 @@ def plan_placements(
     return PlacementPlan(commands, unplaced, open_slots, cfg.method, cfg.use_color)
 
 
+def _assigned(
+    tiles: Sequence[PerceivedTile],
+    slots: Sequence[SlotTarget],
+    cfg: PlacementConfig,
+    tolerances: qshape.Tolerances | None,
+) -> tuple[list[qshape.Assignment], set[int]]:
+    """`qshape.assign` on the slots' design descriptions, then the rest on their seen ones.
+
+    The tiles left out by the first assignment are assigned to the slots it left open that
+    have a seen outline (`SlotTarget.seen`), by its description: a tile whose picture cannot
+    show a design corner still matches the outline the picture shows.
+
+    Returns:
+        (the assignments, indices into ``tiles`` and ``slots``; the tiles assigned by a seen
+        description).
+    """
+    tdesc = [t.description for t in tiles]
+    result = qshape.assign(
+        tdesc, [s.description for s in slots], tolerances, cfg.method, cfg.use_color
+    )
+    used_t = {a.tile for a in result}
+    used_s = {a.slot for a in result}
+    rest_t = [k for k in range(len(tiles)) if k not in used_t]
+    rest_s = [k for k, s in enumerate(slots) if k not in used_s and s.seen is not None]
+    if not rest_t or not rest_s:
+        return result, set()
+    more = qshape.assign(
+        [tdesc[k] for k in rest_t],
+        [slots[k].seen.description for k in rest_s],  # type: ignore[union-attr]
+        tolerances,
+        cfg.method,
+        cfg.use_color,
+    )
+    more = [dataclasses.replace(a, tile=rest_t[a.tile], slot=rest_s[a.slot]) for a in more]
+    return sorted(result + more, key=lambda a: a.tile), {a.tile for a in more}
+
+
 def _command(
-    t: PerceivedTile, s: SlotTarget, a: qshape.Assignment, cfg: PlacementConfig
+    t: PerceivedTile,
+    s: SlotTarget,
+    a: qshape.Assignment,
+    cfg: PlacementConfig,
+    *,
+    seen: bool = False,
 ) -> PickPlace:
-    """The pick-and-place of one assigned (tile, slot) pair (rotation refined, yaws wrapped)."""
+    """The pick-and-place of one assigned (tile, slot) pair (rotation refined, yaws wrapped).
+
+    ``seen``: the pair matched by the slot's seen outline (`SlotTarget.seen`). The tile's
+    figure then has the seen figure's relevant points, and both the arcs through three points
+    that make their area: the rotation is refined against the seen figure, and the tile's
+    centre moved by the design centroid's offset from the seen figure's (turned into the
+    tile's frame), so the tile's own area centroid lands on the slot's.
+    """
+    ref = s.seen.figure if seen and s.seen is not None else s.figure
     rot = wrap(
         refine_rotation(
             t.figure,
-            s.figure,
+            ref,
             a.rotation,
             math.radians(cfg.refine_span_deg),
             math.radians(cfg.refine_tolerance_deg),
         )
     )
+    centre = t.centre
+    if ref is not s.figure:
+        offset = (np.asarray(s.figure.centroid) - np.asarray(ref.centroid)) / MM_PER_M
+        centre = t.centre + rotate_xy(offset, -rot)
     yaw_place = float(s.pose[2])
     yaw_pick = wrap(yaw_place - rot)
-    g_off = rotate_xy(t.grasp - t.centre, rot)
+    g_off = rotate_xy(t.grasp - centre, rot)
     g_place = s.pose[:2] + g_off
     return PickPlace(
         tile=t.index,
         slot=s.index,
         slot_name=s.name,
-        pick=(float(t.centre[0]), float(t.centre[1]), yaw_pick),
+        pick=(float(centre[0]), float(centre[1]), yaw_pick),
         place=(float(s.pose[0]), float(s.pose[1]), yaw_place),
         grasp_pick=(float(t.grasp[0]), float(t.grasp[1])),
         grasp_place=(float(g_place[0]), float(g_place[1])),

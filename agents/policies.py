@@ -277,10 +277,11 @@ def _clone(base: dict[str, Any], path: Path) -> Policy:
     if read_policy_file(path).get("kind") == KIND:
         return _camera(base, path)
     label = checkpoint_label(path)
+    from agents.bc import BCPolicy  # noqa: PLC0415
+
+    overrides = BCPolicy(path).env_overrides  # an objects clone plays on objects rows
 
     def factory(env: gym.Env) -> Predict:
-        from agents.bc import BCPolicy  # noqa: PLC0415
-
         clone = BCPolicy(path)
         check_spaces(label, env, None, clone.action_space)
 
@@ -290,7 +291,7 @@ def _clone(base: dict[str, Any], path: Path) -> Policy:
 
         return predict
 
-    return Policy(label, dict(base), factory)
+    return Policy(label, {**base, **overrides}, factory)
 
 
 def _camera(base: dict[str, Any], path: Path) -> Policy:

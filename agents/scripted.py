@@ -37,6 +37,7 @@ from agents.config import AgentsConfig, load_agents_config
 from agents.errors import AgentError
 from agents.perception import Perception, perceive_tiles, refigured, slot_targets
 from agents.placement import FeasiblePairs, PickPlace, PlacementPlan, Unplaced, plan_placements
+from agents.seen_slots import camera_scale
 from agents.white_balance import color_gain
 from envs.cell.cameras import CameraModel
 from envs.task_spec import PickPlaceCodec, PickPlaceCommand, TaskSpec
@@ -90,14 +91,22 @@ class ScriptedAgent:
         self.camera: CameraModel = (
             calibration.camera if calibration is not None else spec.camera("input_camera")
         )
-        self.slots = slot_targets(spec.slots)
-        retry = self.cfg.perception.retry_outline
-        self.retry_params: OutlineParams | None = (
-            OutlineParams(**{**dataclasses.asdict(ExtractParams.load().outline), **retry})
-            if retry
+        self.tile_top = spec.pick.tile_top_z
+        outline = ExtractParams.load().outline
+        seen = (
+            (
+                outline,
+                camera_scale(self.camera, self.tile_top),
+                self.cfg.perception.seen_turn_residual,
+            )
+            if self.cfg.perception.seen_slots
             else None
         )
-        self.tile_top = spec.pick.tile_top_z
+        self.slots = slot_targets(spec.slots, seen=seen)
+        retry = self.cfg.perception.retry_outline
+        self.retry_params: OutlineParams | None = (
+            OutlineParams(**{**dataclasses.asdict(outline), **retry}) if retry else None
+        )
         self.palette = np.array([s.color for s in self.slots])
         self.queue: deque[PickPlace] = deque()
         self.filled: set[int] = set()

@@ -21,15 +21,21 @@ privileged expert (`MosaicAssemblyEnv.expert_action`, every tile to its slot) in
 scripted agent: the only demonstrator of ``pick_place_discrete`` (the scripted agent acts in
 ``pick_place``). ``--lossless``: store images as raw arrays (Minari JPEG-encodes them by
 default, which changes pixels).
+
+``--lowlevel``: the scripted low-level controller (`agents.lowlevel_expert.LowLevelExpert`) on
+a ``cartesian`` rung (``--task MosaicOneTile-v0``, the default then) with the rung's own
+observations (``state``) and episode limit: the demonstrations low-level learners start from::
+
+    python -m apps.record_demos --lowlevel --episodes 20 --seed 0 \
+        --dataset-id mosaic/one-tile-lowlevel-v0 --replay
 """
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
 import shutil
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -38,14 +44,13 @@ import gymnasium as gym
 import numpy as np
 import yaml
 
+from agents.demos import DEFAULT_ROOT, DemoDatasetError, datasets_root, load_dataset
 from agents.errors import AgentError
 from apps.cli import CommandParser, run_cli
 from configs.files import clear_partials, partial_path, replace_dir, write_json
 
 ENV_ID = "envs:MosaicAssembly-v0"
 """Gymnasium id of the environment."""
-DEFAULT_ROOT = Path("out/minari")
-"""Default dataset root (``MINARI_DATASETS_PATH``)."""
 DEFAULT_ID = "mosaic/scripted-kinematic-v0"
 """Default dataset id."""
 DEFAULT_ENV: dict[str, Any] = {
@@ -63,27 +68,14 @@ REPLAY_ATOL = 1e-5
 """Tolerance of the replayed state observations and rewards."""
 STEPS_PER_SLOT = 2
 """Episode step limit per slot."""
+LOWLEVEL_TASK = "MosaicOneTile-v0"
+"""Rung of ``--lowlevel`` recordings without ``--task``."""
 STAGING_NAME = "recording"
 """Stem of the staging folder a dataset is recorded in (``<root>/.recording.partial-<pid>``)."""
 
 
 class DemoError(AgentError, RuntimeError):
     """A dataset that cannot be written or replayed."""
-
-
-@contextlib.contextmanager
-def datasets_root(root: Path) -> Iterator[None]:
-    """Point ``MINARI_DATASETS_PATH`` at ``root`` for the block (restored afterwards)."""
-    old = os.environ.get("MINARI_DATASETS_PATH")
-    root.mkdir(parents=True, exist_ok=True)
-    os.environ["MINARI_DATASETS_PATH"] = str(root.resolve())
-    try:
-        yield
-    finally:
-        if old is None:
-            os.environ.pop("MINARI_DATASETS_PATH", None)
-        else:
-            os.environ["MINARI_DATASETS_PATH"] = old
 
 
 @dataclass(frozen=True)
@@ -162,6 +154,7 @@ def record(
     expert: bool = False,
     lossless: bool = False,
     task: str = "",
+    lowlevel: bool = False,
 ) -> RecordResult:
     """Record ``episodes`` scripted episodes (seeds ``seed``, ``seed + 1``...) as a dataset.
 
@@ -179,6 +172,11 @@ def record(
 
         env_id = f"envs:{get_task(task).id}"
         kwargs = {"obs_mode": "rgb+state", **(env_kwargs or {})}
+    if lowlevel:
+        from envs.tasks import get_task  # noqa: PLC0415
+
+        env_id = f"envs:{get_task(task or LOWLEVEL_TASK).id}"
+        kwargs = dict(env_kwargs or {})
     with datasets_root(root):
         top = Path(os.environ["MINARI_DATASETS_PATH"])
     path = top / dataset_id
@@ -195,7 +193,7 @@ def record(
                 env_id=env_id,
                 kwargs=kwargs,
                 calibrate=calibrate,
-                expert=expert,
+                expert="lowlevel" if lowlevel else "decision" if expert else "",
                 lossless=lossless,
             )
         replace_dir(staging / dataset_id, path)
@@ -213,10 +211,13 @@ def _collect(
     env_id: str,
     kwargs: dict[str, Any],
     calibrate: bool,
-    expert: bool,
+    expert: str,
     lossless: bool,
 ) -> tuple[int, int, tuple[int, ...], float]:
     """Record the episodes as ``dataset_id`` under ``MINARI_DATASETS_PATH``.
+
+    ``expert``: "" (the scripted agent), ``decision`` (`ExpertAgent`) or ``lowlevel``
+    (`agents.lowlevel_expert.LowLevelExpert`, the env's own episode limit).
 
     Returns:
         (episodes, steps, seeds, success rate).
@@ -228,14 +229,20 @@ def _collect(
     base = gym.make(env_id, **kwargs)
     slots = len(base.unwrapped.task.slot_class)  # type: ignore[attr-defined]
     base.close()
+    limit = None if expert == "lowlevel" else STEPS_PER_SLOT * slots  # None: the env's own
     env = minari.DataCollector(
-        gym.make(env_id, max_episode_steps=STEPS_PER_SLOT * slots, **kwargs),
-        jpeg_encoding=not lossless,
+        gym.make(env_id, max_episode_steps=limit, **kwargs), jpeg_encoding=not lossless
     )
     try:
-        agent: Any = (
-            ExpertAgent(env) if expert else ScriptedAgent.from_env(env, calibrate=calibrate)
-        )
+        agent: Any
+        if expert == "lowlevel":
+            from agents.lowlevel_expert import LowLevelExpert  # noqa: PLC0415
+
+            agent = LowLevelExpert(env)
+        elif expert:
+            agent = ExpertAgent(env)
+        else:
+            agent = ScriptedAgent.from_env(env, calibrate=calibrate)
         seeds = tuple(range(seed, seed + episodes))
         successes = steps = 0
         for s in seeds:
@@ -257,7 +264,9 @@ def _collect(
             code_permalink="apps/record_demos.py",
             description=(
                 (
-                    "Privileged expert (every tile to its slot) "
+                    "Scripted low-level controller (cartesian tool moves and vacuum) "
+                    if expert == "lowlevel"
+                    else "Privileged expert (every tile to its slot) "
                     if expert
                     else "Scripted mosaic cell (perception + qualitative matching + planner "
                     "cycles) "
@@ -282,16 +291,10 @@ def load(dataset_id: str = DEFAULT_ID, root: Path = DEFAULT_ROOT) -> Any:
     Raises:
         DemoError: No complete dataset ``dataset_id`` under ``root``.
     """
-    import minari  # noqa: PLC0415
-
-    with datasets_root(root):
-        path = Path(os.environ["MINARI_DATASETS_PATH"]) / dataset_id
-        if not path.is_dir():
-            raise DemoError(f"no dataset {dataset_id!r} under {root} (record it first)")
-        try:
-            return minari.load_dataset(dataset_id, download=False)
-        except (OSError, ValueError, KeyError) as exc:
-            raise DemoError(f"dataset {dataset_id!r} under {root} cannot be read: {exc}") from exc
+    try:
+        return load_dataset(dataset_id, root)
+    except DemoDatasetError as exc:
+        raise DemoError(str(exc)) from exc
 
 
 def _state_error(recorded: dict[str, np.ndarray], step: int, obs: dict[str, Any]) -> float:
@@ -363,6 +366,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--task", default="", help="a ladder id (MosaicDecision6-v0)")
     ap.add_argument("--expert", action="store_true", help="privileged expert (discrete modes)")
     ap.add_argument("--lossless", action="store_true", help="raw images, no JPEG")
+    ap.add_argument(
+        "--lowlevel", action="store_true", help="scripted low-level controller (cartesian rung)"
+    )
     args = ap.parse_args(argv)
     os.environ.setdefault("MUJOCO_GL", "egl")
     rec = record(
@@ -376,6 +382,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         expert=args.expert,
         lossless=args.lossless,
         task=args.task,
+        lowlevel=args.lowlevel,
     )
     report: dict[str, Any] = {"record": {**asdict(rec), "path": str(rec.path)}}
     print(

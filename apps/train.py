@@ -35,6 +35,7 @@ import yaml
 from gymnasium import spaces
 
 from agents.algorithms import algorithm_class
+from agents.demos import DEFAULT_ROOT as DEMO_ROOT
 from agents.wrappers import (
     EPISODE_TERMS_KEY,
     EpisodeProgress,
@@ -44,6 +45,7 @@ from agents.wrappers import (
     cpu_seconds,
 )
 from apps.cli import CommandParser, run_cli
+from apps.train_extras import clone_before_learning, resolve_algo_kwargs
 from configs import ConfigError, from_dict, load_yaml
 from configs.files import atomic_path, write_json, write_text
 
@@ -100,6 +102,11 @@ class TrainConfig:
         max_wall_s: Stop ``learn`` after this wall time [s] even before ``total_timesteps``;
             0: no limit (the final model is saved either way).
         max_cpu_s: The same limit in CPU time of the training process [s] (children included).
+        demos: Minari dataset id of demonstrations (``out/minari``) for ``bc_epochs``.
+        bc_epochs: Epochs of behaviour cloning of the actor on ``demos`` before learning
+            (SAC; `agents.rlpd.clone_actor`); 0: none. ``algo_kwargs`` keys ending in
+            ``_class`` may name a class as ``module:attr`` (`apps.train_extras`), e.g.
+            ``replay_buffer_class: agents.rlpd:DemoMixReplayBuffer``.
         task: A rung of the task ladder (``MosaicDecision6-v0``, `envs.tasks`): the envs are
             made from its id (its preset and episode limit; env i trains on its training
             design i mod count) and ``env`` overrides on top; "" uses `MosaicAssembly-v0`.
@@ -132,6 +139,8 @@ class TrainConfig:
     task: str = ""
     log_every_s: float = 30.0
     reach_shaping: float = 0.0
+    demos: str = ""
+    bc_epochs: int = 0
 
     def __post_init__(self) -> None:
         if self.vec_env not in VEC_ENVS:
@@ -147,6 +156,8 @@ class TrainConfig:
             raise TrainError(
                 "max_episode_steps, checkpoint_freq, max_wall_s and max_cpu_s must be >= 0"
             )
+        if self.bc_epochs and not self.demos:
+            raise TrainError("bc_epochs needs demos (a dataset id)")
         if self.reach_shaping < 0:
             raise TrainError(f"reach_shaping must be >= 0 [1/m], got {self.reach_shaping}")
         from envs.env_config import load_env_config  # noqa: PLC0415 - validates env keys
@@ -291,6 +302,8 @@ class TrainResult:
     last_success: float
     last_terms: dict[str, float] = field(default_factory=dict)
     cpu_s: float = 0.0
+    gradient_steps: int = 0
+    """Gradient steps of behaviour cloning and ``learn`` (``_n_updates``; 0 if not kept)."""
 
 
 def finished_run(out: Path) -> TrainResult | None:
@@ -460,7 +473,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
     venv = make_vec(cfg, monitor_dir)
     try:
         algo = algorithm_class(cfg.algo)
-        kwargs: dict[str, Any] = dict(cfg.algo_kwargs)
+        kwargs: dict[str, Any] = resolve_algo_kwargs(dict(cfg.algo_kwargs))
         if cfg.policy_kwargs:
             kwargs["policy_kwargs"] = dict(cfg.policy_kwargs)
         model = algo(
@@ -490,6 +503,9 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
                 )
             )
         t0, c0 = time.perf_counter(), cpu_seconds()
+        bc_steps = 0
+        if cfg.bc_epochs:
+            bc_steps = clone_before_learning(model, cfg.demos, DEMO_ROOT, cfg.bc_epochs, cfg.seed)
         model.learn(
             total_timesteps=cfg.total_timesteps,
             callback=callbacks,
@@ -517,6 +533,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
         s1,
         terms.recent(RETURN_WINDOW),
         cpu,
+        bc_steps + int(getattr(model, "_n_updates", 0)),
     )
     summary = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(result).items()}
     write_json(out / SUMMARY_FILE, summary)
@@ -530,6 +547,7 @@ def main(argv: list[str] | None = None) -> TrainResult:
     ap.add_argument("--timesteps", type=int, default=None, help="override total_timesteps")
     ap.add_argument("--seed", type=int, default=None, help="override seed")
     ap.add_argument("--n-envs", type=int, default=None, help="override n_envs")
+    ap.add_argument("--max-cpu-s", type=float, default=None, help="override max_cpu_s [s]")
     ap.add_argument("--out", type=Path, default=None, help="run folder (default runs/<config>)")
     ap.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = ap.parse_args(argv)
@@ -538,6 +556,7 @@ def main(argv: list[str] | None = None) -> TrainResult:
         "total_timesteps": args.timesteps,
         "seed": args.seed,
         "n_envs": args.n_envs,
+        "max_cpu_s": args.max_cpu_s,
     }
     if args.no_progress:
         overrides["progress_bar"] = False

@@ -214,6 +214,9 @@ class TaskSpec:
         image_size: Observation image (height, width) [px].
         cameras: Camera models at ``image_size``, by name.
         codec: The ``pick_place`` action codec (None in the other action modes).
+        tool_step: ``cartesian``: the tool move of a full action (1.0) in one control period,
+            (dx, dy, dz, dyaw) [m, m, m, rad] (tool speed and yaw rate x the period); None in
+            the other action modes.
     """
 
     design: str
@@ -228,6 +231,7 @@ class TaskSpec:
     image_size: tuple[int, int]
     cameras: dict[str, CameraModel]
     codec: PickPlaceCodec | None
+    tool_step: tuple[float, float, float, float] | None = None
 
     def camera(self, name: CameraName) -> CameraModel:
         """The camera model of ``name`` at the observation size.
@@ -301,6 +305,12 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
         else None
     )
     feed: FeedMode = cell.cfg.tiles.feed
+    tool_step = None
+    if config.action_mode == "cartesian":
+        dt = float(cell.model.opt.timestep)
+        period = max(1, round(config.control_dt / dt)) * dt
+        step = config.tool_speed * period
+        tool_step = (step, step, step, config.tool_yaw_rate * period)
     return TaskSpec(
         design=config.design if config.design_source == "fixed" else design.name,
         slots=world_slots(cell, design),
@@ -314,6 +324,7 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
         image_size=(int(h), int(w)),
         cameras=cameras,
         codec=codec,
+        tool_step=tool_step,
     )
 
 

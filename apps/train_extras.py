@@ -1,0 +1,73 @@
+"""Pieces of ``apps.train`` for learning from demonstrations and CPU budgets.
+
+- `resolve_named`: a ``module:attr`` string in a training YAML (``policy``, an
+  ``algo_kwargs`` key ending in ``_class``) becomes the object it names, so a config can use a
+  policy or replay buffer class of the project (`agents.rlpd`) without code.
+- `clone_before_learning`: behaviour cloning of a SAC actor on a demonstration dataset before
+  (or instead of) reinforcement learning.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+from pathlib import Path
+from typing import Any
+
+from configs import ConfigError
+
+BC_BATCH = 256
+"""Transitions per behaviour-cloning gradient step."""
+CLASS_SUFFIX = "_class"
+"""``algo_kwargs`` keys whose ``module:attr`` string values are resolved."""
+
+
+def resolve_named(value: Any) -> Any:
+    """The object a ``module:attr`` string names; any other value unchanged.
+
+    Raises:
+        ConfigError: The module or the attribute does not exist.
+    """
+    if not isinstance(value, str) or ":" not in value:
+        return value
+    module, _, attr = value.partition(":")
+    try:
+        return getattr(importlib.import_module(module), attr)
+    except (ImportError, AttributeError) as exc:
+        raise ConfigError(f"cannot resolve {value!r} (module:attr): {exc}") from exc
+
+
+def resolve_algo_kwargs(kwargs: dict[str, Any]) -> dict[str, Any]:
+    """``algo_kwargs`` with every ``*_class`` string resolved (`resolve_named`)."""
+    return {k: resolve_named(v) if k.endswith(CLASS_SUFFIX) else v for k, v in kwargs.items()}
+
+
+def clone_before_learning(
+    model: Any, dataset_id: str, root: str | Path, epochs: int, seed: int
+) -> int:
+    """Fit ``model``'s actor to the dataset's demonstrations (`agents.rlpd.clone_actor`).
+
+    Returns:
+        The gradient steps taken.
+
+    Raises:
+        ConfigError: The model has no SAC-style actor.
+        DemoSpaceError: The dataset's spaces differ from the model's.
+    """
+    from agents.demos import load_demos  # noqa: PLC0415
+    from agents.rlpd import clone_actor  # noqa: PLC0415
+
+    if not hasattr(model, "actor"):
+        raise ConfigError(f"bc_epochs needs an actor-critic with an actor (SAC), got {model}")
+    demos = load_demos(dataset_id, model.observation_space, model.action_space, Path(root))
+    clone_actor(model, demos, epochs=epochs, batch_size=BC_BATCH, seed=seed)
+    return epochs * math.ceil(len(demos) / BC_BATCH)
+
+
+__all__ = [
+    "BC_BATCH",
+    "CLASS_SUFFIX",
+    "clone_before_learning",
+    "resolve_algo_kwargs",
+    "resolve_named",
+]
