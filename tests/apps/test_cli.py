@@ -104,7 +104,7 @@ def bad_files(tmp_path_factory) -> dict[str, Path]:
     "bad",
     [
         ("truncated", TASK, EXIT_ERROR, "error: cannot load .*truncated/model.zip"),
-        ("random_pt", TASK, EXIT_ERROR, "error: .*random.pt is not a behaviour clone"),
+        ("random_pt", TASK, EXIT_ERROR, "error: .*random.pt is not a saved policy"),
         ("random_zip", TASK, EXIT_ERROR, "error: cannot load .*random.zip"),
         ("missing_zip", TASK, EXIT_ERROR, "error: unknown policy .*missing.zip"),
         ("missing_pt", TASK, EXIT_ERROR, "error: unknown policy .*missing.pt"),
