@@ -94,10 +94,10 @@ class Transitions:
     """Flat transitions of a dataset's episodes.
 
     Attributes:
-        observations: Per observation key, shape (n, *key shape).
-        actions: Shape (n, *action shape).
+        observations: Per observation key, shape (n, ...) (n, then the key's shape).
+        actions: Shape (n, ...) (n, then the action shape).
         rewards: Shape (n,).
-        next_observations: Per key, the observation after each action, shape (n, *key shape).
+        next_observations: Per key, the observation after each action, shape (n, ...).
         terminations: 1.0 where the episode terminated (not truncated) at that step, shape (n,).
         episodes: Episodes read.
     """
