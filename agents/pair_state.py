@@ -14,8 +14,9 @@ gives:
 
 Tile rows keep their position (x, y [m]) and present flag, slot rows their position and
 filled flag; class ids enter through the pair feature only. The masks come from the
-observation's own flags: a tile may be picked when present and not lying on a filled slot
-(within `ON_SLOT_M`), a slot may be filled while not filled correctly. The env's own mask
+observation's own flags: a tile may be picked when present and not lying on a slot
+(within `ON_SLOT_M`; a tile set down on the mesh, in its slot or misplaced, is off the input belt,
+so the env refuses it too), a slot may be filled while not filled correctly. The env's own mask
 (``env.action_masks()``) is what RL training uses instead.
 """
 
@@ -42,7 +43,7 @@ STATE_SLOT_FEATURES = 3
 STATE_PAIR_FEATURES = 5
 """Pair features: class equal, cos d, sin d, cos 2d, sin 2d."""
 ON_SLOT_M = 0.005
-"""A tile whose centre lies this close to a filled slot's centre [m] is in that slot."""
+"""A tile whose centre lies this close to a slot's centre [m] lies on the mesh, in that slot."""
 FLAG = 0.5
 """Threshold of the 0/1 flags."""
 
@@ -65,12 +66,12 @@ def state_rows(tiles: torch.Tensor, slots: torch.Tensor) -> PairRows:
     )
     filled = s[..., 5] > FLAG
     gap = torch.cdist(t[..., :2], s[..., :2])
-    on_filled = ((gap < ON_SLOT_M) & filled[:, None, :]).any(-1)
+    on_slot = (gap < ON_SLOT_M).any(-1)
     return PairRows(
         tiles=torch.stack([t[..., 0], t[..., 1], t[..., 6]], dim=-1),
         slots=torch.stack([s[..., 0], s[..., 1], s[..., 5]], dim=-1),
         pairs=pairs,
-        tile_mask=(t[..., 6] > FLAG) & ~on_filled,
+        tile_mask=(t[..., 6] > FLAG) & ~on_slot,
         slot_mask=~filled,
     )
 
