@@ -13,6 +13,7 @@ masked flat logits. The ``.pt`` file has the layout of `agents.pair_bc` (``arch:
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -55,6 +56,40 @@ def _take(rows: PairRows, idx: torch.Tensor) -> PairRows:
     return PairRows(*(getattr(rows, f)[idx] for f in PairRows.__dataclass_fields__))
 
 
+def _fit(
+    logits: Callable[[torch.Tensor | None], torch.Tensor],
+    opt: torch.optim.Optimizer,
+    y: torch.Tensor,
+    cfg: Any,
+    seed: int,
+    *,
+    accuracy: bool,
+) -> tuple[int, list[dict[str, float]]]:
+    """Cross-entropy epochs over shuffled batches; ``logits(idx)`` of a batch (None: every row).
+
+    Returns the gradient steps and the per-epoch curve (loss, and train accuracy if asked).
+    """
+    gen = torch.Generator().manual_seed(seed)
+    steps, curve = 0, []
+    for _ in range(cfg.epochs):
+        perm = torch.randperm(len(y), generator=gen)
+        total = 0.0
+        for i in range(0, len(y), cfg.batch_size):
+            idx = perm[i : i + cfg.batch_size]
+            loss = torch.nn.functional.cross_entropy(logits(idx), y[idx])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            steps += 1
+            total += float(loss.detach()) * len(idx)
+        point = {"gradient_steps": steps, "loss": total / len(y)}
+        if accuracy:
+            with torch.no_grad():
+                point["train_accuracy"] = float((logits(None).argmax(1) == y).float().mean())
+        curve.append(point)
+    return steps, curve
+
+
 def train_objects_bc(demos: ObjectDemos, out: Path, seed: int, cfg: Any) -> dict[str, Any]:
     """Clone the demonstrations into a pair scorer; writes ``out/bc.pt`` and ``bc_summary.json``.
 
@@ -74,22 +109,9 @@ def train_objects_bc(demos: ObjectDemos, out: Path, seed: int, cfg: Any) -> dict
     shape = PairScorerConfig(*FEATURE_DIMS[ADAPTER], int(demos.nvec[2]), cfg.hidden, cfg.layers)
     net = PairScorer(shape)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
-    gen = torch.Generator().manual_seed(seed)
-    steps, curve = 0, []
-    for _ in range(cfg.epochs):
-        perm = torch.randperm(len(y), generator=gen)
-        total = 0.0
-        for i in range(0, len(y), cfg.batch_size):
-            idx = perm[i : i + cfg.batch_size]
-            loss = torch.nn.functional.cross_entropy(net(_take(rows, idx)), y[idx])
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-            steps += 1
-            total += float(loss.detach()) * len(idx)
-        with torch.no_grad():
-            acc = float((net(rows).argmax(1) == y).float().mean())
-        curve.append({"gradient_steps": steps, "loss": total / len(y), "train_accuracy": acc})
+    steps, curve = _fit(
+        lambda idx: net(rows if idx is None else _take(rows, idx)), opt, y, cfg, seed, accuracy=True
+    )
     out.mkdir(parents=True, exist_ok=True)
     path = out / "bc.pt"
     blob = {"arch": ARCH, "adapter": ADAPTER, "scorer": asdict(shape), "nvec": demos.nvec.tolist()}
@@ -137,20 +159,9 @@ def train_objects_mlp(demos: ObjectDemos, out: Path, seed: int, cfg: Any) -> dic
     torch.manual_seed(seed)
     net = _network(x.shape[1], int(np.prod(demos.nvec)), cfg)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
-    gen = torch.Generator().manual_seed(seed)
-    steps, curve = 0, []
-    for _ in range(cfg.epochs):
-        perm = torch.randperm(len(y), generator=gen)
-        total = 0.0
-        for i in range(0, len(y), cfg.batch_size):
-            idx = perm[i : i + cfg.batch_size]
-            loss = torch.nn.functional.cross_entropy(net(x[idx]), y[idx])
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-            steps += 1
-            total += float(loss.detach()) * len(idx)
-        curve.append({"gradient_steps": steps, "loss": total / len(y)})
+    steps, curve = _fit(
+        lambda idx: net(x if idx is None else x[idx]), opt, y, cfg, seed, accuracy=False
+    )
     out.mkdir(parents=True, exist_ok=True)
     path = out / "bc.pt"
     blob = {
