@@ -64,6 +64,11 @@ class PerceptionConfig:
             slot's symmetry is not used: a tile matched to it might be set down turned.
             Twice qshape's ``uncertainty_residual``: a tile within that residual of one turn
             may be as near the other (dimensionless).
+        min_hole_turn_mm: A slot whose outline turns onto itself at turns that only its
+            holes tell apart, the holes' relevant points moving less than this between them
+            (`agents.seen_slots.hole_turn_gap`), is never matched: the camera cannot tell
+            its turns apart, and a tile set down one outline turn off is misplaced, [mm]
+            (design millimetres; 0: every slot matched).
 
     How outlines become figures (corner threshold, circles, chamfered corners) is qshape's
     business: ``configs/vision.yaml`` section ``extract``.
@@ -80,11 +85,14 @@ class PerceptionConfig:
     retry_outline: dict[str, float] = field(default_factory=dict)
     seen_slots: bool = False
     seen_turn_residual: float = 0.1
+    min_hole_turn_mm: float = 1.5
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""
         if not (self.mm_per_m > 0 and self.pad_clearance >= 0 and self.polylabel_tolerance > 0):
             raise AgentError("perception: mm_per_m, polylabel_tolerance > 0, pad_clearance >= 0")
+        if not self.min_hole_turn_mm >= 0.0:
+            raise AgentError("perception.min_hole_turn_mm must be >= 0")
         if not self.seen_turn_residual >= 0.0:
             raise AgentError(
                 f"perception: seen_turn_residual must be >= 0, got {self.seen_turn_residual!r}"
@@ -109,6 +117,15 @@ class PlacementConfig:
             outlines, [deg] (a precision step: relevant points alone fix a curved tile's turn
             to a degree or two; 0: qshape's rotation as it is).
         refine_tolerance_deg: Precision of that refinement, [deg].
+        fit_max_residual: A tile that no description matches (the design's, the seen one,
+            the retry's) is fitted by its traced outline onto the open slots' outlines
+            (`agents.outline_fit`): the mean distance left must be at most this x sqrt(slot
+            area) (dimensionless; 0: no fit, such tiles stay unplaced).
+        fit_margin: Every turn that is not a symmetry of the slot, and every slot of another
+            class, must fit at least this many times worse than the best (dimensionless).
+        fit_turn_window_deg: Turns closer than this to a symmetry of the slot count as it, [deg].
+        fit_step_deg: Turns tried by that fit, this far apart, [deg].
+        fit_spacing_mm: Largest distance between the outline points compared, [mm].
     """
 
     method: Literal["optimal", "greedy"] = "optimal"
@@ -116,6 +133,11 @@ class PlacementConfig:
     continuous_yaw_steps: int = 12
     refine_span_deg: float = 5.0
     refine_tolerance_deg: float = 0.01
+    fit_max_residual: float = 0.0
+    fit_margin: float = 2.0
+    fit_turn_window_deg: float = 10.0
+    fit_step_deg: float = 2.0
+    fit_spacing_mm: float = 1.0
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on bad values."""
@@ -123,6 +145,17 @@ class PlacementConfig:
             raise AgentError(f"placement.method {self.method!r}; allowed: optimal, greedy")
         if self.continuous_yaw_steps < 1:
             raise AgentError("placement.continuous_yaw_steps must be >= 1")
+        if not (
+            self.fit_max_residual >= 0.0
+            and self.fit_margin >= 1.0
+            and self.fit_turn_window_deg >= 0.0
+            and self.fit_step_deg > 0.0
+            and self.fit_spacing_mm > 0.0
+        ):
+            raise AgentError(
+                "placement: fit_max_residual >= 0, fit_margin >= 1, fit_turn_window_deg >= 0, "
+                "fit_step_deg > 0 and fit_spacing_mm > 0"
+            )
 
 
 @dataclass(frozen=True)

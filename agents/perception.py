@@ -128,6 +128,18 @@ def _to_world_boundary(
     return pts, np.asarray(b.curve_mask)
 
 
+def outline_to_world(
+    camera: CameraModel, outline_px: np.ndarray, z: float, cfg: PerceptionConfig | None = None
+) -> np.ndarray:
+    """A traced pixel outline (k, 2) cast onto the plane at height ``z``: world x, y [mm], y up.
+
+    Raises:
+        PerceptionError: Plane not in front of the camera.
+    """
+    cfg = cfg or PerceptionConfig()
+    return _unproject(camera, np.asarray(outline_px, dtype=float), z)[:, :2] * cfg.mm_per_m
+
+
 def figure_to_world(
     camera: CameraModel, fig: Figure, z: float, cfg: PerceptionConfig | None = None
 ) -> Figure:
@@ -389,6 +401,7 @@ class SlotTarget:
             little for a picture to show (a rounded corner's tangent ends, an arc edge nearly
             continuing its neighbour, a short edge between opposite turns). None when the
             two agree.
+        class_name: The design's shape-and-colour class of the slot ("": not known).
     """
 
     index: int
@@ -399,6 +412,7 @@ class SlotTarget:
     symmetry: int
     color: tuple[float, float, float]
     seen: SeenSlot | None = None
+    class_name: str = ""
 
     @property
     def descriptions(self) -> tuple[Description, ...]:
@@ -439,6 +453,7 @@ def slot_targets(
             s.symmetry,
             s.color,
             sd,
+            s.class_name,
         )
         for s, d, sd in zip(slots, descs, seen_descs, strict=True)
     )
@@ -453,6 +468,7 @@ __all__ = [
     "balance_colors",
     "figure_to_world",
     "grasp_point",
+    "outline_to_world",
     "refigured",
     "perceive_tiles",
     "slot_targets",

@@ -351,6 +351,29 @@ def _command(
     if ref is not s.figure:
         offset = (np.asarray(s.figure.centroid) - np.asarray(ref.centroid)) / MM_PER_M
         centre = t.centre + rotate_xy(offset, -rot)
+    return fitted_command(t, s, rot, centre, score=a.score, cfg=cfg)
+
+
+def fitted_command(
+    t: PerceivedTile,
+    s: SlotTarget,
+    rotation: float,
+    centre: np.ndarray,
+    *,
+    score: float,
+    cfg: PlacementConfig,
+) -> PickPlace:
+    """The pick-and-place of a tile turned by ``rotation`` [rad] about ``centre`` onto ``s``.
+
+    Args:
+        t: The perceived tile (its grasp point is kept).
+        s: The slot.
+        rotation: Turn of the tile onto the slot, CCW [rad].
+        centre: The tile's area centroid, world (x, y) [m]: it lands on the slot's.
+        score: The pair's residual (dimensionless).
+        cfg: Placement settings (``continuous_yaw_steps``).
+    """
+    rot = wrap(rotation)
     yaw_place = float(s.pose[2])
     yaw_pick = wrap(yaw_place - rot)
     g_off = rotate_xy(t.grasp - centre, rot)
@@ -366,7 +389,7 @@ def _command(
         rotation=rot,
         place_yaws=equivalent_yaws(yaw_place, s.symmetry, cfg.continuous_yaw_steps),
         symmetry=s.symmetry,
-        score=a.score,
+        score=score,
     )
 
 
@@ -399,6 +422,7 @@ __all__ = [
     "Unplaced",
     "UnplacedReason",
     "equivalent_yaws",
+    "fitted_command",
     "outline_residual",
     "plan_placements",
     "refine_rotation",

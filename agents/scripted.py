@@ -34,14 +34,30 @@ import numpy as np
 
 from agents.calibration import CalibrationResult, calibrate_env_camera
 from agents.config import AgentsConfig, load_agents_config
-from agents.errors import AgentError
-from agents.perception import Perception, perceive_tiles, refigured, slot_targets
-from agents.placement import FeasiblePairs, PickPlace, PlacementPlan, Unplaced, plan_placements
-from agents.seen_slots import camera_scale
+from agents.errors import AgentError, PerceptionError
+from agents.outline_fit import TileOutline, fit_unmatched
+from agents.perception import (
+    Perception,
+    outline_to_world,
+    perceive_tiles,
+    refigured,
+    slot_targets,
+)
+from agents.placement import (
+    FeasiblePairs,
+    PickPlace,
+    PlacementPlan,
+    Unplaced,
+    fitted_command,
+    plan_placements,
+)
+from agents.seen_slots import camera_scale, hole_turn_gap
 from agents.white_balance import color_gain
 from envs.cell.cameras import CameraModel
 from envs.task_spec import PickPlaceCodec, PickPlaceCommand, TaskSpec
 from qshape import ExtractParams, OutlineParams
+from qshape.theory.tolerances import default_tolerances
+from spatial.units import MM_PER_M
 
 IMAGE_DIMS = 3
 """An unbatched RGB observation has (height, width, 3)."""
@@ -108,6 +124,10 @@ class ScriptedAgent:
             OutlineParams(**{**dataclasses.asdict(outline), **retry}) if retry else None
         )
         self.palette = np.array([s.color for s in self.slots])
+        gap = self.cfg.perception.min_hole_turn_mm
+        self.turn_unresolved: frozenset[int] = frozenset(
+            s.index for s in self.slots if hole_turn_gap(s.figure, s.symmetry, None) < gap
+        )
         self.queue: deque[PickPlace] = deque()
         self.filled: set[int] = set()
         self.order: list[int] = []
@@ -186,6 +206,10 @@ class ScriptedAgent:
         taken = [u.tile for u in plan.unplaced if u.reason == "slots_taken"]
         if taken and self._reopen(taken, pairs):
             plan = self._assign(per, pairs)
+        if self.cfg.placement.fit_max_residual > 0 and any(
+            u.reason == "shape_absent" for u in plan.unplaced
+        ):
+            plan = self._fit_unmatched(per, plan)
         self.pictures += 1
         self.last_perception = per
         self.last_plan = plan
@@ -202,7 +226,7 @@ class ScriptedAgent:
         """
         assert self.retry_params is not None
         absent = {u.tile for u in plan.unplaced if u.reason == "shape_absent"}
-        open_slots = [s for s in self.slots if s.index not in self.filled]
+        open_slots = [s for s in self.slots if s.index not in self.filled | self.turn_unresolved]
         use_color = self.cfg.placement.use_color
         tiles = list(per.tiles)
         changed = False
@@ -221,6 +245,47 @@ class ScriptedAgent:
         pairs = FeasiblePairs(per.tiles, self.slots)
         return per, pairs, self._assign(per, pairs)
 
+    def _fit_unmatched(self, per: Perception, plan: PlacementPlan) -> PlacementPlan:
+        """The plan with tiles no description matched fitted by outline (`agents.outline_fit`).
+
+        A quantitative last resort: the tiles still matching no open slot's shape are turned
+        onto the slots the plan leaves open by their traced outlines, and those fitting one
+        slot class unambiguously are placed by that fit.
+        """
+        absent = {u.tile for u in plan.unplaced if u.reason == "shape_absent"}
+        tiles, outlines = [], []
+        for t in per.tiles:
+            if t.index not in absent or t.outline_px is None:
+                continue
+            try:
+                outer = outline_to_world(self.camera, t.outline_px, per.plane_z)
+            except PerceptionError:
+                continue
+            tiles.append(t)
+            outlines.append(TileOutline(outer, tuple(h.dense() for h in t.figure.holes), t.color))
+        open_ = set(plan.open_slots)
+        slots = [s for s in self.slots if s.index in open_]
+        pcfg = self.cfg.placement
+        found = fit_unmatched(
+            outlines, slots, pcfg, default_tolerances().color_distance, pcfg.fit_spacing_mm
+        )
+        if not found:
+            return plan
+        more = tuple(
+            fitted_command(
+                tiles[i], slots[j], f.rotation, f.centre / MM_PER_M, score=f.residual, cfg=pcfg
+            )
+            for i, j, f in found
+        )
+        placed = {c.tile for c in more}
+        filled = {c.slot for c in more}
+        return dataclasses.replace(
+            plan,
+            commands=plan.commands + more,
+            unplaced=tuple(u for u in plan.unplaced if u.tile not in placed),
+            open_slots=tuple(k for k in plan.open_slots if k not in filled),
+        )
+
     def _white_balance(self, measured: np.ndarray) -> np.ndarray:
         """The gain of a picture's measured colours (n, 3), fitted on the recent history."""
         pcfg = self.cfg.perception
@@ -229,7 +294,8 @@ class ScriptedAgent:
         return color_gain(np.array(self.colors), self.palette, pcfg, per_channel=many)
 
     def _assign(self, per: Perception, pairs: FeasiblePairs) -> PlacementPlan:
-        open_slots = [s for s in self.slots if s.index not in self.filled]
+        left_out = self.filled | self.turn_unresolved
+        open_slots = [s for s in self.slots if s.index not in left_out]
         done = [s for s in self.slots if s.index in self.filled]
         return plan_placements(per.tiles, open_slots, self.cfg.placement, filled=done, pairs=pairs)
 
