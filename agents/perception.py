@@ -75,6 +75,9 @@ class PerceivedTile:
         area: Area on the plane [m^2].
         outline_px: The traced outer outline the figure was simplified from, shape (k, 2)
             [px], y down (None: not kept).
+        outline_mm: That traced outline on the plane of the tile tops, world x, y [mm] (y up),
+            shape (k, 2) (None: not kept): every boundary pixel, where ``figure`` has its
+            relevant points and the arcs through three of them.
     """
 
     index: int
@@ -87,6 +90,7 @@ class PerceivedTile:
     color: tuple[float, float, float]
     area: float
     outline_px: np.ndarray | None = None
+    outline_mm: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -274,7 +278,10 @@ def _perceived(  # noqa: PLR0913, PLR0917
     centre = np.asarray(fw.centroid) * s
     ray = _unproject(camera, np.asarray(fpx.centroid)[None], z)[0, :2]
     grasp = grasp_point(fw, centre, cfg)
-    return PerceivedTile(k, fpx, figure, d, centre, ray, grasp, color, fw.area * s * s, outline)
+    traced = None if outline is None else outline_to_world(camera, outline, z, cfg)
+    return PerceivedTile(
+        k, fpx, figure, d, centre, ray, grasp, color, fw.area * s * s, outline, traced
+    )
 
 
 def refigured(

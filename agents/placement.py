@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+import shapely
 from scipy.optimize import minimize_scalar
 from scipy.spatial import cKDTree
 
@@ -155,6 +156,8 @@ def refine_rotation(
     rotation: float,
     span: float,
     tolerance: float = 1e-4,
+    *,
+    points: np.ndarray | None = None,
 ) -> float:
     """The rotation within +-``span`` of ``rotation`` whose turned tile outline fits best [rad].
 
@@ -168,10 +171,16 @@ def refine_rotation(
         rotation: qshape's rotation of the pair [rad].
         span: Half width of the refinement interval [rad] (0: ``rotation`` as it is).
         tolerance: Refinement precision [rad].
+        points: The tile's outer boundary to fit instead of ``tile``'s (e.g. its traced
+            outline), shape (k, 2), same units; centred on the area centroid of that
+            boundary less ``tile``'s holes.
     """
     if span <= 0:
         return rotation
-    a = np.asarray(tile.outer.dense()) - tile.centroid
+    if points is None:
+        a = np.asarray(tile.outer.dense()) - tile.centroid
+    else:
+        a = np.asarray(points) - _centroid(points, tile)
     tree = cKDTree(np.asarray(slot.outer.dense()) - slot.centroid)
 
     def cost(r: float) -> float:
@@ -184,6 +193,14 @@ def refine_rotation(
         options={"xatol": tolerance},
     )
     return float(res.x) if float(res.fun) <= cost(rotation) else rotation
+
+
+def _centroid(outer: np.ndarray, figure: qshape.Figure) -> np.ndarray:
+    """Area centroid of the boundary ``outer`` (k, 2) less ``figure``'s holes."""
+    poly = shapely.Polygon(outer, [np.asarray(h.dense()) for h in figure.holes])
+    if not poly.is_valid:
+        poly = shapely.make_valid(poly)
+    return np.array([poly.centroid.x, poly.centroid.y])
 
 
 @dataclass(eq=False)
@@ -345,6 +362,7 @@ def _command(
             a.rotation,
             math.radians(cfg.refine_span_deg),
             math.radians(cfg.refine_tolerance_deg),
+            points=t.outline_mm,
         )
     )
     centre = t.centre

@@ -34,11 +34,10 @@ import numpy as np
 
 from agents.calibration import CalibrationResult, calibrate_env_camera
 from agents.config import AgentsConfig, load_agents_config
-from agents.errors import AgentError, PerceptionError
+from agents.errors import AgentError
 from agents.outline_fit import TileOutline, fit_unmatched
 from agents.perception import (
     Perception,
-    outline_to_world,
     perceive_tiles,
     refigured,
     slot_targets,
@@ -253,16 +252,12 @@ class ScriptedAgent:
         slot class unambiguously are placed by that fit.
         """
         absent = {u.tile for u in plan.unplaced if u.reason == "shape_absent"}
-        tiles, outlines = [], []
-        for t in per.tiles:
-            if t.index not in absent or t.outline_px is None:
-                continue
-            try:
-                outer = outline_to_world(self.camera, t.outline_px, per.plane_z)
-            except PerceptionError:
-                continue
-            tiles.append(t)
-            outlines.append(TileOutline(outer, tuple(h.dense() for h in t.figure.holes), t.color))
+        tiles = [t for t in per.tiles if t.index in absent and t.outline_mm is not None]
+        outlines = [
+            TileOutline(t.outline_mm, tuple(h.dense() for h in t.figure.holes), t.color)
+            for t in tiles
+            if t.outline_mm is not None
+        ]
         open_ = set(plan.open_slots)
         slots = [s for s in self.slots if s.index in open_]
         pcfg = self.cfg.placement
