@@ -66,6 +66,11 @@ IDLE_HORIZON_S = 3.0
 """Belt travel time [s] the rest action's pick keeps clear of (about one cycle)."""
 
 
+UNMATCHED = ("shape_absent", "color_absent")
+"""Why a tile left by the descriptions may be fitted by its outline (`agents.outline_fit`):
+it matches no open slot's shape, or only slots of other colours."""
+
+
 class ScriptedAgent:
     """Vision + qualitative matching + planner cycles, as a policy.
 
@@ -206,7 +211,7 @@ class ScriptedAgent:
         if taken and self._reopen(taken, pairs):
             plan = self._assign(per, pairs)
         if self.cfg.placement.fit_max_residual > 0 and any(
-            u.reason == "shape_absent" for u in plan.unplaced
+            u.reason in UNMATCHED for u in plan.unplaced
         ):
             plan = self._fit_unmatched(per, plan)
         self.pictures += 1
@@ -247,11 +252,12 @@ class ScriptedAgent:
     def _fit_unmatched(self, per: Perception, plan: PlacementPlan) -> PlacementPlan:
         """The plan with tiles no description matched fitted by outline (`agents.outline_fit`).
 
-        A quantitative last resort: the tiles still matching no open slot's shape are turned
+        A quantitative last resort: the tiles still matching no open slot's shape (or only
+        slots of other colours, `UNMATCHED`) are turned
         onto the slots the plan leaves open by their traced outlines, and those fitting one
         slot class unambiguously are placed by that fit.
         """
-        absent = {u.tile for u in plan.unplaced if u.reason == "shape_absent"}
+        absent = {u.tile for u in plan.unplaced if u.reason in UNMATCHED}
         tiles = [t for t in per.tiles if t.index in absent and t.outline_mm is not None]
         outlines = [
             TileOutline(t.outline_mm, tuple(h.dense() for h in t.figure.holes), t.color)
@@ -399,4 +405,4 @@ class ScriptedAgent:
         return (act[None] if batched else act), state
 
 
-__all__ = ["ScriptedAgent"]
+__all__ = ["UNMATCHED", "ScriptedAgent"]
