@@ -421,6 +421,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def move_home(self) -> dict[str, Any]:
         """Move the arm to its home pose with one planned move; returns a fresh observation.
 
+        The observation is laid out as `step`'s (privileged rows in the action order).
+
         For a picture of the work after an episode (the arm out of the cameras' view):
         ``dynamic`` execution tracks a time-optimal joint move with the servos (simulated
         time advances); otherwise the arm is put at home. Nothing is evaluated or rewarded.
@@ -435,7 +437,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         else:
             self.cell.set_qpos(home)
         self.actions.reset()
-        return self.observer.observe(self.np_random, self.task.evaluate())
+        return self._observe(self.task.evaluate())
 
     def add_frame_listener(self, listener: Callable[[], None], fps: float) -> None:
         """Call ``listener()`` every ``1 / fps`` s of simulated time, also inside a step.
