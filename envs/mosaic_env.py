@@ -419,9 +419,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         return obs, float(sum(terms.values())), terminated, False, info
 
     def move_home(self) -> dict[str, Any]:
-        """Move the arm to its home pose with one planned move; returns a fresh observation.
-
-        The observation is laid out as `step`'s (privileged rows in the action order).
+        """Move the arm home with one planned move; returns a fresh observation, as `step`'s.
 
         For a picture of the work after an episode (the arm out of the cameras' view):
         ``dynamic`` execution tracks a time-optimal joint move with the servos (simulated
