@@ -350,21 +350,23 @@ def _command(
 
     ``seen``: the pair matched by the slot's seen outline (`SlotTarget.seen`). The tile's
     figure then has the seen figure's relevant points, and both the arcs through three points
-    that make their area: the rotation is refined against the seen figure, and the tile's
-    centre moved by the design centroid's offset from the seen figure's (turned into the
-    tile's frame), so the tile's own area centroid lands on the slot's.
+    that make their area. With the tile's traced outline (``outline_mm``) the rotation is
+    refined by fitting that outline (the tile's own boundary) to the design's, and a tile
+    matched by a seen outline is centred by its traced area centroid. Without it, the
+    rotation is refined against the seen figure and the tile's centre moved by the design
+    centroid's offset from the seen figure's (turned into the tile's frame). Either way the
+    tile's own area centroid lands on the slot's.
     """
+    span = math.radians(cfg.refine_span_deg)
+    step = math.radians(cfg.refine_tolerance_deg)
+    if t.outline_mm is not None:
+        rot = wrap(refine_rotation(t.figure, s.figure, a.rotation, span, step, points=t.outline_mm))
+        centre = t.centre
+        if seen:
+            centre = _centroid(t.outline_mm, t.figure) / MM_PER_M
+        return fitted_command(t, s, rot, centre, score=a.score, cfg=cfg)
     ref = s.seen.figure if seen and s.seen is not None else s.figure
-    rot = wrap(
-        refine_rotation(
-            t.figure,
-            ref,
-            a.rotation,
-            math.radians(cfg.refine_span_deg),
-            math.radians(cfg.refine_tolerance_deg),
-            points=t.outline_mm,
-        )
-    )
+    rot = wrap(refine_rotation(t.figure, ref, a.rotation, span, step))
     centre = t.centre
     if ref is not s.figure:
         offset = (np.asarray(s.figure.centroid) - np.asarray(ref.centroid)) / MM_PER_M
