@@ -37,11 +37,11 @@ from agents.errors import AgentError
 from agents.tile_fit import FitConfig, TileFit, fit_tile, symmetry_period
 from configs import load_config
 from envs.cell.cameras import CameraModel
-from envs.task_spec import PickPlaceCommand, TaskSpec
+from envs.task_spec import CameraName, PickPlaceCommand, TaskSpec
 
 TILE_FIT_CONFIG = "tile_fit"
 """Bundled config name of the pose fit (``configs/tile_fit.yaml``)."""
-CAMERAS = ("input_camera", "output_camera")
+CAMERAS: tuple[CameraName, ...] = ("input_camera", "output_camera")
 """The observation's images the policy reads."""
 QUARTER = math.pi / 2
 """The scorer's turn step [rad]."""
@@ -89,12 +89,12 @@ def at_size(
     h, w = size
     if tuple(np.asarray(obs["input_camera"]).shape[:2]) == (h, w):
         return obs, spec
-    small = {
-        name: cv2.resize(np.asarray(obs[name]), (w, h), interpolation=cv2.INTER_AREA)
-        for name in CAMERAS
-    }
-    cameras = {**spec.cameras, **{n: scaled_camera(spec.camera(n), h, w) for n in CAMERAS}}  # type: ignore[arg-type]
-    return {**obs, **small}, dataclasses.replace(spec, cameras=cameras, image_size=(h, w))
+    small = dict(obs)
+    cameras = dict(spec.cameras)
+    for name in CAMERAS:
+        small[name] = cv2.resize(np.asarray(obs[name]), (w, h), interpolation=cv2.INTER_AREA)
+        cameras[name] = scaled_camera(spec.camera(name), h, w)
+    return small, dataclasses.replace(spec, cameras=cameras, image_size=(h, w))
 
 
 def rotation_for(theta: float, symmetry: int, quarter_turns: int) -> float:
@@ -135,7 +135,10 @@ class ContinuousCameraPolicy:
             AgentError: The env has no ``pick_place`` codec (another action mode).
         """
         if spec.codec is None:
-            raise AgentError(f"the continuous camera policy needs action_mode pick_place, not {spec.action_mode!r}")
+            raise AgentError(
+                "the continuous camera policy needs action_mode pick_place, "
+                f"not {spec.action_mode!r}"
+            )
         small_obs, small_spec = at_size(obs, spec, self.scorer.image_size)
         scores = self.scorer.logits(small_obs, small_spec)
         if scores.size == 0:
@@ -148,7 +151,15 @@ class ContinuousCameraPolicy:
         full = belt_tiles(obs["input_camera"], camera, z, crop)
         label = int(np.linalg.norm(full.xy - seen.xy[i], axis=1).argmin()) + 1
         slot = spec.slots[int(mesh_order(spec)[j])]
-        fit = fit_tile(obs["input_camera"], full.labels, label, camera, spec.pick, slot, self.fit)
+        fit = fit_tile(
+            obs["input_camera"],
+            full.labels,
+            label,
+            camera=camera,
+            area=spec.pick,
+            slot=slot,
+            cfg=self.fit,
+        )
         rotation = rotation_for(fit.theta, slot.symmetry, r)
         command = PickPlaceCommand(
             (float(fit.xy[0]), float(fit.xy[1])),

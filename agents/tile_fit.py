@@ -108,6 +108,7 @@ class _Window:
         image: np.ndarray,
         labels: np.ndarray,
         label: int,
+        *,
         camera: CameraModel,
         area: Area,
         cfg: FitConfig,
@@ -134,7 +135,9 @@ class _Window:
         uv = self.camera.project(pts) - (self.u0, self.v0)
         return np.round(((uv + 0.5) * self.s - 0.5) * (1 << SHIFT)).astype(np.int32)
 
-    def coverage(self, outline: tuple[np.ndarray, list[np.ndarray]], pose: np.ndarray) -> np.ndarray:
+    def coverage(
+        self, outline: tuple[np.ndarray, list[np.ndarray]], pose: np.ndarray
+    ) -> np.ndarray:
         """Share of each window pixel covered by the tile at pose (x, y, theta), (h, w) float32."""
         c, s = math.cos(pose[2]), math.sin(pose[2])
         rot = np.array([[c, -s], [s, c]])
@@ -180,6 +183,7 @@ def fit_tile(
     image: np.ndarray,
     labels: np.ndarray,
     label: int,
+    *,
     camera: CameraModel,
     area: Area,
     slot: WorldSlot,
@@ -196,7 +200,7 @@ def fit_tile(
         slot: A slot of the tile's class (its figure and yaw).
         cfg: Fit settings.
     """
-    win = _Window(image, labels, label, camera, area, cfg)
+    win = _Window(image, labels, label, camera=camera, area=area, cfg=cfg)
     outline = figure_outline(slot)
     xy0 = camera.unproject_to_plane(win.centroid[None], area.tile_top_z)[0, :2]
     period = symmetry_period(slot.symmetry)
