@@ -30,6 +30,7 @@ import gymnasium as gym
 import numpy as np
 
 from agents.camera_continuous import ContinuousCameraPolicy
+from agents.policies import parse_pairs
 from apps.cli import CommandParser, run_cli
 from apps.evaluate import ENV_ID, task_protocol
 from configs.files import write_json
@@ -62,6 +63,8 @@ class Placement:
         yaw_deg: Yaw error modulo the tile's symmetry after the step [deg] (NaN: other class).
         fit_position_mm: Fitted centroid to the tile's true one before the pick [mm].
         fit_yaw_deg: Fitted yaw error modulo symmetry before the pick [deg] (NaN: other class).
+        turn_overruled: The rotation sent is more than 45 deg from the scorer's quarter turn
+            (the fit chose another turn than the scorer).
     """
 
     seed: int
@@ -72,6 +75,7 @@ class Placement:
     yaw_deg: float
     fit_position_mm: float
     fit_yaw_deg: float
+    turn_overruled: bool
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -110,6 +114,10 @@ def play_episode(
         sym = int(before.symmetry[tile])
         same = before.class_name[tile] == slot.class_name
         fit_yaw = slot.yaw + decision.fit.theta
+        scorer_turn = decision.quarter_turns * math.pi / 2
+        overruled = abs(math.remainder(decision.command.rotation - scorer_turn, 2 * math.pi)) > (
+            math.pi / 4
+        )
         obs, _, terminated, truncated, info = env.step(decision.action)
         after = base.ground_truth()
         xy = after.xy[tile]
@@ -124,6 +132,7 @@ def play_episode(
                 _yaw_deg(float(after.yaw[tile]), slot.yaw, sym) if same else math.nan,
                 float(np.linalg.norm(decision.fit.xy - before.xy[tile]) * MM_PER_M),
                 _yaw_deg(fit_yaw, float(before.yaw[tile]), sym) if same else math.nan,
+                overruled,
             )
         )
         if terminated or truncated:
@@ -149,7 +158,7 @@ def run_size(
     policy: ContinuousCameraPolicy,
     size: tuple[int, int],
     seeds: Sequence[int],
-    execution: str | None = None,
+    env_overrides: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Every episode at one image size; the row's figures and its placements.
 
@@ -157,12 +166,15 @@ def run_size(
         policy: The policy.
         size: Image (height, width) [px].
         seeds: Episode seeds.
-        execution: The env's ``execution`` (None: the rung's, ``kinematic``).
+        env_overrides: Further env keys (e.g. ``execution``, ``camera_position_jitter``).
     """
     overrides, protocol = task_protocol(TASK)
-    overrides = {**overrides, "action_mode": "pick_place", "obs_mode": "rgb"}
-    if execution is not None:
-        overrides["execution"] = execution
+    overrides = {
+        **overrides,
+        "action_mode": "pick_place",
+        "obs_mode": "rgb",
+        **(env_overrides or {}),
+    }
     env = gym.make(ENV_ID, **{**overrides, "image_size": list(size)})
     spec: TaskSpec = env.get_wrapper_attr("task_spec")
     mode = str(env.get_wrapper_attr("config").execution)
@@ -175,23 +187,27 @@ def run_size(
     cpu = time.process_time() - t0
     env.close()
     placed = [p for p in placements if p.on_mesh]
-    pos = np.array([p.position_mm for p in placed])
-    yaw = np.array([p.yaw_deg for p in placed])
+    right = [p for p in placed if p.same_class]  # errors against a slot of the tile's class
+    pos = np.array([p.position_mm for p in right])
+    yaw = np.array([p.yaw_deg for p in right])
     both = np.array([p.position_mm <= POSITION_TOL_MM and p.yaw_deg <= YAW_TOL_DEG for p in placed])
     return {
         "size": list(size),
         "execution": mode,
+        "env": dict(env_overrides or {}),
         "mm_per_px": mm_per_px(spec),
         "episodes": len(seeds),
         "filled": float(np.mean([e["correct"] / max(e["slots"], 1) for e in evals])),
         "success": float(np.mean([e["success"] for e in evals])),
         "placed": len(placed),
         "wrong_class": sum(not p.same_class for p in placed),
+        "turn_overruled": sum(p.turn_overruled for p in placements),
+        "wrong_class_position_mm": [p.position_mm for p in placed if not p.same_class],
         "position_mm": distribution(pos, POSITION_TOL_MM),
         "yaw_deg": distribution(yaw, YAW_TOL_DEG),
         "within_both": float(both.mean()) if len(both) else math.nan,
         "fit_position_mm": distribution(
-            np.array([p.fit_position_mm for p in placements]), POSITION_TOL_MM
+            np.array([p.fit_position_mm for p in placements if p.same_class]), POSITION_TOL_MM
         ),
         "fit_yaw_deg": distribution(np.array([p.fit_yaw_deg for p in placements]), YAW_TOL_DEG),
         "env_mean_position_mm": {
@@ -229,13 +245,15 @@ def table(rows: Sequence[dict[str, Any]]) -> str:
     head = (
         "image (h x w)",
         "execution",
+        "env",
         "mm/px",
         "filled",
         "success",
         "placed (wrong class)",
-        "position mm: median / p90 / max (within 1.5)",
-        "yaw deg: median / p90 / max (within 2)",
-        "within both",
+        "position mm: median / p90 / max (within 1.5), right class",
+        "yaw deg: median / p90 / max (within 2), right class",
+        "within both, all placed",
+        "turns overruled",
         "fit position mm",
         "fit yaw deg",
         "CPU-s",
@@ -246,6 +264,7 @@ def table(rows: Sequence[dict[str, Any]]) -> str:
         cells = (
             f"{h} x {w}",
             r["execution"],
+            ", ".join(f"{k}={v}" for k, v in r["env"].items() if k != "execution") or "-",
             f"{r['mm_per_px']:.2f}",
             f"{r['filled']:.2f}",
             f"{r['success']:.2f}",
@@ -253,6 +272,7 @@ def table(rows: Sequence[dict[str, Any]]) -> str:
             d(r["position_mm"], ".2f"),
             d(r["yaw_deg"], ".2f"),
             f"{r['within_both']:.2f}",
+            str(r["turn_overruled"]),
             d(r["fit_position_mm"], ".2f"),
             d(r["fit_yaw_deg"], ".2f"),
             f"{r['cpu_s']:.0f}",
@@ -299,7 +319,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap.add_argument("--sizes", nargs="+", default=list(SIZES), help="image sizes HxW [px]")
     ap.add_argument("--seeds", nargs="+", type=int, help="episode seeds (default: the rung's)")
     ap.add_argument(
-        "--execution", choices=("kinematic", "dynamic"), help="env execution (default: the rung's)"
+        "--env", nargs="*", default=[], metavar="KEY=VALUE", help="env overrides (e.g. execution)"
     )
     ap.add_argument("--out", type=Path, default=Path("runs/camera_continuous"))
     args = ap.parse_args(argv)
@@ -308,7 +328,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     policy = ContinuousCameraPolicy.load(args.checkpoint)
     rows = []
     for text in args.sizes:
-        row = run_size(policy, parse_size(text), seeds, args.execution)
+        row = run_size(policy, parse_size(text), seeds, parse_pairs(args.env))
         row["env_check_mm"] = env_check_mm(row)
         rows.append(row)
         print(
