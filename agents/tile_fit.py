@@ -47,6 +47,8 @@ class FitConfig:
         margin: Window margin around the blob's bounding box, as a share of its larger side.
         min_margin_px: Smallest window margin [px].
         canvas_px: Target side of the supersampled drawing canvas [px] (sets ``supersample``).
+        min_supersample: Smallest drawing supersampling factor (the coverage moves in steps of
+            1 / it of a pixel: a coarse one leaves the cost flat over a fraction of a pixel).
         max_supersample: Largest drawing supersampling factor.
         coarse_step_deg: Step of the coarse grid over theta [deg].
         starts: Best distinct coarse minima refined by Nelder-Mead.
@@ -61,6 +63,7 @@ class FitConfig:
     margin: float = 0.25
     min_margin_px: int = 2
     canvas_px: int = 384
+    min_supersample: int = 8
     max_supersample: int = 16
     coarse_step_deg: float = 2.0
     starts: int = 2
@@ -120,7 +123,9 @@ class _Window:
         self.v0, self.u0 = max(rows.min() - m, 0), max(cols.min() - m, 0)
         v1, u1 = min(rows.max() + m + 1, h), min(cols.max() + m + 1, w)
         self.shape = (v1 - self.v0, u1 - self.u0)
-        self.s = int(np.clip(cfg.canvas_px // max(self.shape), 1, cfg.max_supersample))
+        self.s = int(
+            np.clip(cfg.canvas_px // max(self.shape), cfg.min_supersample, cfg.max_supersample)
+        )
         win = (slice(self.v0, v1), slice(self.u0, u1))
         self.alpha = tile_alpha(image, labels == label)[win]
         others = ((labels != 0) & (labels != label)).astype(np.uint8)

@@ -64,7 +64,7 @@ class Placement:
         fit_position_mm: Fitted centroid to the tile's true one before the pick [mm].
         fit_yaw_deg: Fitted yaw error modulo symmetry before the pick [deg] (NaN: other class).
         turn_overruled: The rotation sent is more than 45 deg from the scorer's quarter turn
-            (the fit chose another turn than the scorer).
+            (the fit chose another turn than the scorer; never for a round slot).
     """
 
     seed: int
@@ -115,9 +115,8 @@ def play_episode(
         same = before.class_name[tile] == slot.class_name
         fit_yaw = slot.yaw + decision.fit.theta
         scorer_turn = decision.quarter_turns * math.pi / 2
-        overruled = abs(math.remainder(decision.command.rotation - scorer_turn, 2 * math.pi)) > (
-            math.pi / 4
-        )
+        gap = abs(math.remainder(decision.command.rotation - scorer_turn, 2 * math.pi))
+        overruled = slot.symmetry > 0 and gap > math.pi / 4  # a round tile is never turned
         obs, _, terminated, truncated, info = env.step(decision.action)
         after = base.ground_truth()
         xy = after.xy[tile]
