@@ -11,7 +11,7 @@ Run::
 Held-out designs (``--suite held_out``): every run trains on the three training-design
 datasets of ``MosaicHeldOutDesigns-v0`` together (``--demos N``: the first N episodes of each,
 0: all; the curve on procedural designs), then plays the rung's evaluation designs (hexagon,
-trencadis) on seeds 1000-1019 and 2000-2019 and ``MosaicDecision6-v0``::
+trencadis) on seeds 1000-1019 and 2000-2019::
 
     python -m benchmarks.camera_bc --suite held_out --demos 0 --seeds 0 1 2 --out runs/held
 
@@ -96,7 +96,6 @@ SUITES = {
         {
             "held_out_designs": "MosaicHeldOutDesigns-v0",
             "held_out_designs_seeds2000": "MosaicHeldOutDesigns-v0",
-            "decision6": "MosaicDecision6-v0",
         },
     ),
 }
