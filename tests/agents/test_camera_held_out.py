@@ -76,5 +76,4 @@ def test_held_out_training_path_learns_training_designs(recorded) -> None:
     pols = make_policies([summary["model_path"], "random"], base)
     rows, _ = evaluate_policy_set(pols, Protocol((2000, 2001), (), 12))  # unseen seeds
     camera, random = rows[0].filled, rows[1].filled
-    print("FILLED", camera, random)
     assert camera > random + 0.2, (camera, random)
