@@ -207,6 +207,27 @@ def clone_actor(
     return losses
 
 
+def hold_actor(steps: int) -> Any:
+    """An SB3 callback keeping a SAC model's actor as it was at the start of ``learn``.
+
+    For ``steps`` env steps the actor's weights are put back after every step, so a cloned
+    actor (`clone_actor`) keeps acting as the clone while the critics learn from its episodes
+    and the demonstrations; a random critic would otherwise drag it off at once.
+    """
+    from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
+
+    class HoldActor(BaseCallback):
+        def _on_training_start(self) -> None:
+            self.saved = {k: v.clone() for k, v in self.model.actor.state_dict().items()}
+
+        def _on_step(self) -> bool:
+            if self.model.num_timesteps <= steps:
+                self.model.actor.load_state_dict(self.saved)
+            return True
+
+    return HoldActor()
+
+
 def portable_checkpoint(src: str | Path, dst: str | Path) -> None:
     """Save a SAC model trained with `DemoMixReplayBuffer` so that it loads without its dataset.
 
@@ -235,6 +256,7 @@ __all__ = [
     "LayerNormCritic",
     "LayerNormSACPolicy",
     "clone_actor",
+    "hold_actor",
     "layer_norm_mlp",
     "portable_checkpoint",
 ]

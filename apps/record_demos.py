@@ -28,6 +28,11 @@ observations (``state``) and episode limit: the demonstrations low-level learner
 
     python -m apps.record_demos --lowlevel --episodes 20 --seed 0 \
         --dataset-id mosaic/one-tile-lowlevel-v0 --replay
+
+``--expert-config NAME``: the controller's settings (``lowlevel_expert_smooth``: continuous
+descents, what the behaviour clones learn from). ``--action-noise SIGMA``: DART-style recording (`agents.dart.NoisyExecution`): the executed
+tool moves get Gaussian noise of SIGMA action units, the dataset keeps the controller's clean
+action (so such a dataset does not replay exactly; ``--replay`` then reports mismatches).
 """
 
 from __future__ import annotations
@@ -155,6 +160,8 @@ def record(
     lossless: bool = False,
     task: str = "",
     lowlevel: bool = False,
+    action_noise: float = 0.0,
+    expert_config: str = "",
 ) -> RecordResult:
     """Record ``episodes`` scripted episodes (seeds ``seed``, ``seed + 1``...) as a dataset.
 
@@ -195,6 +202,8 @@ def record(
                 calibrate=calibrate,
                 expert="lowlevel" if lowlevel else "decision" if expert else "",
                 lossless=lossless,
+                action_noise=action_noise,
+                expert_config=expert_config,
             )
         replace_dir(staging / dataset_id, path)
     finally:
@@ -213,11 +222,15 @@ def _collect(
     calibrate: bool,
     expert: str,
     lossless: bool,
+    action_noise: float = 0.0,
+    expert_config: str = "",
 ) -> tuple[int, int, tuple[int, ...], float]:
     """Record the episodes as ``dataset_id`` under ``MINARI_DATASETS_PATH``.
 
     ``expert``: "" (the scripted agent), ``decision`` (`ExpertAgent`) or ``lowlevel``
-    (`agents.lowlevel_expert.LowLevelExpert`, the env's own episode limit).
+    (`agents.lowlevel_expert.LowLevelExpert`, the env's own episode limit). ``action_noise``:
+    executed actions get that much noise (`agents.dart.NoisyExecution`), labels stay clean.
+    ``expert_config``: the low-level controller's settings (a ``configs/`` name or path).
 
     Returns:
         (episodes, steps, seeds, success rate).
@@ -230,15 +243,21 @@ def _collect(
     slots = len(base.unwrapped.task.slot_class)  # type: ignore[attr-defined]
     base.close()
     limit = None if expert == "lowlevel" else STEPS_PER_SLOT * slots  # None: the env's own
-    env = minari.DataCollector(
-        gym.make(env_id, max_episode_steps=limit, **kwargs), jpeg_encoding=not lossless
-    )
+    inner = gym.make(env_id, max_episode_steps=limit, **kwargs)
+    if action_noise:
+        from agents.dart import NoisyExecution  # noqa: PLC0415
+
+        inner = NoisyExecution(inner, action_noise, seed=seed)
+    env = minari.DataCollector(inner, jpeg_encoding=not lossless)
     try:
         agent: Any
         if expert == "lowlevel":
-            from agents.lowlevel_expert import LowLevelExpert  # noqa: PLC0415
+            from agents.lowlevel_expert import (  # noqa: PLC0415
+                LowLevelExpert,
+                load_expert_config,
+            )
 
-            agent = LowLevelExpert(env)
+            agent = LowLevelExpert(env, load_expert_config(expert_config or "lowlevel_expert"))
         elif expert:
             agent = ExpertAgent(env)
         else:
@@ -272,7 +291,12 @@ def _collect(
                     "cycles) "
                 )
                 + f"on {env_id.removeprefix('envs:')} with {json.dumps(kwargs)}; seeds "
-                f"{seeds[0]}..{seeds[-1]}."
+                f"{seeds[0]}..{seeds[-1]}"
+                + (
+                    f"; executed tool moves with N(0, {action_noise}^2) noise, clean labels."
+                    if action_noise
+                    else "."
+                )
             ),
         )
     finally:
@@ -369,6 +393,17 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument(
         "--lowlevel", action="store_true", help="scripted low-level controller (cartesian rung)"
     )
+    ap.add_argument(
+        "--action-noise",
+        type=float,
+        default=0.0,
+        help="DART: noise (std, action units) on the executed tool moves; labels stay clean",
+    )
+    ap.add_argument(
+        "--expert-config",
+        default="",
+        help="low-level controller settings (configs/ name or path; default lowlevel_expert)",
+    )
     args = ap.parse_args(argv)
     os.environ.setdefault("MUJOCO_GL", "egl")
     rec = record(
@@ -383,6 +418,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         lossless=args.lossless,
         task=args.task,
         lowlevel=args.lowlevel,
+        action_noise=args.action_noise,
+        expert_config=args.expert_config,
     )
     report: dict[str, Any] = {"record": {**asdict(rec), "path": str(rec.path)}}
     print(
