@@ -3,7 +3,12 @@
 Low-level policies read raw world coordinates in metres (tool, tile and slot positions), where
 the few millimetres that decide a seal are a tiny fraction of the inputs' spread.
 `NormalizedStateExtractor` flattens a Dict observation (the space's key order), optionally
-appends relative vectors (tile minus tool, slot minus tile: what a servo acts on), and
+appends relative vectors (tile minus tool, slot minus tile, and the turn from the tile's yaw
+to the slot's as cosines and sines of its 1, 2 and 4 multiples: what a servo acts on; the
+position vectors also squashed at millimetre scales, where the seal and the placement are
+decided; a
+tile's symmetry makes the turn it needs a sawtooth of the yaw difference, which these
+harmonics let a small network build), and
 standardises every feature with a fixed mean and standard deviation, computed once from the
 demonstrations (`feature_stats`). The statistics are constructor arguments, so SB3 saves them
 with the model (``policy_kwargs``) and a saved model plays without the dataset.
@@ -11,7 +16,7 @@ with the model (``policy_kwargs``) and a saved model plays without the dataset.
 In a training config (``apps.train`` fills ``mean``/``std`` from ``demos`` when
 ``normalize_obs`` is on)::
 
-    demos: mosaic/one-tile-lowlevel-dart-v0
+    demos: mosaic/one-tile-lowlevel-dart-v2
     normalize_obs: true
     policy_kwargs: {features_extractor_kwargs: {relative: true}}
 """
@@ -33,8 +38,14 @@ TOOL_POS = slice(12, 15)
 """Tool position (x, y, z) [m] in the ``robot`` vector."""
 STD_FLOOR = 1e-3
 """Smallest standard deviation used (features constant in the data are divided by this)."""
-RELATIVE_DIM = 5
-"""Relative features: tile minus tool (x, y, z) and slot minus tile (x, y) [m]."""
+FINE_SCALES = (0.002, 0.01)
+"""Scales [m] of the fine copies tanh(d / scale) of the relative position vectors d: within a
+few millimetres of a target these change by order one where the standardised d barely moves."""
+YAW_HARMONICS = (1, 2, 4)
+"""Multiples k of the slot-minus-tile yaw difference given as cos(k d), sin(k d)."""
+RELATIVE_DIM = 5 * (1 + len(FINE_SCALES)) + 2 * len(YAW_HARMONICS)
+"""Relative features: tile minus tool (x, y, z) and slot minus tile (x, y) [m], their fine
+copies, the yaw harmonics."""
 
 
 def _flat_dim(space: gym.spaces.Dict) -> int:
@@ -49,8 +60,9 @@ class NormalizedStateExtractor(BaseFeaturesExtractor):
             for ``relative``).
         mean: Per-feature mean, length `features_dim` (None: zeros).
         std: Per-feature standard deviation (None: ones); floored at `STD_FLOOR`.
-        relative: Append the first tile's position minus the tool's and the first slot's
-            (x, y) minus the first tile's [m].
+        relative: Append the first tile's position minus the tool's, the first slot's
+            (x, y) minus the first tile's [m], their fine copies (`FINE_SCALES`) and the
+            harmonics of their yaw difference.
 
     Raises:
         AgentError: Not a Dict space, missing keys for ``relative``, or statistics of the
@@ -92,7 +104,11 @@ class NormalizedStateExtractor(BaseFeaturesExtractor):
             tool = observations["robot"][:, TOOL_POS]
             tile = observations["tiles"][:, :TILE_DIM]
             slot = observations["slots"][:, :SLOT_DIM]
-            parts += [tile[:, :3] - tool, slot[:, :2] - tile[:, :2]]
+            diff = torch.atan2(slot[:, 3], slot[:, 2]) - torch.atan2(tile[:, 4], tile[:, 3])
+            turns = [f(k * diff) for k in YAW_HARMONICS for f in (torch.cos, torch.sin)]
+            rel = torch.cat([tile[:, :3] - tool, slot[:, :2] - tile[:, :2]], 1)
+            fine = [torch.tanh(rel / scale) for scale in FINE_SCALES]
+            parts += [rel, *fine, torch.stack(turns, 1)]
         return torch.cat(parts, dim=1)
 
     def forward(self, observations: dict[str, torch.Tensor]) -> torch.Tensor:
@@ -137,8 +153,10 @@ def normalized_policy_kwargs(
 
 
 __all__ = [
+    "FINE_SCALES",
     "RELATIVE_DIM",
     "STD_FLOOR",
+    "YAW_HARMONICS",
     "NormalizedStateExtractor",
     "feature_stats",
     "normalized_policy_kwargs",

@@ -30,9 +30,15 @@ observations (``state``) and episode limit: the demonstrations low-level learner
         --dataset-id mosaic/one-tile-lowlevel-v0 --replay
 
 ``--expert-config NAME``: the controller's settings (``lowlevel_expert_smooth``: continuous
-descents, what the behaviour clones learn from). ``--action-noise SIGMA``: DART-style recording (`agents.dart.NoisyExecution`): the executed
-tool moves get Gaussian noise of SIGMA action units, the dataset keeps the controller's clean
-action (so such a dataset does not replay exactly; ``--replay`` then reports mismatches).
+descents, what the behaviour clones learn from). ``--action-noise SIGMA``: DART-style
+recording (`agents.dart.NoisyExecution`): the executed tool moves get Gaussian noise of
+SIGMA action units (plus ``--noise-relative`` times the action's size), the dataset keeps the
+controller's clean action (such a dataset does not replay exactly; ``--replay`` then reports
+mismatches)::
+
+    python -m apps.record_demos --lowlevel --episodes 200 --seed 0 --action-noise 0.02 \
+        --noise-relative 0.5 --expert-config lowlevel_expert_smooth \
+        --dataset-id mosaic/one-tile-lowlevel-dart-v2
 """
 
 from __future__ import annotations
@@ -162,6 +168,7 @@ def record(
     lowlevel: bool = False,
     action_noise: float = 0.0,
     expert_config: str = "",
+    noise_relative: float = 0.0,
 ) -> RecordResult:
     """Record ``episodes`` scripted episodes (seeds ``seed``, ``seed + 1``...) as a dataset.
 
@@ -204,6 +211,7 @@ def record(
                 lossless=lossless,
                 action_noise=action_noise,
                 expert_config=expert_config,
+                noise_relative=noise_relative,
             )
         replace_dir(staging / dataset_id, path)
     finally:
@@ -224,12 +232,14 @@ def _collect(
     lossless: bool,
     action_noise: float = 0.0,
     expert_config: str = "",
+    noise_relative: float = 0.0,
 ) -> tuple[int, int, tuple[int, ...], float]:
     """Record the episodes as ``dataset_id`` under ``MINARI_DATASETS_PATH``.
 
     ``expert``: "" (the scripted agent), ``decision`` (`ExpertAgent`) or ``lowlevel``
     (`agents.lowlevel_expert.LowLevelExpert`, the env's own episode limit). ``action_noise``:
-    executed actions get that much noise (`agents.dart.NoisyExecution`), labels stay clean.
+    executed actions get that much noise (`agents.dart.NoisyExecution`), labels stay clean;
+    ``noise_relative``: plus that much per unit of the action's size.
     ``expert_config``: the low-level controller's settings (a ``configs/`` name or path).
 
     Returns:
@@ -244,10 +254,10 @@ def _collect(
     base.close()
     limit = None if expert == "lowlevel" else STEPS_PER_SLOT * slots  # None: the env's own
     inner = gym.make(env_id, max_episode_steps=limit, **kwargs)
-    if action_noise:
+    if action_noise or noise_relative:
         from agents.dart import NoisyExecution  # noqa: PLC0415
 
-        inner = NoisyExecution(inner, action_noise, seed=seed)
+        inner = NoisyExecution(inner, action_noise, seed=seed, relative=noise_relative)
     env = minari.DataCollector(inner, jpeg_encoding=not lossless)
     try:
         agent: Any
@@ -293,8 +303,9 @@ def _collect(
                 + f"on {env_id.removeprefix('envs:')} with {json.dumps(kwargs)}; seeds "
                 f"{seeds[0]}..{seeds[-1]}"
                 + (
-                    f"; executed tool moves with N(0, {action_noise}^2) noise, clean labels."
-                    if action_noise
+                    f"; executed tool moves with N(0, ({action_noise} + {noise_relative} |a|)^2) "
+                    "noise, clean labels."
+                    if action_noise or noise_relative
                     else "."
                 )
             ),
@@ -404,6 +415,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         default="",
         help="low-level controller settings (configs/ name or path; default lowlevel_expert)",
     )
+    ap.add_argument(
+        "--noise-relative",
+        type=float,
+        default=0.0,
+        help="DART: extra noise std per unit of the action's size (large at full speed)",
+    )
     args = ap.parse_args(argv)
     os.environ.setdefault("MUJOCO_GL", "egl")
     rec = record(
@@ -420,6 +437,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         lowlevel=args.lowlevel,
         action_noise=args.action_noise,
         expert_config=args.expert_config,
+        noise_relative=args.noise_relative,
     )
     report: dict[str, Any] = {"record": {**asdict(rec), "path": str(rec.path)}}
     print(

@@ -27,23 +27,26 @@ TASK = "MosaicOneTile-v0"
 DATASET = "test/one-tile-dart-v0"
 SEED = 1000
 """The fixed held-out seed the learners are played on."""
+EPISODES = 12
+"""Demonstrations recorded for the tests (about 2000 steps)."""
 
 
 @pytest.fixture(scope="module")
 def dart_root(tmp_path_factory):
-    """Six DART episodes of the continuous-descent controller (noise 0.02), seeds 0-5."""
+    """DART episodes of the continuous-descent controller (noise 0.02 + 0.5 |a|), seeds 0..."""
     torch.set_num_threads(1)
     root = tmp_path_factory.mktemp("minari")
     rec = record(
-        6,
+        EPISODES,
         seed=0,
         root=root,
         dataset_id=DATASET,
         lowlevel=True,
         action_noise=0.02,
+        noise_relative=0.5,
         expert_config="lowlevel_expert_smooth",
     )
-    assert rec.episodes == 6
+    assert rec.episodes == EPISODES
     return root
 
 
@@ -104,7 +107,7 @@ def test_behaviour_clone_beats_random_on_a_fixed_seed(dart_root, tmp_path, monke
         total_timesteps=1,
         demos=DATASET,
         normalize_obs=True,
-        bc_epochs=40,
+        bc_epochs=200,
         algo_kwargs={"buffer_size": 100, "learning_starts": 100},
         policy_kwargs={"net_arch": [64, 64], "features_extractor_kwargs": {"relative": True}},
         checkpoint_freq=0,
