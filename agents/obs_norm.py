@@ -113,7 +113,8 @@ class NormalizedStateExtractor(BaseFeaturesExtractor):
 
     def forward(self, observations: dict[str, torch.Tensor]) -> torch.Tensor:
         """Standardised features, shape (batch, features_dim)."""
-        return (self.raw_features(observations) - self.mean) / self.std
+        mean, std = self.get_buffer("mean"), self.get_buffer("std")
+        return (self.raw_features(observations) - mean) / std
 
 
 def feature_stats(

@@ -22,6 +22,7 @@ import gymnasium as gym
 import numpy as np
 import torch
 from stable_baselines3.sac.policies import MultiInputPolicy
+from torch import nn
 
 from agents.errors import AgentError
 from agents.lowlevel_expert import LowLevelExpert, LowLevelExpertConfig
@@ -85,11 +86,13 @@ class ResidualSACPolicy(MultiInputPolicy):
 
     def _build(self, lr_schedule: Any) -> None:
         super()._build(lr_schedule)
+        mu: nn.Linear = self.actor.mu  # type: ignore[assignment]
+        log_std: nn.Linear = self.actor.log_std  # type: ignore[assignment]
         with torch.no_grad():
-            self.actor.mu.weight.zero_()
-            self.actor.mu.bias.zero_()
-            self.actor.log_std.weight.zero_()
-            self.actor.log_std.bias.fill_(self.log_std_bias)
+            mu.weight.zero_()
+            mu.bias.zero_()
+            log_std.weight.zero_()
+            log_std.bias.fill_(self.log_std_bias)
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
         data = super()._get_constructor_parameters()

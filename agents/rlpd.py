@@ -239,11 +239,12 @@ def hold_actor(steps: int) -> Any:
 
     class HoldActor(BaseCallback):
         def _on_training_start(self) -> None:
-            self.saved = {k: v.clone() for k, v in self.model.actor.state_dict().items()}
+            actor: nn.Module = getattr(self.model, "actor")  # noqa: B009 - SAC-style models
+            self.saved = {k: v.clone() for k, v in actor.state_dict().items()}
 
         def _on_step(self) -> bool:
             if self.model.num_timesteps <= steps:
-                self.model.actor.load_state_dict(self.saved)
+                getattr(self.model, "actor").load_state_dict(self.saved)  # noqa: B009
             return True
 
     return HoldActor()

@@ -220,6 +220,37 @@ def record(
     return RecordResult(dataset_id, path, *rec, size)
 
 
+def _noisy(env: gym.Env, sigma: float, relative: float, seed: int) -> gym.Env:
+    """``env`` with DART noise on its executed actions (`agents.dart`), or as it is."""
+    if not (sigma or relative):
+        return env
+    from agents.dart import NoisyExecution  # noqa: PLC0415
+
+    return NoisyExecution(env, sigma, seed=seed, relative=relative)
+
+
+def _lowlevel_expert(env: gym.Env, config: str) -> Any:
+    """The scripted low-level controller with the settings ``config`` (default: bundled)."""
+    from agents.lowlevel_expert import LowLevelExpert, load_expert_config  # noqa: PLC0415
+
+    return LowLevelExpert(env, load_expert_config(config or "lowlevel_expert"))
+
+
+def _play(env: gym.Env, agent: Any, seeds: Sequence[int]) -> int:
+    """Play one episode per reset seed; the number that succeeded."""
+    successes = 0
+    for s in seeds:
+        obs, _ = env.reset(seed=s)
+        done, first = False, True
+        info: dict[str, Any] = {}
+        while not done:
+            action, _ = agent.predict(obs, episode_start=np.array([first]))
+            obs, _, terminated, truncated, info = env.step(action)
+            first, done = False, terminated or truncated
+        successes += bool(info["is_success"])
+    return successes
+
+
 def _collect(
     episodes: int,
     seed: int,
@@ -237,10 +268,8 @@ def _collect(
     """Record the episodes as ``dataset_id`` under ``MINARI_DATASETS_PATH``.
 
     ``expert``: "" (the scripted agent), ``decision`` (`ExpertAgent`) or ``lowlevel``
-    (`agents.lowlevel_expert.LowLevelExpert`, the env's own episode limit). ``action_noise``:
-    executed actions get that much noise (`agents.dart.NoisyExecution`), labels stay clean;
-    ``noise_relative``: plus that much per unit of the action's size.
-    ``expert_config``: the low-level controller's settings (a ``configs/`` name or path).
+    (`agents.lowlevel_expert.LowLevelExpert` with ``expert_config``, the env's own episode
+    limit). ``action_noise`` (+ ``noise_relative`` x the action's size): DART (`agents.dart`).
 
     Returns:
         (episodes, steps, seeds, success rate).
@@ -253,37 +282,20 @@ def _collect(
     slots = len(base.unwrapped.task.slot_class)  # type: ignore[attr-defined]
     base.close()
     limit = None if expert == "lowlevel" else STEPS_PER_SLOT * slots  # None: the env's own
-    inner = gym.make(env_id, max_episode_steps=limit, **kwargs)
-    if action_noise or noise_relative:
-        from agents.dart import NoisyExecution  # noqa: PLC0415
-
-        inner = NoisyExecution(inner, action_noise, seed=seed, relative=noise_relative)
+    inner = _noisy(
+        gym.make(env_id, max_episode_steps=limit, **kwargs), action_noise, noise_relative, seed
+    )
     env = minari.DataCollector(inner, jpeg_encoding=not lossless)
     try:
         agent: Any
         if expert == "lowlevel":
-            from agents.lowlevel_expert import (  # noqa: PLC0415
-                LowLevelExpert,
-                load_expert_config,
-            )
-
-            agent = LowLevelExpert(env, load_expert_config(expert_config or "lowlevel_expert"))
+            agent = _lowlevel_expert(env, expert_config)
         elif expert:
             agent = ExpertAgent(env)
         else:
             agent = ScriptedAgent.from_env(env, calibrate=calibrate)
         seeds = tuple(range(seed, seed + episodes))
-        successes = steps = 0
-        for s in seeds:
-            obs, _ = env.reset(seed=s)
-            done, first = False, True
-            info: dict[str, Any] = {}
-            while not done:
-                action, _ = agent.predict(obs, episode_start=np.array([first]))
-                obs, _, terminated, truncated, info = env.step(action)
-                first, done = False, terminated or truncated
-                steps += 1
-            successes += bool(info["is_success"])
+        successes = _play(env, agent, seeds)
         dataset = env.create_dataset(
             dataset_id=dataset_id,
             eval_env=env.spec,

@@ -47,7 +47,8 @@ from agents.wrappers import (
 from apps.cli import CommandParser, run_cli
 from apps.train_extras import (
     clone_before_learning,
-    demo_normalized_kwargs,
+    demo_callbacks,
+    policy_kwargs_for,
     resolve_algo_kwargs,
 )
 from configs import ConfigError, from_dict, load_yaml
@@ -494,12 +495,8 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
     try:
         algo = algorithm_class(cfg.algo)
         kwargs: dict[str, Any] = resolve_algo_kwargs(dict(cfg.algo_kwargs))
-        if cfg.policy_kwargs:
-            kwargs["policy_kwargs"] = dict(cfg.policy_kwargs)
-        if cfg.normalize_obs:
-            kwargs["policy_kwargs"] = demo_normalized_kwargs(
-                dict(cfg.policy_kwargs), cfg.demos, DEMO_ROOT, venv
-            )
+        if cfg.policy_kwargs or cfg.normalize_obs:
+            kwargs["policy_kwargs"] = policy_kwargs_for(cfg, venv, DEMO_ROOT)
         model = algo(
             pick_policy(cfg.policy, venv.observation_space),
             venv,
@@ -510,14 +507,10 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             **kwargs,
         )
         terms = TermsLog(out / TERMS_FILE)
-        callbacks = [_log_terms(terms)]
+        callbacks = [_log_terms(terms), *demo_callbacks(cfg.hold_actor_steps)]
         show_bar = cfg.progress_bar and sys.stdout.isatty()
         if not show_bar and cfg.log_every_s > 0:
             callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps, terms))
-        if cfg.hold_actor_steps:
-            from agents.rlpd import hold_actor  # noqa: PLC0415
-
-            callbacks.append(hold_actor(cfg.hold_actor_steps))
         if cfg.max_wall_s:
             callbacks.append(_wall_clock_stop(cfg.max_wall_s))
         if cfg.max_cpu_s:

@@ -81,11 +81,30 @@ def demo_normalized_kwargs(
     return normalized_policy_kwargs(policy_kwargs, demos.observations, venv.observation_space)
 
 
+def policy_kwargs_for(cfg: Any, venv: Any, root: str | Path) -> dict[str, Any]:
+    """A `TrainConfig`'s ``policy_kwargs``, standardised on its ``demos`` if ``normalize_obs``."""
+    kwargs = dict(cfg.policy_kwargs)
+    if cfg.normalize_obs:
+        return demo_normalized_kwargs(kwargs, cfg.demos, root, venv)
+    return kwargs
+
+
+def demo_callbacks(hold_actor_steps: int) -> list[Any]:
+    """Callbacks of learning from demonstrations: `agents.rlpd.hold_actor` if steps > 0."""
+    if not hold_actor_steps:
+        return []
+    from agents.rlpd import hold_actor  # noqa: PLC0415
+
+    return [hold_actor(hold_actor_steps)]
+
+
 __all__ = [
     "BC_BATCH",
     "CLASS_SUFFIX",
     "clone_before_learning",
+    "demo_callbacks",
     "demo_normalized_kwargs",
+    "policy_kwargs_for",
     "resolve_algo_kwargs",
     "resolve_named",
 ]
