@@ -86,6 +86,8 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
     """
     import torch  # noqa: PLC0415
 
+    from agents.classifier_fit import fit_classifier  # noqa: PLC0415 - torch on demand
+
     cfg = cfg or load_bc_config()
     if cfg.arch == "pair":
         from agents.pair_bc import train_pair_bc  # noqa: PLC0415
@@ -109,18 +111,15 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
     torch.manual_seed(seed)
     net = _network(x.shape[1], int(np.prod(nvec)), cfg)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
-    gen = torch.Generator().manual_seed(seed)
     t0 = time.perf_counter()
-    loss, steps = torch.tensor(0.0), 0
-    for _ in range(cfg.epochs):
-        perm = torch.randperm(len(x), generator=gen)
-        for i in range(0, len(x), cfg.batch_size):
-            idx = perm[i : i + cfg.batch_size]
-            loss = torch.nn.functional.cross_entropy(net(x[idx]), y[idx])
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-            steps += 1
+    fit = fit_classifier(
+        lambda idx: net(x if idx is None else x[idx]),
+        opt,
+        y,
+        epochs=cfg.epochs,
+        batch_size=cfg.batch_size,
+        seed=seed,
+    )
     with torch.no_grad():
         acc = float((net(x).argmax(1) == y).float().mean())
     out.mkdir(parents=True, exist_ok=True)
@@ -141,9 +140,9 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
         "arch": "mlp",
         "samples": len(x),
         "parameters": sum(p.numel() for p in net.parameters()),
-        "gradient_steps": steps,
+        "gradient_steps": fit.gradient_steps,
         "train_accuracy": acc,
-        "final_loss": float(loss.detach()),
+        "final_loss": fit.last_batch_loss,
         "wall_s": time.perf_counter() - t0,
         "cpu_s": time.process_time() - cpu0,
         "seed": seed,

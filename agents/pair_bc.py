@@ -17,8 +17,9 @@ from typing import Any
 import numpy as np
 import torch
 
+from agents.classifier_fit import fit_classifier
 from agents.errors import AgentError
-from agents.pair_scorer import PairRows, PairScorer, PairScorerConfig
+from agents.pair_scorer import PairScorer, PairScorerConfig
 from agents.pair_state import ADAPTERS, FEATURE_DIMS, SLOT_DIM, TILE_DIM
 from configs.files import atomic_path, write_json
 
@@ -50,10 +51,6 @@ def demo_arrays(dataset: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nd
     return np.concatenate(tiles), np.concatenate(slots), flat, nvec
 
 
-def _take(rows: PairRows, idx: torch.Tensor) -> PairRows:
-    return PairRows(*(getattr(rows, f)[idx] for f in PairRows.__dataclass_fields__))
-
-
 def train_pair_bc(
     dataset: Any, out: Path, seed: int, cfg: Any, adapter: str = "state"
 ) -> dict[str, Any]:
@@ -74,17 +71,14 @@ def train_pair_bc(
     shape = PairScorerConfig(*FEATURE_DIMS[adapter], int(nvec[2]), cfg.hidden, cfg.layers)
     net = PairScorer(shape)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
-    gen = torch.Generator().manual_seed(seed)
-    loss, steps = torch.tensor(0.0), 0
-    for _ in range(cfg.epochs):
-        perm = torch.randperm(len(y), generator=gen)
-        for i in range(0, len(y), cfg.batch_size):
-            idx = perm[i : i + cfg.batch_size]
-            loss = torch.nn.functional.cross_entropy(net(_take(rows, idx)), y[idx])
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-            steps += 1
+    fit = fit_classifier(
+        lambda idx: net(rows if idx is None else rows.take(idx)),
+        opt,
+        y,
+        epochs=cfg.epochs,
+        batch_size=cfg.batch_size,
+        seed=seed,
+    )
     with torch.no_grad():
         acc = float((net(rows).argmax(1) == y).float().mean())
     out.mkdir(parents=True, exist_ok=True)
@@ -97,9 +91,9 @@ def train_pair_bc(
         "arch": ARCH,
         "samples": len(y),
         "parameters": sum(p.numel() for p in net.parameters()),
-        "gradient_steps": steps,
+        "gradient_steps": fit.gradient_steps,
         "train_accuracy": acc,
-        "final_loss": float(loss.detach()),
+        "final_loss": fit.last_batch_loss,
         "cpu_s": time.process_time() - cpu0,
         "seed": seed,
     }

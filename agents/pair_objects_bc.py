@@ -13,7 +13,6 @@ masked flat logits. The ``.pt`` file has the layout of `agents.pair_bc` (``arch:
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -21,9 +20,10 @@ from typing import Any
 import numpy as np
 import torch
 
+from agents.classifier_fit import fit_classifier
 from agents.pair_bc import ARCH
 from agents.pair_objects import objects_rows
-from agents.pair_scorer import PairRows, PairScorer, PairScorerConfig
+from agents.pair_scorer import PairScorer, PairScorerConfig
 from agents.pair_state import FEATURE_DIMS
 from configs.files import atomic_path, write_json
 
@@ -52,44 +52,6 @@ class ObjectDemos:
     robot: np.ndarray | None = None
 
 
-def _take(rows: PairRows, idx: torch.Tensor) -> PairRows:
-    return PairRows(*(getattr(rows, f)[idx] for f in PairRows.__dataclass_fields__))
-
-
-def _fit(
-    logits: Callable[[torch.Tensor | None], torch.Tensor],
-    opt: torch.optim.Optimizer,
-    y: torch.Tensor,
-    cfg: Any,
-    seed: int,
-    *,
-    accuracy: bool,
-) -> tuple[int, list[dict[str, float]]]:
-    """Cross-entropy epochs over shuffled batches; ``logits(idx)`` of a batch (None: every row).
-
-    Returns the gradient steps and the per-epoch curve (loss, and train accuracy if asked).
-    """
-    gen = torch.Generator().manual_seed(seed)
-    steps, curve = 0, []
-    for _ in range(cfg.epochs):
-        perm = torch.randperm(len(y), generator=gen)
-        total = 0.0
-        for i in range(0, len(y), cfg.batch_size):
-            idx = perm[i : i + cfg.batch_size]
-            loss = torch.nn.functional.cross_entropy(logits(idx), y[idx])
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-            steps += 1
-            total += float(loss.detach()) * len(idx)
-        point = {"gradient_steps": steps, "loss": total / len(y)}
-        if accuracy:
-            with torch.no_grad():
-                point["train_accuracy"] = float((logits(None).argmax(1) == y).float().mean())
-        curve.append(point)
-    return steps, curve
-
-
 def train_objects_bc(demos: ObjectDemos, out: Path, seed: int, cfg: Any) -> dict[str, Any]:
     """Clone the demonstrations into a pair scorer; writes ``out/bc.pt`` and ``bc_summary.json``.
 
@@ -109,9 +71,16 @@ def train_objects_bc(demos: ObjectDemos, out: Path, seed: int, cfg: Any) -> dict
     shape = PairScorerConfig(*FEATURE_DIMS[ADAPTER], int(demos.nvec[2]), cfg.hidden, cfg.layers)
     net = PairScorer(shape)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
-    steps, curve = _fit(
-        lambda idx: net(rows if idx is None else _take(rows, idx)), opt, y, cfg, seed, accuracy=True
+    fit = fit_classifier(
+        lambda idx: net(rows if idx is None else rows.take(idx)),
+        opt,
+        y,
+        epochs=cfg.epochs,
+        batch_size=cfg.batch_size,
+        seed=seed,
+        accuracy=True,
     )
+    steps, curve = fit.gradient_steps, list(fit.curve)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "bc.pt"
     blob = {"arch": ARCH, "adapter": ADAPTER, "scorer": asdict(shape), "nvec": demos.nvec.tolist()}
@@ -159,9 +128,15 @@ def train_objects_mlp(demos: ObjectDemos, out: Path, seed: int, cfg: Any) -> dic
     torch.manual_seed(seed)
     net = _network(x.shape[1], int(np.prod(demos.nvec)), cfg)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
-    steps, curve = _fit(
-        lambda idx: net(x if idx is None else x[idx]), opt, y, cfg, seed, accuracy=False
+    fit = fit_classifier(
+        lambda idx: net(x if idx is None else x[idx]),
+        opt,
+        y,
+        epochs=cfg.epochs,
+        batch_size=cfg.batch_size,
+        seed=seed,
     )
+    steps, curve = fit.gradient_steps, list(fit.curve)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "bc.pt"
     blob = {

@@ -70,6 +70,16 @@ class PairRows:
         """Allowed (tile, slot) pairs, shape (B, n, k) bool."""
         return self.tile_mask[:, :, None] & self.slot_mask[:, None, :]
 
+    def take(self, idx: torch.Tensor) -> PairRows:
+        """The rows of the batch entries ``idx`` (every field indexed along its first axis)."""
+        return PairRows(
+            self.tiles[idx],
+            self.slots[idx],
+            self.pairs[idx],
+            self.tile_mask[idx],
+            self.slot_mask[idx],
+        )
+
 
 class PairScorer(nn.Module):
     """Shared-weight network over (tile, slot) pairs (see the module docstring).

@@ -12,7 +12,7 @@ policy (labelled by its folder name). The table gives the success rate's IQM wit
 stratified-bootstrap interval (``rliable``, `agents.protocol.iqm_ci`) over the runs given
 per name (one run: over its held-out episodes, each episode one value, the interval then
 says how far 20 episodes pin the rate down), and the compute. The curves are
-`apps.sweep.plot_curves`.
+`apps.sweep_summary.plot_curves`.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from typing import Any
 
 from agents.protocol import iqm_ci
 from apps.cli import CommandParser, run_cli
-from apps.sweep import plot_curves
+from apps.sweep_summary import plot_curves
 from configs import ConfigError
 
 SECONDS_PER_MINUTE = 60.0

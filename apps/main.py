@@ -1,7 +1,7 @@
 """The main job: the scripted cell on a design, end to end from camera images, with its video.
 
 Run ``python -m apps.main`` (options: ``--help``). The paper's loop ("The prototype", steps
-1-7) through the Gymnasium env's public API: `MosaicAssembly-v0` in ``pick_place`` action mode
+1-7) through the Gymnasium env's public API: `MosaicAssembly-v1` in ``pick_place`` action mode
 with full-resolution camera images, driven by `agents.scripted.ScriptedAgent` (describe the
 design's slots; take an input-camera picture; extract and describe the tiles; assign them to
 open slots, optimal and colour-aware by default; map centroid and rotation to the world through
@@ -53,7 +53,7 @@ from envs.task import Evaluation
 from envs.task_spec import FeedMode, TaskSpec
 
 ROOT = Path(__file__).resolve().parents[1]
-ENV_ID = "envs:MosaicAssembly-v0"
+ENV_ID = "envs:MosaicAssembly-v1"
 """Gymnasium id of the environment."""
 
 

@@ -31,8 +31,8 @@ import numpy as np
 
 from agents.bc import load_bc_config
 from agents.pair_objects_bc import ObjectDemos, train_objects_bc, train_objects_mlp
+from agents.policies import parse_pairs
 from apps.cli import CommandParser, run_cli
-from apps.evaluate import parse_pairs
 from configs.files import write_json
 
 ENV_ID = "envs:MosaicAssembly-v0"

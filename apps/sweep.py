@@ -47,10 +47,11 @@ from typing import Any
 import numpy as np
 
 from agents.errors import AgentError
-from agents.protocol import METRICS, aggregate_runs, iqm_ci
+from agents.protocol import METRICS
 from apps.cli import CommandParser, run_cli
+from apps.sweep_summary import summarize
 from configs import ConfigError, from_dict, load_yaml
-from configs.files import append_line, atomic_path, complete_lines, write_json, write_text
+from configs.files import append_line, write_json
 
 RESULT_FILE = "result.json"
 """Per-run result file."""
@@ -65,10 +66,6 @@ WORKER_NICENESS = 0
 host); ``--niceness`` changes it."""
 NICENESS_RANGE = (-20, 19)
 """Allowed niceness values (POSIX), inclusive."""
-CURVE_BINS = 20
-"""Points of a training curve."""
-CURVE_BOOTSTRAP = 1000
-"""Bootstrap resamples of a curve's band."""
 RUN_RETRIES = 2
 """Times Ray runs a run again whose worker process died (killed, out of memory) before it is
 reported failed; an error raised by the run itself is not retried (it would fail again)."""
@@ -334,8 +331,8 @@ def _trained(folder: Path) -> Any:
 
 
 def _metric(ep: Any, name: str) -> float:
-    """A protocol metric of an `apps.evaluate.EpisodeResult` (`apps.evaluate.episode_metrics`)."""
-    from apps.evaluate import episode_metrics  # noqa: PLC0415
+    """A protocol metric of an episode result (`apps.evaluate_results.episode_metrics`)."""
+    from apps.evaluate_results import episode_metrics  # noqa: PLC0415
 
     return float(getattr(episode_metrics(ep), name))
 
@@ -438,142 +435,6 @@ def _run_on_ray(  # noqa: PLR0913, PLR0917
     return results, failed
 
 
-def run_return(result: Mapping[str, Any]) -> float | None:
-    """Mean env return of a run's held-out episodes (its ``episodes.jsonl``), or None.
-
-    The return is the env's own reward (a shaped training reward is never in it); on a task
-    with a staged reward it shows how far through the stages a policy gets when no tile is
-    placed.
-    """
-    path = Path(result.get("folder", "")) / "episodes.jsonl"
-    if not path.is_file():
-        return None
-    values = [json.loads(line)["episode_return"] for line in complete_lines(path)]
-    return float(np.mean(values)) if values else None
-
-
-def summarize(results: Sequence[dict[str, Any]], out: Path) -> dict[str, Any]:
-    """Write ``summary.json``, ``summary.md`` and ``curves.png`` from run results."""
-    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
-    for r in results:
-        groups.setdefault((r.get("ran", r["task"]), r["entry"]), []).append(r)
-    summary = []
-    lines = [
-        "| task | policy | runs | success | slots filled | misplaced/ep | dropped/ep | lost/ep | "
-        "stranded/ep | left/ep | tiles/min (sim) | return/ep | training steps | "
-        "train wall s (per run) | train CPU min (per run) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for (task, entry), rs in groups.items():
-        est = aggregate_runs([r["metrics"] for r in rs])
-        returns = [run_return(r) for r in rs]
-        ret = iqm_ci([x for x in returns if x is not None]) if None not in returns else None
-        steps = [r.get("timesteps", 0) for r in rs]
-        walls = [r.get("train_wall_s", 0.0) for r in rs]
-        cpus = [r.get("train_cpu_s", 0.0) / 60 for r in rs]
-        summary.append(
-            {
-                "task": rs[0]["task"],
-                "ran": task,
-                "entry": entry,
-                "runs": len(rs),
-                "estimates": {k: asdict(v) for k, v in est.items()},
-                "episode_return": asdict(ret) if ret is not None else None,
-                "timesteps": steps,
-                "train_wall_s": walls,
-                "train_cpu_min": cpus,
-            }
-        )
-        lines.append(
-            f"| {task} | {entry} | {len(rs)} | {est['success'].text('{:.2f}')} | "
-            f"{est['filled'].text('{:.2f}')} | {est['misplaced'].text('{:.2f}')} | "
-            f"{est['dropped'].text('{:.2f}')} | {est['lost'].text('{:.2f}')} | "
-            f"{est['stranded'].text('{:.2f}')} | "
-            f"{est['left'].text('{:.2f}')} | {est['tiles_per_min'].text('{:.1f}')} | "
-            f"{ret.text('{:.2f}') if ret is not None else '-'} | "
-            f"{int(np.mean(steps)) if any(steps) else '-'} | "
-            f"{f'{np.mean(walls):.0f}' if any(walls) else '-'} | "
-            f"{f'{np.mean(cpus):.2f}' if any(cpus) else '-'} |"
-        )
-    write_json(out / "summary.json", summary)
-    write_text(out / "summary.md", "\n".join(lines) + "\n")
-    plot_curves(results, out / "curves.png")
-    return {"rows": summary}
-
-
-def training_curve(monitor_dir: Path, edges: np.ndarray) -> np.ndarray | None:
-    """Success rate and mean return of a run's training episodes per step bin, shape (2, bins).
-
-    Bins without a finished episode repeat the previous value; None without episodes.
-    """
-    rows = []
-    for path in sorted(monitor_dir.glob("*.monitor.csv")):
-        lines = path.read_text(encoding="utf-8").splitlines()[1:]
-        if len(lines) < 2:
-            continue
-        head = lines[0].split(",")
-        for line in lines[1:]:
-            rec = dict(zip(head, line.split(","), strict=False))
-            ok = rec.get("is_success", "False") in ("True", "1", "1.0")
-            rows.append((float(rec["t"]), float(rec["l"]), float(rec["r"]), float(ok)))
-    if not rows:
-        return None
-    arr = np.array(sorted(rows))
-    steps = np.cumsum(arr[:, 1])
-    out = np.full((2, len(edges) - 1), np.nan)
-    for b in range(len(edges) - 1):
-        sel = (steps > edges[b]) & (steps <= edges[b + 1])
-        if sel.any():
-            out[0, b] = arr[sel, 3].mean()
-            out[1, b] = arr[sel, 2].mean()
-        elif b:
-            out[:, b] = out[:, b - 1]
-    return out
-
-
-def plot_curves(results: Sequence[dict[str, Any]], path: Path) -> None:
-    """Training success and return vs steps per learned entry, mean over seeds, 95 % band."""
-    import matplotlib as mpl  # noqa: PLC0415
-
-    mpl.use("Agg")
-    import matplotlib.pyplot as plt  # noqa: PLC0415
-
-    learned: dict[tuple[str, str], list[dict[str, Any]]] = {}
-    for r in results:
-        if r.get("timesteps") and (Path(r["folder"]) / "monitor").is_dir():
-            learned.setdefault((r.get("ran", r["task"]), r["entry"]), []).append(r)
-    if not learned:
-        return
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
-    rng = np.random.default_rng(0)
-    for i, ((task, entry), rs) in enumerate(sorted(learned.items())):
-        top = max(r["timesteps"] for r in rs)
-        edges = np.linspace(0, top, CURVE_BINS + 1)
-        curves = [training_curve(Path(r["folder"]) / "monitor", edges) for r in rs]
-        stack = np.array([c for c in curves if c is not None])
-        if not len(stack):
-            continue
-        x = (edges[1:] + edges[:-1]) / 2
-        for k, ax in enumerate(axes):
-            y = stack[:, k, :]
-            mean = np.nanmean(y, axis=0)
-            boot = y[rng.integers(len(y), size=(CURVE_BOOTSTRAP, len(y)))]
-            lo, hi = np.nanpercentile(np.nanmean(boot, axis=1), [2.5, 97.5], axis=0)
-            color = f"C{i % 10}"
-            ax.plot(x, mean, color=color, label=f"{task.removesuffix('-v0')}: {entry} (n={len(y)})")
-            ax.fill_between(x, lo, hi, color=color, alpha=0.2)
-    axes[0].set_title("training success rate (mean over seeds, 95% CI)")
-    axes[1].set_title("training episode return (mean over seeds, 95% CI)")
-    for ax in axes:
-        ax.set_xlabel("env steps")
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=100)
-    plt.close(fig)
-
-
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     """Command line (see the module docstring)."""
     ap = CommandParser(description=__doc__.splitlines()[0])
@@ -624,10 +485,9 @@ __all__ = [
     "load_sweep",
     "main",
     "plan",
-    "run_return",
     "run_sweep",
     "select_tasks",
-    "summarize",
+    "summarize",  # re-exported: the sweep writes it at the end
 ]
 
 if __name__ == "__main__":

@@ -51,6 +51,7 @@ import gymnasium as gym  # noqa: E402 - after MUJOCO_GL is set
 import numpy as np  # noqa: E402
 
 import envs  # noqa: E402, F401 - registers the ids
+from envs.env_config import load_env_config  # noqa: E402
 from envs.mosaic_env import MosaicAssemblyEnv  # noqa: E402
 from envs.tasks import TASKS_DIR as PRESETS_DIR  # noqa: E402
 from envs.tasks import bundled_tasks, load_task  # noqa: E402
@@ -211,16 +212,18 @@ def index_page(ids: list[str]) -> str:
         "| id | what it tests | action / observation mode | episode limit | held-out seeds |",
         "|---|---|---|---|---|",
     ]
+    default = load_env_config()  # configs/env.yaml: what a key not given takes
     for env_id in ids:
         spec = gym.spec(env_id)
         kw = dict(spec.kwargs)
-        modes = f"`{kw.get('action_mode', 'joint')}` / `{kw.get('obs_mode', 'rgb')}`"
+        action_mode = kw.get("action_mode", default.action_mode)
+        modes = f"`{action_mode}` / `{kw.get('obs_mode', default.obs_mode)}`"
         if env_id in tasks:
             task = tasks[env_id]
             what, seeds = task.description, _seeds(*task.eval_seeds)
         else:
             what, seeds = "every option open (the full cell)", "-"
-            modes = "any (defaults `joint` / `rgb`)"
+            modes = f"any (defaults `{default.action_mode}` / `{default.obs_mode}`)"
         if picture_id(env_id) != env_id:
             what = f"{what}; version {env_id.rpartition('-')[2]} (see its page)"
         lines.append(

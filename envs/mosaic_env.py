@@ -419,7 +419,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         return obs, float(sum(terms.values())), terminated, False, info
 
     def move_home(self) -> dict[str, Any]:
-        """Move the arm to its home pose with one planned move; returns a fresh observation.
+        """Move the arm home with one planned move; returns a fresh observation, as `step`'s.
 
         For a picture of the work after an episode (the arm out of the cameras' view):
         ``dynamic`` execution tracks a time-optimal joint move with the servos (simulated
@@ -435,7 +435,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         else:
             self.cell.set_qpos(home)
         self.actions.reset()
-        return self.observer.observe(self.np_random, self.task.evaluate())
+        return self._observe(self.task.evaluate())
 
     def add_frame_listener(self, listener: Callable[[], None], fps: float) -> None:
         """Call ``listener()`` every ``1 / fps`` s of simulated time, also inside a step.

@@ -12,7 +12,6 @@ from apps.evaluate import (
     EpisodeResult,
     EvaluateError,
     aggregate,
-    episode_metrics,
     evaluate_policy_set,
     load_env_overrides,
     make_policies,
@@ -20,6 +19,7 @@ from apps.evaluate import (
     parse_seeds,
     write_outputs,
 )
+from apps.evaluate_results import episode_metrics
 
 BASE = {
     "design": "paper_mixed",

@@ -16,10 +16,10 @@ from apps.sweep import (
     SweepRunsFailed,
     load_sweep,
     plan,
-    run_return,
     run_sweep,
     select_tasks,
 )
+from apps.sweep_summary import run_return
 from envs.tasks import bundled_tasks
 
 

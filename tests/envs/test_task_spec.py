@@ -141,3 +141,16 @@ def test_move_home_plans_a_real_move() -> None:
         assert "robot" in obs
     finally:
         e.close()
+
+
+def test_move_home_observes_in_the_action_order() -> None:
+    e = gym.make(
+        "envs:MosaicDecision6-v1", obs_mode="state", execution="kinematic", design="paper_mixed"
+    )
+    try:
+        obs, _ = e.reset(seed=3)
+        home = e.get_wrapper_attr("move_home")()  # the arm starts at home: nothing moves
+        np.testing.assert_allclose(home["tiles"], obs["tiles"], atol=1e-6)
+        np.testing.assert_allclose(home["slots"], obs["slots"], atol=1e-6)
+    finally:
+        e.close()
