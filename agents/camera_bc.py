@@ -1,7 +1,9 @@
 """Behaviour cloning of the camera policy (`agents.camera_policy`) from image demonstrations.
 
 `demo_arrays` cuts every recorded step of a Minari dataset (``input_camera`` and
-``output_camera`` images, ``pick_place_discrete`` expert actions) into crops once;
+``output_camera`` images, ``pick_place_discrete`` expert actions) into crops once, drawing
+the slot templates from each episode's own task description (`episode_specs`: a procedural
+design is a new one at every reset); `join_demos` stacks several datasets (training designs);
 `train_camera_bc` fits the scorer with a cross-entropy over every (tile, slot, turn) of a step,
 where every turn the slot's symmetry makes equivalent to the demonstrated one counts as right.
 `check_dataset_spaces` refuses a dataset recorded with other spaces than the env's.
@@ -10,7 +12,7 @@ where every turn the slot's symmetry makes equivalent to the demonstrated one co
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,7 +31,7 @@ class DemoArrays:
         tiles: Tile crops, shape (N, n, CHANNELS, G, G) float32 (zeros past ``tile_valid``).
         tile_valid: Tiles seen at each step, shape (N, n) bool.
         mesh: Output-image crops per slot, shape (N, k, CHANNELS, G, G) float32.
-        templates: Slot templates, shape (k, CHANNELS, G, G) float32.
+        templates: Slot templates of each step's episode, shape (N, k, CHANNELS, G, G) float32.
         targets: Right answers, shape (N, n, k, TURNS) bool (the demonstrated tile and slot at
             every turn equivalent to the demonstrated one under the slot's symmetry).
         episodes: Episodes read.
@@ -70,32 +72,62 @@ def check_dataset_spaces(dataset: Any, env: Any) -> None:
             )
 
 
+def episode_specs(dataset: Any, episodes: int = 0) -> list[Any]:
+    """The `TaskSpec` of each of the first ``episodes`` episodes of a dataset (0: all).
+
+    The env the dataset was recorded on (``dataset.recover_environment()``) is reset with each
+    episode's recorded seed: what the policy reads after that reset (a procedural design's
+    slots differ from episode to episode).
+
+    Raises:
+        AgentError: An episode without a recorded seed.
+    """
+    ids = list(dataset.episode_indices)[: episodes or None]
+    env = dataset.recover_environment()
+    specs = []
+    try:
+        for ep, meta in zip(ids, dataset.storage.get_episode_metadata(ids), strict=True):
+            if meta.get("seed") is None:
+                raise AgentError(f"episode {ep} has no recorded seed; cannot rebuild its design")
+            env.reset(seed=int(meta["seed"]))
+            specs.append(env.get_wrapper_attr("task_spec"))
+    finally:
+        env.close()
+    return specs
+
+
 def demo_arrays(dataset: Any, spec: Any, cfg: CameraBCConfig, episodes: int = 0) -> DemoArrays:
     """Crops and targets of the first ``episodes`` episodes of a dataset (0: all).
 
     Args:
         dataset: A Minari dataset of ``pick_place_discrete`` steps with both camera images.
-        spec: The env's `TaskSpec` (cameras at the dataset's image size, the slots).
+        spec: The env's `TaskSpec` (cameras at the dataset's image size, the slots) for a
+            fixed design, or one per episode read (`episode_specs`).
         cfg: Crop settings.
         episodes: Episodes to read (0: all).
 
     Raises:
-        AgentError: The dataset lacks the camera images or discrete actions.
+        AgentError: The dataset lacks the camera images or discrete actions, or fewer specs
+            than episodes.
     """
     crop = cfg.crop()
     n, k = (int(v) for v in np.asarray(dataset.action_space.nvec)[:2])
-    order = mesh_order(spec)
-    sym = np.array([spec.slots[int(j)].symmetry for j in order])
     ids = list(dataset.episode_indices)[: episodes or None]
-    tiles, valid, mesh, targets = [], [], [], []
+    specs = list(spec) if isinstance(spec, Sequence) else [spec] * len(ids)
+    if len(specs) != len(ids):
+        raise AgentError(f"{len(specs)} task specs for {len(ids)} episodes; give one per episode")
+    tiles, valid, mesh, templates, targets = [], [], [], [], []
     skipped = 0
-    for ep in dataset.iterate_episodes(ids):
+    for ep, ep_spec in zip(dataset.iterate_episodes(ids), specs, strict=True):
         obs = ep.observations
         if "input_camera" not in obs or "output_camera" not in obs:
             raise AgentError("camera behaviour cloning needs input_camera and output_camera images")
+        order = mesh_order(ep_spec)
+        sym = np.array([ep_spec.slots[int(j)].symmetry for j in order])
+        ep_templates = slot_templates(ep_spec, crop)
         for t, action in enumerate(np.asarray(ep.actions, np.int64)):
             seen = {key: obs[key][t] for key in ("input_camera", "output_camera")}
-            crops, found = step_crops(seen, spec, crop)
+            crops, found = step_crops(seen, ep_spec, crop)
             m = min(len(found.xy), n)
             if action[0] >= m:
                 skipped += 1
@@ -107,6 +139,7 @@ def demo_arrays(dataset: Any, spec: Any, cfg: CameraBCConfig, episodes: int = 0)
             tiles.append(pad)
             valid.append(np.arange(n) < m)
             mesh.append(crops.mesh)
+            templates.append(ep_templates)
             targets.append(target)
     if not tiles:
         raise AgentError("no usable demonstrated step (no tile seen where the expert picked)")
@@ -114,10 +147,34 @@ def demo_arrays(dataset: Any, spec: Any, cfg: CameraBCConfig, episodes: int = 0)
         np.stack(tiles),
         np.stack(valid),
         np.stack(mesh),
-        slot_templates(spec, crop),
+        np.stack(templates),
         np.stack(targets),
         len(ids),
         skipped,
+    )
+
+
+def join_demos(parts: Sequence[DemoArrays]) -> DemoArrays:
+    """Several datasets' steps as one (same tile and slot counts and crop grid).
+
+    Raises:
+        AgentError: No part, or parts of different shapes.
+    """
+    if not parts:
+        raise AgentError("no demonstrations to join")
+    shapes = {p.targets.shape[1:] + p.tiles.shape[2:] for p in parts}
+    if len(shapes) > 1:
+        raise AgentError(f"demonstrations of different (tiles, slots, turns, crop) shapes {shapes}")
+    if len(parts) == 1:
+        return parts[0]
+    return DemoArrays(
+        np.concatenate([p.tiles for p in parts]),
+        np.concatenate([p.tile_valid for p in parts]),
+        np.concatenate([p.mesh for p in parts]),
+        np.concatenate([p.templates for p in parts]),
+        np.concatenate([p.targets for p in parts]),
+        sum(p.episodes for p in parts),
+        sum(p.skipped for p in parts),
     )
 
 
@@ -130,7 +187,7 @@ def batch_loss(net: Any, data: DemoArrays, idx: np.ndarray, turn: int) -> tuple[
     import torch  # noqa: PLC0415
 
     tiles = torch.as_tensor(data.tiles[idx])
-    tmpl = torch.as_tensor(data.templates)[None].expand(len(idx), -1, -1, -1, -1)
+    tmpl = torch.as_tensor(data.templates[idx])
     slots = torch.cat([tmpl, torch.as_tensor(data.mesh[idx])], dim=2)
     if turn:
         tiles = torch.rot90(tiles, turn, dims=(-2, -1))
@@ -205,6 +262,8 @@ __all__ = [
     "batch_loss",
     "check_dataset_spaces",
     "demo_arrays",
+    "episode_specs",
     "equivalent_turns",
+    "join_demos",
     "train_camera_bc",
 ]

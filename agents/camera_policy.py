@@ -10,7 +10,15 @@ action ``(tile i, slot j, rotation r)`` is
 
     <tile_net(turn(crop_i, r)), slot_net(slot_j)> / sqrt(embed) + bias(slot_j)
 
-so one matching function serves every pair and every turn, and the policy plays any number of
+plus, with ``correlate``, a Transporter-style correlation of the two crops' dense feature maps
+at zero offset (both crops are centred on the object, world-aligned):
+
+    + w * mean over cells <dense_t(turn(crop_i, r)), dense_s(slot_j)>
+
+where ``dense_t`` and ``dense_s`` are the encoders' first convolution (3 x 3 cells, full
+resolution) followed by a 1 x 1 projection: a local overlap of shape and colour that does not
+depend on which shapes training showed. One matching function serves every pair and every
+turn, and the policy plays any number of
 tiles and slots. Rotation ``r`` of ``pick_place_discrete`` (``rotation_frame: tile``) turns the
 tile by about ``r`` quarter turns counter-clockwise from where it lies, which is what turning
 its world-aligned crop by ``r`` quarter turns shows. The policy never reads the env's state: the
@@ -61,6 +69,8 @@ class CameraBCConfig:
         weight_decay: Adam L2 penalty.
         augment: Turn every crop of a batch by one random quarter turn (labels unchanged).
         eval_every: Gradient steps between two points of the training curve (0: none).
+        correlate: Add the dense correlation term of the crops to the score (module
+            docstring); files written without it keep playing as they were.
     """
 
     grid: int = 20
@@ -76,6 +86,7 @@ class CameraBCConfig:
     weight_decay: float = 1e-5
     augment: bool = True
     eval_every: int = 0
+    correlate: bool = False
 
     def crop(self) -> CropConfig:
         """The crop settings."""
@@ -119,18 +130,28 @@ def build_scorer(cfg: CameraBCConfig) -> Any:
             self.slot_net = _encoder(2 * CHANNELS, cfg)
             self.bias = torch.nn.Linear(cfg.embed, 1)
             self.scale = 1.0 / math.sqrt(cfg.embed)
+            if cfg.correlate:
+                self.tile_dense = torch.nn.Conv2d(cfg.width, cfg.width, 1)
+                self.slot_dense = torch.nn.Conv2d(cfg.width, cfg.width, 1)
+                self.weight = torch.nn.Parameter(torch.ones(()))
 
         def forward(self, tiles: Any, slots: Any) -> Any:
             """Score: tiles (B, n, C, G, G), slots (B, k, 2C, G, G) -> logits (B, n, k, TURNS)."""
             b, n = tiles.shape[:2]
             k = slots.shape[1]
-            four = turned(tiles)
-            et = self.tile_net(four.reshape(b * n * TURNS, *tiles.shape[2:])).reshape(
-                b, n, TURNS, -1
-            )
-            es = self.slot_net(slots.reshape(b * k, *slots.shape[2:])).reshape(b, k, -1)
+            four = turned(tiles).reshape(b * n * TURNS, *tiles.shape[2:])
+            flat_slots = slots.reshape(b * k, *slots.shape[2:])
+            ht, hs = self.tile_net[:2](four), self.slot_net[:2](flat_slots)
+            et = self.tile_net[2:](ht).reshape(b, n, TURNS, -1)
+            es = self.slot_net[2:](hs).reshape(b, k, -1)
             logits = torch.einsum("bntd,bkd->bnkt", et, es) * self.scale
-            return logits + self.bias(es).reshape(b, 1, k, 1)
+            logits = logits + self.bias(es).reshape(b, 1, k, 1)
+            if cfg.correlate:
+                dt = self.tile_dense(ht).reshape(b, n, TURNS, -1)
+                ds = self.slot_dense(hs).reshape(b, k, -1)
+                corr = torch.einsum("bntd,bkd->bnkt", dt, ds) / ds.shape[-1]
+                logits = logits + self.weight * corr
+            return logits
 
     return Scorer()
 
@@ -187,7 +208,7 @@ class CameraPolicy:
         self.cfg = cfg
         self.image_size = image_size
         self.crop = cfg.crop()
-        self._templates: tuple[int, np.ndarray] | None = None
+        self._templates: tuple[Any, np.ndarray] | None = None
 
     @classmethod
     def load(cls, path: str | Path) -> CameraPolicy:
@@ -220,8 +241,9 @@ class CameraPolicy:
                 f"camera policy trained on {self.image_size[0]}x{self.image_size[1]} images, "
                 f"got {size[0]}x{size[1]}; set the env's image_size to {list(self.image_size)}"
             )
-        if self._templates is None or self._templates[0] != id(spec):
-            self._templates = (id(spec), slot_templates(spec, self.crop))
+        if self._templates is None or self._templates[0] is not spec:
+            # the spec itself is kept (not its id, which a new spec may reuse once it is freed)
+            self._templates = (spec, slot_templates(spec, self.crop))
         crops, _ = step_crops(obs, spec, self.crop)
         if len(crops.tiles) == 0:
             return np.zeros((0, len(spec.slots), TURNS), np.float32)

@@ -78,6 +78,14 @@ class LowLevelExpertConfig:
         release_z_tolerance: Height error (to ``place_gap``) under which it releases [m].
         retreat_height: Pad height above the place surface after the release [m].
         gain: Fraction of the error corrected per control period (1: dead-beat).
+        approach_blend: 0: the pad drops from ``hover`` to the seal once within
+            ``descend_radius`` (a step in the action); > 0: its height target falls linearly
+            from ``hover`` at ``descend_radius + approach_blend`` to the seal at
+            ``descend_radius``, the vacuum on within that band [m]. A continuous action is
+            what a behaviour clone can fit; the step is what the clone smears out.
+        lower_blend: 0: the tile is set down once within the lower tolerances (a step);
+            > 0: its height target falls linearly from ``align_height`` at (1 +
+            ``lower_blend``) times the tolerances to ``place_gap`` within them.
     """
 
     hover: float = 0.02
@@ -100,6 +108,8 @@ class LowLevelExpertConfig:
     release_z_tolerance: float = 0.001
     retreat_height: float = 0.05
     gain: float = 1.0
+    approach_blend: float = 0.0
+    lower_blend: float = 0.0
 
 
 def load_expert_config(
@@ -170,7 +180,12 @@ class LowLevelExpert:
 
     def _approach(self, tile: np.ndarray, tool: np.ndarray) -> np.ndarray:
         cfg, top = self.cfg, float(tile[2]) + self.spec.tile_thickness / 2
-        near = float(np.linalg.norm(tile[:2] - tool[:2])) < cfg.descend_radius
+        dist = float(np.linalg.norm(tile[:2] - tool[:2]))
+        if cfg.approach_blend > 0:  # height falls with the distance: no step in the action
+            up = float(np.clip((dist - cfg.descend_radius) / cfg.approach_blend, 0.0, 1.0))
+            z = top - cfg.seal_press + up * (cfg.hover + cfg.seal_press)
+            return self._move(tool, self._route(tool[:2], tile[:2]), z, vacuum=up < 1.0)
+        near = dist < cfg.descend_radius
         z = top - cfg.seal_press if near else top + cfg.hover
         return self._move(tool, self._route(tool[:2], tile[:2]), z, vacuum=near)
 
@@ -200,11 +215,15 @@ class LowLevelExpert:
             if tile_z > carry_z - cfg.carry_z_margin:
                 goal = self._route(tile[:2], slot[:2])
             return self._move(tile[:3], goal, carry_z, vacuum=True, tool_yaw=yaw_err)
-        aligned = dist < cfg.lower_xy_tolerance and abs(yaw_err) < math.radians(
-            cfg.lower_yaw_tolerance_deg
+        off = max(
+            dist / cfg.lower_xy_tolerance, abs(yaw_err) / math.radians(cfg.lower_yaw_tolerance_deg)
         )
-        z = place.surface_z + half + (cfg.place_gap if aligned else cfg.align_height)
-        if aligned:  # set down slowly: a fast touch-down knocks the tile out of line
+        if cfg.lower_blend > 0:  # height rises with the error: no step in the action
+            up = float(np.clip((off - 1.0) / cfg.lower_blend, 0.0, 1.0))
+        else:
+            up = 0.0 if off < 1.0 else 1.0
+        z = place.surface_z + half + cfg.place_gap + up * (cfg.align_height - cfg.place_gap)
+        if up < 1.0:  # set down slowly: a fast touch-down knocks the tile out of line
             z = max(z, tile_z - cfg.set_down_step)
         release = (
             dist < cfg.release_xy_tolerance

@@ -15,7 +15,9 @@ its spaces need, an optional wrapper, and a factory that binds it to a built env
 - a ``.pt`` path: a camera policy of `agents.camera_policy` (its file's ``kind`` says so;
   played on ``rgb`` observations at its image size) or a behaviour clone of `agents.bc`.
 - a path to an SB3 ``.zip``: loaded with the algorithm of its run's ``train_config.yaml``;
-  its observation and action spaces must equal the env's, checked when it is bound.
+  its observation and action spaces must equal the env's, checked when it is bound. A run
+  with ``residual_scale`` plays through `agents.residual.ResidualExpertActions` (residual
+  RL: the scripted controller's action plus the model's).
 - ``module:attr``: a user's object. If ``attr`` has ``predict``, ``predict(obs)`` is called
   (SB3 style: a ``(action, state)`` tuple or an action); a class is instantiated with the env
   first; a plain function is called as ``f(obs) -> action``. An object with
@@ -264,7 +266,17 @@ def _trained(base: dict[str, Any], model_path: Path) -> Policy:
 
         return predict
 
-    wrap = FlatDiscreteActions if run.get("flatten_actions") else None
+    wrap: Callable[[gym.Env], gym.Env] | None = None
+    if run.get("flatten_actions"):
+        wrap = FlatDiscreteActions
+    if run.get("residual_scale"):  # residual RL: the scripted controller is part of the policy
+        from agents.residual import ResidualExpertActions  # noqa: PLC0415
+
+        scale = float(run["residual_scale"])
+
+        def wrap(env: gym.Env) -> gym.Env:
+            return ResidualExpertActions(env, scale)
+
     return Policy(label, env_kwargs, factory, wrap)
 
 

@@ -168,11 +168,20 @@ def clone_actor(
     batch_size: int = 256,
     learning_rate: float = 1e-3,
     seed: int = 0,
+    loss: str = "mse",
 ) -> list[float]:
-    """Behaviour cloning: fit a SAC model's actor to the demonstrations (maximum likelihood).
+    """Behaviour cloning: fit a SAC model's actor to the demonstrations.
 
-    The actor's squashed Gaussian is trained to give the demonstrated actions (clipped just
-    inside [-1, 1], where tanh is invertible) the highest log-likelihood.
+    ``loss``:
+
+    - ``mse``: the deterministic action (tanh of the Gaussian's mean) regressed onto the
+      demonstrated action (squared error), and the log standard deviation fitted by maximum
+      likelihood around that mean (the mean's gradient stopped). The mean stays where tanh is
+      steep, so the clone's action can change sign within millimetres as the controller's does.
+    - ``nll``: maximum likelihood of the squashed Gaussian (demonstrated actions clipped just
+      inside [-1, 1], where tanh is invertible). Saturated labels (a full move, +-1) drive the
+      mean far into tanh's flat tails, and the clone turns round late (it overshoots its
+      targets by centimetres on `MosaicOneTile-v0`).
 
     Args:
         model: An SB3 SAC model (its ``actor`` and ``policy.obs_to_tensor``).
@@ -181,10 +190,16 @@ def clone_actor(
         batch_size: Transitions per gradient step.
         learning_rate: Adam step size.
         seed: Seed of the batch order.
+        loss: ``mse`` or ``nll`` (above).
 
     Returns:
-        The mean negative log-likelihood of each epoch.
+        The mean loss of each epoch.
+
+    Raises:
+        ValueError: An unknown ``loss``.
     """
+    if loss not in ("mse", "nll"):
+        raise ValueError(f"clone_actor loss must be 'mse' or 'nll', got {loss!r}")
     actor = model.actor
     optim = torch.optim.Adam(actor.parameters(), lr=learning_rate)
     rng = np.random.default_rng(seed)
@@ -196,15 +211,43 @@ def clone_actor(
         for start in range(0, len(order), batch_size):
             idx = order[start : start + batch_size]
             obs, _ = model.policy.obs_to_tensor({k: v[idx] for k, v in demos.observations.items()})
+            target = torch.as_tensor(actions[idx], device=model.device)
             mean, log_std, kwargs = actor.get_action_dist_params(obs)
-            dist = actor.action_dist.proba_distribution(mean, log_std, **kwargs)
-            loss = -dist.log_prob(torch.as_tensor(actions[idx], device=model.device)).mean()
+            if loss == "mse":
+                dist = actor.action_dist.proba_distribution(mean.detach(), log_std, **kwargs)
+                value = ((torch.tanh(mean) - target) ** 2).sum(1).mean()
+                value = value - 1e-2 * dist.log_prob(target).mean()
+            else:
+                dist = actor.action_dist.proba_distribution(mean, log_std, **kwargs)
+                value = -dist.log_prob(target).mean()
             optim.zero_grad()
-            loss.backward()
+            value.backward()
             optim.step()
-            total += float(loss.detach()) * len(idx)
+            total += float(value.detach()) * len(idx)
         losses.append(total / len(order))
     return losses
+
+
+def hold_actor(steps: int) -> Any:
+    """An SB3 callback keeping a SAC model's actor as it was at the start of ``learn``.
+
+    For ``steps`` env steps the actor's weights are put back after every step, so a cloned
+    actor (`clone_actor`) keeps acting as the clone while the critics learn from its episodes
+    and the demonstrations; a random critic would otherwise drag it off at once.
+    """
+    from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
+
+    class HoldActor(BaseCallback):
+        def _on_training_start(self) -> None:
+            actor: nn.Module = getattr(self.model, "actor")  # noqa: B009 - SAC-style models
+            self.saved = {k: v.clone() for k, v in actor.state_dict().items()}
+
+        def _on_step(self) -> bool:
+            if self.model.num_timesteps <= steps:
+                getattr(self.model, "actor").load_state_dict(self.saved)  # noqa: B009
+            return True
+
+    return HoldActor()
 
 
 def portable_checkpoint(src: str | Path, dst: str | Path) -> None:
@@ -235,6 +278,7 @@ __all__ = [
     "LayerNormCritic",
     "LayerNormSACPolicy",
     "clone_actor",
+    "hold_actor",
     "layer_norm_mlp",
     "portable_checkpoint",
 ]

@@ -9,10 +9,21 @@ Run::
     python -m apps.evaluate --task MosaicDecision6-v0 \\
         --policies runs/camera_bc/d200/seed_0/camera.pt
 
+Held-out designs (``MosaicHeldOutDesigns-v0``): one dataset per training design, recorded on
+the env that design's training entry makes (``--env`` keys of `BenchmarkTask.design_kwargs`),
+trained on together; the curve plays the env ``--env`` makes (here the procedural designs)::
+
+    python -m apps.camera_bc --task MosaicHeldOutDesigns-v0 --dataset-id \
+        mosaic/heldout-procedural-expert-rgb96-v0 mosaic/heldout-square-grid-expert-rgb96-v0 \
+        mosaic/heldout-paper-mixed-expert-rgb96-v0 --env 'image_size=[96,128]' \
+        design_source=procedural 'exclude_designs=[hexagon,trencadis]' --out runs/held/seed_0
+
 The policy (`agents.camera_policy`) reads only the ``input_camera`` and ``output_camera``
 images and the env's public task description; the program builds the task's env with
 ``obs_mode: rgb`` at the dataset's image size, refuses a dataset whose spaces differ from that
-env's, cuts the first ``--demos`` episodes into crops, trains (`CameraBCConfig`,
+env's, rebuilds each demonstrated episode's task description (`agents.camera_bc.episode_specs`:
+the recording env reset with the episode's seed), cuts the first ``--demos`` episodes of each
+dataset into crops, trains (`CameraBCConfig`,
 ``configs/camera_bc.yaml``) and writes ``camera.pt``, ``camera_summary.json`` (CPU time,
 gradient steps, samples) and ``camera_curve.json`` (loss, training accuracy and, with
 ``--curve-episodes``, slots filled on validation seeds during training).
@@ -23,13 +34,20 @@ from __future__ import annotations
 import json
 import os
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import torch
 
-from agents.camera_bc import check_dataset_spaces, demo_arrays, train_camera_bc
+from agents.camera_bc import (
+    check_dataset_spaces,
+    demo_arrays,
+    episode_specs,
+    join_demos,
+    train_camera_bc,
+)
 from agents.camera_policy import (
     CAMERA_BC_CONFIG,
     CameraBCConfig,
@@ -37,6 +55,7 @@ from agents.camera_policy import (
     load_camera_bc_config,
     save_policy,
 )
+from agents.errors import AgentError
 from agents.policies import parse_pairs
 from agents.protocol import EpisodeMetrics
 from apps.cli import CommandParser, run_cli
@@ -61,31 +80,41 @@ def play(env: gym.Env, policy: CameraPolicy, seed: int, max_steps: int, horizon_
 
 
 def train(
-    dataset_id: str,
+    dataset_id: str | Sequence[str],
     out: Path,
     *,
     root: Path = DEFAULT_ROOT,
     task_id: str = "MosaicDecision6-v0",
     env_kwargs: dict[str, Any] | None = None,
-    demos: int = 0,
+    demos: int | Sequence[int] = 0,
     seed: int = 0,
     cfg: CameraBCConfig | None = None,
     curve_episodes: int = 0,
 ) -> dict[str, Any]:
-    """Train one camera policy; writes ``out/camera.pt`` and its summary and curve."""
+    """Train one camera policy; writes ``out/camera.pt`` and its summary and curve.
+
+    ``dataset_id``: one dataset or several (trained on together); ``demos``: the first
+    episodes read of each (0: all), one count for all or one per dataset.
+    """
     torch.set_num_threads(1)
     cpu0 = time.process_time()
     cfg = cfg or load_camera_bc_config()
     task = get_task(task_id)
+    ids = [dataset_id] if isinstance(dataset_id, str) else list(dataset_id)
+    counts = [demos] * len(ids) if isinstance(demos, int) else list(demos)
+    if len(counts) != len(ids):
+        raise AgentError(f"{len(counts)} demonstration counts for {len(ids)} datasets")
     kwargs = {**task.env_kwargs("train"), "obs_mode": "rgb", **(env_kwargs or {})}
-    dataset = load(dataset_id, root)
     env = gym.make(f"envs:{task.id}", **kwargs)
     try:
-        check_dataset_spaces(dataset, env)
+        parts = []
+        for name, count in zip(ids, counts, strict=True):
+            dataset = load(name, root)
+            check_dataset_spaces(dataset, env)
+            parts.append(demo_arrays(dataset, episode_specs(dataset, count), cfg, count))
+        data = join_demos(parts)
         env.reset(seed=CURVE_SEED)
-        spec = env.get_wrapper_attr("task_spec")
-        data = demo_arrays(dataset, spec, cfg, demos)
-        size = spec.image_size
+        size = env.get_wrapper_attr("task_spec").image_size
 
         def on_point(step: int, net: Any) -> dict[str, float]:
             del step
@@ -103,13 +132,13 @@ def train(
     meta = {
         "image_size": list(size),
         "task": task.id,
-        "dataset_id": dataset_id,
+        "dataset_id": ",".join(ids),
         "demos": data.episodes,
     }
     save_policy(path, net, cfg, meta)
     summary = {
         "model_path": str(path),
-        "dataset_id": dataset_id,
+        "dataset_id": ",".join(ids),
         "demos": data.episodes,
         "samples": len(data.tiles),
         "skipped_steps": data.skipped,
@@ -129,11 +158,13 @@ def train(
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line (see the module docstring)."""
     ap = CommandParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--dataset-id", required=True)
+    ap.add_argument("--dataset-id", nargs="+", required=True, help="one or more datasets")
     ap.add_argument("--root", type=Path, default=DEFAULT_ROOT)
     ap.add_argument("--task", default="MosaicDecision6-v0")
     ap.add_argument("--env", nargs="*", default=[], metavar="KEY=VALUE", help="env overrides")
-    ap.add_argument("--demos", type=int, default=0, help="first N episodes (0: all)")
+    ap.add_argument(
+        "--demos", type=int, nargs="+", default=[0], help="first N episodes of each (0: all)"
+    )
     ap.add_argument("--out", type=Path, default=Path("runs/camera_bc"))
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--config", default=CAMERA_BC_CONFIG, help="name in configs/ or a YAML path")
@@ -147,7 +178,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         root=args.root,
         task_id=args.task,
         env_kwargs=parse_pairs(args.env),
-        demos=args.demos,
+        demos=args.demos[0] if len(args.demos) == 1 else args.demos,
         seed=args.seed,
         cfg=load_camera_bc_config(args.config, **parse_pairs(args.set)),
         curve_episodes=args.curve_episodes,

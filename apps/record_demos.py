@@ -28,6 +28,17 @@ observations (``state``) and episode limit: the demonstrations low-level learner
 
     python -m apps.record_demos --lowlevel --episodes 20 --seed 0 \
         --dataset-id mosaic/one-tile-lowlevel-v0 --replay
+
+``--expert-config NAME``: the controller's settings (``lowlevel_expert_smooth``: continuous
+descents, what the behaviour clones learn from). ``--action-noise SIGMA``: DART-style
+recording (`agents.dart.NoisyExecution`): the executed tool moves get Gaussian noise of
+SIGMA action units (plus ``--noise-relative`` times the action's size), the dataset keeps the
+controller's clean action (such a dataset does not replay exactly; ``--replay`` then reports
+mismatches)::
+
+    python -m apps.record_demos --lowlevel --episodes 200 --seed 0 --action-noise 0.02 \
+        --noise-relative 0.5 --expert-config lowlevel_expert_smooth \
+        --dataset-id mosaic/one-tile-lowlevel-dart-v2
 """
 
 from __future__ import annotations
@@ -155,6 +166,9 @@ def record(
     lossless: bool = False,
     task: str = "",
     lowlevel: bool = False,
+    action_noise: float = 0.0,
+    expert_config: str = "",
+    noise_relative: float = 0.0,
 ) -> RecordResult:
     """Record ``episodes`` scripted episodes (seeds ``seed``, ``seed + 1``...) as a dataset.
 
@@ -195,12 +209,46 @@ def record(
                 calibrate=calibrate,
                 expert="lowlevel" if lowlevel else "decision" if expert else "",
                 lossless=lossless,
+                action_noise=action_noise,
+                expert_config=expert_config,
+                noise_relative=noise_relative,
             )
         replace_dir(staging / dataset_id, path)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     size = sum(f.stat().st_size for f in path.rglob("*") if f.is_file()) / 1e6
     return RecordResult(dataset_id, path, *rec, size)
+
+
+def _noisy(env: gym.Env, sigma: float, relative: float, seed: int) -> gym.Env:
+    """``env`` with DART noise on its executed actions (`agents.dart`), or as it is."""
+    if not (sigma or relative):
+        return env
+    from agents.dart import NoisyExecution  # noqa: PLC0415
+
+    return NoisyExecution(env, sigma, seed=seed, relative=relative)
+
+
+def _lowlevel_expert(env: gym.Env, config: str) -> Any:
+    """The scripted low-level controller with the settings ``config`` (default: bundled)."""
+    from agents.lowlevel_expert import LowLevelExpert, load_expert_config  # noqa: PLC0415
+
+    return LowLevelExpert(env, load_expert_config(config or "lowlevel_expert"))
+
+
+def _play(env: gym.Env, agent: Any, seeds: Sequence[int]) -> int:
+    """Play one episode per reset seed; the number that succeeded."""
+    successes = 0
+    for s in seeds:
+        obs, _ = env.reset(seed=s)
+        done, first = False, True
+        info: dict[str, Any] = {}
+        while not done:
+            action, _ = agent.predict(obs, episode_start=np.array([first]))
+            obs, _, terminated, truncated, info = env.step(action)
+            first, done = False, terminated or truncated
+        successes += bool(info["is_success"])
+    return successes
 
 
 def _collect(
@@ -213,11 +261,15 @@ def _collect(
     calibrate: bool,
     expert: str,
     lossless: bool,
+    action_noise: float = 0.0,
+    expert_config: str = "",
+    noise_relative: float = 0.0,
 ) -> tuple[int, int, tuple[int, ...], float]:
     """Record the episodes as ``dataset_id`` under ``MINARI_DATASETS_PATH``.
 
     ``expert``: "" (the scripted agent), ``decision`` (`ExpertAgent`) or ``lowlevel``
-    (`agents.lowlevel_expert.LowLevelExpert`, the env's own episode limit).
+    (`agents.lowlevel_expert.LowLevelExpert` with ``expert_config``, the env's own episode
+    limit). ``action_noise`` (+ ``noise_relative`` x the action's size): DART (`agents.dart`).
 
     Returns:
         (episodes, steps, seeds, success rate).
@@ -230,31 +282,20 @@ def _collect(
     slots = len(base.unwrapped.task.slot_class)  # type: ignore[attr-defined]
     base.close()
     limit = None if expert == "lowlevel" else STEPS_PER_SLOT * slots  # None: the env's own
-    env = minari.DataCollector(
-        gym.make(env_id, max_episode_steps=limit, **kwargs), jpeg_encoding=not lossless
+    inner = _noisy(
+        gym.make(env_id, max_episode_steps=limit, **kwargs), action_noise, noise_relative, seed
     )
+    env = minari.DataCollector(inner, jpeg_encoding=not lossless)
     try:
         agent: Any
         if expert == "lowlevel":
-            from agents.lowlevel_expert import LowLevelExpert  # noqa: PLC0415
-
-            agent = LowLevelExpert(env)
+            agent = _lowlevel_expert(env, expert_config)
         elif expert:
             agent = ExpertAgent(env)
         else:
             agent = ScriptedAgent.from_env(env, calibrate=calibrate)
         seeds = tuple(range(seed, seed + episodes))
-        successes = steps = 0
-        for s in seeds:
-            obs, _ = env.reset(seed=s)
-            done, first = False, True
-            info: dict[str, Any] = {}
-            while not done:
-                action, _ = agent.predict(obs, episode_start=np.array([first]))
-                obs, _, terminated, truncated, info = env.step(action)
-                first, done = False, terminated or truncated
-                steps += 1
-            successes += bool(info["is_success"])
+        successes = _play(env, agent, seeds)
         dataset = env.create_dataset(
             dataset_id=dataset_id,
             eval_env=env.spec,
@@ -272,7 +313,13 @@ def _collect(
                     "cycles) "
                 )
                 + f"on {env_id.removeprefix('envs:')} with {json.dumps(kwargs)}; seeds "
-                f"{seeds[0]}..{seeds[-1]}."
+                f"{seeds[0]}..{seeds[-1]}"
+                + (
+                    f"; executed tool moves with N(0, ({action_noise} + {noise_relative} |a|)^2) "
+                    "noise, clean labels."
+                    if action_noise or noise_relative
+                    else "."
+                )
             ),
         )
     finally:
@@ -369,6 +416,23 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument(
         "--lowlevel", action="store_true", help="scripted low-level controller (cartesian rung)"
     )
+    ap.add_argument(
+        "--action-noise",
+        type=float,
+        default=0.0,
+        help="DART: noise (std, action units) on the executed tool moves; labels stay clean",
+    )
+    ap.add_argument(
+        "--expert-config",
+        default="",
+        help="low-level controller settings (configs/ name or path; default lowlevel_expert)",
+    )
+    ap.add_argument(
+        "--noise-relative",
+        type=float,
+        default=0.0,
+        help="DART: extra noise std per unit of the action's size (large at full speed)",
+    )
     args = ap.parse_args(argv)
     os.environ.setdefault("MUJOCO_GL", "egl")
     rec = record(
@@ -383,6 +447,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         lossless=args.lossless,
         task=args.task,
         lowlevel=args.lowlevel,
+        action_noise=args.action_noise,
+        expert_config=args.expert_config,
+        noise_relative=args.noise_relative,
     )
     report: dict[str, Any] = {"record": {**asdict(rec), "path": str(rec.path)}}
     print(

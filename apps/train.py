@@ -45,7 +45,12 @@ from agents.wrappers import (
     cpu_seconds,
 )
 from apps.cli import CommandParser, run_cli
-from apps.train_extras import clone_before_learning, resolve_algo_kwargs
+from apps.train_extras import (
+    clone_before_learning,
+    demo_callbacks,
+    policy_kwargs_for,
+    resolve_algo_kwargs,
+)
 from configs import ConfigError, from_dict, load_yaml
 from configs.files import atomic_path, write_json, write_text
 
@@ -115,6 +120,13 @@ class TrainConfig:
         reach_shaping: Weight of `agents.wrappers.ReachShaping` on the training envs [1/m]
             (reward per metre the tool approaches the nearest tile; state observations);
             0: off. Evaluation always uses the env's own reward.
+        normalize_obs: Standardise the observations with fixed statistics of ``demos``
+            (`agents.obs_norm.NormalizedStateExtractor`, saved with the model).
+        residual_scale: Residual RL over the scripted low-level controller
+            (`agents.residual.ResidualExpertActions`): the agent's action, times this
+            [action units], is added to the controller's; 0: off. Played the same way.
+        hold_actor_steps: Keep the actor as it starts ``learn`` (e.g. cloned) for this many
+            env steps while the critics learn (`agents.rlpd.hold_actor`); 0: off.
     """
 
     algo: str = "PPO"
@@ -141,6 +153,9 @@ class TrainConfig:
     reach_shaping: float = 0.0
     demos: str = ""
     bc_epochs: int = 0
+    normalize_obs: bool = False
+    residual_scale: float = 0.0
+    hold_actor_steps: int = 0
 
     def __post_init__(self) -> None:
         if self.vec_env not in VEC_ENVS:
@@ -156,8 +171,10 @@ class TrainConfig:
             raise TrainError(
                 "max_episode_steps, checkpoint_freq, max_wall_s and max_cpu_s must be >= 0"
             )
-        if self.bc_epochs and not self.demos:
-            raise TrainError("bc_epochs needs demos (a dataset id)")
+        if (self.bc_epochs or self.normalize_obs) and not self.demos:
+            raise TrainError("bc_epochs and normalize_obs need demos (a dataset id)")
+        if self.residual_scale < 0:
+            raise TrainError(f"residual_scale must be >= 0, got {self.residual_scale}")
         if self.reach_shaping < 0:
             raise TrainError(f"reach_shaping must be >= 0 [1/m], got {self.reach_shaping}")
         from envs.env_config import load_env_config  # noqa: PLC0415 - validates env keys
@@ -238,6 +255,10 @@ def make_env_fn(cfg: TrainConfig, index: int = 0) -> Any:
         env = gym.make(env_id, **kwargs)
         if cfg.reach_shaping:
             env = ReachShaping(env, cfg.reach_shaping)
+        if cfg.residual_scale:
+            from agents.residual import ResidualExpertActions  # noqa: PLC0415
+
+            env = ResidualExpertActions(env, cfg.residual_scale)
         return FlatDiscreteActions(env) if cfg.flatten_actions else env
 
     return make
@@ -474,8 +495,8 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
     try:
         algo = algorithm_class(cfg.algo)
         kwargs: dict[str, Any] = resolve_algo_kwargs(dict(cfg.algo_kwargs))
-        if cfg.policy_kwargs:
-            kwargs["policy_kwargs"] = dict(cfg.policy_kwargs)
+        if cfg.policy_kwargs or cfg.normalize_obs:
+            kwargs["policy_kwargs"] = policy_kwargs_for(cfg, venv, DEMO_ROOT)
         model = algo(
             pick_policy(cfg.policy, venv.observation_space),
             venv,
@@ -486,7 +507,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             **kwargs,
         )
         terms = TermsLog(out / TERMS_FILE)
-        callbacks = [_log_terms(terms)]
+        callbacks = [_log_terms(terms), *demo_callbacks(cfg.hold_actor_steps)]
         show_bar = cfg.progress_bar and sys.stdout.isatty()
         if not show_bar and cfg.log_every_s > 0:
             callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps, terms))

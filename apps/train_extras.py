@@ -5,6 +5,8 @@
   policy or replay buffer class of the project (`agents.rlpd`) without code.
 - `clone_before_learning`: behaviour cloning of a SAC actor on a demonstration dataset before
   (or instead of) reinforcement learning.
+- `demo_normalized_kwargs`: ``policy_kwargs`` whose features extractor standardises the
+  observations with the demonstrations' statistics (`agents.obs_norm`).
 """
 
 from __future__ import annotations
@@ -64,10 +66,45 @@ def clone_before_learning(
     return epochs * math.ceil(len(demos) / BC_BATCH)
 
 
+def demo_normalized_kwargs(
+    policy_kwargs: dict[str, Any], dataset_id: str, root: str | Path, venv: Any
+) -> dict[str, Any]:
+    """``policy_kwargs`` with `agents.obs_norm.NormalizedStateExtractor` fitted to the demos.
+
+    Raises:
+        DemoSpaceError: The dataset's spaces differ from the envs'.
+    """
+    from agents.demos import load_demos  # noqa: PLC0415
+    from agents.obs_norm import normalized_policy_kwargs  # noqa: PLC0415
+
+    demos = load_demos(dataset_id, venv.observation_space, venv.action_space, Path(root))
+    return normalized_policy_kwargs(policy_kwargs, demos.observations, venv.observation_space)
+
+
+def policy_kwargs_for(cfg: Any, venv: Any, root: str | Path) -> dict[str, Any]:
+    """A `TrainConfig`'s ``policy_kwargs``, standardised on its ``demos`` if ``normalize_obs``."""
+    kwargs = dict(cfg.policy_kwargs)
+    if cfg.normalize_obs:
+        return demo_normalized_kwargs(kwargs, cfg.demos, root, venv)
+    return kwargs
+
+
+def demo_callbacks(hold_actor_steps: int) -> list[Any]:
+    """Callbacks of learning from demonstrations: `agents.rlpd.hold_actor` if steps > 0."""
+    if not hold_actor_steps:
+        return []
+    from agents.rlpd import hold_actor  # noqa: PLC0415
+
+    return [hold_actor(hold_actor_steps)]
+
+
 __all__ = [
     "BC_BATCH",
     "CLASS_SUFFIX",
     "clone_before_learning",
+    "demo_callbacks",
+    "demo_normalized_kwargs",
+    "policy_kwargs_for",
     "resolve_algo_kwargs",
     "resolve_named",
 ]

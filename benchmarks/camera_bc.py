@@ -8,6 +8,13 @@ Run::
     python -m benchmarks.camera_bc --demos 50 10 --seeds 0 1 2 --out runs/camera_bc \\
         --set steps=500
 
+Held-out designs (``--suite held_out``): every run trains on the three training-design
+datasets of ``MosaicHeldOutDesigns-v0`` together (``--demos N``: the first N episodes of each,
+0: all; the curve on procedural designs), then plays the rung's evaluation designs (hexagon,
+trencadis) on seeds 1000-1019 and 2000-2019::
+
+    python -m benchmarks.camera_bc --suite held_out --demos 0 --seeds 0 1 2 --out runs/held
+
 Each run trains `apps.camera_bc` on the first ``N`` episodes of the dataset (its curve with
 ``--curve-episodes`` validation episodes per point, seeds from `apps.camera_bc.CURVE_SEED`),
 then plays the evaluation protocol of ``MosaicDecision6-v0`` (seeds 1000-1019), of
@@ -23,6 +30,7 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -47,12 +55,59 @@ EVALUATIONS = {
     "decision6_seeds2000": "MosaicDecision6-v0",
 }
 """Evaluation name -> task whose protocol is played."""
+HELD_OUT_DATASETS = (
+    "mosaic/heldout-procedural-expert-rgb96-v0",
+    "mosaic/heldout-square-grid-expert-rgb96-v0",
+    "mosaic/heldout-paper-mixed-expert-rgb96-v0",
+)
+"""The training designs of ``MosaicHeldOutDesigns-v0`` (procedural, square_grid, paper_mixed)."""
+HELD_OUT_ENV: dict[str, Any] = {
+    "image_size": IMAGE_SIZE,
+    "design_source": "procedural",
+    "exclude_designs": ["hexagon", "trencadis"],
+}
+"""Env of the held-out runs' training curve: its procedural training entry."""
 
 
-def evaluate_run(model: Path) -> dict[str, dict[str, float]]:
+@dataclass(frozen=True)
+class Suite:
+    """What a benchmark's runs train on and are evaluated on.
+
+    Attributes:
+        task: Task id the policy trains on.
+        datasets: Datasets read together (empty: ``--dataset-id``).
+        env_kwargs: Env overrides of training (and of the training curve).
+        evaluations: Evaluation name -> task whose protocol is played (names ending in
+            ``seeds2000`` play seeds 2000-2019).
+    """
+
+    task: str
+    datasets: tuple[str, ...] = ()
+    env_kwargs: dict[str, Any] = field(default_factory=lambda: {"image_size": IMAGE_SIZE})
+    evaluations: dict[str, str] = field(default_factory=lambda: dict(EVALUATIONS))
+
+
+SUITES = {
+    "decision6": Suite("MosaicDecision6-v0"),
+    "held_out": Suite(
+        "MosaicHeldOutDesigns-v0",
+        HELD_OUT_DATASETS,
+        HELD_OUT_ENV,
+        {
+            "held_out_designs": "MosaicHeldOutDesigns-v0",
+            "held_out_designs_seeds2000": "MosaicHeldOutDesigns-v0",
+        },
+    ),
+}
+"""Benchmark suites by name (``--suite``)."""
+
+
+def evaluate_run(
+    model: Path, evaluations: dict[str, str] | None = None
+) -> dict[str, dict[str, float]]:
     """Slots filled and success of one trained policy on every evaluation."""
     out: dict[str, dict[str, float]] = {}
-    for name, task in EVALUATIONS.items():
+    for name, task in (evaluations or EVALUATIONS).items():
         base, proto = task_protocol(task)
         if name.endswith("seeds2000"):
             proto = Protocol(EXTRA_SEEDS, proto.designs, proto.max_steps, proto.horizon_s)
@@ -70,9 +125,11 @@ def run_all(
     root: Path = DEFAULT_ROOT,
     curve_episodes: int = 5,
     cfg: CameraBCConfig | None = None,
+    suite: Suite = SUITES["decision6"],
 ) -> dict[str, Any]:
     """Train and evaluate every (demonstrations, seed) run, then aggregate over seeds."""
     runs: list[dict[str, Any]] = []
+    datasets: str | tuple[str, ...] = suite.datasets or dataset_id
     for n in demos:
         for seed in seeds:
             folder = out / f"d{n}" / f"seed_{seed}"
@@ -81,10 +138,11 @@ def run_all(
                 summary = json.loads(summary_path.read_text(encoding="utf-8"))
             else:
                 summary = train(
-                    dataset_id,
+                    datasets,
                     folder,
                     root=root,
-                    env_kwargs={"image_size": IMAGE_SIZE},
+                    task_id=suite.task,
+                    env_kwargs=suite.env_kwargs,
                     demos=n,
                     seed=seed,
                     cfg=cfg,
@@ -94,23 +152,25 @@ def run_all(
             if eval_path.is_file():
                 evals = json.loads(eval_path.read_text(encoding="utf-8"))
             else:
-                evals = evaluate_run(Path(summary["model_path"]))
+                evals = evaluate_run(Path(summary["model_path"]), suite.evaluations)
                 write_json(eval_path, evals)
             runs.append({"demos": n, "seed": seed, "summary": summary, "eval": evals})
             write_json(out / "results.json", {"runs": runs})
-    table = aggregate(runs)
+    table = aggregate(runs, suite.evaluations)
     write_json(out / "results.json", {"runs": runs, "table": table})
-    plot_curves(out, demos, seeds, out / "curves.png")
+    plot_curves(out, demos, seeds, out / "curves.png", suite.task)
     return {"runs": runs, "table": table}
 
 
-def aggregate(runs: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+def aggregate(
+    runs: Sequence[dict[str, Any]], evaluations: dict[str, str] | None = None
+) -> list[dict[str, Any]]:
     """IQM and 95 % interval over seeds of each evaluation, per demonstration count."""
     table = []
     for n in sorted({r["demos"] for r in runs}, reverse=True):
         mine = [r for r in runs if r["demos"] == n]
         row: dict[str, Any] = {"demos": n, "runs": len(mine)}
-        for name in EVALUATIONS:
+        for name in evaluations or EVALUATIONS:
             for metric in ("filled", "success"):
                 est = iqm_ci([r["eval"][name][metric] for r in mine])
                 row[f"{name}_{metric}"] = est.text()
@@ -118,11 +178,18 @@ def aggregate(runs: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         row["cpu_minutes_max"] = max(cpu)
         row["gradient_steps"] = mine[0]["summary"]["gradient_steps"]
         row["samples"] = mine[0]["summary"]["samples"]
+        row["episodes"] = mine[0]["summary"]["demos"]
         table.append(row)
     return table
 
 
-def plot_curves(out: Path, demos: Sequence[int], seeds: Sequence[int], path: Path) -> None:
+def plot_curves(
+    out: Path,
+    demos: Sequence[int],
+    seeds: Sequence[int],
+    path: Path,
+    task: str = "MosaicDecision6-v0",
+) -> None:
     """Validation slots filled and training loss against gradient steps, one line per run."""
     import matplotlib  # noqa: PLC0415
 
@@ -138,7 +205,8 @@ def plot_curves(out: Path, demos: Sequence[int], seeds: Sequence[int], path: Pat
                 continue
             curve = json.loads(f.read_text(encoding="utf-8"))["curve"]
             steps = [p["step"] for p in curve]
-            label = f"{n} demos" if seed == seeds[0] else None
+            count = json.loads((f.parent / "camera_summary.json").read_text(encoding="utf-8"))
+            label = f"{count['demos']} demos" if seed == seeds[0] else None
             colour = colours[i % len(colours)]
             if "val_filled" in curve[0]:
                 ax_val.plot(steps, [p["val_filled"] for p in curve], color=colour, label=label)
@@ -146,7 +214,7 @@ def plot_curves(out: Path, demos: Sequence[int], seeds: Sequence[int], path: Pat
     ax_val.set(xlabel="gradient steps", ylabel="slots filled (validation seeds)", ylim=(0, 1.02))
     ax_loss.set(xlabel="gradient steps", ylabel="training loss", yscale="log")
     ax_val.legend()
-    ax_val.set_title("MosaicDecision6-v0, camera policy")
+    ax_val.set_title(f"{task}, camera policy")
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
@@ -155,6 +223,7 @@ def plot_curves(out: Path, demos: Sequence[int], seeds: Sequence[int], path: Pat
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line (see the module docstring)."""
     ap = CommandParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--suite", choices=sorted(SUITES), default="decision6")
     ap.add_argument("--demos", type=int, nargs="+", default=[200, 50, 10])
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     ap.add_argument("--out", type=Path, default=Path("runs/camera_bc"))
@@ -173,12 +242,22 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         root=args.root,
         curve_episodes=args.curve_episodes,
         cfg=load_camera_bc_config(args.config, **parse_pairs(args.set)),
+        suite=SUITES[args.suite],
     )
     print(json.dumps(result["table"], indent=2))
     return result
 
 
-__all__ = ["aggregate", "evaluate_run", "main", "plot_curves", "run_all"]
+__all__ = [
+    "HELD_OUT_DATASETS",
+    "SUITES",
+    "Suite",
+    "aggregate",
+    "evaluate_run",
+    "main",
+    "plot_curves",
+    "run_all",
+]
 
 if __name__ == "__main__":
     run_cli(main)
