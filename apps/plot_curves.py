@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from apps.cli import CommandParser, run_cli
+from apps.monitor_log import monitor_episodes
 from configs.files import atomic_path
 
 BINS = 25
@@ -36,22 +37,10 @@ def episodes(run: Path) -> np.ndarray:
 
     Episodes of all the run's envs, ordered by their end (wall time); shape (m, 3).
     """
-    rows = []
-    for path in sorted((run / "monitor").glob("*.monitor.csv")):
-        lines = path.read_text(encoding="utf-8").splitlines()[1:]
-        if len(lines) < 2:
-            continue
-        head = lines[0].split(",")
-        for line in lines[1:]:
-            rec = dict(zip(head, line.split(","), strict=False))
-            rows.append(
-                (
-                    float(rec["t"]),
-                    float(rec["l"]),
-                    float(rec[CPU_COLUMN]) / 60,
-                    float(rec[FILLED_COLUMN]),
-                )
-            )
+    rows = [
+        (float(ep["t"]), float(ep["l"]), float(ep[CPU_COLUMN]) / 60, float(ep[FILLED_COLUMN]))
+        for ep in monitor_episodes(run / "monitor")
+    ]
     if not rows:
         return np.zeros((0, 3))
     arr = np.array(sorted(rows))

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from agents.protocol import aggregate_runs, iqm_ci
+from apps.monitor_log import monitor_episodes, succeeded
 from configs.files import atomic_path, complete_lines, write_json, write_text
 
 CURVE_BINS = 20
@@ -94,16 +95,10 @@ def training_curve(monitor_dir: Path, edges: np.ndarray) -> np.ndarray | None:
 
     Bins without a finished episode repeat the previous value; None without episodes.
     """
-    rows = []
-    for path in sorted(monitor_dir.glob("*.monitor.csv")):
-        lines = path.read_text(encoding="utf-8").splitlines()[1:]
-        if len(lines) < 2:
-            continue
-        head = lines[0].split(",")
-        for line in lines[1:]:
-            rec = dict(zip(head, line.split(","), strict=False))
-            ok = rec.get("is_success", "False") in ("True", "1", "1.0")
-            rows.append((float(rec["t"]), float(rec["l"]), float(rec["r"]), float(ok)))
+    rows = [
+        (float(ep["t"]), float(ep["l"]), float(ep["r"]), succeeded(ep))
+        for ep in monitor_episodes(monitor_dir)
+    ]
     if not rows:
         return None
     arr = np.array(sorted(rows))

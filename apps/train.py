@@ -45,6 +45,7 @@ from agents.wrappers import (
     cpu_seconds,
 )
 from apps.cli import CommandParser, run_cli
+from apps.monitor_log import monitor_episodes, succeeded
 from apps.train_extras import (
     clone_before_learning,
     demo_callbacks,
@@ -344,17 +345,9 @@ def finished_run(out: Path) -> TrainResult | None:
 
 def _episode_stats(monitor_dir: Path) -> tuple[int, float, float, float, float]:
     """(episodes, first/last mean return, first/last success rate) from Monitor CSVs."""
-    rows: list[tuple[float, float, float]] = []  # (end time, return, success)
-    for path in sorted(monitor_dir.glob("*.monitor.csv")):
-        lines = path.read_text(encoding="utf-8").splitlines()[1:]
-        if not lines:
-            continue
-        header = lines[0].split(",")
-        for line in lines[1:]:
-            rec = dict(zip(header, line.split(","), strict=False))
-            ok = 1.0 if rec.get("is_success", "False") in ("True", "1", "1.0") else 0.0
-            rows.append((float(rec["t"]), float(rec["r"]), ok))
-    rows.sort()
+    rows = sorted(  # (end time, return, success)
+        (float(ep["t"]), float(ep["r"]), succeeded(ep)) for ep in monitor_episodes(monitor_dir)
+    )
     if not rows:
         nan = float("nan")
         return 0, nan, nan, nan, nan
