@@ -110,15 +110,13 @@ def train_bc(dataset: Any, out: Path, seed: int = 0, cfg: BCConfig | None = None
     y = torch.as_tensor(np.ravel_multi_index(np.concatenate(ys).T, nvec))
     torch.manual_seed(seed)
     net = _network(x.shape[1], int(np.prod(nvec)), cfg)
-    opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
     t0 = time.perf_counter()
     fit = fit_classifier(
         lambda idx: net(x if idx is None else x[idx]),
-        opt,
+        net.parameters(),
         y,
-        epochs=cfg.epochs,
-        batch_size=cfg.batch_size,
-        seed=seed,
+        cfg,
+        seed,
     )
     with torch.no_grad():
         acc = float((net(x).argmax(1) == y).float().mean())

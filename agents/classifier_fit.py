@@ -2,20 +2,46 @@
 
 The decision-level clones (`agents.bc`'s flat MLP, `agents.pair_bc`'s pair scorer on ``state``,
 `agents.pair_objects_bc`'s pair scorer and flat MLP on ``objects`` rows) differ in their network
-and inputs, not in how they are fitted: every epoch draws a permutation of the samples from a
-generator seeded with the run's seed, and each batch takes one Adam step on the cross-entropy of
-the network's logits against the expert's flat action index.
+and inputs, not in how they are fitted: Adam with the clone's learning rate and weight decay,
+and every epoch a permutation of the samples drawn from a generator seeded with the run's seed,
+each batch one step on the cross-entropy of the network's logits against the expert's flat
+action index.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import Protocol
 
 import torch
 
 Logits = Callable[[torch.Tensor | None], torch.Tensor]
 """``logits(idx)``: the network's logits of the samples ``idx`` (None: of every sample)."""
+
+
+class FitSettings(Protocol):
+    """What a fit reads of a clone's configuration (`agents.bc.BCConfig` has it)."""
+
+    @property
+    def epochs(self) -> int:
+        """Passes over the samples."""
+        ...
+
+    @property
+    def batch_size(self) -> int:
+        """Samples per optimiser step (the last batch of an epoch may be smaller)."""
+        ...
+
+    @property
+    def learning_rate(self) -> float:
+        """Adam's step size."""
+        ...
+
+    @property
+    def weight_decay(self) -> float:
+        """Adam's L2 penalty."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -36,25 +62,25 @@ class FitResult:
 
 def fit_classifier(
     logits: Logits,
-    opt: torch.optim.Optimizer,
+    params: Iterable[torch.nn.Parameter],
     y: torch.Tensor,
-    *,
-    epochs: int,
-    batch_size: int,
+    settings: FitSettings,
     seed: int,
+    *,
     accuracy: bool = False,
 ) -> FitResult:
-    """Fit by cross-entropy over ``epochs`` passes of shuffled batches of ``batch_size``.
+    """Fit by Adam on the cross-entropy, ``settings.epochs`` passes of shuffled batches.
 
     Args:
         logits: The network's logits of a batch of sample indices (see `Logits`).
-        opt: Optimiser over the network's parameters.
+        params: The network's parameters (Adam with ``settings``' rate and decay).
         y: Target class of each sample, shape (N,) int64.
-        epochs: Passes over the samples.
-        batch_size: Samples per optimiser step (the last batch of an epoch may be smaller).
+        settings: Epochs, batch size, learning rate and weight decay (an `agents.bc.BCConfig`).
         seed: Seed of the batch order.
         accuracy: Also measure the training accuracy after every epoch (one full forward pass).
     """
+    opt = torch.optim.Adam(params, lr=settings.learning_rate, weight_decay=settings.weight_decay)
+    epochs, batch_size = settings.epochs, settings.batch_size
     gen = torch.Generator().manual_seed(seed)
     steps, last, curve = 0, 0.0, []
     for _ in range(epochs):

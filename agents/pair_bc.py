@@ -70,14 +70,12 @@ def train_pair_bc(
     torch.manual_seed(seed)
     shape = PairScorerConfig(*FEATURE_DIMS[adapter], int(nvec[2]), cfg.hidden, cfg.layers)
     net = PairScorer(shape)
-    opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
     fit = fit_classifier(
         lambda idx: net(rows if idx is None else rows.take(idx)),
-        opt,
+        net.parameters(),
         y,
-        epochs=cfg.epochs,
-        batch_size=cfg.batch_size,
-        seed=seed,
+        cfg,
+        seed,
     )
     with torch.no_grad():
         acc = float((net(rows).argmax(1) == y).float().mean())

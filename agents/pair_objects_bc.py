@@ -70,14 +70,12 @@ def train_objects_bc(demos: ObjectDemos, out: Path, seed: int, cfg: Any) -> dict
     torch.manual_seed(seed)
     shape = PairScorerConfig(*FEATURE_DIMS[ADAPTER], int(demos.nvec[2]), cfg.hidden, cfg.layers)
     net = PairScorer(shape)
-    opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
     fit = fit_classifier(
         lambda idx: net(rows if idx is None else rows.take(idx)),
-        opt,
+        net.parameters(),
         y,
-        epochs=cfg.epochs,
-        batch_size=cfg.batch_size,
-        seed=seed,
+        cfg,
+        seed,
         accuracy=True,
     )
     steps, curve = fit.gradient_steps, list(fit.curve)
@@ -127,14 +125,12 @@ def train_objects_mlp(demos: ObjectDemos, out: Path, seed: int, cfg: Any) -> dic
     y = torch.as_tensor(demos.actions)
     torch.manual_seed(seed)
     net = _network(x.shape[1], int(np.prod(demos.nvec)), cfg)
-    opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
     fit = fit_classifier(
         lambda idx: net(x if idx is None else x[idx]),
-        opt,
+        net.parameters(),
         y,
-        epochs=cfg.epochs,
-        batch_size=cfg.batch_size,
-        seed=seed,
+        cfg,
+        seed,
     )
     steps, curve = fit.gradient_steps, list(fit.curve)
     out.mkdir(parents=True, exist_ok=True)

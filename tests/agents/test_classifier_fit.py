@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import torch
 
+from agents.bc import BCConfig
 from agents.classifier_fit import fit_classifier
 
 
@@ -12,14 +13,13 @@ def _fit(seed: int):
     x = torch.randn(90, 2)
     y = (x[:, 0] > x[:, 1]).long() + 2 * (x[:, 0] > 0).long()  # four separable classes
     net = torch.nn.Linear(2, 4)
-    opt = torch.optim.Adam(net.parameters(), lr=0.05)
+    settings = BCConfig(epochs=60, batch_size=32, learning_rate=0.05, weight_decay=0.0)
     fit = fit_classifier(
         lambda idx: net(x if idx is None else x[idx]),
-        opt,
+        net.parameters(),
         y,
-        epochs=60,
-        batch_size=32,
-        seed=seed,
+        settings,
+        seed,
         accuracy=True,
     )
     return fit, net
