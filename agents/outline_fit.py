@@ -84,9 +84,15 @@ def _points(boundaries: Sequence[np.ndarray], spacing: float) -> np.ndarray:
     return np.vstack(out)
 
 
-def _polygon(outer: np.ndarray, holes: Sequence[np.ndarray]) -> shapely.Polygon:
+def area_centroid(outer: np.ndarray, holes: Sequence[np.ndarray]) -> np.ndarray:
+    """Area centroid of the region inside ``outer`` (k, 2) and outside ``holes``, shape (2,).
+
+    A self-touching traced boundary is first made valid (`shapely.make_valid`).
+    """
     poly = shapely.Polygon(outer, [np.asarray(h) for h in holes])
-    return poly if poly.is_valid else shapely.make_valid(poly)
+    if not poly.is_valid:
+        poly = shapely.make_valid(poly)
+    return np.array([poly.centroid.x, poly.centroid.y])
 
 
 def fit_outline(
@@ -101,8 +107,7 @@ def fit_outline(
             to a symmetry of the slot count as that symmetry).
         spacing: Largest distance between the points compared [mm].
     """
-    tpoly = _polygon(tile.outer, tile.holes)
-    centre = np.array([tpoly.centroid.x, tpoly.centroid.y])
+    centre = area_centroid(tile.outer, tile.holes)
     tpts = _points([tile.outer, *tile.holes], spacing) - centre
     sfig = slot.figure
     spts = _points([sfig.outer.dense(), *(h.dense() for h in sfig.holes)], spacing / 2.0)
@@ -190,4 +195,4 @@ def fit_unmatched(
     )
 
 
-__all__ = ["OutlineFit", "TileOutline", "fit_outline", "fit_unmatched"]
+__all__ = ["OutlineFit", "TileOutline", "area_centroid", "fit_outline", "fit_unmatched"]

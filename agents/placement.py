@@ -24,12 +24,12 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-import shapely
 from scipy.optimize import minimize_scalar
 from scipy.spatial import cKDTree
 
 import qshape
 from agents.config import PlacementConfig
+from agents.outline_fit import area_centroid
 from agents.perception import PerceivedTile, SlotTarget
 from envs.task_spec import PickPlaceCommand
 from qshape.theory.assign import feasible_pairs
@@ -197,10 +197,7 @@ def refine_rotation(
 
 def _centroid(outer: np.ndarray, figure: qshape.Figure) -> np.ndarray:
     """Area centroid of the boundary ``outer`` (k, 2) less ``figure``'s holes."""
-    poly = shapely.Polygon(outer, [np.asarray(h.dense()) for h in figure.holes])
-    if not poly.is_valid:
-        poly = shapely.make_valid(poly)
-    return np.array([poly.centroid.x, poly.centroid.y])
+    return area_centroid(outer, [h.dense() for h in figure.holes])
 
 
 @dataclass(eq=False)
