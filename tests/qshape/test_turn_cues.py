@@ -1,4 +1,4 @@
-"""Turn cues: what fixes a slot's turn in a picture, measured, warned about, kept by the generator."""
+"""Turn cues: what fixes a slot's turn in a picture; loader warnings; the generator keeps them."""
 
 from __future__ import annotations
 
