@@ -22,16 +22,23 @@ scripted agent: the only demonstrator of ``pick_place_discrete`` (the scripted a
 ``pick_place``). ``--lossless``: store images as raw arrays (Minari JPEG-encodes them by
 default, which changes pixels).
 
-``--lowlevel``: the scripted low-level controller (`agents.lowlevel_expert.LowLevelExpert`) on
-a ``cartesian`` rung (``--task MosaicOneTile-v0``, the default then) with the rung's own
-observations (``state``) and episode limit: the demonstrations low-level learners start from::
+``--lowlevel``: the scripted low-level controller of the rung's action mode on a low-level
+rung (``--task MosaicOneTile-v0``, the default then) with the rung's own observations
+(``state``) and episode limit: the demonstrations low-level learners start from. A
+``cartesian`` rung is played by `agents.lowlevel_expert.LowLevelExpert`, a ``joint`` rung
+(``--task MosaicOneTileJoint-v0``) by `agents.lowlevel_joint_expert.LowLevelJointExpert`::
 
     python -m apps.record_demos --lowlevel --episodes 20 --seed 0 \
         --dataset-id mosaic/one-tile-lowlevel-v0 --replay
+    python -m apps.record_demos --lowlevel --task MosaicOneTileJoint-v0 --episodes 50 \
+        --seed 0 --dataset-id mosaic/one-tile-joint-lowlevel-v0 --replay
 
 ``--expert-config NAME``: the controller's settings (``lowlevel_expert_smooth``: continuous
-descents, what the behaviour clones learn from). ``--action-noise SIGMA``: DART-style
-recording (`agents.dart.NoisyExecution`): the executed tool moves get Gaussian noise of
+descents, what the behaviour clones learn from; on a ``joint`` rung a
+`agents.lowlevel_joint_expert.LowLevelJointExpertConfig`, default ``lowlevel_joint_expert``).
+``--action-noise SIGMA``: DART-style
+recording (`agents.dart.NoisyExecution`): the executed moves (tool or joint moves, not the
+vacuum) get Gaussian noise of
 SIGMA action units (plus ``--noise-relative`` times the action's size), the dataset keeps the
 controller's clean action (such a dataset does not replay exactly; ``--replay`` then reports
 mismatches)::
@@ -81,6 +88,12 @@ STEPS_PER_SLOT = 2
 """Episode step limit per slot."""
 LOWLEVEL_TASK = "MosaicOneTile-v0"
 """Rung of ``--lowlevel`` recordings without ``--task``."""
+NOISY_MOVES = (0, 1, 2, 3)
+"""Action entries DART noise perturbs outside the ``joint`` mode (the tool move)."""
+JOINT_MOVES = 6
+"""Action entries DART noise perturbs in the ``joint`` mode (the joint moves, not the vacuum)."""
+_LOWLEVEL_ACTIONS = {"cartesian": "cartesian tool moves", "joint": "joint target moves"}
+"""What a low-level dataset's actions are, by action mode (its description)."""
 STAGING_NAME = "recording"
 """Stem of the staging folder a dataset is recorded in (``<root>/.recording.partial-<pid>``)."""
 
@@ -226,11 +239,24 @@ def _noisy(env: gym.Env, sigma: float, relative: float, seed: int) -> gym.Env:
         return env
     from agents.dart import NoisyExecution  # noqa: PLC0415
 
-    return NoisyExecution(env, sigma, seed=seed, relative=relative)
+    joint = env.get_wrapper_attr("task_spec").action_mode == "joint"
+    moves = range(JOINT_MOVES) if joint else NOISY_MOVES  # not the vacuum
+    return NoisyExecution(env, sigma, dims=moves, seed=seed, relative=relative)
 
 
 def _lowlevel_expert(env: gym.Env, config: str) -> Any:
-    """The scripted low-level controller with the settings ``config`` (default: bundled)."""
+    """The scripted low-level controller of the env's action mode with the settings ``config``.
+
+    ``cartesian``: `LowLevelExpert`; ``joint``: `LowLevelJointExpert` (default: bundled
+    settings).
+    """
+    if env.get_wrapper_attr("task_spec").action_mode == "joint":
+        from agents.lowlevel_joint_expert import (  # noqa: PLC0415
+            LowLevelJointExpert,
+            load_joint_expert_config,
+        )
+
+        return LowLevelJointExpert(env, load_joint_expert_config(config or None))
     from agents.lowlevel_expert import LowLevelExpert, load_expert_config  # noqa: PLC0415
 
     return LowLevelExpert(env, load_expert_config(config or "lowlevel_expert"))
@@ -285,6 +311,7 @@ def _collect(
     inner = _noisy(
         gym.make(env_id, max_episode_steps=limit, **kwargs), action_noise, noise_relative, seed
     )
+    inner_mode = inner.get_wrapper_attr("task_spec").action_mode
     env = minari.DataCollector(inner, jpeg_encoding=not lossless)
     try:
         agent: Any
@@ -305,7 +332,7 @@ def _collect(
             code_permalink="apps/record_demos.py",
             description=(
                 (
-                    "Scripted low-level controller (cartesian tool moves and vacuum) "
+                    f"Scripted low-level controller ({_LOWLEVEL_ACTIONS[inner_mode]} and vacuum) "
                     if expert == "lowlevel"
                     else "Privileged expert (every tile to its slot) "
                     if expert
@@ -315,7 +342,7 @@ def _collect(
                 + f"on {env_id.removeprefix('envs:')} with {json.dumps(kwargs)}; seeds "
                 f"{seeds[0]}..{seeds[-1]}"
                 + (
-                    f"; executed tool moves with N(0, ({action_noise} + {noise_relative} |a|)^2) "
+                    f"; executed moves with N(0, ({action_noise} + {noise_relative} |a|)^2) "
                     "noise, clean labels."
                     if action_noise or noise_relative
                     else "."
@@ -414,13 +441,15 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--expert", action="store_true", help="privileged expert (discrete modes)")
     ap.add_argument("--lossless", action="store_true", help="raw images, no JPEG")
     ap.add_argument(
-        "--lowlevel", action="store_true", help="scripted low-level controller (cartesian rung)"
+        "--lowlevel",
+        action="store_true",
+        help="scripted low-level controller (cartesian or joint rung)",
     )
     ap.add_argument(
         "--action-noise",
         type=float,
         default=0.0,
-        help="DART: noise (std, action units) on the executed tool moves; labels stay clean",
+        help="DART: noise (std, action units) on the executed moves; labels stay clean",
     )
     ap.add_argument(
         "--expert-config",
