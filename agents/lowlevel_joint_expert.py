@@ -27,7 +27,13 @@ import gymnasium as gym
 import numpy as np
 
 from agents.errors import AgentError
-from agents.lowlevel_expert import TOOL_POS, TOOL_YAW, LowLevelExpert, load_expert_config
+from agents.lowlevel_expert import (
+    EXPERT_CONFIG,
+    TOOL_POS,
+    TOOL_YAW,
+    LowLevelExpert,
+    load_expert_config,
+)
 from configs import check_positive, load_config
 from envs.task_spec import TaskSpec
 from planners.errors import PlannerError
@@ -139,4 +145,24 @@ class LowLevelJointExpert:
         return np.array([*a, cartesian[4]], np.float32)
 
 
-__all__ = ["LowLevelJointExpert", "LowLevelJointExpertConfig", "load_joint_expert_config"]
+def lowlevel_controller(env: gym.Env, config: str = "") -> LowLevelExpert | LowLevelJointExpert:
+    """The scripted low-level controller of the env's action mode, with the settings ``config``.
+
+    ``joint``: `LowLevelJointExpert` (``config`` a `LowLevelJointExpertConfig` name or path);
+    otherwise `LowLevelExpert` (a `agents.lowlevel_expert.LowLevelExpertConfig`). "" the
+    bundled settings.
+
+    Raises:
+        AgentError: The env's action mode is neither ``joint`` nor ``cartesian``.
+    """
+    if env.get_wrapper_attr("task_spec").action_mode == "joint":
+        return LowLevelJointExpert(env, load_joint_expert_config(config or JOINT_EXPERT_CONFIG))
+    return LowLevelExpert(env, load_expert_config(config or EXPERT_CONFIG))
+
+
+__all__ = [
+    "LowLevelJointExpert",
+    "LowLevelJointExpertConfig",
+    "load_joint_expert_config",
+    "lowlevel_controller",
+]

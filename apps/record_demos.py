@@ -88,10 +88,8 @@ STEPS_PER_SLOT = 2
 """Episode step limit per slot."""
 LOWLEVEL_TASK = "MosaicOneTile-v0"
 """Rung of ``--lowlevel`` recordings without ``--task``."""
-NOISY_MOVES = (0, 1, 2, 3)
-"""Action entries DART noise perturbs outside the ``joint`` mode (the tool move)."""
-JOINT_MOVES = 6
-"""Action entries DART noise perturbs in the ``joint`` mode (the joint moves, not the vacuum)."""
+NOISY_MOVES = {"joint": range(6), "": range(4)}
+"""Action entries DART noise perturbs, by action mode (the joint or tool moves, not the vacuum)."""
 _LOWLEVEL_ACTIONS = {"cartesian": "cartesian tool moves", "joint": "joint target moves"}
 """What a low-level dataset's actions are, by action mode (its description)."""
 STAGING_NAME = "recording"
@@ -240,26 +238,7 @@ def _noisy(env: gym.Env, sigma: float, relative: float, seed: int) -> gym.Env:
     from agents.dart import NoisyExecution  # noqa: PLC0415
 
     joint = env.get_wrapper_attr("task_spec").action_mode == "joint"
-    moves = range(JOINT_MOVES) if joint else NOISY_MOVES  # not the vacuum
-    return NoisyExecution(env, sigma, dims=moves, seed=seed, relative=relative)
-
-
-def _lowlevel_expert(env: gym.Env, config: str) -> Any:
-    """The scripted low-level controller of the env's action mode with the settings ``config``.
-
-    ``cartesian``: `LowLevelExpert`; ``joint``: `LowLevelJointExpert` (default: bundled
-    settings).
-    """
-    if env.get_wrapper_attr("task_spec").action_mode == "joint":
-        from agents.lowlevel_joint_expert import (  # noqa: PLC0415
-            LowLevelJointExpert,
-            load_joint_expert_config,
-        )
-
-        return LowLevelJointExpert(env, load_joint_expert_config(config or None))
-    from agents.lowlevel_expert import LowLevelExpert, load_expert_config  # noqa: PLC0415
-
-    return LowLevelExpert(env, load_expert_config(config or "lowlevel_expert"))
+    return NoisyExecution(env, sigma, NOISY_MOVES["joint" if joint else ""], seed, relative)
 
 
 def _play(env: gym.Env, agent: Any, seeds: Sequence[int]) -> int:
@@ -275,6 +254,16 @@ def _play(env: gym.Env, agent: Any, seeds: Sequence[int]) -> int:
             first, done = False, terminated or truncated
         successes += bool(info["is_success"])
     return successes
+
+
+def _demonstrator(expert: str, env: gym.Env) -> str:
+    """The first words of a dataset's description: who acted (and in what action mode)."""
+    if expert == "lowlevel":
+        mode = env.get_wrapper_attr("task_spec").action_mode
+        return f"Scripted low-level controller ({_LOWLEVEL_ACTIONS.get(mode, mode)} and vacuum) "
+    if expert:
+        return "Privileged expert (every tile to its slot) "
+    return "Scripted mosaic cell (perception + qualitative matching + planner cycles) "
 
 
 def _collect(
@@ -294,8 +283,9 @@ def _collect(
     """Record the episodes as ``dataset_id`` under ``MINARI_DATASETS_PATH``.
 
     ``expert``: "" (the scripted agent), ``decision`` (`ExpertAgent`) or ``lowlevel``
-    (`agents.lowlevel_expert.LowLevelExpert` with ``expert_config``, the env's own episode
-    limit). ``action_noise`` (+ ``noise_relative`` x the action's size): DART (`agents.dart`).
+    (`agents.lowlevel_joint_expert.lowlevel_controller`: the controller of the env's action
+    mode with ``expert_config``, the env's own episode limit). ``action_noise`` (+
+    ``noise_relative`` x the action's size): DART (`agents.dart`).
 
     Returns:
         (episodes, steps, seeds, success rate).
@@ -311,12 +301,13 @@ def _collect(
     inner = _noisy(
         gym.make(env_id, max_episode_steps=limit, **kwargs), action_noise, noise_relative, seed
     )
-    inner_mode = inner.get_wrapper_attr("task_spec").action_mode
     env = minari.DataCollector(inner, jpeg_encoding=not lossless)
     try:
         agent: Any
         if expert == "lowlevel":
-            agent = _lowlevel_expert(env, expert_config)
+            from agents.lowlevel_joint_expert import lowlevel_controller  # noqa: PLC0415
+
+            agent = lowlevel_controller(env, expert_config)
         elif expert:
             agent = ExpertAgent(env)
         else:
@@ -331,14 +322,7 @@ def _collect(
             author_email="n/a",
             code_permalink="apps/record_demos.py",
             description=(
-                (
-                    f"Scripted low-level controller ({_LOWLEVEL_ACTIONS[inner_mode]} and vacuum) "
-                    if expert == "lowlevel"
-                    else "Privileged expert (every tile to its slot) "
-                    if expert
-                    else "Scripted mosaic cell (perception + qualitative matching + planner "
-                    "cycles) "
-                )
+                _demonstrator(expert, env)
                 + f"on {env_id.removeprefix('envs:')} with {json.dumps(kwargs)}; seeds "
                 f"{seeds[0]}..{seeds[-1]}"
                 + (
@@ -351,12 +335,7 @@ def _collect(
         )
     finally:
         env.close()
-    return (
-        dataset.total_episodes,
-        dataset.total_steps,
-        seeds,
-        successes / max(episodes, 1),
-    )
+    return dataset.total_episodes, dataset.total_steps, seeds, successes / max(episodes, 1)
 
 
 def load(dataset_id: str = DEFAULT_ID, root: Path = DEFAULT_ROOT) -> Any:
