@@ -31,12 +31,14 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.spatial import cKDTree
 
-import qshape
 from qshape import geometry as geo
 from qshape.design.rules import DesignRules
 from qshape.design.slot import Slot
 from qshape.errors import DesignError, QShapeError, SmallFeatureWarning
+from qshape.theory.description import describe
 from qshape.theory.figure import Figure
+from qshape.theory.matching import match
+from qshape.theory.tolerances import Tolerances
 
 _FINE = 10
 """The boundary probed against is sampled this many times finer than the probes."""
@@ -132,7 +134,7 @@ def turn_cues(
     return TurnCues(shift, asym, gap)
 
 
-def hole_turn_gap(figure: Figure, symmetry: int, tolerances: qshape.Tolerances | None) -> float:
+def hole_turn_gap(figure: Figure, symmetry: int, tolerances: Tolerances | None) -> float:
     """How far the holes' relevant points move between turns only the holes tell apart [unit].
 
     A turn of the outline onto itself (its description's cyclic matches) that is not a
@@ -149,8 +151,8 @@ def hole_turn_gap(figure: Figure, symmetry: int, tolerances: qshape.Tolerances |
         outer = Figure.from_polygon(
             figure.outer.points, [], figure.color, curve_mask=figure.outer.curve_mask
         )
-        d = qshape.describe(outer, tolerances)
-        itself = qshape.match(d, d, tolerances)
+        d = describe(outer, tolerances)
+        itself = match(d, d, tolerances)
     except QShapeError:
         return math.inf
     if itself is None or itself.continuous:
