@@ -66,7 +66,7 @@ class PerceptionConfig:
             may be as near the other (dimensionless).
         min_hole_turn_mm: A slot whose outline turns onto itself at turns that only its
             holes tell apart, the holes' relevant points moving less than this between them
-            (`agents.seen_slots.hole_turn_gap`), is never matched: the camera cannot tell
+            (`qshape.design.turn_cues.hole_turn_gap`), is never matched: the camera cannot tell
             its turns apart, and a tile set down one outline turn off is misplaced, [mm]
             (design millimetres; 0: every slot matched).
 
@@ -117,6 +117,9 @@ class PlacementConfig:
             outlines, [deg] (a precision step: relevant points alone fix a curved tile's turn
             to a degree or two; 0: qshape's rotation as it is).
         refine_tolerance_deg: Precision of that refinement, [deg].
+        refine_scan_deg: The span is scanned this far apart before the refinement, [deg].
+        refine_spacing_mm: Largest distance between the outline points the refinement
+            compares, [mm] (every edge sampled, straight ones too).
         fit_max_residual: A tile that no description matches (the design's, the seen one,
             the retry's) is fitted by its traced outline onto the open slots' outlines
             (`agents.outline_fit`): the mean distance left must be at most this x sqrt(slot
@@ -133,6 +136,8 @@ class PlacementConfig:
     continuous_yaw_steps: int = 12
     refine_span_deg: float = 5.0
     refine_tolerance_deg: float = 0.01
+    refine_scan_deg: float = 1.0
+    refine_spacing_mm: float = 0.5
     fit_max_residual: float = 0.0
     fit_margin: float = 2.0
     fit_turn_window_deg: float = 10.0
@@ -151,10 +156,13 @@ class PlacementConfig:
             and self.fit_turn_window_deg >= 0.0
             and self.fit_step_deg > 0.0
             and self.fit_spacing_mm > 0.0
+            and self.refine_scan_deg > 0.0
+            and self.refine_spacing_mm > 0.0
         ):
             raise AgentError(
                 "placement: fit_max_residual >= 0, fit_margin >= 1, fit_turn_window_deg >= 0, "
-                "fit_step_deg > 0 and fit_spacing_mm > 0"
+                "fit_step_deg > 0, fit_spacing_mm > 0, refine_scan_deg > 0 and "
+                "refine_spacing_mm > 0"
             )
 
 

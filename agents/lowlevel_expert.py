@@ -51,6 +51,8 @@ TOOL_YAW = slice(15, 17)
 """Tool yaw as (cos, sin) in the ``robot`` vector."""
 HELD = 18
 """Index of the pressure switch (tile held) in the ``robot`` vector."""
+CARTESIAN_DIM = 5
+"""Length of a ``cartesian`` action: tool (dx, dy, dz, dyaw) and the vacuum."""
 
 
 @dataclass(frozen=True)
@@ -125,14 +127,24 @@ class LowLevelExpert:
     Args:
         env: A ``cartesian`` env with ``state`` (or ``rgb+state``) observations (any wrapper).
         config: Set points (default: ``configs/lowlevel_expert.yaml``).
+        tool_step: The tool move of a full action (dx, dy, dz, dyaw) [m, m, m, rad] for a
+            controller that maps these cartesian actions onto another action mode
+            (`agents.lowlevel_joint_expert`); then any action mode is accepted and
+            ``action_space`` is the cartesian Box(5). None: the env's ``task_spec.tool_step``.
 
     Raises:
-        AgentError: The env is not in the ``cartesian`` action mode or has no state rows.
+        AgentError: The env is not in the ``cartesian`` action mode (and no ``tool_step`` is
+            given) or has no state rows.
     """
 
-    def __init__(self, env: gym.Env, config: LowLevelExpertConfig | None = None) -> None:
+    def __init__(
+        self,
+        env: gym.Env,
+        config: LowLevelExpertConfig | None = None,
+        tool_step: tuple[float, float, float, float] | None = None,
+    ) -> None:
         spec: TaskSpec = env.get_wrapper_attr("task_spec")
-        if spec.action_mode != "cartesian" or spec.tool_step is None:
+        if tool_step is None and (spec.action_mode != "cartesian" or spec.tool_step is None):
             raise AgentError(
                 f"LowLevelExpert acts in the 'cartesian' action mode, the env's is "
                 f"{spec.action_mode!r}"
@@ -145,10 +157,14 @@ class LowLevelExpert:
             )
         self.cfg = config or load_expert_config()
         self.spec = spec
-        self.step = np.asarray(spec.tool_step, float)
+        self.step = np.asarray(spec.tool_step if tool_step is None else tool_step, float)
         self.symmetry = np.array([s.symmetry for s in spec.slots], int)
         self.observation_space = space
-        self.action_space = env.action_space
+        self.action_space = (
+            env.action_space
+            if tool_step is None
+            else gym.spaces.Box(-1.0, 1.0, (CARTESIAN_DIM,), np.float32)
+        )
 
     def predict(
         self, obs: dict[str, Any], state: Any = None, episode_start: Any = None, **_: Any

@@ -75,7 +75,7 @@ class OutlineFit:
     runner_up: float
 
 
-def _points(boundaries: Sequence[np.ndarray], spacing: float) -> np.ndarray:
+def boundary_points(boundaries: Sequence[np.ndarray], spacing: float) -> np.ndarray:
     """Points along closed boundaries (each (m, 2)) at most ``spacing`` apart, shape (k, 2)."""
     out = [
         shapely.get_coordinates(shapely.segmentize(shapely.linearrings(np.asarray(b)), spacing))
@@ -108,9 +108,9 @@ def fit_outline(
         spacing: Largest distance between the points compared [mm].
     """
     centre = area_centroid(tile.outer, tile.holes)
-    tpts = _points([tile.outer, *tile.holes], spacing) - centre
+    tpts = boundary_points([tile.outer, *tile.holes], spacing) - centre
     sfig = slot.figure
-    spts = _points([sfig.outer.dense(), *(h.dense() for h in sfig.holes)], spacing / 2.0)
+    spts = boundary_points([sfig.outer.dense(), *(h.dense() for h in sfig.holes)], spacing / 2.0)
     spts = spts - np.asarray(sfig.centroid)
     tree = cKDTree(spts)
     scale = math.sqrt(sfig.area)
@@ -195,4 +195,11 @@ def fit_unmatched(
     )
 
 
-__all__ = ["OutlineFit", "TileOutline", "area_centroid", "fit_outline", "fit_unmatched"]
+__all__ = [
+    "OutlineFit",
+    "TileOutline",
+    "area_centroid",
+    "boundary_points",
+    "fit_outline",
+    "fit_unmatched",
+]

@@ -29,7 +29,7 @@ from scipy.spatial import cKDTree
 
 import qshape
 from agents.config import PlacementConfig
-from agents.outline_fit import area_centroid
+from agents.outline_fit import TileOutline, area_centroid, boundary_points, fit_outline
 from agents.perception import PerceivedTile, SlotTarget
 from envs.task_spec import PickPlaceCommand
 from qshape.theory.assign import feasible_pairs
@@ -158,12 +158,17 @@ def refine_rotation(
     tolerance: float = 1e-4,
     *,
     points: np.ndarray | None = None,
+    spacing: float = 0.5,
+    scan: float = math.radians(1.0),
 ) -> float:
     """The rotation within +-``span`` of ``rotation`` whose turned tile outline fits best [rad].
 
     A precision step, not a choice between rotations: qshape's rotation comes from the
-    relevant points alone, which fix the turn of a curved tile only to a degree or two; the
-    mean distance of the dense outlines refines it (kept only when it does fit better).
+    relevant points alone, which fix the turn of a curved tile only to a degree or two (and a
+    crescent's rounded tips to several); the mean distance from the turned tile outline to the
+    slot outline (both sampled at most ``spacing`` apart along every edge, straight ones
+    included) is scanned every ``scan`` over the span and refined at the best; the result is
+    kept only when it does fit better than ``rotation``.
 
     Args:
         tile: Tile figure (y-up units, e.g. world mm).
@@ -174,25 +179,31 @@ def refine_rotation(
         points: The tile's outer boundary to fit instead of ``tile``'s (e.g. its traced
             outline), shape (k, 2), same units; centred on the area centroid of that
             boundary less ``tile``'s holes.
+        spacing: Largest distance between the outline points compared [units of the figures].
+        scan: Step of the scan over the span [rad].
     """
     if span <= 0:
         return rotation
     if points is None:
-        a = np.asarray(tile.outer.dense()) - tile.centroid
+        a = boundary_points([tile.outer.dense()], spacing) - tile.centroid
     else:
-        a = np.asarray(points) - _centroid(points, tile)
-    tree = cKDTree(np.asarray(slot.outer.dense()) - slot.centroid)
+        a = boundary_points([np.asarray(points)], spacing) - _centroid(points, tile)
+    tree = cKDTree(boundary_points([slot.outer.dense()], spacing / 2.0) - slot.centroid)
 
     def cost(r: float) -> float:
         return float(np.mean(tree.query(rotate_xy(a, r))[0]))
 
+    turns = rotation + np.arange(-span, span + 0.5 * scan, scan)
+    coarse = [cost(float(r)) for r in turns]
+    best = float(turns[int(np.argmin(coarse))])
     res = minimize_scalar(
         cost,
-        bounds=(rotation - span, rotation + span),
+        bounds=(best - scan, best + scan),
         method="bounded",
         options={"xatol": tolerance},
     )
-    return float(res.x) if float(res.fun) <= cost(rotation) else rotation
+    found = float(res.x) if float(res.fun) <= min(coarse) else best
+    return found if cost(found) <= cost(rotation) else rotation
 
 
 def _centroid(outer: np.ndarray, figure: qshape.Figure) -> np.ndarray:
@@ -356,19 +367,56 @@ def _command(
     """
     span = math.radians(cfg.refine_span_deg)
     step = math.radians(cfg.refine_tolerance_deg)
+    scan = math.radians(cfg.refine_scan_deg)
+    spacing = cfg.refine_spacing_mm
     if t.outline_mm is not None:
-        rot = wrap(refine_rotation(t.figure, s.figure, a.rotation, span, step, points=t.outline_mm))
+        turn = a.rotation
+        if seen:
+            turn = _checked_turn(t, s, turn, cfg)
+        rot = wrap(
+            refine_rotation(
+                t.figure,
+                s.figure,
+                turn,
+                span,
+                step,
+                points=t.outline_mm,
+                spacing=spacing,
+                scan=scan,
+            )
+        )
         centre = t.centre
         if seen:
             centre = _centroid(t.outline_mm, t.figure) / MM_PER_M
         return fitted_command(t, s, rot, centre, score=a.score, cfg=cfg)
     ref = s.seen.figure if seen and s.seen is not None else s.figure
-    rot = wrap(refine_rotation(t.figure, ref, a.rotation, span, step))
+    rot = wrap(refine_rotation(t.figure, ref, a.rotation, span, step, spacing=spacing, scan=scan))
     centre = t.centre
     if ref is not s.figure:
         offset = (np.asarray(s.figure.centroid) - np.asarray(ref.centroid)) / MM_PER_M
         centre = t.centre + rotate_xy(offset, -rot)
     return fitted_command(t, s, rot, centre, score=a.score, cfg=cfg)
+
+
+def _checked_turn(t: PerceivedTile, s: SlotTarget, turn: float, cfg: PlacementConfig) -> float:
+    """The turn of a pair matched by a seen outline, checked against the traced outline's fit.
+
+    A seen outline is a noise-free picture's simplification of the slot and may turn onto
+    itself more nearly than the slot does (a rounded heptagon seen as seven near-equal arcs):
+    the match's turn can then be one of those near turns. The tile's traced outline is fitted
+    over the whole circle (`agents.outline_fit.fit_outline`); when that fit is tight and
+    unambiguous (the ``fit_*`` thresholds) and lies farther than ``fit_turn_window_deg`` from
+    the match's turn (modulo the slot's symmetry), the fit's turn is taken instead.
+    """
+    if cfg.fit_max_residual <= 0 or t.outline_mm is None:
+        return turn
+    outline = TileOutline(t.outline_mm, tuple(h.dense() for h in t.figure.holes), t.color)
+    fit = fit_outline(outline, s, cfg, cfg.fit_spacing_mm)
+    if fit.residual > cfg.fit_max_residual or fit.runner_up < cfg.fit_margin:
+        return turn
+    period = 2.0 * math.pi / max(s.symmetry, 1) if s.symmetry != 0 else 2.0 * math.pi
+    off = abs(math.remainder(fit.rotation - turn, period))
+    return fit.rotation if off > math.radians(cfg.fit_turn_window_deg) else turn
 
 
 def fitted_command(

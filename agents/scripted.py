@@ -50,11 +50,12 @@ from agents.placement import (
     fitted_command,
     plan_placements,
 )
-from agents.seen_slots import camera_scale, hole_turn_gap
+from agents.seen_slots import camera_scale
 from agents.white_balance import color_gain
 from envs.cell.cameras import CameraModel
 from envs.task_spec import PickPlaceCodec, PickPlaceCommand, TaskSpec
 from qshape import ExtractParams, OutlineParams
+from qshape.design.turn_cues import hole_turn_gap
 from qshape.theory.tolerances import default_tolerances
 from spatial.units import MM_PER_M
 

@@ -112,46 +112,4 @@ def _seen_one(
     return SeenSlot(fig, sd)
 
 
-def hole_turn_gap(figure: Figure, symmetry: int, tolerances: qshape.Tolerances | None) -> float:
-    """How far the holes' relevant points move between turns only the holes tell apart [unit].
-
-    A turn of the outline onto itself (its description's cyclic matches) that is not a
-    symmetry of the whole figure (``symmetry``: 1 none, 0 continuous) is told from the right
-    turn by the holes alone. Per such turn, the RMS distance between the holes' relevant points
-    turned about the figure's centroid and the unturned ones (best cyclic correspondence,
-    all holes together); the least over those turns. A heptagon holding a centred hexagon hole
-    is set apart from its next turn only by the hole's 8.6 deg misfit, under a millimetre on a
-    6 mm hole. inf when there is no such turn (no holes, or the outline decides alone).
-    """
-    if not figure.holes or symmetry == 0:
-        return math.inf
-    try:
-        outer = Figure.from_polygon(
-            figure.outer.points, [], figure.color, curve_mask=figure.outer.curve_mask
-        )
-        d = qshape.describe(outer, tolerances)
-        itself = qshape.match(d, d, tolerances)
-    except qshape.QShapeError:
-        return math.inf
-    if itself is None or itself.continuous:
-        return math.inf
-    period = 2.0 * math.pi / max(symmetry, 1)
-    c = np.asarray(figure.centroid)
-    gap = math.inf
-    for r in itself.rotations:
-        off = math.remainder(r, period)
-        if abs(off) < math.radians(1.0):
-            continue  # a symmetry of the whole figure
-        sq, count = 0.0, 0
-        for h in figure.holes:
-            p = np.asarray(h.points) - c
-            t = p @ np.array([[math.cos(r), math.sin(r)], [-math.sin(r), math.cos(r)]])
-            m = len(p)
-            best = min(float(np.sum((np.roll(t, k, axis=0) - p) ** 2)) for k in range(m))
-            sq += best
-            count += m
-        gap = min(gap, math.sqrt(sq / max(count, 1)))
-    return gap
-
-
-__all__ = ["SeenSlot", "camera_scale", "hole_turn_gap", "seen_outlines"]
+__all__ = ["SeenSlot", "camera_scale", "seen_outlines"]

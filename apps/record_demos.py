@@ -22,16 +22,23 @@ scripted agent: the only demonstrator of ``pick_place_discrete`` (the scripted a
 ``pick_place``). ``--lossless``: store images as raw arrays (Minari JPEG-encodes them by
 default, which changes pixels).
 
-``--lowlevel``: the scripted low-level controller (`agents.lowlevel_expert.LowLevelExpert`) on
-a ``cartesian`` rung (``--task MosaicOneTile-v0``, the default then) with the rung's own
-observations (``state``) and episode limit: the demonstrations low-level learners start from::
+``--lowlevel``: the scripted low-level controller of the rung's action mode on a low-level
+rung (``--task MosaicOneTile-v0``, the default then) with the rung's own observations
+(``state``) and episode limit: the demonstrations low-level learners start from. A
+``cartesian`` rung is played by `agents.lowlevel_expert.LowLevelExpert`, a ``joint`` rung
+(``--task MosaicOneTileJoint-v0``) by `agents.lowlevel_joint_expert.LowLevelJointExpert`::
 
     python -m apps.record_demos --lowlevel --episodes 20 --seed 0 \
         --dataset-id mosaic/one-tile-lowlevel-v0 --replay
+    python -m apps.record_demos --lowlevel --task MosaicOneTileJoint-v0 --episodes 50 \
+        --seed 0 --dataset-id mosaic/one-tile-joint-lowlevel-v0 --replay
 
 ``--expert-config NAME``: the controller's settings (``lowlevel_expert_smooth``: continuous
-descents, what the behaviour clones learn from). ``--action-noise SIGMA``: DART-style
-recording (`agents.dart.NoisyExecution`): the executed tool moves get Gaussian noise of
+descents, what the behaviour clones learn from; on a ``joint`` rung a
+`agents.lowlevel_joint_expert.LowLevelJointExpertConfig`, default ``lowlevel_joint_expert``).
+``--action-noise SIGMA``: DART-style
+recording (`agents.dart.NoisyExecution`): the executed moves (tool or joint moves, not the
+vacuum) get Gaussian noise of
 SIGMA action units (plus ``--noise-relative`` times the action's size), the dataset keeps the
 controller's clean action (such a dataset does not replay exactly; ``--replay`` then reports
 mismatches)::
@@ -81,6 +88,10 @@ STEPS_PER_SLOT = 2
 """Episode step limit per slot."""
 LOWLEVEL_TASK = "MosaicOneTile-v0"
 """Rung of ``--lowlevel`` recordings without ``--task``."""
+NOISY_MOVES = {"joint": range(6), "": range(4)}
+"""Action entries DART noise perturbs, by action mode (the joint or tool moves, not the vacuum)."""
+_LOWLEVEL_ACTIONS = {"cartesian": "cartesian tool moves", "joint": "joint target moves"}
+"""What a low-level dataset's actions are, by action mode (its description)."""
 STAGING_NAME = "recording"
 """Stem of the staging folder a dataset is recorded in (``<root>/.recording.partial-<pid>``)."""
 
@@ -226,14 +237,8 @@ def _noisy(env: gym.Env, sigma: float, relative: float, seed: int) -> gym.Env:
         return env
     from agents.dart import NoisyExecution  # noqa: PLC0415
 
-    return NoisyExecution(env, sigma, seed=seed, relative=relative)
-
-
-def _lowlevel_expert(env: gym.Env, config: str) -> Any:
-    """The scripted low-level controller with the settings ``config`` (default: bundled)."""
-    from agents.lowlevel_expert import LowLevelExpert, load_expert_config  # noqa: PLC0415
-
-    return LowLevelExpert(env, load_expert_config(config or "lowlevel_expert"))
+    joint = env.get_wrapper_attr("task_spec").action_mode == "joint"
+    return NoisyExecution(env, sigma, NOISY_MOVES["joint" if joint else ""], seed, relative)
 
 
 def _play(env: gym.Env, agent: Any, seeds: Sequence[int]) -> int:
@@ -249,6 +254,16 @@ def _play(env: gym.Env, agent: Any, seeds: Sequence[int]) -> int:
             first, done = False, terminated or truncated
         successes += bool(info["is_success"])
     return successes
+
+
+def _demonstrator(expert: str, env: gym.Env) -> str:
+    """The first words of a dataset's description: who acted (and in what action mode)."""
+    if expert == "lowlevel":
+        mode = env.get_wrapper_attr("task_spec").action_mode
+        return f"Scripted low-level controller ({_LOWLEVEL_ACTIONS.get(mode, mode)} and vacuum) "
+    if expert:
+        return "Privileged expert (every tile to its slot) "
+    return "Scripted mosaic cell (perception + qualitative matching + planner cycles) "
 
 
 def _collect(
@@ -268,8 +283,9 @@ def _collect(
     """Record the episodes as ``dataset_id`` under ``MINARI_DATASETS_PATH``.
 
     ``expert``: "" (the scripted agent), ``decision`` (`ExpertAgent`) or ``lowlevel``
-    (`agents.lowlevel_expert.LowLevelExpert` with ``expert_config``, the env's own episode
-    limit). ``action_noise`` (+ ``noise_relative`` x the action's size): DART (`agents.dart`).
+    (`agents.lowlevel_joint_expert.lowlevel_controller`: the controller of the env's action
+    mode with ``expert_config``, the env's own episode limit). ``action_noise`` (+
+    ``noise_relative`` x the action's size): DART (`agents.dart`).
 
     Returns:
         (episodes, steps, seeds, success rate).
@@ -289,7 +305,9 @@ def _collect(
     try:
         agent: Any
         if expert == "lowlevel":
-            agent = _lowlevel_expert(env, expert_config)
+            from agents.lowlevel_joint_expert import lowlevel_controller  # noqa: PLC0415
+
+            agent = lowlevel_controller(env, expert_config)
         elif expert:
             agent = ExpertAgent(env)
         else:
@@ -304,18 +322,11 @@ def _collect(
             author_email="n/a",
             code_permalink="apps/record_demos.py",
             description=(
-                (
-                    "Scripted low-level controller (cartesian tool moves and vacuum) "
-                    if expert == "lowlevel"
-                    else "Privileged expert (every tile to its slot) "
-                    if expert
-                    else "Scripted mosaic cell (perception + qualitative matching + planner "
-                    "cycles) "
-                )
+                _demonstrator(expert, env)
                 + f"on {env_id.removeprefix('envs:')} with {json.dumps(kwargs)}; seeds "
                 f"{seeds[0]}..{seeds[-1]}"
                 + (
-                    f"; executed tool moves with N(0, ({action_noise} + {noise_relative} |a|)^2) "
+                    f"; executed moves with N(0, ({action_noise} + {noise_relative} |a|)^2) "
                     "noise, clean labels."
                     if action_noise or noise_relative
                     else "."
@@ -324,12 +335,7 @@ def _collect(
         )
     finally:
         env.close()
-    return (
-        dataset.total_episodes,
-        dataset.total_steps,
-        seeds,
-        successes / max(episodes, 1),
-    )
+    return dataset.total_episodes, dataset.total_steps, seeds, successes / max(episodes, 1)
 
 
 def load(dataset_id: str = DEFAULT_ID, root: Path = DEFAULT_ROOT) -> Any:
@@ -414,13 +420,15 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--expert", action="store_true", help="privileged expert (discrete modes)")
     ap.add_argument("--lossless", action="store_true", help="raw images, no JPEG")
     ap.add_argument(
-        "--lowlevel", action="store_true", help="scripted low-level controller (cartesian rung)"
+        "--lowlevel",
+        action="store_true",
+        help="scripted low-level controller (cartesian or joint rung)",
     )
     ap.add_argument(
         "--action-noise",
         type=float,
         default=0.0,
-        help="DART: noise (std, action units) on the executed tool moves; labels stay clean",
+        help="DART: noise (std, action units) on the executed moves; labels stay clean",
     )
     ap.add_argument(
         "--expert-config",

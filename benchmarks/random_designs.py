@@ -333,7 +333,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
     def keep(row: dict[str, Any]) -> None:
         save_pictures([row], folder_out, pictures)
-        rows.append({k: v for k, v in row.items() if not k.startswith("_")})
+        rows.append(r := {k: v for k, v in row.items() if not k.startswith("_")})
+        print(
+            f"{r['level']}: design {r['design']}: {r['correct']}/{r['slots']} "
+            f"({r['wall_s']:.1f} s) {r['failures'] or ''}",
+            flush=True,
+        )
+        # Written after every design: a run stopped early keeps what it played.
+        _write(args, cfg, levels, rows, pictures, time.perf_counter() - t0, done=False)
 
     with tempfile.TemporaryDirectory(prefix="random_designs_") as folder:
         jobs: list[Job] = [(lv, i, cfg, folder) for lv in levels for i in range(*lv.designs)]
@@ -347,14 +354,6 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         else:
             for j in jobs:
                 keep(play_design(j))
-                r = rows[-1]
-                print(
-                    f"{r['level']}: design {r['design']}: {r['correct']}/{r['slots']} "
-                    f"({r['wall_s']:.1f} s) {r['failures'] or ''}",
-                    flush=True,
-                )
-                # Written after every design: a run stopped early keeps what it played.
-                _write(args, cfg, levels, rows, pictures, time.perf_counter() - t0, done=False)
     result = _write(args, cfg, levels, rows, pictures, time.perf_counter() - t0, done=True)
     print(table(result["levels"]))
     print(

@@ -217,6 +217,9 @@ class TaskSpec:
         tool_step: ``cartesian``: the tool move of a full action (1.0) in one control period,
             (dx, dy, dz, dyaw) [m, m, m, rad] (tool speed and yaw rate x the period); None in
             the other action modes.
+        joint_step: ``joint``: the joint target move of a full action (1.0) in one control
+            period, shape (6,) [rad] (each axis' speed limit x the period); None in the other
+            action modes.
     """
 
     design: str
@@ -232,6 +235,7 @@ class TaskSpec:
     cameras: dict[str, CameraModel]
     codec: PickPlaceCodec | None
     tool_step: tuple[float, float, float, float] | None = None
+    joint_step: tuple[float, ...] | None = None
 
     def camera(self, name: CameraName) -> CameraModel:
         """The camera model of ``name`` at the observation size.
@@ -305,12 +309,14 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
         else None
     )
     feed: FeedMode = cell.cfg.tiles.feed
-    tool_step = None
+    dt = float(cell.model.opt.timestep)
+    period = max(1, round(config.control_dt / dt)) * dt
+    tool_step = joint_step = None
     if config.action_mode == "cartesian":
-        dt = float(cell.model.opt.timestep)
-        period = max(1, round(config.control_dt / dt)) * dt
         step = config.tool_speed * period
         tool_step = (step, step, step, config.tool_yaw_rate * period)
+    if config.action_mode == "joint":
+        joint_step = tuple(float(v) * period for v in cell.max_joint_speed)
     return TaskSpec(
         design=config.design if config.design_source == "fixed" else design.name,
         slots=world_slots(cell, design),
@@ -325,6 +331,7 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
         cameras=cameras,
         codec=codec,
         tool_step=tool_step,
+        joint_step=joint_step,
     )
 
 

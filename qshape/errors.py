@@ -40,7 +40,10 @@ class ExcludedClassError(GeneratorError):
 
 
 class SmallFeatureWarning(UserWarning):
-    """A design slot holds a curved feature below what the camera recognises (named in it)."""
+    """A design slot holds a feature below what the camera resolves (named in it).
+
+    A small arc, or a turn the picture may not fix.
+    """
 
 
 class LimitError(QShapeError):

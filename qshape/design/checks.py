@@ -8,6 +8,7 @@ import shapely
 from qshape import geometry as geo
 from qshape.design.features import check_small_features
 from qshape.design.fields import DesignFields
+from qshape.design.turn_cues import check_turn_cues
 from qshape.errors import DesignError, DesignLimitError, InvalidFigureError
 from qshape.geometry import FloatArray
 from qshape.limits import default_limits
@@ -20,7 +21,8 @@ def validate(design: DesignFields, source: str = "") -> None:
         DesignError: Duplicate names, degenerate or self-crossing outlines, bad holes,
             slots outside the mesh (by more than ``rules.mesh_margin_mm``), or two slots
             closer than ``rules.min_gap_fraction`` x joint; arcs below the smallest the camera
-            recognises with ``rules.small_features == "refuse"`` (with ``"warn"``: a
+            recognises, or slots whose turn it may not fix (`qshape.design.turn_cues`), with
+            ``rules.small_features == "refuse"`` (with ``"warn"``: a
             `qshape.errors.SmallFeatureWarning` per slot).
         DesignLimitError: A mesh side or tile outline above the ``max_design_mm`` cap.
     """
@@ -54,6 +56,7 @@ def validate(design: DesignFields, source: str = "") -> None:
             )
         outlines.append(dense)
     check_small_features(design.slots, design.rules, pre)
+    check_turn_cues(design.slots, design.rules, pre)
     min_gap = design.rules.min_gap_fraction * design.joint
     centres = np.array([d.mean(axis=0) for d in outlines])
     radii = np.array(

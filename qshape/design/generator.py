@@ -18,8 +18,11 @@ Any class may get holes (circle, square, rectangle, triangle, regular polygon), 
 outline's area centroid or off it, of a symmetry other than the outline's. Every feature stays
 above the smallest-feature parameters: straight edges, arc chords, hole sizes and the material
 between a hole and the outline are at least ``min_feature_mm``, arc sagittas at least
-``min_sagitta_mm``. The result is validated by the design loader's own checks
-(`Design.from_dict`); a draw failing them is drawn again (``max_tries``).
+``min_sagitta_mm``; and the turn is one the camera fixes (the turn cues of
+`qshape.design.turn_cues` at or above the design rules' ``min_turn_shift_mm``,
+``min_asymmetry_mm`` and ``min_hole_turn_mm``: no nearly round or nearly symmetric tile, no
+hole whose turns differ by less than the camera sees). The result is validated by the design
+loader's own checks (`Design.from_dict`); a draw failing them is drawn again (``max_tries``).
 
 The bundled families are special cases in their shapes: ``square_grid`` and ``hexagon`` are
 the ``regular`` family with 4 or 6 sides at one size and no turn (``families: {regular: 1}``,
@@ -63,6 +66,7 @@ from qshape.design.shape_maps import (
 )
 from qshape.design.shapes import tile_path
 from qshape.design.slot import Slot
+from qshape.design.turn_cues import turn_cues, weak_cues
 from qshape.errors import DesignError, GeneratorError, InvalidFigureError
 
 _HOLE_ORDER = {"circle": 0, "square": 4, "rectangle": 2, "triangle": 3, "pentagon": 5, "hexagon": 6}
@@ -234,7 +238,11 @@ class DesignGenerator:
         return scaled_shape(shape, radius / far)
 
     def _valid(self, shape: Shape, radius: float) -> bool:
-        """Every feature above the limits, the outline simple, holes inside with material."""
+        """Every feature above the limits, the outline simple, holes inside with material.
+
+        The turn too must be one the camera fixes: every cue of `qshape.design.turn_cues`
+        at or above the design rules' limits (the loader warns below them).
+        """
         cfg = self.config
         slot = Slot("probe", shape, (0.5, 0.5, 0.5), 0.0, 0.0, 0.0, self.rules)
         try:
@@ -254,7 +262,17 @@ class DesignGenerator:
             whole_turn = abs(f.sagitta_mm) >= f.chord_mm / 2.0 - 1e-9
             if f.curved and not whole_turn and f.chord_mm < cfg.min_arc_chord_mm + KEEP_ABOVE_MM:
                 return False
-        return self._holes_ok(path)
+        if not self._holes_ok(path):
+            return False
+        rules = self.rules
+        cues = turn_cues(
+            slot,
+            tolerance_deg=rules.turn_tolerance_deg,
+            window_deg=rules.turn_window_deg,
+            step_deg=rules.turn_step_deg,
+            spacing_mm=rules.check_step_mm,
+        )
+        return not weak_cues(cues, rules)
 
     def _holes_ok(self, path: TilePath) -> bool:
         step = self.rules.outline_step_mm

@@ -38,9 +38,21 @@ class DesignRules:
             as such). Measured at the default input camera (2.05 px/mm on the tile tops):
             ``docs/random_designs.md``.
         min_arc_chord_mm: Smallest arc chord the camera recognises, in [mm] (as above).
-        small_features: What loading does with a slot holding a smaller arc: ``warn`` (a
-            `SmallFeatureWarning` per slot naming the slot and the arc), ``refuse`` (a
-            `DesignError`) or ``ignore``.
+        turn_tolerance_deg: The placement tolerance on a tile's turn, in [deg]: the turn
+            shift below is measured at this turn.
+        min_turn_shift_mm: Smallest mean move of a slot's boundary under a turn of
+            ``turn_tolerance_deg`` from which the camera fixes the turn within that
+            tolerance, in [mm] (`qshape.design.turn_cues`; nearly round tiles move less).
+        min_asymmetry_mm: Smallest mean move of the boundary under a turn that is not a
+            symmetry of the slot from which the camera tells the two turns apart, in [mm].
+        min_hole_turn_mm: Smallest move of the holes' relevant points between turns of the
+            outline onto itself that only the holes tell apart, in [mm].
+        turn_window_deg: Turns closer than this to a symmetry count as it, in [deg].
+        turn_step_deg: Turns tried for the asymmetry, this far apart, in [deg] (the lowest
+            three are refined between their neighbours).
+        small_features: What loading does with a slot holding a smaller arc, or whose turn
+            the camera may not fix (the cues above): ``warn`` (a `SmallFeatureWarning` per
+            slot naming the slot and the feature), ``refuse`` (a `DesignError`) or ``ignore``.
     """
 
     outline_step_mm: float = 0.25
@@ -53,6 +65,12 @@ class DesignRules:
     symmetry_samples: int = 512
     min_arc_sagitta_mm: float = 5.0
     min_arc_chord_mm: float = 20.0
+    turn_tolerance_deg: float = 2.0
+    min_turn_shift_mm: float = 0.1
+    min_asymmetry_mm: float = 0.3
+    min_hole_turn_mm: float = 1.5
+    turn_window_deg: float = 10.0
+    turn_step_deg: float = 6.0
     small_features: Literal["warn", "refuse", "ignore"] = "warn"
 
     def __post_init__(self) -> None:
@@ -69,6 +87,14 @@ class DesignRules:
             raise DesignError("max_symmetry_order must be >= 1 and symmetry_samples >= 16")
         if not (self.min_arc_sagitta_mm >= 0.0 and self.min_arc_chord_mm >= 0.0):
             raise DesignError("min_arc_sagitta_mm and min_arc_chord_mm must be >= 0")
+        turn = (self.min_turn_shift_mm, self.min_asymmetry_mm, self.min_hole_turn_mm)
+        if not (min(turn) >= 0.0 and self.turn_tolerance_deg > 0.0):
+            raise DesignError(
+                "min_turn_shift_mm, min_asymmetry_mm and min_hole_turn_mm must be >= 0 and "
+                "turn_tolerance_deg > 0"
+            )
+        if not (0.0 <= self.turn_window_deg < 90.0 and 0.0 < self.turn_step_deg <= 30.0):
+            raise DesignError("turn_window_deg must be in [0, 90) and turn_step_deg in (0, 30]")
         if self.small_features not in ("warn", "refuse", "ignore"):
             raise DesignError(
                 f"small_features {self.small_features!r}; allowed: 'warn', 'refuse', 'ignore'"

@@ -11,10 +11,10 @@ from agents.config import PlacementConfig, load_agents_config
 from agents.outline_fit import TileOutline, fit_outline, fit_unmatched
 from agents.perception import balance_colors, perceive_tiles, slot_targets
 from agents.placement import fitted_command, plan_placements
-from agents.seen_slots import hole_turn_gap
 from benchmarks.design_cell import build_design_cell, nearest_tile
 from envs.task_spec import work_areas, world_slots
 from qshape.design import Design
+from qshape.design.turn_cues import hole_turn_gap
 from qshape.theory.tolerances import default_tolerances
 from spatial.angles import yaw_error
 from spatial.units import MM_PER_M

@@ -15,6 +15,7 @@ from agents.scripted import ScriptedAgent
 from envs.errors import EnvError
 from envs.task import Evaluation
 from envs.task_spec import ActionError, PickPlaceCommand, TaskSpec
+from planners.robot import robot_joint_speeds
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -154,3 +155,26 @@ def test_move_home_observes_in_the_action_order() -> None:
         np.testing.assert_allclose(home["slots"], obs["slots"], atol=1e-6)
     finally:
         e.close()
+
+
+def test_joint_step_is_the_joint_move_of_a_full_action() -> None:
+    """``joint_step`` = speed limits x control period; a full action moves a joint that far."""
+    e = gym.make("envs:MosaicAssembly-v0", action_mode="joint", obs_mode="state", max_slots=1)
+    spec: TaskSpec = e.get_wrapper_attr("task_spec")
+    assert spec.joint_step is not None and spec.tool_step is None
+    period = 0.04  # the default control period [s]
+    np.testing.assert_allclose(spec.joint_step, np.asarray(robot_joint_speeds()) * period)
+    obs, _ = e.reset(seed=0)
+    q0 = obs["robot"][:6].copy()
+    full = np.array([1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0], np.float32)
+    for _ in range(3):
+        e.step(full)
+    for _ in range(10):  # the servo settles on the target
+        obs = e.step(np.array([0.0] * 6 + [-1.0], np.float32))[0]
+    e.close()
+    moved = obs["robot"][:6] - q0
+    expected = np.array([3.0, 0.0, 0.0, 0.0, 0.0, -3.0]) * np.asarray(spec.joint_step)
+    np.testing.assert_allclose(moved, expected, atol=2e-3)
+    cartesian = gym.make("envs:MosaicAssembly-v0", action_mode="cartesian", max_slots=1)
+    assert cartesian.get_wrapper_attr("task_spec").joint_step is None
+    cartesian.close()
