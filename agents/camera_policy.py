@@ -186,7 +186,15 @@ def read_policy_file(path: str | Path) -> dict[str, Any]:
 
     try:
         blob = torch.load(str(path), map_location="cpu", weights_only=True)
-    except (OSError, RuntimeError, EOFError, pickle.UnpicklingError) as exc:
+    except (
+        OSError,
+        RuntimeError,
+        EOFError,
+        pickle.UnpicklingError,
+        LookupError,
+        ValueError,
+    ) as exc:
+        # a file that is not a torch archive can fail anywhere in the unpickler (KeyError ...)
         what = "no such file" if isinstance(exc, FileNotFoundError) else "unreadable"
         raise AgentError(f"{path} is not a saved policy ({what}: {type(exc).__name__})") from exc
     if not isinstance(blob, dict):

@@ -13,7 +13,11 @@ its spaces need, an optional wrapper, and a factory that binds it to a built env
   training seed, replayed on every episode without looking (shows whether the encoding leaks).
 - ``identity``: the open-loop sequence ``(i, i, 0)`` (decision level).
 - a ``.pt`` path: a camera policy of `agents.camera_policy` (its file's ``kind`` says so;
-  played on ``rgb`` observations at its image size) or a behaviour clone of `agents.bc`.
+  played on ``rgb`` observations at its image size) or a behaviour clone of `agents.bc`. A
+  camera policy plays the env's action mode (`CAMERA_ACTION_MODES`): in
+  ``pick_place_discrete`` its (tile, slot, turn), in ``pick_place`` that choice placed at the
+  pose its figure fit measures (`agents.camera_continuous`; ``--env action_mode=pick_place``
+  or ``camera.pt@action_mode=pick_place``).
 - a path to an SB3 ``.zip``: loaded with the algorithm of its run's ``train_config.yaml``;
   its observation and action spaces must equal the env's, checked when it is bound. A run
   with ``residual_scale`` plays through `agents.residual.ResidualExpertActions` (residual
@@ -52,6 +56,8 @@ OPENLOOP_TRAIN_SEED = 0
 """Training seed on which ``openloop`` records the expert's sequence."""
 ALGORITHMS = ("PPO", "A2C", "DQN", "SAC", "TD3", "DDPG")
 """Algorithms tried in turn for a checkpoint without a run config."""
+CAMERA_ACTION_MODES = ("pick_place_discrete", "pick_place")
+"""Action modes a camera policy plays: its scorer's choice, or that choice at fitted poses."""
 
 Predict = Callable[[dict[str, Any], bool], np.ndarray]
 """A policy step: (observation, episode start) -> action."""
@@ -282,11 +288,17 @@ def _trained(base: dict[str, Any], model_path: Path) -> Policy:
 
 def _clone(base: dict[str, Any], path: Path) -> Policy:
     """A ``.pt`` policy: a camera policy (by the file's ``kind``) or a behaviour clone."""
-    if not path.is_file():
-        raise PolicyError(f"unknown policy {str(path)!r}: no such behaviour-clone file")
     from agents.camera_policy import KIND, read_policy_file  # noqa: PLC0415
+    from agents.errors import AgentError  # noqa: PLC0415
 
-    if read_policy_file(path).get("kind") == KIND:
+    allowed = "a camera policy (apps.camera_bc) or a behaviour clone (apps.bc) .pt file"
+    if not path.is_file():
+        raise PolicyError(f"unknown policy {str(path)!r}: no such file; a .pt policy is {allowed}")
+    try:
+        kind = read_policy_file(path).get("kind")
+    except AgentError as exc:
+        raise PolicyError(f"policy {str(path)!r}: {exc}; a .pt policy is {allowed}") from exc
+    if kind == KIND:
         return _camera(base, path)
     label = checkpoint_label(path)
     from agents.bc import BCPolicy  # noqa: PLC0415
@@ -307,24 +319,41 @@ def _clone(base: dict[str, Any], path: Path) -> Policy:
 
 
 def _camera(base: dict[str, Any], path: Path) -> Policy:
-    """A camera policy: ``rgb`` observations at the image size it was trained on."""
+    """A camera policy: ``rgb`` observations at its image size, in the env's action mode.
+
+    In ``pick_place`` the scorer's choice is placed at the poses of the figure fit
+    (`agents.camera_continuous.ContinuousCameraPolicy`, bundled fit settings); its label says
+    so when the base env asks for that mode, so its episodes never mix with the discrete ones.
+    """
     from agents.camera_policy import CameraPolicy  # noqa: PLC0415
 
-    policy = CameraPolicy.load(path)
-    env_kwargs = {**base, "obs_mode": "rgb", "image_size": list(policy.image_size)}
+    scorer = CameraPolicy.load(path)
+    env_kwargs = {**base, "obs_mode": "rgb", "image_size": list(scorer.image_size)}
+    label = checkpoint_label(path)
+    label += "@pick_place" if base.get("action_mode") == "pick_place" else ""
 
     def factory(env: gym.Env) -> Predict:
-        _need_discrete(env, checkpoint_label(path))
         spec = [env.get_wrapper_attr("task_spec")]
+        mode = spec[0].action_mode
+        player: Any = scorer
+        if mode == "pick_place":
+            from agents.camera_continuous import ContinuousCameraPolicy, load_fit_config  # noqa: PLC0415
+
+            player = ContinuousCameraPolicy(scorer, load_fit_config())
+        elif mode not in CAMERA_ACTION_MODES:
+            raise PolicyError(
+                f"policy {label!r} is a camera policy: it plays action_mode "
+                f"{' or '.join(repr(m) for m in CAMERA_ACTION_MODES)}, not {mode!r}"
+            )
 
         def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
             if start:
                 spec[0] = env.get_wrapper_attr("task_spec")
-            return policy.predict(obs, spec[0])[0]
+            return np.asarray(player.predict(obs, spec[0])[0])
 
         return predict
 
-    return Policy(checkpoint_label(path), env_kwargs, factory)
+    return Policy(label, env_kwargs, factory)
 
 
 def _user(base: dict[str, Any], spec: str) -> Policy:
@@ -427,6 +456,7 @@ def parse_pairs(pairs: Sequence[str]) -> dict[str, Any]:
 
 
 __all__ = [
+    "CAMERA_ACTION_MODES",
     "SCRIPTED_IMAGE_SIZE",
     "SPACE_KEYS",
     "Policy",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -67,3 +68,46 @@ def test_scaled_camera_keeps_pixel_centres(env) -> None:
     big = scaled_camera(cam, 2 * cam.height, 2 * cam.width)
     point = np.array([0.03, 0.52, 0.205])
     assert np.allclose(big.project(point), (cam.project(point) + 0.5) * 2 - 0.5)
+
+
+def test_apps_evaluate_plays_it_from_the_scorer_file(tmp_path) -> None:
+    """``--env action_mode=pick_place`` makes apps.evaluate play the scorer with the tile fit."""
+    from apps.evaluate import main  # noqa: PLC0415
+
+    args = ["--task", TASK, "--seeds", "1000", "--env", "action_mode=pick_place"]
+    report = main([*args, "--policies", str(CHECKPOINT), "--out", str(tmp_path), "--quiet"])
+    (row,) = report["rows"]
+    assert row["policy"].endswith("camera@pick_place")
+    assert row["env"]["action_mode"] == "pick_place" and row["env"]["image_size"] == [96, 128]
+    assert row["filled"] == 1.0 and row["success_rate"] == 1.0  # seed 1000: all 6 slots
+
+
+def _cli_error(monkeypatch, capsys, args: list[str]) -> str:
+    """``python -m apps.evaluate args`` in this process: its one ``error:`` line (exit 1)."""
+    from apps.cli import DEBUG_ENV, EXIT_ERROR, run_cli  # noqa: PLC0415
+    from apps.evaluate import main  # noqa: PLC0415
+
+    monkeypatch.setattr(sys, "argv", ["apps.evaluate", "--task", TASK, "--seeds", "1000", *args])
+    monkeypatch.delenv(DEBUG_ENV, raising=False)
+    with pytest.raises(SystemExit) as exc:
+        run_cli(main)
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert exc.value.code == EXIT_ERROR and len(lines) == 1 and lines[0].startswith("error:")
+    return lines[0]
+
+
+def test_apps_evaluate_names_a_wrong_action_mode_and_a_bad_path(
+    monkeypatch, capsys, tmp_path
+) -> None:
+    out = ["--out", str(tmp_path)]
+    line = _cli_error(
+        monkeypatch, capsys, ["--env", "action_mode=cartesian", "--policies", str(CHECKPOINT), *out]
+    )
+    assert (
+        "camera policy" in line and "'pick_place_discrete' or 'pick_place', not 'cartesian'" in line
+    )
+    line = _cli_error(monkeypatch, capsys, ["--policies", str(tmp_path / "camera.pt"), *out])
+    assert "no such file; a .pt policy is a camera policy (apps.camera_bc)" in line
+    (tmp_path / "junk.pt").write_bytes(b"not a torch file")
+    line = _cli_error(monkeypatch, capsys, ["--policies", str(tmp_path / "junk.pt"), *out])
+    assert "junk.pt is not a saved policy (unreadable" in line
