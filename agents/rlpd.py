@@ -81,6 +81,8 @@ class DemoMixReplayBuffer(DictReplayBuffer):
             demos = load_demos(dataset_id, observation_space, action_space, Path(root))
         self.demos = demos
         self.demo_fraction = float(demo_fraction)
+        self.last_demo: DictReplayBufferSamples | None = None
+        """The demonstration part of the last batch `sample` returned (None before one)."""
 
     def sample(self, batch_size: int, env: Any = None) -> DictReplayBufferSamples:  # type: ignore[override]
         """``batch_size`` transitions: ``demo_fraction`` of them demonstrations."""
@@ -89,8 +91,10 @@ class DemoMixReplayBuffer(DictReplayBuffer):
             n_demo = batch_size
         online = super().sample(batch_size - n_demo, env) if n_demo < batch_size else None
         if n_demo == 0 and online is not None:
+            self.last_demo = None
             return online
         demo = self._demo_samples(np.random.randint(0, len(self.demos), size=n_demo), env)
+        self.last_demo = demo
         if online is None:
             return demo
         return DictReplayBufferSamples(

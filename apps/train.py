@@ -128,6 +128,13 @@ class TrainConfig:
             [action units], is added to the controller's; 0: off. Played the same way.
         hold_actor_steps: Keep the actor as it starts ``learn`` (e.g. cloned) for this many
             env steps while the critics learn (`agents.rlpd.hold_actor`); 0: off.
+        actor_bc_weight: Weight of a behaviour-cloning term in SAC's actor loss on the
+            demonstration half of each batch (`agents.actor_bc`: squared distance of the
+            actor's deterministic action to the demonstrated one [action units^2], times the
+            critic's mean magnitude; TD3+BC's alpha 2.5 is 0.4); 0: off. Needs
+            ``replay_buffer_class: agents.rlpd:DemoMixReplayBuffer``.
+        actor_bc_decay_steps: Env steps over which ``actor_bc_weight`` falls linearly to 0;
+            0: constant.
     """
 
     algo: str = "PPO"
@@ -157,6 +164,8 @@ class TrainConfig:
     normalize_obs: bool = False
     residual_scale: float = 0.0
     hold_actor_steps: int = 0
+    actor_bc_weight: float = 0.0
+    actor_bc_decay_steps: int = 0
 
     def __post_init__(self) -> None:
         if self.vec_env not in VEC_ENVS:
@@ -176,6 +185,8 @@ class TrainConfig:
             raise TrainError("bc_epochs and normalize_obs need demos (a dataset id)")
         if self.residual_scale < 0:
             raise TrainError(f"residual_scale must be >= 0, got {self.residual_scale}")
+        if min(self.actor_bc_weight, self.actor_bc_decay_steps, self.hold_actor_steps) < 0:
+            raise TrainError("actor_bc_weight, actor_bc_decay_steps, hold_actor_steps must be >= 0")
         if self.reach_shaping < 0:
             raise TrainError(f"reach_shaping must be >= 0 [1/m], got {self.reach_shaping}")
         from envs.env_config import load_env_config  # noqa: PLC0415 - validates env keys
@@ -500,7 +511,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
             **kwargs,
         )
         terms = TermsLog(out / TERMS_FILE)
-        callbacks = [_log_terms(terms), *demo_callbacks(cfg.hold_actor_steps)]
+        callbacks = [_log_terms(terms), *demo_callbacks(cfg)]
         show_bar = cfg.progress_bar and sys.stdout.isatty()
         if not show_bar and cfg.log_every_s > 0:
             callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps, terms))

@@ -89,13 +89,22 @@ def policy_kwargs_for(cfg: Any, venv: Any, root: str | Path) -> dict[str, Any]:
     return kwargs
 
 
-def demo_callbacks(hold_actor_steps: int) -> list[Any]:
-    """Callbacks of learning from demonstrations: `agents.rlpd.hold_actor` if steps > 0."""
-    if not hold_actor_steps:
-        return []
-    from agents.rlpd import hold_actor  # noqa: PLC0415
+def demo_callbacks(cfg: Any) -> list[Any]:
+    """Callbacks of learning from demonstrations of a `TrainConfig`.
 
-    return [hold_actor(hold_actor_steps)]
+    `agents.rlpd.hold_actor` if ``hold_actor_steps`` > 0, `agents.actor_bc.actor_bc` (a
+    behaviour-cloning term in the actor's loss) if ``actor_bc_weight`` > 0.
+    """
+    callbacks: list[Any] = []
+    if cfg.hold_actor_steps:
+        from agents.rlpd import hold_actor  # noqa: PLC0415
+
+        callbacks.append(hold_actor(cfg.hold_actor_steps))
+    if cfg.actor_bc_weight:
+        from agents.actor_bc import actor_bc  # noqa: PLC0415
+
+        callbacks.append(actor_bc(cfg.actor_bc_weight, cfg.actor_bc_decay_steps))
+    return callbacks
 
 
 __all__ = [

@@ -137,3 +137,41 @@ def test_behaviour_cloning_moves_the_actor_towards_the_expert(demo_root):
     assert losses[-1] < losses[0]
     assert action_error() < 0.5 * before
     env.close()
+
+
+def _cloned_model(env, demo_root, weight: float):
+    """A cloned actor, then 250 env steps (400 gradient steps) of RLPD with the BC term."""
+    from agents.actor_bc import actor_bc  # noqa: PLC0415
+
+    torch.manual_seed(0)
+    model = _model(env, demo_root)
+    demos = model.replay_buffer.demos
+    clone_actor(model, demos, epochs=150, batch_size=64)
+    cloned, _ = model.predict(demos.observations, deterministic=True)
+    model.learn(300, callback=[actor_bc(weight)] if weight else None)
+    after, _ = model.predict(demos.observations, deterministic=True)
+    return float(np.abs(after - cloned).mean()), float(np.abs(after - demos.actions).mean())
+
+
+def test_actor_bc_term_keeps_the_actor_at_the_demonstrations(demo_root):
+    env = gym.make(TASK)
+    drift_free, error_free = _cloned_model(env, demo_root, 0.0)
+    drift_bc, error_bc = _cloned_model(env, demo_root, 5.0)
+    # without the term SAC's updates drag the clone off; with it the actor stays near the demos
+    assert drift_bc < 0.5 * drift_free, (drift_bc, drift_free)
+    assert error_bc < error_free, (error_bc, error_free)
+    env.close()
+
+
+def test_actor_bc_term_refuses_a_buffer_without_demonstrations(demo_root):
+    from stable_baselines3 import SAC  # noqa: PLC0415
+
+    from agents.actor_bc import ActorBCError, actor_bc  # noqa: PLC0415
+
+    with pytest.raises(ActorBCError, match="weight and decay must be >= 0"):
+        actor_bc(-1.0)
+    env = gym.make(TASK)
+    model = SAC("MultiInputPolicy", env, seed=0, device="cpu", learning_starts=10)
+    with pytest.raises(ActorBCError, match="DemoMixReplayBuffer"):
+        model.learn(20, callback=actor_bc(1.0))
+    env.close()
