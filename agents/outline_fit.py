@@ -34,7 +34,7 @@ from scipy.optimize import linear_sum_assignment, minimize_scalar
 from scipy.spatial import cKDTree
 
 from agents.config import PlacementConfig
-from agents.perception import SlotTarget
+from agents.perception import PerceivedTile, SlotTarget
 from spatial.angles import rotate_xy, wrap_angle
 
 _COST_REFUSED = 1e9
@@ -54,6 +54,13 @@ class TileOutline:
     outer: np.ndarray
     holes: tuple[np.ndarray, ...]
     color: tuple[float, float, float]
+
+    @classmethod
+    def of(cls, tile: PerceivedTile) -> TileOutline | None:
+        """The perceived tile's traced outline with its figure's holes (None: not traced)."""
+        if tile.outline_mm is None:
+            return None
+        return cls(tile.outline_mm, tuple(h.dense() for h in tile.figure.holes), tile.color)
 
 
 @dataclass(frozen=True)

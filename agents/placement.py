@@ -408,9 +408,9 @@ def _checked_turn(t: PerceivedTile, s: SlotTarget, turn: float, cfg: PlacementCo
     unambiguous (the ``fit_*`` thresholds) and lies farther than ``fit_turn_window_deg`` from
     the match's turn (modulo the slot's symmetry), the fit's turn is taken instead.
     """
-    if cfg.fit_max_residual <= 0 or t.outline_mm is None:
+    outline = TileOutline.of(t)
+    if cfg.fit_max_residual <= 0 or outline is None:
         return turn
-    outline = TileOutline(t.outline_mm, tuple(h.dense() for h in t.figure.holes), t.color)
     fit = fit_outline(outline, s, cfg, cfg.fit_spacing_mm)
     if fit.residual > cfg.fit_max_residual or fit.runner_up < cfg.fit_margin:
         return turn

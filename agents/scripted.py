@@ -259,12 +259,9 @@ class ScriptedAgent:
         slot class unambiguously are placed by that fit.
         """
         absent = {u.tile for u in plan.unplaced if u.reason in UNMATCHED}
-        tiles = [t for t in per.tiles if t.index in absent and t.outline_mm is not None]
-        outlines = [
-            TileOutline(t.outline_mm, tuple(h.dense() for h in t.figure.holes), t.color)
-            for t in tiles
-            if t.outline_mm is not None
-        ]
+        traced = [(t, TileOutline.of(t)) for t in per.tiles if t.index in absent]
+        tiles = [t for t, o in traced if o is not None]
+        outlines = [o for _, o in traced if o is not None]
         open_ = set(plan.open_slots)
         slots = [s for s in self.slots if s.index in open_]
         pcfg = self.cfg.placement

@@ -75,8 +75,9 @@ def _scene(design: Design):  # noqa: ANN202 - (cell truth, slots, perception)
 
 
 def _outline(t) -> TileOutline:  # noqa: ANN001
-    assert t.outline_mm is not None
-    return TileOutline(t.outline_mm, tuple(h.dense() for h in t.figure.holes), t.color)
+    outline = TileOutline.of(t)
+    assert outline is not None
+    return outline
 
 
 def test_bitten_tiles_are_placed_by_their_traced_outlines() -> None:
