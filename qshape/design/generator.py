@@ -66,7 +66,7 @@ from qshape.design.shape_maps import (
 )
 from qshape.design.shapes import tile_path
 from qshape.design.slot import Slot
-from qshape.design.turn_cues import turn_cues, weak_cues
+from qshape.design.turn_cues import rule_cues, weak_cues
 from qshape.errors import DesignError, GeneratorError, InvalidFigureError
 
 _HOLE_ORDER = {"circle": 0, "square": 4, "rectangle": 2, "triangle": 3, "pentagon": 5, "hexagon": 6}
@@ -264,15 +264,7 @@ class DesignGenerator:
                 return False
         if not self._holes_ok(path):
             return False
-        rules = self.rules
-        cues = turn_cues(
-            slot,
-            tolerance_deg=rules.turn_tolerance_deg,
-            window_deg=rules.turn_window_deg,
-            step_deg=rules.turn_step_deg,
-            spacing_mm=rules.check_step_mm,
-        )
-        return not weak_cues(cues, rules)
+        return not weak_cues(rule_cues(slot, self.rules), self.rules)
 
     def _holes_ok(self, path: TilePath) -> bool:
         step = self.rules.outline_step_mm

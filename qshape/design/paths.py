@@ -112,6 +112,21 @@ class Loop:
         t = (np.arange(counts.sum()) - np.repeat(starts, counts)) / np.repeat(counts, counts)
         return self.edge_points(t.astype(np.float64), edge)
 
+    def made_vertices(self, arc_step: float) -> FloatArray:
+        """The vertices of the tile as made, shape (m, 2).
+
+        Straight edges keep their ends; arcs are cut into at least two pieces, each at most
+        ``arc_step`` long. The cell builds its tiles' meshes from these, each vertex moved by
+        its own manufacturing deviation.
+        """
+        counts = np.where(
+            self.bulges == 0.0, 1, np.maximum(2, np.ceil(self.edge_lengths() / arc_step))
+        ).astype(int)
+        edge = np.repeat(np.arange(len(self.vertices)), counts)
+        starts = np.cumsum(counts) - counts
+        t = (np.arange(counts.sum()) - np.repeat(starts, counts)) / np.repeat(counts, counts)
+        return self.edge_points(t.astype(np.float64), edge)
+
     def relevant(self, max_arc_deg: float) -> tuple[FloatArray, BoolArray]:
         """Relevant points (vertices, arc middles, splits of long arcs) and their curve mask.
 

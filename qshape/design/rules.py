@@ -47,6 +47,17 @@ class DesignRules:
             symmetry of the slot from which the camera tells the two turns apart, in [mm].
         min_hole_turn_mm: Smallest move of the holes' relevant points between turns of the
             outline onto itself that only the holes tell apart, in [mm].
+        made_arc_step_mm: A made tile's vertices lie at its corners and at most this far
+            apart along its arcs, in [mm] (`qshape.design.Loop.made_vertices`; the cell builds
+            its tile meshes so).
+        tile_deviation_mm: Standard deviation of a made tile's vertices off its drawing, each
+            on its own, in [mm] (manufacturing; the simulated cell's ``tiles.vertex_jitter``
+            in ``configs/cell.yaml`` is 0.2 mm).
+        min_turn_capability: Smallest turn capability of a slot: ``turn_tolerance_deg`` over
+            three standard deviations of the turn at which a made tile fits its drawing best
+            (`qshape.design.turn_cues.made_turn_sd`), dimensionless. Below 1, the tile's own
+            deviation puts its best fit outside the tolerance more often than 3 in 1,000
+            tiles, whatever the camera.
         turn_window_deg: Turns closer than this to a symmetry count as it, in [deg].
         turn_step_deg: Turns tried for the asymmetry, this far apart, in [deg] (the lowest
             three are refined between their neighbours).
@@ -69,6 +80,9 @@ class DesignRules:
     min_turn_shift_mm: float = 0.1
     min_asymmetry_mm: float = 0.3
     min_hole_turn_mm: float = 1.5
+    made_arc_step_mm: float = 2.0
+    tile_deviation_mm: float = 0.2
+    min_turn_capability: float = 1.0
     turn_window_deg: float = 10.0
     turn_step_deg: float = 6.0
     small_features: Literal["warn", "refuse", "ignore"] = "warn"
@@ -92,6 +106,12 @@ class DesignRules:
             raise DesignError(
                 "min_turn_shift_mm, min_asymmetry_mm and min_hole_turn_mm must be >= 0 and "
                 "turn_tolerance_deg > 0"
+            )
+        made = (self.made_arc_step_mm, self.tile_deviation_mm, self.min_turn_capability)
+        if not (made[0] > 0.0 and made[1] >= 0.0 and made[2] >= 0.0):
+            raise DesignError(
+                "made_arc_step_mm must be > 0, tile_deviation_mm and min_turn_capability >= 0; "
+                f"got {made[0]}, {made[1]} and {made[2]}"
             )
         if not (0.0 <= self.turn_window_deg < 90.0 and 0.0 < self.turn_step_deg <= 30.0):
             raise DesignError("turn_window_deg must be in [0, 90) and turn_step_deg in (0, 30]")

@@ -1,8 +1,9 @@
 """What tells a slot's turns apart, and by how much: the cues a picture must resolve.
 
 A tile is set down right only when its picture fixes its turn to within the placement
-tolerance, modulo the slot's symmetry. Three cues decide that, each a distance on the tile
-in [mm], so each can be compared with what the camera resolves:
+tolerance, modulo the slot's symmetry. Three cues decide whether a picture can, each a
+distance on the tile in [mm], so each can be compared with what the camera resolves; a fourth
+whether the tile itself does:
 
 - **turn shift**: how far the boundary moves, on average, when the tile turns by the placement
   tolerance (the loop that moves most: the outline or one hole, each probed against the whole
@@ -15,6 +16,10 @@ in [mm], so each can be compared with what the camera resolves:
 - **hole turn gap** (`hole_turn_gap`): where the outline alone turns onto itself at a turn
   that is not a symmetry of the whole tile (a heptagon holding a hexagon hole), how far the
   holes' relevant points move between those turns: the holes alone tell them apart.
+- **made turn spread** (`qshape.design.made_turn`): the standard deviation of the turn at which
+  a made tile (its vertices off the drawing by the manufacturing deviation) fits its drawing
+  best. No camera does better than the tile itself; its turn capability, the tolerance over
+  three of these standard deviations, must reach the rules' ``min_turn_capability``.
 
 The generator keeps every cue above its limits and the design loader warns about (or refuses)
 slots below the loader's limits (`check_turn_cues`), naming the slot and the cue.
@@ -32,6 +37,7 @@ from scipy.optimize import minimize_scalar
 from scipy.spatial import cKDTree
 
 from qshape import geometry as geo
+from qshape.design.made_turn import made_turn_sd
 from qshape.design.rules import DesignRules
 from qshape.design.slot import Slot
 from qshape.errors import DesignError, QShapeError, SmallFeatureWarning
@@ -60,11 +66,21 @@ class TurnCues:
         asymmetry_mm: Least such move under a turn that is not a symmetry of the slot (inf
             for a continuous slot).
         hole_gap_mm: `hole_turn_gap` (inf when the outline alone decides the turn).
+        made_turn_sd_deg: Std of a made tile's best-fit turn at the given vertex deviation
+            (`qshape.design.made_turn.made_turn_sd`), in [deg] (0: not measured, no deviation
+            given or a continuous slot, which has no turn to fix).
     """
 
     turn_shift_mm: float
     asymmetry_mm: float
     hole_gap_mm: float
+    made_turn_sd_deg: float = 0.0
+
+    def capability(self, tolerance_deg: float) -> float:
+        """The turn capability: ``tolerance_deg`` over 3 x ``made_turn_sd_deg`` (inf at 0)."""
+        if self.made_turn_sd_deg <= 0.0:
+            return math.inf
+        return tolerance_deg / (3.0 * self.made_turn_sd_deg)
 
 
 def _samples(slot: Slot, spacing_mm: float) -> list[np.ndarray]:
@@ -80,6 +96,8 @@ def turn_cues(
     window_deg: float,
     step_deg: float,
     spacing_mm: float,
+    deviation_mm: float = 0.0,
+    arc_step_mm: float = 1.0,
 ) -> TurnCues:
     """The turn cues of ``slot`` (`TurnCues`).
 
@@ -89,6 +107,9 @@ def turn_cues(
         window_deg: Turns this close to a symmetry of the slot count as it [deg].
         step_deg: Turns tried for the asymmetry, this far apart [deg].
         spacing_mm: Largest distance between the boundary samples turned [mm].
+        deviation_mm: Std of a made tile's vertices off the drawing [mm] (0: the made turn
+            spread is not measured).
+        arc_step_mm: A made tile's vertices along its arcs, at most this far apart [mm].
     """
     loops = _samples(slot, spacing_mm)
     pts = np.concatenate(loops)
@@ -131,7 +152,23 @@ def turn_cues(
         if abs(math.remainder(float(res.x), period)) > window:
             asym = min(asym, float(res.fun))
     gap = hole_turn_gap(slot.figure(), symmetry, None)
-    return TurnCues(shift, asym, gap)
+    made = 0.0
+    if deviation_mm > 0.0:
+        made = deviation_mm * made_turn_sd(slot, arc_step_mm=arc_step_mm, spacing_mm=spacing_mm)
+    return TurnCues(shift, asym, gap, made)
+
+
+def rule_cues(slot: Slot, rules: DesignRules) -> TurnCues:
+    """`turn_cues` of ``slot`` with the settings and tile deviation of ``rules``."""
+    return turn_cues(
+        slot,
+        tolerance_deg=rules.turn_tolerance_deg,
+        window_deg=rules.turn_window_deg,
+        step_deg=rules.turn_step_deg,
+        spacing_mm=rules.check_step_mm,
+        deviation_mm=rules.tile_deviation_mm,
+        arc_step_mm=rules.made_arc_step_mm,
+    )
 
 
 def hole_turn_gap(figure: Figure, symmetry: int, tolerances: Tolerances | None) -> float:
@@ -195,6 +232,15 @@ def weak_cues(cues: TurnCues, rules: DesignRules) -> list[str]:
             f"only its holes tell its outline's turns apart, by {cues.hole_gap_mm:.2f} mm "
             f"(the camera needs >= {rules.min_hole_turn_mm:g} mm)"
         )
+    capability = cues.capability(rules.turn_tolerance_deg)
+    if capability < rules.min_turn_capability:
+        out.append(
+            f"a tile whose vertices deviate {rules.tile_deviation_mm:g} mm (std) from the drawing "
+            f"fits it best {cues.made_turn_sd_deg:.2f} deg (std) off its turn, whatever the "
+            f"camera: turn "
+            f"capability {capability:.2f} (the {rules.turn_tolerance_deg:g} deg tolerance over "
+            f"3 std; >= {rules.min_turn_capability:g} needed)"
+        )
     return out
 
 
@@ -211,21 +257,14 @@ def check_turn_cues(slots: Sequence[Slot], rules: DesignRules, pre: str = "") ->
     known: dict[str, list[str]] = {}
     for slot in slots:
         if slot.shape_key not in known:
-            cues = turn_cues(
-                slot,
-                tolerance_deg=rules.turn_tolerance_deg,
-                window_deg=rules.turn_window_deg,
-                step_deg=rules.turn_step_deg,
-                spacing_mm=rules.check_step_mm,
-            )
-            known[slot.shape_key] = weak_cues(cues, rules)
+            known[slot.shape_key] = weak_cues(rule_cues(slot, rules), rules)
         weak = known[slot.shape_key]
         if not weak:
             continue
-        text = f"{pre}slot {slot.name!r}: the camera may not fix its turn: " + "; ".join(weak)
+        text = f"{pre}slot {slot.name!r}: its turn may not be fixed: " + "; ".join(weak)
         if rules.small_features == "refuse":
             raise DesignError(f"{text} (small_features: refuse; 'warn' loads it anyway)")
         warnings.warn(text, SmallFeatureWarning, stacklevel=4)
 
 
-__all__ = ["TurnCues", "check_turn_cues", "hole_turn_gap", "turn_cues", "weak_cues"]
+__all__ = ["TurnCues", "check_turn_cues", "hole_turn_gap", "rule_cues", "turn_cues", "weak_cues"]

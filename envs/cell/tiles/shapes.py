@@ -17,20 +17,8 @@ from envs.errors import CellError
 from spatial.units import M_PER_MM
 
 
-def _loop_points(loop: Any, arc_step_mm: float) -> np.ndarray:
-    """Vertices of a `qshape.design.Loop`: straight edges kept, arcs sampled [mm]."""
-    n = len(loop.vertices)
-    lengths = loop.edge_lengths()
-    counts = np.where(loop.bulges == 0.0, 1, np.maximum(2, np.ceil(lengths / arc_step_mm)))
-    counts = counts.astype(int)
-    edge = np.repeat(np.arange(n), counts)
-    starts = np.cumsum(counts) - counts
-    t = (np.arange(counts.sum()) - np.repeat(starts, counts)) / np.repeat(counts, counts)
-    return np.asarray(loop.edge_points(t.astype(float), edge))
-
-
 def tile_shapes_from_design(
-    design: Any, arc_step_mm: float = 2.0
+    design: Any, arc_step_mm: float | None = None
 ) -> tuple[tuple[TileShape, ...], tuple[SlotSpec, ...]]:
     """Tile shapes and slots of a `qshape.design.Design` (mm, mesh origin at a corner).
 
@@ -40,12 +28,15 @@ def tile_shapes_from_design(
 
     Args:
         design: A loaded design (``Design.load("paper_mixed")``).
-        arc_step_mm: Largest distance between samples along arcs [mm] (straight edges keep
-            only their vertices).
+        arc_step_mm: Largest distance between vertices along arcs [mm] (straight edges keep
+            only their ends; `qshape.design.Loop.made_vertices`). None: the design rules'
+            ``made_arc_step_mm``, the tile the design's turn checks assume.
 
     Returns:
         ``(shapes, slots)``, in the design's slot order.
     """
+    if arc_step_mm is None:
+        arc_step_mm = float(design.rules.made_arc_step_mm)
     if not arc_step_mm > 0:
         raise CellError(f"arc_step_mm must be positive, got {arc_step_mm}")
     mm = M_PER_MM
@@ -57,8 +48,8 @@ def tile_shapes_from_design(
         if shape is None:
             path = slot.local_path
             shape = by_class[slot.class_key] = TileShape(
-                _loop_points(path.outer, arc_step_mm) * mm,
-                holes=tuple(_loop_points(h, arc_step_mm) * mm for h in path.holes),
+                path.outer.made_vertices(arc_step_mm) * mm,
+                holes=tuple(h.made_vertices(arc_step_mm) * mm for h in path.holes),
                 color=tuple(slot.color),
                 name=slot.class_key,
                 symmetry=int(slot.symmetry),
