@@ -64,11 +64,6 @@ class PerceptionConfig:
             slot's symmetry is not used: a tile matched to it might be set down turned.
             Twice qshape's ``uncertainty_residual``: a tile within that residual of one turn
             may be as near the other (dimensionless).
-        min_hole_turn_mm: A slot whose outline turns onto itself at turns that only its
-            holes tell apart, the holes' relevant points moving less than this between them
-            (`qshape.design.turn_cues.hole_turn_gap`), is never matched: the camera cannot tell
-            its turns apart, and a tile set down one outline turn off is misplaced, [mm]
-            (design millimetres; 0: every slot matched).
 
     How outlines become figures (corner threshold, circles, chamfered corners) is qshape's
     business: ``configs/vision.yaml`` section ``extract``.
@@ -85,14 +80,11 @@ class PerceptionConfig:
     retry_outline: dict[str, float] = field(default_factory=dict)
     seen_slots: bool = False
     seen_turn_residual: float = 0.1
-    min_hole_turn_mm: float = 1.5
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""
         if not (self.mm_per_m > 0 and self.pad_clearance >= 0 and self.polylabel_tolerance > 0):
             raise AgentError("perception: mm_per_m, polylabel_tolerance > 0, pad_clearance >= 0")
-        if not self.min_hole_turn_mm >= 0.0:
-            raise AgentError("perception.min_hole_turn_mm must be >= 0")
         if not self.seen_turn_residual >= 0.0:
             raise AgentError(
                 f"perception: seen_turn_residual must be >= 0, got {self.seen_turn_residual!r}"

@@ -55,6 +55,7 @@ from agents.white_balance import color_gain
 from envs.cell.cameras import CameraModel
 from envs.task_spec import PickPlaceCodec, PickPlaceCommand, TaskSpec
 from qshape import ExtractParams, OutlineParams
+from qshape.design.rules import DesignRules
 from qshape.design.turn_cues import hole_turn_gap
 from qshape.theory.tolerances import default_tolerances
 from spatial.units import MM_PER_M
@@ -129,7 +130,10 @@ class ScriptedAgent:
             OutlineParams(**{**dataclasses.asdict(outline), **retry}) if retry else None
         )
         self.palette = np.array([s.color for s in self.slots])
-        gap = self.cfg.perception.min_hole_turn_mm
+        # A slot whose outline's turns only its holes tell apart, by less than the design
+        # rules' limit (the loader warns about it), is never matched: its tile would be set
+        # down one outline turn off as often as not.
+        gap = DesignRules.load().min_hole_turn_mm
         self.turn_unresolved: frozenset[int] = frozenset(
             s.index for s in self.slots if hole_turn_gap(s.figure, s.symmetry, None) < gap
         )

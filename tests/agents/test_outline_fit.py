@@ -14,6 +14,7 @@ from agents.placement import fitted_command, plan_placements
 from benchmarks.design_cell import build_design_cell, nearest_tile
 from envs.task_spec import work_areas, world_slots
 from qshape.design import Design
+from qshape.design.rules import DesignRules
 from qshape.design.turn_cues import hole_turn_gap
 from qshape.theory.tolerances import default_tolerances
 from spatial.angles import yaw_error
@@ -111,7 +112,7 @@ def test_a_tile_whose_turn_the_outline_cannot_tell_is_left() -> None:
     _, names, near, slots, per = _scene(design)
     cfg = load_agents_config()
     gaps = [hole_turn_gap(s.figure, s.symmetry, None) for s in slots]
-    assert gaps[0] < cfg.perception.min_hole_turn_mm < gaps[2]
+    assert gaps[0] < DesignRules().min_hole_turn_mm < gaps[2]
     assert math.isinf(gaps[1]) and math.isinf(gaps[3])  # no holes
     hept = next(t for t in per.tiles if names[near[t.index]] == design.slots[0].class_key)
     f = fit_outline(_outline(hept), slots[0], cfg.placement, 1.0)
