@@ -20,8 +20,9 @@ above the smallest-feature parameters: straight edges, arc chords, hole sizes an
 between a hole and the outline are at least ``min_feature_mm``, arc sagittas at least
 ``min_sagitta_mm``; and the turn is one the camera fixes (the turn cues of
 `qshape.design.turn_cues` at or above the design rules' ``min_turn_shift_mm``,
-``min_asymmetry_mm`` and ``min_hole_turn_mm``: no nearly round or nearly symmetric tile, no
-hole whose turns differ by less than the camera sees). The result is validated by the design
+``min_asymmetry_mm``, ``min_hole_turn_mm`` and ``min_turn_capability``: no nearly round or
+nearly symmetric tile, no hole whose turns differ by less than the camera sees, no tile whose
+own manufacturing deviation leaves its turn loose). The result is validated by the design
 loader's own checks (`Design.from_dict`); a draw failing them is drawn again (``max_tries``).
 
 The bundled families are special cases in their shapes: ``square_grid`` and ``hexagon`` are

@@ -55,7 +55,7 @@ class DesignRules:
             in ``configs/cell.yaml`` is 0.2 mm).
         min_turn_capability: Smallest turn capability of a slot: ``turn_tolerance_deg`` over
             three standard deviations of the turn at which a made tile fits its drawing best
-            (`qshape.design.turn_cues.made_turn_sd`), dimensionless. Below 1, the tile's own
+            (`qshape.design.made_turn.made_turn_sd`), dimensionless. Below 1, the tile's own
             deviation puts its best fit outside the tolerance more often than 3 in 1,000
             tiles, whatever the camera.
         turn_window_deg: Turns closer than this to a symmetry count as it, in [deg].
