@@ -18,7 +18,7 @@ Most tiles come out at 0.2-0.45 deg for a 0.2 mm deviation. A thin crescent whos
 share nearly one centre comes out at about 0.7 deg: turning it about that centre moves its
 arcs along themselves, only its tips and short edge fix the turn, and the centroid (far from
 the arcs' centre) moves with every vertex. A Monte-Carlo of made copies gives the same spread
-(``tests/qshape/test_made_turn.py``).
+(``tests/qshape/test_turn_cues.py``).
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ import math
 
 import numpy as np
 
+from qshape import geometry as geo
 from qshape.design.slot import Slot
 from qshape.geometry import FloatArray
 
@@ -39,19 +40,21 @@ def _area_moment(loops: list[FloatArray]) -> tuple[FloatArray, FloatArray]:
     out_a, out_m = [], []
     for v in loops:
         w = np.roll(v, -1, axis=-2)
-        cross = v[..., 0] * w[..., 1] - v[..., 1] * w[..., 0]
+        cross = geo.cross2(v, w)
         out_a.append(0.5 * cross.sum(axis=-1))
         out_m.append(((v + w) * cross[..., None]).sum(axis=-2) / 6.0)
     return np.asarray(out_a), np.asarray(out_m)
 
 
-def _centroid_gradients(loops: list[FloatArray]) -> list[FloatArray]:
+def _centroid_gradients(
+    loops: list[FloatArray], areas: FloatArray, moments: FloatArray
+) -> list[FloatArray]:
     """Per loop, d(area centroid)/d(vertex), shape (n, 2 [vertex axis], 2 [centroid axis]).
 
-    The region is the first loop less the others (every loop counter-clockwise).
+    The region is the first loop less the others (every loop counter-clockwise); ``areas`` and
+    ``moments`` are the loops' own (`_area_moment`).
     """
     sign = np.array([1.0] + [-1.0] * (len(loops) - 1))
-    areas, moments = _area_moment(loops)
     area = float(np.dot(sign, areas))
     moment = sign @ moments
     grads = []
@@ -113,7 +116,7 @@ def made_turn_sd(slot: Slot, *, arc_step_mm: float, spacing_mm: float) -> float:
     np.add.at(grad[0], which, (1.0 - t)[:, None] * coef)
     np.add.at(grad[0], (which + 1) % n, t[:, None] * coef)
     pull = coef.sum(axis=0)
-    for k, g in enumerate(_centroid_gradients(loops)):
+    for k, g in enumerate(_centroid_gradients(loops, areas, moments)):
         grad[k] -= g @ pull
     return math.degrees(math.sqrt(sum(float(np.sum(g * g)) for g in grad)))
 

@@ -96,8 +96,8 @@ def turn_cues(
     window_deg: float,
     step_deg: float,
     spacing_mm: float,
-    deviation_mm: float = 0.0,
-    arc_step_mm: float = 1.0,
+    deviation_mm: float,
+    arc_step_mm: float,
 ) -> TurnCues:
     """The turn cues of ``slot`` (`TurnCues`).
 
