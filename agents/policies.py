@@ -4,7 +4,7 @@
 its spaces need, an optional wrapper, and a factory that binds it to a built env and returns a
 ``predict(obs, episode_start) -> action`` function. Names:
 
-- ``scripted``: the scripted cell from camera images (`agents.scripted.ScriptedAgent`),
+- ``scripted``: the scripted cell from camera images (`agents.scripted.agent.ScriptedAgent`),
   ``pick_place`` actions at ``scripted_image_size``.
 - ``random``: uniform samples of the env's action space (seeded per episode); where the env
   offers action masks (``action_masks()``, the discrete modes) only among the allowed actions
@@ -12,15 +12,16 @@ its spaces need, an optional wrapper, and a factory that binds it to a built env
 - ``openloop``: the best open-loop sequence: the privileged expert's actions recorded on one
   training seed, replayed on every episode without looking (shows whether the encoding leaks).
 - ``identity``: the open-loop sequence ``(i, i, 0)`` (decision level).
-- a ``.pt`` path: a camera policy of `agents.camera_policy` (its file's ``kind`` says so;
-  played on ``rgb`` observations at its image size) or a behaviour clone of `agents.bc`. A
-  camera policy plays the env's action mode (`CAMERA_ACTION_MODES`): in
+- a ``.pt`` path: a camera policy of `agents.camera.crop_scorer` (its file's ``kind`` says so;
+  played on ``rgb`` observations at its image size) or a behaviour clone of
+  `agents.learning.decision_bc`. A camera policy plays the env's action mode
+  (`CAMERA_ACTION_MODES`): in
   ``pick_place_discrete`` its (tile, slot, turn), in ``pick_place`` that choice placed at the
-  pose its figure fit measures (`agents.camera_continuous`; ``--env action_mode=pick_place``
+  pose its figure fit measures (`agents.camera.continuous`; ``--env action_mode=pick_place``
   or ``camera.pt@action_mode=pick_place``).
 - a path to an SB3 ``.zip``: loaded with the algorithm of its run's ``train_config.yaml``;
   its observation and action spaces must equal the env's, checked when it is bound. A run
-  with ``residual_scale`` plays through `agents.residual.ResidualExpertActions` (residual
+  with ``residual_scale`` plays through `agents.learning.residual.ResidualExpertActions` (residual
   RL: the scripted controller's action plus the model's).
 - ``module:attr``: a user's object. If ``attr`` has ``predict``, ``predict(obs)`` is called
   (SB3 style: a ``(action, state)`` tuple or an action); a class is instantiated with the env
@@ -45,7 +46,7 @@ import numpy as np
 import yaml
 from gymnasium import spaces
 
-from agents.wrappers import FlatDiscreteActions
+from agents.learning.wrappers import FlatDiscreteActions
 from configs import ConfigError
 
 SCRIPTED_IMAGE_SIZE = (492, 656)
@@ -128,7 +129,7 @@ def _scripted(base: dict[str, Any], image_size: tuple[int, int], calibrate: bool
     }
 
     def factory(env: gym.Env) -> Predict:
-        from agents.scripted import ScriptedAgent  # noqa: PLC0415 - vision stack
+        from agents.scripted.agent import ScriptedAgent  # noqa: PLC0415 - vision stack
 
         agent = ScriptedAgent.from_env(env, calibrate=calibrate)
 
@@ -239,7 +240,7 @@ def load_model(model_path: Path, algo: str = "") -> Any:
     Raises:
         PolicyError: No algorithm loads it.
     """
-    from agents.algorithms import algorithm_class  # noqa: PLC0415
+    from agents.learning.algorithms import algorithm_class  # noqa: PLC0415
 
     names = [algo] if algo else list(ALGORITHMS)
     reason = ""
@@ -276,7 +277,7 @@ def _trained(base: dict[str, Any], model_path: Path) -> Policy:
     if run.get("flatten_actions"):
         wrap = FlatDiscreteActions
     if run.get("residual_scale"):  # residual RL: the scripted controller is part of the policy
-        from agents.residual import ResidualExpertActions  # noqa: PLC0415
+        from agents.learning.residual import ResidualExpertActions  # noqa: PLC0415
 
         scale = float(run["residual_scale"])
 
@@ -288,10 +289,10 @@ def _trained(base: dict[str, Any], model_path: Path) -> Policy:
 
 def _clone(base: dict[str, Any], path: Path) -> Policy:
     """A ``.pt`` policy: a camera policy (by the file's ``kind``) or a behaviour clone."""
-    from agents.camera_policy import KIND, read_policy_file  # noqa: PLC0415
+    from agents.camera.crop_scorer import KIND, read_policy_file  # noqa: PLC0415
     from agents.errors import AgentError  # noqa: PLC0415
 
-    allowed = "a camera policy (apps.camera_bc) or a behaviour clone (apps.bc) .pt file"
+    allowed = "a camera policy (apps.bc.camera) or a behaviour clone (apps.bc.decision) .pt file"
     if not path.is_file():
         raise PolicyError(f"unknown policy {str(path)!r}: no such file; a .pt policy is {allowed}")
     try:
@@ -301,7 +302,7 @@ def _clone(base: dict[str, Any], path: Path) -> Policy:
     if kind == KIND:
         return _camera(base, path)
     label = checkpoint_label(path)
-    from agents.bc import BCPolicy  # noqa: PLC0415
+    from agents.learning.decision_bc import BCPolicy  # noqa: PLC0415
 
     overrides = BCPolicy(path).env_overrides  # an objects clone plays on objects rows
 
@@ -322,10 +323,10 @@ def _camera(base: dict[str, Any], path: Path) -> Policy:
     """A camera policy: ``rgb`` observations at its image size, in the env's action mode.
 
     In ``pick_place`` the scorer's choice is placed at the poses of the figure fit
-    (`agents.camera_continuous.ContinuousCameraPolicy`, bundled fit settings); its label says
+    (`agents.camera.continuous.ContinuousCameraPolicy`, bundled fit settings); its label says
     so when the base env asks for that mode, so its episodes never mix with the discrete ones.
     """
-    from agents.camera_policy import CameraPolicy  # noqa: PLC0415
+    from agents.camera.crop_scorer import CameraPolicy  # noqa: PLC0415
 
     scorer = CameraPolicy.load(path)
     env_kwargs = {**base, "obs_mode": "rgb", "image_size": list(scorer.image_size)}
@@ -337,7 +338,7 @@ def _camera(base: dict[str, Any], path: Path) -> Policy:
         mode = spec[0].action_mode
         player: Any = scorer
         if mode == "pick_place":
-            from agents.camera_continuous import ContinuousCameraPolicy, load_fit_config  # noqa: PLC0415
+            from agents.camera.continuous import ContinuousCameraPolicy, load_fit_config  # noqa: PLC0415
 
             player = ContinuousCameraPolicy(scorer, load_fit_config())
         elif mode not in CAMERA_ACTION_MODES:

@@ -4,7 +4,7 @@ The main job (``apps.main``), the paper's experiment (``apps.paper_experiment``)
 bundled-design generator (``apps.make_designs``).
 """
 
-import os
+from envs.cell.rendering import use_headless_rendering
 
 # Headless rendering by default, as `import envs` does: set before anything imports mujoco.
-os.environ.setdefault("MUJOCO_GL", "egl")
+use_headless_rendering()

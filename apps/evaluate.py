@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import re
 import time
 from collections.abc import Sequence
@@ -59,9 +58,10 @@ from apps.evaluate_results import (
 )
 from configs import ConfigError, load_yaml
 from configs.files import append_line, complete_lines
+from envs import ENV_ID
+from envs.cell.rendering import use_headless_rendering
 from envs.task import Evaluation
 
-ENV_ID = "envs:MosaicAssembly-v0"
 """Gymnasium id of the environment."""
 STEPS_PER_SLOT = 2
 """Default episode step limit per slot of the design (without a task)."""
@@ -286,7 +286,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         nargs="+",
         required=True,
         help="scripted, random, openloop, identity, SB3 model .zip paths, behaviour clone .pt "
-        "paths (apps.bc) or module:callable, each optionally with @KEY=VALUE[,KEY=VALUE] env "
+        "paths (apps.bc.decision) or module:callable, each optionally with "
+        "@KEY=VALUE[,KEY=VALUE] env "
         "overrides (scripted@execution=dynamic)",
     )
     ap.add_argument(
@@ -311,7 +312,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--out", type=Path, default=Path("out"))
     ap.add_argument("--quiet", action="store_true")
     args = ap.parse_args(argv)
-    os.environ.setdefault("MUJOCO_GL", "egl")
+    use_headless_rendering()
     import torch  # noqa: PLC0415
 
     torch.set_num_threads(1)

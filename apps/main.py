@@ -2,12 +2,12 @@
 
 Run ``python -m apps.main`` (options: ``--help``). The paper's loop ("The prototype", steps
 1-7) through the Gymnasium env's public API: `MosaicAssembly-v1` in ``pick_place`` action mode
-with full-resolution camera images, driven by `agents.scripted.ScriptedAgent` (describe the
+with full-resolution camera images, driven by `agents.scripted.agent.ScriptedAgent` (describe the
 design's slots; take an input-camera picture; extract and describe the tiles; assign them to
 open slots, optimal and colour-aware by default; map centroid and rotation to the world through
 the calibrated camera; one ``pick_place`` step per tile; a new picture; until the design is
 finished or nothing placeable remains). The cameras are calibrated from rendered checkerboard
-images first (``agents.calibration``).
+images first (``agents.scripted.calibration``).
 
 Decisions use only the observation images, the calibrated camera and the env's task
 description (``task_spec``: slots in the world, areas, the action codec); the env's evaluation
@@ -36,11 +36,11 @@ import cv2
 import gymnasium as gym
 import numpy as np
 
-from agents.calibration import calibrate_env_camera
-from agents.config import AgentsConfig, RunConfig, load_agents_config
-from agents.perception import PerceivedTile, Perception
-from agents.placement import PlacementPlan
-from agents.scripted import ScriptedAgent
+from agents.scripted.agent import ScriptedAgent
+from agents.scripted.calibration import calibrate_env_camera
+from agents.scripted.config import AgentsConfig, RunConfig, load_agents_config
+from agents.scripted.perception import PerceivedTile, Perception
+from agents.scripted.placement import PlacementPlan
 from apps.cli import CommandParser, run_cli
 from apps.main_pictures import CellVideo, draw_perception, draw_slots
 from apps.main_report import RecognitionRow, RunReport, recognition, report_text

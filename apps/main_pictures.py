@@ -17,10 +17,10 @@ import cv2
 import gymnasium as gym
 import numpy as np
 
-from agents.config import RunConfig
-from agents.perception import Perception, SlotTarget
-from agents.placement import PlacementPlan
-from agents.scripted import ScriptedAgent
+from agents.scripted.agent import ScriptedAgent
+from agents.scripted.config import RunConfig
+from agents.scripted.perception import Perception, SlotTarget
+from agents.scripted.placement import PlacementPlan
 from configs.files import atomic_path
 from envs.cell.cameras import CameraModel
 from spatial.units import MM_PER_M

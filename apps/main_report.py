@@ -10,9 +10,9 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from agents.config import PlacementConfig
-from agents.placement import Unplaced
-from agents.scripted import ScriptedAgent
+from agents.scripted.agent import ScriptedAgent
+from agents.scripted.config import PlacementConfig
+from agents.scripted.placement import Unplaced
 from envs.task import GroundTruth
 from envs.task_spec import FeedMode
 from spatial.angles import yaw_error

@@ -25,8 +25,8 @@ default, which changes pixels).
 ``--lowlevel``: the scripted low-level controller of the rung's action mode on a low-level
 rung (``--task MosaicOneTile-v0``, the default then) with the rung's own observations
 (``state``) and episode limit: the demonstrations low-level learners start from. A
-``cartesian`` rung is played by `agents.lowlevel_expert.LowLevelExpert`, a ``joint`` rung
-(``--task MosaicOneTileJoint-v0``) by `agents.lowlevel_joint_expert.LowLevelJointExpert`::
+``cartesian`` rung is played by `agents.experts.cartesian.LowLevelExpert`, a ``joint`` rung
+(``--task MosaicOneTileJoint-v0``) by `agents.experts.joint.LowLevelJointExpert`::
 
     python -m apps.record_demos --lowlevel --episodes 20 --seed 0 \
         --dataset-id mosaic/one-tile-lowlevel-v0 --replay
@@ -35,9 +35,9 @@ rung (``--task MosaicOneTile-v0``, the default then) with the rung's own observa
 
 ``--expert-config NAME``: the controller's settings (``lowlevel_expert_smooth``: continuous
 descents, what the behaviour clones learn from; on a ``joint`` rung a
-`agents.lowlevel_joint_expert.LowLevelJointExpertConfig`, default ``lowlevel_joint_expert``).
+`agents.experts.joint.LowLevelJointExpertConfig`, default ``lowlevel_joint_expert``).
 ``--action-noise SIGMA``: DART-style
-recording (`agents.dart.NoisyExecution`): the executed moves (tool or joint moves, not the
+recording (`agents.learning.dart.NoisyExecution`): the executed moves (tool or joint moves, not the
 vacuum) get Gaussian noise of
 SIGMA action units (plus ``--noise-relative`` times the action's size), the dataset keeps the
 controller's clean action (such a dataset does not replay exactly; ``--replay`` then reports
@@ -62,12 +62,13 @@ import gymnasium as gym
 import numpy as np
 import yaml
 
-from agents.demos import DEFAULT_ROOT, DemoDatasetError, datasets_root, load_dataset
 from agents.errors import AgentError
+from agents.learning.demos import DEFAULT_ROOT, DemoDatasetError, datasets_root, load_dataset
 from apps.cli import CommandParser, run_cli
 from configs.files import clear_partials, partial_path, replace_dir, write_json
+from envs import ENV_ID
+from envs.cell.rendering import use_headless_rendering
 
-ENV_ID = "envs:MosaicAssembly-v0"
 """Gymnasium id of the environment."""
 DEFAULT_ID = "mosaic/scripted-kinematic-v0"
 """Default dataset id."""
@@ -232,10 +233,10 @@ def record(
 
 
 def _noisy(env: gym.Env, sigma: float, relative: float, seed: int) -> gym.Env:
-    """``env`` with DART noise on its executed actions (`agents.dart`), or as it is."""
+    """``env`` with DART noise on its executed actions (`agents.learning.dart`), or as it is."""
     if not (sigma or relative):
         return env
-    from agents.dart import NoisyExecution  # noqa: PLC0415
+    from agents.learning.dart import NoisyExecution  # noqa: PLC0415
 
     joint = env.get_wrapper_attr("task_spec").action_mode == "joint"
     return NoisyExecution(env, sigma, NOISY_MOVES["joint" if joint else ""], seed, relative)
@@ -283,16 +284,16 @@ def _collect(
     """Record the episodes as ``dataset_id`` under ``MINARI_DATASETS_PATH``.
 
     ``expert``: "" (the scripted agent), ``decision`` (`ExpertAgent`) or ``lowlevel``
-    (`agents.lowlevel_joint_expert.lowlevel_controller`: the controller of the env's action
+    (`agents.experts.joint.lowlevel_controller`: the controller of the env's action
     mode with ``expert_config``, the env's own episode limit). ``action_noise`` (+
-    ``noise_relative`` x the action's size): DART (`agents.dart`).
+    ``noise_relative`` x the action's size): DART (`agents.learning.dart`).
 
     Returns:
         (episodes, steps, seeds, success rate).
     """
     import minari  # noqa: PLC0415 - optional heavy import
 
-    from agents.scripted import ScriptedAgent  # noqa: PLC0415
+    from agents.scripted.agent import ScriptedAgent  # noqa: PLC0415
 
     base = gym.make(env_id, **kwargs)
     slots = len(base.unwrapped.task.slot_class)  # type: ignore[attr-defined]
@@ -305,7 +306,7 @@ def _collect(
     try:
         agent: Any
         if expert == "lowlevel":
-            from agents.lowlevel_joint_expert import lowlevel_controller  # noqa: PLC0415
+            from agents.experts.joint import lowlevel_controller  # noqa: PLC0415
 
             agent = lowlevel_controller(env, expert_config)
         elif expert:
@@ -442,7 +443,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         help="DART: extra noise std per unit of the action's size (large at full speed)",
     )
     args = ap.parse_args(argv)
-    os.environ.setdefault("MUJOCO_GL", "egl")
+    use_headless_rendering()
     rec = record(
         args.episodes,
         seed=args.seed,

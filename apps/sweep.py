@@ -49,9 +49,10 @@ import numpy as np
 from agents.errors import AgentError
 from agents.protocol import METRICS
 from apps.cli import CommandParser, run_cli
-from apps.sweep_summary import summarize
+from apps.results.sweep_summary import summarize
 from configs import ConfigError, from_dict, load_yaml
 from configs.files import append_line, write_json
+from envs.cell.rendering import RENDER_ENV_VAR, rendering_backend, use_headless_rendering
 
 RESULT_FILE = "result.json"
 """Per-run result file."""
@@ -92,8 +93,9 @@ class SweepEntry:
         env: Extra env overrides of training and evaluation.
         bc_episodes: Behaviour cloning: record this many privileged-expert episodes on the
             task (reset seeds from seed x 10000, never the held-out ones) and clone them
-            (`agents.bc`); 0: not a clone entry.
-        bc_config: The clone's `agents.bc.BCConfig` (a name in ``configs/`` or a path):
+            (`agents.learning.decision_bc`); 0: not a clone entry.
+        bc_config: The clone's `agents.learning.decision_bc.BCConfig` (a name in ``configs/`` or a
+            path):
             ``bc`` the flat MLP, ``bc_pair`` the pair scorer.
     """
 
@@ -209,7 +211,7 @@ def plan(cfg: SweepConfig, out: Path, niceness: int = WORKER_NICENESS) -> list[R
 
 def execute(spec: RunSpec) -> dict[str, Any]:
     """Train (train entries) and evaluate one run; writes and returns its result dict."""
-    os.environ.setdefault("MUJOCO_GL", "egl")
+    use_headless_rendering()
     try:  # Ray starts workers at niceness 15; the run sets the niceness it was planned with
         os.setpriority(os.PRIO_PROCESS, 0, spec.niceness)
     except PermissionError:
@@ -291,7 +293,7 @@ def _train_bc(
     spec: RunSpec, folder: Path, base: dict[str, Any]
 ) -> tuple[dict[str, Any], str, dict[str, Any]]:
     """Record expert demos and clone them: (env kwargs, clone path, figures)."""
-    from agents.bc import load_bc_config, train_bc  # noqa: PLC0415
+    from agents.learning.decision_bc import load_bc_config, train_bc  # noqa: PLC0415
     from apps.record_demos import load, record  # noqa: PLC0415
 
     e = spec.entry
@@ -398,7 +400,7 @@ def _run_on_ray(  # noqa: PLR0913, PLR0917
     results: list[dict[str, Any]] = []
     failed: list[dict[str, Any]] = []
     env_vars = {"PYTHONPATH": os.environ.get("PYTHONPATH", str(Path.cwd()))}
-    env_vars["MUJOCO_GL"] = os.environ.get("MUJOCO_GL", "egl")
+    env_vars[RENDER_ENV_VAR] = rendering_backend()
     if address:
         ray.init(address=address, runtime_env={"env_vars": env_vars})
     else:

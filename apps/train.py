@@ -9,8 +9,8 @@ The run folder gets ``model.zip`` (final model), ``checkpoints/`` (`CheckpointCa
 ``tb/`` (TensorBoard), ``monitor/`` (per-env episode CSVs with ``is_success``),
 ``train_config.yaml`` (the resolved configuration; `apps.evaluate` rebuilds the env from it),
 ``reward_terms.csv`` (per training episode: the step it ended at and the sum of each named reward
-term of the env, `agents.wrappers.EpisodeRewardTerms`) and ``summary.json`` (timesteps, wall
-time, steps/s, first/last episode returns, last episodes' mean of each reward term).
+term of the env, `agents.learning.wrappers.EpisodeRewardTerms`) and ``summary.json`` (timesteps,
+wall time, steps/s, first/last episode returns, last episodes' mean of each reward term).
 
 The policy is picked from the observation space when ``policy: auto``: ``MultiInputPolicy``
 for Dict observations, ``CnnPolicy`` for image Boxes, ``MlpPolicy`` otherwise.
@@ -21,7 +21,6 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import json
-import os
 import sys
 import time
 from collections.abc import Mapping
@@ -34,9 +33,9 @@ import numpy as np
 import yaml
 from gymnasium import spaces
 
-from agents.algorithms import algorithm_class
-from agents.demos import DEFAULT_ROOT as DEMO_ROOT
-from agents.wrappers import (
+from agents.learning.algorithms import algorithm_class
+from agents.learning.demos import DEFAULT_ROOT as DEMO_ROOT
+from agents.learning.wrappers import (
     EPISODE_TERMS_KEY,
     EpisodeProgress,
     EpisodeRewardTerms,
@@ -45,7 +44,7 @@ from agents.wrappers import (
     cpu_seconds,
 )
 from apps.cli import CommandParser, run_cli
-from apps.monitor_log import monitor_episodes, succeeded
+from apps.results.monitor_log import monitor_episodes, succeeded
 from apps.train_extras import (
     clone_before_learning,
     demo_callbacks,
@@ -54,8 +53,9 @@ from apps.train_extras import (
 )
 from configs import ConfigError, from_dict, load_yaml
 from configs.files import atomic_path, write_json, write_text
+from envs import ENV_ID
+from envs.cell.rendering import use_headless_rendering
 
-ENV_ID = "envs:MosaicAssembly-v0"
 """Gymnasium id of the environment (the ``envs:`` prefix imports and registers it)."""
 VEC_ENVS = ("dummy", "subproc")
 """Allowed ``vec_env`` values."""
@@ -71,7 +71,8 @@ SUMMARY_FILE = "summary.json"
 """The run's summary, written last: its presence marks a finished run (`finished_run`)."""
 MONITORED = ("is_success", "filled", "cpu_s")
 """``info`` entries of an episode's last step written to the Monitor CSVs (success, fraction of
-slots filled, CPU seconds of the training process then: `agents.wrappers.EpisodeProgress`)."""
+slots filled, CPU seconds of the training process then:
+`agents.learning.wrappers.EpisodeProgress`)."""
 MODEL_FILE = "model.zip"
 """The run's final model."""
 
@@ -88,7 +89,7 @@ class TrainConfig:
         algo: stable-baselines3 algorithm class name (``PPO``, ``A2C``, ``DQN``, ``SAC``,
             ``TD3``, ``DDPG``; ``sb3_contrib`` ones too when installed).
         policy: One of `POLICIES` (``auto`` picks from the observation space), or a policy
-            class as ``module:Class`` (``agents.pair_policy:PairScorerPolicy``).
+            class as ``module:Class`` (``agents.pair.maskable_policy:PairScorerPolicy``).
         total_timesteps: Env steps over all envs.
         n_envs: Parallel envs.
         vec_env: ``dummy`` (one process) or ``subproc`` (one process per env).
@@ -103,36 +104,37 @@ class TrainConfig:
         torch_threads: ``torch.set_num_threads`` (shared CPUs: keep 1).
         device: Torch device (``cpu``, ``cuda``, ``auto``).
         verbose: SB3 verbosity (0, 1, 2).
-        flatten_actions: Wrap the envs in `agents.wrappers.FlatDiscreteActions` (MultiDiscrete
+        flatten_actions: Wrap the envs in `agents.learning.wrappers.FlatDiscreteActions`
+            (MultiDiscrete
             -> one Discrete over all combinations).
         max_wall_s: Stop ``learn`` after this wall time [s] even before ``total_timesteps``;
             0: no limit (the final model is saved either way).
         max_cpu_s: The same limit in CPU time of the training process [s] (children included).
         demos: Minari dataset id of demonstrations (``out/minari``) for ``bc_epochs``.
         bc_epochs: Epochs of behaviour cloning of the actor on ``demos`` before learning
-            (SAC; `agents.rlpd.clone_actor`); 0: none. ``algo_kwargs`` keys ending in
+            (SAC; `agents.learning.rlpd.clone_actor`); 0: none. ``algo_kwargs`` keys ending in
             ``_class`` may name a class as ``module:attr`` (`apps.train_extras`), e.g.
-            ``replay_buffer_class: agents.rlpd:DemoMixReplayBuffer``.
+            ``replay_buffer_class: agents.learning.rlpd:DemoMixReplayBuffer``.
         task: A rung of the task ladder (``MosaicDecision6-v0``, `envs.tasks`): the envs are
             made from its id (its preset and episode limit; env i trains on its training
             design i mod count) and ``env`` overrides on top; "" uses `MosaicAssembly-v0`.
         log_every_s: When output is not a terminal, print a progress line (steps, steps/s,
             recent return and success) to the log this often [s] instead of a progress bar.
-        reach_shaping: Weight of `agents.wrappers.ReachShaping` on the training envs [1/m]
+        reach_shaping: Weight of `agents.learning.wrappers.ReachShaping` on the training envs [1/m]
             (reward per metre the tool approaches the nearest tile; state observations);
             0: off. Evaluation always uses the env's own reward.
         normalize_obs: Standardise the observations with fixed statistics of ``demos``
-            (`agents.obs_norm.NormalizedStateExtractor`, saved with the model).
+            (`agents.learning.obs_norm.NormalizedStateExtractor`, saved with the model).
         residual_scale: Residual RL over the scripted low-level controller
-            (`agents.residual.ResidualExpertActions`): the agent's action, times this
+            (`agents.learning.residual.ResidualExpertActions`): the agent's action, times this
             [action units], is added to the controller's; 0: off. Played the same way.
         hold_actor_steps: Keep the actor as it starts ``learn`` (e.g. cloned) for this many
-            env steps while the critics learn (`agents.rlpd.hold_actor`); 0: off.
+            env steps while the critics learn (`agents.learning.rlpd.hold_actor`); 0: off.
         actor_bc_weight: Weight of a behaviour-cloning term in SAC's actor loss on the
-            demonstration half of each batch (`agents.actor_bc`: squared distance of the
+            demonstration half of each batch (`agents.learning.actor_bc`: squared distance of the
             actor's deterministic action to the demonstrated one [action units^2], times the
             critic's mean magnitude; TD3+BC's alpha 2.5 is 0.4); 0: off. Needs
-            ``replay_buffer_class: agents.rlpd:DemoMixReplayBuffer``.
+            ``replay_buffer_class: agents.learning.rlpd:DemoMixReplayBuffer``.
         actor_bc_decay_steps: Env steps over which ``actor_bc_weight`` falls linearly to 0;
             0: constant.
     """
@@ -268,7 +270,7 @@ def make_env_fn(cfg: TrainConfig, index: int = 0) -> Any:
         if cfg.reach_shaping:
             env = ReachShaping(env, cfg.reach_shaping)
         if cfg.residual_scale:
-            from agents.residual import ResidualExpertActions  # noqa: PLC0415
+            from agents.learning.residual import ResidualExpertActions  # noqa: PLC0415
 
             env = ResidualExpertActions(env, cfg.residual_scale)
         return FlatDiscreteActions(env) if cfg.flatten_actions else env
@@ -576,7 +578,7 @@ def main(argv: list[str] | None = None) -> TrainResult:
     ap.add_argument("--out", type=Path, default=None, help="run folder (default runs/<config>)")
     ap.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = ap.parse_args(argv)
-    os.environ.setdefault("MUJOCO_GL", "egl")
+    use_headless_rendering()
     overrides: dict[str, Any] = {
         "total_timesteps": args.timesteps,
         "seed": args.seed,

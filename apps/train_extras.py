@@ -2,11 +2,11 @@
 
 - `resolve_named`: a ``module:attr`` string in a training YAML (``policy``, an
   ``algo_kwargs`` key ending in ``_class``) becomes the object it names, so a config can use a
-  policy or replay buffer class of the project (`agents.rlpd`) without code.
+  policy or replay buffer class of the project (`agents.learning.rlpd`) without code.
 - `clone_before_learning`: behaviour cloning of a SAC actor on a demonstration dataset before
   (or instead of) reinforcement learning.
 - `demo_normalized_kwargs`: ``policy_kwargs`` whose features extractor standardises the
-  observations with the demonstrations' statistics (`agents.obs_norm`).
+  observations with the demonstrations' statistics (`agents.learning.obs_norm`).
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ def resolve_algo_kwargs(kwargs: dict[str, Any]) -> dict[str, Any]:
 def clone_before_learning(
     model: Any, dataset_id: str, root: str | Path, epochs: int, seed: int
 ) -> int:
-    """Fit ``model``'s actor to the dataset's demonstrations (`agents.rlpd.clone_actor`).
+    """Fit ``model``'s actor to the dataset's demonstrations (`agents.learning.rlpd.clone_actor`).
 
     Returns:
         The gradient steps taken.
@@ -56,8 +56,8 @@ def clone_before_learning(
         ConfigError: The model has no SAC-style actor.
         DemoSpaceError: The dataset's spaces differ from the model's.
     """
-    from agents.demos import load_demos  # noqa: PLC0415
-    from agents.rlpd import clone_actor  # noqa: PLC0415
+    from agents.learning.demos import load_demos  # noqa: PLC0415
+    from agents.learning.rlpd import clone_actor  # noqa: PLC0415
 
     if not hasattr(model, "actor"):
         raise ConfigError(f"bc_epochs needs an actor-critic with an actor (SAC), got {model}")
@@ -69,13 +69,13 @@ def clone_before_learning(
 def demo_normalized_kwargs(
     policy_kwargs: dict[str, Any], dataset_id: str, root: str | Path, venv: Any
 ) -> dict[str, Any]:
-    """``policy_kwargs`` with `agents.obs_norm.NormalizedStateExtractor` fitted to the demos.
+    """``policy_kwargs`` with the demos' `agents.learning.obs_norm.NormalizedStateExtractor`.
 
     Raises:
         DemoSpaceError: The dataset's spaces differ from the envs'.
     """
-    from agents.demos import load_demos  # noqa: PLC0415
-    from agents.obs_norm import normalized_policy_kwargs  # noqa: PLC0415
+    from agents.learning.demos import load_demos  # noqa: PLC0415
+    from agents.learning.obs_norm import normalized_policy_kwargs  # noqa: PLC0415
 
     demos = load_demos(dataset_id, venv.observation_space, venv.action_space, Path(root))
     return normalized_policy_kwargs(policy_kwargs, demos.observations, venv.observation_space)
@@ -92,16 +92,17 @@ def policy_kwargs_for(cfg: Any, venv: Any, root: str | Path) -> dict[str, Any]:
 def demo_callbacks(cfg: Any) -> list[Any]:
     """Callbacks of learning from demonstrations of a `TrainConfig`.
 
-    `agents.rlpd.hold_actor` if ``hold_actor_steps`` > 0, `agents.actor_bc.actor_bc` (a
-    behaviour-cloning term in the actor's loss) if ``actor_bc_weight`` > 0.
+    `agents.learning.rlpd.hold_actor` if ``hold_actor_steps`` > 0,
+    `agents.learning.actor_bc.actor_bc` (a behaviour-cloning term in the actor's loss) if
+    ``actor_bc_weight`` > 0.
     """
     callbacks: list[Any] = []
     if cfg.hold_actor_steps:
-        from agents.rlpd import hold_actor  # noqa: PLC0415
+        from agents.learning.rlpd import hold_actor  # noqa: PLC0415
 
         callbacks.append(hold_actor(cfg.hold_actor_steps))
     if cfg.actor_bc_weight:
-        from agents.actor_bc import actor_bc  # noqa: PLC0415
+        from agents.learning.actor_bc import actor_bc  # noqa: PLC0415
 
         callbacks.append(actor_bc(cfg.actor_bc_weight, cfg.actor_bc_decay_steps))
     return callbacks

@@ -4,7 +4,7 @@
 (``benchmarks.table``); ``python -m benchmarks.<name>`` runs one.
 """
 
-import os
+from envs.cell.rendering import use_headless_rendering
 
 # Headless rendering by default, as `import envs` does: set before anything imports mujoco.
-os.environ.setdefault("MUJOCO_GL", "egl")
+use_headless_rendering()

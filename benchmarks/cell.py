@@ -8,7 +8,6 @@ core; both cameras at 128 x 128 >= 100 frames/s in total; 656 x 492 reported.
 from __future__ import annotations
 
 import json
-import os
 import platform
 import time
 from pathlib import Path
@@ -20,6 +19,7 @@ from apps.cli import CommandParser, run_cli
 from configs.files import write_text
 from envs.cell.cell import CAMERAS, Cell
 from envs.cell.config import CellConfig, InputBeltConfig, load_cell_config
+from envs.cell.rendering import rendering_backend
 from envs.cell.tiles.shapes import basic_shapes
 
 N_TILES = 40
@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> dict:
     results = {
         "mujoco": mujoco.__version__,
         "machine": platform.processor() or platform.machine(),
-        "gl": os.environ.get("MUJOCO_GL", ""),
+        "gl": rendering_backend(),
         "physics_resting_arm_still": _physics(cfg, args.seconds, moving_arm=False),
         "physics_resting_arm_moving": _physics(cfg, args.seconds, moving_arm=True),
         "physics_resting_no_sleep": _physics(no_sleep, args.seconds / 4, moving_arm=False),

@@ -58,6 +58,7 @@ from benchmarks.env_measure import (
     measure_task_resets,
 )
 from configs.files import write_text
+from envs.cell.rendering import rendering_backend, use_headless_rendering
 
 OUT = Path(__file__).resolve().parents[1] / "out" / "bench_env.json"
 OUT_RESETS = OUT.with_name("bench_env_resets.json")
@@ -133,7 +134,7 @@ def _machine() -> dict[str, Any]:
         "python": platform.python_version(),
         "note": "shared 2-core machine (other engineers' jobs may run); one core per case",
         "load_average": os.getloadavg(),
-        "gl": os.environ.get("MUJOCO_GL", ""),
+        "gl": rendering_backend(),
     }
 
 
@@ -212,7 +213,7 @@ def main() -> None:
     )
     args = parser.parse_args()
     seconds = 1.0 if args.quick else args.seconds
-    os.environ.setdefault("MUJOCO_GL", "egl")
+    use_headless_rendering()
     for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
         os.environ[var] = "1"
     if args.resets:

@@ -3,7 +3,7 @@
 Run ``python -m benchmarks.mural [--mural sunset] [--meshes r0c0,r1c2] [--seed 0] [--workers 2]``.
 Each mesh of the mural (``configs/murals/``) is one episode of `MosaicAssembly-v0` with
 ``feed="batch"`` (a static belt, tiles indexed in batch by batch), driven by
-`agents.scripted.ScriptedAgent` from full-resolution camera images with dynamic execution, as
+`agents.scripted.agent.ScriptedAgent` from full-resolution camera images with dynamic execution, as
 ``benchmarks.scripted`` plays its scenarios (its `play` runs each episode). Before running, every
 mesh is checked to fit the cell's mesh sheet. Prints one row per mesh and the mural's totals
 (correct, misplaced, tiles per simulated minute, wall time) and writes ``out/bench_mural.json``.
@@ -22,6 +22,7 @@ from apps.cli import CommandParser, run_cli
 from benchmarks.scripted import Episode, Scenario, ScriptedBenchConfig, play, summarise, table
 from configs import load_config
 from configs.files import write_text
+from envs.cell.rendering import use_headless_rendering
 from qshape.design.mural import Mural, MuralError
 from spatial.units import MM_PER_M
 
@@ -99,7 +100,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     cfg = load_config(ScriptedBenchConfig, args.config)
     jobs = [(s, args.seed, cfg.image_size, cfg.steps_per_slot) for s in chosen]
     t0 = time.perf_counter()
-    os.environ.setdefault("MUJOCO_GL", "egl")
+    use_headless_rendering()
     with mp.get_context("spawn").Pool(max(1, args.workers)) as pool:
         episodes = pool.map(play, jobs, chunksize=1)
     wall = time.perf_counter() - t0

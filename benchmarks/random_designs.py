@@ -4,7 +4,7 @@ Run ``python -m benchmarks.random_designs`` (``--designs 0-9`` for a quick look,
 to pick levels). Each level of ``configs/bench_random_designs.yaml`` draws its designs from
 `qshape.design.generator.DesignGenerator` (design ``i`` from ``numpy.random.default_rng(i)``),
 writes each as a design file and plays one episode of `MosaicAssembly-v0` per design (reset
-seed ``i``), driven by `agents.scripted.ScriptedAgent` from full-resolution camera images
+seed ``i``), driven by `agents.scripted.agent.ScriptedAgent` from full-resolution camera images
 (`benchmarks.scripted.run_episode`). Levels differ in execution (kinematic for speed, a
 dynamic sample) and camera (ideal, realistic).
 
@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import json
 import multiprocessing as mp
-import os
 import tempfile
 import time
 from collections import Counter
@@ -34,6 +33,8 @@ from apps.cli import CommandParser, run_cli
 from benchmarks.scripted import _seed_range, run_episode
 from configs import ConfigError, load_config
 from configs.files import write_text
+from envs import ENV_ID
+from envs.cell.rendering import use_headless_rendering
 
 OUT = Path("out/bench_random_designs.json")
 """Default output file (pictures go to the folder of the same stem)."""
@@ -154,7 +155,7 @@ def play_design(job: Job) -> dict[str, Any]:
     """Draw design ``index``, play one episode of it, classify the open slots (worker)."""
     import gymnasium as gym  # noqa: PLC0415 - workers import the stack themselves
 
-    from agents.scripted import ScriptedAgent  # noqa: PLC0415
+    from agents.scripted.agent import ScriptedAgent  # noqa: PLC0415
     from qshape.design.generator import DesignGenerator  # noqa: PLC0415
     from qshape.design.generator_config import GeneratorConfig  # noqa: PLC0415
 
@@ -164,7 +165,7 @@ def play_design(job: Job) -> dict[str, Any]:
     path = Path(folder) / f"random_{index}.yaml"
     design.save(path)
     env = gym.make(
-        "envs:MosaicAssembly-v0",
+        ENV_ID,
         max_episode_steps=None,
         **{
             "action_mode": "pick_place",
@@ -326,7 +327,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     if not levels:
         raise SystemExit(f"error: no level matches {args.level}")
     t0 = time.perf_counter()
-    os.environ.setdefault("MUJOCO_GL", "egl")
+    use_headless_rendering()
     pictures: dict[str, str] = {}
     folder_out = args.out.with_suffix("")
     rows: list[dict[str, Any]] = []

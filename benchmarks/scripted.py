@@ -2,7 +2,7 @@
 
 Run ``python -m benchmarks.scripted`` (``--seeds 0-4`` for a quick look, ``--workers 2``).
 Every scenario of ``configs/bench_scripted.yaml`` (a design, a belt speed, a feed) plays one
-episode of `MosaicAssembly-v0` per seed, driven by `agents.scripted.ScriptedAgent` from
+episode of `MosaicAssembly-v0` per seed, driven by `agents.scripted.agent.ScriptedAgent` from
 full-resolution camera images (calibrated cameras, dynamic execution). Prints one row per
 scenario with its targets and writes ``out/bench_scripted.json``: per scenario the totals, the
 worst episode's tiles/min, wall seconds per tile and every episode.
@@ -23,6 +23,8 @@ from typing import Any
 from apps.cli import CommandParser, UsageError, run_cli
 from configs import ConfigError, load_config
 from configs.files import write_text
+from envs import ENV_ID
+from envs.cell.rendering import use_headless_rendering
 
 OUT = Path("out/bench_scripted.json")
 """Default output file."""
@@ -98,13 +100,13 @@ def play(job: tuple[Scenario, int, tuple[int, int], int]) -> Episode:
     """Play one episode of a scenario with the scripted agent (in a worker process)."""
     import gymnasium as gym  # noqa: PLC0415 - workers import the stack themselves
 
-    from agents.scripted import ScriptedAgent  # noqa: PLC0415
+    from agents.scripted.agent import ScriptedAgent  # noqa: PLC0415
 
     scenario, seed, image_size, steps_per_slot = job
     if scenario.name not in _ENVS:
         close_envs()  # jobs come scenario by scenario: free the last one
         env = gym.make(
-            "envs:MosaicAssembly-v0",
+            ENV_ID,
             max_episode_steps=None,
             **{"action_mode": "pick_place", "image_size": image_size, **scenario.env},
         )
@@ -264,7 +266,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         for seed in range(*cfg.seeds)
     ]
     t0 = time.perf_counter()
-    os.environ.setdefault("MUJOCO_GL", "egl")
+    use_headless_rendering()
     with mp.get_context("spawn").Pool(max(1, args.workers), maxtasksperchild=None) as pool:
         episodes = pool.map(play, jobs, chunksize=1)
     rows = [summarise(s, [e for e in episodes if e.scenario == s.name]) for s in scenarios]

@@ -31,9 +31,9 @@ import envs  # noqa: F401 - registers the env
 from apps.cli import CommandParser, run_cli
 from configs import load_config
 from configs.files import write_text
+from envs import ENV_ID
 from envs.cell.accounting import TILE_STATES
 
-ENV_ID = "envs:MosaicAssembly-v0"
 MB = 1024.0 * 1024.0
 
 

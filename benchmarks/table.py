@@ -5,10 +5,10 @@ JSON under ``--out-dir``) and the learned-vs-scripted evaluation, or
 ``python -m benchmarks --from-json`` to collect the JSON files they already wrote. Prints one
 table and writes ``out/bench.json`` (date, machine, every figure) and ``out/bench.md``.
 
-Sources (``BENCHES``): ``benchmarks.shapes`` (describe/assign 10,000 tiles),
-``benchmarks.vision`` (recognition on synthetic images), ``benchmarks.cell`` (physics and
-rendering speed), ``benchmarks.planner`` (cycle time, tiles/min, tracking),
-``benchmarks.env`` (env steps/s, memory), ``benchmarks.perception`` (camera-to-world
+Sources (``BENCHES``): ``benchmarks.theory.shapes`` (describe/assign 10,000 tiles),
+``benchmarks.recognition.synthetic`` (recognition on synthetic images), ``benchmarks.cell``
+(physics and rendering speed), ``benchmarks.motion.planner`` (cycle time, tiles/min, tracking),
+``benchmarks.env`` (env steps/s, memory), ``benchmarks.recognition.cell_renders`` (camera-to-world
 perception), ``benchmarks.scripted`` (the scripted cell over 20 seeds per scenario),
 ``apps.evaluate`` (learned vs scripted vs random), and the main job's
 ``out/report.json`` when present (collected only). A missing source gives rows marked
@@ -45,6 +45,7 @@ from benchmarks.figures import (
     vision_figures,
 )
 from configs.files import write_text
+from envs.cell.rendering import child_environment
 
 OUT_DIR = Path("out")
 """Default folder of the benchmark JSON files."""
@@ -81,8 +82,16 @@ class Bench:
 
 
 BENCHES = (
-    Bench("qshape", "benchmarks.shapes", "bench_qshape.json", ("--repeat", "1"), qshape_figures),
-    Bench("vision", "benchmarks.vision", "bench_vision.json", ("--images", "4"), vision_figures),
+    Bench(
+        "qshape", "benchmarks.theory.shapes", "bench_qshape.json", ("--repeat", "1"), qshape_figures
+    ),
+    Bench(
+        "vision",
+        "benchmarks.recognition.synthetic",
+        "bench_vision.json",
+        ("--images", "4"),
+        vision_figures,
+    ),
     Bench(
         "cell",
         "benchmarks.cell",
@@ -90,11 +99,13 @@ BENCHES = (
         ("--seconds", "5", "--frames", "100"),
         cell_figures,
     ),
-    Bench("planner", "benchmarks.planner", "planner_bench.json", ("--quick",), planner_figures),
+    Bench(
+        "planner", "benchmarks.motion.planner", "planner_bench.json", ("--quick",), planner_figures
+    ),
     Bench("env", "benchmarks.env", "bench_env.json", ("--quick",), env_figures, False),
     Bench(
         "perception",
-        "benchmarks.perception",
+        "benchmarks.recognition.cell_renders",
         "bench_perception.json",
         ("--seeds", "5"),
         perception_figures,
@@ -151,7 +162,7 @@ def run_benches(
 ) -> dict[str, dict[str, Any]]:
     """Run each benchmark script; return per-bench status (rc, wall s, error tail)."""
     status: dict[str, dict[str, Any]] = {}
-    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    env = child_environment()
     for b in benches:
         cmd = command(b, out_dir, quick, model)
         if cmd is None:

@@ -18,7 +18,9 @@ from sphinx.highlighting import lexers
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-os.environ.setdefault("MUJOCO_GL", "egl")
+from envs.cell.rendering import use_headless_rendering  # noqa: E402 - the root on sys.path first
+
+use_headless_rendering()
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 from bench_page import write_bench_table  # noqa: E402 - docs/ on sys.path first

@@ -11,11 +11,11 @@ Rendering is headless by default (``MUJOCO_GL=egl`` unless already set).
 
 from __future__ import annotations
 
-import os
-
 import gymnasium as gym
 
-os.environ.setdefault("MUJOCO_GL", "egl")
+from envs.cell.rendering import use_headless_rendering
+
+use_headless_rendering()
 
 ENV_ID = "MosaicAssembly-v0"
 """Registered id of the environment."""

@@ -91,7 +91,7 @@ class EnvConfig:
         planner: Planner configuration: bundled name or path (``configs/planner.yaml``).
         action_mode: One of `ACTION_MODES`.
         obs_mode: One of `OBS_MODES` (``state`` = robot + privileged state, no images;
-            ``objects`` = robot + entity rows without class ids, `envs.objects`).
+            ``objects`` = robot + entity rows without class ids, `envs.observations.objects`).
         objects_points: ``objects``: outline points per row, in `OBJECTS_POINTS_RANGE`.
         objects_rows: ``objects``: rows of ``tiles`` and of ``slots`` (padded with zero rows,
             ``valid`` 0); None: the episode's tile and slot counts.
@@ -99,7 +99,7 @@ class EnvConfig:
             (0: off).
         objects_source: ``objects``: where the rows come from, one of `OBJECTS_SOURCES`
             (``privileged``: the simulator's poses and the built outlines; ``perception``: the
-            tile rows from the input camera's picture, `envs.objects_perception`).
+            tile rows from the input camera's picture, `envs.observations.objects_perception`).
         objects_image_size: ``objects`` with ``perception``: (height, width) [px] the input
             camera is rendered at for the extraction (independent of ``image_size``).
         objects_gate_mm: ``objects`` with ``perception``: a perceived figure fills tile ``i``'s

@@ -21,7 +21,7 @@ from envs.cell.pick_place import PickPlaceExecutor
 from envs.env_config import EnvConfig, EnvConfigError
 from envs.episode_setup import build_cell, design_cell_parts
 from envs.indexing import IndexMaps
-from envs.observations import Observer
+from envs.observations.spaces import Observer
 from envs.task import MosaicTask
 from envs.task_spec import Area, PickPlaceCodec, TaskSpec, build_task_spec, work_areas
 from planners.config import PlannerConfig

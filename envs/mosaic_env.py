@@ -90,15 +90,16 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     bound plus dwells). Outcomes of clean picks agree with dynamic mode (tested).
 
     ## Observation Space
-    Dict (see `envs.observations`): ``input_camera``, ``output_camera`` RGB uint8
+    Dict (see `envs.observations.spaces`): ``input_camera``, ``output_camera`` RGB uint8
     (H, W, 3) at ``image_size`` (``rgb``/``rgb+state``; depth (H, W, 1) float32 [m] with
     ``depth``), ``robot`` float32 (19,) (joint pos/vel, tool pose, vacuum, held), and with
     ``state``/``rgb+state`` the privileged ``tiles`` (n * 7,) and ``slots`` (k * 6,), rows in the
     same index order as the discrete actions. With ``objects`` (no images), ``robot`` and
     ``tiles`` (rows, D), ``slots`` (rows, D) float32: one entity row per tile / slot in the
     same index order, without class ids (outline points [mm], colour, area, hole area, position,
-    yaw, pickable / filled flag, valid), columns named by `envs.objects.OBJECT_FIELDS`. Camera
-    intrinsics/extrinsics at the observation size: ``task_spec.cameras``.
+    yaw, pickable / filled flag, valid), columns named by
+    `envs.observations.objects.OBJECT_FIELDS`. Camera intrinsics/extrinsics at the observation
+    size: ``task_spec.cameras``.
 
     ## Task description
     ``env.get_wrapper_attr("task_spec")`` is a frozen `envs.task_spec.TaskSpec`: the design's

@@ -3,7 +3,7 @@
 Work in qshape grows with the number of relevant points (matching compares every cyclic offset:
 n^2), with the length of a dense outline and of a description's text. Inputs above a cap are
 refused with a typed error (`qshape.LimitError`, naming the cap and where to change it) before
-any work is done; inputs at a cap run in well under a second (``benchmarks/robustness.py``).
+any work is done; inputs at a cap run in well under a second (``benchmarks/theory/robustness.py``).
 Bundled values live in the ``limits`` section of ``configs/qshape.yaml``.
 """
 

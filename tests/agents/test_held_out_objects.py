@@ -8,13 +8,13 @@ import pytest
 import torch
 
 import envs  # noqa: F401
-from agents.bc import BCConfig
-from agents.pair_objects import bin_turns, objects_rows
-from agents.pair_objects_bc import train_objects_bc
+from agents.experts.theory import TheoryPolicy
+from agents.learning.decision_bc import BCConfig
+from agents.pair.objects_bc import train_objects_bc
+from agents.pair.objects_rows import bin_turns, objects_rows
 from agents.policies import make_policies
-from agents.theory_policy import TheoryPolicy
+from apps.bc.objects import record_expert
 from apps.evaluate import Protocol, evaluate_policy_set, task_protocol
-from apps.objects_bc import record_expert
 
 TASK = "MosaicHeldOutDesigns-v0"
 HELD_OUT = Protocol((1000, 1001, 1002, 1003), ("hexagon", "trencadis"), 12)

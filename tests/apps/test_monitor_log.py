@@ -1,8 +1,8 @@
-"""apps.monitor_log: the Monitor CSVs of a run read as episodes, every env's file in order."""
+"""apps.results.monitor_log: the Monitor CSVs of a run as episodes, every env's file in order."""
 
 from __future__ import annotations
 
-from apps.monitor_log import monitor_episodes, succeeded
+from apps.results.monitor_log import monitor_episodes, succeeded
 
 
 def test_episodes_of_every_env_file_and_their_success(tmp_path) -> None:

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from agents.protocol import METRICS
+from apps.results.sweep_summary import run_return
 from apps.sweep import (
     RESULT_FILE,
     RESULTS_LOG,
@@ -19,7 +20,6 @@ from apps.sweep import (
     run_sweep,
     select_tasks,
 )
-from apps.sweep_summary import run_return
 from envs.tasks import bundled_tasks
 
 

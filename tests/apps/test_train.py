@@ -10,8 +10,8 @@ import pytest
 from gymnasium import spaces
 from stable_baselines3 import PPO
 
-from agents.algorithms import AlgorithmError, algorithm_class
-from agents.wrappers import FlatDiscreteActions
+from agents.learning.algorithms import AlgorithmError, algorithm_class
+from agents.learning.wrappers import FlatDiscreteActions
 from apps.train import (
     TrainError,
     load_train_config,

@@ -103,7 +103,7 @@ def test_fig_and_commands(tmp_path):
     by = {b.name: b for b in BENCHES}
     assert command(by["main"], tmp_path, False, None) is None
     cmd = command(by["planner"], tmp_path, True, None)
-    assert cmd is not None and cmd[2] == "benchmarks.planner" and "--quick" in cmd
+    assert cmd is not None and cmd[2] == "benchmarks.motion.planner" and "--quick" in cmd
     env_cmd = command(by["env"], tmp_path, False, None)
     assert env_cmd is not None and "--out" not in env_cmd
     ev = command(by["learned"], tmp_path, False, tmp_path / "run" / "model.zip")

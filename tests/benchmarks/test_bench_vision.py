@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from apps.cli import UsageError
-from benchmarks import vision
-from benchmarks.vision_realistic import Level, RealisticBench, markdown, plot, run_level
+from benchmarks.recognition import synthetic as vision
+from benchmarks.recognition.realistic import Level, RealisticBench, markdown, plot, run_level
 from configs import load_config
 from qshape.synthetic.effects import CameraEffects
 from qshape.synthetic.synth import SynthParams

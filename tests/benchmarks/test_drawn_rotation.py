@@ -1,4 +1,4 @@
-"""The orientation a drawn tile really has (benchmarks.drawn_rotation) on generated pictures."""
+"""A drawn tile's true orientation (benchmarks.recognition.drawn_rotation) on generated pictures."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from benchmarks.drawn_rotation import drawn_angle
+from benchmarks.recognition.drawn_rotation import drawn_angle
 from qshape.design import Design
 from qshape.geometry import rotate
 from qshape.synthetic.effects import CameraEffects

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 import envs  # noqa: F401  (registers MosaicAssembly-v0)
-from agents.calibration import calibrate
-from agents.config import load_agents_config
-from agents.perception import perceive_tiles
-from benchmarks.camera import glaze_colours
+from agents.scripted.calibration import calibrate
+from agents.scripted.config import load_agents_config
+from agents.scripted.perception import perceive_tiles
 from benchmarks.design_cell import build_design_cell, nearest_tile
+from benchmarks.recognition.camera_model import glaze_colours
 from envs.cell.calibration_board import render_calibration_views
 from envs.cell.cameras import CameraModel, CameraRig, camera_model, distort_normalised
 from envs.cell.cell import Cell

@@ -6,7 +6,7 @@ from typing import get_args
 
 import pytest
 
-from agents.config import RunConfig
+from agents.scripted.config import RunConfig
 from envs.cell.config import FEED_MODES, FeedMode, TileConfig
 from envs.env_config import FEEDS
 from envs.episode_setup import FALLBACK_FEED, retry_layout, with_feed_fallback

@@ -172,8 +172,8 @@ def test_distractors_are_not_counted_among_the_real_tiles():
 
 
 def _scripted(env: Any) -> Any:
-    from agents.config import load_agents_config  # noqa: PLC0415
-    from agents.scripted import ScriptedAgent  # noqa: PLC0415
+    from agents.scripted.agent import ScriptedAgent  # noqa: PLC0415
+    from agents.scripted.config import load_agents_config  # noqa: PLC0415
 
     return ScriptedAgent.from_env(env, load_agents_config(), calibrate=False)
 

@@ -1,4 +1,4 @@
-"""The ``objects`` observation: entity rows without class ids (`envs.objects`)."""
+"""The ``objects`` observation: entity rows without class ids (`envs.observations.objects`)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import envs  # noqa: F401 - registers the ids
 from envs.cell.cell import Cell
 from envs.cell.tiles.tile import SlotSpec, TileShape
 from envs.env_config import EnvConfigError, load_env_config
-from envs.objects import (
+from envs.observations.objects import (
     OBJECT_DIM,
     OBJECT_FIELDS,
     OVERSAMPLE,
@@ -23,7 +23,7 @@ from envs.objects import (
     object_fields,
     oriented_points,
 )
-from envs.observations import Observer
+from envs.observations.spaces import Observer
 from envs.task import MosaicTask
 
 F = OBJECT_FIELDS

@@ -1,4 +1,4 @@
-"""``objects_source="perception"``: tile rows from the input picture (`envs.objects_perception`)."""
+"""Perception rows (`envs.observations.objects_perception`): tile rows from the picture."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ import pytest
 import envs  # noqa: F401 - registers the ids
 from envs.env_config import EnvConfigError, load_env_config
 from envs.mosaic_env import MosaicAssemblyEnv
-from envs.objects import OBJECT_FIELDS as F
-from envs.objects_perception import register
+from envs.observations.objects import OBJECT_FIELDS as F
+from envs.observations.objects_perception import register
 
 TASK = "MosaicDecision6-v0"
 SEED = 1000

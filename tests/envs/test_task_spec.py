@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import envs  # noqa: F401
-from agents.scripted import ScriptedAgent
+from agents.scripted.agent import ScriptedAgent
 from envs.errors import EnvError
 from envs.task import Evaluation
 from envs.task_spec import ActionError, PickPlaceCommand, TaskSpec
@@ -114,10 +114,10 @@ def test_the_info_evaluation_is_the_typed_record(env) -> None:
 @pytest.mark.parametrize(
     "path",
     [
-        "agents/scripted.py",
-        "agents/perception.py",
-        "agents/placement.py",
-        "agents/calibration.py",
+        "agents/scripted/agent.py",
+        "agents/scripted/perception.py",
+        "agents/scripted/placement.py",
+        "agents/scripted/calibration.py",
         "apps/main.py",
     ],
 )

@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from benchmarks.planner import LAYOUT_SEED_TRIES, CellRunner, cell_config
+from benchmarks.motion.planner import LAYOUT_SEED_TRIES, CellRunner, cell_config
 from envs.cell.tiles.shapes import basic_shapes
 from envs.episode_setup import build_cell
 from planners.config import load_planner_config

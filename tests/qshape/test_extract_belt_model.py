@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 import pytest
 
-from benchmarks.vision_realistic import DesignClasses, RealisticBench, seen_picture, synth_for
+from benchmarks.recognition.realistic import DesignClasses, RealisticBench, seen_picture, synth_for
 from configs import load_config
 from qshape import Tolerances, describe
 from qshape.design import Design

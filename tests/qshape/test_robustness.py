@@ -1,7 +1,8 @@
 """qshape refuses bad and oversized input with its own errors, and stays precise far away.
 
 Caps come from ``configs/qshape.yaml`` (``limits``); inputs at a cap give the correct result,
-inputs above it a typed `qshape.LimitError` (timings at the caps: ``benchmarks/robustness.py``).
+inputs above it a typed `qshape.LimitError` (timings at the caps:
+``benchmarks/theory/robustness.py``).
 """
 
 from __future__ import annotations

@@ -1,0 +1,1 @@
+"""Policies that read the two camera images: object crops, the crop scorer, its cloning, poses."""

@@ -1,0 +1,1 @@
+"""Learning machinery of the learned policies: demonstrations, cloning, RL helpers, wrappers."""

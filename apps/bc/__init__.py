@@ -1,0 +1,1 @@
+"""Behaviour cloning commands: python -m apps.bc {decision,camera,objects} ...."""

@@ -1,0 +1,1 @@
+"""Reading and plotting what training and sweeps produced: curves, tables, episode logs."""

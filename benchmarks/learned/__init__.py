@@ -1,0 +1,1 @@
+"""Experiments with learned policies: training rows, evaluation, curves."""

@@ -1,0 +1,1 @@
+"""Recognition benchmarks: synthetic and realistic pictures, cell renders, the camera."""

@@ -1,0 +1,1 @@
+"""Benchmarks of the qshape library: describing and assigning many tiles, robustness at its caps."""
