@@ -16,7 +16,6 @@ to the `Cell`, advancing simulated time. Continuous spaces are Box in [-1, 1] fl
 
 from __future__ import annotations
 
-import math
 from abc import ABC, abstractmethod
 
 import numpy as np
@@ -25,7 +24,14 @@ from gymnasium import spaces
 from envs.cell.cell import Cell
 from envs.cell.pick_place import ActionResult, PickPlaceExecutor
 from envs.env_config import EnvConfig
-from envs.task_spec import RANGE_SLACK, ActionError, Area, PickPlaceCodec, PickPlaceCommand
+from envs.task_spec import (
+    RANGE_SLACK,
+    ActionError,
+    Area,
+    PickPlaceCodec,
+    PickPlaceCommand,
+    discrete_codec,
+)
 from planners.errors import PlannerError
 from planners.ik import IKSolver
 from planners.robot import joint_ranges
@@ -218,9 +224,8 @@ class DiscretePickPlaceActions(ActionAdapter):
     def __init__(self, cell: Cell, config: EnvConfig, executor: PickPlaceExecutor) -> None:
         super().__init__(cell, config)
         self.executor = executor
-        n = max(len(cell.tiles), 1)
-        k = max(len(cell.slots), 1)
-        self.space = spaces.MultiDiscrete([n, k, config.rotation_bins])
+        self.codec = discrete_codec(cell, config)
+        self.space = spaces.MultiDiscrete(list(self.codec.nvec))
 
     def reset(self) -> None:
         """Episode start (the executor forgets the last contact)."""
@@ -228,7 +233,7 @@ class DiscretePickPlaceActions(ActionAdapter):
 
     def poses(self, tile: int, slot: int, rot: int) -> PickPlaceCommand:
         """The world command of a discrete action."""
-        return transfer_poses(self.cell, tile, slot, rot * 2 * math.pi / self.cfg.rotation_bins)
+        return transfer_poses(self.cell, tile, slot, self.codec.turn(rot))
 
     def apply(self, action: np.ndarray) -> ActionResult:
         """Run one cycle moving the chosen tile to the chosen slot."""

@@ -26,6 +26,7 @@ from envs.env_cell_keys import (
     merge_cell,
     split_cell,
 )
+from spatial.tolerance import PLACEMENT_POSITION_TOLERANCE_M, PLACEMENT_YAW_TOLERANCE_DEG
 
 ActionMode = Literal["joint", "cartesian", "pick_place", "pick_place_discrete"]
 ObsMode = Literal["rgb", "state", "rgb+state", "objects"]
@@ -213,8 +214,8 @@ class EnvConfig:
     reject_release_height: float = 0.03
     reset_settle: float = 0.0
     layout_tries: int = 20
-    position_tolerance: float = 0.0015
-    yaw_tolerance_deg: float = 2.0
+    position_tolerance: float = PLACEMENT_POSITION_TOLERANCE_M
+    yaw_tolerance_deg: float = PLACEMENT_YAW_TOLERANCE_DEG
     mesh_height_tolerance: float = 0.003
     max_tilt_deg: float = 8.0
     reward_correct: float = 1.0

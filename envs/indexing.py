@@ -30,6 +30,7 @@ import numpy as np
 
 from envs.cell.cell import Cell
 from envs.env_config import EnvConfig
+from envs.task_spec import rotation_step
 
 ROW_DECIMALS = 3
 """Slot rows: y positions rounded to this many decimals of a metre group slots into one row."""
@@ -56,7 +57,7 @@ class IndexMaps:
         self.slots = np.arange(k)
         self._rest = np.arange(n)
         self._mesh_order = raster_order(cell.slot_poses_world()[:, :2]) if k else self.slots
-        self._step = 2 * math.pi / config.rotation_bins
+        self._step = rotation_step(config.rotation_bins)
 
     def reset(self, rng: np.random.Generator) -> None:
         """Draw the per-reset permutations, then compute the tile order of the first observation."""

@@ -8,12 +8,15 @@ Agents are built from it (``ScriptedAgent.from_env``); they never read the env's
 
 `PickPlaceCodec` is the one conversion between a world pick-and-place command and the
 normalised ``pick_place`` action: the env decodes with it, agents encode with it.
+`DiscreteCodec` is the ``pick_place_discrete`` action's: its index ranges, what a rotation index
+turns and the flat index of a (tile, slot, rotation) triple. `StateFields` and
+``TaskSpec.object_fields`` say what each column of the ``state`` and ``objects`` rows means.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -21,12 +24,14 @@ import numpy as np
 from envs.cell.cameras import CameraModel
 from envs.cell.config import FeedMode
 from envs.errors import EnvError
-from spatial.angles import wrap_angle
+from envs.observations.fields import ROBOT_FIELDS, SLOT_FIELDS, TILE_FIELDS, FieldMap
+from envs.observations.objects import object_fields
+from spatial.angles import TWO_PI, wrap_angle
 from spatial.units import MM_PER_M
 
 if TYPE_CHECKING:
     from envs.cell.cell import Cell
-    from envs.env_config import ActionMode, EnvConfig
+    from envs.env_config import ActionMode, EnvConfig, RotationFrame
     from qshape.design import Design
     from qshape.theory.figure import Figure
 
@@ -196,6 +201,80 @@ class PickPlaceCodec:
         return np.clip(out, -1, 1).astype(np.float32)
 
 
+def discrete_codec(cell: Cell, config: EnvConfig) -> DiscreteCodec:
+    """The ``pick_place_discrete`` codec of a cell (at least one tile and one slot index)."""
+    n, k = max(len(cell.tiles), 1), max(len(cell.slots), 1)
+    return DiscreteCodec(n, k, config.rotation_bins, config.rotation_frame)
+
+
+def rotation_step(bins: int) -> float:
+    """The turn of one ``pick_place_discrete`` rotation index, ``2 pi / bins`` [rad]."""
+    return TWO_PI / bins
+
+
+@dataclass(frozen=True)
+class DiscreteCodec:
+    """The ``pick_place_discrete`` action: MultiDiscrete((tiles, slots, rotation_bins)).
+
+    Which tile and slot an index names is the env's ``tile_order`` / ``slot_order``
+    (`envs.indexing`); rotation ``r`` turns the tile by ``r`` steps of `rotation_step` from the
+    slot-aligned pose nearest the tile's yaw (``rotation_frame`` ``tile``) or from the slot's
+    own yaw (``slot``).
+
+    Attributes:
+        tiles: Tile indices (the episode's maximum tile count).
+        slots: Slot indices.
+        rotation_bins: Rotation indices.
+        rotation_frame: ``tile`` or ``slot``: what rotation 0 means.
+    """
+
+    tiles: int
+    slots: int
+    rotation_bins: int
+    rotation_frame: RotationFrame
+
+    @property
+    def nvec(self) -> tuple[int, int, int]:
+        """The MultiDiscrete sizes (tiles, slots, rotation_bins)."""
+        return (self.tiles, self.slots, self.rotation_bins)
+
+    @property
+    def rotation_step(self) -> float:
+        """The turn of one rotation index [rad]."""
+        return rotation_step(self.rotation_bins)
+
+    def turn(self, rotation: int) -> float:
+        """The turn rotation index ``rotation`` adds to its frame's zero [rad]."""
+        return rotation * TWO_PI / self.rotation_bins
+
+    def nearest_rotation(self, turn: float) -> int:
+        """The rotation index whose turn is nearest ``turn`` [rad] (modulo a full turn)."""
+        return round(turn / self.rotation_step) % self.rotation_bins
+
+    def flat(self, action: tuple[int, int, int] | np.ndarray) -> int:
+        """The flat index of (tile, slot, rotation), row-major (rotation fastest)."""
+        return int(np.ravel_multi_index(tuple(int(a) for a in action), self.nvec))
+
+    def unflat(self, index: int) -> np.ndarray:
+        """(tile, slot, rotation) of a flat index, shape (3,) int64."""
+        return np.array(np.unravel_index(int(index), self.nvec), np.int64)
+
+
+@dataclass(frozen=True)
+class StateFields:
+    """What each column of the ``state`` observation's vectors means (`envs.observations.fields`).
+
+    Attributes:
+        robot: Field -> slice of the ``robot`` vector.
+        tile: Field -> slice of one ``tiles`` row.
+        slot: Field -> slice of one ``slots`` row.
+    """
+
+    robot: FieldMap = field(default_factory=lambda: ROBOT_FIELDS)
+    tile: FieldMap = field(default_factory=lambda: TILE_FIELDS)
+    slot: FieldMap = field(default_factory=lambda: SLOT_FIELDS)
+
+
 @dataclass(frozen=True, eq=False)
 class TaskSpec:
     """What an agent may know about an env besides its observations.
@@ -220,6 +299,10 @@ class TaskSpec:
         joint_step: ``joint``: the joint target move of a full action (1.0) in one control
             period, shape (6,) [rad] (each axis' speed limit x the period); None in the other
             action modes.
+        discrete: The ``pick_place_discrete`` codec (None in the other action modes).
+        state_fields: What each column of the ``state`` vectors means.
+        object_fields: Field -> column slice of an ``objects`` row at the env's
+            ``objects_points`` (`envs.observations.objects.object_fields`).
     """
 
     design: str
@@ -236,6 +319,9 @@ class TaskSpec:
     codec: PickPlaceCodec | None
     tool_step: tuple[float, float, float, float] | None = None
     joint_step: tuple[float, ...] | None = None
+    discrete: DiscreteCodec | None = None
+    state_fields: StateFields = field(default_factory=StateFields)
+    object_fields: FieldMap = field(default_factory=object_fields)
 
     def camera(self, name: CameraName) -> CameraModel:
         """The camera model of ``name`` at the observation size.
@@ -317,6 +403,9 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
         tool_step = (step, step, step, config.tool_yaw_rate * period)
     if config.action_mode == "joint":
         joint_step = tuple(float(v) * period for v in cell.max_joint_speed)
+    discrete = None
+    if config.action_mode == "pick_place_discrete":
+        discrete = discrete_codec(cell, config)
     return TaskSpec(
         design=config.design if config.design_source == "fixed" else design.name,
         slots=world_slots(cell, design),
@@ -332,6 +421,8 @@ def build_task_spec(cell: Cell, config: EnvConfig, design: Design) -> TaskSpec:
         codec=codec,
         tool_step=tool_step,
         joint_step=joint_step,
+        discrete=discrete,
+        object_fields=object_fields(config.objects_points),
     )
 
 
@@ -340,12 +431,16 @@ __all__ = [
     "ActionError",
     "Area",
     "CameraName",
+    "DiscreteCodec",
     "FeedMode",
     "PickPlaceCodec",
     "PickPlaceCommand",
+    "StateFields",
     "TaskSpec",
     "WorldSlot",
     "build_task_spec",
+    "discrete_codec",
+    "rotation_step",
     "work_areas",
     "world_slots",
 ]

@@ -66,6 +66,7 @@ from planners.cycle.plan import CyclePlan
 from planners.errors import InvalidTargetError, PlannerError, TrajectoryError
 from planners.ik import IKSolver
 from planners.joints import JointState, as_joint_vector
+from planners.tool_pose import symmetric_yaws
 from planners.trajectory import Piecewise, Segment, hold_segment
 from spatial.angles import wrap_angle
 from spatial.rotations import yaw_from_matrix
@@ -165,8 +166,7 @@ class PickPlacePlanner:
         # Tool yaw at the pick: keep the current one (the round pad may pick at any yaw).
         pick_yaw = yaw_from_matrix(self.ik.fk(start.q)[1])
         rotations = [
-            (rotation + k * 2.0 * math.pi / symmetry_order, grasp, object_yaw)
-            for k in range(symmetry_order)
+            (float(turn), grasp, object_yaw) for turn in symmetric_yaws(rotation, symmetry_order)
         ]
         req = CycleRequest(
             start, start_at_contact, end_retreat, pick0, place, pick_yaw, tuple(rotations), belt

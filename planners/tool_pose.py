@@ -8,10 +8,10 @@ import numpy as np
 import numpy.typing as npt
 
 from planners.errors import InvalidTargetError
+from spatial.angles import equivalent_yaws
 
 Array = npt.NDArray[np.float64]
 
-_TWO_PI = 2.0 * math.pi
 
 _DOWN = np.diag([1.0, -1.0, -1.0])
 """Tool-down orientation at yaw 0: site x along world x, site z along world -z."""
@@ -41,7 +41,7 @@ def symmetric_yaws(yaw: float, order: int) -> Array:
         raise InvalidTargetError(f"yaw must be finite, got {yaw!r}")
     if order < 1:
         raise InvalidTargetError(f"symmetry order must be >= 1, got {order!r}")
-    return yaw + _TWO_PI * np.arange(order) / order
+    return equivalent_yaws(yaw, order)
 
 
 __all__ = ["symmetric_yaws", "tool_down_rotation"]

@@ -50,6 +50,42 @@ def rotate_xy(xy: npt.ArrayLike, yaw: float) -> Array:
     return out
 
 
+def symmetry_period(symmetry: int) -> float:
+    """The turn [rad] that maps a figure of ``symmetry``-fold rotational symmetry onto itself.
+
+    ``2 pi / symmetry`` for a k-fold symmetry (k >= 1; 1: no symmetry, a full turn); 0.0 for a
+    continuous one (``symmetry`` 0, a round tile: every turn maps it onto itself). Callers that
+    search over one period for a round figure say so (``symmetry_period(s) or TWO_PI``).
+
+    Raises:
+        ValueError: A negative symmetry order.
+    """
+    if symmetry < 0:
+        raise ValueError(f"symmetry order must be >= 0 (0: continuous), got {symmetry!r}")
+    return 0.0 if symmetry == 0 else TWO_PI / symmetry
+
+
+def equivalent_yaws(yaw: float, symmetry: int, continuous_steps: int = 1) -> Array:
+    """The yaws a ``symmetry``-fold figure makes equivalent to ``yaw``, ``yaw`` first [rad].
+
+    ``yaw + 2 pi j / k`` for j = 0 .. k-1 (not wrapped). A continuous figure (``symmetry`` 0)
+    is listed at ``continuous_steps`` evenly spaced yaws.
+
+    Returns:
+        Shape (k,) [rad].
+
+    Raises:
+        ValueError: A negative symmetry order, or fewer than one yaw to list.
+    """
+    order = continuous_steps if symmetry == 0 else symmetry
+    if symmetry < 0 or order < 1:
+        raise ValueError(
+            f"symmetry order must be >= 0 and the yaws listed >= 1, got {symmetry!r} and {order!r}"
+        )
+    out: Array = yaw + TWO_PI * np.arange(order) / order
+    return out
+
+
 def yaw_error(yaw: float | Array, target: float | Array, symmetry: int | Array) -> float | Array:
     """|yaw - target| modulo the shape's rotational symmetry [rad].
 
@@ -69,4 +105,12 @@ def yaw_error(yaw: float | Array, target: float | Array, symmetry: int | Array) 
     return float(err) if np.ndim(err) == 0 else np.asarray(err, dtype=np.float64)
 
 
-__all__ = ["TWO_PI", "rotate_xy", "wrap_angle", "wrap_angles", "yaw_error"]
+__all__ = [
+    "TWO_PI",
+    "equivalent_yaws",
+    "rotate_xy",
+    "symmetry_period",
+    "wrap_angle",
+    "wrap_angles",
+    "yaw_error",
+]

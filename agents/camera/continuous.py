@@ -33,11 +33,12 @@ import numpy as np
 
 from agents.camera.crop_scorer import CameraPolicy
 from agents.camera.crops import belt_tiles, mesh_order
-from agents.camera.tile_fit import FitConfig, TileFit, fit_tile, symmetry_period
+from agents.camera.tile_fit import FitConfig, TileFit, fit_tile
 from agents.errors import AgentError
 from configs import load_config
 from envs.cell.cameras import CameraModel
 from envs.task_spec import CameraName, PickPlaceCommand, TaskSpec
+from spatial.angles import symmetry_period
 
 TILE_FIT_CONFIG = "tile_fit"
 """Bundled config name of the pose fit (``configs/tile_fit.yaml``)."""

@@ -33,6 +33,7 @@ from shapely.geometry import Polygon
 
 from envs.cell.cameras import CameraModel
 from envs.task_spec import Area, WorldSlot
+from spatial.angles import symmetry_period
 from spatial.units import MM_PER_M
 
 SHIFT = 4
@@ -96,11 +97,6 @@ def figure_outline(slot: WorldSlot) -> tuple[np.ndarray, list[np.ndarray]]:
     centroid = np.asarray(Polygon(outer).centroid.coords[0])
     holes = [np.asarray(h.dense(), float) / MM_PER_M - centroid for h in slot.figure.holes]
     return outer - centroid, holes
-
-
-def symmetry_period(symmetry: int) -> float:
-    """Turn [rad] that maps a figure of this rotational symmetry onto itself (0: continuous)."""
-    return 0.0 if symmetry <= 0 else 2 * math.pi / symmetry
 
 
 class _Window:
@@ -258,6 +254,5 @@ __all__ = [
     "TileFit",
     "figure_outline",
     "fit_tile",
-    "symmetry_period",
     "tile_alpha",
 ]

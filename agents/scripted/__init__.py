@@ -6,7 +6,7 @@ from typing import Any
 
 
 def __getattr__(name: str) -> Any:
-    """Names of the old ``agents.scripted`` module (now `agents.scripted.agent`), for one version."""
+    """Names of the old ``agents.scripted`` module (now `agents.scripted.agent`), one version."""
     module = importlib.import_module("agents.scripted.agent")
     if not hasattr(module, name):
         raise AttributeError(f"module 'agents.scripted' has no attribute {name!r}")

@@ -35,7 +35,7 @@ from scipy.spatial import cKDTree
 
 from agents.scripted.config import PlacementConfig
 from agents.scripted.perception import PerceivedTile, SlotTarget
-from spatial.angles import rotate_xy, wrap_angle
+from spatial.angles import rotate_xy, symmetry_period, wrap_angle
 
 _COST_REFUSED = 1e9
 """Assignment cost of a (tile, slot) pair the fit refuses (never chosen as a pair)."""
@@ -137,7 +137,7 @@ def fit_outline(
     residual = max(cost(rot), back) / scale
     runner_up = math.inf
     if slot.symmetry != 0:
-        period = 2.0 * math.pi / max(slot.symmetry, 1)
+        period = symmetry_period(slot.symmetry)
         d = np.mod(turns - rot, period)
         off = np.minimum(d, period - d)
         other = off > math.radians(cfg.fit_turn_window_deg)

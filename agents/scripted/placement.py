@@ -33,7 +33,7 @@ from agents.scripted.outline_fit import TileOutline, area_centroid, boundary_poi
 from agents.scripted.perception import PerceivedTile, SlotTarget
 from envs.task_spec import PickPlaceCommand
 from qshape.theory.assign import feasible_pairs
-from spatial.angles import rotate_xy, wrap_angle
+from spatial.angles import TWO_PI, equivalent_yaws, rotate_xy, symmetry_period, wrap_angle
 from spatial.units import MM_PER_M
 
 
@@ -123,18 +123,6 @@ class PlacementPlan:
     open_slots: tuple[int, ...]
     method: Literal["optimal", "greedy"]
     use_color: bool
-
-
-def equivalent_yaws(slot_yaw: float, symmetry: int, continuous_steps: int) -> tuple[float, ...]:
-    """Every place yaw equivalent under the slot shape's symmetry, ``slot_yaw`` first [rad].
-
-    Args:
-        slot_yaw: The slot's yaw [rad] (the chosen place yaw).
-        symmetry: Symmetry order of the slot shape from the design (1: none, 0: continuous).
-        continuous_steps: Yaws listed for a continuous shape.
-    """
-    order = continuous_steps if symmetry == 0 else max(symmetry, 1)
-    return tuple(wrap(slot_yaw + 2 * math.pi * k / order) for k in range(order))
 
 
 def outline_residual(tile: qshape.Figure, slot: qshape.Figure, rotation: float) -> float:
@@ -414,7 +402,7 @@ def _checked_turn(t: PerceivedTile, s: SlotTarget, turn: float, cfg: PlacementCo
     fit = fit_outline(outline, s, cfg, cfg.fit_spacing_mm)
     if fit.residual > cfg.fit_max_residual or fit.runner_up < cfg.fit_margin:
         return turn
-    period = 2.0 * math.pi / max(s.symmetry, 1) if s.symmetry != 0 else 2.0 * math.pi
+    period = symmetry_period(s.symmetry) or TWO_PI  # a round slot: one full turn
     off = abs(math.remainder(fit.rotation - turn, period))
     return fit.rotation if off > math.radians(cfg.fit_turn_window_deg) else turn
 
@@ -452,7 +440,9 @@ def fitted_command(
         grasp_pick=(float(t.grasp[0]), float(t.grasp[1])),
         grasp_place=(float(g_place[0]), float(g_place[1])),
         rotation=rot,
-        place_yaws=equivalent_yaws(yaw_place, s.symmetry, cfg.continuous_yaw_steps),
+        place_yaws=tuple(
+            wrap(float(y)) for y in equivalent_yaws(yaw_place, s.symmetry, cfg.continuous_yaw_steps)
+        ),
         symmetry=s.symmetry,
         score=score,
     )
@@ -486,7 +476,6 @@ __all__ = [
     "PlacementPlan",
     "Unplaced",
     "UnplacedReason",
-    "equivalent_yaws",
     "fitted_command",
     "outline_residual",
     "plan_placements",

@@ -36,6 +36,7 @@ from apps.evaluate import ENV_ID, task_protocol
 from configs.files import write_json
 from envs.task_spec import TaskSpec
 from spatial.angles import yaw_error
+from spatial.tolerance import PLACEMENT_POSITION_TOLERANCE_MM, PLACEMENT_YAW_TOLERANCE_DEG
 from spatial.units import MM_PER_M
 
 TASK = "MosaicDecision6-v0"
@@ -44,9 +45,9 @@ CHECKPOINT = "checkpoints/MosaicDecision6-v0/BC_camera_crops_rgb/seed_0/camera.p
 """The shipped crop scorer."""
 SIZES = ("96x128", "192x256", "492x656")
 """Image sizes (height x width) [px]: the training size and two larger ones."""
-POSITION_TOL_MM = 1.5
+POSITION_TOL_MM = PLACEMENT_POSITION_TOLERANCE_MM
 """The env's default position tolerance [mm] (``position_tolerance``)."""
-YAW_TOL_DEG = 2.0
+YAW_TOL_DEG = PLACEMENT_YAW_TOLERANCE_DEG
 """The env's default yaw tolerance [deg] (``yaw_tolerance_deg``)."""
 
 

@@ -34,6 +34,7 @@ from apps.cli import CommandParser, run_cli
 from configs.files import write_text
 from envs.mosaic_env import MosaicAssemblyEnv
 from envs.observations.objects import OBJECT_FIELDS as F
+from spatial.angles import symmetry_period
 from spatial.units import MM_PER_M
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -97,7 +98,7 @@ def cost(blocks: int, episodes: int) -> dict[str, Any]:
 def _angle_error_deg(a: float, b: float, symmetry: int) -> float | None:
     if symmetry == 0:
         return None
-    period = 2 * np.pi / symmetry
+    period = symmetry_period(symmetry)
     d = (a - b) % period
     return float(np.degrees(min(d, period - d)))
 

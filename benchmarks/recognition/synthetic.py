@@ -41,6 +41,7 @@ from qshape.synthetic.synth import SynthParams, generate
 from qshape.theory.figure import figures_from_outlines
 from qshape.vision.extract import extract_detailed
 from qshape.vision.params import ExtractParams
+from spatial.angles import symmetry_period
 
 
 @dataclass(frozen=True)
@@ -142,7 +143,7 @@ def _rot_error_deg(m: Any, rep_angle_deg: float, tile: Any, angle: float | None 
         return 0.0
     truth = tile.angle if angle is None else angle
     expected = wrap_angle(math.radians(rep_angle_deg) - truth)
-    period = 2.0 * math.pi / symmetry
+    period = symmetry_period(symmetry)
     return min(abs(math.degrees(math.remainder(r - expected, period))) for r in m.rotations)
 
 

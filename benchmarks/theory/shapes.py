@@ -48,6 +48,7 @@ from qshape import Description, Tolerances  # noqa: E402
 from qshape.theory.description import describe_many  # noqa: E402
 from qshape.theory.labels import primary_code  # noqa: E402
 from qshape.theory.matching import clear_key_caches  # noqa: E402
+from spatial.angles import symmetry_period  # noqa: E402
 
 T = TypeVar("T")
 
@@ -117,7 +118,7 @@ def paper_pairwise(
 def _rotation_error(rot: float, truth: float, symmetry: int) -> float:
     if symmetry == 0:
         return 0.0
-    period = 2 * math.pi / symmetry
+    period = symmetry_period(symmetry)
     d = (rot - truth) % period
     return min(d, period - d)
 

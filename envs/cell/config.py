@@ -16,6 +16,7 @@ from typing import Any, Literal, get_args
 from configs import ConfigError, check_length, check_positive, load_config
 from envs.cell.view_config import CameraConfig, RenderConfig, SceneryConfig
 from envs.errors import CellError
+from spatial.tolerance import MADE_TILE_DEVIATION_M
 
 FeedMode = Literal["all", "stream", "batch"]
 """How tiles arrive on the input belt (`TileConfig.feed`, `envs.cell.feed`)."""
@@ -205,7 +206,8 @@ class TileConfig:
         body_color: RGB in [0, 1] of the unglazed ceramic (sides and bottom).
         glaze_thickness: Thickness of the coloured glaze layer drawn on the top face [m]
             (visual only).
-        vertex_jitter: Std of the manufacturing noise added to outline vertices [m].
+        vertex_jitter: Std of the manufacturing noise added to outline vertices [m] (by
+            default the made tile's deviation of `spatial.tolerance`).
         color_jitter: Std of the noise added to each RGB channel [0..1 units].
         variants: Noisy copies built per tile [count]. With 1 the noise (outline and colour)
             is drawn once when the cell is built and kept by every reset. With V > 1 each
@@ -237,7 +239,7 @@ class TileConfig:
     friction: float = 0.8
     body_color: tuple[float, ...] = (0.80, 0.74, 0.64)
     glaze_thickness: float = 0.0008
-    vertex_jitter: float = 0.0002
+    vertex_jitter: float = MADE_TILE_DEVIATION_M
     color_jitter: float = 0.02
     variants: int = 1
     min_gap: float = 0.006

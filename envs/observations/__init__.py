@@ -6,7 +6,7 @@ from typing import Any
 
 
 def __getattr__(name: str) -> Any:
-    """Names of the old ``envs.observations`` module (now `envs.observations.spaces`), one version."""
+    """The old ``envs.observations`` module's names (now `envs.observations.spaces`)."""
     module = importlib.import_module("envs.observations.spaces")
     if not hasattr(module, name):
         raise AttributeError(f"module 'envs.observations' has no attribute {name!r}")

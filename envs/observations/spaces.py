@@ -16,7 +16,8 @@ Keys (by ``obs_mode``):
   padding. With ``objects_source="perception"`` the tile rows come from the input camera's picture
   (`envs.observations.objects_perception`): a tile not seen there is a masked row of zeros.
 
-Every observation is a fresh array (no memory shared between steps).
+The ``state`` vectors' field maps are `envs.observations.fields`. Every observation is a fresh
+array (no memory shared between steps).
 """
 
 from __future__ import annotations
@@ -28,17 +29,12 @@ from gymnasium import spaces
 
 from envs.cell.cell import CAMERAS, Cell
 from envs.env_config import EnvConfig
+from envs.observations.fields import ROBOT_DIM, SLOT_DIM, TILE_DIM
 from envs.observations.objects import ObjectRows
 from envs.observations.objects_perception import PerceivedTiles
 from envs.task import Evaluation, MosaicTask
 from spatial.rotations import yaw_from_matrix
 
-ROBOT_DIM = 19
-"""Length of the ``robot`` vector."""
-TILE_DIM = 7
-"""Features per tile in ``tiles``."""
-SLOT_DIM = 6
-"""Features per slot in ``slots``."""
 DEPTH_MAX = 10.0
 """Upper bound of depth values [m] (the far plane is well below)."""
 BIG = 1e3

@@ -11,6 +11,7 @@ from typing import Any, Literal
 
 from qshape.config_sections import load_section
 from qshape.errors import DesignError
+from spatial.tolerance import MADE_TILE_DEVIATION_MM, PLACEMENT_YAW_TOLERANCE_DEG
 
 
 @dataclass(frozen=True)
@@ -51,8 +52,8 @@ class DesignRules:
             apart along its arcs, in [mm] (`qshape.design.Loop.made_vertices`; the cell builds
             its tile meshes so).
         tile_deviation_mm: Standard deviation of a made tile's vertices off its drawing, each
-            on its own, in [mm] (manufacturing; the simulated cell's ``tiles.vertex_jitter``
-            in ``configs/cell.yaml`` is 0.2 mm).
+            on its own, in [mm] (manufacturing; by default `spatial.tolerance`'s made-tile
+            deviation, which the simulated cell also builds its tiles with).
         min_turn_capability: Smallest turn capability of a slot: ``turn_tolerance_deg`` over
             three standard deviations of the turn at which a made tile fits its drawing best
             (`qshape.design.made_turn.made_turn_sd`), dimensionless. Below 1, the tile's own
@@ -76,12 +77,12 @@ class DesignRules:
     symmetry_samples: int = 512
     min_arc_sagitta_mm: float = 5.0
     min_arc_chord_mm: float = 20.0
-    turn_tolerance_deg: float = 2.0
+    turn_tolerance_deg: float = PLACEMENT_YAW_TOLERANCE_DEG
     min_turn_shift_mm: float = 0.1
     min_asymmetry_mm: float = 0.3
     min_hole_turn_mm: float = 1.5
     made_arc_step_mm: float = 2.0
-    tile_deviation_mm: float = 0.2
+    tile_deviation_mm: float = MADE_TILE_DEVIATION_MM
     min_turn_capability: float = 1.0
     turn_window_deg: float = 10.0
     turn_step_deg: float = 6.0

@@ -45,6 +45,7 @@ from qshape.theory.description import describe
 from qshape.theory.figure import Figure
 from qshape.theory.matching import match
 from qshape.theory.tolerances import Tolerances
+from spatial.angles import symmetry_period
 
 _FINE = 10
 """The boundary probed against is sampled this many times finer than the probes."""
@@ -133,7 +134,7 @@ def turn_cues(
         return TurnCues(math.inf, math.inf, math.inf)
     tol = math.radians(tolerance_deg)
     shift = float(np.min(moves([tol, -tol])))
-    period = 2.0 * math.pi / max(symmetry, 1)
+    period = symmetry_period(symmetry)
     window = math.radians(window_deg)
     step = math.radians(step_deg)
     turns = [
@@ -194,7 +195,7 @@ def hole_turn_gap(figure: Figure, symmetry: int, tolerances: Tolerances | None) 
         return math.inf
     if itself is None or itself.continuous:
         return math.inf
-    period = 2.0 * math.pi / max(symmetry, 1)
+    period = symmetry_period(symmetry)
     c = np.asarray(figure.centroid)
     gap = math.inf
     for r in itself.rotations:

@@ -11,12 +11,12 @@ import pytest
 import qshape
 from agents.scripted.config import PlacementConfig
 from agents.scripted.perception import balance_colors, perceive_tiles, slot_targets
-from agents.scripted.placement import equivalent_yaws, plan_placements, wrap
+from agents.scripted.placement import plan_placements, wrap
 from benchmarks.design_cell import build_design_cell, nearest_tile
 from envs.cell.config import load_cell_config
 from envs.task_spec import work_areas, world_slots
 from qshape.design import Design
-from spatial.angles import yaw_error
+from spatial.angles import equivalent_yaws, yaw_error
 
 YAW_TOL = math.radians(2.0)
 
@@ -89,7 +89,8 @@ def test_shape_only_mixes_colours(scene):
 def test_equivalent_yaws():
     assert len(equivalent_yaws(0.3, 4, 12)) == 4
     assert len(equivalent_yaws(0.3, 0, 12)) == 12
-    assert equivalent_yaws(0.3, 1, 12) == (0.3,)
+    assert tuple(equivalent_yaws(0.3, 1, 12)) == (0.3,)
+    assert equivalent_yaws(0.3, 4)[1] == 0.3 + math.pi / 2
 
 
 def test_empty_inputs():
