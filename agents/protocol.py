@@ -24,7 +24,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -46,6 +46,25 @@ BOOTSTRAP_REPS = 2000
 """Bootstrap resamples of the confidence intervals."""
 CONFIDENCE = 0.95
 """Confidence level of the intervals."""
+
+
+class TileCounts(Protocol):
+    """What an episode's outcome counts (`envs.task.Evaluation` and recorded results have it)."""
+
+    @property
+    def success(self) -> bool: ...  # noqa: D102
+    @property
+    def correct(self) -> int: ...  # noqa: D102
+    @property
+    def slots(self) -> int: ...  # noqa: D102
+    @property
+    def misplaced(self) -> int: ...  # noqa: D102
+    @property
+    def dropped(self) -> int: ...  # noqa: D102
+    @property
+    def lost(self) -> int: ...  # noqa: D102
+    @property
+    def stranded(self) -> int: ...  # noqa: D102
 
 
 @dataclass(frozen=True)
@@ -98,17 +117,38 @@ class EpisodeMetrics:
             sim_s: Simulated episode time [s].
             horizon_s: Throughput horizon of a failed episode [s].
         """
-        return EpisodeMetrics(
-            success=float(ev.success),
-            filled=ev.correct / max(ev.slots, 1),
-            misplaced=float(ev.misplaced),
-            dropped=float(ev.dropped),
-            lost=float(ev.lost),
-            stranded=float(ev.stranded),
-            left=float(ev.on_input + ev.held + ev.waiting),  # never placed
+        return EpisodeMetrics.from_counts(
+            ev,
+            left=ev.on_input + ev.held + ev.waiting,  # never placed
             tiles_per_min=ev.tiles_per_min(sim_s, horizon_s),
             sim_s=sim_s,
             span_s=ev.throughput_span(sim_s, horizon_s),
+        )
+
+    @staticmethod
+    def from_counts(
+        counts: TileCounts, *, left: float, tiles_per_min: float, sim_s: float, span_s: float
+    ) -> EpisodeMetrics:
+        """The one construction of the metrics from an episode's tile counts.
+
+        Args:
+            counts: The episode's outcome (an `envs.task.Evaluation`, an evaluation record).
+            left: Tiles never placed.
+            tiles_per_min: Placed-and-correct tiles per simulated minute.
+            sim_s: Simulated episode time [s].
+            span_s: The span the throughput is measured over [s].
+        """
+        return EpisodeMetrics(
+            success=float(counts.success),
+            filled=counts.correct / max(counts.slots, 1),
+            misplaced=float(counts.misplaced),
+            dropped=float(counts.dropped),
+            lost=float(counts.lost),
+            stranded=float(counts.stranded),
+            left=float(left),
+            tiles_per_min=tiles_per_min,
+            sim_s=sim_s,
+            span_s=span_s,
         )
 
 
@@ -185,6 +225,7 @@ __all__ = [
     "METRICS",
     "EpisodeMetrics",
     "Estimate",
+    "TileCounts",
     "aggregate_runs",
     "iqm_ci",
     "run_score",

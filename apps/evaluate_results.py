@@ -147,17 +147,8 @@ class Protocol:
 
 def episode_metrics(ep: EpisodeResult) -> EpisodeMetrics:
     """The protocol's metrics of an episode result (`agents.protocol.EpisodeMetrics`)."""
-    return EpisodeMetrics(
-        success=float(ep.success),
-        filled=ep.correct / max(ep.slots, 1),
-        misplaced=float(ep.misplaced),
-        dropped=float(ep.dropped),
-        lost=float(ep.lost),
-        stranded=float(ep.stranded),
-        left=float(ep.left),
-        tiles_per_min=ep.tiles_per_min,
-        sim_s=ep.sim_s,
-        span_s=ep.span_s,
+    return EpisodeMetrics.from_counts(
+        ep, left=ep.left, tiles_per_min=ep.tiles_per_min, sim_s=ep.sim_s, span_s=ep.span_s
     )
 
 

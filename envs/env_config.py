@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any, Literal, get_args
 
 from configs import ConfigError, from_dict, load_yaml, resolve_path
+from configs.checks import check_fields, checked
 from envs.cell.config import FEED_MODES, CellConfig
 from envs.env_cell_keys import (
     CELL_KEYS,
@@ -39,6 +40,8 @@ SlotOrder = Literal["mesh", "shuffled", "design"]
 RotationFrame = Literal["tile", "slot"]
 InvalidActions = Literal["fail", "refuse"]
 DesignSource = Literal["fixed", "procedural"]
+DEFAULT_ROTATION_BINS = 4
+"""Rotation choices of ``pick_place_discrete`` by default: quarter turns (this 4's one home)."""
 ACTION_MODES: tuple[str, ...] = get_args(ActionMode)
 """Allowed ``action_mode`` values."""
 OBS_MODES: tuple[str, ...] = get_args(ObsMode)
@@ -170,52 +173,52 @@ class EnvConfig:
     """
 
     design: str = "paper_mixed"
-    max_slots: int = 0
-    design_source: DesignSource = "fixed"
+    max_slots: int = checked(0, ge=0)
+    design_source: DesignSource = checked("fixed", choices=DESIGN_SOURCES)
     design_generator: str = "design_generator_train"
     exclude_designs: tuple[str, ...] = ()
-    design_tries: int = 50
+    design_tries: int = checked(50, ge=1, integer=True)
     cell: CellConfig = field(default_factory=lambda: env_cell("cell", ENV_CELL_CHANGES))
     planner: str = "planner"
-    action_mode: ActionMode = "pick_place"
-    obs_mode: ObsMode = "rgb"
+    action_mode: ActionMode = checked("pick_place", choices=ACTION_MODES)
+    obs_mode: ObsMode = checked("rgb", choices=OBS_MODES)
     objects_points: int = 32
     objects_rows: int | None = None
-    objects_noise_mm: float = 0.0
-    objects_source: ObjectsSource = "privileged"
+    objects_noise_mm: float = checked(0.0, ge=0)
+    objects_source: ObjectsSource = checked("privileged", choices=OBJECTS_SOURCES)
     objects_image_size: tuple[int, int] = (492, 656)
     objects_gate_mm: float = 5.0
     image_size: tuple[int, int] = (72, 96)
     depth: bool = False
-    reward_mode: RewardMode = "sparse"
-    execution: Execution = "dynamic"
+    reward_mode: RewardMode = checked("sparse", choices=REWARD_MODES)
+    execution: Execution = checked("dynamic", choices=EXECUTIONS)
     pick_yaw_entry: bool = True
     chain_cycles: bool = True
-    color_randomization: float = 0.0
-    light_randomization: float = 0.0
-    camera_position_jitter: float = 0.0
-    camera_angle_jitter_deg: float = 0.0
-    action_noise: float = 0.0
-    obs_noise: float = 0.0
-    control_dt: float = 0.04
-    tool_speed: float = 0.5
-    tool_yaw_rate: float = 3.0
+    color_randomization: float = checked(0.0, ge=0)
+    light_randomization: float = checked(0.0, ge=0)
+    camera_position_jitter: float = checked(0.0, ge=0)
+    camera_angle_jitter_deg: float = checked(0.0, ge=0)
+    action_noise: float = checked(0.0, ge=0)
+    obs_noise: float = checked(0.0, ge=0)
+    control_dt: float = checked(0.04, gt=0)
+    tool_speed: float = checked(0.5, gt=0)
+    tool_yaw_rate: float = checked(3.0, gt=0)
     tool_z_range: tuple[float, float] = (0.004, 0.3)
-    pick_margin: float = 0.0
-    place_margin: float = 0.0
-    rotation_bins: int = 4
-    tile_order: TileOrder = "belt"
-    slot_order: SlotOrder = "mesh"
-    rotation_frame: RotationFrame = "tile"
-    invalid_actions: InvalidActions = "fail"
-    kinematic_settle: float = 0.01
-    failed_action_time: float = 0.04
-    reject_past_belt_end: float = 0.08
-    reject_release_height: float = 0.03
-    reset_settle: float = 0.0
-    layout_tries: int = 20
-    position_tolerance: float = PLACEMENT_POSITION_TOLERANCE_M
-    yaw_tolerance_deg: float = PLACEMENT_YAW_TOLERANCE_DEG
+    pick_margin: float = checked(0.0, ge=0)
+    place_margin: float = checked(0.0, ge=0)
+    rotation_bins: int = checked(DEFAULT_ROTATION_BINS, ge=1, integer=True)
+    tile_order: TileOrder = checked("belt", choices=TILE_ORDERS)
+    slot_order: SlotOrder = checked("mesh", choices=SLOT_ORDERS)
+    rotation_frame: RotationFrame = checked("tile", choices=ROTATION_FRAMES)
+    invalid_actions: InvalidActions = checked("fail", choices=INVALID_ACTIONS)
+    kinematic_settle: float = checked(0.01, gt=0)
+    failed_action_time: float = checked(0.04, gt=0)
+    reject_past_belt_end: float = checked(0.08, gt=0)
+    reject_release_height: float = checked(0.03, gt=0)
+    reset_settle: float = checked(0.0, ge=0)
+    layout_tries: int = checked(20, ge=1, integer=True)
+    position_tolerance: float = checked(PLACEMENT_POSITION_TOLERANCE_M, gt=0)
+    yaw_tolerance_deg: float = checked(PLACEMENT_YAW_TOLERANCE_DEG, gt=0)
     mesh_height_tolerance: float = 0.003
     max_tilt_deg: float = 8.0
     reward_correct: float = 1.0
@@ -238,55 +241,11 @@ class EnvConfig:
         object.__setattr__(self, "image_size", size)
         if len(size) != 2 or min(size) < 1:
             raise EnvConfigError(f"image_size must be (height, width) >= 1 px, got {size}")
-        for name, allowed in (
-            ("action_mode", ACTION_MODES),
-            ("obs_mode", OBS_MODES),
-            ("objects_source", OBJECTS_SOURCES),
-            ("reward_mode", REWARD_MODES),
-            ("execution", EXECUTIONS),
-            ("tile_order", TILE_ORDERS),
-            ("slot_order", SLOT_ORDERS),
-            ("rotation_frame", ROTATION_FRAMES),
-            ("invalid_actions", INVALID_ACTIONS),
-            ("design_source", DESIGN_SOURCES),
-        ):
-            value = getattr(self, name)
-            if value not in allowed:
-                raise EnvConfigError(f"unknown {name} {value!r}; allowed: {list(allowed)}")
+        check_fields(self, EnvConfigError)
         if self.render_mode is not None and self.render_mode not in RENDER_MODES:
             raise EnvConfigError(
                 f"unknown render_mode {self.render_mode!r}; allowed: None, {list(RENDER_MODES)}"
             )
-        positive = (
-            "control_dt",
-            "tool_speed",
-            "tool_yaw_rate",
-            "position_tolerance",
-            "yaw_tolerance_deg",
-            "kinematic_settle",
-            "failed_action_time",
-            "reject_past_belt_end",
-            "reject_release_height",
-        )
-        for name in positive:
-            if not getattr(self, name) > 0:
-                raise EnvConfigError(f"{name} must be > 0, got {getattr(self, name)!r}")
-        nonneg = (
-            "max_slots",
-            "color_randomization",
-            "light_randomization",
-            "camera_position_jitter",
-            "camera_angle_jitter_deg",
-            "action_noise",
-            "obs_noise",
-            "reset_settle",
-            "pick_margin",
-            "place_margin",
-            "objects_noise_mm",
-        )
-        for name in nonneg:
-            if not getattr(self, name) >= 0:
-                raise EnvConfigError(f"{name} must be >= 0, got {getattr(self, name)!r}")
         self._check_objects()
         lo_hi = tuple(self.tool_z_range)
         if len(lo_hi) != 2 or not 0 <= lo_hi[0] < lo_hi[1]:  # noqa: PLR2004 - (low, high)
@@ -302,10 +261,6 @@ class EnvConfig:
                 "design_source 'procedural' needs max_slots >= 1 (the spaces are built for "
                 f"that many tiles and slots), got max_slots={self.max_slots!r}"
             )
-        for name in ("rotation_bins", "layout_tries", "design_tries"):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-                raise EnvConfigError(f"{name} must be an int >= 1, got {value!r}")
 
     def _check_objects(self) -> None:
         lo, hi = OBJECTS_POINTS_RANGE
@@ -394,6 +349,7 @@ __all__ = [
     "RenderMode",
     "RewardMode",
     "ACTION_MODES",
+    "DEFAULT_ROTATION_BINS",
     "DESIGN_SOURCES",
     "EXECUTIONS",
     "FEEDS",

@@ -3,7 +3,9 @@
 ``python scripts/check_sizes.py [--file-lines 500] [--function-lines 80] [PACKAGE ...]`` prints
 every ``.py`` file of the packages (default: every top-level package of the repository) longer
 than ``--file-lines`` lines and every function or method longer than ``--function-lines`` lines
-(its decorators excluded, its docstring included), and exits with status 1 when any is found.
+(its decorators excluded, its docstring included). The limits are a prompt for review, not a
+reason to split or move code: a file that holds one concept may be long. It exits with status 0
+(a warning) unless ``--strict`` is given, then 1 when anything is over.
 """
 
 from __future__ import annotations
@@ -38,11 +40,12 @@ def oversized(
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Print what is over the limits; 1 when anything is."""
+    """Print what is over the limits (review prompts); with ``--strict`` 1 when anything is."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("packages", nargs="*", default=list(PACKAGES))
     ap.add_argument("--file-lines", type=int, default=500)
     ap.add_argument("--function-lines", type=int, default=80)
+    ap.add_argument("--strict", action="store_true", help="exit 1 when anything is over")
     args = ap.parse_args(argv)
     found = oversized(args.packages, args.file_lines, args.function_lines)
     for kind, lines, where in found:
@@ -51,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{len(found)} over the limits ({args.file_lines} lines a file, "
         f"{args.function_lines} a function)"
     )
-    return 1 if found else 0
+    return 1 if found and args.strict else 0
 
 
 if __name__ == "__main__":

@@ -42,13 +42,14 @@ import numpy as np
 from agents.camera.crops import CHANNELS, CropConfig, slot_templates, step_crops
 from agents.errors import AgentError
 from configs import load_config
+from envs.env_config import DEFAULT_ROTATION_BINS
 
 KIND = "camera_crops"
 """The ``kind`` entry of a saved camera policy (how `agents.policies` recognises the file)."""
 CAMERA_BC_CONFIG = "camera_bc"
 """Bundled config name (``configs/camera_bc.yaml``)."""
-TURNS = 4
-"""Quarter turns scored per tile (the env's default ``rotation_bins``)."""
+TURNS = DEFAULT_ROTATION_BINS
+"""Turns scored per tile: quarter turns of the crop (the env's default ``rotation_bins``)."""
 
 
 @dataclass(frozen=True)

@@ -39,7 +39,7 @@ import numpy as np
 
 from agents.errors import AgentError
 from configs import load_config
-from envs.observations.spaces import SLOT_DIM, TILE_DIM
+from envs.observations.fields import SLOT_DIM, SLOT_FIELDS, TILE_DIM, TILE_FIELDS, column
 from envs.task_spec import TaskSpec
 from spatial.angles import wrap_angle
 
@@ -269,8 +269,12 @@ class LowLevelExpert:
 
 def _target(tiles: np.ndarray, slots: np.ndarray) -> tuple[int, int] | None:
     """(tile, slot): the first open slot and the present tile of its class nearest to it."""
-    for k in np.flatnonzero(slots[:, 5] < 0.5):
-        same = np.flatnonzero((tiles[:, 6] > 0.5) & (np.abs(tiles[:, 5] - slots[k, 4]) < 0.5))
+    t_class, present = column(TILE_FIELDS, "class"), column(TILE_FIELDS, "present")
+    s_class, filled = column(SLOT_FIELDS, "class"), column(SLOT_FIELDS, "filled")
+    for k in np.flatnonzero(slots[:, filled] < 0.5):
+        same = np.flatnonzero(
+            (tiles[:, present] > 0.5) & (np.abs(tiles[:, t_class] - slots[k, s_class]) < 0.5)
+        )
         if len(same):
             d = np.linalg.norm(tiles[same, :2] - slots[k, :2], axis=1)
             return int(same[np.argmin(d)]), int(k)

@@ -28,6 +28,7 @@ from shapely.geometry import Polygon
 
 import qshape
 from agents.pair.objects_rows import FIELDS, bin_turns
+from envs.env_config import DEFAULT_ROTATION_BINS
 
 SIMPLIFY_MM = 3.0
 """Douglas-Peucker tolerance [mm] that reduces a row's resampled outline to its relevant points
@@ -71,7 +72,7 @@ class TheoryPolicy:
     def __init__(self, env: Any = None, simplify_mm: float = SIMPLIFY_MM) -> None:
         self.simplify_mm = simplify_mm
         space = getattr(env, "action_space", None)
-        self.bins = int(space.nvec[2]) if space is not None else 4
+        self.bins = int(space.nvec[2]) if space is not None else DEFAULT_ROTATION_BINS
         self._slot_cache: dict[bytes, qshape.Description | None] = {}
         self.fallbacks = 0
         """Steps on which no pair matched qualitatively (the colour-and-area fallback)."""

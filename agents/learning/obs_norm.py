@@ -32,9 +32,9 @@ import torch
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 
 from agents.errors import AgentError
-from envs.observations.spaces import SLOT_DIM, TILE_DIM
+from envs.observations.fields import ROBOT_FIELDS, SLOT_DIM, SLOT_FIELDS, TILE_DIM, TILE_FIELDS
 
-TOOL_POS = slice(12, 15)
+TOOL_POS = ROBOT_FIELDS["tool_pos"]
 """Tool position (x, y, z) [m] in the ``robot`` vector."""
 STD_FLOOR = 1e-3
 """Smallest standard deviation used (features constant in the data are divided by this)."""
@@ -104,7 +104,10 @@ class NormalizedStateExtractor(BaseFeaturesExtractor):
             tool = observations["robot"][:, TOOL_POS]
             tile = observations["tiles"][:, :TILE_DIM]
             slot = observations["slots"][:, :SLOT_DIM]
-            diff = torch.atan2(slot[:, 3], slot[:, 2]) - torch.atan2(tile[:, 4], tile[:, 3])
+            s_yaw, t_yaw = SLOT_FIELDS["yaw"].start, TILE_FIELDS["yaw"].start
+            diff = torch.atan2(slot[:, s_yaw + 1], slot[:, s_yaw]) - torch.atan2(
+                tile[:, t_yaw + 1], tile[:, t_yaw]
+            )
             turns = [f(k * diff) for k in YAW_HARMONICS for f in (torch.cos, torch.sin)]
             rel = torch.cat([tile[:, :3] - tool, slot[:, :2] - tile[:, :2]], 1)
             fine = [torch.tanh(rel / scale) for scale in FINE_SCALES]

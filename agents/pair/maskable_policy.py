@@ -24,7 +24,9 @@ from torch import nn
 
 from agents.errors import AgentError
 from agents.pair.scorer import PairScorer, PairScorerConfig
-from agents.pair.state_rows import ADAPTERS, FEATURE_DIMS, SLOT_DIM, TILE_DIM
+from agents.pair.state_rows import ADAPTERS, FEATURE_DIMS
+from envs.env_config import DEFAULT_ROTATION_BINS
+from envs.observations.fields import SLOT_DIM, TILE_DIM
 
 
 class PairFeatures(BaseFeaturesExtractor):
@@ -46,7 +48,7 @@ class PairFeatures(BaseFeaturesExtractor):
         observation_space: spaces.Dict,
         hidden: int = 64,
         layers: int = 2,
-        rotation_bins: int = 4,
+        rotation_bins: int = DEFAULT_ROTATION_BINS,
         adapter: str = "state",
     ) -> None:
         keys = getattr(observation_space, "spaces", {})

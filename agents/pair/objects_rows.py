@@ -21,24 +21,28 @@ filled while its flag is 0.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import torch
 
 from agents.pair.scorer import PairRows
+from envs.env_config import DEFAULT_ROTATION_BINS
+from envs.observations.fields import column
+from envs.observations.objects import OBJECT_FIELDS
+from envs.task_spec import rotation_step
 
 FIELDS: dict[str, Any] = {
-    "rgb": slice(0, 3),
-    "area": 3,
-    "hole_area": 4,
-    "yaw": slice(7, 9),
-    "flag": 9,
-    "valid": 10,
-    "points": 11,
+    "rgb": OBJECT_FIELDS["rgb"],
+    "area": column(OBJECT_FIELDS, "area"),
+    "hole_area": column(OBJECT_FIELDS, "hole_area"),
+    "yaw": OBJECT_FIELDS["yaw"],
+    "flag": column(OBJECT_FIELDS, "flag"),
+    "valid": column(OBJECT_FIELDS, "valid"),
+    "points": OBJECT_FIELDS["points"].start,
 }
-"""Columns of an entity row (`envs.observations.objects.OBJECT_FIELDS`; points from 11 on)."""
-ROTATION_BINS = 4
+"""Columns of an entity row read here (the env's `envs.observations.objects.OBJECT_FIELDS`; the
+points from their first column to the row's end, whatever ``objects_points``)."""
+ROTATION_BINS = DEFAULT_ROTATION_BINS
 """Rotation bins of the ``pick_place_discrete`` action this adapter serves."""
 CHAMFER_SCALE_MM = 5.0
 """Chamfer distances are divided by this [mm] before they enter the scorer."""
@@ -76,7 +80,7 @@ def bin_turns(tiles: torch.Tensor, slots: torch.Tensor, bins: int = ROTATION_BIN
     yaw, then ``r`` more steps of ``2 pi / bins``: turn = r * step - e, e the tile's yaw
     relative to the slot wrapped into [-step / 2, step / 2].
     """
-    step = 2 * math.pi / bins
+    step = rotation_step(bins)
     d = yaw(tiles)[:, :, None] - yaw(slots)[:, None, :]
     e = d - step * torch.round(d / step)
     r = torch.arange(bins, dtype=tiles.dtype) * step

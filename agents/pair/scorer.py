@@ -22,6 +22,8 @@ from typing import Any
 import torch
 from torch import nn
 
+from envs.env_config import DEFAULT_ROTATION_BINS
+
 MASKED_LOGIT = -1e9
 """Logit of a forbidden (tile, slot) pair (finite, so a softmax over all-forbidden rows is
 defined; exp of it is 0 in float32)."""
@@ -43,7 +45,7 @@ class PairScorerConfig:
     tile_dim: int
     slot_dim: int
     pair_dim: int
-    rotation_bins: int = 4
+    rotation_bins: int = DEFAULT_ROTATION_BINS
     hidden: int = 64
     layers: int = 2
 

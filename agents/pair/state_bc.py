@@ -20,8 +20,9 @@ import torch
 from agents.errors import AgentError
 from agents.learning.classifier_fit import fit_classifier
 from agents.pair.scorer import PairScorer, PairScorerConfig
-from agents.pair.state_rows import ADAPTERS, FEATURE_DIMS, SLOT_DIM, TILE_DIM
+from agents.pair.state_rows import ADAPTERS, FEATURE_DIMS
 from configs.files import atomic_path, write_json
+from envs.observations.fields import SLOT_DIM, TILE_DIM
 
 ARCH = "pair"
 """Value of the ``arch`` entry of a pair-scorer clone file."""

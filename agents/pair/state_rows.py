@@ -31,11 +31,12 @@ from agents.pair.objects_rows import (
     objects_rows,
 )
 from agents.pair.scorer import PairRows
+from envs.observations.fields import SLOT_DIM, SLOT_FIELDS, TILE_DIM, TILE_FIELDS, column
 
-TILE_DIM = 7
-"""Features per tile in the ``tiles`` observation."""
-SLOT_DIM = 6
-"""Features per slot in the ``slots`` observation."""
+T_CLASS, T_PRESENT = column(TILE_FIELDS, "class"), column(TILE_FIELDS, "present")
+T_YAW = TILE_FIELDS["yaw"]
+S_CLASS, S_FILLED = column(SLOT_FIELDS, "class"), column(SLOT_FIELDS, "filled")
+S_XY, S_YAW = SLOT_FIELDS["xy"], SLOT_FIELDS["yaw"]
 STATE_TILE_FEATURES = 3
 """Tile row features given to the scorer: x, y [m], present."""
 STATE_SLOT_FEATURES = 3
@@ -57,21 +58,21 @@ def state_rows(tiles: torch.Tensor, slots: torch.Tensor) -> PairRows:
     """
     t = tiles.float().reshape(tiles.shape[0] if tiles.dim() > 1 else 1, -1, TILE_DIM)
     s = slots.float().reshape(t.shape[0], -1, SLOT_DIM)
-    same = (t[:, :, None, 5] - s[:, None, :, 4]).abs() < FLAG
-    t_yaw = torch.atan2(t[..., 4], t[..., 3])
-    s_yaw = torch.atan2(s[..., 3], s[..., 2])
+    same = (t[:, :, None, T_CLASS] - s[:, None, :, S_CLASS]).abs() < FLAG
+    t_yaw = torch.atan2(t[..., T_YAW.start + 1], t[..., T_YAW.start])
+    s_yaw = torch.atan2(s[..., S_YAW.start + 1], s[..., S_YAW.start])
     d = t_yaw[:, :, None] - s_yaw[:, None, :]
     pairs = torch.stack(
         [same.float(), torch.cos(d), torch.sin(d), torch.cos(2 * d), torch.sin(2 * d)], dim=-1
     )
-    filled = s[..., 5] > FLAG
-    gap = torch.cdist(t[..., :2], s[..., :2])
+    filled = s[..., S_FILLED] > FLAG
+    gap = torch.cdist(t[..., :2], s[..., S_XY])
     on_slot = (gap < ON_SLOT_M).any(-1)
     return PairRows(
-        tiles=torch.stack([t[..., 0], t[..., 1], t[..., 6]], dim=-1),
-        slots=torch.stack([s[..., 0], s[..., 1], s[..., 5]], dim=-1),
+        tiles=torch.stack([t[..., 0], t[..., 1], t[..., T_PRESENT]], dim=-1),
+        slots=torch.stack([s[..., S_XY.start], s[..., S_XY.start + 1], s[..., S_FILLED]], dim=-1),
         pairs=pairs,
-        tile_mask=(t[..., 6] > FLAG) & ~on_slot,
+        tile_mask=(t[..., T_PRESENT] > FLAG) & ~on_slot,
         slot_mask=~filled,
     )
 
