@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from agents.moved import MOVED
+
 ROOT = Path(__file__).resolve().parents[1]
 MOST_MODULES = {"agents": 10, "apps": 14, "benchmarks": 14, "envs": 16}
 """At most this many modules directly in each folder; more go into subpackages by kind."""
@@ -21,8 +23,6 @@ def test_folders_hold_few_modules_directly(folder: str, most: int) -> None:
 
 def test_old_agent_module_names_load_the_moved_modules() -> None:
     """Checkpoints pickle classes by dotted path: an old name loads the moved module, warning."""
-    from agents.moved import MOVED
-
     for old, new in sorted(MOVED.items()):
         sys.modules.pop(old, None)
         with pytest.warns(DeprecationWarning, match=new.replace(".", r"\.")):
