@@ -137,7 +137,7 @@ def _module(name: str) -> str:
         ("train", ["--config", "no_such_preset"], "error: .*no_such_preset"),
         ("sweep", ["--config", "no_such_sweep"], "error: .*no_such_sweep"),
         ("record_demos", ["--task", "NoSuch-v0", "--episodes", "1"], "error: unknown task"),
-        ("bc", ["--dataset-id", "mosaic/none-v0", "--root", "{tmp}"], "error: no dataset"),
+        ("decision", ["--dataset-id", "mosaic/none-v0", "--root", "{tmp}"], "error: no dataset"),
         ("main", ["--belt-speed", "-1", "--out", "{tmp}"], "error: run: belt_speed"),
     ],
 )
