@@ -47,6 +47,7 @@ class Rule:
         length: A sequence value must have this many elements.
         increasing: A sequence value must be strictly increasing.
         integer: Each value must be an int (not a bool).
+        finite: Each value must be a finite number (implied by any bound).
         optional: None is allowed besides the values the rule allows.
     """
 
@@ -58,6 +59,7 @@ class Rule:
     length: int | None = None
     increasing: bool = False
     integer: bool = False
+    finite: bool = False
     optional: bool = False
 
     def problem(self, name: str, value: Any) -> str | None:
@@ -90,14 +92,17 @@ class Rule:
             right = ")" if upper[0] == "<" else "]"
             return f"{kind}in {left}{_number(lower[1])}, {_number(upper[1])}{right}"
         bounds = [f"{op} {_number(b)}" for op, b in (lower, upper) if b is not None]
-        return (kind + " ".join(bounds)).strip() or "an int"
+        if not bounds:
+            return "an int" if self.integer else "a finite number"
+        return kind + " ".join(bounds)
 
     def _bounded(self) -> bool:
-        return any(b is not None for b in (self.gt, self.ge, self.lt, self.le))
+        return self.finite or any(b is not None for b in (self.gt, self.ge, self.lt, self.le))
 
-    def _within(self, v: Any) -> bool:
-        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(v):
+    def _within(self, value: Any) -> bool:
+        if not _finite_number(value):
             return False
+        v = float(value)
         return (
             (self.gt is None or v > self.gt)
             and (self.ge is None or v >= self.ge)
@@ -106,12 +111,15 @@ class Rule:
         )
 
     def _broken(self, name: str, value: Any) -> str:
-        finite = "" if self.integer else "a finite number "
-        plain = all(
-            isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)
-            for v in _elements(value)
-        )
-        return f"{name} must be {'' if plain else finite}{self.describe()}, got {value!r}"
+        words = self.describe()
+        plain = all(_finite_number(v) for v in _elements(value))
+        if not (plain or self.integer or words.startswith("a finite")):
+            words = f"a finite number {words}"
+        return f"{name} must be {words}, got {value!r}"
+
+
+def _finite_number(value: Any) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def _elements(value: Any) -> list[Any]:
@@ -121,7 +129,8 @@ def _elements(value: Any) -> list[Any]:
 
 
 def _number(bound: float) -> str:
-    return str(int(bound)) if float(bound).is_integer() and math.isfinite(bound) else repr(bound)
+    whole = float(bound).is_integer() and abs(bound) < 1e6  # noqa: PLR2004 - beyond: 1e+15
+    return str(int(bound)) if whole else repr(float(bound))
 
 
 def checked(
@@ -135,10 +144,11 @@ def checked(
     length: int | None = None,
     increasing: bool = False,
     integer: bool = False,
+    finite: bool = False,
     optional: bool = False,
 ) -> Any:
     """A dataclass field with ``default`` and the `Rule` its values must keep."""
-    rule = Rule(gt, ge, lt, le, choices, length, increasing, integer, optional)
+    rule = Rule(gt, ge, lt, le, choices, length, increasing, integer, finite, optional)
     return dataclasses.field(default=default, metadata={CHECK_KEY: rule})
 
 
