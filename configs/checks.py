@@ -26,7 +26,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from typing import Any
 
@@ -146,9 +146,12 @@ def checked(
     integer: bool = False,
     finite: bool = False,
     optional: bool = False,
+    factory: Callable[[], Any] | None = None,
 ) -> Any:
-    """A dataclass field with ``default`` and the `Rule` its values must keep."""
+    """A dataclass field with ``default`` (or ``factory``) and the `Rule` its values must keep."""
     rule = Rule(gt, ge, lt, le, choices, length, increasing, integer, finite, optional)
+    if factory is not None:
+        return dataclasses.field(default_factory=factory, metadata={CHECK_KEY: rule})
     return dataclasses.field(default=default, metadata={CHECK_KEY: rule})
 
 
