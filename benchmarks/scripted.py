@@ -22,6 +22,7 @@ from typing import Any
 
 from apps.cli import CommandParser, UsageError, run_cli
 from configs import ConfigError, load_config
+from configs.checks import check_fields, checked
 from configs.files import write_text
 from envs import ENV_ID
 from envs.cell.rendering import use_headless_rendering
@@ -61,15 +62,16 @@ class ScriptedBenchConfig:
 
     seeds: tuple[int, int] = (0, 20)
     image_size: tuple[int, int] = (492, 656)
-    steps_per_slot: int = 2
+    steps_per_slot: int = checked(2, ge=1)
     scenarios: tuple[Scenario, ...] = ()
 
     def __post_init__(self) -> None:
         """Raise `ConfigError` on bad values."""
-        if self.seeds[1] <= self.seeds[0] or self.steps_per_slot < 1 or not self.scenarios:
+        check_fields(self, ConfigError, prefix="bench_scripted: ")
+        if self.seeds[1] <= self.seeds[0] or not self.scenarios:
             raise ConfigError(
-                "bench_scripted: seeds must be [first, last) with last > first, "
-                "steps_per_slot >= 1 and at least one scenario"
+                "bench_scripted: seeds must be [first, last) with last > first, and at least one "
+                "scenario"
             )
 
 
