@@ -15,6 +15,7 @@ import pytest
 import envs  # noqa: F401 - registers MosaicAssembly-v0
 from envs.actions import transfer_poses
 from envs.mosaic_env import MosaicAssemblyEnv, MosaicEnvError
+from tests.presets import FAST_DISCRETE
 
 OUT = Path(__file__).resolve().parents[2] / "out"
 N_SLOTS = 3
@@ -97,12 +98,7 @@ def test_dynamic_and_kinematic_agree_on_clean_picks() -> None:
 @pytest.fixture
 def discrete_env() -> Iterator[MosaicAssemblyEnv]:
     """A kinematic ``pick_place_discrete`` env on the paper's mixed design, reset with seed 0."""
-    env = MosaicAssemblyEnv(
-        action_mode="pick_place_discrete",
-        execution="kinematic",
-        obs_mode="state",
-        design="paper_mixed",
-    )
+    env = MosaicAssemblyEnv(**FAST_DISCRETE)
     env.reset(seed=0)
     yield env
     env.close()
