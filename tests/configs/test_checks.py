@@ -99,3 +99,39 @@ def test_describe_puts_the_rule_in_words() -> None:
     assert Rule(ge=2, le=256, integer=True).describe() == "an int in [2, 256]"
     assert Rule(lt=0.5).describe() == "< 0.5"
     assert Rule(gt=0, le=1e4).describe() == "in (0, 10000]"
+    assert Rule(gt=0, le=1e100).describe() == "in (0, 1e+100]"
+    assert Rule(integer=True).describe() == "an int"
+    assert Rule(finite=True).describe() == "a finite number"
+
+
+BUILT: list[int] = []
+
+
+def _home() -> tuple[float, ...]:
+    BUILT.append(1)
+    return (0.0, 1.5)
+
+
+@dataclass(frozen=True)
+class Lens:
+    k1: float = checked(0.0, finite=True)
+    home: tuple[float, ...] = checked(factory=_home, length=2, finite=True)
+    steps: int = checked(3, integer=True)
+
+    def __post_init__(self) -> None:
+        check_fields(self, MotionError, qualify=True)
+
+
+def test_finite_only_factory_defaults_and_int_only_rules() -> None:
+    before = len(BUILT)
+    assert Lens().home == (0.0, 1.5) and Lens().home == (0.0, 1.5)
+    assert len(BUILT) == before + 2  # the default is built per instance
+    assert Lens(k1=-3.0).k1 == -3.0  # no bound: any finite number
+    with pytest.raises(MotionError, match=re.escape("Lens.k1 must be a finite number, got nan")):
+        Lens(k1=math.nan)
+    with pytest.raises(MotionError, match=re.escape("Lens.home must be a finite number, got")):
+        Lens(home=(0.0, math.inf))
+    with pytest.raises(MotionError, match=re.escape("Lens.home needs 2 values, got (0.0,)")):
+        Lens(home=(0.0,))
+    with pytest.raises(MotionError, match=re.escape("Lens.steps must be an int, got 2.5")):
+        Lens(steps=2.5)  # type: ignore[arg-type]
