@@ -25,7 +25,10 @@ import argparse
 import os
 import sys
 from collections.abc import Callable, Sequence
-from typing import Any, NoReturn
+from pathlib import Path
+from typing import Any, NoReturn, TypeVar
+
+T = TypeVar("T")
 
 EXIT_ERROR = 1
 """Exit status of a command refused by one of the project's errors."""
@@ -124,6 +127,21 @@ def run_cli(main: Callable[[], Any], argv: Sequence[str] | None = None) -> NoRet
     sys.exit(0)
 
 
+def write_result(path: str | Path, result: T, note: str = "") -> T:
+    """Write a command's result as indented JSON (whole or not at all), say where, return it.
+
+    Args:
+        path: The JSON file (its folder is made).
+        result: A JSON-serialisable value.
+        note: Appended to the printed ``wrote <path>`` line (e.g. the run's time).
+    """
+    from configs.files import write_json  # noqa: PLC0415 - this module imports no package
+
+    write_json(path, result)
+    print(f"wrote {path}{note}")
+    return result
+
+
 __all__ = [
     "DEBUG_ENV",
     "DEBUG_FLAG",
@@ -137,4 +155,5 @@ __all__ = [
     "one_line",
     "project_errors",
     "run_cli",
+    "write_result",
 ]

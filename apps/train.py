@@ -52,6 +52,7 @@ from apps.train_extras import (
     resolve_algo_kwargs,
 )
 from configs import ConfigError, from_dict, load_yaml
+from configs.checks import check_fields, checked
 from configs.files import atomic_path, write_json, write_text
 from envs import ENV_ID
 from envs.cell.rendering import use_headless_rendering
@@ -141,56 +142,42 @@ class TrainConfig:
 
     algo: str = "PPO"
     policy: str = "auto"
-    total_timesteps: int = 100_000
-    n_envs: int = 1
-    vec_env: str = "dummy"
+    total_timesteps: int = checked(100_000, ge=1)
+    n_envs: int = checked(1, ge=1)
+    vec_env: str = checked("dummy", choices=VEC_ENVS)
     seed: int = 0
-    max_episode_steps: int = 0
+    max_episode_steps: int = checked(0, ge=0)
     env: Mapping[str, Any] = field(default_factory=dict)
     algo_kwargs: Mapping[str, Any] = field(default_factory=dict)
     policy_kwargs: Mapping[str, Any] = field(default_factory=dict)
-    checkpoint_freq: int = 10_000
+    checkpoint_freq: int = checked(10_000, ge=0)
     tensorboard: bool = True
     progress_bar: bool = True
-    torch_threads: int = 1
+    torch_threads: int = checked(1, ge=1)
     device: str = "cpu"
     verbose: int = 0
     flatten_actions: bool = False
-    max_wall_s: float = 0.0
-    max_cpu_s: float = 0.0
+    max_wall_s: float = checked(0.0, ge=0)
+    max_cpu_s: float = checked(0.0, ge=0)
     task: str = ""
     log_every_s: float = 30.0
-    reach_shaping: float = 0.0
+    reach_shaping: float = checked(0.0, ge=0)  # [1/m]
     demos: str = ""
     bc_epochs: int = 0
     normalize_obs: bool = False
-    residual_scale: float = 0.0
-    hold_actor_steps: int = 0
-    actor_bc_weight: float = 0.0
-    actor_bc_decay_steps: int = 0
+    residual_scale: float = checked(0.0, ge=0)
+    hold_actor_steps: int = checked(0, ge=0)
+    actor_bc_weight: float = checked(0.0, ge=0)
+    actor_bc_decay_steps: int = checked(0, ge=0)
 
     def __post_init__(self) -> None:
-        if self.vec_env not in VEC_ENVS:
-            raise TrainError(f"unknown vec_env {self.vec_env!r}; allowed: {list(VEC_ENVS)}")
+        check_fields(self, TrainError)
         if self.policy not in POLICIES and ":" not in self.policy:
             raise TrainError(
                 f"unknown policy {self.policy!r}; allowed: {list(POLICIES)} or module:Class"
             )
-        for name in ("total_timesteps", "n_envs", "torch_threads"):
-            if getattr(self, name) < 1:
-                raise TrainError(f"{name} must be >= 1, got {getattr(self, name)}")
-        if min(self.max_episode_steps, self.checkpoint_freq, self.max_wall_s, self.max_cpu_s) < 0:
-            raise TrainError(
-                "max_episode_steps, checkpoint_freq, max_wall_s and max_cpu_s must be >= 0"
-            )
         if (self.bc_epochs or self.normalize_obs) and not self.demos:
             raise TrainError("bc_epochs and normalize_obs need demos (a dataset id)")
-        if self.residual_scale < 0:
-            raise TrainError(f"residual_scale must be >= 0, got {self.residual_scale}")
-        if min(self.actor_bc_weight, self.actor_bc_decay_steps, self.hold_actor_steps) < 0:
-            raise TrainError("actor_bc_weight, actor_bc_decay_steps, hold_actor_steps must be >= 0")
-        if self.reach_shaping < 0:
-            raise TrainError(f"reach_shaping must be >= 0 [1/m], got {self.reach_shaping}")
         from envs.env_config import load_env_config  # noqa: PLC0415 - validates env keys
 
         load_env_config(**dict(self.env))

@@ -7,7 +7,6 @@ core; both cameras at 128 x 128 >= 100 frames/s in total; 656 x 492 reported.
 
 from __future__ import annotations
 
-import json
 import platform
 import time
 from pathlib import Path
@@ -15,8 +14,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from apps.cli import CommandParser, run_cli
-from configs.files import write_text
+from apps.cli import CommandParser, run_cli, write_result
 from envs.cell.cell import CAMERAS, Cell
 from envs.cell.config import CellConfig, InputBeltConfig, load_cell_config
 from envs.cell.rendering import rendering_backend
@@ -103,10 +101,7 @@ def main(argv: list[str] | None = None) -> dict:
     results["pass"] = {"physics": rtf >= PHYSICS_TARGET_RTF, "render_128": fps >= RENDER_TARGET_FPS}
     for key, val in results.items():
         print(f"{key}: {val}")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    write_text(args.out, json.dumps(results, indent=2))
-    print(f"wrote {args.out}")
-    return results
+    return write_result(args.out, results)
 
 
 if __name__ == "__main__":

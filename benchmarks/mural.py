@@ -11,17 +11,15 @@ mesh is checked to fit the cell's mesh sheet. Prints one row per mesh and the mu
 
 from __future__ import annotations
 
-import json
 import multiprocessing as mp
 import os
 import time
 from pathlib import Path
 from typing import Any
 
-from apps.cli import CommandParser, run_cli
+from apps.cli import CommandParser, run_cli, write_result
 from benchmarks.scripted import Episode, Scenario, ScriptedBenchConfig, play, summarise, table
 from configs import load_config
-from configs.files import write_text
 from envs.cell.rendering import use_headless_rendering
 from qshape.design.mural import Mural, MuralError
 from spatial.units import MM_PER_M
@@ -123,10 +121,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "total": total,
         "meshes": rows,
     }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    write_text(args.out, json.dumps(result, indent=2))
-    print(f"wrote {args.out}")
-    return result
+    return write_result(args.out, result)
 
 
 if __name__ == "__main__":

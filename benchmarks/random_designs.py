@@ -32,6 +32,7 @@ import numpy as np
 from apps.cli import CommandParser, run_cli
 from benchmarks.scripted import _seed_range, run_episode
 from configs import ConfigError, load_config
+from configs.checks import check_fields, checked
 from configs.files import write_text
 from envs import ENV_ID
 from envs.cell.rendering import use_headless_rendering
@@ -90,13 +91,14 @@ class RandomDesignsBenchConfig:
     generator: str = "design_generator"
     generator_overrides: dict[str, Any] = field(default_factory=dict)
     image_size: tuple[int, int] = (492, 656)
-    steps_per_slot: int = 2
+    steps_per_slot: int = checked(2, ge=1)
     levels: tuple[Level, ...] = ()
 
     def __post_init__(self) -> None:
         """Raise `ConfigError` on bad values."""
-        if self.steps_per_slot < 1 or not self.levels:
-            raise ConfigError("bench_random_designs: steps_per_slot >= 1 and at least one level")
+        check_fields(self, ConfigError, prefix="bench_random_designs: ")
+        if not self.levels:
+            raise ConfigError("bench_random_designs: at least one level")
         for lv in self.levels:
             if lv.designs[1] <= lv.designs[0]:
                 raise ConfigError(

@@ -11,7 +11,6 @@ worst episode's tiles/min, wall seconds per tile and every episode.
 from __future__ import annotations
 
 import argparse
-import json
 import multiprocessing as mp
 import os
 import time
@@ -20,9 +19,9 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from apps.cli import CommandParser, UsageError, run_cli
+from apps.cli import CommandParser, UsageError, run_cli, write_result
 from configs import ConfigError, load_config
-from configs.files import write_text
+from configs.checks import check_fields, checked
 from envs import ENV_ID
 from envs.cell.rendering import use_headless_rendering
 
@@ -61,15 +60,16 @@ class ScriptedBenchConfig:
 
     seeds: tuple[int, int] = (0, 20)
     image_size: tuple[int, int] = (492, 656)
-    steps_per_slot: int = 2
+    steps_per_slot: int = checked(2, ge=1)
     scenarios: tuple[Scenario, ...] = ()
 
     def __post_init__(self) -> None:
         """Raise `ConfigError` on bad values."""
-        if self.seeds[1] <= self.seeds[0] or self.steps_per_slot < 1 or not self.scenarios:
+        check_fields(self, ConfigError, prefix="bench_scripted: ")
+        if self.seeds[1] <= self.seeds[0] or not self.scenarios:
             raise ConfigError(
-                "bench_scripted: seeds must be [first, last) with last > first, "
-                "steps_per_slot >= 1 and at least one scenario"
+                "bench_scripted: seeds must be [first, last) with last > first, and at least one "
+                "scenario"
             )
 
 
@@ -277,10 +277,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "wall_s": time.perf_counter() - t0,
         "scenarios": rows,
     }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    write_text(args.out, json.dumps(result, indent=2))
-    print(f"wrote {args.out} ({result['wall_s']:.0f} s)")
-    return result
+    return write_result(args.out, result, f" ({result['wall_s']:.0f} s)")
 
 
 if __name__ == "__main__":

@@ -17,7 +17,6 @@ Not part of the default test run (it is a benchmark, not a test).
 
 from __future__ import annotations
 
-import json
 import resource
 import time
 from collections import Counter
@@ -28,9 +27,8 @@ from typing import Any
 import gymnasium as gym
 
 import envs  # noqa: F401 - registers the env
-from apps.cli import CommandParser, run_cli
+from apps.cli import CommandParser, run_cli, write_result
 from configs import load_config
-from configs.files import write_text
 from envs import ENV_ID
 from envs.cell.accounting import TILE_STATES
 
@@ -167,10 +165,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "wall_s",
     ):
         print(f"{key}: {out[key]}")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    write_text(args.out, json.dumps(out, indent=2) + "\n")
-    print(f"wrote {args.out}")
-    return out
+    return write_result(args.out, out)
 
 
 if __name__ == "__main__":

@@ -240,44 +240,6 @@ def check_field_types(obj: object) -> None:
             object.__setattr__(obj, f.name, converted)
 
 
-def check_positive(
-    obj: object, *names: str, error: type[Exception] = ConfigError, strict: bool = True
-) -> None:
-    """Check that named fields of a config are finite and positive, for ``__post_init__``.
-
-    A tuple-valued field is checked element by element.
-
-    Args:
-        obj: The config instance.
-        *names: Field names to check.
-        error: Exception type to raise (the calling package's own).
-        strict: True: values must be > 0; False: >= 0 is allowed.
-
-    Raises:
-        error: A value is not a finite number above (or, with ``strict=False``, at) zero; the
-            message names the class, the field and the value.
-    """
-    bound = "positive" if strict else ">= 0"
-    for name in names:
-        value = getattr(obj, name)
-        for v in value if isinstance(value, tuple) else (value,):
-            ok = isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-            if not ok or v < 0 or (strict and v == 0):
-                where = f"{type(obj).__name__}.{name}"
-                raise error(f"{where} must be {bound} and finite, got {value!r}")
-
-
-def check_length(obj: object, name: str, n: int, error: type[Exception] = ConfigError) -> None:
-    """Check that a sequence-valued field of a config holds ``n`` values, for ``__post_init__``.
-
-    Raises:
-        error: Another length; the message names the class, the field and the value.
-    """
-    value = getattr(obj, name)
-    if len(value) != n:
-        raise error(f"{type(obj).__name__}.{name} needs {n} values, got {value!r}")
-
-
 def load_config(
     cls: type[T], name_or_path: str | Path | None = None, subdir: str = "", **overrides: Any
 ) -> T:
@@ -305,8 +267,6 @@ __all__ = [
     "CONFIG_DIR",
     "ConfigError",
     "check_field_types",
-    "check_length",
-    "check_positive",
     "from_dict",
     "load_config",
     "load_yaml",

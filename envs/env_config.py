@@ -231,7 +231,7 @@ class EnvConfig:
     dense_reach: float = 0.5
     dense_grasp: float = 0.2
     dense_carry: float = 0.5
-    render_mode: RenderMode | None = None
+    render_mode: RenderMode | None = checked(None, choices=(None, *RENDER_MODES))
 
     def __post_init__(self) -> None:
         raw: Any = self.image_size
@@ -242,10 +242,6 @@ class EnvConfig:
         if len(size) != 2 or min(size) < 1:
             raise EnvConfigError(f"image_size must be (height, width) >= 1 px, got {size}")
         check_fields(self, EnvConfigError)
-        if self.render_mode is not None and self.render_mode not in RENDER_MODES:
-            raise EnvConfigError(
-                f"unknown render_mode {self.render_mode!r}; allowed: None, {list(RENDER_MODES)}"
-            )
         self._check_objects()
         lo_hi = tuple(self.tool_z_range)
         if len(lo_hi) != 2 or not 0 <= lo_hi[0] < lo_hi[1]:  # noqa: PLR2004 - (low, high)

@@ -31,6 +31,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from configs import load_config
+from configs.checks import check_fields, checked
 from envs.cell.cell import Cell
 from spatial.angles import rotate_xy, yaw_error
 
@@ -63,17 +64,15 @@ class StagedRewardConfig:
     transport: float = 2.0
     align: float = 1.0
     release: float = 4.0
-    reach_scale: float = 0.3
-    lift_height: float = 0.03
-    transport_scale: float = 0.3
-    align_distance: float = 0.02
+    reach_scale: float = checked(0.3, gt=0)
+    lift_height: float = checked(0.03, gt=0)
+    transport_scale: float = checked(0.3, gt=0)
+    align_distance: float = checked(0.02, gt=0)
 
     def __post_init__(self) -> None:
         from envs.errors import CellError  # noqa: PLC0415 - the envs base error
 
-        for name in ("reach_scale", "lift_height", "transport_scale", "align_distance"):
-            if not getattr(self, name) > 0:
-                raise CellError(f"staged reward: {name} must be > 0 [m], got {getattr(self, name)}")
+        check_fields(self, CellError, prefix="staged reward: ")
 
 
 def load_staged_config(

@@ -28,6 +28,7 @@ from typing import Any
 import gymnasium as gym
 
 from configs import CONFIG_DIR, ConfigError, from_dict, load_yaml
+from configs.checks import check_fields, checked
 from envs.errors import EnvError
 
 TASKS_DIR = CONFIG_DIR / "tasks"
@@ -74,19 +75,18 @@ class BenchmarkTask:
 
     id: str
     description: str
-    max_episode_steps: int
-    horizon_s: float
-    eval_seeds: tuple[int, int]
+    max_episode_steps: int = checked(ge=1)
+    horizon_s: float = checked(gt=0)
+    eval_seeds: tuple[int, int] = checked(ge=0)
     env: Mapping[str, Any] = field(default_factory=dict)
     train_designs: tuple[str, ...] = ()
     eval_designs: tuple[str, ...] = ()
     versions: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.max_episode_steps < 1 or not self.horizon_s > 0:
-            raise TaskError(f"{self.id}: max_episode_steps >= 1 and horizon_s > 0 are required")
+        check_fields(self, TaskError, prefix=f"{self.id}: ")
         lo, hi = self.eval_seeds
-        if not 0 <= lo <= hi:
+        if not lo <= hi:
             raise TaskError(f"{self.id}: eval_seeds must be a range lo <= hi of seeds >= 0")
         if PROCEDURAL in self.eval_designs or PROCEDURAL == self.env.get("design"):
             raise TaskError(

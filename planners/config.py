@@ -21,11 +21,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import partial
 from pathlib import Path
 from typing import Any
 
-from configs import check_positive, load_config
+from configs import load_config
+from configs.checks import check_fields, checked
 from planners.errors import LimitError, PlannerError
 from planners.robot import robot_joint_lower, robot_joint_speeds, robot_joint_upper
 
@@ -36,23 +36,6 @@ ACCEL_PER_SPEED = 9.0
 """Default axis acceleration limit per unit of speed limit [1/s] (assumption, see above)."""
 JERK_PER_ACCEL = 10.0
 """Default axis jerk limit per unit of acceleration limit [1/s] (assumption, see above)."""
-
-_check_positive = partial(check_positive, error=LimitError)
-_check_non_negative = partial(check_positive, error=LimitError, strict=False)
-
-
-def _check_tuple(obj: object, name: str, *, positive: bool = True) -> None:
-    value = getattr(obj, name)
-    if len(value) != N_JOINTS:
-        raise LimitError(
-            f"{type(obj).__name__}.{name} needs {N_JOINTS} values (one per joint), got {value!r}"
-        )
-    for i, v in enumerate(value):
-        if not math.isfinite(v) or (positive and v <= 0.0):
-            raise LimitError(
-                f"{type(obj).__name__}.{name}[{i}] (joint {i + 1}) must be "
-                f"{'positive and ' if positive else ''}finite, got {v!r}"
-            )
 
 
 def _from_speeds(times_accel: float) -> tuple[float, ...]:
@@ -76,23 +59,18 @@ class JointLimits:
         max_jerk: Axis jerk limits, shape (6,) [rad/s^3] (assumption: 10 x acceleration).
     """
 
-    lower: tuple[float, ...] = field(default_factory=robot_joint_lower)
-    upper: tuple[float, ...] = field(default_factory=robot_joint_upper)
-    max_velocity: tuple[float, ...] = field(default_factory=robot_joint_speeds)
-    max_acceleration: tuple[float, ...] = field(
-        default_factory=lambda: tuple(ACCEL_PER_SPEED * v for v in robot_joint_speeds())
+    lower: tuple[float, ...] = checked(factory=robot_joint_lower, length=N_JOINTS, finite=True)
+    upper: tuple[float, ...] = checked(factory=robot_joint_upper, length=N_JOINTS, finite=True)
+    max_velocity: tuple[float, ...] = checked(factory=robot_joint_speeds, length=N_JOINTS, gt=0)
+    max_acceleration: tuple[float, ...] = checked(
+        factory=lambda: _from_speeds(1.0), length=N_JOINTS, gt=0
     )
-    max_jerk: tuple[float, ...] = field(
-        default_factory=lambda: tuple(
-            JERK_PER_ACCEL * ACCEL_PER_SPEED * v for v in robot_joint_speeds()
-        )
+    max_jerk: tuple[float, ...] = checked(
+        factory=lambda: _from_speeds(JERK_PER_ACCEL), length=N_JOINTS, gt=0
     )
 
     def __post_init__(self) -> None:
-        _check_tuple(self, "lower", positive=False)
-        _check_tuple(self, "upper", positive=False)
-        for name in ("max_velocity", "max_acceleration", "max_jerk"):
-            _check_tuple(self, name)
+        check_fields(self, LimitError, qualify=True)
         for i, (lo, hi) in enumerate(zip(self.lower, self.upper, strict=True)):
             if lo >= hi:
                 raise LimitError(
@@ -144,45 +122,28 @@ class IKConfig:
     """
 
     site: str = "tcp"
-    joint_names: tuple[str, ...] = ("joint1", "joint2", "joint3", "joint4", "joint5", "joint6")
-    position_tolerance: float = 1e-4
-    orientation_tolerance_deg: float = 0.1
-    max_iterations: int = 40
-    step_dt: float = 0.1
-    damping: float = 1e-4
-    regularisation: float = 1e-9
-    position_cost: float = 1.0
-    orientation_cost: float = 1.0
+    joint_names: tuple[str, ...] = checked(
+        ("joint1", "joint2", "joint3", "joint4", "joint5", "joint6"), length=N_JOINTS
+    )
+    position_tolerance: float = checked(1e-4, gt=0)
+    orientation_tolerance_deg: float = checked(0.1, gt=0)
+    max_iterations: int = checked(40, gt=0)
+    step_dt: float = checked(0.1, gt=0)
+    damping: float = checked(1e-4, ge=0)
+    regularisation: float = checked(1e-9, ge=0)
+    position_cost: float = checked(1.0, gt=0)
+    orientation_cost: float = checked(1.0, gt=0)
     solver: str = "daqp"
-    restarts: int = 6
+    restarts: int = checked(6, ge=0)
     restart_seed: int = 0
-    restart_spread: float = 0.6
-    collision_min_distance: float = 0.002
-    collision_detection_distance: float = 0.05
-    limit_margin: float = 1e-3
-    memory: int = 256
+    restart_spread: float = checked(0.6, ge=0)
+    collision_min_distance: float = checked(0.002, ge=0)
+    collision_detection_distance: float = checked(0.05, gt=0)
+    limit_margin: float = checked(1e-3, ge=0)
+    memory: int = checked(256, gt=0)
 
     def __post_init__(self) -> None:
-        _check_positive(
-            self,
-            "memory",
-            "position_tolerance",
-            "orientation_tolerance_deg",
-            "max_iterations",
-            "step_dt",
-            "position_cost",
-            "orientation_cost",
-            "collision_detection_distance",
-        )
-        _check_non_negative(
-            self,
-            "damping",
-            "regularisation",
-            "restarts",
-            "restart_spread",
-            "collision_min_distance",
-            "limit_margin",
-        )
+        check_fields(self, LimitError, qualify=True)
         import qpsolvers  # noqa: PLC0415 - mink's QP back end, only needed to check the name
 
         if self.solver not in qpsolvers.available_solvers:
@@ -190,8 +151,6 @@ class IKConfig:
                 f"ik.solver {self.solver!r} is not an installed QP solver; allowed: "
                 f"{sorted(qpsolvers.available_solvers)}"
             )
-        if len(self.joint_names) != N_JOINTS:
-            raise LimitError(f"IKConfig.joint_names needs {N_JOINTS} names, got {self.joint_names}")
 
 
 @dataclass(frozen=True)
@@ -207,19 +166,13 @@ class TrajectoryConfig:
             (ruckig's own numerical error plus finite-difference error).
     """
 
-    sample_dt: float = 0.002
+    sample_dt: float = checked(0.002, gt=0)
     blend: bool = True
-    wrap_joints: tuple[int, ...] = (3, 5)
-    limit_tolerance: float = 1e-3
+    wrap_joints: tuple[int, ...] = checked((3, 5), ge=0, lt=N_JOINTS)
+    limit_tolerance: float = checked(1e-3, ge=0)
 
     def __post_init__(self) -> None:
-        _check_positive(self, "sample_dt")
-        _check_non_negative(self, "limit_tolerance")
-        for j in self.wrap_joints:
-            if not 0 <= j < N_JOINTS:
-                raise LimitError(
-                    f"TrajectoryConfig.wrap_joints: {j} is not a joint index; allowed 0..5"
-                )
+        check_fields(self, LimitError, qualify=True)
 
 
 @dataclass(frozen=True)
@@ -278,67 +231,39 @@ class CycleConfig:
         max_tilt_deg: Largest tool tilt from straight down accepted at a contact pose [deg].
     """
 
-    approach_height: float = 0.015
-    approach_speed: float = 0.25
+    approach_height: float = checked(0.015, gt=0)
+    approach_speed: float = checked(0.25, gt=0)
     approach_alternatives: tuple[float, ...] = (0.025,)
-    lead_bisections: int = 8
-    lead_joints: tuple[int, ...] = (0, 3, 5)
-    lead_share: float = 0.99
-    counter_swing: tuple[float, ...] = (0.006, 0.007, 0.008, 0.009, 0.010, 0.011, 0.012)
+    lead_bisections: int = checked(8, ge=0)
+    lead_joints: tuple[int, ...] = checked((0, 3, 5), ge=0, lt=N_JOINTS)
+    lead_share: float = checked(0.99, gt=0, lt=1)
+    counter_swing: tuple[float, ...] = checked(
+        (0.006, 0.007, 0.008, 0.009, 0.010, 0.011, 0.012), gt=0
+    )
     counter_swing_joints: tuple[int, ...] = (0,)
-    lateral_clearance_height: float = 0.006
-    empty_clearance_height: float = 0.002
-    max_lateral_drift: float = 0.001
-    transfer_clearance: float = 0.008
-    pick_press: float = 0.0005
-    place_gap: float = 0.0005
-    pick_dwell: float = 0.05
-    place_dwell: float = 0.05
-    belt_match_time: float = 0.05
-    predict_iterations: int = 6
-    predict_tolerance: float = 2e-4
-    predict_margin: float = 0.02
-    max_tilt_deg: float = 0.5
+    lateral_clearance_height: float = checked(0.006, gt=0)
+    empty_clearance_height: float = checked(0.002, gt=0)
+    max_lateral_drift: float = checked(0.001, gt=0)
+    transfer_clearance: float = checked(0.008, ge=0)
+    pick_press: float = checked(0.0005, ge=0)
+    place_gap: float = checked(0.0005, ge=0)
+    pick_dwell: float = checked(0.05, ge=0)
+    place_dwell: float = checked(0.05, ge=0)
+    belt_match_time: float = checked(0.05, ge=0)
+    predict_iterations: int = checked(6, gt=0)
+    predict_tolerance: float = checked(2e-4, gt=0)
+    predict_margin: float = checked(0.02, gt=0)
+    max_tilt_deg: float = checked(0.5, gt=0)
 
     def __post_init__(self) -> None:
-        _check_positive(
-            self,
-            "approach_height",
-            "approach_speed",
-            "lateral_clearance_height",
-            "empty_clearance_height",
-            "max_lateral_drift",
-            "predict_iterations",
-            "predict_tolerance",
-            "predict_margin",
-            "max_tilt_deg",
-        )
-        _check_non_negative(
-            self,
-            "lead_bisections",
-            "transfer_clearance",
-            "pick_press",
-            "place_gap",
-            "pick_dwell",
-            "place_dwell",
-            "belt_match_time",
-        )
+        check_fields(self, LimitError, qualify=True)
         swings = self.counter_swing
-        if not all(math.isfinite(p) and p > 0.0 for p in swings) or list(swings) != sorted(swings):
-            raise LimitError(
-                f"CycleConfig.counter_swing: lengths must be finite, > 0 s and ascending, got "
-                f"{swings}"
-            )
-        if not 0.0 < self.lead_share < 1.0:
-            raise LimitError(f"CycleConfig.lead_share must be in (0, 1), got {self.lead_share}")
+        if list(swings) != sorted(swings):
+            raise LimitError(f"CycleConfig.counter_swing: lengths must be ascending, got {swings}")
         if not set(self.counter_swing_joints) <= set(self.lead_joints):
             raise LimitError(
                 f"CycleConfig.counter_swing_joints {self.counter_swing_joints} must be among "
                 f"lead_joints {self.lead_joints}"
-            )
-        if not all(0 <= j < N_JOINTS for j in self.lead_joints):
-            raise LimitError(
-                f"CycleConfig.lead_joints: {self.lead_joints} are not joint indices 0..5"
             )
         for height in self.approach_alternatives:
             if not (math.isfinite(height) and height >= self.lateral_clearance_height):

@@ -24,7 +24,7 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from configs import check_positive
+from configs.checks import check_fields, checked
 from planners.config import N_JOINTS
 from planners.errors import InvalidTargetError, LimitError, PlannerError
 from planners.robot import ROBOT_XML, joint_ranges
@@ -47,13 +47,12 @@ class ToolStepConfig:
     """
 
     site: str = "tcp"
-    damping: float = 0.01
-    iterations: int = 3
-    orientation_weight: float = 0.2
+    damping: float = checked(0.01, ge=0)
+    iterations: int = checked(3, gt=0)
+    orientation_weight: float = checked(0.2, gt=0)
 
     def __post_init__(self) -> None:
-        check_positive(self, "iterations", "orientation_weight", error=LimitError)
-        check_positive(self, "damping", error=LimitError, strict=False)
+        check_fields(self, LimitError, qualify=True)
 
 
 class ToolStepIK:

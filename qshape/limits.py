@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from configs import ConfigError, check_field_types
+from configs.checks import check_fields, checked
 from qshape.config_sections import load_section
 from qshape.errors import DesignLimitError, FigureLimitError, LimitError, ToleranceError
 from qshape.geometry import MAX_COORDINATE
@@ -42,13 +43,13 @@ class Limits:
             with these lengths; 10 m covers any wall mosaic the cell could lay.
     """
 
-    max_points: int = 1000
-    max_holes: int = 32
-    max_dense_points: int = 100_000
-    max_coordinate: float = 1e12
-    coordinate_resolution: float = 1e-6
-    max_text_chars: int = 1_000_000
-    max_design_mm: float = 10_000.0
+    max_points: int = checked(1000, ge=1)
+    max_holes: int = checked(32, ge=1)
+    max_dense_points: int = checked(100_000, ge=1)
+    max_coordinate: float = checked(1e12, gt=0, le=MAX_COORDINATE)
+    coordinate_resolution: float = checked(1e-6, gt=0, lt=1)
+    max_text_chars: int = checked(1_000_000, ge=1)
+    max_design_mm: float = checked(10_000.0, gt=0)
 
     def __post_init__(self) -> None:
         """Check types and ranges.
@@ -60,22 +61,7 @@ class Limits:
             check_field_types(self)
         except ConfigError as exc:
             raise ToleranceError(str(exc)) from None
-        for name in ("max_points", "max_holes", "max_dense_points", "max_text_chars"):
-            if getattr(self, name) < 1:
-                raise ToleranceError(f"Limits.{name} must be >= 1, got {getattr(self, name)}")
-        if not 0.0 < self.max_coordinate <= MAX_COORDINATE:
-            raise ToleranceError(
-                f"Limits.max_coordinate must be in (0, {MAX_COORDINATE:g}], got "
-                f"{self.max_coordinate!r}"
-            )
-        if not (math.isfinite(self.max_design_mm) and self.max_design_mm > 0.0):
-            raise ToleranceError(
-                f"Limits.max_design_mm must be a positive finite length, got {self.max_design_mm}"
-            )
-        if not 0.0 < self.coordinate_resolution < 1.0:
-            raise ToleranceError(
-                f"Limits.coordinate_resolution must be in (0, 1), got {self.coordinate_resolution}"
-            )
+        check_fields(self, ToleranceError, qualify=True)
 
     @classmethod
     def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> Limits:

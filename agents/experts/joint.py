@@ -34,7 +34,8 @@ from agents.experts.cartesian import (
     LowLevelExpert,
     load_expert_config,
 )
-from configs import check_positive, load_config
+from configs import load_config
+from configs.checks import check_fields, checked
 from envs.task_spec import TaskSpec
 from planners.errors import PlannerError
 from planners.tool_step_ik import ToolStepConfig, ToolStepIK
@@ -61,17 +62,14 @@ class LowLevelJointExpertConfig:
     """
 
     phases: str = "lowlevel_expert"
-    tool_step: float = 0.02
-    yaw_step: float = 0.12
-    damping: float = 0.01
-    iterations: int = 3
-    orientation_weight: float = 0.2
+    tool_step: float = checked(0.02, gt=0)
+    yaw_step: float = checked(0.12, gt=0)
+    damping: float = checked(0.01, ge=0)
+    iterations: int = checked(3, gt=0)
+    orientation_weight: float = checked(0.2, gt=0)
 
     def __post_init__(self) -> None:
-        check_positive(
-            self, "tool_step", "yaw_step", "iterations", "orientation_weight", error=AgentError
-        )
-        check_positive(self, "damping", error=AgentError, strict=False)
+        check_fields(self, AgentError, qualify=True)
         if not self.phases:
             raise AgentError("LowLevelJointExpertConfig.phases must name a config, got ''")
 

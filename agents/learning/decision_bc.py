@@ -15,6 +15,7 @@ import numpy as np
 
 from agents.errors import AgentError
 from configs import load_config
+from configs.checks import check_fields, checked
 from configs.files import atomic_path, write_json
 
 STATE_KEYS = ("robot", "tiles", "slots")
@@ -46,11 +47,10 @@ class BCConfig:
     batch_size: int = 64
     learning_rate: float = 1e-3
     weight_decay: float = 1e-4
-    arch: str = "mlp"
+    arch: str = checked("mlp", choices=ARCHS)
 
     def __post_init__(self) -> None:
-        if self.arch not in ARCHS:
-            raise AgentError(f"unknown behaviour-cloning arch {self.arch!r}; allowed: {ARCHS}")
+        check_fields(self, AgentError, prefix="behaviour cloning: ")
 
 
 def load_bc_config(name_or_path: str | Path = BC_CONFIG, **overrides: Any) -> BCConfig:

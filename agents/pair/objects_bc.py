@@ -22,9 +22,7 @@ import torch
 
 from agents.learning.classifier_fit import fit_classifier
 from agents.pair.objects_rows import objects_rows
-from agents.pair.scorer import PairScorer, PairScorerConfig
-from agents.pair.state_bc import ARCH
-from agents.pair.state_rows import FEATURE_DIMS
+from agents.pair.state_bc import ARCH, fit_scorer
 from configs.files import atomic_path, write_json
 
 ADAPTER = "objects"
@@ -68,23 +66,10 @@ def train_objects_bc(demos: ObjectDemos, out: Path, seed: int, cfg: Any) -> dict
     cpu0 = time.process_time()
     rows = objects_rows(torch.as_tensor(demos.tiles), torch.as_tensor(demos.slots))
     y = torch.as_tensor(demos.actions)
-    torch.manual_seed(seed)
-    shape = PairScorerConfig(*FEATURE_DIMS[ADAPTER], int(demos.nvec[2]), cfg.hidden, cfg.layers)
-    net = PairScorer(shape)
-    fit = fit_classifier(
-        lambda idx: net(rows if idx is None else rows.take(idx)),
-        net.parameters(),
-        y,
-        cfg,
-        seed,
-        accuracy=True,
+    net, fit, path = fit_scorer(
+        rows, y, demos.nvec, cfg, adapter=ADAPTER, seed=seed, out=out, accuracy=True
     )
     steps, curve = fit.gradient_steps, list(fit.curve)
-    out.mkdir(parents=True, exist_ok=True)
-    path = out / "bc.pt"
-    blob = {"arch": ARCH, "adapter": ADAPTER, "scorer": asdict(shape), "nvec": demos.nvec.tolist()}
-    with atomic_path(path) as tmp:
-        torch.save({**blob, "state_dict": net.state_dict(), "config": asdict(cfg)}, tmp)
     summary = {
         "model_path": str(path),
         "arch": ARCH,

@@ -18,7 +18,7 @@ import numpy as np
 import torch
 
 from agents.errors import AgentError
-from agents.learning.classifier_fit import fit_classifier
+from agents.learning.classifier_fit import FitResult, fit_classifier
 from agents.pair.scorer import PairScorer, PairScorerConfig
 from agents.pair.state_rows import ADAPTERS, FEATURE_DIMS
 from configs.files import atomic_path, write_json
@@ -52,6 +52,51 @@ def demo_arrays(dataset: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nd
     return np.concatenate(tiles), np.concatenate(slots), flat, nvec
 
 
+def fit_scorer(
+    rows: Any,
+    y: torch.Tensor,
+    nvec: np.ndarray,
+    cfg: Any,
+    *,
+    adapter: str,
+    seed: int,
+    out: Path,
+    accuracy: bool = False,
+) -> tuple[PairScorer, FitResult, Path]:
+    """Fit a pair scorer to the demonstrated flat actions and write it to ``out/bc.pt``.
+
+    Args:
+        rows: The adapter's feature rows of every demonstrated step (`PairRows`).
+        y: Flat action index per step.
+        nvec: The ``pick_place_discrete`` action space's sizes (tile, slot, rotation).
+        cfg: `agents.learning.decision_bc.BCConfig`.
+        adapter: Name of the row adapter (`agents.pair.state_rows.ADAPTERS`).
+        seed: Seed of the initial weights and the minibatch order.
+        out: Run folder (made).
+        accuracy: Record the training accuracy after each epoch (`fit_classifier`).
+
+    Returns:
+        The fitted scorer, the fit's record and the path of the written clone.
+    """
+    torch.manual_seed(seed)
+    shape = PairScorerConfig(*FEATURE_DIMS[adapter], int(nvec[2]), cfg.hidden, cfg.layers)
+    net = PairScorer(shape)
+    fit = fit_classifier(
+        lambda idx: net(rows if idx is None else rows.take(idx)),
+        net.parameters(),
+        y,
+        cfg,
+        seed,
+        accuracy=accuracy,
+    )
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "bc.pt"
+    blob = {"arch": ARCH, "adapter": adapter, "scorer": asdict(shape), "nvec": nvec.tolist()}
+    with atomic_path(path) as tmp:
+        torch.save({**blob, "state_dict": net.state_dict(), "config": asdict(cfg)}, tmp)
+    return net, fit, path
+
+
 def train_pair_bc(
     dataset: Any, out: Path, seed: int, cfg: Any, adapter: str = "state"
 ) -> dict[str, Any]:
@@ -69,23 +114,9 @@ def train_pair_bc(
     tiles, slots, flat, nvec = demo_arrays(dataset)
     rows = ADAPTERS[adapter](torch.as_tensor(tiles), torch.as_tensor(slots))
     y = torch.as_tensor(flat)
-    torch.manual_seed(seed)
-    shape = PairScorerConfig(*FEATURE_DIMS[adapter], int(nvec[2]), cfg.hidden, cfg.layers)
-    net = PairScorer(shape)
-    fit = fit_classifier(
-        lambda idx: net(rows if idx is None else rows.take(idx)),
-        net.parameters(),
-        y,
-        cfg,
-        seed,
-    )
+    net, fit, path = fit_scorer(rows, y, nvec, cfg, adapter=adapter, seed=seed, out=out)
     with torch.no_grad():
         acc = float((net(rows).argmax(1) == y).float().mean())
-    out.mkdir(parents=True, exist_ok=True)
-    path = out / "bc.pt"
-    blob = {"arch": ARCH, "adapter": adapter, "scorer": asdict(shape), "nvec": nvec.tolist()}
-    with atomic_path(path) as tmp:
-        torch.save({**blob, "state_dict": net.state_dict(), "config": asdict(cfg)}, tmp)
     summary = {
         "model_path": str(path),
         "arch": ARCH,

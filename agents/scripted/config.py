@@ -14,6 +14,7 @@ from typing import Any, Literal
 
 from agents.errors import AgentError
 from configs import load_config
+from configs.checks import check_fields, checked
 from envs.cell.calibration_board import CalibrationTarget
 from envs.task_spec import FeedMode
 from spatial.units import MM_PER_M
@@ -69,31 +70,21 @@ class PerceptionConfig:
     business: ``configs/vision.yaml`` section ``extract``.
     """
 
-    mm_per_m: float = MM_PER_M
-    pad_clearance: float = 0.0115
-    polylabel_tolerance: float = 1e-4
+    mm_per_m: float = checked(MM_PER_M, gt=0)
+    pad_clearance: float = checked(0.0115, ge=0)
+    polylabel_tolerance: float = checked(1e-4, gt=0)
     color_balance: bool = True
     color_balance_iterations: int = 3
     max_color_gain: float = 2.0
-    color_history: int = 64
-    color_min_samples: int = 6
+    color_history: int = checked(64, ge=1)
+    color_min_samples: int = checked(6, ge=1)
     retry_outline: dict[str, float] = field(default_factory=dict)
     seen_slots: bool = False
-    seen_turn_residual: float = 0.1
+    seen_turn_residual: float = checked(0.1, ge=0)
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""
-        if not (self.mm_per_m > 0 and self.pad_clearance >= 0 and self.polylabel_tolerance > 0):
-            raise AgentError("perception: mm_per_m, polylabel_tolerance > 0, pad_clearance >= 0")
-        if not self.seen_turn_residual >= 0.0:
-            raise AgentError(
-                f"perception: seen_turn_residual must be >= 0, got {self.seen_turn_residual!r}"
-            )
-        if self.color_history < 1 or self.color_min_samples < 1:
-            raise AgentError(
-                "perception: color_history and color_min_samples must be >= 1, got "
-                f"{self.color_history}, {self.color_min_samples}"
-            )
+        check_fields(self, AgentError, prefix="perception: ")
 
 
 @dataclass(frozen=True)
@@ -123,39 +114,22 @@ class PlacementConfig:
         fit_spacing_mm: Largest distance between the outline points compared, [mm].
     """
 
-    method: Literal["optimal", "greedy"] = "optimal"
+    method: Literal["optimal", "greedy"] = checked("optimal", choices=("optimal", "greedy"))
     use_color: bool = True
-    continuous_yaw_steps: int = 12
+    continuous_yaw_steps: int = checked(12, ge=1)
     refine_span_deg: float = 5.0
     refine_tolerance_deg: float = 0.01
-    refine_scan_deg: float = 1.0
-    refine_spacing_mm: float = 0.5
-    fit_max_residual: float = 0.0
-    fit_margin: float = 2.0
-    fit_turn_window_deg: float = 10.0
-    fit_step_deg: float = 2.0
-    fit_spacing_mm: float = 1.0
+    refine_scan_deg: float = checked(1.0, gt=0)
+    refine_spacing_mm: float = checked(0.5, gt=0)
+    fit_max_residual: float = checked(0.0, ge=0)
+    fit_margin: float = checked(2.0, ge=1)
+    fit_turn_window_deg: float = checked(10.0, ge=0)
+    fit_step_deg: float = checked(2.0, gt=0)
+    fit_spacing_mm: float = checked(1.0, gt=0)
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on bad values."""
-        if self.method not in ("optimal", "greedy"):
-            raise AgentError(f"placement.method {self.method!r}; allowed: optimal, greedy")
-        if self.continuous_yaw_steps < 1:
-            raise AgentError("placement.continuous_yaw_steps must be >= 1")
-        if not (
-            self.fit_max_residual >= 0.0
-            and self.fit_margin >= 1.0
-            and self.fit_turn_window_deg >= 0.0
-            and self.fit_step_deg > 0.0
-            and self.fit_spacing_mm > 0.0
-            and self.refine_scan_deg > 0.0
-            and self.refine_spacing_mm > 0.0
-        ):
-            raise AgentError(
-                "placement: fit_max_residual >= 0, fit_margin >= 1, fit_turn_window_deg >= 0, "
-                "fit_step_deg > 0, fit_spacing_mm > 0, refine_scan_deg > 0 and "
-                "refine_spacing_mm > 0"
-            )
+        check_fields(self, AgentError, prefix="placement: ")
 
 
 @dataclass(frozen=True)
@@ -183,19 +157,19 @@ class CalibrationConfig:
     """
 
     # The board and its poses (the env renders them; `target`), defaults as the env's.
-    squares: tuple[int, int] = CalibrationTarget.squares
-    square_size: float = CalibrationTarget.square_size
-    border: float = CalibrationTarget.border
+    squares: tuple[int, int] = checked(CalibrationTarget.squares, ge=3)
+    square_size: float = checked(CalibrationTarget.square_size, gt=0)
+    border: float = checked(CalibrationTarget.border, ge=0)
     plate_thickness: float = CalibrationTarget.plate_thickness
     square_height: float = CalibrationTarget.square_height
     tilts_deg: tuple[float, ...] = CalibrationTarget.tilts_deg
     lift: tuple[float, ...] = CalibrationTarget.lift
     shifts: tuple[tuple[float, float], ...] = CalibrationTarget.shifts
-    subpix_window_px: int = 5
+    subpix_window_px: int = checked(5, ge=1)
     subpix_iterations: int = 50
     subpix_epsilon_px: float = 1e-3
     max_reprojection_px: float = 1.0
-    min_views: int = 5
+    min_views: int = checked(5, ge=3)
     fix_aspect_ratio: bool = True
     zero_tangential: bool = True
     fix_k3: bool = True
@@ -203,10 +177,7 @@ class CalibrationConfig:
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on bad values."""
-        if min(self.squares) < 3 or self.square_size <= 0 or self.border < 0:
-            raise AgentError("calibration: squares >= 3 each, square_size > 0, border >= 0")
-        if self.min_views < 3 or self.subpix_window_px < 1:
-            raise AgentError("calibration: min_views >= 3, subpix_window_px >= 1")
+        check_fields(self, AgentError, prefix="calibration: ")
 
     @property
     def target(self) -> CalibrationTarget:
@@ -249,29 +220,22 @@ class RunConfig:
 
     design: str = "paper_mixed"
     seed: int = 0
-    belt_speed: float = 0.0
+    belt_speed: float = checked(0.0, ge=0)
     feed: FeedMode = "all"
-    distractor_rate: float = 0.0
-    max_slots: int = 0
-    max_steps_per_slot: int = 2
-    max_idle_steps: int = 8
-    reject_after_idle: int = 2
+    distractor_rate: float = checked(0.0, ge=0)
+    max_slots: int = checked(0, ge=0)
+    max_steps_per_slot: int = checked(2, ge=1)
+    max_idle_steps: int = checked(8, ge=0)
+    reject_after_idle: int = checked(2, ge=0)
     execute: bool = True
     calibrate: bool = True
-    video_fps: float = 10.0
+    video_fps: float = checked(10.0, gt=0)
     marker_radius_px: int = 3
     out_dir: str = "out"
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on bad values."""
-        if self.video_fps <= 0 or self.max_steps_per_slot < 1 or self.max_idle_steps < 0:
-            raise AgentError(
-                "run: video_fps must be > 0, max_steps_per_slot >= 1 and max_idle_steps >= 0"
-            )
-        if self.reject_after_idle < 0:
-            raise AgentError(f"run: reject_after_idle must be >= 0, got {self.reject_after_idle}")
-        if self.belt_speed < 0 or self.distractor_rate < 0 or self.max_slots < 0:
-            raise AgentError("run: belt_speed, distractor_rate and max_slots must be >= 0")
+        check_fields(self, AgentError, prefix="run: ")
 
 
 @dataclass(frozen=True)

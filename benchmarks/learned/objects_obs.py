@@ -27,6 +27,7 @@ import numpy as np
 
 import envs  # noqa: F401 - registers the ids
 from apps.cli import CommandParser, run_cli
+from benchmarks.learned.expert_step import timed_expert_step
 from configs.files import write_text
 from envs.mosaic_env import MosaicAssemblyEnv
 
@@ -40,22 +41,17 @@ TARGET_MS = 0.1
 
 def _expert_steps(env: gym.Env, steps: int, seed: int) -> float:
     """CPU seconds of ``steps`` expert steps (resets excluded)."""
-    u = cast(MosaicAssemblyEnv, env.unwrapped)
     spent, done, episode = 0.0, 0, seed
     while done < steps:
         env.reset(seed=episode)
         episode += 1
         for _ in range(6):
-            on_input = np.flatnonzero(u.cell.input_half())
-            if not len(on_input):
+            step = timed_expert_step(env)
+            if step is None:
                 break
-            tile = int(on_input[0])
-            action = u.expert_action(tile, tile)
-            t0 = time.process_time()
-            _, _, term, trunc, _ = env.step(action)
-            spent += time.process_time() - t0
+            spent += step[0]
             done += 1
-            if term or trunc or done >= steps:
+            if step[1] or done >= steps:
                 break
     return spent
 

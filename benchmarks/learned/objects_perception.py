@@ -21,7 +21,6 @@ Writes ``out/bench_objects_perception.json``.
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 from typing import Any, cast
 
@@ -31,6 +30,7 @@ from shapely.geometry import LinearRing, Point
 
 import envs  # noqa: F401 - registers the ids
 from apps.cli import CommandParser, run_cli
+from benchmarks.learned.expert_step import timed_expert_step
 from configs.files import write_text
 from envs.mosaic_env import MosaicAssemblyEnv
 from envs.observations.objects import OBJECT_FIELDS as F
@@ -61,17 +61,13 @@ def _expert_episode(env: gym.Env, seed: int, visit: Any = None) -> float:
         visit()
     spent = 0.0
     for _ in range(len(u.cell.slots)):
-        on_input = np.flatnonzero(u.cell.input_half())
-        if not len(on_input):
+        step = timed_expert_step(env)
+        if step is None:
             break
-        tile = int(on_input[0])
-        action = u.expert_action(tile, tile)
-        t0 = time.process_time()
-        _, _, term, trunc, _ = env.step(action)
-        spent += time.process_time() - t0
+        spent += step[0]
         if visit is not None:
             visit()
-        if term or trunc:
+        if step[1]:
             break
     return spent
 

@@ -20,7 +20,6 @@ only) and shape-and-colour classes. Printed and written to ``out/bench_vision.js
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import time
 from collections import defaultdict
@@ -31,9 +30,8 @@ from typing import Any
 import cv2
 import numpy as np
 
-from apps.cli import CommandParser, run_cli
+from apps.cli import CommandParser, run_cli, write_result
 from benchmarks.figures import VISION_CANNY_RATIO
-from configs.files import write_text
 from qshape import Boundary, Figure, Tolerances, match_best
 from qshape.design import Design, Slot
 from qshape.geometry import FloatArray, wrap_angle
@@ -465,10 +463,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     _print_timing(t)
     if args.timing_only:  # no accuracy table: nothing written
         return results
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    write_text(args.out, json.dumps(results, indent=2))
-    print(f"wrote {args.out}")
-    return results
+    return write_result(args.out, results)
 
 
 if __name__ == "__main__":

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
-from functools import partial
 from pathlib import Path
 from typing import Any, Literal, get_args
 
-from configs import ConfigError, check_length, check_positive, load_config
+from configs import ConfigError, load_config
+from configs.checks import check_fields, checked
 from envs.cell.view_config import CameraConfig, RenderConfig, SceneryConfig
 from envs.errors import CellError
 from spatial.tolerance import MADE_TILE_DEVIATION_M
@@ -25,12 +25,6 @@ FEED_MODES: tuple[str, ...] = get_args(FeedMode)
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 """Repository root (assets are resolved relative to it)."""
-
-_positive = partial(check_positive, error=CellError)
-_non_negative = partial(check_positive, error=CellError, strict=False)
-
-
-_length = partial(check_length, error=CellError)
 
 
 @dataclass(frozen=True)
@@ -46,20 +40,15 @@ class PhysicsConfig:
         impratio: Frictional-to-normal impedance ratio (higher reduces slip on the belt).
     """
 
-    timestep: float = 0.002
+    timestep: float = checked(0.002, gt=0, le=0.005)
     sleep: bool = True
-    sleep_tolerance: float = 1e-3
-    iterations: int = 50
-    ls_iterations: int = 20
-    impratio: float = 1.0
+    sleep_tolerance: float = checked(1e-3, gt=0)
+    iterations: int = checked(50, gt=0)
+    ls_iterations: int = checked(20, gt=0)
+    impratio: float = checked(1.0, gt=0)
 
     def __post_init__(self) -> None:
-        _positive(self, "timestep", "sleep_tolerance", "iterations", "ls_iterations", "impratio")
-        if self.timestep > 0.005:
-            raise CellError(
-                f"PhysicsConfig.timestep {self.timestep} s is too large for 5 mm tiles; "
-                "allowed: (0, 0.005]"
-            )
+        check_fields(self, CellError, qualify=True)
 
 
 @dataclass(frozen=True)
@@ -74,12 +63,11 @@ class RobotConfig:
     """
 
     model: str = "assets/irb140/irb140.xml"
-    home: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 1.5707963, 0.0)
-    base_keepout: float = 0.15
+    home: tuple[float, ...] = checked((0.0, 0.0, 0.0, 0.0, 1.5707963, 0.0), length=6)
+    base_keepout: float = checked(0.15, gt=0)
 
     def __post_init__(self) -> None:
-        _length(self, "home", 6)
-        _positive(self, "base_keepout")
+        check_fields(self, CellError, qualify=True)
         if not self.model_path.is_file():
             raise CellError(f"RobotConfig.model: no file {self.model_path}")
 
@@ -106,14 +94,12 @@ class LayoutConfig:
         belt_top_z: Height of both belts' top surfaces [m].
     """
 
-    belt_separation: float = 1.0
-    work_x: float = 0.0
-    belt_top_z: float = 0.2
+    belt_separation: float = checked(1.0, gt=0)
+    work_x: float = checked(0.0, finite=True)
+    belt_top_z: float = checked(0.2, gt=0)
 
     def __post_init__(self) -> None:
-        _positive(self, "belt_separation", "belt_top_z")
-        if not math.isfinite(self.work_x):
-            raise CellError(f"LayoutConfig.work_x must be finite, got {self.work_x!r}")
+        check_fields(self, CellError, qualify=True)
 
 
 @dataclass(frozen=True)
@@ -134,23 +120,18 @@ class InputBeltConfig:
             is counted lost [m].
     """
 
-    length: float = 1.0
-    width: float = 0.3
-    thickness: float = 0.04
-    speed: float = 0.0
+    length: float = checked(1.0, gt=0)
+    width: float = checked(0.3, gt=0)
+    thickness: float = checked(0.04, gt=0)
+    speed: float = checked(0.0, ge=0, le=1)
     end_offset: float = 0.3
-    tile_area: tuple[float, ...] = (0.30, 0.22)
-    bin_length: float = 0.3
-    bin_depth: float = 0.15
-    lost_margin: float = 0.02
+    tile_area: tuple[float, ...] = checked((0.30, 0.22), length=2, gt=0)
+    bin_length: float = checked(0.3, gt=0)
+    bin_depth: float = checked(0.15, gt=0)
+    lost_margin: float = checked(0.02, gt=0)
 
     def __post_init__(self) -> None:
-        _length(self, "tile_area", 2)
-        _positive(self, "length", "width", "thickness", "tile_area", "bin_length", "bin_depth")
-        _positive(self, "lost_margin")
-        _non_negative(self, "speed")
-        if self.speed > 1.0:
-            raise CellError(f"InputBeltConfig.speed {self.speed} m/s; allowed: 0 to 1.0 m/s")
+        check_fields(self, CellError, qualify=True)
         if self.tile_area[1] > self.width:
             raise CellError(
                 f"InputBeltConfig.tile_area width {self.tile_area[1]} m exceeds the belt width "
@@ -177,17 +158,15 @@ class OutputBeltConfig:
         slot_mark_height: Height of the visual slot marks above the sheet [m] (no contacts).
     """
 
-    length: float = 0.6
-    width: float = 0.32
-    thickness: float = 0.04
-    mesh_size: tuple[float, ...] = (0.23, 0.23)
-    mesh_thickness: float = 0.002
-    slot_mark_height: float = 0.0003
+    length: float = checked(0.6, gt=0)
+    width: float = checked(0.32, gt=0)
+    thickness: float = checked(0.04, gt=0)
+    mesh_size: tuple[float, ...] = checked((0.23, 0.23), length=2, gt=0)
+    mesh_thickness: float = checked(0.002, gt=0)
+    slot_mark_height: float = checked(0.0003, gt=0)
 
     def __post_init__(self) -> None:
-        _length(self, "mesh_size", 2)
-        _positive(self, "length", "width", "thickness", "mesh_size", "mesh_thickness")
-        _positive(self, "slot_mark_height")
+        check_fields(self, CellError, qualify=True)
         if self.mesh_size[0] > self.length or self.mesh_size[1] > self.width:
             raise CellError(
                 f"OutputBeltConfig.mesh_size {self.mesh_size} m does not fit the belt "
@@ -234,53 +213,32 @@ class TileConfig:
             picked tile clear first).
     """
 
-    thickness: float = 0.005
-    density: float = 2400.0
-    friction: float = 0.8
-    body_color: tuple[float, ...] = (0.80, 0.74, 0.64)
-    glaze_thickness: float = 0.0008
-    vertex_jitter: float = MADE_TILE_DEVIATION_M
-    color_jitter: float = 0.02
-    variants: int = 1
-    min_gap: float = 0.006
-    placement_attempts: int = 400
-    placement_restarts: int = 40
-    distractor_rate: float = 0.0
+    thickness: float = checked(0.005, gt=0, le=0.02)
+    density: float = checked(2400.0, gt=0)
+    friction: float = checked(0.8, gt=0)
+    body_color: tuple[float, ...] = checked((0.80, 0.74, 0.64), length=3, ge=0, le=1)
+    glaze_thickness: float = checked(0.0008, gt=0)
+    vertex_jitter: float = checked(MADE_TILE_DEVIATION_M, ge=0)
+    color_jitter: float = checked(0.02, ge=0)
+    variants: int = checked(1, ge=1, integer=True)
+    min_gap: float = checked(0.006, ge=0)
+    placement_attempts: int = checked(400, gt=0)
+    placement_restarts: int = checked(40, gt=0)
+    distractor_rate: float = checked(0.0, ge=0, le=1)
     distractor_kinds: tuple[str, ...] = ("color", "broken", "shape")
-    feed: FeedMode = "all"
-    stream_period: float = 2.0
-    stream_initial: int = 0
-    batch_size: int = 16
-    batch_index_time: float = 0.5
+    feed: FeedMode = checked("all", choices=FEED_MODES)
+    stream_period: float = checked(2.0, gt=0)
+    stream_initial: int = checked(0, ge=0)
+    batch_size: int = checked(16, ge=1, integer=True)
+    batch_index_time: float = checked(0.5, gt=0)
 
     def __post_init__(self) -> None:
-        _positive(
-            self,
-            "thickness",
-            "density",
-            "friction",
-            "placement_attempts",
-            "placement_restarts",
-            "variants",
-        )
-        _positive(self, "glaze_thickness")
-        for name in ("variants", "batch_size"):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool):
-                raise CellError(f"TileConfig.{name} must be an int >= 1, got {value!r}")
-        _length(self, "body_color", 3)
-        if not all(0.0 <= c <= 1.0 for c in self.body_color):
-            raise CellError(f"TileConfig.body_color must be RGB in [0, 1], got {self.body_color}")
+        check_fields(self, CellError, qualify=True)
         if self.glaze_thickness >= self.thickness:
             raise CellError(
                 f"TileConfig.glaze_thickness {self.glaze_thickness} m must be < thickness "
                 f"{self.thickness} m"
             )
-        _positive(self, "stream_period", "batch_size", "batch_index_time")
-        _non_negative(self, "vertex_jitter", "color_jitter", "min_gap", "distractor_rate")
-        _non_negative(self, "stream_initial")
-        if self.distractor_rate > 1.0:
-            raise CellError(f"TileConfig.distractor_rate {self.distractor_rate}; allowed: 0..1")
         allowed = {"color", "broken", "shape"}
         bad = set(self.distractor_kinds) - allowed
         if bad or not self.distractor_kinds:
@@ -288,11 +246,6 @@ class TileConfig:
                 f"TileConfig.distractor_kinds {self.distractor_kinds}; allowed: non-empty subset "
                 f"of {sorted(allowed)}"
             )
-        if self.feed not in FEED_MODES:
-            feeds = ", ".join(repr(m) for m in FEED_MODES)
-            raise CellError(f"TileConfig.feed {self.feed!r}; allowed: {feeds}")
-        if self.thickness > 0.02:
-            raise CellError(f"TileConfig.thickness {self.thickness} m; allowed: (0, 0.02]")
 
 
 @dataclass(frozen=True)
@@ -309,18 +262,15 @@ class SuctionConfig:
             holding force, 0 < w <= 1 [-] (1: no filtering).
     """
 
-    pad_diameter: float = 0.023
-    vacuum_pressure: float = 60000.0
-    friction: float = 0.5
-    seal_max_gap: float = 0.002
-    seal_max_tilt_deg: float = 5.0
-    force_filter: float = 0.5
+    pad_diameter: float = checked(0.023, gt=0)
+    vacuum_pressure: float = checked(60000.0, gt=0)
+    friction: float = checked(0.5, gt=0)
+    seal_max_gap: float = checked(0.002, gt=0)
+    seal_max_tilt_deg: float = checked(5.0, gt=0)
+    force_filter: float = checked(0.5, gt=0, le=1)
 
     def __post_init__(self) -> None:
-        _positive(self, "pad_diameter", "vacuum_pressure", "friction", "seal_max_gap")
-        _positive(self, "seal_max_tilt_deg", "force_filter")
-        if self.force_filter > 1:
-            raise CellError(f"SuctionConfig.force_filter {self.force_filter}; allowed: (0, 1]")
+        check_fields(self, CellError, qualify=True)
 
     @property
     def holding_force(self) -> float:

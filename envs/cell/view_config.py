@@ -9,14 +9,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import partial
 
-from configs import check_length, check_positive
+from configs.checks import check_fields, checked
 from envs.errors import CellError
-
-_positive = partial(check_positive, error=CellError)
-_non_negative = partial(check_positive, error=CellError, strict=False)
-_length = partial(check_length, error=CellError)
 
 
 @dataclass(frozen=True)
@@ -36,23 +31,16 @@ class CameraConfig:
             (`envs.cell.camera_effects.BeltBlur`); 0: a still picture.
     """
 
-    width: int = 656
-    height: int = 492
-    height_above_belt: float = 0.5
-    fovy_deg: float = 27.0
-    offset: tuple[float, ...] = (0.0, 0.0)
-    distortion: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0)
-    exposure_time: float = 0.0
+    width: int = checked(656, gt=0)
+    height: int = checked(492, gt=0)
+    height_above_belt: float = checked(0.5, gt=0)
+    fovy_deg: float = checked(27.0, gt=0, lt=170)
+    offset: tuple[float, ...] = checked((0.0, 0.0), length=2)
+    distortion: tuple[float, ...] = checked((0.0, 0.0, 0.0, 0.0, 0.0), length=5, finite=True)
+    exposure_time: float = checked(0.0, ge=0)
 
     def __post_init__(self) -> None:
-        _length(self, "offset", 2)
-        _length(self, "distortion", 5)
-        _non_negative(self, "exposure_time")
-        if not all(math.isfinite(c) for c in self.distortion):
-            raise CellError(f"CameraConfig.distortion {self.distortion}; allowed: finite numbers")
-        _positive(self, "width", "height", "height_above_belt", "fovy_deg")
-        if self.fovy_deg >= 170:
-            raise CellError(f"CameraConfig.fovy_deg {self.fovy_deg}; allowed: (0, 170)")
+        check_fields(self, CellError, qualify=True)
 
     @property
     def pixels_per_metre(self) -> float:
@@ -89,20 +77,16 @@ class RenderConfig:
 
     shadows: bool = False
     reflections: bool = False
-    overview_size: tuple[int, ...] = (480, 640)
+    overview_size: tuple[int, ...] = checked((480, 640), length=2, gt=0)
     cull: bool = True
-    samples: int = 4
-    supersample: int = 2
-    supersample_max_pixels: int = 40000
-    lens_max_iterations: int = 40
-    lens_tolerance: float = 1e-9
+    samples: int = checked(4, ge=0)
+    supersample: int = checked(2, gt=0)
+    supersample_max_pixels: int = checked(40000, ge=0)
+    lens_max_iterations: int = checked(40, gt=0)
+    lens_tolerance: float = checked(1e-9, gt=0)
 
     def __post_init__(self) -> None:
-        _length(self, "overview_size", 2)
-        _positive(self, "overview_size", "lens_max_iterations", "lens_tolerance", "supersample")
-        if self.samples < 0:
-            raise CellError(f"RenderConfig.samples must be >= 0, got {self.samples}")
-        _non_negative(self, "supersample_max_pixels")
+        check_fields(self, CellError, qualify=True)
 
 
 @dataclass(frozen=True)
@@ -143,65 +127,44 @@ class SceneryConfig:
             ``xyaxes``) (6,).
     """
 
-    floor_half_size: float = 4.0
+    floor_half_size: float = checked(4.0, gt=0)
     floor_checker: tuple[tuple[float, ...], ...] = ((0.33, 0.35, 0.38), (0.28, 0.3, 0.33))
-    floor_texture_px: int = 256
-    floor_texture_repeat: int = 8
-    light_pos: tuple[float, ...] = (0.3, 0.0, 2.5)
-    light_diffuse: float = 0.45
-    light_specular: float = 0.0
-    headlight_ambient: float = 0.3
-    headlight_diffuse: float = 0.35
-    exposure: float = 1.0
-    belt_rgba: tuple[float, ...] = (0.12, 0.12, 0.13, 1.0)
-    frame_rgba: tuple[float, ...] = (0.55, 0.57, 0.6, 1.0)
-    sheet_rgba: tuple[float, ...] = (0.22, 0.22, 0.24, 1.0)
-    bin_floor_rgba: tuple[float, ...] = (0.35, 0.25, 0.15, 1.0)
-    bin_wall_rgba: tuple[float, ...] = (0.45, 0.33, 0.2, 1.0)
-    slot_white: float = 0.45
-    rail_gap: float = 0.01
-    rail_half_width: float = 0.01
-    rail_height: float = 0.01
-    stand_inset: tuple[float, ...] = (0.05, 0.03)
-    bin_gap: float = 0.005
-    bin_side_margin: float = 0.05
-    bin_wall: float = 0.005
-    bin_stand_inset: float = 0.02
-    overview_pos: tuple[float, ...] = (1.45, 0.0, 1.35)
-    overview_xyaxes: tuple[float, ...] = (0.0, 1.0, 0.0, -0.62, 0.0, 0.78)
+    floor_texture_px: int = checked(256, gt=0)
+    floor_texture_repeat: int = checked(8, gt=0)
+    light_pos: tuple[float, ...] = checked((0.3, 0.0, 2.5), length=3)
+    light_diffuse: float = checked(0.45, ge=0)
+    light_specular: float = checked(0.0, ge=0)
+    headlight_ambient: float = checked(0.3, ge=0)
+    headlight_diffuse: float = checked(0.35, ge=0)
+    exposure: float = checked(1.0, gt=0, le=1)
+    belt_rgba: tuple[float, ...] = checked((0.12, 0.12, 0.13, 1.0), length=4)
+    frame_rgba: tuple[float, ...] = checked((0.55, 0.57, 0.6, 1.0), length=4)
+    sheet_rgba: tuple[float, ...] = checked((0.22, 0.22, 0.24, 1.0), length=4)
+    bin_floor_rgba: tuple[float, ...] = checked((0.35, 0.25, 0.15, 1.0), length=4)
+    bin_wall_rgba: tuple[float, ...] = checked((0.45, 0.33, 0.2, 1.0), length=4)
+    slot_white: float = checked(0.45, ge=0)
+    rail_gap: float = checked(0.01, ge=0)
+    rail_half_width: float = checked(0.01, gt=0)
+    rail_height: float = checked(0.01, gt=0)
+    stand_inset: tuple[float, ...] = checked((0.05, 0.03), length=2, ge=0)
+    bin_gap: float = checked(0.005, ge=0)
+    bin_side_margin: float = checked(0.05, ge=0)
+    bin_wall: float = checked(0.005, gt=0)
+    bin_stand_inset: float = checked(0.02, ge=0)
+    overview_pos: tuple[float, ...] = checked((1.45, 0.0, 1.35), length=3)
+    overview_xyaxes: tuple[float, ...] = checked((0.0, 1.0, 0.0, -0.62, 0.0, 0.78), length=6)
 
     def __post_init__(self) -> None:
-        for name, n in (
-            ("light_pos", 3),
-            ("belt_rgba", 4),
-            ("frame_rgba", 4),
-            ("sheet_rgba", 4),
-            ("bin_floor_rgba", 4),
-            ("bin_wall_rgba", 4),
-            ("stand_inset", 2),
-            ("overview_pos", 3),
-            ("overview_xyaxes", 6),
-        ):
-            _length(self, name, n)
+        check_fields(self, CellError, qualify=True)
         if len(self.floor_checker) != 2 or any(len(c) != 3 for c in self.floor_checker):  # noqa: PLR2004
             raise CellError(
                 f"SceneryConfig.floor_checker needs two RGB colours, got {self.floor_checker}"
             )
-        _positive(
-            self,
-            "floor_half_size",
-            "floor_texture_px",
-            "floor_texture_repeat",
-            "rail_half_width",
-            "rail_height",
-            "bin_wall",
-        )
-        _non_negative(self, "light_diffuse", "light_specular", "slot_white", "rail_gap", "bin_gap")
-        _non_negative(self, "headlight_ambient", "headlight_diffuse")
-        if not 0.0 < self.exposure <= 1.0 or self.light_weight_sum <= 0.0:
+        if self.light_weight_sum <= 0.0:
             raise CellError(
-                f"SceneryConfig.exposure {self.exposure}; allowed: (0, 1], with a positive sum "
-                "of light_diffuse, headlight_ambient and headlight_diffuse"
+                "SceneryConfig: light_diffuse, headlight_ambient and headlight_diffuse must have "
+                f"a positive sum (what exposure {self.exposure} rescales), got "
+                f"{self.light_weight_sum}"
             )
 
     @property
@@ -213,7 +176,6 @@ class SceneryConfig:
     def light_scale(self) -> float:
         """Factor applied to every configured ambient and diffuse intensity."""
         return self.exposure / self.light_weight_sum
-        _non_negative(self, "stand_inset", "bin_side_margin", "bin_stand_inset")
 
 
 __all__ = ["CameraConfig", "RenderConfig", "SceneryConfig"]

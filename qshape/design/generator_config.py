@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from configs import ConfigError, check_field_types, load_config
+from configs.checks import check_fields, checked
 from qshape.design.values import parse_color
 from qshape.errors import DesignError, GeneratorError
 
@@ -69,25 +70,25 @@ class GeneratorConfig:
         max_tries: Draws of one shape (or one design) before giving up with `GeneratorError`.
     """
 
-    mesh_mm: tuple[float, float] = (230.0, 230.0)
-    joint_mm: float = 2.0
-    margin_mm: float = 3.0
-    tiles: tuple[int, int] = (6, 16)
-    classes: tuple[int, int] = (3, 9)
+    mesh_mm: tuple[float, float] = checked((230.0, 230.0), gt=0)
+    joint_mm: float = checked(2.0, gt=0)
+    margin_mm: float = checked(3.0, ge=0)
+    tiles: tuple[int, int] = checked((6, 16), ge=1)
+    classes: tuple[int, int] = checked((3, 9), ge=1)
     size_mm: tuple[float, float] = (30.0, 50.0)
-    min_feature_mm: float = 6.0
-    min_sagitta_mm: float = 5.0
-    min_arc_chord_mm: float = 20.0
-    max_sagitta_ratio: float = 0.3
+    min_feature_mm: float = checked(6.0, gt=0)
+    min_sagitta_mm: float = checked(5.0, gt=0)
+    min_arc_chord_mm: float = checked(20.0, gt=0)
+    max_sagitta_ratio: float = checked(0.3, gt=0, le=0.5)
     families: dict[str, float] = field(default_factory=lambda: dict.fromkeys(SHAPE_FAMILIES, 1.0))
-    hole_probability: float = 0.3
-    two_hole_probability: float = 0.2
-    centred_hole_probability: float = 0.5
-    recolor_probability: float = 0.2
-    turns_deg: float = 360.0
+    hole_probability: float = checked(0.3, ge=0, le=1)
+    two_hole_probability: float = checked(0.2, ge=0, le=1)
+    centred_hole_probability: float = checked(0.5, ge=0, le=1)
+    recolor_probability: float = checked(0.2, ge=0, le=1)
+    turns_deg: float = checked(360.0, ge=0, le=360)
     palette: tuple[str, ...] = DEFAULT_PALETTE
     grout_color: str = "#d9d4c7"
-    max_tries: int = 200
+    max_tries: int = checked(200, ge=1)
 
     def __post_init__(self) -> None:
         """Raise `GeneratorError` naming the parameter and what is allowed."""
@@ -95,6 +96,7 @@ class GeneratorConfig:
             check_field_types(self)
         except ConfigError as exc:
             raise GeneratorError(str(exc)) from exc
+        check_fields(self, GeneratorError, qualify=True)
         self._check_lengths()
         self._check_counts()
         self._check_draws()
@@ -102,29 +104,12 @@ class GeneratorConfig:
         self._check_mesh_holds_the_tiles()
 
     def _check_lengths(self) -> None:
-        for name in (
-            "joint_mm",
-            "min_feature_mm",
-            "min_sagitta_mm",
-            "min_arc_chord_mm",
-            "max_sagitta_ratio",
-        ):
-            if not getattr(self, name) > 0.0:
-                raise GeneratorError(f"{_PRE}{name} must be > 0, got {getattr(self, name)!r}")
-        if min(self.mesh_mm) <= 0.0:
-            raise GeneratorError(f"{_PRE}mesh_mm must be two sizes > 0, got {self.mesh_mm}")
-        if self.margin_mm < 0.0:
-            raise GeneratorError(f"{_PRE}margin_mm must be >= 0, got {self.margin_mm}")
         lo_s, hi_s = self.size_mm
         least = 4.0 * self.min_feature_mm
         if not least <= lo_s <= hi_s:
             raise GeneratorError(
                 f"{_PRE}size_mm must be (low, high) with 4 x min_feature_mm ({least:g}) <= low "
                 f"<= high, got {self.size_mm}"
-            )
-        if not self.max_sagitta_ratio <= 0.5:
-            raise GeneratorError(
-                f"{_PRE}max_sagitta_ratio must be in (0, 0.5], got {self.max_sagitta_ratio}"
             )
         if self.min_sagitta_mm > self.max_sagitta_ratio * lo_s:
             raise GeneratorError(
@@ -135,15 +120,13 @@ class GeneratorConfig:
     def _check_counts(self) -> None:
         for name in ("tiles", "classes"):
             lo, hi = getattr(self, name)
-            if not 1 <= lo <= hi:
-                raise GeneratorError(f"{_PRE}{name} must be (low, high) with 1 <= low <= high")
+            if not lo <= hi:
+                raise GeneratorError(f"{_PRE}{name} must be (low, high) with low <= high")
         if self.classes[0] > self.tiles[1]:
             raise GeneratorError(
                 f"{_PRE}classes: the least number of classes ({self.classes[0]}) exceeds the "
                 f"most slots ({self.tiles[1]}); allowed: classes[0] <= tiles[1]"
             )
-        if self.max_tries < 1:
-            raise GeneratorError(f"{_PRE}max_tries must be >= 1, got {self.max_tries}")
 
     def _check_draws(self) -> None:
         unknown = sorted(set(self.families) - set(SHAPE_FAMILIES))
@@ -156,16 +139,6 @@ class GeneratorConfig:
             raise GeneratorError(
                 f"{_PRE}families: weights must be >= 0 with one > 0, got {dict(self.families)}"
             )
-        for name in (
-            "hole_probability",
-            "two_hole_probability",
-            "centred_hole_probability",
-            "recolor_probability",
-        ):
-            if not 0.0 <= getattr(self, name) <= 1.0:
-                raise GeneratorError(f"{_PRE}{name} must be in [0, 1], got {getattr(self, name)}")
-        if not 0.0 <= self.turns_deg <= 360.0:
-            raise GeneratorError(f"{_PRE}turns_deg must be in [0, 360], got {self.turns_deg}")
 
     def _check_colours(self) -> None:
         if not self.palette:

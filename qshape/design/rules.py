@@ -7,11 +7,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
+from configs.checks import check_fields, checked
 from qshape.config_sections import load_section
 from qshape.errors import DesignError
 from spatial.tolerance import MADE_TILE_DEVIATION_MM, PLACEMENT_YAW_TOLERANCE_DEG
+
+SmallFeatures = Literal["warn", "refuse", "ignore"]
+"""What loading does with a slot holding a feature the camera may miss."""
 
 
 @dataclass(frozen=True)
@@ -67,59 +71,30 @@ class DesignRules:
             slot naming the slot and the feature), ``refuse`` (a `DesignError`) or ``ignore``.
     """
 
-    outline_step_mm: float = 0.25
-    max_arc_deg: float = 240.0
-    check_step_mm: float = 1.0
-    min_gap_fraction: float = 0.5
+    outline_step_mm: float = checked(0.25, gt=0)
+    max_arc_deg: float = checked(240.0, ge=90, lt=360)
+    check_step_mm: float = checked(1.0, gt=0)
+    min_gap_fraction: float = checked(0.5, ge=0, le=1)
     mesh_margin_mm: float = 0.0
-    symmetry_tolerance: float = 0.01
-    max_symmetry_order: int = 12
-    symmetry_samples: int = 512
-    min_arc_sagitta_mm: float = 5.0
-    min_arc_chord_mm: float = 20.0
-    turn_tolerance_deg: float = PLACEMENT_YAW_TOLERANCE_DEG
-    min_turn_shift_mm: float = 0.1
-    min_asymmetry_mm: float = 0.3
-    min_hole_turn_mm: float = 1.5
-    made_arc_step_mm: float = 2.0
-    tile_deviation_mm: float = MADE_TILE_DEVIATION_MM
-    min_turn_capability: float = 1.0
-    turn_window_deg: float = 10.0
-    turn_step_deg: float = 6.0
-    small_features: Literal["warn", "refuse", "ignore"] = "warn"
+    symmetry_tolerance: float = checked(0.01, gt=0)
+    max_symmetry_order: int = checked(12, ge=1)
+    symmetry_samples: int = checked(512, ge=16)
+    min_arc_sagitta_mm: float = checked(5.0, ge=0)
+    min_arc_chord_mm: float = checked(20.0, ge=0)
+    turn_tolerance_deg: float = checked(PLACEMENT_YAW_TOLERANCE_DEG, gt=0)
+    min_turn_shift_mm: float = checked(0.1, ge=0)
+    min_asymmetry_mm: float = checked(0.3, ge=0)
+    min_hole_turn_mm: float = checked(1.5, ge=0)
+    made_arc_step_mm: float = checked(2.0, gt=0)
+    tile_deviation_mm: float = checked(MADE_TILE_DEVIATION_MM, ge=0)
+    min_turn_capability: float = checked(1.0, ge=0)
+    turn_window_deg: float = checked(10.0, ge=0, lt=90)
+    turn_step_deg: float = checked(6.0, gt=0, le=30)
+    small_features: SmallFeatures = checked("warn", choices=get_args(SmallFeatures))
 
     def __post_init__(self) -> None:
         """Raise `DesignError` on out-of-range values."""
-        if not (self.outline_step_mm > 0.0 and self.check_step_mm > 0.0):
-            raise DesignError("outline_step_mm and check_step_mm must be > 0")
-        if not 90.0 <= self.max_arc_deg < 360.0:
-            raise DesignError(f"max_arc_deg must be in [90, 360), got {self.max_arc_deg}")
-        if not 0.0 <= self.min_gap_fraction <= 1.0:
-            raise DesignError(f"min_gap_fraction must be in [0, 1], got {self.min_gap_fraction}")
-        if not self.symmetry_tolerance > 0.0:
-            raise DesignError("symmetry_tolerance must be > 0")
-        if self.max_symmetry_order < 1 or self.symmetry_samples < 16:
-            raise DesignError("max_symmetry_order must be >= 1 and symmetry_samples >= 16")
-        if not (self.min_arc_sagitta_mm >= 0.0 and self.min_arc_chord_mm >= 0.0):
-            raise DesignError("min_arc_sagitta_mm and min_arc_chord_mm must be >= 0")
-        turn = (self.min_turn_shift_mm, self.min_asymmetry_mm, self.min_hole_turn_mm)
-        if not (min(turn) >= 0.0 and self.turn_tolerance_deg > 0.0):
-            raise DesignError(
-                "min_turn_shift_mm, min_asymmetry_mm and min_hole_turn_mm must be >= 0 and "
-                "turn_tolerance_deg > 0"
-            )
-        made = (self.made_arc_step_mm, self.tile_deviation_mm, self.min_turn_capability)
-        if not (made[0] > 0.0 and made[1] >= 0.0 and made[2] >= 0.0):
-            raise DesignError(
-                "made_arc_step_mm must be > 0, tile_deviation_mm and min_turn_capability >= 0; "
-                f"got {made[0]}, {made[1]} and {made[2]}"
-            )
-        if not (0.0 <= self.turn_window_deg < 90.0 and 0.0 < self.turn_step_deg <= 30.0):
-            raise DesignError("turn_window_deg must be in [0, 90) and turn_step_deg in (0, 30]")
-        if self.small_features not in ("warn", "refuse", "ignore"):
-            raise DesignError(
-                f"small_features {self.small_features!r}; allowed: 'warn', 'refuse', 'ignore'"
-            )
+        check_fields(self, DesignError)
 
     @classmethod
     def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> DesignRules:

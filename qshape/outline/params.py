@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from configs.checks import check_fields, checked
 from qshape.errors import ToleranceError
 from qshape.theory.tolerances import _load_section
 
@@ -103,26 +103,26 @@ class OutlineParams:
             fraction the rounded corner turned twice, a corner gained.
     """
 
-    resample_points: int = 256
-    smooth_fraction: float = 0.006
-    corner_window: float = 0.02
-    corner_angle_deg: float = 25.0
-    straight_sagitta_ratio: float = 0.03
-    noise_fraction: float = 0.006
-    max_curve_turn_deg: float = 240.0
-    merge_fraction: float = 0.02
+    resample_points: int = checked(256, ge=MIN_RESAMPLE_POINTS)
+    smooth_fraction: float = checked(0.006, ge=0, lt=0.5)
+    corner_window: float = checked(0.02, gt=0, lt=0.5)
+    corner_angle_deg: float = checked(25.0, gt=0, lt=180)
+    straight_sagitta_ratio: float = checked(0.03, ge=0, lt=0.5)
+    noise_fraction: float = checked(0.006, ge=0, lt=0.5)
+    max_curve_turn_deg: float = checked(240.0, ge=90, le=360)
+    merge_fraction: float = checked(0.02, ge=0, lt=0.5)
     refine_corners: bool = False
-    arc_turning_deg: float = 0.0
-    circle_residual: float = 0.0
-    chamfer_fraction: float = 0.0
-    missed_corner_ratio: float = 0.0
-    roughness_sigmas: float = 0.0
-    min_corner_deg: float = 0.0
-    fit_merge_chi2: float = 0.0
-    fit_sigma_floor: float = 0.0
-    fit_split_turn_deg: float = 0.0
-    refine_trim_fraction: float = 0.0
-    hole_corner_window: float = 0.0
+    arc_turning_deg: float = checked(0.0, ge=0, lt=180)
+    circle_residual: float = checked(0.0, ge=0, lt=0.5)
+    chamfer_fraction: float = checked(0.0, ge=0, lt=0.5)
+    missed_corner_ratio: float = checked(0.0, ge=0, lt=0.5)
+    roughness_sigmas: float = checked(0.0, ge=0, le=20)
+    min_corner_deg: float = checked(0.0, ge=0, lt=90)
+    fit_merge_chi2: float = checked(0.0, ge=0, le=1e4)
+    fit_sigma_floor: float = checked(0.0, ge=0, lt=0.5)
+    fit_split_turn_deg: float = checked(0.0, ge=0, lt=180)
+    refine_trim_fraction: float = checked(0.0, ge=0, lt=0.5)
+    hole_corner_window: float = checked(0.0, ge=0, lt=0.5)
 
     def __post_init__(self) -> None:
         """Validate ranges.
@@ -130,50 +130,7 @@ class OutlineParams:
         Raises:
             ToleranceError: Naming the field and the allowed range.
         """
-        if self.resample_points < MIN_RESAMPLE_POINTS:
-            raise ToleranceError(
-                f"resample_points must be >= {MIN_RESAMPLE_POINTS}, got {self.resample_points}"
-            )
-        for name in (
-            "smooth_fraction",
-            "corner_window",
-            "straight_sagitta_ratio",
-            "noise_fraction",
-            "merge_fraction",
-            "circle_residual",
-            "chamfer_fraction",
-            "missed_corner_ratio",
-            "fit_sigma_floor",
-            "refine_trim_fraction",
-            "hole_corner_window",
-        ):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and 0.0 <= v < 0.5):
-                raise ToleranceError(f"{name} must be in [0, 0.5), got {v!r}")
-        if self.corner_window <= 0.0:
-            raise ToleranceError("corner_window must be > 0")
-        if not (math.isfinite(self.roughness_sigmas) and 0.0 <= self.roughness_sigmas <= 20.0):  # noqa: PLR2004
-            raise ToleranceError(
-                f"roughness_sigmas must be in [0, 20], got {self.roughness_sigmas}"
-            )
-        if not (math.isfinite(self.fit_merge_chi2) and 0.0 <= self.fit_merge_chi2 <= 1e4):  # noqa: PLR2004
-            raise ToleranceError(f"fit_merge_chi2 must be in [0, 1e4], got {self.fit_merge_chi2}")
-        if not 0.0 <= self.min_corner_deg < 90.0:  # noqa: PLR2004
-            raise ToleranceError(f"min_corner_deg must be in [0, 90), got {self.min_corner_deg}")
-        if not 0.0 <= self.fit_split_turn_deg < 180.0:  # noqa: PLR2004
-            raise ToleranceError(
-                f"fit_split_turn_deg must be in [0, 180), got {self.fit_split_turn_deg}"
-            )
-        if not 0.0 <= self.arc_turning_deg < 180.0:
-            raise ToleranceError(f"arc_turning_deg must be in [0, 180), got {self.arc_turning_deg}")
-        if not 0.0 < self.corner_angle_deg < 180.0:
-            raise ToleranceError(
-                f"corner_angle_deg must be in (0, 180), got {self.corner_angle_deg}"
-            )
-        if not 90.0 <= self.max_curve_turn_deg <= 360.0:
-            raise ToleranceError(
-                f"max_curve_turn_deg must be in [90, 360], got {self.max_curve_turn_deg}"
-            )
+        check_fields(self, ToleranceError)
 
     @classmethod
     def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> OutlineParams:

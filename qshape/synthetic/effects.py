@@ -19,6 +19,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from configs.checks import check_fields, checked
 from qshape.errors import QShapeError
 from qshape.geometry import FloatArray
 from spatial.units import MM_PER_M
@@ -55,58 +56,29 @@ class CameraEffects:
         jpeg_quality: JPEG quality of the stored picture, 1..100; 0: not compressed.
     """
 
-    edge_roughness_mm: float = 0.0
-    roughness_length_mm: float = 1.0
-    chip_probability: float = 0.0
-    chip_size_mm: float = 0.0
-    belt_speed_m_s: float = 0.0
-    exposure_ms: float = 0.0
+    edge_roughness_mm: float = checked(0.0, ge=0)
+    roughness_length_mm: float = checked(1.0, ge=0)
+    chip_probability: float = checked(0.0, ge=0, le=1)
+    chip_size_mm: float = checked(0.0, ge=0)
+    belt_speed_m_s: float = checked(0.0, ge=0)
+    exposure_ms: float = checked(0.0, ge=0)
     belt_direction_deg: float = 0.0
-    lens_k1: float = 0.0
-    lens_k2: float = 0.0
-    focal_px: float = 0.0
-    shadow_strength: float = 0.0
-    shadow_softness_px: float = 25.0
-    shadow_width_fraction: float = 0.35
-    highlight_strength: float = 0.0
-    highlight_size_mm: float = 4.0
-    highlight_probability: float = 0.0
-    touching_probability: float = 0.0
-    partial_probability: float = 0.0
-    jpeg_quality: int = 0
+    lens_k1: float = checked(0.0, finite=True)
+    lens_k2: float = checked(0.0, finite=True)
+    focal_px: float = checked(0.0, ge=0)
+    shadow_strength: float = checked(0.0, ge=0, lt=1)
+    shadow_softness_px: float = checked(25.0, ge=0)
+    shadow_width_fraction: float = checked(0.35, ge=0)
+    highlight_strength: float = checked(0.0, ge=0, le=1)
+    highlight_size_mm: float = checked(4.0, ge=0)
+    highlight_probability: float = checked(0.0, ge=0, le=1)
+    touching_probability: float = checked(0.0, ge=0, le=1)
+    partial_probability: float = checked(0.0, ge=0, le=1)
+    jpeg_quality: int = checked(0, ge=0, le=100)  # JPEG's scale; 0: off
 
     def __post_init__(self) -> None:
         """Raise `QShapeError` naming the field and its allowed range."""
-        for name in (
-            "edge_roughness_mm",
-            "roughness_length_mm",
-            "chip_size_mm",
-            "belt_speed_m_s",
-            "exposure_ms",
-            "focal_px",
-            "shadow_softness_px",
-            "shadow_width_fraction",
-            "highlight_size_mm",
-        ):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0.0):
-                raise QShapeError(f"{name} must be a finite number >= 0, got {v!r}")
-        for name in (
-            "chip_probability",
-            "highlight_strength",
-            "highlight_probability",
-            "touching_probability",
-            "partial_probability",
-        ):
-            v = getattr(self, name)
-            if not 0.0 <= v <= 1.0:
-                raise QShapeError(f"{name} must be in [0, 1], got {v!r}")
-        if not 0.0 <= self.shadow_strength < 1.0:
-            raise QShapeError(f"shadow_strength must be in [0, 1), got {self.shadow_strength!r}")
-        if not 0 <= self.jpeg_quality <= 100:  # noqa: PLR2004 (JPEG's own scale)
-            raise QShapeError(f"jpeg_quality must be in 0..100 (0: off), got {self.jpeg_quality}")
-        if not (math.isfinite(self.lens_k1) and math.isfinite(self.lens_k2)):
-            raise QShapeError("lens_k1 and lens_k2 must be finite")
+        check_fields(self, QShapeError)
 
     def blur_px(self, px_per_mm: float) -> float:
         """Motion blur length on the picture, in [px]: belt speed x exposure x scale."""

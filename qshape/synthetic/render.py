@@ -15,6 +15,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from configs.checks import check_fields, checked
 from qshape.config_sections import load_section
 from qshape.design import Design
 from qshape.errors import QShapeError
@@ -37,8 +38,8 @@ class RenderParams:
         label_color: RGB in [0, 1] of the overlay's text.
     """
 
-    px_per_mm: float = 3.0
-    subpixel_bits: int = 4
+    px_per_mm: float = checked(3.0, gt=0)
+    subpixel_bits: int = checked(4, ge=0, le=8)
     antialias: bool = True
     corner_color: tuple[float, float, float] = (0.0, 0.0, 0.0)
     curve_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
@@ -48,10 +49,7 @@ class RenderParams:
 
     def __post_init__(self) -> None:
         """Raise `QShapeError` on out-of-range values."""
-        if not self.px_per_mm > 0.0:
-            raise QShapeError(f"px_per_mm must be > 0, got {self.px_per_mm}")
-        if not 0 <= self.subpixel_bits <= 8:
-            raise QShapeError(f"subpixel_bits must be in 0..8, got {self.subpixel_bits}")
+        check_fields(self, QShapeError)
 
     @classmethod
     def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> RenderParams:

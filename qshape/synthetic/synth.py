@@ -21,6 +21,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from configs.checks import check_fields, checked
 from qshape.design import Design, Slot, TilePath, load_section
 from qshape.errors import QShapeError
 from qshape.geometry import BoolArray, FloatArray, wrap_angle
@@ -51,39 +52,25 @@ class SynthParams:
         effects: What a real line adds (all off by default; see `qshape.synthetic.effects`).
     """
 
-    width_px: int = 656
-    height_px: int = 492
-    px_per_mm: float = 2.5
+    width_px: int = checked(656, ge=16)
+    height_px: int = checked(492, ge=16)
+    px_per_mm: float = checked(2.5, gt=0)
     belt_color: tuple[float, float, float] = (0.24, 0.26, 0.28)
-    gap_mm: float = 3.0
+    gap_mm: float = checked(3.0, ge=0)
     margin_px: int = 4
     placement_attempts: int = 300
-    vertex_jitter_mm: float = 0.5
-    bulge_jitter: float = 0.05
-    color_jitter: float = 0.02
-    noise_std: float = 3.0
-    blur_sigma_px: float = 0.7
-    illumination: float = 0.1
+    vertex_jitter_mm: float = checked(0.5, ge=0)
+    bulge_jitter: float = checked(0.05, ge=0)
+    color_jitter: float = checked(0.02, ge=0)
+    noise_std: float = checked(3.0, ge=0)
+    blur_sigma_px: float = checked(0.7, ge=0)
+    illumination: float = checked(0.1, ge=0, lt=1)
     outline_step_px: float = 0.5
     effects: fx.CameraEffects = field(default_factory=fx.CameraEffects)
 
     def __post_init__(self) -> None:
         """Raise `QShapeError` on out-of-range values."""
-        if self.width_px < 16 or self.height_px < 16 or not self.px_per_mm > 0.0:
-            raise QShapeError("image must be at least 16 x 16 px and px_per_mm > 0")
-        for name in (
-            "gap_mm",
-            "vertex_jitter_mm",
-            "bulge_jitter",
-            "color_jitter",
-            "noise_std",
-            "blur_sigma_px",
-            "illumination",
-        ):
-            if getattr(self, name) < 0.0:
-                raise QShapeError(f"{name} must be >= 0, got {getattr(self, name)}")
-        if self.illumination >= 1.0:
-            raise QShapeError("illumination must be < 1")
+        check_fields(self, QShapeError)
 
     @classmethod
     def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> SynthParams:

@@ -9,24 +9,16 @@ Bundled values live in ``configs/qshape.yaml``; load them with `Tolerances.load`
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
 from configs import ConfigError, check_field_types
+from configs.checks import check_fields, checked
 from qshape.config_sections import load_section
 from qshape.errors import ToleranceError
 
 T = TypeVar("T")
-
-
-def _check_band(name: str, band: tuple[float, ...], low_min: float = 0.0) -> None:
-    """Raise `ToleranceError` unless ``low_min < band[0] < band[1]``, both finite."""
-    if len(band) != 2 or not all(math.isfinite(v) for v in band):
-        raise ToleranceError(f"{name} must be two finite numbers (low, high), got {band!r}")
-    if not low_min < band[0] < band[1]:
-        raise ToleranceError(f"{name} must satisfy {low_min} < low < high, got {band!r}")
 
 
 @dataclass(frozen=True)
@@ -119,30 +111,32 @@ class Tolerances:
             exactly one reference. 0: structural neighbours off. Dimensionless.
     """
 
-    right_angle_deg: tuple[float, ...] = (85.0, 95.0)
-    equal_length_ratio: tuple[float, ...] = (0.8, 1.25)
-    semicircle_ratio: tuple[float, ...] = (0.9, 1.1)
-    angle_margin_deg: float = 2.0
-    length_margin: float = 0.05
-    semicircle_margin: float = 0.03
-    convexity_margin_deg: float = 2.0
-    cone_margin_deg: float = 5.0
-    color_distance: float = 0.2
-    joint_width: float = 2.0
-    size_area_threshold: float | None = None
+    right_angle_deg: tuple[float, ...] = checked(
+        (85.0, 95.0), length=2, gt=0, increasing=True, lt=180
+    )
+    equal_length_ratio: tuple[float, ...] = checked((0.8, 1.25), length=2, gt=0, increasing=True)
+    semicircle_ratio: tuple[float, ...] = checked((0.9, 1.1), length=2, gt=0, increasing=True)
+    angle_margin_deg: float = checked(2.0, ge=0)
+    length_margin: float = checked(0.05, ge=0)
+    semicircle_margin: float = checked(0.03, ge=0)
+    convexity_margin_deg: float = checked(2.0, ge=0, lt=90)
+    cone_margin_deg: float = checked(5.0, ge=0, lt=22.5)  # half a cone
+    color_distance: float = checked(0.2, gt=0)
+    joint_width: float = checked(2.0, ge=0)
+    size_area_threshold: float | None = checked(None, ge=0, optional=True)
     check_size: bool = True
-    symmetry_residual: float = 0.05
-    symmetry_tolerance: float = 0.02
-    max_key_variants: int = 64
-    tie_tolerance: float = 1e-6
-    point_tolerance: float = 0.5
-    uncertainty_residual: float = 0.05
-    curve_point_weight: float = 0.25
-    rotation_corner_share: float = 0.33
-    weak_turn_deg: float = 40.0
-    weak_pair_fraction: float = 0.08
-    weak_slide_fraction: float = 0.03
-    neighbour_residual: float = 0.04
+    symmetry_residual: float = checked(0.05, ge=0)
+    symmetry_tolerance: float = checked(0.02, ge=0)
+    max_key_variants: int = checked(64, ge=1)
+    tie_tolerance: float = checked(1e-6, ge=0)
+    point_tolerance: float = checked(0.5, ge=0)
+    uncertainty_residual: float = checked(0.05, ge=0)
+    curve_point_weight: float = checked(0.25, ge=0, le=1)
+    rotation_corner_share: float = checked(0.33, ge=0, le=1)
+    weak_turn_deg: float = checked(40.0, ge=0, lt=90)
+    weak_pair_fraction: float = checked(0.08, ge=0)
+    weak_slide_fraction: float = checked(0.03, ge=0)
+    neighbour_residual: float = checked(0.04, ge=0)
 
     def __post_init__(self) -> None:
         """Validate bands (ordered, positive) and margins (non-negative, narrower than bands).
@@ -158,31 +152,7 @@ class Tolerances:
             check_field_types(self)
         except ConfigError as exc:
             raise ToleranceError(str(exc)) from None
-        _check_band("right_angle_deg", self.right_angle_deg)
-        if self.right_angle_deg[1] >= 180.0:
-            raise ToleranceError(f"right_angle_deg high must be < 180, got {self.right_angle_deg}")
-        _check_band("equal_length_ratio", self.equal_length_ratio)
-        _check_band("semicircle_ratio", self.semicircle_ratio)
-        for name in (
-            "angle_margin_deg",
-            "length_margin",
-            "semicircle_margin",
-            "convexity_margin_deg",
-            "cone_margin_deg",
-            "joint_width",
-            "symmetry_residual",
-            "symmetry_tolerance",
-            "tie_tolerance",
-            "point_tolerance",
-            "uncertainty_residual",
-            "weak_turn_deg",
-            "weak_pair_fraction",
-            "weak_slide_fraction",
-            "neighbour_residual",
-        ):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ToleranceError(f"{name} must be a finite number >= 0, got {value!r}")
+        check_fields(self, ToleranceError)
         lo, hi = self.right_angle_deg
         if 2.0 * self.angle_margin_deg >= hi - lo:
             raise ToleranceError(
@@ -202,26 +172,6 @@ class Tolerances:
                     f"{margin_name}={margin} is too wide for {band_name}={(blo, bhi)}: "
                     f"(1 + margin)^2 must be < high / low = {bhi / blo:.4g}"
                 )
-        for name in ("curve_point_weight", "rotation_corner_share"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and 0.0 <= value <= 1.0):
-                raise ToleranceError(f"{name} must be in [0, 1], got {value!r}")
-        if self.weak_turn_deg >= 90.0:
-            raise ToleranceError(f"weak_turn_deg must be < 90, got {self.weak_turn_deg!r}")
-        if self.convexity_margin_deg >= 90.0:
-            raise ToleranceError("convexity_margin_deg must be < 90")
-        if self.cone_margin_deg >= 22.5:
-            raise ToleranceError("cone_margin_deg must be < 22.5 (half a cone)")
-        if not (math.isfinite(self.color_distance) and self.color_distance > 0.0):
-            raise ToleranceError(f"color_distance must be > 0, got {self.color_distance!r}")
-        if self.size_area_threshold is not None and not (
-            math.isfinite(self.size_area_threshold) and self.size_area_threshold >= 0.0
-        ):
-            raise ToleranceError(
-                f"size_area_threshold must be None or >= 0, got {self.size_area_threshold!r}"
-            )
-        if self.max_key_variants < 1:
-            raise ToleranceError(f"max_key_variants must be >= 1, got {self.max_key_variants}")
 
     @classmethod
     def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> Tolerances:

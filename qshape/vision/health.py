@@ -17,6 +17,7 @@ from typing import Any, Literal
 import cv2
 import numpy as np
 
+from configs.checks import check_fields, checked
 from qshape.design import load_section
 from qshape.vision.extract import check_image
 from qshape.vision.params import ImageError, default_params
@@ -37,21 +38,14 @@ class HealthParams:
         saturated_fraction: More clipped pixels than this fraction: overexposed, in [0, 1].
     """
 
-    uniform_range: int = 2
-    dark_level: float = 10.0
-    saturated_level: int = 250
-    saturated_fraction: float = 0.5
+    uniform_range: int = checked(2, ge=0, le=255)
+    dark_level: float = checked(10.0, ge=0, le=255)
+    saturated_level: int = checked(250, ge=1, le=255)
+    saturated_fraction: float = checked(0.5, gt=0, le=1)
 
     def __post_init__(self) -> None:
         """Raise `ImageError` naming the field and its allowed range."""
-        if not 0 <= self.uniform_range <= 255:  # noqa: PLR2004 (8-bit levels)
-            raise ImageError(f"uniform_range must be in 0..255, got {self.uniform_range}")
-        if not 0.0 <= self.dark_level <= 255.0:  # noqa: PLR2004
-            raise ImageError(f"dark_level must be in [0, 255], got {self.dark_level}")
-        if not 1 <= self.saturated_level <= 255:  # noqa: PLR2004
-            raise ImageError(f"saturated_level must be in 1..255, got {self.saturated_level}")
-        if not 0.0 < self.saturated_fraction <= 1.0:
-            raise ImageError(f"saturated_fraction must be in (0, 1], got {self.saturated_fraction}")
+        check_fields(self, ImageError)
 
     @classmethod
     def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> HealthParams:

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from configs.checks import check_fields, checked
 from qshape.config_sections import load_section
 from qshape.errors import QShapeError
 from qshape.outline.params import OutlineParams
@@ -116,94 +116,64 @@ class ExtractParams:
         outline: Slope-comparison simplification parameters for pixel outlines.
     """
 
-    min_size_px: int = 16
+    min_size_px: int = checked(16, ge=1)
     max_size_px: int = 8192
     uniform_range: int = 2
-    blur_sigma_px: float = 1.0
-    background_bins: int = 16
+    blur_sigma_px: float = checked(1.0, ge=0)
+    background_bins: int = checked(16, ge=2, le=256)
     background_border_px: int = 4
-    background_sample_step: int = 4
-    min_background_fraction: float = 0.25
-    illumination_cell_px: int = 16
-    illumination_degree: int = 2
-    illumination_local_sigma_cells: float = 1.5
-    illumination_min_weight: float = 0.05
+    background_sample_step: int = checked(4, ge=1)
+    min_background_fraction: float = checked(0.25, ge=0, le=1)
+    illumination_cell_px: int = checked(16, ge=1)
+    illumination_degree: int = checked(2, ge=0, le=3)
+    illumination_local_sigma_cells: float = checked(1.5, ge=0)
+    illumination_min_weight: float = checked(0.05, gt=0, le=1)
     illumination_blend: bool = True
-    illumination_blend_min_change: float = 3.0
+    illumination_blend_min_change: float = checked(3.0, ge=0)
     illumination_min_cells: int = 12
     background_chroma_tolerance: float = 12.0
-    belt_gain_min: float = 0.25
+    belt_gain_min: float = checked(0.25, gt=0, le=1)
     normalize_shading: bool = True
-    lit_percentile: float = 50.0
+    lit_percentile: float = checked(50.0, ge=0, le=100)
     background_tolerance: float = 40.0
-    threshold_min: float = 20.0
+    threshold_min: float = checked(20.0, gt=0)
     threshold_max: float = 60.0
-    otsu_sample_step: int = 1
-    open_px: int = 3
+    otsu_sample_step: int = checked(1, ge=1)
+    open_px: int = checked(3, ge=0)
     edge_fraction: float = 0.5
     edge_threshold_max: float = 60.0
-    edge_sample_step: int = 2
+    edge_sample_step: int = checked(2, ge=1)
     split_touching: bool = True
     canny_low: float = 60.0
     canny_high: float = 150.0
-    canny_reduction: int = 1
-    restore_iterations: int = 3
-    min_area_px: float = 150.0
-    min_hole_area_px: float = 40.0
+    canny_reduction: int = checked(1, ge=1)
+    restore_iterations: int = checked(3, ge=0)
+    min_area_px: float = checked(150.0, ge=0)
+    min_hole_area_px: float = checked(40.0, ge=0)
     min_hole_width_px: float = 3.0
     hole_belt_fraction: float = 0.5
     hole_belt_percentile: float = 10.0
-    max_outline_excess: float = 1.3
-    border_margin_px: int = 1
+    max_outline_excess: float = checked(1.3, ge=1)
+    border_margin_px: int = checked(1, ge=0)
     boundary_offset_px: float = 0.5
-    color_erode_px: int = 3
+    color_erode_px: int = checked(3, ge=0)
     color_sample_step: int = 2
     correct_illumination: bool = True
-    resample_per_px: float = 0.0
+    resample_per_px: float = checked(0.0, ge=0)
     outline: OutlineParams = field(default_factory=OutlineParams)
 
     def __post_init__(self) -> None:
         """Raise `ImageError` on out-of-range values."""
-        if not 1 <= self.min_size_px <= self.max_size_px:
-            raise ImageError("need 1 <= min_size_px <= max_size_px")
-        if not 2 <= self.background_bins <= 256 or self.background_sample_step < 1:
-            raise ImageError("background_bins must be in 2..256, background_sample_step >= 1")
-        if not 0.0 <= self.min_background_fraction <= 1.0:
-            raise ImageError("min_background_fraction must be in [0, 1]")
-        if self.illumination_cell_px < 1 or not 0 <= self.illumination_degree <= 3:
-            raise ImageError("illumination_cell_px must be >= 1, illumination_degree in 0..3")
-        if not 0.0 < self.belt_gain_min <= 1.0:
-            raise ImageError(f"belt_gain_min must be in (0, 1], got {self.belt_gain_min}")
-        if self.max_outline_excess < 1.0:
-            raise ImageError("max_outline_excess must be >= 1")
-        if not 0.0 <= self.lit_percentile <= 100.0:
-            raise ImageError("lit_percentile must be in [0, 100]")
-        weight = self.illumination_min_weight
-        if self.illumination_local_sigma_cells < 0.0 or not 0.0 < weight <= 1.0:
+        check_fields(self, ImageError)
+        if not self.min_size_px <= self.max_size_px:
             raise ImageError(
-                "illumination_local_sigma_cells must be >= 0, illumination_min_weight in (0, 1]"
+                f"need min_size_px <= max_size_px, got {self.min_size_px} > {self.max_size_px}"
             )
-        if self.illumination_blend_min_change < 0.0:
+        if not self.threshold_min <= self.threshold_max:
             raise ImageError(
-                "illumination_blend_min_change must be >= 0 [levels], got "
-                f"{self.illumination_blend_min_change}"
+                f"need threshold_min <= threshold_max, got {self.threshold_min} > "
+                f"{self.threshold_max}"
             )
-        if not 0.0 < self.threshold_min <= self.threshold_max:
-            raise ImageError("need 0 < threshold_min <= threshold_max")
-        if self.otsu_sample_step < 1 or self.edge_sample_step < 1:
-            raise ImageError(
-                "otsu_sample_step and edge_sample_step must be >= 1 [px], got "
-                f"{self.otsu_sample_step} and {self.edge_sample_step}"
-            )
-        sizes = (self.open_px, self.restore_iterations, self.color_erode_px, self.border_margin_px)
-        if min(sizes) < 0:
-            raise ImageError("pixel sizes must be >= 0")
-        if not (math.isfinite(self.resample_per_px) and self.resample_per_px >= 0.0):
-            raise ImageError(f"resample_per_px must be >= 0, got {self.resample_per_px}")
-        if self.canny_reduction < 1:
-            raise ImageError(f"canny_reduction must be >= 1, got {self.canny_reduction}")
-        if self.blur_sigma_px < 0.0 or self.min_area_px < 0.0 or self.min_hole_area_px < 0.0:
-            raise ImageError("blur_sigma_px, min_area_px and min_hole_area_px must be >= 0")
 
     @classmethod
     def load(cls, name_or_path: str | Path | None = None, **overrides: Any) -> ExtractParams:

@@ -12,14 +12,9 @@ import pytest
 import envs  # noqa: F401
 from agents.policies import PolicyError, make_policies, make_policy
 from apps.evaluate import EPISODES_FILE, Protocol, evaluate_policy_set, main
+from tests.presets import FAST_DISCRETE
 
-BASE = {
-    "design": "paper_mixed",
-    "max_slots": 2,
-    "action_mode": "pick_place_discrete",
-    "obs_mode": "state",
-    "execution": "kinematic",
-}
+BASE = {**FAST_DISCRETE, "max_slots": 2}
 SEEDS = Protocol((1000, 1001), (), 4)
 
 

@@ -75,7 +75,7 @@ def test_config_is_strict(yaml_file):
         load_train_config(TINY, reach_shaping=-1.0)
     shaped = load_train_config("bench_sac_one_tile_joint_reach")
     assert shaped.reach_shaping > 0 and shaped.task == "MosaicOneTileJoint-v0"
-    with pytest.raises(TrainError, match="actor_bc_weight, actor_bc_decay_steps"):
+    with pytest.raises(TrainError, match="actor_bc_weight must be >= 0"):
         load_train_config(TINY, actor_bc_weight=-1.0)
     rlpd = load_train_config("rlpd_one_tile")
     assert rlpd.actor_bc_weight > 0 and rlpd.actor_bc_decay_steps == 0

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 import pytest
 
@@ -18,6 +20,16 @@ def _cell(**suction: float) -> Cell:
     return Cell(cfg, [SHAPES["square"], SHAPES["ring"]], seed=1)
 
 
+@pytest.fixture
+def rig(arm_ik: ArmIKFor) -> Iterator[tuple[Cell, ArmIK]]:
+    """The default cell (a square and a ring) and its arm IK; closed after the test."""
+    cell = _cell()
+    try:
+        yield cell, arm_ik(cell)
+    finally:
+        cell.close()
+
+
 def _hover(
     cell: Cell, ik: ArmIK, i: int, height: float, *, tilt_deg: float = 0.0, at_origin: bool = False
 ) -> None:
@@ -31,58 +43,46 @@ def _hover(
     move(cell, ik.solve(p + [0, 0, height], tilt @ tool_down(yaw), q), speed_scale=0.3)
 
 
-def test_sensors_and_seal_only_when_close_and_flat(arm_ik: ArmIKFor) -> None:
-    cell = _cell()
-    ik = arm_ik(cell)
-    try:
-        assert not cell.vacuum_on and not cell.tile_held
-        _hover(cell, ik, 0, height=0.01)  # 10 mm above: no seal
-        assert cell.vacuum(True) is None
-        cell.step(5)
-        assert cell.vacuum_on and not cell.tile_held
-        cell.vacuum(False)
-        _hover(cell, ik, 0, height=0.0005, tilt_deg=12.0)  # close but tilted: no seal
-        cell.vacuum(True)
-        cell.step(5)
-        assert not cell.tile_held
-        cell.vacuum(False)
-        _hover(cell, ik, 0, height=0.0005)  # close and flat: seal
-        ev = cell.vacuum(True)
-        assert ev is not None and ev.kind == "grasp" and ev.tile == 0
-        assert cell.tile_held and cell.held_tile == 0
-        ev = cell.vacuum(False)
-        assert ev is not None and ev.kind == "release"
-        assert not cell.tile_held
-    finally:
-        cell.close()
+def test_sensors_and_seal_only_when_close_and_flat(rig: tuple[Cell, ArmIK]) -> None:
+    cell, ik = rig
+    assert not cell.vacuum_on and not cell.tile_held
+    _hover(cell, ik, 0, height=0.01)  # 10 mm above: no seal
+    assert cell.vacuum(True) is None
+    cell.step(5)
+    assert cell.vacuum_on and not cell.tile_held
+    cell.vacuum(False)
+    _hover(cell, ik, 0, height=0.0005, tilt_deg=12.0)  # close but tilted: no seal
+    cell.vacuum(True)
+    cell.step(5)
+    assert not cell.tile_held
+    cell.vacuum(False)
+    _hover(cell, ik, 0, height=0.0005)  # close and flat: seal
+    ev = cell.vacuum(True)
+    assert ev is not None and ev.kind == "grasp" and ev.tile == 0
+    assert cell.tile_held and cell.held_tile == 0
+    ev = cell.vacuum(False)
+    assert ev is not None and ev.kind == "release"
+    assert not cell.tile_held
 
 
-def test_no_seal_over_a_hole(arm_ik: ArmIKFor) -> None:
-    cell = _cell()
-    ik = arm_ik(cell)
-    try:
-        _hover(cell, ik, 1, height=0.0005, at_origin=True)  # ring: centroid is in the hole
-        cell.vacuum(True)
-        cell.step(5)
-        assert not cell.tile_held
-        cell.vacuum(False)
-        assert pick(cell, ik, 1)  # at its grasp point on the material it seals
-    finally:
-        cell.close()
+def test_no_seal_over_a_hole(rig: tuple[Cell, ArmIK]) -> None:
+    cell, ik = rig
+    _hover(cell, ik, 1, height=0.0005, at_origin=True)  # ring: centroid is in the hole
+    cell.vacuum(True)
+    cell.step(5)
+    assert not cell.tile_held
+    cell.vacuum(False)
+    assert pick(cell, ik, 1)  # at its grasp point on the material it seals
 
 
-def test_descending_with_vacuum_on_seals_on_contact(arm_ik: ArmIKFor) -> None:
-    cell = _cell()
-    ik = arm_ik(cell)
-    try:
-        _hover(cell, ik, 0, height=0.02)
-        cell.vacuum(True)
-        assert not cell.tile_held
-        p, yaw = world_grasp(cell, 0)
-        move(cell, ik.solve(p + [0, 0, 0.0005], tool_down(yaw), cell.qpos), speed_scale=0.2)
-        assert cell.held_tile == 0
-    finally:
-        cell.close()
+def test_descending_with_vacuum_on_seals_on_contact(rig: tuple[Cell, ArmIK]) -> None:
+    cell, ik = rig
+    _hover(cell, ik, 0, height=0.02)
+    cell.vacuum(True)
+    assert not cell.tile_held
+    p, yaw = world_grasp(cell, 0)
+    move(cell, ik.solve(p + [0, 0, 0.0005], tool_down(yaw), cell.qpos), speed_scale=0.2)
+    assert cell.held_tile == 0
 
 
 def test_over_limit_acceleration_drops_the_tile_and_is_reported(arm_ik: ArmIKFor) -> None:
@@ -110,14 +110,10 @@ def test_over_limit_acceleration_drops_the_tile_and_is_reported(arm_ik: ArmIKFor
         cell.close()
 
 
-def test_default_vacuum_holds_through_full_speed(arm_ik: ArmIKFor) -> None:
-    cell = _cell()
-    ik = arm_ik(cell)
-    try:
-        assert pick(cell, ik, 0)
-        target = ik.solve(cell.geometry.output_centre + [0, 0, 0.06], tool_down(0.0), cell.qpos)
-        move(cell, target, speed_scale=1.0)
-        assert cell.held_tile == 0 and cell.n_dropped == 0
-        assert 0 < cell.suction.pull + cell.suction.shear < cell.suction.holding_force
-    finally:
-        cell.close()
+def test_default_vacuum_holds_through_full_speed(rig: tuple[Cell, ArmIK]) -> None:
+    cell, ik = rig
+    assert pick(cell, ik, 0)
+    target = ik.solve(cell.geometry.output_centre + [0, 0, 0.06], tool_down(0.0), cell.qpos)
+    move(cell, target, speed_scale=1.0)
+    assert cell.held_tile == 0 and cell.n_dropped == 0
+    assert 0 < cell.suction.pull + cell.suction.shear < cell.suction.holding_force

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Iterator
 from pathlib import Path
 
 import gymnasium as gym
@@ -14,6 +15,7 @@ import pytest
 import envs  # noqa: F401 - registers MosaicAssembly-v0
 from envs.actions import transfer_poses
 from envs.mosaic_env import MosaicAssemblyEnv, MosaicEnvError
+from tests.presets import FAST_DISCRETE
 
 OUT = Path(__file__).resolve().parents[2] / "out"
 N_SLOTS = 3
@@ -93,25 +95,25 @@ def test_dynamic_and_kinematic_agree_on_clean_picks() -> None:
         e2.close()
 
 
-def test_wrong_slot_is_misplaced_and_penalised() -> None:
-    env = MosaicAssemblyEnv(
-        action_mode="pick_place_discrete",
-        execution="kinematic",
-        obs_mode="state",
-        design="paper_mixed",
-    )
-    try:
-        env.reset(seed=0)
-        classes = env.task.slot_class
-        wrong = int(np.flatnonzero(classes != env.task.tile_class[0])[0])
-        _, r, _, _, info = env.step(env.index.encode(0, wrong))  # cell indices -> agent's
-        assert info["evaluation"]["misplaced"] == 1 and info["evaluation"]["correct"] == 0
-        assert r == pytest.approx(-env.config.penalty_misplaced)
-        # Picking the already placed tile again is a failed action, not a crash.
-        _, r, _, _, info = env.step(env.index.encode(0, 0))
-        assert info["action_failed"] and r < 0
-    finally:
-        env.close()
+@pytest.fixture
+def discrete_env() -> Iterator[MosaicAssemblyEnv]:
+    """A kinematic ``pick_place_discrete`` env on the paper's mixed design, reset with seed 0."""
+    env = MosaicAssemblyEnv(**FAST_DISCRETE)
+    env.reset(seed=0)
+    yield env
+    env.close()
+
+
+def test_wrong_slot_is_misplaced_and_penalised(discrete_env: MosaicAssemblyEnv) -> None:
+    env = discrete_env
+    classes = env.task.slot_class
+    wrong = int(np.flatnonzero(classes != env.task.tile_class[0])[0])
+    _, r, _, _, info = env.step(env.index.encode(0, wrong))  # cell indices -> agent's
+    assert info["evaluation"]["misplaced"] == 1 and info["evaluation"]["correct"] == 0
+    assert r == pytest.approx(-env.config.penalty_misplaced)
+    # Picking the already placed tile again is a failed action, not a crash.
+    _, r, _, _, info = env.step(env.index.encode(0, 0))
+    assert info["action_failed"] and r < 0
 
 
 def test_empty_pick_fails_cleanly() -> None:
@@ -218,28 +220,21 @@ def test_info_keys_and_dense_terms() -> None:
         env.close()
 
 
-def test_tile_into_a_filled_slot_is_misplaced_and_penalised() -> None:
-    env = MosaicAssemblyEnv(
-        action_mode="pick_place_discrete",
-        execution="kinematic",
-        obs_mode="state",
-        design="paper_mixed",
-    )
-    try:
-        env.reset(seed=0)
-        task = env.task
-        twin = int(np.flatnonzero(task.tile_class == task.tile_class[0])[1])  # same class
-        _, r, _, _, info = env.step(env.expert_action(0, 0))
-        assert info["evaluation"]["correct"] == 1 and r == pytest.approx(env.config.reward_correct)
-        _, r, _, _, info = env.step(env.expert_action(twin, 0))
-        ev = info["evaluation"]
-        assert not info["action_failed"], info["action_error"]
-        assert ev["misplaced"] == 1 and ev["correct"] == 1 and ev["slot_filled"][0]
-        assert info["reward_misplaced"] == -env.config.penalty_misplaced
-        assert r == pytest.approx(-env.config.penalty_misplaced)
-        assert ev["placeable"] == len(env.cell.slots) - 2  # the twin's class has no open slot
-    finally:
-        env.close()
+def test_tile_into_a_filled_slot_is_misplaced_and_penalised(
+    discrete_env: MosaicAssemblyEnv,
+) -> None:
+    env = discrete_env
+    task = env.task
+    twin = int(np.flatnonzero(task.tile_class == task.tile_class[0])[1])  # same class
+    _, r, _, _, info = env.step(env.expert_action(0, 0))
+    assert info["evaluation"]["correct"] == 1 and r == pytest.approx(env.config.reward_correct)
+    _, r, _, _, info = env.step(env.expert_action(twin, 0))
+    ev = info["evaluation"]
+    assert not info["action_failed"], info["action_error"]
+    assert ev["misplaced"] == 1 and ev["correct"] == 1 and ev["slot_filled"][0]
+    assert info["reward_misplaced"] == -env.config.penalty_misplaced
+    assert r == pytest.approx(-env.config.penalty_misplaced)
+    assert ev["placeable"] == len(env.cell.slots) - 2  # the twin's class has no open slot
 
 
 def test_frame_listener_renders_inside_a_dynamic_cycle() -> None:

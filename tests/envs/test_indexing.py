@@ -9,15 +9,10 @@ import pytest
 import envs  # noqa: F401 - registers the ids
 from agents.policies import make_policies
 from apps.evaluate import Protocol, evaluate_policy_set
+from tests.presets import FAST_DISCRETE
 
 HELD_OUT = Protocol(tuple(range(1000, 1012)), (), 12)
-BASE = {
-    "design": "paper_mixed",
-    "max_slots": 6,
-    "action_mode": "pick_place_discrete",
-    "obs_mode": "state",
-    "execution": "kinematic",
-}
+BASE = {**FAST_DISCRETE, "max_slots": 6}
 LEAKY = {"tile_order": "design", "slot_order": "design", "rotation_frame": "slot"}
 RANDOM_MARGIN = 0.5
 """Correct tiles per episode an open-loop sequence may exceed random by (sampling noise)."""

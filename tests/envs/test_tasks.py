@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -87,61 +89,60 @@ def test_staged_reward_telescopes_to_the_stage_weights() -> None:
         env.close()
 
 
-def test_staged_potentials_rise_through_reach_and_seal() -> None:
+@pytest.fixture
+def one_tile() -> Iterator[gym.Env]:
+    """``MosaicOneTile-v0`` as registered; closed after the test."""
     env = gym.make("MosaicOneTile-v0")
-    try:
-        u = env.unwrapped
-        env.reset(seed=1)
-        st = u.task.staged
-        far = st.potentials(u.evaluate())["reach"]
-        # Put the pad on the tile (kinematic, through the privileged pose) and seal.
-        cmd = transfer_poses(u.cell, 0, 0)
-        q = u.ik.solve(np.array([*cmd.pick_xy, u.pick_area.tile_top_z]), cmd.pick_yaw).q
-        u.cell.set_qpos(q)
-        near = st.potentials(u.evaluate())
-        assert near["reach"] > 0.95 > far and near["seal"] == 0.0
-        u.cell.vacuum(True)
-        held = st.potentials(u.evaluate())
-        assert u.cell.held_tile == 0 and held["seal"] == 1.0 and held["reach"] == 1.0
-    finally:
-        env.close()
+    yield env
+    env.close()
 
 
-def test_one_tile_cartesian_starts_inside_its_box() -> None:
+def test_staged_potentials_rise_through_reach_and_seal(one_tile: gym.Env) -> None:
+    env = one_tile
+    u = env.unwrapped
+    env.reset(seed=1)
+    st = u.task.staged
+    far = st.potentials(u.evaluate())["reach"]
+    # Put the pad on the tile (kinematic, through the privileged pose) and seal.
+    cmd = transfer_poses(u.cell, 0, 0)
+    q = u.ik.solve(np.array([*cmd.pick_xy, u.pick_area.tile_top_z]), cmd.pick_yaw).q
+    u.cell.set_qpos(q)
+    near = st.potentials(u.evaluate())
+    assert near["reach"] > 0.95 > far and near["seal"] == 0.0
+    u.cell.vacuum(True)
+    held = st.potentials(u.evaluate())
+    assert u.cell.held_tile == 0 and held["seal"] == 1.0 and held["reach"] == 1.0
+
+
+def test_one_tile_cartesian_starts_inside_its_box(one_tile: gym.Env) -> None:
     """A zero action keeps the tool still: the home pose lies in the tool target's box.
 
     The box used to be only the tile area and the mesh, so the first step clipped the target
     0.3 m away and the carry had to cross over the robot's base.
     """
-    env = gym.make("MosaicOneTile-v0")
-    try:
-        env.reset(seed=1000)
-        u = env.unwrapped
-        start, _ = u.cell.tcp_pose()
-        lo, hi = u.actions.box
-        assert np.all(start >= lo - 1e-9) and np.all(start <= hi + 1e-9)
-        assert hi[0] >= start[0] > max(u.pick_area.hi[0], u.place_area.hi[0])
-        still = np.array([0, 0, 0, 0, -1], np.float32)
-        for _ in range(3):
-            _, _, _, _, info = env.step(still)
-        end, _ = u.cell.tcp_pose()
-        assert np.linalg.norm(end - start) < 0.002
-    finally:
-        env.close()
+    env = one_tile
+    env.reset(seed=1000)
+    u = env.unwrapped
+    start, _ = u.cell.tcp_pose()
+    lo, hi = u.actions.box
+    assert np.all(start >= lo - 1e-9) and np.all(start <= hi + 1e-9)
+    assert hi[0] >= start[0] > max(u.pick_area.hi[0], u.place_area.hi[0])
+    still = np.array([0, 0, 0, 0, -1], np.float32)
+    for _ in range(3):
+        _, _, _, _, info = env.step(still)
+    end, _ = u.cell.tcp_pose()
+    assert np.linalg.norm(end - start) < 0.002
 
 
-def test_the_first_step_pays_only_the_change_since_reset() -> None:
+def test_the_first_step_pays_only_the_change_since_reset(one_tile: gym.Env) -> None:
     """Reset stores the reset state's potentials: standing still earns (almost) nothing."""
-    env = gym.make("MosaicOneTile-v0")
-    try:
-        u = env.unwrapped
-        for seed in (1, 3):
-            env.reset(seed=seed)
-            start = u.task.staged.potentials(u.evaluate())
-            assert start["reach"] > 1e-3  # the pad starts near enough to have a potential
-            still = np.array([0, 0, 0, 0, -1], np.float32)  # no move, no vacuum
-            _, _, _, _, info = env.step(still)
-            for s in STAGES:
-                assert abs(info[f"reward_stage_{s}"]) < 1e-6, (seed, s, info[f"reward_stage_{s}"])
-    finally:
-        env.close()
+    env = one_tile
+    u = env.unwrapped
+    for seed in (1, 3):
+        env.reset(seed=seed)
+        start = u.task.staged.potentials(u.evaluate())
+        assert start["reach"] > 1e-3  # the pad starts near enough to have a potential
+        still = np.array([0, 0, 0, 0, -1], np.float32)  # no move, no vacuum
+        _, _, _, _, info = env.step(still)
+        for s in STAGES:
+            assert abs(info[f"reward_stage_{s}"]) < 1e-6, (seed, s, info[f"reward_stage_{s}"])

@@ -64,14 +64,12 @@ _UNIT = st.one_of(
     st.floats(-1.0, 1.0, allow_nan=False, width=32),
 )
 
+SIMULATED = settings(deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+"""Hypothesis settings of the simulated sequences: reproducible, no per-example deadline."""
+
 
 @pytest.mark.slow
-@settings(
-    max_examples=25,
-    deadline=None,
-    derandomize=True,
-    suppress_health_check=[HealthCheck.too_slow],
-)
+@settings(SIMULATED, max_examples=25)
 @given(
     seed=st.integers(0, 2**16),
     actions=st.lists(st.lists(_UNIT, min_size=6, max_size=6), min_size=1, max_size=30),
@@ -89,12 +87,7 @@ def test_pick_place_sequences_keep_every_tile_accounted(seed, actions):
 
 
 @pytest.mark.slow
-@settings(
-    max_examples=15,
-    deadline=None,
-    derandomize=True,
-    suppress_health_check=[HealthCheck.too_slow],
-)
+@settings(SIMULATED, max_examples=15)
 @given(
     seed=st.integers(0, 2**16),
     actions=st.lists(st.lists(_UNIT, min_size=5, max_size=5), min_size=1, max_size=25),

@@ -1,7 +1,7 @@
-"""Shared fixtures of qshape's tests: the design the synthetic pictures are drawn from, and the
-bundled picture and extraction parameters.
+"""Shared fixtures of qshape's tests: the design the synthetic pictures are drawn from.
 
-Loaded once per test module (frozen values: a test changes a copy, ``dataclasses.replace``).
+The bundled picture and extraction parameters are fixtures of ``tests/conftest.py``. Loaded once
+per test module (frozen values: a test changes a copy, ``dataclasses.replace``).
 """
 
 from __future__ import annotations
@@ -9,23 +9,9 @@ from __future__ import annotations
 import pytest
 
 from qshape.design import Design
-from qshape.synthetic.synth import SynthParams
-from qshape.vision.params import ExtractParams
 
 
 @pytest.fixture(scope="module")
 def design() -> Design:
     """The paper's mixed design (``paper_mixed``): squares, triangles, arcs and holes."""
     return Design.load("paper_mixed")
-
-
-@pytest.fixture(scope="module")
-def synth_params() -> SynthParams:
-    """The bundled synthetic-picture parameters (``configs/vision.yaml``, ``synth``)."""
-    return SynthParams.load()
-
-
-@pytest.fixture(scope="module")
-def extract_params() -> ExtractParams:
-    """The bundled extraction parameters (``configs/vision.yaml``, ``extract``)."""
-    return ExtractParams.load()

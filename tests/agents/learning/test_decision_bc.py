@@ -10,14 +10,9 @@ from agents.learning.decision_bc import BCConfig, train_bc  # noqa: E402
 from agents.policies import PolicyError, make_policies  # noqa: E402
 from apps.evaluate import Protocol, evaluate_policy_set  # noqa: E402
 from apps.record_demos import load, record  # noqa: E402
+from tests.presets import FAST_DISCRETE
 
-BASE = {
-    "design": "paper_mixed",
-    "max_slots": 2,
-    "action_mode": "pick_place_discrete",
-    "obs_mode": "state",
-    "execution": "kinematic",
-}
+BASE = {**FAST_DISCRETE, "max_slots": 2}
 
 
 def test_clone_fits_its_demos_and_plays(tmp_path) -> None:

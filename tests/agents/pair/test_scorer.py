@@ -16,15 +16,10 @@ from agents.pair.state_rows import state_rows  # noqa: E402
 from agents.policies import PolicyError, make_policies  # noqa: E402
 from apps.evaluate import Protocol, evaluate_policy_set  # noqa: E402
 from apps.record_demos import load, record  # noqa: E402
+from tests.presets import FAST_DISCRETE
 
 TASK = "MosaicDecision6-v0"
-BASE = {
-    "design": "paper_mixed",
-    "max_slots": 6,
-    "action_mode": "pick_place_discrete",
-    "obs_mode": "state",
-    "execution": "kinematic",
-}
+BASE = {**FAST_DISCRETE, "max_slots": 6}
 HELD_OUT = Protocol((1000, 1001, 1002, 1003), (), 12)
 """Seeds none of the demonstrations used, the task's 12-step limit."""
 

@@ -8,12 +8,11 @@ import numpy as np
 
 from agents.scripted.config import load_agents_config
 from agents.scripted.perception import perceive_tiles, refigured, slot_targets
-from benchmarks.design_cell import build_design_cell
-from envs.task_spec import work_areas, world_slots
 from qshape import ExtractParams, OutlineParams
 from qshape.design import Design
 from qshape.theory.assign import feasible_pairs
 from qshape.theory.tolerances import default_tolerances
+from tests.agents.scripted.cell_picture import four_slot_design, picture_of
 
 
 def _bitten() -> Design:
@@ -23,33 +22,17 @@ def _bitten() -> Design:
         "kind": "polygon",
         "vertices": [[0, 0], [10, 0, -0.6], [30, 0], [40, 0], [40, 40], [0, 40]],
     }
-    slots = []
-    for i in range(4):
-        shape = bite if i % 2 == 0 else {"kind": "square", "size": 40}
-        slots.append(
-            {
-                "name": f"t{i}",
-                "shape": shape,
-                "color": "#c0392b" if i < 2 else "#2e6fd1",
-                "pose": {"x": 40 + 60 * (i % 2), "y": 40 + 60 * (i // 2), "angle": 30.0 * i},
-            }
-        )
-    return Design.from_dict(
-        {"name": "bitten", "mesh": {"width": 230, "height": 230}, "joint": 2.0, "slots": slots}
+    square = {"kind": "square", "size": 40}
+    colors = ("#c0392b", "#c0392b", "#2e6fd1", "#2e6fd1")
+    return four_slot_design(
+        "bitten", (bite, square), colors, start_mm=40, pitch_mm=60, turn_deg=30.0
     )
 
 
 def test_the_retry_recognises_the_bitten_tiles() -> None:
-    design = _bitten()
-    cell, _ = build_design_cell(design, seed=0)
-    try:
-        cell.step(100)
-        img = cell.render("input_camera")
-        cam = cell.camera_model("input_camera")
-        z = work_areas(cell)[0].tile_top_z
-        slots = slot_targets(world_slots(cell, design))
-    finally:
-        cell.close()
+    pic = picture_of(_bitten())
+    img, cam, z = pic.image, pic.camera, pic.tile_top_z
+    slots = slot_targets(pic.slots)
     per = perceive_tiles(img, cam, z)
     assert len(per.tiles) == 4
     tol = default_tolerances()

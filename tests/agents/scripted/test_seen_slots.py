@@ -10,11 +10,10 @@ from agents.scripted.config import load_agents_config
 from agents.scripted.perception import figure_to_world, perceive_tiles, slot_targets
 from agents.scripted.placement import FeasiblePairs, plan_placements
 from agents.scripted.seen_slots import camera_scale
-from benchmarks.design_cell import build_design_cell
-from envs.task_spec import work_areas, world_slots
 from qshape import ExtractParams, Figure
 from qshape.design import Design
 from qshape.design.shape_maps import rounded_polygon_shape
+from tests.agents.scripted.cell_picture import four_slot_design, picture_of
 
 
 def _rounded_and_plain() -> Design:
@@ -23,32 +22,15 @@ def _rounded_and_plain() -> Design:
     h = 23.0
     v = np.array([[-h, -h], [h, -h], [h, h], [-h, h]])
     rounded = rounded_polygon_shape(v, 17.5, np.array([True, False, True, False]))
-    slots = []
-    for i in range(4):
-        shape = rounded if i % 2 == 0 else {"kind": "square", "size": 40}
-        slots.append(
-            {
-                "name": f"t{i}",
-                "shape": shape,
-                "color": "#c0392b",
-                "pose": {"x": 50 + 100 * (i % 2), "y": 50 + 100 * (i // 2), "angle": 25.0 * i},
-            }
-        )
-    mesh = {"width": 230, "height": 230}
-    return Design.from_dict({"name": "rounded", "mesh": mesh, "joint": 2.0, "slots": slots})
+    square = {"kind": "square", "size": 40}
+    return four_slot_design(
+        "rounded", (rounded, square), ("#c0392b",) * 4, start_mm=50, pitch_mm=100, turn_deg=25.0
+    )
 
 
 def test_rounded_tiles_match_their_slots_as_the_camera_sees_them() -> None:
-    design = _rounded_and_plain()
-    cell, _ = build_design_cell(design, seed=0)
-    try:
-        cell.step(100)
-        img = cell.render("input_camera")
-        cam = cell.camera_model("input_camera")
-        z = work_areas(cell)[0].tile_top_z
-        ws = world_slots(cell, design)
-    finally:
-        cell.close()
+    pic = picture_of(_rounded_and_plain())
+    img, cam, z, ws = pic.image, pic.camera, pic.tile_top_z, pic.slots
     scale = camera_scale(cam, z)
     assert 1.5 < scale < 2.5  # [px/mm] the default input camera on the tile tops
     cfg = load_agents_config().perception

@@ -1,4 +1,4 @@
-"""Shared fixtures of the benchmarks' tests: the bundled picture and extraction parameters.
+"""Fixtures shared by the test folders: the bundled picture and extraction parameters.
 
 Loaded once per test module (frozen values: a test changes a copy, ``dataclasses.replace``).
 """
