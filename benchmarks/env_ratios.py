@@ -162,8 +162,9 @@ def measure_camera_ratio(seconds: float, queue: mp.Queue) -> None:
         "execution": "kinematic",
         "image_size": DECISION_IMAGE,
     }
-    rgb, state = gym.make(envs.ENV_ID, obs_mode="rgb", **kw), gym.make(
-        envs.ENV_ID, obs_mode="state", **kw
+    rgb, state = (
+        gym.make(envs.ENV_ID, obs_mode="rgb", **kw),
+        gym.make(envs.ENV_ID, obs_mode="state", **kw),
     )
     a = b = 0.0
     na = nb = seed = 0
