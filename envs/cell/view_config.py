@@ -85,6 +85,9 @@ class RenderConfig:
             camera and image size).
         lens_tolerance: Its convergence tolerance, in normalised image units (1 px ~ 1 / the
             focal length in px).
+        reuse_unchanged: A model camera whose scene did not change since its last picture
+            at the same size returns that picture again instead of drawing it (the same
+            pixels; `envs.cell.render_memo`).
     """
 
     shadows: bool = False
@@ -96,6 +99,7 @@ class RenderConfig:
     supersample_max_pixels: int = 40000
     lens_max_iterations: int = 40
     lens_tolerance: float = 1e-9
+    reuse_unchanged: bool = True
 
     def __post_init__(self) -> None:
         _length(self, "overview_size", 2)
