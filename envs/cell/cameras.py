@@ -265,7 +265,8 @@ class CameraRig:
         self._renderers: dict[tuple[int, int, int], mujoco.Renderer] = {}
         self._depth: dict[tuple[int, int, int], mujoco.Renderer] = {}
         self._culler = ViewCuller(model)
-        self._pictures = LastPictures()
+        self.pictures = LastPictures()
+        """The last picture of each camera and size (`envs.cell.render_memo`)."""
         self._reuse = cfg.reuse_unchanged and memo_possible(model)
         self._camera_ids: dict[str, int] = {}
         self._closed = False
@@ -339,7 +340,7 @@ class CameraRig:
         if self._reuse and cam is not None and effect is None:
             slot = (cam, height, width, depth, f)
             key = scene_key(self._model, data, cam, hidden, r.scene.flags)
-            kept = self._pictures.get(slot, key)
+            kept = self.pictures.get(slot, key)
             if kept is not None:
                 if out is None:
                     return kept
@@ -351,7 +352,7 @@ class CameraRig:
         if f == 1 and lens is None and effect is None:
             image = r.render(out=out)
             if memo is not None:
-                self._pictures.put(*memo, image)
+                self.pictures.put(*memo, image)
             return image
         image = r.render()
         if f > 1:
@@ -361,7 +362,7 @@ class CameraRig:
         if lens is not None:
             image = lens.apply(image)
         if memo is not None:
-            self._pictures.put(*memo, image)
+            self.pictures.put(*memo, image)
         if out is None:
             return image
         out[...] = image
@@ -420,7 +421,7 @@ class CameraRig:
             for r in pool.values():
                 r.close()
             pool.clear()
-        self._pictures.clear()
+        self.pictures.clear()
         _OPEN_RIGS.discard(self)
         self._closed = True
 
