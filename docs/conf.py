@@ -21,7 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
-from bench_page import write_bench_table  # noqa: E402 - docs/ on sys.path first
+from bench_page import write_bench_table, write_ratio_table  # noqa: E402 - docs/ on sys.path
 
 project = "Mosaic assembly cell"
 author = "The mosaic-cell authors"
@@ -81,3 +81,5 @@ def setup(app: Sphinx) -> None:
     app.connect("autodoc-process-docstring", escape_bars)
     if (Path(__file__).parent / "bench.json").is_file():
         app.connect("builder-inited", lambda _app: write_bench_table())
+    if (Path(__file__).parent / "bench_env_ratios.json").is_file():
+        app.connect("builder-inited", lambda _app: write_ratio_table())
