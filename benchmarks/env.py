@@ -42,6 +42,7 @@ import json
 import multiprocessing as mp
 import os
 import platform
+import time
 from pathlib import Path
 from typing import Any
 
@@ -252,7 +253,9 @@ def main() -> None:
     if args.ratios:
         ratios = _ratio_rows(2 * seconds)
         OUT_RATIOS.parent.mkdir(exist_ok=True)
-        write_text(OUT_RATIOS, json.dumps({"machine": _machine(), "ratios": ratios}, indent=2))
+        date = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+        report = {"date": date, "machine": _machine(), "ratios": ratios}
+        write_text(OUT_RATIOS, json.dumps(report, indent=2))
         print(f"wrote {OUT_RATIOS}")
         return
     ratios = _ratio_rows(2 * seconds)

@@ -71,7 +71,8 @@ def ratios_markdown(report: dict[str, Any]) -> str:
     """The load line and a table of each ratio: both sides [CPU ms], ratio, target, met."""
     m = report["machine"]
     lines = [
-        f"One run on {m['cpus']} CPUs ({m['platform']}, Python {m['python']}), each ratio in "
+        f"Run of {report.get('date', '?')} on {m['cpus']} CPUs ({m['platform']}, Python "
+        f"{m['python']}), each ratio in "
         f"one process pinned to one core, its two sides interleaved; CPU time of the process "
         f"(the software renderer's threads included).",
         "",

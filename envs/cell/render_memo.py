@@ -49,8 +49,10 @@ _MODEL_ALL = (
     "site_group",
 )
 """Model arrays that set how materials, lights and sites look."""
-_DATA_ALL = ("light_xpos", "light_xdir", "site_xpos", "site_xmat")
-"""State arrays of lights and sites (all of them)."""
+_DATA_ALL = ("light_xpos", "light_xdir")
+"""State arrays of the lights (all of them)."""
+_SITES_SHOWN = np.asarray(mujoco.MjvOption().sitegroup, bool)
+"""Site groups a renderer's default options draw (the cell's cameras use them)."""
 _CAMERA = ("cam_fovy", "cam_ipd", "cam_intrinsic", "cam_sensorsize", "cam_projection")
 """Per-camera model arrays of its projection."""
 MAX_PICTURES = 16
@@ -91,6 +93,9 @@ def scene_key(
     parts += [getattr(model, name) for name in _MODEL_GEOM]
     parts += [getattr(model, name) for name in _MODEL_ALL]
     parts += [getattr(data, name) for name in _DATA_ALL]
+    drawn = _SITES_SHOWN[np.clip(model.site_group, 0, len(_SITES_SHOWN) - 1)]
+    drawn &= (model.site_group >= 0) & (model.site_group < len(_SITES_SHOWN))
+    parts += [data.site_xpos[drawn], data.site_xmat[drawn]]
     parts += [getattr(model, name)[camera] for name in _CAMERA]
     vis, stat = model.vis, model.stat
     head = vis.headlight

@@ -92,3 +92,35 @@ def test_the_pictures_kept_are_bounded() -> None:
     assert kept.get(("camera", 0), b"key") is None
     assert kept.get(("camera", 3 * MAX_PICTURES - 1), b"key") is not None
     assert kept.get(("camera", 3 * MAX_PICTURES - 1), b"other key") is None
+
+
+def test_joint_steps_observe_the_same_pictures_with_and_without_reuse() -> None:
+    """Random joint moves (the arm in and out of the cameras' views), one env reusing pictures
+    and one drawing every picture: the same observations at every step."""
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: PLC0415
+
+    kw = {"action_mode": "joint", "obs_mode": "rgb", "image_size": SIZE}
+    a = gym.make(envs.ENV_ID, **kw)
+    b = gym.make(envs.ENV_ID, cell={"render": {"reuse_unchanged": False}}, **kw)
+    try:
+        for env in (a, b):
+            env.reset(seed=3)
+        rng = np.random.default_rng(0)
+        for k in range(40):
+            if k == 20:  # the arm over the input belt, in the input camera's view
+                for env in (a, b):
+                    u = env.unwrapped
+                    g = u.cell.geometry
+                    over = np.array([*g.input_centre[:2], g.belt_top + 0.08])
+                    u.cell.set_qpos(u.ik.solve(over, 0.0).q)
+            action = rng.uniform(-1.0, 1.0, a.action_space.shape).astype(np.float32)
+            oa, ob = a.step(action)[0], b.step(action)[0]
+            for camera in CAMERAS:
+                np.testing.assert_array_equal(oa[camera], ob[camera])
+        kept = a.unwrapped.cell.views.rig.pictures
+        assert kept.hits > 0 and kept.misses > len(CAMERAS)
+    finally:
+        a.close()
+        b.close()
