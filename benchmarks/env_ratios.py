@@ -21,6 +21,7 @@ before and after it (`os.getloadavg`).
 
 from __future__ import annotations
 
+import functools
 import multiprocessing as mp
 import os
 import time
@@ -38,7 +39,10 @@ TARGET_CAMERA = 2.0
 """A decision step with both images within this many times the step without."""
 RUNG = "MosaicHeldOutDesigns-v1"
 """The rung whose procedural and fixed resets are compared (6 slots)."""
-PROCEDURAL = {"design_source": "procedural", "exclude_designs": ["hexagon", "trencadis"]}
+PROCEDURAL: dict[str, Any] = {
+    "design_source": "procedural",
+    "exclude_designs": ["hexagon", "trencadis"],
+}
 """Its procedural training entry (`envs.tasks.BenchmarkTask.design_kwargs`)."""
 
 
@@ -78,14 +82,15 @@ def measure_reset_ratio(seconds: float, queue: mp.Queue) -> None:
     import envs  # noqa: F401, PLC0415
 
     load0 = os.getloadavg()
-    proc, fixed = gym.make(RUNG, **PROCEDURAL), gym.make(RUNG)
+    proc: Any = gym.make(RUNG, **PROCEDURAL)
+    fixed: Any = gym.make(RUNG)
     proc.reset(seed=10_000)
     fixed.reset(seed=10_000)
     a = b = 0.0
     seed = 0
     while a + b < seconds or seed < 3:
-        a += _cpu(lambda s=seed: proc.reset(seed=s))
-        b += _cpu(lambda s=seed: fixed.reset(seed=s))
+        a += _cpu(functools.partial(proc.reset, seed=seed))
+        b += _cpu(functools.partial(fixed.reset, seed=seed))
         seed += 1
     proc.close()
     fixed.close()
@@ -110,7 +115,7 @@ def measure_step_ratio(seconds: float, queue: mp.Queue) -> None:
     import envs  # noqa: PLC0415
 
     load0 = os.getloadavg()
-    env = gym.make(
+    env: Any = gym.make(
         envs.ENV_ID,
         design=DESIGN,
         action_mode="pick_place",
@@ -162,10 +167,8 @@ def measure_camera_ratio(seconds: float, queue: mp.Queue) -> None:
         "execution": "kinematic",
         "image_size": DECISION_IMAGE,
     }
-    rgb, state = (
-        gym.make(envs.ENV_ID, obs_mode="rgb", **kw),
-        gym.make(envs.ENV_ID, obs_mode="state", **kw),
-    )
+    rgb: Any = gym.make(envs.ENV_ID, obs_mode="rgb", **kw)
+    state: Any = gym.make(envs.ENV_ID, obs_mode="state", **kw)
     a = b = 0.0
     na = nb = seed = 0
     while a + b < seconds:
