@@ -40,3 +40,28 @@ def test_symmetry_is_remembered_by_shape_and_equals_the_computed_order() -> None
     moved = Slot("b", dict(square.shape), (0.0, 1.0, 0.0), -5.0, 2.0, 71.0, square.rules)
     assert moved.symmetry == order and SYMMETRY_MEMO.hits == hits + 1
     assert SYMMETRY_MEMO.maxsize == SYMMETRY_MEMO_SIZE
+
+
+def test_a_design_file_loads_once_and_a_changed_file_loads_anew(tmp_path) -> None:
+    from qshape.design.model import LOADED_DESIGNS  # noqa: PLC0415
+
+    path = tmp_path / "d.yaml"
+    Design.load("paper_mixed").save(path)
+    first = Design.load(path)
+    assert Design.load(path) is first  # the same file text: the design validated once
+    text = path.read_text(encoding="utf-8")
+    path.write_text(text.replace("name: paper_mixed", "name: changed", 1), encoding="utf-8")
+    changed = Design.load(path)
+    assert changed is not first and changed.name == "changed" and first.name == "paper_mixed"
+    assert LOADED_DESIGNS >= 1
+
+
+def test_parsed_configuration_text_is_a_fresh_copy_each_time() -> None:
+    from configs import PARSED_TEXTS, parse_yaml  # noqa: PLC0415
+
+    text = "a: {b: [1, 2]}\n"
+    first = parse_yaml(text)
+    first["a"]["b"].append(3)
+    assert parse_yaml(text) == {"a": {"b": [1, 2]}}
+    assert parse_yaml("a: {b: [1, 2, 4]}\n") == {"a": {"b": [1, 2, 4]}}
+    assert PARSED_TEXTS >= 1
