@@ -42,6 +42,7 @@ import json
 import multiprocessing as mp
 import os
 import platform
+import time
 from pathlib import Path
 from typing import Any
 
@@ -57,11 +58,13 @@ from benchmarks.env_measure import (
     measure_sections,
     measure_task_resets,
 )
+from benchmarks.env_ratios import RATIOS
 from configs.files import write_text
 from envs.cell.rendering import rendering_backend, use_headless_rendering
 
 OUT = Path(__file__).resolve().parents[1] / "out" / "bench_env.json"
 OUT_RESETS = OUT.with_name("bench_env_resets.json")
+OUT_RATIOS = OUT.with_name("bench_env_ratios.json")
 TARGET_KINEMATIC = 1000.0
 TARGET_JOINT_RGB = 60.0
 TARGET_RSS_MB = 600.0
@@ -126,6 +129,23 @@ def _reset_rows() -> tuple[dict[int, Any], list[dict[str, Any]]]:
     return resets, task_resets
 
 
+def _ratio_rows(seconds: float) -> dict[str, Any]:
+    """Measure and print the three ratios of `benchmarks.env_ratios` (one child each)."""
+    rows = {}
+    for name, target in RATIOS.items():
+        r = _child(target, seconds)
+        rows[name] = r
+        parts = ", ".join(f"{k} {v:.2f}" for k, v in r.items() if k.endswith("_ms"))
+        load = r["load_average"][1][0]
+        print(
+            f"ratio {name}: {r['ratio']:.2f} (target <= {r['target']:g}) "
+            f"{'MET' if r['ratio'] <= r['target'] else 'NOT MET'}  [{r['what']}: {parts} "
+            f"CPU ms; load average {load:.1f}]",
+            flush=True,
+        )
+    return rows
+
+
 def _machine() -> dict[str, Any]:
     """The machine the figures were measured on."""
     return {
@@ -139,7 +159,10 @@ def _machine() -> dict[str, Any]:
 
 
 def _targets(
-    rows: list[dict[str, Any]], decision: dict[str, Any], resets: dict[int, Any]
+    rows: list[dict[str, Any]],
+    decision: dict[str, Any],
+    resets: dict[int, Any],
+    ratios: dict[str, Any],
 ) -> dict[str, dict[str, Any]]:
     """Each target's figure, target and whether it is met."""
 
@@ -200,6 +223,12 @@ def _targets(
             "met": resets[0]["reset_cpu_ms"] <= TARGET_RESET_MS,
         },
     }
+    for name, r in ratios.items():
+        targets[f"{name}_ratio"] = {
+            "value": r["ratio"],
+            "target": r["target"],
+            "met": r["ratio"] <= r["target"],
+        }
     return targets
 
 
@@ -211,6 +240,9 @@ def main() -> None:
     parser.add_argument(
         "--resets", action="store_true", help=f"the reset rows only (writes {OUT_RESETS.name})"
     )
+    parser.add_argument(
+        "--ratios", action="store_true", help=f"the three ratios only (writes {OUT_RATIOS.name})"
+    )
     args = parser.parse_args()
     seconds = 1.0 if args.quick else args.seconds
     use_headless_rendering()
@@ -219,6 +251,15 @@ def main() -> None:
     if args.resets:
         _reset_rows()
         return
+    if args.ratios:
+        ratios = _ratio_rows(2 * seconds)
+        OUT_RATIOS.parent.mkdir(exist_ok=True)
+        date = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+        report = {"date": date, "machine": _machine(), "ratios": ratios}
+        write_text(OUT_RATIOS, json.dumps(report, indent=2))
+        print(f"wrote {OUT_RATIOS}")
+        return
+    ratios = _ratio_rows(2 * seconds)
     rows = []
     for mode, execution in CASES:
         for obs_mode in ("state", "rgb"):
@@ -255,7 +296,7 @@ def main() -> None:
         f"async joint+rgb: 1 worker {one:.1f}, 2 workers {two:.1f} env steps/s (x{two / one:.2f})"
     )
 
-    targets = _targets(rows, decision, resets)
+    targets = _targets(rows, decision, resets, ratios)
     for k, v in targets.items():
         print(f"{k}: {v['value']:.1f} (target {v['target']}) {'MET' if v['met'] else 'NOT MET'}")
     result = {
@@ -269,6 +310,7 @@ def main() -> None:
         "reset": {f"{r['tiles']}_tiles": r for r in resets.values()},
         "task_resets": task_resets,
         "sections": sections,
+        "ratios": ratios,
         "targets": targets,
     }
     OUT.parent.mkdir(exist_ok=True)

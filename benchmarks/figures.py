@@ -325,7 +325,7 @@ def env_figures(d: dict[str, Any]) -> list[Figure]:
     g = "env"
     out = []
     for name, t in (d.get("targets") or {}).items():
-        op = "<=" if "rss" in name or "_ms" in name else ">="
+        op = "<=" if "rss" in name or "_ms" in name or name.endswith("_ratio") else ">="
         out.append(fig(g, name.replace("_", " "), _get(t, "value"), "", op, _get(t, "target")))
     out.append(fig(g, "async vector env speed-up (2 workers)", _get(d, "async", "speedup"), "x"))
     return out

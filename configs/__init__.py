@@ -16,7 +16,9 @@ Typical use::
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import functools
 import math
 import numbers
 import types
@@ -68,12 +70,26 @@ def _strict_mapping(loader: _StrictLoader, node: yaml.MappingNode, deep: bool = 
 _StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _strict_mapping)
 
 
+PARSED_TEXTS = 256
+"""YAML texts whose parse is remembered (`parse_yaml`), least recently used dropped first: a
+configuration file of a few kB each, well under a MB in all."""
+
+
 def parse_yaml(text: str) -> Any:
     """Parse YAML text safely, refusing duplicate keys.
+
+    The same text is parsed once (the last `PARSED_TEXTS` texts are remembered): every env
+    build reads the same configuration files again, and PyYAML's pure-Python parser cost more
+    than the rest of building some envs. Each call returns a fresh copy.
 
     Raises:
         yaml.YAMLError: Malformed YAML or a duplicate key (the message names it and its lines).
     """
+    return copy.deepcopy(_parse_once(text))
+
+
+@functools.lru_cache(maxsize=PARSED_TEXTS)
+def _parse_once(text: str) -> Any:
     return yaml.load(text, Loader=_StrictLoader)  # noqa: S506 (a SafeLoader subclass)
 
 
@@ -265,6 +281,7 @@ def load_config(
 
 __all__ = [
     "CONFIG_DIR",
+    "PARSED_TEXTS",
     "ConfigError",
     "check_field_types",
     "from_dict",

@@ -1,9 +1,13 @@
-"""The benchmarks page's table, generated from the committed ``docs/bench.json``.
+"""The benchmarks page's tables, generated from committed benchmark JSON files.
 
 ``python -m benchmarks`` writes ``out/bench.json`` (`benchmarks.table`: date, machine, every
 figure with its target); a copy of the latest run is committed as ``docs/bench.json`` because CI
 cannot run every benchmark. The docs build writes ``docs/_generated/bench_table.md`` from it
 (the run's date and machine line, then the table), which ``benchmarks.md`` includes.
+
+Likewise ``python -m benchmarks.env --ratios`` writes ``out/bench_env_ratios.json`` (the three
+ratios of where training spends its time, `benchmarks.env_ratios`); its committed copy
+``docs/bench_env_ratios.json`` becomes ``docs/_generated/bench_ratios.md``.
 """
 
 from __future__ import annotations
@@ -20,6 +24,16 @@ BENCH_JSON = DOCS / "bench.json"
 """The committed copy of the latest ``out/bench.json``."""
 TABLE_MD = DOCS / "_generated" / "bench_table.md"
 """Generated include of the benchmarks page."""
+RATIOS_JSON = DOCS / "bench_env_ratios.json"
+"""The committed copy of the latest ``out/bench_env_ratios.json``."""
+RATIOS_MD = DOCS / "_generated" / "bench_ratios.md"
+"""Generated include of the benchmarks page's ratio table."""
+RATIO_FIGURES = {
+    "reset": ("procedural reset", "fixed reset"),
+    "step": ("kinematic pick_place step", "its physics"),
+    "camera": ("decision step with both images", "without images"),
+}
+"""Each ratio's two sides, as the table names them."""
 MACHINE_KEYS = ("mujoco", "torch", "stable_baselines3", "gymnasium", "numpy")
 """Library versions named on the machine line."""
 
@@ -51,6 +65,39 @@ def bench_markdown(report: dict[str, Any]) -> str:
         parts.append("Scripts that gave no figures in this run: " + "; ".join(broken) + ".")
     parts.append(table(figures))
     return "\n\n".join(parts) + "\n"
+
+
+def ratios_markdown(report: dict[str, Any]) -> str:
+    """The load line and a table of each ratio: both sides [CPU ms], ratio, target, met."""
+    m = report["machine"]
+    lines = [
+        f"Run of {report.get('date', '?')} on {m['cpus']} CPUs ({m['platform']}, Python "
+        f"{m['python']}), each ratio in "
+        f"one process pinned to one core, its two sides interleaved; CPU time of the process "
+        f"(the software renderer's threads included).",
+        "",
+        "| ratio | side | CPU ms | other side | CPU ms | ratio | target | met | load average |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, r in report["ratios"].items():
+        ms = [(k, v) for k, v in r.items() if k.endswith("_ms")]
+        top, bottom = RATIO_FIGURES.get(name, (ms[0][0], ms[1][0]))
+        load = r["load_average"][1]
+        met = "yes" if r["ratio"] <= r["target"] else "**no**"
+        lines.append(
+            f"| {name} | {top} | {ms[0][1]:.2f} | {bottom} | {ms[1][1]:.2f} | {r['ratio']:.2f} "
+            f"| <= {r['target']:g} | {met} | {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def write_ratio_table(src: Path = RATIOS_JSON, dst: Path = RATIOS_MD) -> Path:
+    """Write the benchmarks page's ratio include from ``src``; returns its path."""
+    text = ratios_markdown(json.loads(src.read_text(encoding="utf-8")))
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    if not dst.is_file() or dst.read_text(encoding="utf-8") != text:
+        dst.write_text(text, encoding="utf-8")
+    return dst
 
 
 def write_bench_table(src: Path = BENCH_JSON, dst: Path = TABLE_MD) -> Path:

@@ -23,7 +23,7 @@ from envs.cell.rendering import use_headless_rendering  # noqa: E402 - the root 
 use_headless_rendering()
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
-from bench_page import write_bench_table  # noqa: E402 - docs/ on sys.path first
+from bench_page import write_bench_table, write_ratio_table  # noqa: E402 - docs/ on sys.path
 
 project = "Mosaic assembly cell"
 author = "The mosaic-cell authors"
@@ -83,3 +83,5 @@ def setup(app: Sphinx) -> None:
     app.connect("autodoc-process-docstring", escape_bars)
     if (Path(__file__).parent / "bench.json").is_file():
         app.connect("builder-inited", lambda _app: write_bench_table())
+    if (Path(__file__).parent / "bench_env_ratios.json").is_file():
+        app.connect("builder-inited", lambda _app: write_ratio_table())

@@ -89,6 +89,19 @@ def test_benchmark_page_renders_the_committed_json(tmp_path: Path) -> None:
     assert len(rows) == len(report["figures"]) + 1  # header
 
 
+def test_benchmark_page_renders_the_committed_ratios(tmp_path: Path) -> None:
+    bench = _load("bench_page")
+    report = json.loads((DOCS / "bench_env_ratios.json").read_text(encoding="utf-8"))
+    text = bench.write_ratio_table(DOCS / "bench_env_ratios.json", tmp_path / "r.md").read_text(
+        encoding="utf-8"
+    )
+    rows = [line for line in text.splitlines() if line.startswith("| ") and "---" not in line]
+    assert len(rows) == len(report["ratios"]) + 1  # header
+    for name, r in report["ratios"].items():
+        row = next(line for line in rows if line.startswith(f"| {name} |"))
+        assert f"| {r['ratio']:.2f} |" in row and f"<= {r['target']:g}" in row
+
+
 def test_lock_pins_every_dependency() -> None:
     """``requirements.lock`` pins every dependency of pyproject.toml (with the extras)."""
     project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]

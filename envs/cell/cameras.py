@@ -25,6 +25,7 @@ import mujoco
 import numpy as np
 
 from envs.cell.config import CameraConfig, RenderConfig
+from envs.cell.render_memo import LastPictures, memo_possible, scene_key
 from envs.cell.view_culling import PROBE_SCALE, ViewCuller
 from envs.errors import CellError
 
@@ -264,6 +265,9 @@ class CameraRig:
         self._renderers: dict[tuple[int, int, int], mujoco.Renderer] = {}
         self._depth: dict[tuple[int, int, int], mujoco.Renderer] = {}
         self._culler = ViewCuller(model)
+        self.pictures = LastPictures()
+        """The last picture of each camera and size (`envs.cell.render_memo`)."""
+        self._reuse = cfg.reuse_unchanged and memo_possible(model)
         self._camera_ids: dict[str, int] = {}
         self._closed = False
 
@@ -330,10 +334,26 @@ class CameraRig:
         small = height * width <= cfg.supersample_max_pixels
         f = cfg.supersample if samples > 0 and small and not depth else 1
         r = self._renderer(height * f, width * f, depth, 0 if f > 1 else samples)
-        self._update_scene(r, data, camera)
+        cam = self._camera_id(camera)
+        hidden = self._hidden(r, data, cam)
+        memo: tuple[tuple[object, ...], bytes] | None = None
+        if self._reuse and cam is not None and effect is None:
+            slot = (cam, height, width, depth, f)
+            key = scene_key(self._model, data, cam, hidden, r.scene.flags)
+            kept = self.pictures.get(slot, key)
+            if kept is not None:
+                if out is None:
+                    return kept
+                out[...] = kept
+                return out
+            memo = (slot, key)
+        self._update_scene(r, data, camera, hidden)
         lens = self._lens(camera)
         if f == 1 and lens is None and effect is None:
-            return r.render(out=out)
+            image = r.render(out=out)
+            if memo is not None:
+                self.pictures.put(*memo, image)
+            return image
         image = r.render()
         if f > 1:
             image = cv2.resize(image, (width, height), interpolation=cv2.INTER_AREA)
@@ -341,23 +361,37 @@ class CameraRig:
             image = effect(image)
         if lens is not None:
             image = lens.apply(image)
+        if memo is not None:
+            self.pictures.put(*memo, image)
         if out is None:
             return image
         out[...] = image
         return out
 
-    def _update_scene(
-        self, r: mujoco.Renderer, data: mujoco.MjData, camera: int | str | mujoco.MjvCamera
-    ) -> None:
-        """``r.update_scene`` without the geoms the camera cannot see (`envs.cell.view_culling`)."""
-        cam = self._camera_id(camera)
+    def _hidden(self, r: mujoco.Renderer, data: mujoco.MjData, cam: int | None) -> np.ndarray:
+        """Geoms the model camera ``cam`` cannot see (`envs.cell.view_culling`), (ngeom,) bool.
+
+        None of them without culling or for a free camera (``cam`` None).
+        """
         if cam is None or not self._cfg.cull:
+            return np.zeros(self._model.ngeom, bool)
+        return self._culler.hidden(r, data, cam)
+
+    def _update_scene(
+        self,
+        r: mujoco.Renderer,
+        data: mujoco.MjData,
+        camera: int | str | mujoco.MjvCamera,
+        hidden: np.ndarray,
+    ) -> None:
+        """``r.update_scene`` without the ``hidden`` geoms."""
+        if not hidden.any():
             r.update_scene(data, camera=camera)
             return
         rgba = self._model.geom_rgba
         alpha = rgba[:, 3].copy()
         try:
-            rgba[self._culler.hidden(r, data, cam), 3] = 0.0
+            rgba[hidden, 3] = 0.0
             r.update_scene(data, camera=camera)
         finally:
             rgba[:, 3] = alpha
@@ -387,6 +421,7 @@ class CameraRig:
             for r in pool.values():
                 r.close()
             pool.clear()
+        self.pictures.clear()
         _OPEN_RIGS.discard(self)
         self._closed = True
 

@@ -73,6 +73,9 @@ class RenderConfig:
             camera and image size).
         lens_tolerance: Its convergence tolerance, in normalised image units (1 px ~ 1 / the
             focal length in px).
+        reuse_unchanged: A model camera whose scene did not change since its last picture
+            at the same size returns that picture again instead of drawing it (the same
+            pixels; `envs.cell.render_memo`).
     """
 
     shadows: bool = False
@@ -84,6 +87,7 @@ class RenderConfig:
     supersample_max_pixels: int = checked(40000, ge=0)
     lens_max_iterations: int = checked(40, gt=0)
     lens_tolerance: float = checked(1e-9, gt=0)
+    reuse_unchanged: bool = True
 
     def __post_init__(self) -> None:
         check_fields(self, CellError, qualify=True)

@@ -7,6 +7,7 @@ are the public entry points to them.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -14,9 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from configs import CONFIG_DIR, ConfigError, load_yaml
+from configs import CONFIG_DIR, ConfigError, parse_yaml, resolve_path
 from qshape.design import checks, fileformat
 from qshape.design.from_image import design_mapping
+from qshape.design.memo import BoundedMemo
 from qshape.design.rules import DesignRules
 from qshape.design.slot import Slot
 from qshape.errors import DesignError
@@ -24,6 +26,9 @@ from qshape.theory.figure import Figure
 
 DESIGN_SUBDIR = "designs"
 """Sub-folder of ``configs/`` holding the bundled designs."""
+LOADED_DESIGNS = 64
+"""Designs `Design.load` remembers (by file, text and rules; least recently used dropped
+first): a design and its slots' outlines, a few hundred kB at most each."""
 
 
 @dataclass(frozen=True)
@@ -61,10 +66,20 @@ class Design:
                 slot.
         """
         try:
-            data = load_yaml(name_or_path, DESIGN_SUBDIR)
+            path = resolve_path(name_or_path, DESIGN_SUBDIR)
         except ConfigError as exc:
             raise DesignError(str(exc)) from exc
-        return cls.from_dict(data, rules=rules, source=str(name_or_path))
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise DesignError(f"cannot read configuration {path}: {exc}") from exc
+        source = str(name_or_path)
+        key = (str(path.resolve()), text, rules, source)
+        design, said = _LOADED.get(key, lambda: _load_recorded(cls, path, text, rules, source))
+        registry = globals().setdefault("__warningregistry__", {})
+        for w in said:  # what loading it said, said again at every load
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, None, registry)
+        return design
 
     @classmethod
     def from_dict(
@@ -160,4 +175,29 @@ def bundled_designs() -> list[str]:
     return sorted(p.stem for p in (CONFIG_DIR / DESIGN_SUBDIR).glob("*.yaml"))
 
 
-__all__ = ["DESIGN_SUBDIR", "Design", "bundled_designs"]
+_LOADED: BoundedMemo[tuple[Design, list[warnings.WarningMessage]]] = BoundedMemo(LOADED_DESIGNS)
+"""`Design.load`'s designs with the warnings their loading gave: the same file text and rules
+give the same (frozen) design, validated once; every env of a fixed design loads it."""
+
+
+def _load_recorded(
+    cls: type[Design], path: Path, text: str, rules: DesignRules | None, source: str
+) -> tuple[Design, list[warnings.WarningMessage]]:
+    """Parse and validate a design file's text; the design and the warnings it gave."""
+    import yaml  # noqa: PLC0415 - its error type only
+
+    try:
+        data = parse_yaml(text)
+    except yaml.YAMLError as exc:
+        raise DesignError(f"cannot read configuration {path}: {exc}") from exc
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise DesignError(f"{path}: top level must be a mapping of keys, got {type(data).__name__}")
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        design = cls.from_dict(data, rules=rules, source=source)
+    return design, list(said)
+
+
+__all__ = ["DESIGN_SUBDIR", "LOADED_DESIGNS", "Design", "bundled_designs"]

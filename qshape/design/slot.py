@@ -14,6 +14,7 @@ import yaml
 from scipy.spatial import cKDTree
 
 from qshape import geometry as geo
+from qshape.design.memo import BoundedMemo
 from qshape.design.paths import TilePath
 from qshape.design.rules import DesignRules
 from qshape.design.shapes import tile_path
@@ -21,6 +22,13 @@ from qshape.design.values import color_hex, plain, round_mm
 from qshape.errors import DesignError
 from qshape.geometry import FloatArray
 from qshape.theory.figure import Figure
+
+SYMMETRY_MEMO_SIZE = 4096
+"""Shapes whose symmetry order is remembered (`SYMMETRY_MEMO`); an entry is a key (the
+shape's canonical text, about 0.1-1 kB, and the rules) and an int: a few MB at most."""
+SYMMETRY_MEMO: BoundedMemo[int] = BoundedMemo(SYMMETRY_MEMO_SIZE)
+"""`Slot.symmetry` by (shape text, rules): the order depends on nothing else, and the same
+shape is asked again by every slot of its class, every copy of a design and every check."""
 
 
 @dataclass(frozen=True)
@@ -87,10 +95,14 @@ class Slot:
         return self.local_path.area_centroid(self.rules.outline_step_mm)[0]
 
     @cached_property
+    def shape_text(self) -> str:
+        """The shape mapping's canonical text (YAML, sorted keys): equal for equal shapes."""
+        return yaml.safe_dump(plain(self.shape), sort_keys=True)
+
+    @cached_property
     def shape_key(self) -> str:
         """Identifier of the shape class: equal for slots whose shapes are equal (any pose)."""
-        text = yaml.safe_dump(plain(self.shape), sort_keys=True)
-        return hashlib.sha1(text.encode()).hexdigest()[:12]
+        return hashlib.sha1(self.shape_text.encode()).hexdigest()[:12]
 
     @property
     def class_key(self) -> str:
@@ -99,7 +111,13 @@ class Slot:
 
     @cached_property
     def symmetry(self) -> int:
-        """Rotational symmetry order of the shape (1: none, 4: square, 0: continuous)."""
+        """Rotational symmetry order of the shape (1: none, 4: square, 0: continuous).
+
+        Remembered by shape and rules (`SYMMETRY_MEMO`).
+        """
+        return SYMMETRY_MEMO.get((self.shape_text, self.rules), self._symmetry)
+
+    def _symmetry(self) -> int:
         rules = self.rules
         loops = (self.local_path.outer, *self.local_path.holes)
         samples = np.concatenate([lp.dense(rules.outline_step_mm / 4.0) for lp in loops])
@@ -129,4 +147,4 @@ class Slot:
         }
 
 
-__all__ = ["Slot"]
+__all__ = ["SYMMETRY_MEMO", "SYMMETRY_MEMO_SIZE", "Slot"]

@@ -1,0 +1,216 @@
+"""Where training spends its time, as ratios measured in one process (`benchmarks.env`).
+
+Three ratios of CPU time [s of the process, every thread: the software renderer's included],
+each between two things timed in the same process, interleaved (an episode of one, then of
+the other), so that a shared machine's load slows both alike and the ratio holds across
+machines and loads:
+
+- ``reset``: a reset of ``MosaicHeldOutDesigns-v1``'s procedural training entry (a new design
+  drawn and its cell built) over a reset of the same rung on its fixed design (6 slots both,
+  the rung's state observation). Target <= `TARGET_RESET`.
+- ``step``: a kinematic ``pick_place`` step (state observation, `DESIGN`, the privileged
+  correct action) over its physics (`Cell.step`, the calls timed inside the same steps).
+  Target <= `TARGET_STEP`.
+- ``camera``: a decision step (``pick_place_discrete``, kinematic, the scripted correct
+  decision) with both 72 x 96 camera images over the same step without images
+  (``obs_mode="state"``). Target <= `TARGET_CAMERA`.
+
+Each row also gives the absolute figures [ms] and the machine's load average (1, 5, 15 min)
+before and after it (`os.getloadavg`).
+"""
+
+from __future__ import annotations
+
+import functools
+import multiprocessing as mp
+import os
+import time
+import warnings
+from collections.abc import Callable
+from typing import Any
+
+from benchmarks.env_measure import DECISION_IMAGE, DESIGN
+
+TARGET_RESET = 3.0
+"""A procedural-design reset within this many fixed-design resets of the same size."""
+TARGET_STEP = 2.0
+"""A kinematic pick_place step within this many times its physics."""
+TARGET_CAMERA = 2.0
+"""A decision step with both images within this many times the step without."""
+RUNG = "MosaicHeldOutDesigns-v1"
+"""The rung whose procedural and fixed resets are compared (6 slots)."""
+PROCEDURAL: dict[str, Any] = {
+    "design_source": "procedural",
+    "exclude_designs": ["hexagon", "trencadis"],
+}
+"""Its procedural training entry (`envs.tasks.BenchmarkTask.design_kwargs`)."""
+
+
+def _pin() -> None:
+    """One core and one BLAS thread for this process (the figures are per core)."""
+    os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    warnings.simplefilter("ignore")
+
+
+def _cpu(fn: Callable[[], Any]) -> float:
+    """CPU seconds of ``fn()``."""
+    c = time.process_time()
+    fn()
+    return time.process_time() - c
+
+
+def _episode(env: Any, steps: int) -> tuple[float, int]:
+    """CPU seconds of up to ``steps`` correct steps (tile i into slot i) and the step count."""
+    u, spent, n = env.unwrapped, 0.0, 0
+    k = len(u.cell.slots)
+    for i in range(steps):
+        action = u.expert_action(i % k, i % k)
+        c = time.process_time()
+        _, _, term, trunc, _ = env.step(action)
+        spent += time.process_time() - c
+        n += 1
+        if term or trunc:
+            break
+    return spent, n
+
+
+def measure_reset_ratio(seconds: float, queue: mp.Queue) -> None:
+    """Child process: procedural over fixed reset CPU time, interleaved seed by seed."""
+    _pin()
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: F401, PLC0415
+
+    load0 = os.getloadavg()
+    proc: Any = gym.make(RUNG, **PROCEDURAL)
+    fixed: Any = gym.make(RUNG)
+    proc.reset(seed=10_000)
+    fixed.reset(seed=10_000)
+    a = b = 0.0
+    seed = 0
+    while a + b < seconds or seed < 3:
+        a += _cpu(functools.partial(proc.reset, seed=seed))
+        b += _cpu(functools.partial(fixed.reset, seed=seed))
+        seed += 1
+    proc.close()
+    fixed.close()
+    queue.put(
+        {
+            "what": f"{RUNG} reset: procedural design / fixed design (6 slots)",
+            "procedural_ms": 1e3 * a / seed,
+            "fixed_ms": 1e3 * b / seed,
+            "ratio": a / b,
+            "target": TARGET_RESET,
+            "resets": seed,
+            "load_average": [load0, os.getloadavg()],
+        }
+    )
+
+
+def measure_step_ratio(seconds: float, queue: mp.Queue) -> None:
+    """Child process: kinematic pick_place step CPU time over its physics (`Cell.step`)."""
+    _pin()
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: PLC0415
+
+    load0 = os.getloadavg()
+    env: Any = gym.make(
+        envs.ENV_ID,
+        design=DESIGN,
+        action_mode="pick_place",
+        execution="kinematic",
+        obs_mode="state",
+    )
+    cell_step = type(env.unwrapped.cell).step
+    physics = [0.0]
+
+    def timed(cell: Any, *a: Any, **k: Any) -> Any:
+        c = time.process_time()
+        try:
+            return cell_step(cell, *a, **k)
+        finally:
+            physics[0] += time.process_time() - c
+
+    total, steps, seed = 0.0, 0, 0
+    while total < seconds:
+        env.reset(seed=seed)
+        u = env.unwrapped
+        u.cell.step = timed.__get__(u.cell)  # this episode's cell, timed
+        spent, n = _episode(env, len(u.cell.slots))
+        total, steps, seed = total + spent, steps + n, seed + 1
+    env.close()
+    queue.put(
+        {
+            "what": "kinematic pick_place step / its physics (Cell.step)",
+            "step_ms": 1e3 * total / steps,
+            "physics_ms": 1e3 * physics[0] / steps,
+            "ratio": total / physics[0],
+            "target": TARGET_STEP,
+            "steps": steps,
+            "load_average": [load0, os.getloadavg()],
+        }
+    )
+
+
+def measure_camera_ratio(seconds: float, queue: mp.Queue) -> None:
+    """Child process: decision step CPU time with both images over without, interleaved."""
+    _pin()
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: PLC0415
+
+    load0 = os.getloadavg()
+    kw: dict[str, Any] = {
+        "design": DESIGN,
+        "action_mode": "pick_place_discrete",
+        "execution": "kinematic",
+        "image_size": DECISION_IMAGE,
+    }
+    rgb: Any = gym.make(envs.ENV_ID, obs_mode="rgb", **kw)
+    state: Any = gym.make(envs.ENV_ID, obs_mode="state", **kw)
+    a = b = 0.0
+    na = nb = seed = 0
+    while a + b < seconds:
+        for env in (rgb, state):
+            env.reset(seed=seed)
+        spent, n = _episode(rgb, len(rgb.unwrapped.cell.slots))
+        a, na = a + spent, na + n
+        spent, n = _episode(state, len(state.unwrapped.cell.slots))
+        b, nb = b + spent, nb + n
+        seed += 1
+    rgb.close()
+    state.close()
+    queue.put(
+        {
+            "what": (
+                f"decision step with two {DECISION_IMAGE[0]}x{DECISION_IMAGE[1]} images / "
+                "without images"
+            ),
+            "with_images_ms": 1e3 * a / na,
+            "without_images_ms": 1e3 * b / nb,
+            "ratio": (a / na) / (b / nb),
+            "target": TARGET_CAMERA,
+            "steps": na + nb,
+            "load_average": [load0, os.getloadavg()],
+        }
+    )
+
+
+RATIOS = {
+    "reset": measure_reset_ratio,
+    "step": measure_step_ratio,
+    "camera": measure_camera_ratio,
+}
+"""Each ratio's measurement (a child process's target: ``seconds``, result queue)."""
+
+
+__all__ = [
+    "RATIOS",
+    "TARGET_CAMERA",
+    "TARGET_RESET",
+    "TARGET_STEP",
+    "measure_camera_ratio",
+    "measure_reset_ratio",
+    "measure_step_ratio",
+]
