@@ -14,7 +14,7 @@ import envs  # noqa: F401 - registers the ids
 from envs.env_config import EnvConfigError, load_env_config
 from envs.mosaic_env import MosaicAssemblyEnv
 from envs.objects import OBJECT_FIELDS as F
-from envs.objects_perception import register
+from envs.objects_perception import PerceivedFigure, register
 
 TASK = "MosaicDecision6-v0"
 SEED = 1000
@@ -149,3 +149,37 @@ def test_bad_perception_config_is_refused(key: str, value: object, needle: str) 
 def test_image_size_outside_the_extraction_limits_is_refused() -> None:
     with pytest.raises(EnvConfigError, match="objects_image_size 8 x 656"):
         _make(objects_source="perception", objects_image_size=[8, 656])
+
+
+def _figure_at(centre: np.ndarray) -> PerceivedFigure:
+    square = np.array([[-0.01, -0.01], [0.01, -0.01], [0.01, 0.01], [-0.01, 0.01]]) + centre
+    return PerceivedFigure(square, (), (0.5, 0.5, 0.5), np.asarray(centre, float))
+
+
+def test_a_figure_fills_a_row_only_within_the_gate(perceived: gym.Env) -> None:
+    """Guards against the perception gate removed or in the wrong unit (``objects_gate_mm``
+    5 mm): a figure 4.9 mm from a fed tile fills its row, one 5.1 mm away fills none, and the
+    pairing is one to one (a second figure near a paired tile is dropped)."""
+    perceived.reset(seed=SEED)
+    u = cast(MosaicAssemblyEnv, perceived.unwrapped)
+    per = u.observer.perceived
+    assert per is not None and per.gate == pytest.approx(0.005)
+    xy = u.cell.tile_poses().pos[:, :2]
+    figs = [
+        _figure_at(xy[0] + [0.0049, 0.0]),
+        _figure_at(xy[1] + [0.0, -0.0051]),
+        _figure_at(xy[2] + [0.0, 0.0]),
+        _figure_at(xy[2] + [0.0010, 0.0]),
+    ]
+    pairs = per.associate(figs)
+    assert sorted(pairs) == [(0, 0), (2, 2)]
+    # the gate is a config value: 6 mm takes the second figure in
+    wide = _make(objects_source="perception", objects_gate_mm=6.0)
+    try:
+        wide.reset(seed=SEED)
+        w = cast(MosaicAssemblyEnv, wide.unwrapped).observer.perceived
+        assert w is not None
+        assert sorted(w.associate(figs)) == [(0, 0), (1, 1), (2, 2)]
+    finally:
+        wide.close()
+

@@ -1,0 +1,235 @@
+"""Reward contract of every ``reward_mode`` (`envs.task.MosaicTask.rewards`, `envs.rewards`).
+
+Written from the documented terms (``configs/env.yaml``, the `EnvConfig` fields, the staged
+reward's module docstring): each term is its weight times the change since the previous call,
+penalties are negative, dense and staged terms are 0 in the other modes. The evaluations are
+the task's own with counts changed (`dataclasses.replace`), so each term is checked alone.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterator
+from typing import Any
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+import pytest
+
+import envs
+from envs.actions import transfer_poses
+from envs.rewards import STAGES, StagedRewardConfig
+from envs.task import REWARD_TERMS
+from spatial.rotations import quat_from_yaw
+
+
+def _make(mode: str) -> gym.Env:
+    return gym.make(
+        envs.ENV_ID,
+        action_mode="pick_place",
+        execution="kinematic",
+        obs_mode="state",
+        max_slots=4,
+        reward_mode=mode,
+        disable_env_checker=True,
+    )
+
+
+@pytest.fixture(scope="module")
+def sparse() -> Iterator[gym.Env]:
+    e = _make("sparse")
+    yield e
+    e.close()
+
+
+@pytest.fixture(scope="module")
+def dense() -> Iterator[gym.Env]:
+    e = _make("dense")
+    yield e
+    e.close()
+
+
+@pytest.fixture(scope="module")
+def one_tile() -> Iterator[gym.Env]:
+    e = gym.make("MosaicOneTile-v0", disable_env_checker=True)
+    yield e
+    e.close()
+
+
+def _terms(u: Any, failed: bool = False, **change: Any) -> dict[str, float]:
+    """Reward terms of a step whose evaluation differs from the last one by ``change``."""
+    u.task.reset()
+    e = dataclasses.replace(u.task.last_evaluation, **change)
+    return u.task.rewards(e, failed)
+
+
+@pytest.mark.parametrize(
+    ("change", "failed", "expected"),
+    [
+        ({"correct": 2}, False, {"correct": 2.0}),
+        ({"correct": 1, "success": True}, False, {"correct": 1.0, "success": 5.0}),
+        ({"misplaced": 3}, False, {"misplaced": -1.5}),
+        ({"dropped": 2}, False, {"dropped": -1.0}),
+        ({"lost": 1}, False, {"lost": -0.5}),
+        ({"distractors_placed": 2}, False, {"distractor": -1.0}),
+        ({}, True, {"failed_action": -0.1}),
+    ],
+)
+def test_sparse_terms_are_weights_times_changes(
+    sparse: gym.Env, change: dict[str, Any], failed: bool, expected: dict[str, float]
+) -> None:
+    """Guards against a term with the wrong weight (``configs/env.yaml``: correct 1, success 5,
+    penalties 0.5, failed action 0.1), sign, or read from the wrong count."""
+    sparse.reset(seed=0)
+    terms = _terms(sparse.unwrapped, failed, **change)
+    assert set(terms) == set(REWARD_TERMS)
+    for name in REWARD_TERMS:
+        assert terms[name] == pytest.approx(expected.get(name, 0.0)), name
+
+
+def test_sparse_terms_pay_only_the_change_since_the_last_call(sparse: gym.Env) -> None:
+    """Guards against terms paid on the totals instead of the change, a success paid at every
+    step, or a misplaced tile set right being paid back (the penalty counts increases only)."""
+    sparse.reset(seed=0)
+    u = sparse.unwrapped
+    base = u.task.last_evaluation
+    first = dataclasses.replace(base, correct=3, misplaced=2, success=True, distractors_placed=1)
+    assert u.task.rewards(first, False)["success"] == 5.0
+    again = u.task.rewards(first, False)
+    assert all(v == 0.0 for v in again.values())
+    better = dataclasses.replace(first, misplaced=0, distractors_placed=0, correct=4)
+    terms = u.task.rewards(better, False)
+    assert terms["misplaced"] == 0.0 and terms["distractor"] == 0.0 and terms["correct"] == 1.0
+    assert terms["success"] == 0.0
+    worse = dataclasses.replace(better, correct=2)
+    assert u.task.rewards(worse, False)["correct"] == -2.0  # a filled slot undone costs it back
+
+
+def test_dense_reach_is_minus_the_tool_distance_to_the_nearest_wanted_tile(dense: gym.Env) -> None:
+    """Guards against the reach term using the farthest tile, an unwanted tile or the wrong
+    weight (``dense_reach`` 0.5 per m); grasp and carry stay 0 while nothing is held."""
+    dense.reset(seed=0)
+    u = dense.unwrapped
+    terms = _terms(u)
+    tool = u.cell.tcp_pose()[0]
+    wanted = np.flatnonzero(u.task.wanted_tiles(u.task.last_evaluation))
+    assert len(wanted) == 4
+    d = np.linalg.norm(u.cell.tile_poses().pos[wanted] - tool, axis=1).min()
+    assert terms["reach"] == pytest.approx(-0.5 * d)
+    assert terms["grasp"] == 0.0 and terms["carry"] == 0.0
+    # a tile whose class's slots are all filled is not wanted any more
+    filled = dataclasses.replace(u.task.last_evaluation, slot_filled=(True,) * 4, correct=4)
+    assert not u.task.wanted_tiles(filled).any()
+
+
+def _hold(u: Any, tile: int, slot: int) -> None:
+    """Put the pad on ``tile`` (kinematically) and seal."""
+    cmd = transfer_poses(u.cell, tile, slot)
+    q = u.ik.solve(np.array([*cmd.pick_xy, u.pick_area.tile_top_z]), cmd.pick_yaw).q
+    u.cell.set_qpos(q)
+    u.cell.vacuum(True)
+    assert u.cell.held_tile == tile
+
+
+def test_dense_grasp_and_carry_while_holding_a_wanted_tile(dense: gym.Env) -> None:
+    """Guards against carry measured to a filled slot or a slot of another class, or grasp paid
+    for a tile no open slot wants (``dense_grasp`` 0.2, ``dense_carry`` 0.5 per m)."""
+    dense.reset(seed=0)
+    u = dense.unwrapped
+    task = u.task
+    tile = 0
+    _hold(u, tile, int(np.flatnonzero(task.slot_class == task.tile_class[tile])[0]))
+    terms = _terms(u)
+    free = np.flatnonzero(task.slot_class == task.tile_class[tile])
+    xy = u.cell.tile_poses().pos[tile, :2]
+    d = np.linalg.norm(task.slot_xyyaw[free, :2] - xy, axis=1).min()
+    assert terms["grasp"] == pytest.approx(0.2)
+    assert terms["carry"] == pytest.approx(-0.5 * d)
+    assert terms["reach"] == 0.0
+    # its class's slots all filled: holding it earns nothing
+    filled = tuple(bool(task.slot_class[j] == task.tile_class[tile]) for j in range(4))
+    u.task.reset()
+    e = dataclasses.replace(u.task.last_evaluation, slot_filled=filled)
+    t2 = u.task.rewards(e, False)
+    assert (t2["grasp"], t2["carry"], t2["reach"]) == (0.0, 0.0, 0.0)
+
+
+def test_sparse_and_dense_modes_leave_the_staged_terms_zero(dense: gym.Env) -> None:
+    """Guards against the staged terms leaking into the other modes."""
+    dense.reset(seed=0)
+    terms = _terms(dense.unwrapped, correct=1)
+    assert all(terms[f"stage_{s}"] == 0.0 for s in STAGES)
+
+
+def test_staged_potentials_follow_the_documented_formulas(one_tile: gym.Env) -> None:
+    """Guards against a stage's potential off its documented formula: reach 1 - tanh(d / 0.3 m),
+    lift the height over 0.03 m clipped and latched, transport lift x (1 - tanh(d / 0.3 m)),
+    align (1 - d / 0.02 m) x (1 - yaw error / half the symmetry period), release the fraction
+    filled, every other stage f + (1 - f) x progress."""
+    one_tile.reset(seed=1)
+    u = one_tile.unwrapped
+    st = u.task.staged
+    cfg: StagedRewardConfig = st.cfg
+    assert (cfg.reach_scale, cfg.lift_height, cfg.transport_scale, cfg.align_distance) == (
+        0.3,
+        0.03,
+        0.3,
+        0.02,
+    )
+    e = u.evaluate()
+    pot = st.potentials(e)
+    cell = u.cell
+    tool = cell.tcp_pose()[0]
+    pose = cell.tile_poses()
+    g = np.array(cell.tiles[0].grasp[:2])
+    c, s = math.cos(pose.yaw[0]), math.sin(pose.yaw[0])
+    grasp = pose.pos[0].copy()
+    grasp[:2] += [c * g[0] - s * g[1], s * g[0] + c * g[1]]
+    assert pot["reach"] == pytest.approx(1 - math.tanh(np.linalg.norm(grasp - tool) / 0.3))
+    assert pot["seal"] == pot["lift"] == pot["transport"] == pot["align"] == 0.0
+    assert pot["release"] == 0.0
+    # held and lifted half the lift height, then a full lift height: latched at 1
+    _hold(u, 0, 0)
+    rest = cell.tile_poses().pos[0, 2]
+    q = cell.ids.tile_qpos_index[0]
+    slot = u.task.slot_xyyaw[0]
+    sym = int(u.task.symmetry[0])
+    for h, lift in ((0.015, 0.5), (0.03, 1.0), (0.01, 1.0)):
+        cell.data.qpos[q[2]] = rest + h
+        mujoco.mj_forward(cell.model, cell.data)
+        pot = st.potentials(u.evaluate())
+        assert pot["seal"] == 1.0 and pot["reach"] == 1.0
+        assert pot["lift"] == pytest.approx(lift, abs=1e-6), h
+        d = np.linalg.norm(slot[:2] - cell.tile_poses().pos[0, :2])
+        assert pot["transport"] == pytest.approx(lift * (1 - math.tanh(d / 0.3)), abs=1e-6)
+    # over the slot, 10 mm off and turned by a quarter of the half period
+    turn = (math.pi / sym) / 4 if sym > 0 else 0.0
+    cell.data.qpos[q[:2]] = slot[:2] + [0.01, 0.0]
+    cell.data.qpos[q[3:]] = quat_from_yaw(slot[2] + turn)
+    mujoco.mj_forward(cell.model, cell.data)
+    pot = st.potentials(u.evaluate())
+    expect = 0.5 * (0.75 if sym > 0 else 1.0)
+    assert pot["align"] == pytest.approx(expect, abs=1e-6)
+    # the slot filled: release 1, every other stage 1 (f + (1 - f) x progress)
+    done = dataclasses.replace(u.evaluate(), correct=1, slot_filled=(True,))
+    assert all(v == pytest.approx(1.0) for v in st.potentials(done).values())
+
+
+def test_staged_terms_are_weights_times_potential_changes(one_tile: gym.Env) -> None:
+    """Guards against a stage's weight swapped (``configs/rewards.yaml``: transport 2, release 4,
+    the others 1) or a term paid on the potential instead of its change."""
+    one_tile.reset(seed=1)
+    u = one_tile.unwrapped
+    st = u.task.staged
+    e = u.evaluate()
+    st.reset(e)
+    assert all(v == 0.0 for v in st.terms(e).values())
+    done = dataclasses.replace(e, correct=1, slot_filled=(True,))
+    before = st.potentials(e)
+    terms = st.terms(done)
+    weights = {"reach": 1, "seal": 1, "lift": 1, "transport": 2, "align": 1, "release": 4}
+    for s in STAGES:
+        assert terms[f"stage_{s}"] == pytest.approx(weights[s] * (1.0 - before[s])), s
+    assert all(v == 0.0 for v in st.terms(done).values())  # no change, no reward
