@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import envs  # noqa: F401 - registers the ids
-from envs.observations import ROBOT_DIM, SLOT_DIM, TILE_DIM
+from envs.observations import DEPTH_MAX, ROBOT_DIM, SLOT_DIM, TILE_DIM
 from spatial.rotations import yaw_from_matrix
 
 
@@ -88,3 +88,23 @@ def test_images_are_the_cameras_at_the_configured_size(env: gym.Env) -> None:
     np.testing.assert_array_equal(obs["input_camera"], u.cell.render("input_camera", 24, 32))
     assert not np.array_equal(obs["input_camera"], obs["output_camera"])
     assert env.observation_space.contains(obs)
+
+
+def test_depth_images_are_metres_under_the_far_bound() -> None:
+    """Guards against the depth keys misnamed, not clipped to `DEPTH_MAX` or in another unit:
+    the input camera sees the belt top about its height above it [m]."""
+    e = gym.make("MosaicDecision6-v0", obs_mode="rgb", depth=True, image_size=(24, 32))
+    try:
+        obs, _ = e.reset(seed=11)
+        u: Any = e.unwrapped
+        for name in ("input_depth", "output_depth"):
+            d = obs[name]
+            assert d.shape == (24, 32, 1) and d.dtype == np.float32
+            assert e.observation_space[name].contains(d)
+            assert 0.0 < float(d.min()) and float(d.max()) <= DEPTH_MAX
+        raw = u.cell.render("input_camera", 24, 32, depth=True)
+        np.testing.assert_allclose(obs["input_depth"][..., 0], np.clip(raw, 0.0, DEPTH_MAX))
+        centre = float(obs["input_depth"][12, 16, 0])
+        assert 0.05 < centre < 2.0  # metres from the camera to the belt
+    finally:
+        e.close()

@@ -119,6 +119,7 @@ def test_dense_reach_is_minus_the_tool_distance_to_the_nearest_wanted_tile(dense
     d = np.linalg.norm(u.cell.tile_poses().pos[wanted] - tool, axis=1).min()
     assert terms["reach"] == pytest.approx(-0.5 * d)
     assert terms["grasp"] == 0.0 and terms["carry"] == 0.0
+    assert set(terms) == set(REWARD_TERMS)
     # a tile whose class's slots are all filled is not wanted any more
     filled = dataclasses.replace(u.task.last_evaluation, slot_filled=(True,) * 4, correct=4)
     assert not u.task.wanted_tiles(filled).any()
@@ -148,12 +149,14 @@ def test_dense_grasp_and_carry_while_holding_a_wanted_tile(dense: gym.Env) -> No
     assert terms["grasp"] == pytest.approx(0.2)
     assert terms["carry"] == pytest.approx(-0.5 * d)
     assert terms["reach"] == 0.0
+    assert set(terms) == set(REWARD_TERMS)
     # its class's slots all filled: holding it earns nothing
     filled = tuple(bool(task.slot_class[j] == task.tile_class[tile]) for j in range(4))
     u.task.reset()
     e = dataclasses.replace(u.task.last_evaluation, slot_filled=filled)
     t2 = u.task.rewards(e, False)
     assert (t2["grasp"], t2["carry"], t2["reach"]) == (0.0, 0.0, 0.0)
+    assert set(t2) == set(REWARD_TERMS)
 
 
 def test_sparse_and_dense_modes_leave_the_staged_terms_zero(dense: gym.Env) -> None:

@@ -11,6 +11,7 @@ run against that bug made by hand and failed.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterator
 from typing import Any
@@ -299,3 +300,25 @@ def test_evaluation_round_trips_through_info(u: Any) -> None:
     e = u.evaluate()
     assert Evaluation.from_info({"evaluation": e.as_dict()}) == e
     assert isinstance(e.as_dict()["slot_filled"], list)
+
+
+def test_ground_truth_holds_the_poses_and_finds_the_nearest_fed_tile(u: Any) -> None:
+    """Guards against the privileged poses or classes read wrong, or `nearest` returning a
+    tile not fed (parked tiles are never the nearest) or a distance in another unit."""
+    gt = u.ground_truth()
+    cell = u.cell
+    poses = cell.tile_poses()
+    np.testing.assert_allclose(gt.xy, poses.pos[:, :2])
+    np.testing.assert_allclose(gt.yaw, poses.yaw)
+    assert gt.class_name == tuple(t.shape.name for t in cell.tiles)
+    assert gt.slot_class == tuple(s.shape.name for s in cell.slots)
+    np.testing.assert_array_equal(gt.symmetry, u.task.symmetry)
+    assert not gt.distractor.any() and gt.on_stage.all()
+    target = gt.xy[5] + [0.003, -0.004]
+    assert gt.nearest(target) == (5, pytest.approx(0.005))
+    on = gt.on_stage.copy()
+    on[5] = False
+    parked = dataclasses.replace(gt, on_stage=on)
+    i, d = parked.nearest(target)
+    assert i != 5 and d > 0.005
+
