@@ -33,6 +33,7 @@ def _make(mode: str) -> gym.Env:
         obs_mode="state",
         max_slots=4,
         reward_mode=mode,
+        tile_variants=1,
         disable_env_checker=True,
     )
 
