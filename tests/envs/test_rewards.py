@@ -20,7 +20,7 @@ import pytest
 
 import envs
 from envs.actions import transfer_poses
-from envs.rewards import STAGES, StagedRewardConfig
+from envs.rewards import STAGES, StagedReward, StagedRewardConfig, load_staged_config
 from envs.task import REWARD_TERMS
 from spatial.rotations import quat_from_yaw
 
@@ -31,7 +31,7 @@ def _make(mode: str) -> gym.Env:
         action_mode="pick_place",
         execution="kinematic",
         obs_mode="state",
-        max_slots=4,
+        max_slots=4 if mode == "sparse" else 0,  # dense: the full design, two slots of a class
         reward_mode=mode,
         tile_variants=1,
         disable_env_checker=True,
@@ -116,13 +116,13 @@ def test_dense_reach_is_minus_the_tool_distance_to_the_nearest_wanted_tile(dense
     terms = _terms(u)
     tool = u.cell.tcp_pose()[0]
     wanted = np.flatnonzero(u.task.wanted_tiles(u.task.last_evaluation))
-    assert len(wanted) == 4
+    assert len(wanted) == 16
     d = np.linalg.norm(u.cell.tile_poses().pos[wanted] - tool, axis=1).min()
     assert terms["reach"] == pytest.approx(-0.5 * d)
     assert terms["grasp"] == 0.0 and terms["carry"] == 0.0
     assert set(terms) == set(REWARD_TERMS)
     # a tile whose class's slots are all filled is not wanted any more
-    filled = dataclasses.replace(u.task.last_evaluation, slot_filled=(True,) * 4, correct=4)
+    filled = dataclasses.replace(u.task.last_evaluation, slot_filled=(True,) * 16, correct=16)
     assert not u.task.wanted_tiles(filled).any()
 
 
@@ -145,6 +145,7 @@ def test_dense_grasp_and_carry_while_holding_a_wanted_tile(dense: gym.Env) -> No
     _hold(u, tile, int(np.flatnonzero(task.slot_class == task.tile_class[tile])[0]))
     terms = _terms(u)
     free = np.flatnonzero(task.slot_class == task.tile_class[tile])
+    assert len(free) == 2  # the nearest of two slots: a minimum, not a norm of both
     xy = u.cell.tile_poses().pos[tile, :2]
     d = np.linalg.norm(task.slot_xyyaw[free, :2] - xy, axis=1).min()
     assert terms["grasp"] == pytest.approx(0.2)
@@ -152,7 +153,7 @@ def test_dense_grasp_and_carry_while_holding_a_wanted_tile(dense: gym.Env) -> No
     assert terms["reach"] == 0.0
     assert set(terms) == set(REWARD_TERMS)
     # its class's slots all filled: holding it earns nothing
-    filled = tuple(bool(task.slot_class[j] == task.tile_class[tile]) for j in range(4))
+    filled = tuple(bool(task.slot_class[j] == task.tile_class[tile]) for j in range(16))
     u.task.reset()
     e = dataclasses.replace(u.task.last_evaluation, slot_filled=filled)
     t2 = u.task.rewards(e, False)
@@ -208,6 +209,7 @@ def test_staged_potentials_follow_the_documented_formulas(one_tile: gym.Env) -> 
         assert pot["lift"] == pytest.approx(lift, abs=1e-6), h
         d = np.linalg.norm(slot[:2] - cell.tile_poses().pos[0, :2])
         assert pot["transport"] == pytest.approx(lift * (1 - math.tanh(d / 0.3)), abs=1e-6)
+        assert d > 0.02 and pot["align"] == 0.0  # farther than align_distance from the slot
     # over the slot, 10 mm off and turned by a quarter of the half period
     turn = (math.pi / sym) / 4 if sym > 0 else 0.0
     cell.data.qpos[q[:2]] = slot[:2] + [0.01, 0.0]
@@ -216,6 +218,9 @@ def test_staged_potentials_follow_the_documented_formulas(one_tile: gym.Env) -> 
     pot = st.potentials(u.evaluate())
     expect = 0.5 * (0.75 if sym > 0 else 1.0)
     assert pot["align"] == pytest.approx(expect, abs=1e-6)
+    cell.data.qpos[q[:2]] = slot[:2]  # right on the slot: only the turn is left
+    mujoco.mj_forward(cell.model, cell.data)
+    assert st.potentials(u.evaluate())["align"] == pytest.approx(0.75 if sym > 0 else 1.0)
     # the slot filled: release 1, every other stage 1 (f + (1 - f) x progress)
     done = dataclasses.replace(u.evaluate(), correct=1, slot_filled=(True,))
     assert all(v == pytest.approx(1.0) for v in st.potentials(done).values())
@@ -237,3 +242,26 @@ def test_staged_terms_are_weights_times_potential_changes(one_tile: gym.Env) -> 
     for s in STAGES:
         assert terms[f"stage_{s}"] == pytest.approx(weights[s] * (1.0 - before[s])), s
     assert all(v == 0.0 for v in st.terms(done).values())  # no change, no reward
+
+
+@pytest.mark.parametrize(("order", "expected"), [(1, 0.75), (2, 0.5), (0, 1.0)])
+def test_staged_align_divides_the_yaw_error_by_half_the_symmetry_period(
+    dense: gym.Env, order: int, expected: float
+) -> None:
+    """Guards against the symmetry order's special cases moved (0: any yaw aligns; 1: the half
+    period is pi): a tile held on its slot, turned by pi / 4, aligns 1 - (pi / 4) / (pi / order)."""
+    dense.reset(seed=0)
+    u = dense.unwrapped
+    task = u.task
+    tile = int(np.flatnonzero(task.symmetry == order)[0])
+    slot = int(np.flatnonzero(task.slot_class == task.tile_class[tile])[0])
+    _hold(u, tile, slot)
+    staged = StagedReward(task, load_staged_config())
+    cell = u.cell
+    q = cell.ids.tile_qpos_index[tile]
+    x, y, yaw = task.slot_xyyaw[slot]
+    cell.data.qpos[q[:2]] = [x, y]
+    cell.data.qpos[q[3:]] = quat_from_yaw(yaw + math.pi / 4)
+    mujoco.mj_forward(cell.model, cell.data)
+    e = dataclasses.replace(u.evaluate(), slot_filled=(False,) * 16, correct=0)
+    assert staged.potentials(e)["align"] == pytest.approx(expected, abs=1e-6)
