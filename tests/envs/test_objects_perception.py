@@ -229,10 +229,13 @@ def test_rows_at_another_picture_size_use_that_size_s_camera_model() -> None:
 
 
 def test_picture_size_bounds_are_inclusive(perceived: gym.Env) -> None:
-    """Guards against the accepted picture sizes' ends excluded (qshape's 16..8192 px per side)."""
+    """Guards against the accepted picture sizes' ends excluded (qshape's 16..8192 px per side),
+    and the figures cast onto another plane than the tiles' top faces on the input belt."""
     u = cast(MosaicAssemblyEnv, perceived.unwrapped)
     objects = u.observer.objects
-    assert objects is not None
+    assert objects is not None and u.observer.perceived is not None
+    top = u.cell.geometry.belt_top + u.cell.cfg.tiles.thickness
+    assert u.observer.perceived.plane_z == pytest.approx(top)
     base = load_env_config()
     for size in ((16, 8192), (8192, 16)):
         cfg = dataclasses.replace(base, objects_image_size=size)
@@ -242,3 +245,14 @@ def test_picture_size_bounds_are_inclusive(perceived: gym.Env) -> None:
         with pytest.raises(EnvConfigError, match="objects_image_size"):
             PerceivedTiles(u.cell, dataclasses.replace(base, objects_image_size=size),
                            objects.fields, objects.dim)  # fmt: skip
+
+
+def test_register_residual_is_the_rms_distance_left() -> None:
+    """Guards against the residual's power terms miscomputed (the RMS left after the best turn):
+    a 10 mm circle registered on a 7 mm one leaves 3 mm at every sample."""
+    k = np.arange(64)
+    big = 10 * np.exp(2j * np.pi * k / 64)
+    small = 7 * np.exp(2j * np.pi * k / 64)
+    r, _, rms = register(big, np.stack([small, 3 * small]))
+    assert r == 0
+    assert rms == pytest.approx(3.0, abs=1e-9)
