@@ -149,7 +149,9 @@ def report(args: argparse.Namespace) -> int:
             survivors.append(name)
         else:
             per[module][st] += 1
-    print(f"{'module':34} {'mutants':>7} {'equiv':>5} {'killed':>6} {'surv':>5} {'other':>5}  score")
+    print(
+        f"{'module':34} {'mutants':>7} {'equiv':>5} {'killed':>6} {'surv':>5} {'other':>5}  score"
+    )
     groups: dict[str, Counter[str]] = defaultdict(Counter)
     for module in sorted(per):
         c = per[module]
@@ -189,11 +191,13 @@ def report(args: argparse.Namespace) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    """mutmut run (all, resuming; or one group's modules, re-run), timed, then the report."""
+    """Mutmut run (all, resuming; or one group's modules, re-run), timed, then the report."""
     mm, ours = settings()
     patterns: list[str] = []
     if args.group:
-        chosen = [p for p in mm["only_mutate"] if (p in ours["scoring"]) == (args.group == "scoring")]
+        chosen = [
+            p for p in mm["only_mutate"] if (p in ours["scoring"]) == (args.group == "scoring")
+        ]
         patterns = [module_of(p) for p in chosen]
     t0 = time.monotonic()
     code = subprocess.call(
@@ -265,8 +269,10 @@ def sample(args: argparse.Namespace) -> int:
         f"in {time.monotonic() - t0:.0f} s (mutmut exit {code})"
     )
     for n in missed:
-        print(f"  SURVIVED {n}: write a test that kills it, or review it as equivalent "
-              f"({EQUIVALENT.relative_to(ROOT)})")  # fmt: skip
+        print(
+            f"  SURVIVED {n}: write a test that kills it, or review it as equivalent "
+            f"({EQUIVALENT.relative_to(ROOT)})"
+        )
     for n in unknown:
         print(f"  NOT TESTED {n}: no test of the sample's selection calls it")
     return 1 if missed or unknown or code else 0

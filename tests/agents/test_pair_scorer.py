@@ -135,10 +135,14 @@ def test_state_pair_features_are_the_yaw_difference_at_known_yaws(tile_yaw, slot
     np.testing.assert_allclose(rows.pairs[0, 0, 0].numpy(), expected, atol=1e-6)
     assert rows.pairs[0, 0, 1, 0] == 0.0 and rows.pairs[0, 1, 0, 0] == 0.0  # classes differ
     d10 = np.radians(0.0 - slot_yaw)
-    np.testing.assert_allclose(rows.pairs[0, 1, 0, 1:3].numpy(), [np.cos(d10), np.sin(d10)], atol=1e-6)
+    np.testing.assert_allclose(
+        rows.pairs[0, 1, 0, 1:3].numpy(), [np.cos(d10), np.sin(d10)], atol=1e-6
+    )
     # rows: tile x, y, present; slot x, y, filled; masks from the flags
     np.testing.assert_allclose(rows.tiles[0].numpy(), [[0.1, 0.3, 1.0], [0.2, 0.3, 1.0]], atol=1e-6)
-    np.testing.assert_allclose(rows.slots[0].numpy(), [[0.0, -0.5, 0.0], [0.05, -0.5, 1.0]], atol=1e-6)
+    np.testing.assert_allclose(
+        rows.slots[0].numpy(), [[0.0, -0.5, 0.0], [0.05, -0.5, 1.0]], atol=1e-6
+    )
     assert rows.tile_mask[0].tolist() == [True, True]
     assert rows.slot_mask[0].tolist() == [True, False]
 

@@ -210,8 +210,9 @@ def test_the_mask_follows_the_agent_indices_not_the_cell_order():
         cell_tile = 2
         u.cell.place_tiles(np.array([cell_tile]), np.array([[0.0, 0.0, 0.0]]))
         q = u.cell.ids.tile_qpos_index[cell_tile]
-        x, y, yaw = u.task.slot_xyyaw[int(np.flatnonzero(
-            u.task.slot_class == u.task.tile_class[cell_tile])[0])]  # fmt: skip
+        x, y, yaw = u.task.slot_xyyaw[
+            int(np.flatnonzero(u.task.slot_class == u.task.tile_class[cell_tile])[0])
+        ]
         u.cell.data.qpos[q[:2]] = [x, y]
         u.cell.data.qpos[q[2]] = u.cell.geometry.mesh_top + u.cell.cfg.tiles.thickness / 2
         from spatial.rotations import quat_from_yaw  # noqa: PLC0415

@@ -295,9 +295,10 @@ def test_slot_rows_hold_the_slot_pose_and_filled_flag(env: gym.Env) -> None:
     xyyaw = u.task.slot_xyyaw[u.index.slots]
     np.testing.assert_allclose(obs["slots"][:, F["xy"]], xyyaw[:, :2], atol=1e-6)
     np.testing.assert_allclose(
-        obs["slots"][:, F["yaw"]], np.column_stack([np.cos(xyyaw[:, 2]), np.sin(xyyaw[:, 2])]),
+        obs["slots"][:, F["yaw"]],
+        np.column_stack([np.cos(xyyaw[:, 2]), np.sin(xyyaw[:, 2])]),
         atol=1e-6,
-    )  # fmt: skip
+    )
     assert not obs["slots"][:, F["flag"]].any()
     yaw = u.cell.tile_poses().yaw[u.index.tiles]
     np.testing.assert_allclose(

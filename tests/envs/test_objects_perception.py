@@ -185,14 +185,19 @@ def test_a_figure_fills_a_row_only_within_the_gate(perceived: gym.Env) -> None:
         wide.close()
 
 
-
 def test_holed_tiles_of_the_full_design_keep_their_hole_area_and_yaw() -> None:
     """Guards against the holes dropped from the perceived figures or from the registration's
     references (an off-centre hole moves the area centroid): on the full paper_mixed design the
     holed square and the ring are perceived with their hole area and their yaw."""
-    env = gym.make(envs.ENV_ID, obs_mode="objects", objects_source="perception",
-                   action_mode="pick_place_discrete", execution="kinematic", tile_variants=1,
-                   disable_env_checker=True)  # fmt: skip
+    env = gym.make(
+        envs.ENV_ID,
+        obs_mode="objects",
+        objects_source="perception",
+        action_mode="pick_place_discrete",
+        execution="kinematic",
+        tile_variants=1,
+        disable_env_checker=True,
+    )
     try:
         env.reset(seed=SEED)
         u = cast(MosaicAssemblyEnv, env.unwrapped)
@@ -243,8 +248,12 @@ def test_picture_size_bounds_are_inclusive(perceived: gym.Env) -> None:
         assert per.size == size
     for size in ((15, 656), (492, 8193)):
         with pytest.raises(EnvConfigError, match="objects_image_size"):
-            PerceivedTiles(u.cell, dataclasses.replace(base, objects_image_size=size),
-                           objects.fields, objects.dim)  # fmt: skip
+            PerceivedTiles(
+                u.cell,
+                dataclasses.replace(base, objects_image_size=size),
+                objects.fields,
+                objects.dim,
+            )
 
 
 def test_register_residual_is_the_rms_distance_left() -> None:

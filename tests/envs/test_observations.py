@@ -21,9 +21,13 @@ from spatial.rotations import yaw_from_matrix
 @pytest.fixture(scope="module")
 def env() -> Iterator[gym.Env]:
     e = gym.make(
-        "MosaicDecision6-v0", tile_order="shuffled", slot_order="shuffled", obs_mode="rgb+state",
-        image_size=(24, 32), disable_env_checker=True,
-    )  # fmt: skip
+        "MosaicDecision6-v0",
+        tile_order="shuffled",
+        slot_order="shuffled",
+        obs_mode="rgb+state",
+        image_size=(24, 32),
+        disable_env_checker=True,
+    )
     yield e
     e.close()
 

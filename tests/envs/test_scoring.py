@@ -50,7 +50,7 @@ def u(env: gym.Env) -> Any:
     return env.unwrapped
 
 
-def lay(u: Any, tile: int, xy: Any, yaw: float, dz: float = 0.0, tilt_deg: float = 0.0) -> None:
+def lay(u: Any, tile: int, xy: Any, yaw: float, *, dz: float = 0.0, tilt_deg: float = 0.0) -> None:
     """Put ``tile`` at world ``xy`` [m] and ``yaw`` [rad], ``dz`` [m] above resting on the sheet,
     tilted ``tilt_deg`` about the world x axis."""
     cell = u.cell
@@ -75,8 +75,16 @@ def slot_of(u: Any, tile: int, nth: int = 0) -> int:
     return int(np.flatnonzero(task.slot_class == task.tile_class[tile])[nth])
 
 
-def on_slot(u: Any, tile: int, slot: int, dx_mm: float = 0.0, dy_mm: float = 0.0,
-            dyaw_deg: float = 0.0, **kw: Any) -> None:  # fmt: skip
+def on_slot(
+    u: Any,
+    tile: int,
+    slot: int,
+    *,
+    dx_mm: float = 0.0,
+    dy_mm: float = 0.0,
+    dyaw_deg: float = 0.0,
+    **kw: Any,
+) -> None:
     x, y, yaw = u.task.slot_xyyaw[slot]
     lay(u, tile, (x + dx_mm * MM, y + dy_mm * MM), yaw + math.radians(dyaw_deg), **kw)
 
@@ -263,9 +271,10 @@ def test_every_slot_filled_is_a_success_and_errors_are_means_and_maxima(u: Any) 
     offsets = []
     for tile in range(len(u.cell.tiles)):
         slot = next(
-            int(j) for j in np.flatnonzero(task.slot_class == task.tile_class[tile])
+            int(j)
+            for j in np.flatnonzero(task.slot_class == task.tile_class[tile])
             if int(j) not in used
-        )  # fmt: skip
+        )
         used.add(slot)
         d = 0.1 * (tile % 5)
         offsets.append(d)
@@ -322,4 +331,3 @@ def test_ground_truth_holds_the_poses_and_finds_the_nearest_fed_tile(u: Any) -> 
     parked = dataclasses.replace(gt, on_stage=on)
     i, d = parked.nearest(target)
     assert i != 5 and d > 0.005
-
