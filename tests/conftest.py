@@ -1,9 +1,10 @@
 """Test-run settings shared by every folder.
 
 Under mutation testing (mutmut sets ``MUTANT_UNDER_TEST`` to the mutant's name in the process
-that runs its tests) the tests of a mutant run file by file in the order of pyproject's
+that runs its tests) a mutant's tests run file by file: first the files pyproject's
+``[tool.mosaic-mutation.first_tests]`` names for the mutated module, then in the order of
 ``[tool.mutmut] pytest_add_cli_args_test_selection``, which lists the fast contract tests
-first: mutmut stops at the first failure, so a killed mutant costs the cheapest test that
+first. mutmut stops at the first failure, so a killed mutant costs the cheapest test that
 catches it. Ordinary runs keep pytest's order.
 """
 
@@ -18,26 +19,30 @@ import pytest
 _ROOT = Path(__file__).resolve().parents[1]
 
 
-def _selection_rank() -> dict[str, int]:
+def _file_order(mutant: str) -> list[str]:
+    """Test files (or folders) in the order a mutant's tests should run."""
     try:
         tool = tomllib.loads((_ROOT / "pyproject.toml").read_text(encoding="utf-8"))["tool"]
-        paths = tool["mutmut"]["pytest_add_cli_args_test_selection"]
-    except (OSError, KeyError, tomllib.TOMLDecodeError):
-        return {}
-    return {p.rstrip("/"): i for i, p in enumerate(paths)}
+    except (OSError, tomllib.TOMLDecodeError):
+        return []
+    selection = tool.get("mutmut", {}).get("pytest_add_cli_args_test_selection", [])
+    first = tool.get("mosaic-mutation", {}).get("first_tests", {})
+    module = mutant.split(".x", 1)[0]
+    return [p.rstrip("/") for p in [*first.get(module, []), *selection]]
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Order a mutant's tests by the selection's file order (mutation runs only)."""
-    if "__mutmut_" not in os.environ.get("MUTANT_UNDER_TEST", ""):
+    """Order a mutant's tests (mutation runs only; see the module docstring)."""
+    mutant = os.environ.get("MUTANT_UNDER_TEST", "")
+    if "__mutmut_" not in mutant:
         return
-    rank = _selection_rank()
+    order = _file_order(mutant)
 
     def key(item: pytest.Item) -> int:
         path = item.nodeid.split("::", 1)[0]
-        for p, i in rank.items():
+        for i, p in enumerate(order):
             if path == p or path.startswith(p + "/"):
                 return i
-        return len(rank)
+        return len(order)
 
     items.sort(key=key)  # stable: a file's tests keep their order
