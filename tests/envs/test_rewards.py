@@ -265,3 +265,18 @@ def test_staged_align_divides_the_yaw_error_by_half_the_symmetry_period(
     mujoco.mj_forward(cell.model, cell.data)
     e = dataclasses.replace(u.evaluate(), slot_filled=(False,) * 16, correct=0)
     assert staged.potentials(e)["align"] == pytest.approx(expected, abs=1e-6)
+
+
+def test_staged_release_is_the_fraction_of_slots_filled(dense: gym.Env) -> None:
+    """Guards against the filled fraction computed against the wrong count (times instead of
+    over the slots): 4 of 16 slots filled is a release potential of 0.25, and every other stage
+    starts from it."""
+    dense.reset(seed=0)
+    u = dense.unwrapped
+    staged = StagedReward(u.task, load_staged_config())
+    e = u.evaluate()
+    filled = dataclasses.replace(e, correct=4, slot_filled=(True,) * 4 + (False,) * 12)
+    pot = staged.potentials(filled)
+    assert pot["release"] == pytest.approx(0.25)
+    assert all(0.25 <= v <= 1.0 for v in pot.values())
+    assert pot["seal"] == pytest.approx(0.25)  # nothing held: no progress past the filled part
