@@ -21,6 +21,7 @@ import pytest
 import envs
 from envs.actions import transfer_poses
 from envs.rewards import STAGES, StagedReward, StagedRewardConfig, load_staged_config
+from envs.errors import CellError
 from envs.task import REWARD_TERMS
 from spatial.rotations import quat_from_yaw
 
@@ -275,8 +276,42 @@ def test_staged_release_is_the_fraction_of_slots_filled(dense: gym.Env) -> None:
     u = dense.unwrapped
     staged = StagedReward(u.task, load_staged_config())
     e = u.evaluate()
-    filled = dataclasses.replace(e, correct=4, slot_filled=(True,) * 4 + (False,) * 12)
+    filled = dataclasses.replace(e, correct=4)  # the count only: the same wanted tiles
     pot = staged.potentials(filled)
     assert pot["release"] == pytest.approx(0.25)
     assert all(0.25 <= v <= 1.0 for v in pot.values())
     assert pot["seal"] == pytest.approx(0.25)  # nothing held: no progress past the filled part
+    reach = staged.potentials(e)["reach"]  # nothing filled: the reach progress alone
+    assert 0.0 < reach < 1.0
+    assert pot["reach"] == pytest.approx(0.25 + 0.75 * reach)
+
+
+def test_staged_config_loads_overrides_and_refuses_non_positive_scales(tmp_path) -> None:
+    """Guards against the overrides or the file name dropped by `load_staged_config`, and a
+    zero scale accepted (every scale must be > 0 m)."""
+    assert load_staged_config(reach_scale=0.5).reach_scale == 0.5
+    path = tmp_path / "rewards.yaml"
+    path.write_text("transport: 3.0\n", encoding="utf-8")
+    assert load_staged_config(str(path)).transport == 3.0
+    with pytest.raises(CellError, match=r"reach_scale must be > 0 \[m\], got 0.0"):
+        StagedRewardConfig(reach_scale=0.0)
+
+
+def test_staged_progress_stops_when_the_held_tiles_slots_are_filled(dense: gym.Env) -> None:
+    """Guards against the filled slots ignored by the staged progress: holding a tile whose
+    class's slots are all filled is no progress (only the filled fraction counts)."""
+    dense.reset(seed=0)
+    u = dense.unwrapped
+    task = u.task
+    tile = 0
+    mine = np.flatnonzero(task.slot_class == task.tile_class[tile])
+    _hold(u, tile, int(mine[0]))
+    staged = StagedReward(task, load_staged_config())
+    filled = tuple(bool(j in mine) for j in range(16))
+    e = dataclasses.replace(u.evaluate(), correct=len(mine), slot_filled=filled)
+    pot = staged.potentials(e)
+    done = len(mine) / 16
+    for stage in ("seal", "lift", "transport", "align"):  # reach turns to the wanted tiles
+        assert pot[stage] == pytest.approx(done), stage
+    open_ = dataclasses.replace(e, correct=0, slot_filled=(False,) * 16)
+    assert staged.potentials(open_)["seal"] == 1.0
