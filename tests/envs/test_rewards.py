@@ -20,8 +20,8 @@ import pytest
 
 import envs
 from envs.actions import transfer_poses
-from envs.rewards import STAGES, StagedReward, StagedRewardConfig, load_staged_config
 from envs.errors import CellError
+from envs.rewards import STAGES, StagedReward, StagedRewardConfig, load_staged_config
 from envs.task import REWARD_TERMS
 from spatial.rotations import quat_from_yaw
 
