@@ -17,8 +17,9 @@ from hypothesis import strategies as st
 from sb3_contrib.common.maskable.utils import get_action_masks, is_masking_supported
 from stable_baselines3.common.vec_env import DummyVecEnv
 
-import envs  # noqa: F401 - registers the ids
-from envs.masks import split_mask
+import envs
+import envs.tasks
+from envs.masks import action_mask, check_allowed, split_mask
 from envs.mosaic_env import MosaicEnvError
 from envs.task_spec import ActionError
 
@@ -160,3 +161,94 @@ def test_the_mask_allows_exactly_what_the_env_accepts(refusing, seed, actions):
         assert waiting or "not on the input belt" not in info["action_error"]
         if terminated:
             break
+
+
+def _rung_env(task_id: str) -> gym.Env:
+    return gym.make(task_id, disable_env_checker=True)
+
+
+@pytest.mark.parametrize("task_id", list(envs.tasks.bundled_tasks()))
+def test_every_rung_masks_belt_tiles_open_slots_and_padding(task_id):
+    """Guards against the mask read from the wrong index map (cell order instead of the agent's
+    indices), a filled slot left open, padded indices allowed, or a rung without the mask.
+
+    Decision rungs: tile ``i`` allowed iff the tile the agent's index ``i`` names lies on the
+    input belt's side; slot ``j`` iff open; every rotation; indices past the episode's counts
+    forbidden. The other rungs have no mask (a typed error)."""
+    env = _rung_env(task_id)
+    try:
+        env.reset(seed=7)
+        u = env.unwrapped
+        if env.action_space.__class__.__name__ != "MultiDiscrete":
+            with pytest.raises(MosaicEnvError, match="needs pick_place_discrete"):
+                env.get_wrapper_attr("action_masks")()
+            return
+        nvec = env.action_space.nvec
+        tiles, slots, rotations = split_mask(masks(env), nvec)
+        n, k = len(u.index.tiles), len(u.index.slots)
+        on_input = u.cell.input_half()[u.index.tiles]
+        if on_input.any():
+            np.testing.assert_array_equal(tiles[:n], on_input)
+        else:
+            assert tiles[:n].all()  # nothing to pick: every tile index is a wait
+        assert not tiles[n:].any() and not slots[k:].any()
+        filled = np.asarray(u.evaluate().slot_filled, bool)[u.index.slots]
+        np.testing.assert_array_equal(slots[:k], ~filled)
+        assert rotations.all() and len(rotations) == nvec[2]
+    finally:
+        env.close()
+
+
+def test_the_mask_follows_the_agent_indices_not_the_cell_order():
+    """Guards against ``index.tiles`` / ``index.slots`` dropped from the mask: with shuffled
+    indices a tile taken off the belt and its filled slot close at their agent indices
+    (`envs.masks.action_mask` of the state now; the env's mask is the one of the last step)."""
+    env = gym.make(TASK, tile_order="shuffled", slot_order="shuffled")
+    try:
+        env.reset(seed=5)
+        u = env.unwrapped
+        cell_tile = 2
+        u.cell.place_tiles(np.array([cell_tile]), np.array([[0.0, 0.0, 0.0]]))
+        q = u.cell.ids.tile_qpos_index[cell_tile]
+        x, y, yaw = u.task.slot_xyyaw[
+            int(np.flatnonzero(u.task.slot_class == u.task.tile_class[cell_tile])[0])
+        ]
+        u.cell.data.qpos[q[:2]] = [x, y]
+        u.cell.data.qpos[q[2]] = u.cell.geometry.mesh_top + u.cell.cfg.tiles.thickness / 2
+        from spatial.rotations import quat_from_yaw  # noqa: PLC0415
+
+        u.cell.data.qpos[q[3:]] = quat_from_yaw(yaw)
+        import mujoco  # noqa: PLC0415
+
+        mujoco.mj_forward(u.cell.model, u.cell.data)
+        e = u.evaluate()
+        filled_slot = int(np.flatnonzero(e.slot_filled)[0])
+        nvec = env.action_space.nvec
+        tiles, slots, _ = split_mask(action_mask(u.cell, u.index, e.slot_filled, nvec), nvec)
+        agent_tile = int(np.flatnonzero(u.index.tiles == cell_tile)[0])
+        agent_slot = int(np.flatnonzero(u.index.slots == filled_slot)[0])
+        assert not tiles[agent_tile] and tiles.sum() == SLOTS - 1
+        assert not slots[agent_slot] and slots.sum() == SLOTS - 1
+    finally:
+        env.close()
+
+
+def test_split_and_check_allowed_on_a_hand_made_mask():
+    """Guards against the cut points of the flat mask or the refusal test moved by one."""
+    nvec = np.array([3, 2, 4])
+    mask = np.array([1, 0, 1, 0, 1, 1, 1, 1, 1], bool)
+    tiles, slots, rotations = split_mask(mask, nvec)
+    assert tiles.tolist() == [True, False, True] and slots.tolist() == [False, True]
+    assert rotations.tolist() == [True] * 4
+
+    class Space:
+        pass
+
+    space = Space()
+    space.nvec = nvec  # type: ignore[attr-defined]
+    check_allowed(np.array([2, 1, 3]), mask, space, "refuse")
+    check_allowed(np.array([1, 0, 0]), mask, space, "fail")  # fail: never refused here
+    with pytest.raises(ActionError, match=r"tile index 1 is not on the input belt.*\[0, 2\]"):
+        check_allowed(np.array([1, 1, 0]), mask, space, "refuse")
+    with pytest.raises(ActionError, match=r"slot index 0 is filled already.*\[1\]"):
+        check_allowed(np.array([0, 0, 0]), mask, space, "refuse")

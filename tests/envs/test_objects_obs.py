@@ -242,3 +242,76 @@ def test_objects_keys_leave_the_state_observation_alone() -> None:
     changed = rollout(objects_noise_mm=1.0, objects_points=64, objects_rows=9)
     for a, b in zip(rollout(), changed, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+KNOWN_AREAS_CM2 = {
+    "square": 40.0 * 40.0 / 100,  # paper_mixed: 40 mm squares
+    "rect": 48.0 * 24.0 / 100,  # 48 x 24 mm
+    "circle": math.pi * 21.0**2 / 100,  # radius 21 mm (the built outline is a polygon)
+    "right": 46.0 * 34.0 / 200,  # right triangle 46 x 34 mm
+    "iso": 44.0 * 40.0 / 200,  # isosceles triangle, base 44 mm, height 40 mm
+}
+
+
+def test_area_is_in_square_centimetres_for_known_tiles(env: gym.Env) -> None:
+    """Guards against the area changing unit (mm^2, m^2) unnoticed: the first six slots of
+    paper_mixed are two 40 mm squares (16 cm^2), a 48 x 24 mm rectangle, a 21 mm disc, a
+    46 x 34 mm right triangle and a 44 x 40 mm isosceles triangle; no holes."""
+    obs, _ = env.reset(seed=SEED)
+    u = env.unwrapped
+    expected = [KNOWN_AREAS_CM2[k] for k in ("square", "square", "rect", "circle", "right", "iso")]
+    cell_slots = np.empty(6)
+    cell_slots[u.index.slots] = obs["slots"][:, F["area"]].ravel()
+    np.testing.assert_allclose(cell_slots, expected, rtol=0.005)
+    assert np.all(obs["slots"][:, F["hole_area"]] == 0.0)
+    # tiles: the built outlines carry 0.2 mm noise, within 3 % of their class's slot
+    by_class = {s.shape.name: a for s, a in zip(u.cell.slots, expected, strict=True)}
+    tile_area = np.empty(6)
+    tile_area[u.index.tiles] = obs["tiles"][:, F["area"]].ravel()
+    for t, a in zip(u.cell.tiles, tile_area, strict=True):
+        assert a == pytest.approx(by_class[t.shape.name], rel=0.03)
+
+
+def test_hole_area_is_subtracted_and_reported_in_square_centimetres() -> None:
+    """Guards against the hole area in another unit or not subtracted from the area."""
+    square = np.array([[0.0, 0.0], [0.04, 0.0], [0.04, 0.04], [0.0, 0.04]])
+    hole = np.array([[0.01, 0.01], [0.02, 0.01], [0.02, 0.02], [0.01, 0.02]])
+    g = entity_geometry([square], [[hole]], [(0.2, 0.4, 0.6)], 8)
+    assert g.area[0] == pytest.approx(16.0 - 1.0)
+    assert g.hole_area[0] == pytest.approx(1.0)
+    np.testing.assert_allclose(g.rgb, [[0.2, 0.4, 0.6]])
+    # points about the area centroid of the outline with its hole (off-centre hole: shifted)
+    pts = as_xy(oriented_points(g, np.ones(1, complex), np.zeros(1), 8))[0].reshape(-1, 2)
+    c = np.array([20.0, 20.0]) - (np.array([15.0, 15.0]) - 20.0) * 1.0 / 15.0  # [mm]
+    assert pts.min(axis=0) == pytest.approx(-c, abs=1e-9)
+    assert pts.max(axis=0) == pytest.approx(40.0 - c, abs=1e-9)
+
+
+def test_slot_rows_hold_the_slot_pose_and_filled_flag(env: gym.Env) -> None:
+    """Guards against the slot rows' xy [m], yaw (cos, sin) or filled flag taken from the wrong
+    column or frame, and tile rows' yaw not being the tile's world yaw."""
+    obs, _ = env.reset(seed=SEED)
+    u = env.unwrapped
+    xyyaw = u.task.slot_xyyaw[u.index.slots]
+    np.testing.assert_allclose(obs["slots"][:, F["xy"]], xyyaw[:, :2], atol=1e-6)
+    np.testing.assert_allclose(
+        obs["slots"][:, F["yaw"]],
+        np.column_stack([np.cos(xyyaw[:, 2]), np.sin(xyyaw[:, 2])]),
+        atol=1e-6,
+    )
+    assert not obs["slots"][:, F["flag"]].any()
+    yaw = u.cell.tile_poses().yaw[u.index.tiles]
+    np.testing.assert_allclose(
+        obs["tiles"][:, F["yaw"]], np.column_stack([np.cos(yaw), np.sin(yaw)]), atol=1e-6
+    )
+    colours = np.array([t.color for t in u.cell.tiles])[u.index.tiles]
+    np.testing.assert_allclose(obs["tiles"][:, F["rgb"]], colours, atol=1e-6)
+    # a tile set into its slot: the slot's flag turns 1, the tile's (pickable) 0
+    obs, _, _, _, info = env.step(u.expert_action(0, 0))
+    filled = np.asarray(info["evaluation"]["slot_filled"], float)[u.index.slots]
+    assert filled.sum() == 1
+    np.testing.assert_array_equal(obs["slots"][:, F["flag"]].ravel(), filled)
+    np.testing.assert_array_equal(
+        obs["tiles"][:, F["flag"]].ravel(), u.cell.input_half()[u.index.tiles]
+    )
+    assert obs["tiles"][:, F["flag"]].sum() == 5

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 from typing import Any, cast
 
@@ -10,11 +11,11 @@ import mujoco
 import numpy as np
 import pytest
 
-import envs  # noqa: F401 - registers the ids
+import envs
 from envs.env_config import EnvConfigError, load_env_config
 from envs.mosaic_env import MosaicAssemblyEnv
 from envs.observations.objects import OBJECT_FIELDS as F
-from envs.observations.objects_perception import register
+from envs.observations.objects_perception import PerceivedFigure, PerceivedTiles, register
 
 TASK = "MosaicDecision6-v0"
 SEED = 1000
@@ -149,3 +150,118 @@ def test_bad_perception_config_is_refused(key: str, value: object, needle: str) 
 def test_image_size_outside_the_extraction_limits_is_refused() -> None:
     with pytest.raises(EnvConfigError, match="objects_image_size 8 x 656"):
         _make(objects_source="perception", objects_image_size=[8, 656])
+
+
+def _figure_at(centre: np.ndarray) -> PerceivedFigure:
+    square = np.array([[-0.01, -0.01], [0.01, -0.01], [0.01, 0.01], [-0.01, 0.01]]) + centre
+    return PerceivedFigure(square, (), (0.5, 0.5, 0.5), np.asarray(centre, float))
+
+
+def test_a_figure_fills_a_row_only_within_the_gate(perceived: gym.Env) -> None:
+    """Guards against the perception gate removed or in the wrong unit (``objects_gate_mm``
+    5 mm): a figure 4.9 mm from a fed tile fills its row, one 5.1 mm away fills none, and the
+    pairing is one to one (a second figure near a paired tile is dropped)."""
+    perceived.reset(seed=SEED)
+    u = cast(MosaicAssemblyEnv, perceived.unwrapped)
+    per = u.observer.perceived
+    assert per is not None and per.gate == pytest.approx(0.005)
+    xy = u.cell.tile_poses().pos[:, :2]
+    figs = [
+        _figure_at(xy[0] + [0.0049, 0.0]),
+        _figure_at(xy[1] + [0.0, -0.0051]),
+        _figure_at(xy[2] + [0.0, 0.0]),
+        _figure_at(xy[2] + [0.0010, 0.0]),
+    ]
+    pairs = per.associate(figs)
+    assert sorted(pairs) == [(0, 0), (2, 2)]
+    # the gate is a config value: 6 mm takes the second figure in
+    wide = _make(objects_source="perception", objects_gate_mm=6.0)
+    try:
+        wide.reset(seed=SEED)
+        w = cast(MosaicAssemblyEnv, wide.unwrapped).observer.perceived
+        assert w is not None
+        assert sorted(w.associate(figs)) == [(0, 0), (1, 1), (2, 2)]
+    finally:
+        wide.close()
+
+
+def test_holed_tiles_of_the_full_design_keep_their_hole_area_and_yaw() -> None:
+    """Guards against the holes dropped from the perceived figures or from the registration's
+    references (an off-centre hole moves the area centroid): on the full paper_mixed design the
+    holed square and the ring are perceived with their hole area and their yaw."""
+    env = gym.make(
+        envs.ENV_ID,
+        obs_mode="objects",
+        objects_source="perception",
+        action_mode="pick_place_discrete",
+        execution="kinematic",
+        tile_variants=1,
+        disable_env_checker=True,
+    )
+    try:
+        env.reset(seed=SEED)
+        u = cast(MosaicAssemblyEnv, env.unwrapped)
+        priv, per = _rows(env)
+        holed = [i for i, t in enumerate(u.cell.tiles) if len(t.holes)]
+        assert len(holed) == 2
+        for i in holed:
+            assert per[i, F["valid"]][0] == 1.0
+            hole = per[i, F["hole_area"]][0]
+            assert hole == pytest.approx(priv[i, F["hole_area"]][0], rel=0.15) and hole > 0.5
+            area = per[i, F["area"]][0] / priv[i, F["area"]][0]
+            assert abs(area - 1) * 100 < AREA_PCT
+            centroid = np.linalg.norm(per[i, F["xy"]] - priv[i, F["xy"]]) * 1e3
+            assert centroid < CENTROID_MM
+            sym = u.cell.tiles[i].shape.symmetry
+            assert _yaw_error_deg(per[i, F["yaw"]], priv[i, F["yaw"]], sym) < YAW_DEG
+    finally:
+        env.close()
+
+
+def test_rows_at_another_picture_size_use_that_size_s_camera_model() -> None:
+    """Guards against the figures cast through the camera model of another picture size: at half
+    the native size the perceived centroids still lie on the tiles'."""
+    env = _make(objects_source="perception", objects_image_size=[246, 328])
+    try:
+        env.reset(seed=SEED)
+        priv, per = _rows(env)
+        seen = per[:, F["valid"]].ravel() == 1.0
+        assert seen.sum() >= 4
+        d = np.linalg.norm(per[seen][:, F["xy"]] - priv[seen][:, F["xy"]], axis=1) * 1e3
+        assert d.max() < 2 * CENTROID_MM
+    finally:
+        env.close()
+
+
+def test_picture_size_bounds_are_inclusive(perceived: gym.Env) -> None:
+    """Guards against the accepted picture sizes' ends excluded (qshape's 16..8192 px per side),
+    and the figures cast onto another plane than the tiles' top faces on the input belt."""
+    u = cast(MosaicAssemblyEnv, perceived.unwrapped)
+    objects = u.observer.objects
+    assert objects is not None and u.observer.perceived is not None
+    top = u.cell.geometry.belt_top + u.cell.cfg.tiles.thickness
+    assert u.observer.perceived.plane_z == pytest.approx(top)
+    base = load_env_config()
+    for size in ((16, 8192), (8192, 16)):
+        cfg = dataclasses.replace(base, objects_image_size=size)
+        per = PerceivedTiles(u.cell, cfg, objects.fields, objects.dim)
+        assert per.size == size
+    for size in ((15, 656), (492, 8193)):
+        with pytest.raises(EnvConfigError, match="objects_image_size"):
+            PerceivedTiles(
+                u.cell,
+                dataclasses.replace(base, objects_image_size=size),
+                objects.fields,
+                objects.dim,
+            )
+
+
+def test_register_residual_is_the_rms_distance_left() -> None:
+    """Guards against the residual's power terms miscomputed (the RMS left after the best turn):
+    a 10 mm circle registered on a 7 mm one leaves 3 mm at every sample."""
+    k = np.arange(64)
+    big = 10 * np.exp(2j * np.pi * k / 64)
+    small = 7 * np.exp(2j * np.pi * k / 64)
+    r, _, rms = register(big, np.stack([small, 3 * small]))
+    assert r == 0
+    assert rms == pytest.approx(3.0, abs=1e-9)

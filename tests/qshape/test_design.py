@@ -275,7 +275,7 @@ def test_design_reloads_from_its_rendering(
         assert m is not None, slot.name
 
 
-# Pinned by mutation testing (benchmarks/mutation.py): changes these tests must notice.
+# Pinned by mutation testing: changes these tests must notice.
 def test_slot_touching_the_mesh_edge_is_inside() -> None:
     data = _base()
     data["slots"][0]["pose"] = {"x": 10, "y": 10}  # the 20 mm square ends exactly at 0

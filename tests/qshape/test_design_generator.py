@@ -191,3 +191,50 @@ def test_small_arcs_names_shallow_bites() -> None:
     assert arc.sagitta_mm == pytest.approx(-3.0)
     assert "bite, chord 12.0 mm, sagitta 3.0 mm" in arc.describe()
     assert not small_arcs(slot, min_sagitta_mm=2.0, min_chord_mm=4.0)
+
+
+WIDE = {
+    "mesh_mm": (300.0, 150.0),
+    "joint_mm": 3.0,
+    "margin_mm": 3.0,
+    "size_mm": (30.0, 40.0),
+    "families": {"regular": 1.0},
+    "hole_probability": 0.0,
+}
+"""A mesh twice as wide as high: 6 columns and 3 rows of 43 mm cells."""
+
+
+def test_layout_pitch_holds_the_joint_and_columns_run_along_the_width() -> None:
+    """Guards against the pitch drawn without the joint, and rows and columns swapped (both
+    invisible on a square mesh): on a 300 x 150 mm mesh with 40 mm tiles and a 3 mm joint
+    every cell is a column of x at 43 mm steps (6 of them) and a row of y (3 of them), centred
+    on the mesh, inside its margin."""
+    cfg = GeneratorConfig(**WIDE, tiles=(18, 18), classes=(3, 3))
+    assert cfg.cells() == (6, 3)
+    design = random_design(np.random.default_rng(4), cfg)
+    assert len(design.slots) == 18
+    xs = sorted({s.x for s in design.slots})
+    ys = sorted({s.y for s in design.slots})
+    assert len(xs) == 6 and len(ys) == 3
+    np.testing.assert_allclose(np.diff(xs), 43.0, atol=1e-3)
+    np.testing.assert_allclose(np.diff(ys), 43.0, atol=1e-3)
+    assert np.mean(xs) == pytest.approx(150.0, abs=1e-3)
+    assert np.mean(ys) == pytest.approx(75.0, abs=1e-3)
+    assert xs[0] - 20.0 >= 3.0 and xs[-1] + 20.0 <= 300.0 - 3.0
+    assert ys[0] - 20.0 >= 3.0 and ys[-1] + 20.0 <= 150.0 - 3.0
+    cells = {(s.x, s.y) for s in design.slots}
+    assert len(cells) == 18  # one tile per cell
+
+
+def test_both_ends_of_the_count_ranges_are_drawn() -> None:
+    """Guards against a count range drawn with its top left out (an exclusive upper bound):
+    over seeded draws the tile count takes 2, 3 and 4 and the class count 1 and 2."""
+    cfg = GeneratorConfig(**WIDE, tiles=(2, 4), classes=(1, 2))
+    tiles, classes = set(), set()
+    gen = DesignGenerator(cfg)
+    for seed in range(40):
+        d = gen.draw_mapping(np.random.default_rng(seed))
+        tiles.add(len(d["slots"]))
+        classes.add(len({(str(s["shape"]), s["color"]) for s in d["slots"]}))
+    assert tiles == {2, 3, 4}
+    assert classes == {1, 2}

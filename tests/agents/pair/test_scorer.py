@@ -105,3 +105,52 @@ def test_pair_policy_learns_under_maskable_ppo(tmp_path) -> None:
         MaskablePPO(PairScorerPolicy, gym.make(f"envs:{TASK}"), n_steps=32)
     env.close()
     assert np.isfinite(loaded.policy.value_net.weight.detach().numpy()).all()
+
+
+def _tile_row(x: float, y: float, yaw_deg: float, cls: int, present: float = 1.0) -> list[float]:
+    a = np.radians(yaw_deg)
+    return [x, y, 0.2, float(np.cos(a)), float(np.sin(a)), float(cls), present]
+
+
+def _slot_row(x: float, y: float, yaw_deg: float, cls: int, filled: float = 0.0) -> list[float]:
+    a = np.radians(yaw_deg)
+    return [x, y, float(np.cos(a)), float(np.sin(a)), float(cls), filled]
+
+
+@pytest.mark.parametrize(("tile_yaw", "slot_yaw"), [(30.0, 100.0), (-150.0, 20.0), (0.0, 90.0)])
+def test_state_pair_features_are_the_yaw_difference_at_known_yaws(tile_yaw, slot_yaw) -> None:
+    """Guards against the slot yaw's angle computed with its arguments swapped (atan2(cos, sin))
+    or the difference taken the other way: the pair features are (class equal, cos d, sin d,
+    cos 2d, sin 2d) with d = tile yaw - slot yaw."""
+    tiles = torch.tensor([_tile_row(0.1, 0.3, tile_yaw, 2), _tile_row(0.2, 0.3, 0.0, 5)])
+    slots = torch.tensor([_slot_row(0.0, -0.5, slot_yaw, 2), _slot_row(0.05, -0.5, 0.0, 4, 1.0)])
+    rows = state_rows(tiles.reshape(-1), slots.reshape(-1))
+    d = np.radians(tile_yaw - slot_yaw)
+    expected = [1.0, np.cos(d), np.sin(d), np.cos(2 * d), np.sin(2 * d)]
+    np.testing.assert_allclose(rows.pairs[0, 0, 0].numpy(), expected, atol=1e-6)
+    assert rows.pairs[0, 0, 1, 0] == 0.0 and rows.pairs[0, 1, 0, 0] == 0.0  # classes differ
+    d10 = np.radians(0.0 - slot_yaw)
+    np.testing.assert_allclose(
+        rows.pairs[0, 1, 0, 1:3].numpy(), [np.cos(d10), np.sin(d10)], atol=1e-6
+    )
+    # rows: tile x, y, present; slot x, y, filled; masks from the flags
+    np.testing.assert_allclose(rows.tiles[0].numpy(), [[0.1, 0.3, 1.0], [0.2, 0.3, 1.0]], atol=1e-6)
+    np.testing.assert_allclose(
+        rows.slots[0].numpy(), [[0.0, -0.5, 0.0], [0.05, -0.5, 1.0]], atol=1e-6
+    )
+    assert rows.tile_mask[0].tolist() == [True, True]
+    assert rows.slot_mask[0].tolist() == [True, False]
+
+
+def test_state_tile_mask_closes_absent_tiles_and_tiles_on_a_slot() -> None:
+    """Guards against the on-slot distance (5 mm) or the present flag ignored by the mask."""
+    tiles = torch.tensor(
+        [
+            _tile_row(0.0, -0.5 + 0.0049, 0.0, 1),  # 4.9 mm from slot 0: on it
+            _tile_row(0.0, -0.5 + 0.0051, 0.0, 1),  # 5.1 mm: not
+            _tile_row(0.1, 0.3, 0.0, 1, present=0.0),
+        ]
+    )
+    slots = torch.tensor([_slot_row(0.0, -0.5, 0.0, 1)])
+    rows = state_rows(tiles[None].reshape(1, -1), slots[None].reshape(1, -1))
+    assert rows.tile_mask[0].tolist() == [False, True, False]

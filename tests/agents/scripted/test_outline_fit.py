@@ -9,15 +9,16 @@ import pytest
 
 from agents.scripted.config import PlacementConfig, load_agents_config
 from agents.scripted.outline_fit import TileOutline, fit_outline, fit_unmatched
-from agents.scripted.perception import balance_colors, perceive_tiles, slot_targets
+from agents.scripted.perception import SlotTarget, balance_colors, perceive_tiles, slot_targets
 from agents.scripted.placement import fitted_command, plan_placements
 from benchmarks.design_cell import build_design_cell, nearest_tile
 from envs.task_spec import work_areas, world_slots
+from qshape import Figure, describe
 from qshape.design import Design
 from qshape.design.rules import DesignRules
 from qshape.design.turn_cues import hole_turn_gap
 from qshape.theory.tolerances import default_tolerances
-from spatial.angles import yaw_error
+from spatial.angles import rotate_xy, yaw_error
 from spatial.units import MM_PER_M
 
 YAW_TOL = math.radians(2.0)  # the env's yaw tolerance
@@ -147,3 +148,46 @@ def test_the_turn_is_refined_on_the_traced_outline() -> None:
         assert names[k] == design.slots[c.slot].class_key
         errors.append(math.degrees(yaw_error(truth.yaw[k] + c.rotation, c.place[2], c.symmetry)))
     assert max(errors) < 1.5  # measured 0.1-0.8 deg; the env tolerates 2
+
+
+def _rect(w: float, h: float) -> np.ndarray:
+    return np.array([[-w / 2, -h / 2], [w / 2, -h / 2], [w / 2, h / 2], [-w / 2, h / 2]])
+
+
+def _slot(outline: np.ndarray, symmetry: int) -> SlotTarget:
+    fig = Figure.from_polygon(outline, color=(0.8, 0.2, 0.2))
+    return SlotTarget(
+        0, "s", fig, describe(fig), np.zeros(3), symmetry, (0.8, 0.2, 0.2), class_name="r"
+    )
+
+
+def test_a_tile_covering_half_a_larger_slot_is_refused() -> None:
+    """Guards against the residual measured one way only (tile onto slot): a 40 x 10 mm tile
+    set on an 80 x 10 mm slot lies on the slot's outline (0.5 mm mean, 0.018 x sqrt(area),
+    under ``fit_max_residual`` 0.03) yet covers half of it; the slot onto the tile leaves
+    10 mm on average, and the fit refuses it. The same tile on its own 40 x 10 slot fits."""
+    cfg = load_agents_config().placement
+    tile = TileOutline(_rect(40.0, 10.0) + [300.0, -120.0], (), (0.8, 0.2, 0.2))
+    half = fit_outline(tile, _slot(_rect(80.0, 10.0), 2), cfg, 1.0)
+    assert half.residual > 5 * cfg.fit_max_residual
+    assert fit_unmatched([tile], [_slot(_rect(80.0, 10.0), 2)], cfg, 1.0, 1.0) == []
+    own = fit_outline(tile, _slot(_rect(40.0, 10.0), 2), cfg, 1.0)
+    assert own.residual < 0.5 * cfg.fit_max_residual  # the points are 1 mm apart
+    np.testing.assert_allclose(own.centre, [300.0, -120.0], atol=1e-9)
+    assert yaw_error(own.rotation, 0.0, 2) < math.radians(0.1)
+    assert own.runner_up >= cfg.fit_margin  # the quarter turn fits far worse
+    found = fit_unmatched([tile], [_slot(_rect(40.0, 10.0), 2)], cfg, 1.0, 1.0)
+    assert [(i, j) for i, j, _ in found] == [(0, 0)]
+
+
+def test_the_fit_finds_the_turn_of_a_turned_tile() -> None:
+    """Guards against the fit's turn taken with the wrong sign or outside (-pi, pi]: an L tile
+    turned by -70 deg needs +70 deg to lie on its slot."""
+    cfg = load_agents_config().placement
+    ell = np.array([[0, 0], [40, 0], [40, 14], [14, 14], [14, 40], [0, 40]], float)
+    fig = Figure.from_polygon(ell)
+    c = np.asarray(fig.centroid)
+    turned = rotate_xy(ell - c, math.radians(-70.0)) + [50.0, 60.0]
+    f = fit_outline(TileOutline(turned, (), (0.5, 0.5, 0.5)), _slot(ell, 1), cfg, 1.0)
+    assert math.degrees(f.rotation) == pytest.approx(70.0, abs=0.2)
+    assert f.residual < 0.5 * cfg.fit_max_residual and f.runner_up > cfg.fit_margin

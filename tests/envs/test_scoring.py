@@ -1,0 +1,333 @@
+"""Scoring contract of `MosaicAssembly-v0` (`envs.task`): which tile fills which slot, and the
+counts of the evaluation, for tiles laid directly at chosen poses.
+
+Written from the documented contract (`envs.task` module docstring, `Placement`, `Evaluation`,
+``configs/env.yaml``): a tile fills the nearest slot when it lies flat on the sheet, its class is
+the slot's, its centre is within ``position_tolerance`` (1.5 mm) and its yaw within
+``yaw_tolerance_deg`` (2 deg) modulo the tile's symmetry; one tile per slot (the closest); every
+other real tile over the mesh is misplaced. Each test names the bug it guards against; each was
+run against that bug made by hand and failed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterator
+from typing import Any
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+import pytest
+
+import envs
+from envs.task import Evaluation
+from spatial.rotations import quat_from_yaw
+
+MM = 1e-3
+"""Metres per millimetre (offsets below are written in mm)."""
+
+
+@pytest.fixture(scope="module")
+def env() -> Iterator[gym.Env]:
+    """The full paper_mixed design: 16 slots, two tiles of one class, symmetries 0, 1, 2, 4, 6."""
+    e = gym.make(
+        envs.ENV_ID,
+        action_mode="pick_place_discrete",
+        execution="kinematic",
+        obs_mode="state",
+        tile_variants=1,  # one noisy outline per tile: a faster build, the same contract
+        disable_env_checker=True,
+    )
+    yield e
+    e.close()
+
+
+@pytest.fixture
+def u(env: gym.Env) -> Any:
+    env.reset(seed=0)
+    return env.unwrapped
+
+
+def lay(u: Any, tile: int, xy: Any, yaw: float, *, dz: float = 0.0, tilt_deg: float = 0.0) -> None:
+    """Put ``tile`` at world ``xy`` [m] and ``yaw`` [rad], ``dz`` [m] above resting on the sheet,
+    tilted ``tilt_deg`` about the world x axis."""
+    cell = u.cell
+    q = cell.ids.tile_qpos_index[tile]
+    z = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2 + dz
+    quat = quat_from_yaw(yaw)
+    if tilt_deg:
+        t = math.radians(tilt_deg)
+        tilt = np.array([math.cos(t / 2), math.sin(t / 2), 0.0, 0.0])
+        out = np.zeros(4)
+        mujoco.mju_mulQuat(out, tilt, quat)
+        quat = out
+    cell.data.qpos[q[:3]] = [xy[0], xy[1], z]
+    cell.data.qpos[q[3:]] = quat
+    cell.on_stage[tile] = True
+    mujoco.mj_forward(cell.model, cell.data)
+
+
+def slot_of(u: Any, tile: int, nth: int = 0) -> int:
+    """The ``nth`` slot of ``tile``'s class."""
+    task = u.task
+    return int(np.flatnonzero(task.slot_class == task.tile_class[tile])[nth])
+
+
+def on_slot(
+    u: Any,
+    tile: int,
+    slot: int,
+    *,
+    dx_mm: float = 0.0,
+    dy_mm: float = 0.0,
+    dyaw_deg: float = 0.0,
+    **kw: Any,
+) -> None:
+    x, y, yaw = u.task.slot_xyyaw[slot]
+    lay(u, tile, (x + dx_mm * MM, y + dy_mm * MM), yaw + math.radians(dyaw_deg), **kw)
+
+
+def tile_with_symmetry(u: Any, order: int) -> int:
+    return int(np.flatnonzero(u.task.symmetry == order)[0])
+
+
+def test_a_tile_laid_on_its_slot_fills_it_and_nothing_else(u: Any) -> None:
+    """Guards against a slot filled by the wrong tile, or a fill not counted as `correct`."""
+    tile = 3
+    slot = slot_of(u, tile)
+    on_slot(u, tile, slot)
+    p = u.task.placement()
+    assert p.on_mesh[tile] and p.flat[tile] and p.slot[tile] == slot
+    assert np.flatnonzero(p.correct).tolist() == [tile]
+    assert np.flatnonzero(p.slot_filled).tolist() == [slot]
+    e = u.evaluate()
+    assert (e.correct, e.misplaced, e.success) == (1, 0, False)
+    assert e.slot_filled[slot] and sum(e.slot_filled) == 1
+    assert e.position_error_mm == pytest.approx(0.0, abs=1e-6)
+    assert e.yaw_error_deg == pytest.approx(0.0, abs=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("dx", "dy", "ok"),
+    [
+        (1.49, 0.0, True),
+        (1.51, 0.0, False),
+        (-1.49, 0.0, True),
+        (-1.51, 0.0, False),
+        (0.0, 1.49, True),
+        (0.0, -1.51, False),
+        (1.05, 1.05, True),  # 1.485 mm away on the diagonal
+        (1.07, 1.07, False),  # 1.513 mm: the distance, not each axis, is compared
+    ],
+)
+def test_position_tolerance_at_its_edges(u: Any, dx: float, dy: float, ok: bool) -> None:
+    """Guards against a tolerance compared per axis, in the wrong unit or with the wrong sign
+    (1.5 mm: 1.49 mm fills the slot, 1.51 mm is misplaced)."""
+    tile = 4  # no symmetry
+    slot = slot_of(u, tile)
+    on_slot(u, tile, slot, dx_mm=dx, dy_mm=dy)
+    e = u.evaluate()
+    assert e.slot_filled[slot] is ok
+    assert (e.correct, e.misplaced) == ((1, 0) if ok else (0, 1))
+    assert e.position_error_mm == pytest.approx(math.hypot(dx, dy), abs=1e-6)
+    assert e.position_error_mm_max == pytest.approx(math.hypot(dx, dy), abs=1e-6)
+
+
+@pytest.mark.parametrize(("dyaw", "ok"), [(1.9, True), (2.1, False), (-1.9, True), (-2.1, False)])
+def test_yaw_tolerance_at_its_edges(u: Any, dyaw: float, ok: bool) -> None:
+    """Guards against a yaw tolerance in the wrong unit or a yaw error with a sign
+    (2 deg: 1.9 deg fills the slot, 2.1 deg is misplaced, both ways round)."""
+    tile = 4  # no symmetry
+    slot = slot_of(u, tile)
+    on_slot(u, tile, slot, dyaw_deg=dyaw)
+    e = u.evaluate()
+    assert e.slot_filled[slot] is ok
+    assert e.yaw_error_deg == pytest.approx(abs(dyaw), abs=1e-6)
+    assert e.yaw_error_deg_max == pytest.approx(abs(dyaw), abs=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("order", "turn", "ok"),
+    [
+        (4, 90 + 1.9, True),
+        (4, 90 + 2.1, False),
+        (4, 180 - 1.9, True),
+        (4, 45, False),
+        (2, 180 + 1.9, True),
+        (2, 180 - 2.1, False),
+        (2, 90, False),
+        (6, 60 - 1.9, True),
+        (6, 120 + 2.1, False),
+        (1, 180, False),
+        (1, 360 - 1.9, True),
+        (0, 137, True),  # a disc fits at any yaw
+    ],
+)
+def test_yaw_is_compared_modulo_the_tiles_symmetry(
+    u: Any, order: int, turn: float, ok: bool
+) -> None:
+    """Guards against the symmetry period ignored or taken as 2 pi / (order + 1) or 2 pi * order:
+    a symmetric tile turned by its period fills the slot, within the same 2 deg edges."""
+    tile = tile_with_symmetry(u, order)
+    slot = slot_of(u, tile)
+    on_slot(u, tile, slot, dyaw_deg=turn)
+    assert u.evaluate().slot_filled[slot] is ok
+
+
+def test_two_tiles_in_one_slot_fill_it_once_the_closer_one_counts(env: gym.Env, u: Any) -> None:
+    """Guards against ranking the candidates by error before slot (a one-line change of the
+    sort keys): with a tile of another slot ranked between them, both tiles of one slot
+    counted as correct and none as misplaced."""
+    same = np.flatnonzero(u.task.tile_class == u.task.tile_class[0])
+    assert len(same) == 2  # two tiles of one class, two slots of it
+    a, b = (int(i) for i in same)
+    slot = slot_of(u, a)
+    other = 4
+    for first, second in ((a, b), (b, a)):  # index order must not matter
+        env.reset(seed=0)
+        on_slot(u, first, slot, dx_mm=0.1)
+        on_slot(u, second, slot, dx_mm=-0.9)
+        on_slot(u, other, slot_of(u, other), dy_mm=0.5)
+        p = u.task.placement()
+        assert p.slot[first] == p.slot[second] == slot
+        assert p.correct[first] and not p.correct[second] and p.correct[other]
+        e = u.evaluate()
+        assert (e.correct, e.misplaced) == (2, 1)
+        assert sum(e.slot_filled) == 2
+        states = u.task.tile_states()
+        assert int(np.count_nonzero(states == 2)) == 2  # CORRECT: one per slot
+
+
+def test_a_tile_of_another_class_on_a_slot_is_misplaced(u: Any) -> None:
+    """Guards against a class test dropped or inverted."""
+    tile = 4
+    wrong = int(np.flatnonzero(u.task.slot_class != u.task.tile_class[tile])[0])
+    on_slot(u, tile, wrong)
+    e = u.evaluate()
+    assert (e.correct, e.misplaced) == (0, 1)
+    assert not any(e.slot_filled)
+
+
+@pytest.mark.parametrize(
+    ("dz_mm", "tilt", "flat"),
+    [(2.9, 0.0, True), (3.1, 0.0, False), (0.0, 7.5, True), (0.0, 8.5, False), (-2.9, 0.0, True)],
+)
+def test_height_and_tilt_decide_flat(u: Any, dz_mm: float, tilt: float, flat: bool) -> None:
+    """Guards against the height tolerance (3 mm) or the tilt limit (8 deg) moved, dropped or
+    compared the wrong way: a tile stacked or tilted over its slot is misplaced."""
+    tile = 4
+    slot = slot_of(u, tile)
+    on_slot(u, tile, slot, dz=dz_mm * MM, tilt_deg=tilt)
+    p = u.task.placement()
+    assert p.on_mesh[tile] and p.flat[tile] is np.bool_(flat)
+    e = u.evaluate()
+    assert (e.correct, e.misplaced) == ((1, 0) if flat else (0, 1))
+
+
+def test_a_tile_stacked_on_another_is_misplaced(u: Any) -> None:
+    """Guards against stacked tiles (a tile's thickness above the sheet) counted as filling."""
+    a, b = 4, 3
+    on_slot(u, a, slot_of(u, a))
+    on_slot(u, b, slot_of(u, a), dz=u.cell.cfg.tiles.thickness)
+    e = u.evaluate()
+    assert (e.correct, e.misplaced) == (1, 1)
+
+
+def test_mesh_edges_decide_on_mesh_and_beside_it_is_stranded(env: gym.Env, u: Any) -> None:
+    """Guards against the mesh bounds moved or swapped: just inside every edge a tile is on the
+    mesh (misplaced); just outside, on the output belt, it is stranded."""
+    cell = u.cell
+    c = cell.geometry.output_centre[:2]
+    half = np.asarray(cell.cfg.output_belt.mesh_size) / 2
+    tile = 4
+    for sign in (-1, 1):
+        for axis in (0, 1):
+            for inside, state in ((0.999, "misplaced"), (1.001, "stranded")):
+                xy = c.copy()
+                xy[axis] += sign * half[axis] * inside
+                env.reset(seed=0)
+                lay(u, tile, xy, 0.3)
+                e = u.evaluate().as_dict()
+                assert e[state] == 1, (sign, axis, inside, e)
+                assert u.task.placement().on_mesh[tile] is np.bool_(state == "misplaced")
+
+
+def test_fresh_episode_counts_every_tile_on_the_input_belt(u: Any) -> None:
+    """Guards against the evaluation's counts not summing to the tiles fed."""
+    e = u.evaluate()
+    n = len(u.cell.tiles)
+    assert (e.fed, e.on_input, e.waiting, e.held) == (n, n, 0, 0)
+    assert (e.correct, e.misplaced, e.stranded, e.dropped, e.lost) == (0, 0, 0, 0, 0)
+    assert (e.slots, e.placeable, e.success, e.failure) == (16, 16, False, False)
+    assert e.position_error_mm is None and e.yaw_error_deg_max is None
+
+
+def test_every_slot_filled_is_a_success_and_errors_are_means_and_maxima(u: Any) -> None:
+    """Guards against success declared early or the error summaries mixing units."""
+    task = u.task
+    used: set[int] = set()
+    offsets = []
+    for tile in range(len(u.cell.tiles)):
+        slot = next(
+            int(j)
+            for j in np.flatnonzero(task.slot_class == task.tile_class[tile])
+            if int(j) not in used
+        )
+        used.add(slot)
+        d = 0.1 * (tile % 5)
+        offsets.append(d)
+        on_slot(u, tile, slot, dx_mm=d, dyaw_deg=0.2)
+        e = u.evaluate()
+        assert e.success is (tile == len(u.cell.tiles) - 1)
+        assert e.correct == tile + 1 and e.placeable == 16 - tile - 1
+    assert e.failure is False
+    assert e.position_error_mm == pytest.approx(np.mean(offsets), abs=1e-6)
+    assert e.position_error_mm_max == pytest.approx(max(offsets), abs=1e-6)
+    turned = np.count_nonzero(u.task.symmetry != 0)  # a disc has no yaw error
+    assert e.yaw_error_deg == pytest.approx(0.2 * turned / 16, abs=1e-6)
+    assert e.yaw_error_deg_max == pytest.approx(0.2, abs=1e-6)
+    assert e.tiles_per_min(60.0) == pytest.approx(16.0)
+
+
+def test_nothing_placeable_is_a_failure(u: Any) -> None:
+    """Guards against `failure` missing when the only tile of a class is misplaced."""
+    tile = 4
+    wrong = int(np.flatnonzero(u.task.slot_class != u.task.tile_class[tile])[0])
+    on_slot(u, tile, wrong)
+    e = u.evaluate()
+    assert e.placeable == 15 and not e.failure  # other tiles still fill the other slots
+    for t in range(len(u.cell.tiles)):
+        lay(u, t, u.cell.geometry.output_centre[:2] + [0.0, 0.13], 0.0)  # beside the mesh
+    e = u.evaluate()
+    assert e.stranded == 16 and e.placeable == 0 and e.failure and not e.success
+
+
+def test_evaluation_round_trips_through_info(u: Any) -> None:
+    """Guards against `as_dict` / `from_info` losing or renaming a field."""
+    on_slot(u, 4, slot_of(u, 4), dx_mm=0.7)
+    e = u.evaluate()
+    assert Evaluation.from_info({"evaluation": e.as_dict()}) == e
+    assert isinstance(e.as_dict()["slot_filled"], list)
+
+
+def test_ground_truth_holds_the_poses_and_finds_the_nearest_fed_tile(u: Any) -> None:
+    """Guards against the privileged poses or classes read wrong, or `nearest` returning a
+    tile not fed (parked tiles are never the nearest) or a distance in another unit."""
+    gt = u.ground_truth()
+    cell = u.cell
+    poses = cell.tile_poses()
+    np.testing.assert_allclose(gt.xy, poses.pos[:, :2])
+    np.testing.assert_allclose(gt.yaw, poses.yaw)
+    assert gt.class_name == tuple(t.shape.name for t in cell.tiles)
+    assert gt.slot_class == tuple(s.shape.name for s in cell.slots)
+    np.testing.assert_array_equal(gt.symmetry, u.task.symmetry)
+    assert not gt.distractor.any() and gt.on_stage.all()
+    target = gt.xy[5] + [0.003, -0.004]
+    assert gt.nearest(target) == (5, pytest.approx(0.005))
+    on = gt.on_stage.copy()
+    on[5] = False
+    parked = dataclasses.replace(gt, on_stage=on)
+    i, d = parked.nearest(target)
+    assert i != 5 and d > 0.005
