@@ -1,7 +1,8 @@
 """Observation contract of the ``state`` and ``robot`` keys (`envs.observations.spaces`), read
 from the documented layout: per tile x, y, z [m], cos yaw, sin yaw, class index, present; per slot
 x, y [m], cos yaw, sin yaw, class index, filled; ``robot`` joint positions [rad], velocities
-[rad/s], tool position [m], tool yaw (cos, sin), vacuum on, tile held. World frame, agent index order.
+[rad/s], tool position [m], tool yaw (cos, sin), vacuum on, tile held.
+World frame, agent index order.
 """
 
 from __future__ import annotations
