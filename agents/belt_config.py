@@ -89,7 +89,8 @@ class BeltScheduleConfig:
         check_positive(self, "end_margin", "view_margin", error=BeltScheduleError, strict=False)
         if not 0.0 < self.cycle_smoothing <= 1.0:
             raise BeltScheduleError(
-                f"BeltScheduleConfig.cycle_smoothing must be in (0, 1], got {self.cycle_smoothing!r}"
+                "BeltScheduleConfig.cycle_smoothing must be in (0, 1], got "
+                f"{self.cycle_smoothing!r}"
             )
         if self.match_tolerance_x > self.match_gate_x:
             raise BeltScheduleError(

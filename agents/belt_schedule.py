@@ -92,8 +92,10 @@ def deadline_order(
 
 
 def camera_view(camera: CameraModel, plane_z: float) -> View:
-    """The rectangle (lower, upper (x, y) corners) [m] a camera sees on the plane ``plane_z``
-    [m]: inside its image's four corners."""
+    """The rectangle a camera sees on the plane ``plane_z`` [m]: lower and upper corners [m].
+
+    The largest axis-aligned rectangle inside its image's four corners on that plane.
+    """
     w, h = camera.width, camera.height
     uv = np.array([[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]])
     xy = np.sort(camera.unproject_to_plane(uv, plane_z)[:, :2], axis=0)
@@ -182,8 +184,10 @@ class BeltScheduler:
     def observe(
         self, tiles: Sequence[PerceivedTile], partial: Sequence[PartialRegion] = ()
     ) -> None:
-        """Follow a new picture's perceived tiles and cut regions (before its slots are
-        planned)."""
+        """Follow a new picture's whole tiles and regions cut by the view's edge.
+
+        Called before the picture's slots are planned (`reserved` then holds).
+        """
         self.tracker.observe(tiles, partial, taken=self._taken, idle=self._idle)
 
     def _ghost_x(self, tr: Track) -> float:

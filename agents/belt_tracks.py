@@ -75,8 +75,10 @@ class Track:
 
 
 def tile_shape(tile: PerceivedTile) -> Polygon:
-    """A perceived tile's material around its centroid [m]: its figure's outer boundary and
-    holes, arcs sampled."""
+    """A perceived tile's material around its centroid [m].
+
+    Its figure's outer boundary and holes, arcs sampled.
+    """
     centre = np.asarray(tile.centre, float)
     fig = tile.figure
 
@@ -88,10 +90,11 @@ def tile_shape(tile: PerceivedTile) -> Polygon:
 
 
 def slid_into_view(shape: Polygon, y: float, area: float, view: View) -> float | None:
-    """Centroid position along the belt at which ``shape`` (around its centroid, at ``y``
-    across the belt) shows ``area`` [m^2] inside ``view`` while leaving it downstream; None
-    when no position does. The visible area falls as the shape slides out past the view's
-    downstream edge (bisection).
+    """Where along the belt a tile cut by the view's downstream edge is [m].
+
+    The centroid position at which ``shape`` (around its centroid, at ``y`` across the belt)
+    shows ``area`` [m^2] inside ``view``; None when no position does. The visible area falls
+    as the shape slides out past the view's downstream edge (bisection).
     """
     lo, hi = view
     frame = box(float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
@@ -224,8 +227,11 @@ class BeltTracker:
         partial: Sequence[PartialRegion],
         interval: float,
     ) -> dict[int, float]:
-        """Tracks (by position in ``old``) placed by a region cut by the view's downstream
-        edge: their centroid's position along the belt now [m]."""
+        """Tracks placed by a region cut by the view's downstream edge.
+
+        Returns:
+            Position in ``old`` -> the tile's centroid along the belt now [m].
+        """
         cfg, v = self.cfg, self.speed
         mid_x = 0.5 * float(self.view[0][0] + self.view[1][0])
         out: dict[int, float] = {}
@@ -300,8 +306,11 @@ class BeltTracker:
         return float(np.median([gaps[i, j] for i, j in pairs])), pairs
 
     def remember(self, commands: Sequence[PickPlace]) -> None:
-        """Store the latest plan's commands on the tracks of their tiles (for when they go
-        out of view); a visible track without a command forgets its old one."""
+        """Store the latest plan's commands on the tracks of their tiles.
+
+        Kept for when they go out of view; a visible track without a command forgets its old
+        one.
+        """
         by_tile = {c.tile: c for c in commands}
         self.tracks = [
             dataclasses.replace(tr, command=by_tile.get(tr.tile)) if tr.visible else tr
