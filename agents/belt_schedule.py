@@ -149,7 +149,7 @@ class BeltScheduler:
         self.cfg = config
         self.speed = float(speed)
         self.last_x = float(belt_end_x) - config.end_margin
-        self.tracker = BeltTracker(config, speed, view)
+        self.tracker = BeltTracker(config, speed, view, float(belt_end_x))
         self.last_schedule: Schedule | None = None
         self._taken = -1
         self._idle = False

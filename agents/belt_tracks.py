@@ -117,11 +117,15 @@ class BeltTracker:
         config: Scheduler settings (gates, cycle estimates).
         speed: Belt speed along +x [m/s], > 0.
         view: The camera's view on the plane of the tile tops.
+        end_x: The input belt's end [m]: a tile followed past it has left the belt.
     """
 
-    def __init__(self, config: BeltScheduleConfig, speed: float, view: View) -> None:
+    def __init__(
+        self, config: BeltScheduleConfig, speed: float, view: View, end_x: float = np.inf
+    ) -> None:
         self.cfg = config
         self.speed = float(speed)
+        self.end_x = float(end_x)
         self.view = (np.asarray(view[0], float), np.asarray(view[1], float))
         self.tracks: list[Track] = []
         self.clock = 0.0
@@ -195,7 +199,9 @@ class BeltTracker:
                 continue
             x = tr.x_at(self.clock, v)
             r = tr.radius + cfg.view_margin
-            if x > lo[0] and not (lo[0] < x - r and x + r < hi[0]):  # out of view downstream
+            # Off the belt, or not seen where it would have been seen whole: gone.
+            gone = x > self.end_x or (lo[0] < x - r and x + r < hi[0])
+            if x > lo[0] and not gone:  # out of view downstream, still on the belt
                 tracks.append(dataclasses.replace(tr, visible=False, tile=-1))
         self.tracks = tracks
 
