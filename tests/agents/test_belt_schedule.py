@@ -116,8 +116,8 @@ def test_on_the_stream_the_tile_nearer_the_end_goes_first_and_the_other_is_follo
         obs, _, _, _, info = env.step(action)
         assert info["evaluation"]["correct"] == 1
         # The other tile left the whole view meanwhile (cut by its edge): followed, picked.
-        assert agent.last_perception is not None and not agent.last_perception.tiles
         action, _ = agent.predict(obs)
+        assert agent.last_perception is not None and not agent.last_perception.tiles
         assert agent.last_command is not None and agent.belt is not None
         obs, _, _, _, info = env.step(action)
         ev = info["evaluation"]
