@@ -1,7 +1,8 @@
 """Stress curve of the stream: the highest supply rate the scripted cell sustains, no tile lost.
 
 Run ``python -m benchmarks.stream_stress`` (``--figure`` also writes the figure,
-``--tiles 20`` for a quick look). For every belt speed and supply period of
+``--tiles 20`` for a quick look, ``--from-json out/bench_stream_stress.json --figure`` to print
+and plot an earlier run again). For every belt speed and supply period of
 ``configs/bench_stream_stress.yaml``, the scripted cell (`agents.scripted.ScriptedAgent`, its
 belt scheduler `agents.belt_schedule`) plays episodes of the task's env with that stream until
 at least ``tiles`` tiles were fed. Per run it prints the supply rate, the rate the cell
@@ -16,8 +17,9 @@ did sustain. Per speed: the highest supply rate kept up with. Writes
 from __future__ import annotations
 
 import json
+import math
 import time
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -80,8 +82,9 @@ class StressRun:
         supply_per_min: The supply rate, 60 / period [tiles/min].
         sustained_per_min: Correct tiles per simulated minute from each episode's first to
             its last placement, pooled [tiles/min].
-        cycle_s: Mean simulated time of the cell's pick cycles [s].
-        cycle_bound_per_min: The rate that cycle allows, 60 / cycle_s [tiles/min].
+        cycle_s: Mean simulated time of the cell's pick cycles [s] (NaN: no pick).
+        cycle_bound_per_min: The rate that cycle allows, 60 / cycle_s [tiles/min] (NaN: no
+            pick).
         wall_s: Wall time of the run [s].
     """
 
@@ -239,25 +242,48 @@ def plot(runs: list[StressRun], path: Path) -> None:
             if not r.keeps_up:
                 ax.plot(r.supply_per_min, r.sustained_per_min, "x", color="k", ms=9, mew=2)
                 ax.annotate(
-                    f"{r.fed - r.correct} lost",
+                    f"{r.fed - r.correct} not placed",
                     (r.supply_per_min, r.sustained_per_min),
                     textcoords="offset points",
                     xytext=(6, -12 - 10 * k),
                     fontsize=8,
                     color=color,
                 )
-        bound = sum(r.cycle_bound_per_min for r in rs) / len(rs)
-        ax.axhline(bound, color=color, ls="--", lw=1, label=f"cycle bound {bound:.1f}/min")
+        bounds = [r.cycle_bound_per_min for r in rs if math.isfinite(r.cycle_bound_per_min)]
+        if bounds:
+            bound = sum(bounds) / len(bounds)
+            ax.axhline(bound, color=color, ls="--", lw=1, label=f"cycle bound {bound:.1f}/min")
     ax.set_xlim(lo, hi)
     ax.set_xlabel("supply [tiles per simulated minute]")
     ax.set_ylabel("placed correctly [tiles per simulated minute]")
-    ax.set_title("Scripted cell on a stream: x = tiles lost (not kept up with)")
+    ax.set_title("Scripted cell on a stream (x: tiles lost, not kept up with)")
     ax.legend(fontsize=8, loc="upper left")
     ax.grid(alpha=0.3)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def _finite(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
+def replot(path: Path, figure: bool) -> dict[str, Any]:
+    """Print the table (and with ``figure`` write the figure) of an earlier run's JSON."""
+    report: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
+    names = {f.name for f in fields(StressRun)}
+    nan = float("nan")
+    runs: list[StressRun] = []
+    for r in report["runs"]:
+        values: dict[str, Any] = {k: (nan if v is None else v) for k, v in r.items() if k in names}
+        runs.append(StressRun(**values))
+    print(table(runs))
+    if figure:
+        out = Path(report["config"]["figure"])
+        plot(runs, out)
+        print(f"wrote {out}")
+    return report
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -269,7 +295,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--speeds", type=float, nargs="+", default=None, help="m/s, belt speeds")
     ap.add_argument("--figure", action="store_true", help="also write the config's figure")
     ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument(
+        "--from-json", type=Path, default=None, help="print and plot an earlier run's JSON"
+    )
     args = ap.parse_args(argv)
+    if args.from_json is not None:
+        return replot(args.from_json, args.figure)
     cfg = load_config(StreamStressConfig, args.config)
     changes: dict[str, Any] = {}
     if args.tiles:
@@ -295,7 +326,15 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     print(table(runs))
     report = {
         "config": asdict(cfg),
-        "runs": [{**asdict(r), "keeps_up": r.keeps_up} for r in runs],
+        "runs": [
+            {
+                **asdict(r),
+                "cycle_s": _finite(r.cycle_s),
+                "cycle_bound_per_min": _finite(r.cycle_bound_per_min),
+                "keeps_up": r.keeps_up,
+            }
+            for r in runs
+        ],
         "highest_kept_up": {
             str(s): (asdict(b) if (b := highest_kept_up(runs, s)) is not None else None)
             for s in cfg.speeds
