@@ -54,6 +54,9 @@ class BeltScheduleConfig:
             the camera's view must be seen there [m]; unseen, it left the belt (picked, or
             fallen); further out it is tracked on from its last sighting.
         min_interval_s: Shortest interval between two pictures the measurement accepts [s].
+        last_chance_reach_s: The shortest reach measured [s]: when no tile can be picked on
+            time with ``reach_s``, the most urgent one this shorter reach still gets to in time
+            is tried (the cycle would be empty otherwise, so the try costs no other tile).
     """
 
     first_reach_s: float = 0.7
@@ -69,6 +72,7 @@ class BeltScheduleConfig:
     match_area: float = 0.25
     view_margin: float = 0.004
     min_interval_s: float = 0.5
+    last_chance_reach_s: float = 1.0
 
     def __post_init__(self) -> None:
         """Raise `BeltScheduleError` on a value out of its range."""
@@ -84,6 +88,7 @@ class BeltScheduleConfig:
             "match_color",
             "match_area",
             "min_interval_s",
+            "last_chance_reach_s",
             error=BeltScheduleError,
         )
         check_positive(self, "end_margin", "view_margin", error=BeltScheduleError, strict=False)
@@ -96,6 +101,11 @@ class BeltScheduleConfig:
             raise BeltScheduleError(
                 "BeltScheduleConfig.match_tolerance_x must be at most match_gate_x, got "
                 f"{self.match_tolerance_x!r} > {self.match_gate_x!r}"
+            )
+        if self.last_chance_reach_s > self.reach_s:
+            raise BeltScheduleError(
+                "BeltScheduleConfig.last_chance_reach_s must be at most reach_s, got "
+                f"{self.last_chance_reach_s!r} > {self.reach_s!r}"
             )
         for name in ("first_reach_s", "reach_s"):
             if getattr(self, name) >= getattr(self, name.replace("reach", "cycle")):

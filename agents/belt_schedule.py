@@ -9,7 +9,9 @@ orders the tiles by deadline (earliest first, which saves every tile whenever an
 for picks of equal length) and, where no order saves every tile, *defers* the tiles that
 would come too late in it (the next picture decides on them again) and *rejects* those no
 pick can reach in time: the cell does not spend a cycle on a tile it
-cannot save.
+cannot save. When that leaves the cycle empty, the most urgent rejected tile the shortest
+measured reach (``last_chance_reach_s``) still gets to in time is tried: the try costs no other
+tile.
 
 The pick itself meets the moving tile: the command carries the tile's pose at the picture
 (for a followed tile, its last sighting advanced by the belt's travel since) and the planner
@@ -110,7 +112,10 @@ class ScheduleTally:
         pictures: Pictures planned.
         picks: Commands given.
         ghost_picks: Of those, tiles picked out of the camera's view (followed).
-        rejected: Tiles given up because no pick could reach them in time.
+        rejected: Tiles found too late for a pick on time (some then tried at the last
+            chance).
+        last_chances: Of the picks, tiles tried with the shortest reach (nothing else could
+            be picked on time).
         deferred: Pictures in which no order saved every known tile.
         measured: Intervals between pictures measured from tiles seen twice.
         cycle_s: The running cycle estimate at the end [s].
@@ -120,6 +125,7 @@ class ScheduleTally:
     picks: int
     ghost_picks: int
     rejected: int
+    last_chances: int
     deferred: int
     measured: int
     cycle_s: float
@@ -157,6 +163,8 @@ class BeltScheduler:
         self._ghost_picks = 0
         self._rejected: set[int] = set()
         self._deferred = 0
+        self._last_chances = 0
+        self._sure: list[bool] = []
 
     @classmethod
     def for_spec(
@@ -173,7 +181,7 @@ class BeltScheduler:
         self.last_schedule = None
         self._taken = -1
         self._idle = False
-        self._picks = self._ghost_picks = self._deferred = 0
+        self._picks = self._ghost_picks = self._deferred = self._last_chances = 0
         self._rejected = set()
 
     @property
@@ -231,18 +239,37 @@ class BeltScheduler:
             xs.append(x)
             cmds.append(shifted(g.command, x - float(g.command.pick[0])))
             ghosts.add(g.key)
+        self._sure = [True] * len(cmds)
+        self._sure[len(cmds) - len(ghosts) :] = [g.sure for g in tr.ghosts()]
         sched = deadline_order(xs, self.speed, self.last_x, self.reach_s, tr.cycle)
         self.last_schedule = sched
         self._rejected.update(keys[i] for i in sched.rejected)
         self._deferred += bool(sched.deferred)
-        if not sched.order:
+        first = sched.order[0] if sched.order else self._last_chance(sched)
+        if first < 0:
             self._taken, self._idle = -1, True
             return None
-        first = sched.order[0]
         self._taken, self._idle = keys[first], False
         self._picks += 1
         self._ghost_picks += keys[first] in ghosts
         return cmds[first]
+
+    def _last_chance(self, sched: Schedule) -> int:
+        """The most urgent rejected tile the shortest reach still gets to in time (-1: none).
+
+        Tried only when nothing can be picked on time (the cycle would be empty otherwise)
+        and only where the tile's position is measured (`agents.belt_tracks.Track.sure`): a
+        pick off the tile's centre would set it down off its slot.
+        """
+        late = [
+            i
+            for i in sched.rejected
+            if sched.deadlines[i] >= self.cfg.last_chance_reach_s and self._sure[i]
+        ]
+        if not late:
+            return -1
+        self._last_chances += 1
+        return min(late, key=lambda i: float(sched.deadlines[i]))
 
     def tally(self) -> ScheduleTally:
         """What the scheduler did since the episode started."""
@@ -252,6 +279,7 @@ class BeltScheduler:
             self._picks,
             self._ghost_picks,
             len(self._rejected),
+            self._last_chances,
             self._deferred,
             tr.measured,
             tr.cycle,

@@ -51,6 +51,8 @@ class Track:
         command: The last command planned for it (None: it fills no open slot).
         visible: Seen whole in the latest picture.
         tile: Its index in the latest picture's perceived tiles (-1 when not seen whole there).
+        sure: Its position now rests on measurements only: seen (whole or cut by the view's
+            edge) in the latest picture, or followed over measured intervals since.
     """
 
     key: int
@@ -62,6 +64,7 @@ class Track:
     command: PickPlace | None = None
     visible: bool = True
     tile: int = -1
+    sure: bool = True
 
     @property
     def radius(self) -> float:
@@ -193,16 +196,16 @@ class BeltTracker:
                 continue
             if j in cut:  # placed by its visible part
                 xy = np.array([cut[j], tr.xy[1]])
-                tracks.append(
-                    dataclasses.replace(tr, xy=xy, seen_at=self.clock, visible=False, tile=-1)
-                )
+                placed = dataclasses.replace(tr, xy=xy, seen_at=self.clock, sure=True)
+                tracks.append(dataclasses.replace(placed, visible=False, tile=-1))
                 continue
             x = tr.x_at(self.clock, v)
             r = tr.radius + cfg.view_margin
             # Off the belt, or not seen where it would have been seen whole: gone.
             gone = x > self.end_x or (lo[0] < x - r and x + r < hi[0])
             if x > lo[0] and not gone:  # out of view downstream, still on the belt
-                tracks.append(dataclasses.replace(tr, visible=False, tile=-1))
+                sure = tr.sure and interval is not None
+                tracks.append(dataclasses.replace(tr, visible=False, tile=-1, sure=sure))
         self.tracks = tracks
 
     def _prior(self) -> float:
