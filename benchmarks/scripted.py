@@ -29,6 +29,10 @@ OUT = Path("out/bench_scripted.json")
 """Default output file."""
 
 
+STREAM_KEYS = ("belt_speed", "feed", "stream_period", "stream_initial")
+"""The env keys a scenario's ``task`` gives it: the rung's belt and stream."""
+
+
 @dataclass(frozen=True)
 class Scenario:
     """One benchmark scenario.
@@ -39,12 +43,28 @@ class Scenario:
         min_correct: Target: fraction of all tiles placed correctly over the seeds.
         min_tiles_per_min: Target: the worst episode's correct tiles per simulated minute
             (0: reported only).
+        task: A ladder rung whose belt and stream (`STREAM_KEYS` of its env) the scenario
+            plays, under ``env`` ("": none).
     """
 
     name: str
     env: dict[str, Any] = field(default_factory=dict)
     min_correct: float = 1.0
     min_tiles_per_min: float = 0.0
+    task: str = ""
+
+    def env_kwargs(self) -> dict[str, Any]:
+        """The scenario's env overrides: its task's belt and stream, then ``env``.
+
+        Raises:
+            ConfigError: Unknown task (the message lists the ids).
+        """
+        if not self.task:
+            return dict(self.env)
+        from envs.tasks import get_task  # noqa: PLC0415 - the env stack, only when played
+
+        rung = get_task(self.task).env
+        return {**{k: rung[k] for k in STREAM_KEYS if k in rung}, **self.env}
 
 
 @dataclass(frozen=True)
@@ -108,7 +128,7 @@ def play(job: tuple[Scenario, int, tuple[int, int], int]) -> Episode:
         env = gym.make(
             ENV_ID,
             max_episode_steps=None,
-            **{"action_mode": "pick_place", "image_size": image_size, **scenario.env},
+            **{"action_mode": "pick_place", "image_size": image_size, **scenario.env_kwargs()},
         )
         _ENVS[scenario.name] = (env, ScriptedAgent.from_env(env))
     env, agent = _ENVS[scenario.name]
@@ -187,7 +207,7 @@ def summarise(scenario: Scenario, episodes: list[Episode]) -> dict[str, Any]:
     met = frac >= scenario.min_correct and worst >= scenario.min_tiles_per_min
     return {
         "scenario": scenario.name,
-        "env": scenario.env,
+        "env": scenario.env_kwargs(),
         "episodes": len(episodes),
         "success_rate": sum(e.correct == e.slots for e in episodes) / max(len(episodes), 1),
         "tiles": tiles,

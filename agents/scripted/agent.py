@@ -33,6 +33,7 @@ import gymnasium as gym
 import numpy as np
 
 from agents.errors import AgentError
+from agents.scripted.belt_schedule import BeltScheduler
 from agents.scripted.calibration import CalibrationResult, calibrate_env_camera
 from agents.scripted.config import AgentsConfig, load_agents_config
 from agents.scripted.outline_fit import TileOutline, fit_unmatched
@@ -137,6 +138,10 @@ class ScriptedAgent:
         self.turn_unresolved: frozenset[int] = frozenset(
             s.index for s in self.slots if hole_turn_gap(s.figure, s.symmetry, None) < gap
         )
+        self.belt: BeltScheduler | None = (
+            BeltScheduler.for_spec(spec, self.camera) if spec.belt_speed > 0 else None
+        )
+        """On a moving belt: the pick order by deadline (`agents.scripted.belt_schedule`)."""
         self.queue: deque[PickPlace] = deque()
         self.filled: set[int] = set()
         self.order: list[int] = []
@@ -192,6 +197,8 @@ class ScriptedAgent:
         self.last_perception = None
         self.last_command = None
         self.pictures = 0
+        if self.belt is not None:
+            self.belt.reset()
 
     def plan(self, image: np.ndarray) -> PlacementPlan:
         """Perceive one input-camera image and assign its tiles to the open slots.
@@ -208,6 +215,8 @@ class ScriptedAgent:
             cfg=pcfg,
             white_balance=self._white_balance if pcfg.color_balance else None,
         )
+        if self.belt is not None:
+            self.belt.observe(per.tiles, per.partial)
         pairs = FeasiblePairs(per.tiles, self.slots)
         plan = self._assign(per, pairs)
         if self.retry_params is not None and any(u.reason == "shape_absent" for u in plan.unplaced):
@@ -235,7 +244,8 @@ class ScriptedAgent:
         """
         assert self.retry_params is not None
         absent = {u.tile for u in plan.unplaced if u.reason == "shape_absent"}
-        open_slots = [s for s in self.slots if s.index not in self.filled | self.turn_unresolved]
+        left_out = self.filled | self.turn_unresolved | self._reserved()
+        open_slots = [s for s in self.slots if s.index not in left_out]
         use_color = self.cfg.placement.use_color
         tiles = list(per.tiles)
         changed = False
@@ -296,8 +306,12 @@ class ScriptedAgent:
         many = len(self.colors) >= pcfg.color_min_samples
         return color_gain(np.array(self.colors), self.palette, pcfg, per_channel=many)
 
+    def _reserved(self) -> frozenset[int]:
+        """Slots of tiles followed out of the camera's view (moving belt), kept for them."""
+        return self.belt.reserved() if self.belt is not None else frozenset()
+
     def _assign(self, per: Perception, pairs: FeasiblePairs) -> PlacementPlan:
-        left_out = self.filled | self.turn_unresolved
+        left_out = self.filled | self.turn_unresolved | self._reserved()
         open_slots = [s for s in self.slots if s.index not in left_out]
         done = [s for s in self.slots if s.index in self.filled]
         return plan_placements(per.tiles, open_slots, self.cfg.placement, filled=done, pairs=pairs)
@@ -321,8 +335,9 @@ class ScriptedAgent:
             self.queue.clear()
         if not self.queue:
             cmds = list(self.plan(image).commands)
-            if self.belt_speed > 0:  # the belt runs along +x: downstream tiles first
-                cmds.sort(key=lambda c: -c.grasp_pick[0])
+            if self.belt is not None:  # one pick, by deadline (followed tiles included)
+                chosen = self.belt.choose(cmds)
+                cmds = [chosen] if chosen is not None else []
             self.queue.extend(cmds)
         if not self.queue:
             self.last_command = None

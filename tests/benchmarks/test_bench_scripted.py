@@ -14,6 +14,7 @@ from benchmarks.scripted import (
     summarise,
 )
 from configs import ConfigError, load_config
+from envs.tasks import get_task
 
 
 def test_bundled_config_has_the_issue_targets():
@@ -23,7 +24,12 @@ def test_bundled_config_has_the_issue_targets():
     assert by["paper_mixed, static belt"].min_correct == 1.0
     assert by["paper_mixed, static belt"].min_tiles_per_min == 24.0
     moving = by["paper_mixed, belt 0.1 m/s"]
-    assert moving.env["belt_speed"] == 0.1 and moving.min_correct == 0.98
+    assert moving.min_correct == 0.98
+    stream = get_task("MosaicStream-v1").env
+    for name in ("paper_mixed, belt 0.1 m/s", "paper_mixed, belt 0.1 m/s, realistic camera"):
+        env = by[name].env_kwargs()  # the task's belt and stream: two tiles at reset
+        assert env["belt_speed"] == 0.1 and env["feed"] == "stream"
+        assert env["stream_initial"] == stream["stream_initial"] == 2
     with pytest.raises(ConfigError, match="seeds"):
         ScriptedBenchConfig(seeds=(3, 3), scenarios=(moving,))
 
