@@ -2,8 +2,8 @@
 
 Every tile the cell knows of (seen in this picture, or followed out of the camera's view by
 `agents.scripted.belt_tracks`) has a *deadline*: the time left before its pick contact would
-come too late, i.e. before the belt carries it to ``end_margin`` short of the belt's end. The cell picks
-one tile per cycle: the ``k``-th pick from now makes contact ``reach + k * cycle`` seconds after
+come too late, i.e. before the belt carries it to ``end_margin`` short of the belt's end. The
+cell picks one tile per cycle: the ``k``-th pick from now makes contact ``reach + k * cycle`` seconds after
 the picture (`BeltScheduleConfig`; from home the first reach is shorter). `deadline_order`
 orders the tiles by deadline (earliest first, which saves every tile whenever any order does
 for picks of equal length) and, where no order saves every tile, *defers* the tiles that
