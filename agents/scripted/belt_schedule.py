@@ -3,15 +3,14 @@
 Every tile the cell knows of (seen in this picture, or followed out of the camera's view by
 `agents.scripted.belt_tracks`) has a *deadline*: the time left before its pick contact would
 come too late, i.e. before the belt carries it to ``end_margin`` short of the belt's end. The
-cell picks one tile per cycle: the ``k``-th pick from now makes contact ``reach + k * cycle`` seconds after
-the picture (`BeltScheduleConfig`; from home the first reach is shorter). `deadline_order`
-orders the tiles by deadline (earliest first, which saves every tile whenever any order does
-for picks of equal length) and, where no order saves every tile, *defers* the tiles that
-would come too late in it (the next picture decides on them again) and *rejects* those no
-pick can reach in time: the cell does not spend a cycle on a tile it
-cannot save. When that leaves the cycle empty, the most urgent rejected tile the shortest
-measured reach (``last_chance_reach_s``) still gets to in time is tried: the try costs no other
-tile.
+cell picks one tile per cycle: the ``k``-th pick from now makes contact ``reach + k * cycle``
+seconds after the picture (`BeltScheduleConfig`; from home the first reach is shorter).
+`deadline_order` orders the tiles by deadline (earliest first, which saves every tile whenever
+any order does for picks of equal length) and, where no order saves every tile, *defers* the
+tiles that would come too late in it (the next picture decides on them again) and *rejects*
+those no pick can reach in time: the cell does not spend a cycle on a tile it cannot save. When
+that leaves the cycle empty, the most urgent rejected tile the shortest measured reach
+(``last_chance_reach_s``) still gets to in time is tried: the try costs no other tile.
 
 The pick itself meets the moving tile: the command carries the tile's pose at the picture
 (for a followed tile, its last sighting advanced by the belt's travel since) and the planner
