@@ -61,16 +61,21 @@ def build_cell(
     slots: Sequence[SlotSpec] = (),
     seed: int = 0,
     tries: int = 20,
+    *,
+    mesh_size: Sequence[float] | None = None,
 ) -> Cell:
     """The cell built with the first seed from ``seed`` on whose layout fits the belt.
 
-    The seed used is ``cell.layout_seed``.
+    The seed used is ``cell.layout_seed``; ``mesh_size`` is the design's mesh [m]
+    (`envs.cell.tiles.shapes.design_mesh_size`; None: the cell's largest).
 
     Raises:
         LayoutError: No seed in ``[seed, seed + tries)`` fits.
-        CellError: Any other bad input (raised at once).
+        CellError: Any other bad input (raised at once), e.g. a `MeshSizeError`.
     """
-    return retry_layout(lambda k: Cell(config, shapes, slots, seed=seed + k), tries)
+    return retry_layout(
+        lambda k: Cell(config, shapes, slots, seed=seed + k, mesh_size=mesh_size), tries
+    )
 
 
 def with_feed_fallback(make: Callable[[FeedMode], T], feed: FeedMode) -> tuple[T, FeedMode]:

@@ -171,25 +171,32 @@ class OutputBeltConfig:
         length: Belt length along x [m].
         width: Belt width [m].
         thickness: Belt slab thickness [m].
-        mesh_size: Size of the mesh sheet, x and y [m].
+        max_mesh_size: The largest mesh sheet the cell takes, x and y [m]: what the output
+            belt holds and the arm reaches. The sheet itself is the design's mesh
+            (`envs.cell.geometry.cell_geometry`); a cell built without a design lays this one.
         mesh_thickness: Thickness of the mesh sheet [m].
         slot_mark_height: Height of the visual slot marks above the sheet [m] (no contacts).
+        frame_margin: Belt seen beyond each mesh edge in the output camera's picture [m]: the
+            output camera is raised above its ``height_above_belt`` when a larger mesh would
+            not fit its view with this margin.
     """
 
     length: float = 0.6
     width: float = 0.32
     thickness: float = 0.04
-    mesh_size: tuple[float, ...] = (0.23, 0.23)
+    max_mesh_size: tuple[float, ...] = (0.32, 0.32)
     mesh_thickness: float = 0.002
     slot_mark_height: float = 0.0003
+    frame_margin: float = 0.005
 
     def __post_init__(self) -> None:
-        _length(self, "mesh_size", 2)
-        _positive(self, "length", "width", "thickness", "mesh_size", "mesh_thickness")
+        _length(self, "max_mesh_size", 2)
+        _positive(self, "length", "width", "thickness", "max_mesh_size", "mesh_thickness")
         _positive(self, "slot_mark_height")
-        if self.mesh_size[0] > self.length or self.mesh_size[1] > self.width:
+        _non_negative(self, "frame_margin")
+        if self.max_mesh_size[0] > self.length or self.max_mesh_size[1] > self.width:
             raise CellError(
-                f"OutputBeltConfig.mesh_size {self.mesh_size} m does not fit the belt "
+                f"OutputBeltConfig.max_mesh_size {self.max_mesh_size} m does not fit the belt "
                 f"({self.length} x {self.width} m)"
             )
 
