@@ -58,7 +58,9 @@ def nest_loops(
             naming them.
     """
     kept = [i for i in range(len(loops)) if keep is None or keep[i]]
-    dense = {i: loops[i].dense(step) for i in kept}
+    if len(kept) == 1:
+        return [(kept[0], [])]  # one outline: a tile (a crossing is the layout check's)
+    dense = {i: loops[i].made_vertices(step) for i in kept}  # straight edges: their ends
     polys = {i: shapely.Polygon(dense[i]) for i in kept}
     for i in kept:
         if not polys[i].is_valid:
@@ -106,9 +108,21 @@ def _polygon_spec(loop: Loop, decimals: int) -> list[list[float]]:
 
 @dataclass
 class _Class:
+    """A shape class: its file shape, its path about its vertices' centroid, and sizes."""
+
     shape: dict[str, Any]
     local: TilePath
     area: float
+    offset: FloatArray
+    """The area centroid (`TilePath.area_centroid`) from the vertices' centroid [mm]."""
+
+
+def _anchor(path: TilePath) -> tuple[float, FloatArray]:
+    """Area and centroid of the outline's vertices as a polygon (cheap, pose-covariant)."""
+    v = path.outer.vertices
+    if len(v) < 3:
+        return 0.0, v.mean(axis=0)
+    return abs(geo.signed_area(v)), geo.polygon_centroid(v)
 
 
 class DrawnClasses:
@@ -130,31 +144,35 @@ class DrawnClasses:
         Raises:
             DesignError: Zero or negative area (holes as large as the tile).
         """
-        area, c = tile.path.area_centroid(self.rules.outline_step_mm)
-        if not area > 0.0:
-            raise DesignError(f"slot {tile.name!r}: zero or negative area (holes too large?)")
-        local = tile.path.transformed(0.0, -c)
+        v_area, anchor = _anchor(tile.path)
+        local = tile.path.transformed(0.0, -anchor)
         key = (len(local.outer.vertices), *sorted(len(h.vertices) for h in local.holes))
         angle = 0.0
         found = None
         for cls in self._by_key.get(key, []):
-            if abs(cls.area - area) > self.tol * 4.0 * math.sqrt(area) + 1e-9:
+            if abs(cls.area - v_area) > self.tol * 4.0 * math.sqrt(max(v_area, 1e-12)):
                 continue
             turn = _turn_onto(cls.local, local, self.tol)
             if turn is not None:
                 found, angle = cls, turn
                 break
-        if found is None:
+        if found is not None:
+            c = anchor + geo.rotate(found.offset, angle)
+        else:
+            area, c = tile.path.area_centroid(self.rules.outline_step_mm)
+            if not area > 0.0:
+                raise DesignError(f"slot {tile.name!r}: zero or negative area (holes too large?)")
+            class_local = tile.path.transformed(0.0, -c)
             shape: dict[str, Any] = {
                 "kind": "polygon",
-                "vertices": _polygon_spec(local.outer, self.decimals),
+                "vertices": _polygon_spec(class_local.outer, self.decimals),
             }
-            if local.holes:
+            if class_local.holes:
                 shape["holes"] = [
                     {"kind": "polygon", "vertices": _polygon_spec(h, self.decimals)}
-                    for h in local.holes
+                    for h in class_local.holes
                 ]
-            found = _Class(shape, local, area)
+            found = _Class(shape, local, v_area, c - anchor)
             self._by_key.setdefault(key, []).append(found)
         return {
             "name": tile.name,
@@ -220,22 +238,24 @@ def loop_from_nodes(vertices: FloatArray, bulges: FloatArray, where: str) -> Loo
         DesignError: Fewer than the vertices a closed outline needs, naming ``where``.
     """
     v = np.asarray(vertices, dtype=np.float64).reshape(-1, 2)
-    b = np.asarray(bulges, dtype=np.float64)
-    nxt = np.roll(v, -1, axis=0)
+    b = np.asarray(bulges, dtype=np.float64).reshape(-1)
+    if len(b) != len(v) or not (np.all(np.isfinite(v)) and np.all(np.isfinite(b))):
+        raise DesignError(f"{where}: vertices and bulges must be finite, one bulge per vertex")
+    nxt = np.concatenate([v[1:], v[:1]])
     keep = np.hypot(*(nxt - v).T) > 1e-9
-    v, b = v[keep], b[keep]
-    d = np.roll(v, -1, axis=0) - v
+    v, b, nxt = v[keep], b[keep], nxt[keep]
+    if len(v) < (2 if np.any(b != 0.0) else 3):
+        raise DesignError(f"{where}: a closed outline needs at least 3 vertices, got {len(v)}")
+    d = nxt - v
     right = np.stack([d[:, 1], -d[:, 0]], axis=1)  # chord length x right unit normal
-    mids = 0.5 * (v + np.roll(v, -1, axis=0)) + right * (b / 2.0)[:, None]
+    mids = 0.5 * (v + nxt) + right * (b / 2.0)[:, None]
     ring = np.stack([v, mids], axis=1).reshape(-1, 2)  # vertices and arc middles, in order
     x, y = ring[:, 0], ring[:, 1]
-    if float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)) < 0.0:
-        b = -b
-    keep = np.ones(len(v), dtype=bool)
-    try:
-        return Loop.make(v[keep], b[keep])
-    except DesignError as exc:
-        raise DesignError(f"{where}: {exc}") from exc
+    x1, y1 = np.concatenate([x[1:], x[:1]]), np.concatenate([y[1:], y[:1]])
+    if float(np.sum(x * y1 - x1 * y)) >= 0.0:
+        return Loop(v, b)  # counter-clockwise: DXF bulges are outward bulges
+    # Clockwise: run it the other way; edge (v_i+1 -> v_i) turns the other way round.
+    return Loop(v[::-1].copy(), -np.concatenate([b[::-1][1:], b[::-1][:1]]))
 
 
 __all__ = ["DrawnClasses", "DrawnTile", "loop_from_nodes", "nest_loops"]

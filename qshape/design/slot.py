@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import functools
 import hashlib
+import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -21,6 +23,17 @@ from qshape.design.values import color_hex, plain, round_mm
 from qshape.errors import DesignError
 from qshape.geometry import FloatArray
 from qshape.theory.figure import Figure
+
+
+@functools.lru_cache(maxsize=4096)
+def _shape_key(shape_json: str) -> str:
+    """The shape key of a shape mapping (given as sorted JSON): a hash of its sorted YAML.
+
+    The YAML text is what the key has always hashed; a design of many copies of one shape
+    (a mural) writes it once.
+    """
+    text = yaml.safe_dump(json.loads(shape_json), sort_keys=True)
+    return hashlib.sha1(text.encode()).hexdigest()[:12]
 
 
 @dataclass(frozen=True)
@@ -89,8 +102,7 @@ class Slot:
     @cached_property
     def shape_key(self) -> str:
         """Identifier of the shape class: equal for slots whose shapes are equal (any pose)."""
-        text = yaml.safe_dump(plain(self.shape), sort_keys=True)
-        return hashlib.sha1(text.encode()).hexdigest()[:12]
+        return _shape_key(json.dumps(plain(self.shape), sort_keys=True))
 
     @property
     def class_key(self) -> str:
