@@ -9,6 +9,8 @@ the arc through a start, a point on the arc and an end.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -122,4 +124,54 @@ def fit_arcs(points: ArrayLike, tol: float) -> tuple[FloatArray, FloatArray]:
     return np.array(verts).reshape(-1, 2), np.array(bulges)
 
 
-__all__ = ["fit_arcs", "three_point_bulge"]
+def _arc_circle(p0: FloatArray, p1: FloatArray, bulge: float) -> tuple[FloatArray, float]:
+    """Centre and radius of the arc from p0 to p1 with a (DXF) bulge != 0."""
+    d = p1 - p0
+    c = float(np.hypot(*d))
+    right = np.array([d[1], -d[0]]) / c
+    sag = bulge * c / 2.0  # signed: positive bows to the right of p0 -> p1
+    radius = c * (1.0 + bulge * bulge) / (4.0 * abs(bulge))
+    centre = 0.5 * (p0 + p1) + right * (sag - np.sign(bulge) * radius)
+    return centre, radius
+
+
+def merge_arcs(vertices: ArrayLike, bulges: ArrayLike, tol: float) -> tuple[FloatArray, FloatArray]:
+    """A closed outline with neighbouring arcs of one circle joined, up to half circles.
+
+    A circle drawn as four quarter arcs (SVG, or four Beziers fitted by `fit_arcs`) becomes
+    two half circles, as a design's ``circle`` is: the description's relevant points are
+    those of the circle, not of how it was drawn.
+
+    Args:
+        vertices: Shape (n, 2), the outline's vertices in order.
+        bulges: Shape (n,), DXF bulges (edge i from vertex i to vertex i + 1).
+        tol: Largest difference of centres and radii of arcs on one circle.
+
+    Returns:
+        (vertices (k, 2), bulges (k,)), k <= n.
+    """
+    v = [np.asarray(p, dtype=np.float64) for p in np.asarray(vertices, dtype=np.float64)]
+    b = [float(x) for x in np.asarray(bulges, dtype=np.float64)]
+    changed = True
+    while changed and len(v) > 2:
+        changed = False
+        n = len(v)
+        for i in range(n):
+            j, k = (i + 1) % n, (i + 2) % n
+            if b[i] == 0.0 or b[j] == 0.0 or (b[i] > 0.0) != (b[j] > 0.0):
+                continue
+            turn = 4.0 * (math.atan(abs(b[i])) + math.atan(abs(b[j])))
+            if turn > math.pi + 1e-9:
+                continue
+            ci, ri = _arc_circle(v[i], v[j], b[i])
+            cj, rj = _arc_circle(v[j], v[k], b[j])
+            if float(np.hypot(*(ci - cj))) > tol or abs(ri - rj) > tol:
+                continue
+            b[i] = math.copysign(math.tan(turn / 4.0), b[i])
+            del v[j], b[j]
+            changed = True
+            break
+    return np.array(v).reshape(-1, 2), np.array(b)
+
+
+__all__ = ["fit_arcs", "merge_arcs", "three_point_bulge"]

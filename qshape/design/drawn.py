@@ -19,6 +19,7 @@ import numpy as np
 import shapely
 
 from qshape import geometry as geo
+from qshape.design.arc_fit import merge_arcs
 from qshape.design.paths import Loop, TilePath
 from qshape.design.rules import DesignRules
 from qshape.design.values import color_hex, round_mm
@@ -159,6 +160,10 @@ class DrawnClasses:
         if found is not None:
             c = anchor + geo.rotate(found.offset, angle)
         else:
+            if geo.self_intersects(tile.path.outer.dense(self.rules.check_step_mm)):
+                raise DesignError(
+                    f"slot {tile.name!r}: its outline crosses itself; allowed: simple outlines"
+                )
             area, c = tile.path.area_centroid(self.rules.outline_step_mm)
             if not area > 0.0:
                 raise DesignError(f"slot {tile.name!r}: zero or negative area (holes too large?)")
@@ -227,10 +232,14 @@ def _holes_match(ref: Sequence[Loop], new: Sequence[Loop], angle: float, tol: fl
     return not free
 
 
-def loop_from_nodes(vertices: FloatArray, bulges: FloatArray, where: str) -> Loop:
+def loop_from_nodes(
+    vertices: FloatArray, bulges: FloatArray, where: str, tol: float = 1e-3
+) -> Loop:
     """A closed `Loop` of vertices and DXF bulges, consecutive repeats merged.
 
-    ``bulges`` follow the DXF convention (positive: the arc turns counter-clockwise, y up),
+    Neighbouring arcs of one circle (centres and radii within ``tol`` [mm]) are joined up
+    to half circles (`qshape.design.arc_fit.merge_arcs`). ``bulges`` follow the DXF
+    convention (positive: the arc turns counter-clockwise, y up),
     whichever way the outline runs; `Loop`'s bulges are positive bowing out of the tile, so
     they are negated for a clockwise outline before it is turned counter-clockwise.
 
@@ -243,7 +252,8 @@ def loop_from_nodes(vertices: FloatArray, bulges: FloatArray, where: str) -> Loo
         raise DesignError(f"{where}: vertices and bulges must be finite, one bulge per vertex")
     nxt = np.concatenate([v[1:], v[:1]])
     keep = np.hypot(*(nxt - v).T) > 1e-9
-    v, b, nxt = v[keep], b[keep], nxt[keep]
+    v, b = merge_arcs(v[keep], b[keep], tol)
+    nxt = np.concatenate([v[1:], v[:1]])
     if len(v) < (2 if np.any(b != 0.0) else 3):
         raise DesignError(f"{where}: a closed outline needs at least 3 vertices, got {len(v)}")
     d = nxt - v

@@ -183,7 +183,7 @@ def read_dxf(
         got = _outline(e, mm, params, where)
         if got is None:
             continue
-        loops.append(loop_from_nodes(*got, where))
+        loops.append(loop_from_nodes(*got, where, params.curve_tolerance_mm))
         names.append(_slot_name(e))
         colors.append(_rgb(doc, e))
     if skipped:

@@ -233,7 +233,7 @@ def _element_tiles(
     loops: list[Loop] = []
     winding: list[float] = []
     for k, (v, b) in enumerate(sub.done):
-        loops.append(loop_from_nodes(v, b, f"{where} sub-path {k}"))
+        loops.append(loop_from_nodes(v, b, f"{where} sub-path {k}", params.curve_tolerance_mm))
         winding.append(float(np.sign(_signed_area(v))))
     even_odd = str(el.values.get("fill-rule", "nonzero")).strip() == "evenodd"
     names = [f"{name} sub-path {k}" for k in range(len(loops))]
