@@ -42,7 +42,13 @@ def _quiet_load(path: Path) -> Design:
 
 
 @pytest.mark.parametrize("fmt", ["svg", "dxf"])
-@pytest.mark.parametrize("name", bundled_designs())
+@pytest.mark.parametrize(
+    "name",
+    [
+        pytest.param(n, marks=pytest.mark.slow) if n == "trencadis" else n  # 42 shapes: 4 s
+        for n in bundled_designs()
+    ],
+)
 def test_bundled_designs_round_trip(tmp_path: Path, name: str, fmt: str) -> None:
     design = Design.load(name)
     path = tmp_path / f"{name}.{fmt}"
