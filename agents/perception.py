@@ -197,6 +197,7 @@ def perceive_tiles(
     extract_params: qshape.ExtractParams | None = None,
     tolerances: qshape.Tolerances | None = None,
     white_balance: WhiteBalance | None = None,
+    height: np.ndarray | None = None,
 ) -> Perception:
     """Tiles in an input-camera image, located in the world and described (once).
 
@@ -213,6 +214,9 @@ def perceive_tiles(
             (n, 3), when there are any; the tiles' colours are multiplied by the gain (3,) it
             returns (clipped to [0, 1], `recolour`) before they are described. None: the
             colours as measured.
+        height: The tiles' height above the belt [mm], shape (h, w), aligned with ``image``
+            (`agents.height.HeightMap`), or None: a tile of the belt's colour is then found
+            by its height (`qshape.extract_detailed`).
 
     Returns:
         The perceived tiles, partial regions and unrecognised regions. An image qshape cannot
@@ -225,7 +229,7 @@ def perceive_tiles(
     """
     cfg = cfg or PerceptionConfig()
     z = float(tile_top_z)
-    res = _extract(image, extract_params)
+    res = _extract(image, extract_params, height)
     if isinstance(res, str):
         return Perception((), (), (res,), z)
     world: list[Figure] = []
@@ -329,7 +333,9 @@ def refigured(
 
 
 def _extract(
-    image: np.ndarray, extract_params: qshape.ExtractParams | None
+    image: np.ndarray,
+    extract_params: qshape.ExtractParams | None,
+    height: np.ndarray | None = None,
 ) -> qshape.ExtractResult | str:
     """The figures qshape extracts from a picture, or why the picture is not usable.
 
@@ -341,7 +347,7 @@ def _extract(
         if health.verdict in ("dark", "overexposed"):
             # A uniform picture is an empty belt; a black or blown-out one is a camera fault.
             return f"image not usable: {health.message}"
-        return qshape.extract_detailed(image, extract_params)
+        return qshape.extract_detailed(image, extract_params, height)
     except qshape.ImageError as exc:
         arr = np.asarray(image)
         well_formed = arr.dtype == np.uint8 and arr.ndim == 3 and arr.shape[2] == 3  # noqa: PLR2004

@@ -107,6 +107,13 @@ class ExtractParams:
             through the centres of the outermost region pixels), in [px].
         color_erode_px: Erosion before taking the median colour, in [px].
         color_sample_step: Every n-th pixel (each axis) of a tile enters its median colour.
+        height_levels_per_mm: With a height picture (`extract_detailed`'s ``height``: the
+            tiles' height above the belt from a 3D camera, a cue that does not depend on
+            colour), a tile's height counts as this many colour-distance levels per mm where
+            its colour does not stand off the belt (a black tile on a dark belt, a glaze of the
+            belt's own colour), in [levels/mm].
+        height_grow_px: The height cue covers each such raised region grown by this many
+            pixels (its blurred edge), in [px].
         correct_illumination: Divide tile colours by the modelled relative illumination.
         resample_per_px: The picture's outlines are resampled to this many samples per
             traced pixel of its longest whole-tile outline, in [samples/px], and at most
@@ -158,6 +165,8 @@ class ExtractParams:
     boundary_offset_px: float = 0.5
     color_erode_px: int = 3
     color_sample_step: int = 2
+    height_levels_per_mm: float = 40.0
+    height_grow_px: int = 2
     correct_illumination: bool = True
     resample_per_px: float = 0.0
     outline: OutlineParams = field(default_factory=OutlineParams)
@@ -202,6 +211,8 @@ class ExtractParams:
             raise ImageError(f"resample_per_px must be >= 0, got {self.resample_per_px}")
         if self.canny_reduction < 1:
             raise ImageError(f"canny_reduction must be >= 1, got {self.canny_reduction}")
+        if not self.height_levels_per_mm > 0.0 or self.height_grow_px < 0:
+            raise ImageError("height_levels_per_mm must be > 0 and height_grow_px >= 0")
         if self.blur_sigma_px < 0.0 or self.min_area_px < 0.0 or self.min_hole_area_px < 0.0:
             raise ImageError("blur_sigma_px, min_area_px and min_hole_area_px must be >= 0")
 
