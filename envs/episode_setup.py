@@ -26,6 +26,7 @@ from envs.cell.config import CellConfig, FeedMode
 from envs.cell.tiles.shapes import tile_shapes_from_design
 from envs.cell.tiles.tile import SlotSpec, TileShape
 from envs.errors import CellError, LayoutError
+from envs.glazes import check_glazes
 
 if TYPE_CHECKING:
     from envs.env_config import EnvConfig
@@ -101,10 +102,12 @@ def design_cell_parts(
     """A design with its tile shapes and slots (the first ``max_slots`` when set).
 
     ``design`` None: the env's ``design`` (loaded); else that design (a procedural draw).
+    A slot colour the cell cannot tell from its belt is warned about (`envs.glazes`).
     """
     from qshape.design import Design  # noqa: PLC0415 - keep `import envs` light
 
     design = Design.load(config.design) if design is None else design
+    check_glazes(design, config.cell, config.depth)
     shapes, slots = tile_shapes_from_design(design)
     if config.max_slots:
         shapes, slots = shapes[: config.max_slots], slots[: config.max_slots]
