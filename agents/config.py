@@ -34,6 +34,10 @@ class PerceptionConfig:
             far inside the tile material; otherwise at its pole of inaccessibility, [m] (half
             the 23 mm pad of the paper: the pad seals on material all round).
         polylabel_tolerance: Precision of the pole-of-inaccessibility search, [m].
+        thin_fraction: A tile whose pole lies less than this x ``pad_clearance`` inside it
+            (no room for the pad anywhere: a thin tile) is picked where the most of the pad
+            lies on it instead (`agents.grasp.best_hold`), dimensionless.
+        grasp_step: Grid of that search before it is refined (to ``polylabel_tolerance``), [m].
         color_balance: Estimate a per-channel gain mapping measured tile colours onto the
             design's palette (white balance against known colours: camera calibration)
             before matching.
@@ -72,6 +76,8 @@ class PerceptionConfig:
     mm_per_m: float = MM_PER_M
     pad_clearance: float = 0.0115
     polylabel_tolerance: float = 1e-4
+    thin_fraction: float = 0.9
+    grasp_step: float = 0.002
     color_balance: bool = True
     color_balance_iterations: int = 3
     max_color_gain: float = 2.0
@@ -83,6 +89,11 @@ class PerceptionConfig:
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on non-positive values."""
+        if not (self.grasp_step > 0 and 0 <= self.thin_fraction <= 1):
+            raise AgentError(
+                "perception: grasp_step > 0 and thin_fraction in [0, 1] required, got "
+                f"{self.grasp_step!r} and {self.thin_fraction!r}"
+            )
         if not (self.mm_per_m > 0 and self.pad_clearance >= 0 and self.polylabel_tolerance > 0):
             raise AgentError("perception: mm_per_m, polylabel_tolerance > 0, pad_clearance >= 0")
         if not self.seen_turn_residual >= 0.0:
@@ -121,6 +132,13 @@ class PlacementConfig:
         fit_turn_window_deg: Turns closer than this to a symmetry of the slot count as it, [deg].
         fit_step_deg: Turns tried by that fit, this far apart, [deg].
         fit_spacing_mm: Largest distance between the outline points compared, [mm].
+        centre_fit_below_deg: A tile whose slot has a corner sharper than this is centred by
+            the slot's outline fitted to its traced outline (`agents.centre_fit`), not by its
+            relevant points (the picture blunts a sharp tip), [deg] (0: never).
+        centre_fit_step_mm: Sampling of the slot's outline in that fit, [mm].
+        centre_fit_iterations: Translation updates of that fit.
+        centre_fit_trim: Traced points farther off than this x the median distance are left
+            out of each update (dimensionless).
     """
 
     method: Literal["optimal", "greedy"] = "optimal"
@@ -135,9 +153,22 @@ class PlacementConfig:
     fit_turn_window_deg: float = 10.0
     fit_step_deg: float = 2.0
     fit_spacing_mm: float = 1.0
+    centre_fit_below_deg: float = 30.0
+    centre_fit_step_mm: float = 0.25
+    centre_fit_iterations: int = 12
+    centre_fit_trim: float = 3.0
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on bad values."""
+        if (
+            self.centre_fit_step_mm <= 0
+            or self.centre_fit_iterations < 1
+            or self.centre_fit_trim <= 1
+        ):
+            raise AgentError(
+                "placement: centre_fit_step_mm > 0, centre_fit_iterations >= 1 and "
+                "centre_fit_trim > 1 required"
+            )
         if self.method not in ("optimal", "greedy"):
             raise AgentError(f"placement.method {self.method!r}; allowed: optimal, greedy")
         if self.continuous_yaw_steps < 1:

@@ -27,6 +27,7 @@ from shapely.geometry import Point, Polygon
 import qshape
 from agents.config import PerceptionConfig
 from agents.errors import PerceptionError
+from agents.grasp import best_hold
 from agents.seen_slots import SeenSlot, seen_outlines
 from agents.white_balance import color_gain, recolour
 from envs.cell.cameras import CameraModel
@@ -167,7 +168,7 @@ def figure_to_world(
 
 
 def grasp_point(fig_mm: Figure, centre: np.ndarray, cfg: PerceptionConfig) -> np.ndarray:
-    """Pad position [m], shape (2,): the centre if the pad fits there, else the pole.
+    """Pad position [m], shape (2,): the centre if the pad fits there, else its best hold.
 
     Args:
         fig_mm: World figure in [mm].
@@ -185,7 +186,9 @@ def grasp_point(fig_mm: Figure, centre: np.ndarray, cfg: PerceptionConfig) -> np
     if poly.contains(c) and poly.boundary.distance(c) >= cfg.pad_clearance:
         return np.asarray(centre, dtype=float).copy()
     best = shapely.ops.polylabel(poly, tolerance=cfg.polylabel_tolerance)
-    return np.array([best.x, best.y])
+    if poly.boundary.distance(best) >= cfg.thin_fraction * cfg.pad_clearance:
+        return np.array([best.x, best.y])  # (nearly) the whole pad on material
+    return best_hold(poly, centre, cfg.pad_clearance, cfg.grasp_step, cfg.polylabel_tolerance)
 
 
 def perceive_tiles(
