@@ -18,7 +18,9 @@ from shapely.geometry import Polygon
 
 def pad_area_on_tile(tile: Polygon, points: np.ndarray, pad_radius: float) -> np.ndarray:
     """Area of the pad disc on the tile, per pad centre, shape (n,) [unit^2]."""
-    discs = shapely.buffer(shapely.points(np.asarray(points, dtype=float)), pad_radius, 32)
+    discs = shapely.buffer(
+        shapely.points(np.asarray(points, dtype=float)), pad_radius, quad_segs=32
+    )
     return np.asarray(shapely.area(shapely.intersection(discs, tile)), dtype=float)
 
 

@@ -87,6 +87,7 @@ def make_env(
         "feed": rc.feed,
         "distractor_rate": rc.distractor_rate,
         "max_slots": rc.max_slots,
+        "depth": True,  # the height picture: tiles of the belt's colour seen too (agents.height)
     }
 
     def make(feed: FeedMode) -> gym.Env[Any, Any]:

@@ -169,6 +169,7 @@ def play_design(job: Job) -> dict[str, Any]:
         **{
             "action_mode": "pick_place",
             "image_size": cfg.image_size,
+            "depth": True,  # the height picture (agents.height): every glaze seen
             **level.env,
             "design": str(path),
         },

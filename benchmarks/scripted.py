@@ -107,7 +107,12 @@ def play(job: tuple[Scenario, int, tuple[int, int], int]) -> Episode:
         env = gym.make(
             "envs:MosaicAssembly-v0",
             max_episode_steps=None,
-            **{"action_mode": "pick_place", "image_size": image_size, **scenario.env},
+            **{
+                "action_mode": "pick_place",
+                "image_size": image_size,
+                "depth": True,  # the height picture (agents.height): every glaze seen
+                **scenario.env,
+            },
         )
         _ENVS[scenario.name] = (env, ScriptedAgent.from_env(env))
     env, agent = _ENVS[scenario.name]
