@@ -87,7 +87,7 @@ def run(repeat: int) -> dict[str, Any]:
                     "met": seconds < MAX_LOAD_S,
                 }
             )
-        trips = []
+        trips: list[dict[str, Any]] = []
         for name in bundled_designs():
             design = Design.load(name)
             for fmt in ("svg", "dxf"):
@@ -98,7 +98,7 @@ def run(repeat: int) -> dict[str, Any]:
                     back = Design.load(path)
                 change = slot_change_mm(design, back)
                 trips.append({"design": name, "format": fmt, "change_mm": change})
-    worst = max(t["change_mm"] for t in trips)
+    worst = max(float(t["change_mm"]) for t in trips)
     return {
         "loads": rows,
         "round_trips": trips,

@@ -62,7 +62,7 @@ def _units(doc: Any, source: str) -> float:
         )
         return 1.0
     try:
-        return float(units.conversion_factor(code, INSUNITS_MM))
+        return float(units.conversion_factor(code, INSUNITS_MM))  # type: ignore[arg-type]
     except (KeyError, IndexError, ValueError) as exc:
         raise DesignError(
             f"{source}: unknown units ($INSUNITS {code}); allowed: the DXF unit codes "
@@ -127,11 +127,11 @@ def _outline(
         closed = e.closed if kind == "SPLINE" else _full_ellipse(e)
         if not closed:
             start = e.construction_tool().point(0) if kind == "SPLINE" else None
-            pts = [] if start is None else list(e.flattening(1.0))
+            flat: list[Any] = [] if start is None else list(e.flattening(1.0))
             if (
                 start is None
-                or not pts
-                or np.hypot(*(np.subtract(pts[-1][:2], pts[0][:2]))) * mm
+                or not flat
+                or np.hypot(*(np.subtract(flat[-1][:2], flat[0][:2]))) * mm
                 > params.close_tolerance_mm
             ):
                 raise DesignError(f"{where}: an open curve; allowed: closed outlines")
@@ -273,7 +273,8 @@ def write_dxf(
         [(0.0, 0.0), (w, 0.0), (w, h), (0.0, h)], close=True, dxfattribs={"layer": MESH_LAYER}
     )
     for s in design.slots:
-        rgb = tuple(int(round(c * 255)) for c in s.color)
+        r, g, b = (int(round(c * 255)) for c in s.color)
+        rgb = (r, g, b)
         for k, loop in enumerate((s.path.outer, *s.path.holes)):
             rows = [
                 (round(float(x), d), round(float(y), d), float(b))

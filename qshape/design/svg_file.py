@@ -124,7 +124,8 @@ class _Subpaths:
         length = float(np.sum(np.hypot(*np.diff(coarse, axis=0).T)))
         n = max(16, math.ceil(length / self.params.curve_step_mm))
         raw = seg.npoint(np.linspace(0.0, 1.0, n + 1))
-        return self.to_mm(np.asarray(raw, dtype=np.float64))
+        out: FloatArray = self.to_mm(np.asarray(raw, dtype=np.float64))
+        return out
 
 
 def read_svg(

@@ -379,8 +379,8 @@ def _height_levels(
         raise ImageError(
             f"height picture must be finite, shape {tuple(shape)} (the image's), got {h.shape}"
         )
-    levels = cv2.multiply(h, p.height_levels_per_mm)
-    return np.clip(levels, 0.0, 255.0).astype(np.uint8)
+    levels = h * np.float32(p.height_levels_per_mm)
+    return np.asarray(np.clip(levels, 0.0, 255.0), dtype=np.uint8)
 
 
 def extract(image: np.ndarray, params: ExtractParams | None = None) -> list[Figure]:

@@ -237,20 +237,20 @@ def height_cue(
     ``thr`` is a tile the colour does not show; its height, over the region grown by
     ``height_grow_px`` (its edge), becomes its distance. None when there is no such region.
     """
-    raised = cv2.compare(height, thr, cv2.CMP_GE)
+    raised = np.where(height >= thr, np.uint8(255), np.uint8(0))
     count, lab = cv2.connectedComponents(raised, connectivity=8, ltype=cv2.CV_32S)
     if count <= 1:
         return None
     seen = np.zeros(count, np.uint8)
-    np.maximum.at(seen, lab.ravel(), dist.ravel())
+    np.maximum.at(seen, np.asarray(lab, dtype=np.intp).ravel(), dist.ravel())
     hidden = seen < thr
     hidden[0] = False
     if not hidden.any():
         return None
-    keep = hidden[lab].astype(np.uint8) * 255
+    keep = hidden[lab].astype(np.uint8) * np.uint8(255)
     if p.height_grow_px > 0:
-        keep = cv2.dilate(keep, box_kernel(2 * p.height_grow_px + 1))
-    return cv2.bitwise_and(height, keep)
+        keep = np.asarray(cv2.dilate(keep, box_kernel(2 * p.height_grow_px + 1)), dtype=np.uint8)
+    return np.asarray(cv2.bitwise_and(height, keep), dtype=np.uint8)
 
 
 def label_pieces(cut: np.ndarray) -> tuple[int, np.ndarray]:
