@@ -16,8 +16,10 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
+from agents.config import PlacementConfig
 from qshape import Figure
 from qshape.geometry import rotate
+from spatial.units import MM_PER_M
 
 
 def sharpest_corner_deg(figure: Figure) -> float:
@@ -86,4 +88,26 @@ def fitted_centre(
     return centre
 
 
-__all__ = ["fitted_centre", "sharpest_corner_deg"]
+def tile_centre(
+    centre_m: np.ndarray, traced_mm: np.ndarray, slot: Figure, turn: float, cfg: PlacementConfig
+) -> np.ndarray:
+    """A tile's area centroid [m], shape (2,): fitted when its slot has a sharp corner.
+
+    `fitted_centre` when the slot has a corner sharper than ``cfg.centre_fit_below_deg``;
+    else ``centre_m`` (the relevant points' centroid).
+    """
+    if sharpest_corner_deg(slot) >= cfg.centre_fit_below_deg:
+        return centre_m
+    mm = fitted_centre(
+        traced_mm,
+        slot,
+        turn,
+        np.asarray(centre_m, dtype=float) * MM_PER_M,
+        step_mm=cfg.centre_fit_step_mm,
+        iterations=cfg.centre_fit_iterations,
+        trim=cfg.centre_fit_trim,
+    )
+    return np.asarray(mm / MM_PER_M, dtype=float)
+
+
+__all__ = ["fitted_centre", "sharpest_corner_deg", "tile_centre"]

@@ -28,7 +28,7 @@ from scipy.optimize import minimize_scalar
 from scipy.spatial import cKDTree
 
 import qshape
-from agents.centre_fit import fitted_centre, sharpest_corner_deg
+from agents.centre_fit import tile_centre
 from agents.config import PlacementConfig
 from agents.outline_fit import TileOutline, area_centroid, boundary_points, fit_outline
 from agents.perception import PerceivedTile, SlotTarget
@@ -389,19 +389,8 @@ def _command(
         centre = t.centre
         if seen:
             centre = _centroid(t.outline_mm, t.figure) / MM_PER_M
-        elif sharpest_corner_deg(s.figure) < cfg.centre_fit_below_deg:
-            centre = (
-                fitted_centre(
-                    t.outline_mm,
-                    s.figure,
-                    rot,
-                    t.centre * MM_PER_M,
-                    step_mm=cfg.centre_fit_step_mm,
-                    iterations=cfg.centre_fit_iterations,
-                    trim=cfg.centre_fit_trim,
-                )
-                / MM_PER_M
-            )
+        else:
+            centre = tile_centre(t.centre, t.outline_mm, s.figure, rot, cfg)
         return fitted_command(t, s, rot, centre, score=a.score, cfg=cfg)
     ref = s.seen.figure if seen and s.seen is not None else s.figure
     rot = wrap(refine_rotation(t.figure, ref, a.rotation, span, step, spacing=spacing, scan=scan))
