@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from envs.cell.config import CellConfig
+from envs.errors import EnvError
 
 if TYPE_CHECKING:
     from qshape.design import Design
@@ -26,7 +27,7 @@ LEVELS = 255.0
 """Levels of one 8-bit channel, the scale of the vision's thresholds."""
 
 
-class GlazeWarning(UserWarning):
+class GlazeWarning(EnvError, UserWarning):
     """A design's tile colour the configured cell cannot separate from its belt (named)."""
 
 
