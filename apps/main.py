@@ -36,6 +36,7 @@ import cv2
 import gymnasium as gym
 import numpy as np
 
+from agents.policies import parse_pairs
 from agents.scripted.agent import ScriptedAgent
 from agents.scripted.calibration import calibrate_env_camera
 from agents.scripted.config import AgentsConfig, RunConfig, load_agents_config
@@ -58,20 +59,25 @@ ENV_ID = "envs:MosaicAssembly-v1"
 
 
 # ------------------------------------------------------------------------------ the run
-def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
+def make_env(
+    rc: RunConfig, env_config: str | None = None, env_over: dict[str, Any] | None = None
+) -> gym.Env[Any, Any]:
     """The env of the main job: ``pick_place``, full-resolution images, ``rgb_array`` frames.
 
     With the ``all`` feed, tiles that do not fit the input belt at once (many distractors)
     are fed in batches instead (the env's ``batch`` feed); the report names the feed used.
+    ``env_config`` (an env YAML, bundled name or path; None: ``configs/env.yaml``) and
+    ``env_over`` (env keys, e.g. ``{"cell": {"config": "my_cell.yaml"}}``) give the env and
+    its cell; the run's own keys (design, feed, belt speed, ...) are set over them.
 
     Raises:
         QShapeError: The design does not load or validate.
         CellError: The design's tiles do not fit the input belt.
         ConfigError: A bad env setting.
     """
-    from envs.cell.config import load_cell_config  # noqa: PLC0415
+    from envs.env_config import load_env_config  # noqa: PLC0415
 
-    cam = load_cell_config().input_camera
+    cam = load_env_config(env_config or "env", **(env_over or {})).cell.input_camera
     over: dict[str, Any] = {
         "design": rc.design,
         "action_mode": "pick_place",
@@ -81,10 +87,14 @@ def make_env(rc: RunConfig) -> gym.Env[Any, Any]:
         "feed": rc.feed,
         "distractor_rate": rc.distractor_rate,
         "max_slots": rc.max_slots,
+        # The height picture (agents.scripted.height): tiles of the belt's colour are seen too.
+        "depth": True,
     }
 
     def make(feed: FeedMode) -> gym.Env[Any, Any]:
-        kw = {**over, "feed": feed}
+        kw = {**(env_over or {}), **over, "feed": feed}
+        if env_config is not None:
+            kw["config"] = env_config
         return gym.make(ENV_ID, max_episode_steps=None, render_mode="rgb_array", **kw)
 
     return with_feed_fallback(make, rc.feed)[0]
@@ -105,8 +115,16 @@ class _Episode:
     failures: list[str] = field(default_factory=list)
 
 
-def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
+def run(
+    cfg: AgentsConfig,
+    out_dir: Path,
+    quiet: bool = False,
+    env_config: str | None = None,
+    env_over: dict[str, Any] | None = None,
+) -> RunReport:
     """Run the scripted cell for one episode and write the report, images and video.
+
+    ``env_config`` and ``env_over`` give the env and its cell (`make_env`).
 
     Raises:
         AgentError: Calibration failed.
@@ -118,7 +136,7 @@ def run(cfg: AgentsConfig, out_dir: Path, quiet: bool = False) -> RunReport:
     rc = cfg.run
     t_wall = time.perf_counter()
     out_dir.mkdir(parents=True, exist_ok=True)
-    env = make_env(rc)
+    env = make_env(rc, env_config, env_over)
     spec: TaskSpec = env.get_wrapper_attr("task_spec")
     bar = tqdm(total=len(spec.slots), desc="tiles placed", unit="tile", disable=quiet)
     try:
@@ -320,7 +338,19 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     """Command line: run the scripted cell and print the report; returns ``report.json``'s dict."""
     parser = CommandParser(description=__doc__.splitlines()[0])
     parser.add_argument("--config", default="agents", help="bundled name or YAML path")
-    parser.add_argument("--design", help="design name or path (default: config)")
+    parser.add_argument(
+        "--design", help="design name or file: .yaml, .svg or .dxf (default: config)"
+    )
+    parser.add_argument(
+        "--env-config", help="env YAML, bundled name or path (default: env); its cell: the cell"
+    )
+    parser.add_argument(
+        "--env",
+        nargs="*",
+        default=[],
+        metavar="KEY=VALUE",
+        help="env overrides, e.g. cell='{config: my_cell.yaml}' or belt_speed=0.1",
+    )
     parser.add_argument("--seed", type=int, help="episode seed (default: config)")
     parser.add_argument("--belt-speed", type=float, help="input belt speed [m/s]")
     parser.add_argument("--feed", choices=FEEDS, help="tile feed")
@@ -362,7 +392,9 @@ def main(argv: list[str] | None = None) -> dict[str, object]:
     )
     out = args.out or Path(cfg.run.out_dir)
     out = out if out.is_absolute() else ROOT / out
-    report = run(cfg, out, quiet=args.quiet)
+    report = run(
+        cfg, out, quiet=args.quiet, env_config=args.env_config, env_over=parse_pairs(args.env)
+    )
     print(report_text(report), end="")
     print(f"wrote {out / 'report.json'}")
     return report.as_dict()

@@ -13,7 +13,7 @@ import numpy as np
 
 from envs.cell.cell import Cell
 from envs.cell.config import CellConfig, load_cell_config
-from envs.cell.tiles.shapes import tile_shapes_from_design
+from envs.cell.tiles.shapes import design_mesh_size, tile_shapes_from_design
 from envs.episode_setup import build_cell
 from qshape.design import Design
 
@@ -36,7 +36,8 @@ def build_design_cell(
         LayoutError: No seed in ``[seed, seed + tries)`` fits the tiles on the belt.
     """
     shapes, slots = tile_shapes_from_design(design)
-    cell = build_cell(cfg or load_cell_config(), shapes, slots, seed, tries)
+    cfg = cfg or load_cell_config()
+    cell = build_cell(cfg, shapes, slots, seed, tries, mesh_size=design_mesh_size(design))
     return cell, seed if cell.layout_seed is None else cell.layout_seed
 
 

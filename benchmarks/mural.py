@@ -51,11 +51,11 @@ def scenarios(mural: Mural, names: list[str] | None) -> list[Scenario]:
 
 
 def mesh_area_mm() -> tuple[float, float]:
-    """The cell's mesh sheet, (width, height) in [mm] (``configs/cell.yaml``)."""
+    """The largest mesh sheet the cell takes, (width, height) in [mm] (``configs/cell.yaml``)."""
     from envs.cell.config import load_cell_config  # noqa: PLC0415 - keep the import light
 
-    cell = load_cell_config()
-    return cell.output_belt.mesh_size[0] * MM_PER_M, cell.output_belt.mesh_size[1] * MM_PER_M
+    largest = load_cell_config().output_belt.max_mesh_size
+    return largest[0] * MM_PER_M, largest[1] * MM_PER_M
 
 
 def totals(rows: list[dict[str, Any]], episodes: list[Episode], wall_s: float) -> dict[str, Any]:

@@ -66,6 +66,8 @@ class Level:
         min_correct: Target: fraction of all tiles placed correctly.
         min_complete: Target: fraction of mosaics complete.
         max_misplaced: Target: tiles misplaced over the level.
+        generator: `GeneratorConfig` fields changed for this level's designs (over the
+            benchmark's ``generator_overrides``): e.g. the full range of glaze colours.
     """
 
     name: str
@@ -74,6 +76,7 @@ class Level:
     min_correct: float = 0.995
     min_complete: float = 0.98
     max_misplaced: int = 0
+    generator: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -162,7 +165,7 @@ def play_design(job: Job) -> dict[str, Any]:
     from qshape.design.generator_config import GeneratorConfig  # noqa: PLC0415
 
     level, index, cfg, folder = job
-    gen_cfg = GeneratorConfig.load(cfg.generator, **cfg.generator_overrides)
+    gen_cfg = GeneratorConfig.load(cfg.generator, **{**cfg.generator_overrides, **level.generator})
     design = DesignGenerator(gen_cfg).draw(np.random.default_rng(index), name=f"random_{index}")
     path = Path(folder) / f"random_{index}.yaml"
     design.save(path)
@@ -172,6 +175,7 @@ def play_design(job: Job) -> dict[str, Any]:
         **{
             "action_mode": "pick_place",
             "image_size": cfg.image_size,
+            "depth": True,  # the height picture (agents.scripted.height): every glaze seen
             **level.env,
             "design": str(path),
         },

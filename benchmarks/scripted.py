@@ -19,6 +19,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from agents.policies import parse_pairs
 from apps.cli import CommandParser, UsageError, run_cli, write_result
 from configs import ConfigError, load_config
 from configs.checks import check_fields, checked
@@ -128,7 +129,12 @@ def play(job: tuple[Scenario, int, tuple[int, int], int]) -> Episode:
         env = gym.make(
             ENV_ID,
             max_episode_steps=None,
-            **{"action_mode": "pick_place", "image_size": image_size, **scenario.env_kwargs()},
+            **{
+                "action_mode": "pick_place",
+                "image_size": image_size,
+                "depth": True,  # the height picture (agents.scripted.height): every glaze seen
+                **scenario.env_kwargs(),
+            },
         )
         _ENVS[scenario.name] = (env, ScriptedAgent.from_env(env))
     env, agent = _ENVS[scenario.name]
@@ -250,6 +256,17 @@ def table(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def design_scenario(design: str) -> Scenario:
+    """The scenario of one design file: a static belt fed in batches, every tile right."""
+    name = Path(design).name if Path(design).suffix else design
+    return Scenario(
+        f"{name}, static belt, batches",
+        {"design": design, "feed": "batch"},
+        min_correct=1.0,
+        min_tiles_per_min=24.0,
+    )
+
+
 def _seed_range(text: str) -> tuple[int, int]:
     try:
         a, _, b = text.partition("-")
@@ -267,14 +284,25 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     p.add_argument("--config", default="bench_scripted", help="bundled name or YAML path")
     p.add_argument("--seeds", type=_seed_range, help="FIRST-LAST (default: config)")
     p.add_argument("--scenario", action="append", help="only these scenarios (by name prefix)")
+    p.add_argument(
+        "--design",
+        action="append",
+        help="instead of the config's scenarios: this design (name, .yaml, .svg or .dxf) on a "
+        "static belt fed in batches, every tile right (repeatable)",
+    )
+    p.add_argument(
+        "--env", nargs="*", default=[], metavar="KEY=VALUE", help="env (and cell) overrides"
+    )
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
     p.add_argument("--out", type=Path, default=OUT)
     args = p.parse_args(argv)
     cfg = load_config(ScriptedBenchConfig, args.config)
     if args.seeds:
         cfg = replace(cfg, seeds=args.seeds)
+    if args.design:
+        cfg = replace(cfg, scenarios=tuple(design_scenario(d) for d in args.design))
     scenarios = [
-        s
+        replace(s, env={**s.env, **parse_pairs(args.env)})
         for s in cfg.scenarios
         if not args.scenario or any(s.name.startswith(x) for x in args.scenario)
     ]

@@ -24,7 +24,8 @@ from pathlib import Path
 from typing import Any
 
 from apps.cli import CommandParser, run_cli
-from configs import ConfigError, check_positive, load_config
+from configs import ConfigError, load_config
+from configs.checks import check_fields, checked
 from configs.files import write_text
 
 OUT = Path("out/bench_stream_stress.json")
@@ -49,19 +50,18 @@ class StreamStressConfig:
     """
 
     task: str = "MosaicStream-v1"
-    periods: tuple[float, ...] = (2.5, 2.2, 2.0, 1.8)
-    speeds: tuple[float, ...] = (0.1, 0.2)
-    tiles: int = 100
-    first_seed: int = 2000
-    stream_initial: int = 0
-    image_size: tuple[int, int] = (492, 656)
-    steps_per_tile: int = 2
+    periods: tuple[float, ...] = checked((2.5, 2.2, 2.0, 1.8), gt=0)
+    speeds: tuple[float, ...] = checked((0.1, 0.2), gt=0)
+    tiles: int = checked(100, gt=0)
+    first_seed: int = checked(2000, ge=0)
+    stream_initial: int = checked(0, ge=0)
+    image_size: tuple[int, int] = checked((492, 656), length=2, gt=0)
+    steps_per_tile: int = checked(2, gt=0)
     figure: str = "docs/stream_stress.png"
 
     def __post_init__(self) -> None:
         """Raise `ConfigError` on bad values."""
-        check_positive(self, "periods", "speeds", "tiles", "steps_per_tile", "image_size")
-        check_positive(self, "first_seed", "stream_initial", strict=False)
+        check_fields(self, ConfigError, prefix="bench_stream_stress: ")
         if not self.periods or not self.speeds:
             raise ConfigError("bench_stream_stress: periods and speeds must not be empty")
 

@@ -18,6 +18,7 @@ from envs.actions import (
 )
 from envs.cell.cell import Cell
 from envs.cell.pick_place import PickPlaceExecutor
+from envs.cell.tiles.shapes import design_mesh_size
 from envs.env_config import EnvConfig, EnvConfigError
 from envs.episode_setup import build_cell, design_cell_parts
 from envs.indexing import IndexMaps
@@ -57,7 +58,8 @@ def build_parts(
         EnvConfigError: An observation image larger than the render buffer.
     """
     design, shapes, slots = design_cell_parts(cfg, design)
-    cell = build_cell(cfg.cell, shapes, slots, seed=seed, tries=cfg.layout_tries)
+    mesh = design_mesh_size(design)
+    cell = build_cell(cfg.cell, shapes, slots, seed=seed, tries=cfg.layout_tries, mesh_size=mesh)
     check_image_size(cfg, cell)
     task = MosaicTask(cell, cfg)
     pick, place = work_areas(cell, cfg)

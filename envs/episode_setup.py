@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, TypeVar
 
 from envs.cell.cell import Cell
 from envs.cell.config import CellConfig, FeedMode
+from envs.cell.glazes import check_glazes
 from envs.cell.tiles.shapes import tile_shapes_from_design
 from envs.cell.tiles.tile import SlotSpec, TileShape
 from envs.errors import CellError, LayoutError
@@ -61,16 +62,21 @@ def build_cell(
     slots: Sequence[SlotSpec] = (),
     seed: int = 0,
     tries: int = 20,
+    *,
+    mesh_size: Sequence[float] | None = None,
 ) -> Cell:
     """The cell built with the first seed from ``seed`` on whose layout fits the belt.
 
-    The seed used is ``cell.layout_seed``.
+    The seed used is ``cell.layout_seed``; ``mesh_size`` is the design's mesh [m]
+    (`envs.cell.tiles.shapes.design_mesh_size`; None: the cell's largest).
 
     Raises:
         LayoutError: No seed in ``[seed, seed + tries)`` fits.
-        CellError: Any other bad input (raised at once).
+        CellError: Any other bad input (raised at once), e.g. a `MeshSizeError`.
     """
-    return retry_layout(lambda k: Cell(config, shapes, slots, seed=seed + k), tries)
+    return retry_layout(
+        lambda k: Cell(config, shapes, slots, seed=seed + k, mesh_size=mesh_size), tries
+    )
 
 
 def with_feed_fallback(make: Callable[[FeedMode], T], feed: FeedMode) -> tuple[T, FeedMode]:
@@ -96,10 +102,12 @@ def design_cell_parts(
     """A design with its tile shapes and slots (the first ``max_slots`` when set).
 
     ``design`` None: the env's ``design`` (loaded); else that design (a procedural draw).
+    A slot colour the cell cannot tell from its belt is warned about (`envs.cell.glazes`).
     """
     from qshape.design import Design  # noqa: PLC0415 - keep `import envs` light
 
     design = Design.load(config.design) if design is None else design
+    check_glazes(design, config.cell, config.depth)
     shapes, slots = tile_shapes_from_design(design)
     if config.max_slots:
         shapes, slots = shapes[: config.max_slots], slots[: config.max_slots]

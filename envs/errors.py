@@ -19,4 +19,8 @@ class LayoutError(CellError):
     """The tiles did not fit the tile area in one random layout draw (another draw may fit)."""
 
 
-__all__ = ["CellError", "EnvError", "LayoutError"]
+class MeshSizeError(CellError):
+    """A design's mesh is larger than the cell takes (the message names the largest that fits)."""
+
+
+__all__ = ["CellError", "EnvError", "LayoutError", "MeshSizeError"]

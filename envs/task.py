@@ -222,9 +222,7 @@ class MosaicTask:
         self.distractor = cell.is_distractor.copy()
         self.symmetry = np.array([t.shape.symmetry for t in cell.tiles], dtype=int)
         self.slot_xyyaw = cell.slot_poses_world()
-        mesh = np.asarray(cell.cfg.output_belt.mesh_size) / 2
-        self._mesh_lo = cell.geometry.output_centre[:2] - mesh
-        self._mesh_hi = cell.geometry.output_centre[:2] + mesh
+        self._mesh_lo, self._mesh_hi = cell.geometry.mesh_lo, cell.geometry.mesh_hi
         self._rest_z = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2
         self._yaw_tol = math.radians(config.yaw_tolerance_deg)
         self._flat = math.cos(math.radians(config.max_tilt_deg))

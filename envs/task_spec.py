@@ -346,7 +346,7 @@ def work_areas(cell: Cell, config: EnvConfig | None = None) -> tuple[Area, Area]
     pick_margin = config.pick_margin if config is not None else 0.0
     place_margin = config.place_margin if config is not None else 0.0
     half_in = np.asarray(c.input_belt.tile_area) / 2 + pick_margin
-    half_mesh = np.asarray(c.output_belt.mesh_size) / 2 + place_margin
+    half_mesh = g.mesh_size / 2 + place_margin
     pick_hi = g.input_centre[:2] + half_in
     if (
         config is not None and config.belt_speed > 0

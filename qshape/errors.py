@@ -46,6 +46,13 @@ class SmallFeatureWarning(UserWarning):
     """
 
 
+class DesignFileWarning(UserWarning):
+    """A design file (SVG, DXF) held something loading skipped or filled in (named in it).
+
+    Text and dimension entities, a missing joint width, a file without units.
+    """
+
+
 class LimitError(QShapeError):
     """An input exceeds a documented cap (``limits`` of configs/qshape.yaml), named in it."""
 
@@ -64,6 +71,7 @@ class DesignLimitError(LimitError, DesignError):
 
 __all__ = [
     "DesignError",
+    "DesignFileWarning",
     "DesignLimitError",
     "FigureLimitError",
     "ExcludedClassError",

@@ -36,6 +36,7 @@ from agents.errors import AgentError
 from agents.scripted.belt_schedule import BeltScheduler
 from agents.scripted.calibration import CalibrationResult, calibrate_env_camera
 from agents.scripted.config import AgentsConfig, load_agents_config
+from agents.scripted.height import HeightMap
 from agents.scripted.outline_fit import TileOutline, fit_unmatched
 from agents.scripted.perception import (
     Perception,
@@ -115,6 +116,10 @@ class ScriptedAgent:
             calibration.camera if calibration is not None else spec.camera("input_camera")
         )
         self.tile_top = spec.pick.tile_top_z
+        self.heights = HeightMap(self.camera, spec.pick.surface_z)
+        """Heights above the belt from the depth picture (`agents.scripted.height`), if any."""
+        self.height: np.ndarray | None = None
+        """The latest picture's tile heights [mm] (``input_depth`` observations), or None."""
         outline = ExtractParams.load().outline
         seen = (
             (
@@ -214,6 +219,7 @@ class ScriptedAgent:
             self.tile_top,
             cfg=pcfg,
             white_balance=self._white_balance if pcfg.color_balance else None,
+            height=self.height,
         )
         if self.belt is not None:
             self.belt.observe(per.tiles, per.partial)
@@ -409,6 +415,7 @@ class ScriptedAgent:
         """
         del deterministic
         image = np.asarray(observation["input_camera"])
+        depth = observation.get("input_depth") if hasattr(observation, "get") else None
         batched = image.ndim == IMAGE_DIMS + 1
         if batched:
             if image.shape[0] != 1:
@@ -416,6 +423,8 @@ class ScriptedAgent:
                     f"the scripted agent drives one env, got a batch of {image.shape[0]}"
                 )
             image = image[0]
+            depth = None if depth is None else np.asarray(depth)[0]
+        self.height = None if depth is None else self.heights.height_mm(depth)
         if episode_start is not None and bool(np.asarray(episode_start).ravel()[0]):
             self.reset()
         act = self.action(self.next_command(image))

@@ -14,7 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from agents.errors import AgentError
-from configs import ConfigError, check_positive, load_config
+from configs import ConfigError, load_config
+from configs.checks import check_fields, checked
 
 BELT_SCHEDULE_CONFIG = "belt_schedule"
 """Bundled config name (``configs/belt_schedule.yaml``)."""
@@ -59,44 +60,24 @@ class BeltScheduleConfig:
             is tried (the cycle would be empty otherwise, so the try costs no other tile).
     """
 
-    first_reach_s: float = 0.7
-    reach_s: float = 1.2
-    first_cycle_s: float = 1.8
-    cycle_s: float = 2.3
-    cycle_smoothing: float = 0.5
-    end_margin: float = 0.02
-    match_gate_x: float = 0.06
-    match_tolerance_x: float = 0.006
-    match_gate_y: float = 0.004
-    match_color: float = 0.15
-    match_area: float = 0.25
-    view_margin: float = 0.004
-    min_interval_s: float = 0.5
-    last_chance_reach_s: float = 1.0
+    first_reach_s: float = checked(0.7, gt=0)
+    reach_s: float = checked(1.2, gt=0)
+    first_cycle_s: float = checked(1.8, gt=0)
+    cycle_s: float = checked(2.3, gt=0)
+    cycle_smoothing: float = checked(0.5, gt=0, le=1)
+    end_margin: float = checked(0.02, ge=0)
+    match_gate_x: float = checked(0.06, gt=0)
+    match_tolerance_x: float = checked(0.006, gt=0)
+    match_gate_y: float = checked(0.004, gt=0)
+    match_color: float = checked(0.15, gt=0)
+    match_area: float = checked(0.25, gt=0)
+    view_margin: float = checked(0.004, ge=0)
+    min_interval_s: float = checked(0.5, gt=0)
+    last_chance_reach_s: float = checked(1.0, gt=0)
 
     def __post_init__(self) -> None:
         """Raise `BeltScheduleError` on a value out of its range."""
-        check_positive(
-            self,
-            "first_reach_s",
-            "reach_s",
-            "first_cycle_s",
-            "cycle_s",
-            "match_gate_x",
-            "match_tolerance_x",
-            "match_gate_y",
-            "match_color",
-            "match_area",
-            "min_interval_s",
-            "last_chance_reach_s",
-            error=BeltScheduleError,
-        )
-        check_positive(self, "end_margin", "view_margin", error=BeltScheduleError, strict=False)
-        if not 0.0 < self.cycle_smoothing <= 1.0:
-            raise BeltScheduleError(
-                "BeltScheduleConfig.cycle_smoothing must be in (0, 1], got "
-                f"{self.cycle_smoothing!r}"
-            )
+        check_fields(self, BeltScheduleError, qualify=True)
         if self.match_tolerance_x > self.match_gate_x:
             raise BeltScheduleError(
                 "BeltScheduleConfig.match_tolerance_x must be at most match_gate_x, got "

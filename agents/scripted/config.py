@@ -35,6 +35,10 @@ class PerceptionConfig:
             far inside the tile material; otherwise at its pole of inaccessibility, [m] (half
             the 23 mm pad of the paper: the pad seals on material all round).
         polylabel_tolerance: Precision of the pole-of-inaccessibility search, [m].
+        thin_fraction: A tile whose pole lies less than this x ``pad_clearance`` inside it
+            (no room for the pad anywhere: a thin tile) is picked where the most of the pad
+            lies on it instead (`agents.scripted.grasp.best_hold`), dimensionless.
+        grasp_step: Grid of that search before it is refined (to ``polylabel_tolerance``), [m].
         color_balance: Estimate a per-channel gain mapping measured tile colours onto the
             design's palette (white balance against known colours: camera calibration)
             before matching.
@@ -73,6 +77,8 @@ class PerceptionConfig:
     mm_per_m: float = checked(MM_PER_M, gt=0)
     pad_clearance: float = checked(0.0115, ge=0)
     polylabel_tolerance: float = checked(1e-4, gt=0)
+    thin_fraction: float = checked(0.9, ge=0, le=1)
+    grasp_step: float = checked(0.002, gt=0)
     color_balance: bool = True
     color_balance_iterations: int = 3
     max_color_gain: float = 2.0
@@ -112,6 +118,13 @@ class PlacementConfig:
         fit_turn_window_deg: Turns closer than this to a symmetry of the slot count as it, [deg].
         fit_step_deg: Turns tried by that fit, this far apart, [deg].
         fit_spacing_mm: Largest distance between the outline points compared, [mm].
+        centre_fit_below_deg: A tile whose slot has a corner sharper than this is centred by
+            the slot's outline fitted to its traced outline (`agents.scripted.centre_fit`), not
+            by its relevant points (the picture blunts a sharp tip), [deg] (0: never).
+        centre_fit_step_mm: Sampling of the slot's outline in that fit, [mm].
+        centre_fit_iterations: Translation updates of that fit.
+        centre_fit_trim: Traced points farther off than this x the median distance are left
+            out of each update (dimensionless).
     """
 
     method: Literal["optimal", "greedy"] = checked("optimal", choices=("optimal", "greedy"))
@@ -126,6 +139,10 @@ class PlacementConfig:
     fit_turn_window_deg: float = checked(10.0, ge=0)
     fit_step_deg: float = checked(2.0, gt=0)
     fit_spacing_mm: float = checked(1.0, gt=0)
+    centre_fit_below_deg: float = checked(30.0, ge=0)
+    centre_fit_step_mm: float = checked(0.25, gt=0)
+    centre_fit_iterations: int = checked(12, ge=1, integer=True)
+    centre_fit_trim: float = checked(3.0, gt=1)
 
     def __post_init__(self) -> None:
         """Raise `AgentError` on bad values."""

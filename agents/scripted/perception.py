@@ -27,6 +27,7 @@ from shapely.geometry import Point, Polygon
 import qshape
 from agents.errors import PerceptionError
 from agents.scripted.config import PerceptionConfig
+from agents.scripted.grasp import best_hold
 from agents.scripted.seen_slots import SeenSlot, seen_outlines
 from agents.scripted.white_balance import color_gain, recolour
 from envs.cell.cameras import CameraModel
@@ -167,7 +168,7 @@ def figure_to_world(
 
 
 def grasp_point(fig_mm: Figure, centre: np.ndarray, cfg: PerceptionConfig) -> np.ndarray:
-    """Pad position [m], shape (2,): the centre if the pad fits there, else the pole.
+    """Pad position [m], shape (2,): the centre if the pad fits there, else its best hold.
 
     Args:
         fig_mm: World figure in [mm].
@@ -185,7 +186,9 @@ def grasp_point(fig_mm: Figure, centre: np.ndarray, cfg: PerceptionConfig) -> np
     if poly.contains(c) and poly.boundary.distance(c) >= cfg.pad_clearance:
         return np.asarray(centre, dtype=float).copy()
     best = shapely.ops.polylabel(poly, tolerance=cfg.polylabel_tolerance)
-    return np.array([best.x, best.y])
+    if poly.boundary.distance(best) >= cfg.thin_fraction * cfg.pad_clearance:
+        return np.array([best.x, best.y])  # (nearly) the whole pad on material
+    return best_hold(poly, centre, cfg.pad_clearance, cfg.grasp_step, cfg.polylabel_tolerance)
 
 
 def perceive_tiles(
@@ -197,6 +200,7 @@ def perceive_tiles(
     extract_params: qshape.ExtractParams | None = None,
     tolerances: qshape.Tolerances | None = None,
     white_balance: WhiteBalance | None = None,
+    height: np.ndarray | None = None,
 ) -> Perception:
     """Tiles in an input-camera image, located in the world and described (once).
 
@@ -213,6 +217,9 @@ def perceive_tiles(
             (n, 3), when there are any; the tiles' colours are multiplied by the gain (3,) it
             returns (clipped to [0, 1], `recolour`) before they are described. None: the
             colours as measured.
+        height: The tiles' height above the belt [mm], shape (h, w), aligned with ``image``
+            (`agents.scripted.height.HeightMap`), or None: a tile of the belt's colour is then found
+            by its height (`qshape.extract_detailed`).
 
     Returns:
         The perceived tiles, partial regions and unrecognised regions. An image qshape cannot
@@ -225,7 +232,7 @@ def perceive_tiles(
     """
     cfg = cfg or PerceptionConfig()
     z = float(tile_top_z)
-    res = _extract(image, extract_params)
+    res = _extract(image, extract_params, height)
     if isinstance(res, str):
         return Perception((), (), (res,), z)
     world: list[Figure] = []
@@ -329,7 +336,9 @@ def refigured(
 
 
 def _extract(
-    image: np.ndarray, extract_params: qshape.ExtractParams | None
+    image: np.ndarray,
+    extract_params: qshape.ExtractParams | None,
+    height: np.ndarray | None = None,
 ) -> qshape.ExtractResult | str:
     """The figures qshape extracts from a picture, or why the picture is not usable.
 
@@ -341,7 +350,7 @@ def _extract(
         if health.verdict in ("dark", "overexposed"):
             # A uniform picture is an empty belt; a black or blown-out one is a camera fault.
             return f"image not usable: {health.message}"
-        return qshape.extract_detailed(image, extract_params)
+        return qshape.extract_detailed(image, extract_params, height)
     except qshape.ImageError as exc:
         arr = np.asarray(image)
         well_formed = arr.dtype == np.uint8 and arr.ndim == 3 and arr.shape[2] == 3  # noqa: PLR2004

@@ -28,6 +28,7 @@ from scipy.optimize import minimize_scalar
 from scipy.spatial import cKDTree
 
 import qshape
+from agents.scripted.centre_fit import tile_centre
 from agents.scripted.config import PlacementConfig
 from agents.scripted.outline_fit import TileOutline, area_centroid, boundary_points, fit_outline
 from agents.scripted.perception import PerceivedTile, SlotTarget
@@ -376,6 +377,8 @@ def _command(
         centre = t.centre
         if seen:
             centre = _centroid(t.outline_mm, t.figure) / MM_PER_M
+        else:
+            centre = tile_centre(t.centre, t.outline_mm, s.figure, rot, cfg)
         return fitted_command(t, s, rot, centre, score=a.score, cfg=cfg)
     ref = s.seen.figure if seen and s.seen is not None else s.figure
     rot = wrap(refine_rotation(t.figure, ref, a.rotation, span, step, spacing=spacing, scan=scan))

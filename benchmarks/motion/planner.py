@@ -42,7 +42,7 @@ from configs.files import write_text
 from envs.cell.cell import Cell
 from envs.cell.config import CellConfig, load_cell_config
 from envs.cell.scene import build_arm_model
-from envs.cell.tiles.shapes import tile_shapes_from_design
+from envs.cell.tiles.shapes import design_mesh_size, tile_shapes_from_design
 from envs.episode_setup import build_cell
 from planners.config import PlannerConfig, load_planner_config
 from planners.cycle.plan import CyclePlan
@@ -364,11 +364,14 @@ def run_design(
     stream_period: float = 2.5,
 ) -> dict[str, Any]:
     """Pick and place a whole design; returns the figures for one layout and belt speed."""
-    shapes, slots = tile_shapes_from_design(Design.load(design))
+    loaded = Design.load(design)
+    shapes, slots = tile_shapes_from_design(loaded)
     if max_tiles is not None:
         shapes, slots = shapes[:max_tiles], slots[:max_tiles]
     cfg = cell_config(layout, belt_speed, stream_period)
-    cell = _build_cell(cfg, shapes, slots, seed)
+    cell = build_cell(
+        cfg, shapes, slots, seed, LAYOUT_SEED_TRIES, mesh_size=design_mesh_size(loaded)
+    )
     try:
         cell.belt_speed = belt_speed
         runner = CellRunner(cell, planner_config, dynamic)
@@ -395,11 +398,6 @@ def run_design(
         }
     finally:
         cell.close()
-
-
-def _build_cell(cfg: CellConfig, shapes: Any, slots: Any, seed: int) -> Cell:
-    """The cell with the first layout seed from ``seed`` on that fits every tile on the belt."""
-    return build_cell(cfg, shapes, slots, seed, LAYOUT_SEED_TRIES)
 
 
 def cell_config(layout: str, belt_speed: float, stream_period: float) -> CellConfig:

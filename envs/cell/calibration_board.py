@@ -23,7 +23,7 @@ import numpy as np
 
 from envs.cell.cameras import CameraModel, CameraRig, camera_model
 from envs.cell.config import CellConfig
-from envs.cell.scene import build_spec, cell_geometry
+from envs.cell.scene import CellGeometry, build_spec, cell_geometry
 from envs.errors import CellError
 
 BOARD = "calibration_board"
@@ -156,6 +156,7 @@ def render_calibration_views(
     camera: str,
     target: CalibrationTarget | None = None,
     size: tuple[int, int] | None = None,
+    geometry: CellGeometry | None = None,
 ) -> CalibrationViews:
     """Render the board at the calibration poses with one of the cell's cameras.
 
@@ -164,6 +165,8 @@ def render_calibration_views(
         camera: ``"input_camera"`` or ``"output_camera"``.
         target: Board and poses (defaults when None).
         size: Image (height, width) [px]; the camera's configured size when None.
+        geometry: The cell's geometry (its mesh sets the output camera's height); None:
+            the configuration's largest mesh.
 
     Raises:
         CellError: Unknown camera.
@@ -174,12 +177,12 @@ def render_calibration_views(
         raise CellError(f"unknown camera {camera!r}; allowed: {sorted(cams)}")
     cam_cfg = cams[camera]
     height, width = size if size is not None else (cam_cfg.height, cam_cfg.width)
-    geo = cell_geometry(cell_cfg)
+    geo = geometry or cell_geometry(cell_cfg)
     if camera == "input_camera":
         centre = np.array([geo.input_centre[0], geo.input_centre[1], geo.belt_top])
     else:
         centre = np.array([geo.output_centre[0], geo.output_centre[1], geo.mesh_top])
-    spec = build_spec(cell_cfg)
+    spec = build_spec(cell_cfg, geometry=geo)
     add_board(spec, target)
     model = spec.compile()
     data = mujoco.MjData(model)

@@ -49,8 +49,12 @@ class Cell:
         shapes: Tile shapes to feed (the built-in test shapes when None).
         slots: Slots of the mesh (visual marks on the output belt).
         seed: Seed or generator for noise, distractors and layout.
+        mesh_size: (x, y) of the design's mesh [m] (the sheet, the on-mesh test, the place
+            area and the output camera's framing follow it: `geometry`); None: the
+            configuration's largest mesh (``output_belt.max_mesh_size``).
 
     Raises:
+        MeshSizeError: A mesh larger than ``output_belt.max_mesh_size`` (names the largest).
         CellError: Bad configuration, slots outside the mesh, or tiles that do not fit the
             input belt (checked before anything is simulated).
     """
@@ -61,8 +65,11 @@ class Cell:
         shapes: Sequence[TileShape] | None = None,
         slots: Sequence[SlotSpec] = (),
         seed: int | np.random.Generator | None = 0,
+        mesh_size: Sequence[float] | None = None,
     ) -> None:
         self.cfg = config if config is not None else load_cell_config()
+        self.geometry = cell_geometry(self.cfg, mesh_size)
+        """Where the cell's parts are, with the design's mesh (`envs.cell.geometry`)."""
         self._rng = np.random.default_rng(seed)
         self.shapes = tuple(shapes) if shapes is not None else basic_shapes()
         self.slots = tuple(slots)
@@ -71,8 +78,7 @@ class Cell:
         pool = [t for variant in self.tile_pool for t in variant]
         n, n_variants = len(self.tile_pool[0]), len(self.tile_pool)
         self.is_distractor = np.array([t.distractor != "" for t in self.tile_pool[0]])
-        self.geometry = cell_geometry(self.cfg)
-        self.model, self.ids = build_scene(self.cfg, pool, self.slots, n_variants)
+        self.model, self.ids = build_scene(self.cfg, pool, self.slots, n_variants, self.geometry)
         self.data = mujoco.MjData(self.model)
         self._park = park_positions(n, self.cfg.tiles.thickness)
         self.variants = TileVariants(

@@ -153,23 +153,29 @@ class OutputBeltConfig:
         length: Belt length along x [m].
         width: Belt width [m].
         thickness: Belt slab thickness [m].
-        mesh_size: Size of the mesh sheet, x and y [m].
+        max_mesh_size: The largest mesh sheet the cell takes, x and y [m]: what the output
+            belt holds and the arm reaches. The sheet itself is the design's mesh
+            (`envs.cell.geometry.cell_geometry`); a cell built without a design lays this one.
         mesh_thickness: Thickness of the mesh sheet [m].
         slot_mark_height: Height of the visual slot marks above the sheet [m] (no contacts).
+        frame_margin: Belt seen beyond each mesh edge in the output camera's picture [m]: the
+            output camera is raised above its ``height_above_belt`` when a larger mesh would
+            not fit its view with this margin.
     """
 
     length: float = checked(0.6, gt=0)
     width: float = checked(0.32, gt=0)
     thickness: float = checked(0.04, gt=0)
-    mesh_size: tuple[float, ...] = checked((0.23, 0.23), length=2, gt=0)
+    max_mesh_size: tuple[float, ...] = checked((0.32, 0.32), length=2, gt=0)
     mesh_thickness: float = checked(0.002, gt=0)
     slot_mark_height: float = checked(0.0003, gt=0)
+    frame_margin: float = checked(0.005, ge=0)
 
     def __post_init__(self) -> None:
         check_fields(self, CellError, qualify=True)
-        if self.mesh_size[0] > self.length or self.mesh_size[1] > self.width:
+        if self.max_mesh_size[0] > self.length or self.max_mesh_size[1] > self.width:
             raise CellError(
-                f"OutputBeltConfig.mesh_size {self.mesh_size} m does not fit the belt "
+                f"OutputBeltConfig.max_mesh_size {self.max_mesh_size} m does not fit the belt "
                 f"({self.length} x {self.width} m)"
             )
 

@@ -16,7 +16,7 @@ from shapely.geometry import Polygon
 
 from envs.cell.config import CellConfig
 from envs.cell.contacts import CONTACT_SOLREF, WORLD_CONAFFINITY, WORLD_CONTYPE
-from envs.cell.geometry import CellGeometry, cell_geometry
+from envs.cell.geometry import CellGeometry
 from envs.cell.tiles.tile import SlotSpec
 from envs.errors import CellError
 from spatial.rotations import quat_from_yaw
@@ -85,13 +85,17 @@ def _box(
     return g
 
 
-def add_fixtures(spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotSpec]) -> None:
+def add_fixtures(
+    spec: mujoco.MjSpec, cfg: CellConfig, slots: Sequence[SlotSpec], geo: CellGeometry
+) -> None:
     """Floor, light, belts, bin, mesh sheet with slot marks, cameras (in this order).
+
+    The mesh sheet, the slot marks' bounds and the output camera's height are ``geo``'s
+    (the design's mesh, `envs.cell.geometry.cell_geometry`).
 
     Raises:
         CellError: A slot extends beyond the mesh sheet.
     """
-    geo = cell_geometry(cfg)
     _add_floor_and_light(spec, cfg)
     _add_input_belt(spec.worldbody, cfg, geo)
     _add_bin(spec.worldbody, cfg, geo)
@@ -248,7 +252,7 @@ def _add_output_belt(wb: mujoco.MjsBody, cfg: CellConfig, geo: CellGeometry) -> 
         wb,
         "mesh_sheet",
         [oc[0], oc[1], top + ob.mesh_thickness / 2],
-        [ob.mesh_size[0] / 2, ob.mesh_size[1] / 2, ob.mesh_thickness / 2],
+        [geo.mesh_size[0] / 2, geo.mesh_size[1] / 2, ob.mesh_thickness / 2],
         look.sheet_rgba,
     )
     sheet.friction = friction
@@ -259,7 +263,7 @@ def _add_slot_marks(
 ) -> None:
     """A thin coloured mark per slot on the mesh sheet (visual only)."""
     wb, ob, look, oc = spec.worldbody, cfg.output_belt, cfg.scenery, geo.output_centre
-    half = np.asarray(ob.mesh_size) / 2
+    half = geo.mesh_size / 2
     for k, slot in enumerate(slots):
         x, y, yaw = slot.pose
         c = slot.shape.polygon.centroid
@@ -271,7 +275,7 @@ def _add_slot_marks(
         if np.any(np.abs(world) > half + 1e-9):
             raise CellError(
                 f"slot {k} ({slot.shape.name}) at pose {slot.pose} extends beyond the mesh "
-                f"({ob.mesh_size[0] * MM_PER_M:.0f} x {ob.mesh_size[1] * MM_PER_M:.0f} mm, "
+                f"({geo.mesh_size[0] * MM_PER_M:.0f} x {geo.mesh_size[1] * MM_PER_M:.0f} mm, "
                 "centred at 0)"
             )
         verts, faces = extrusion(outline, holes, 0.0, ob.slot_mark_height)
@@ -291,16 +295,12 @@ def _add_cameras(wb: mujoco.MjsBody, cfg: CellConfig, geo: CellGeometry) -> None
     """The input and output cameras and the overview camera."""
     look = cfg.scenery
     # Cameras looking straight down; image right = +x, image up = +y.
-    for name, centre, cam in (
-        ("input_camera", geo.input_centre, cfg.input_camera),
-        ("output_camera", geo.output_centre, cfg.output_camera),
+    for name, centre, cam, height in (
+        ("input_camera", geo.input_centre, cfg.input_camera, cfg.input_camera.height_above_belt),
+        ("output_camera", geo.output_centre, cfg.output_camera, geo.output_camera_height),
     ):
         c = wb.add_camera(name=name)
-        c.pos = [
-            centre[0] + cam.offset[0],
-            centre[1] + cam.offset[1],
-            centre[2] + cam.height_above_belt,
-        ]
+        c.pos = [centre[0] + cam.offset[0], centre[1] + cam.offset[1], centre[2] + height]
         c.quat = [1, 0, 0, 0]
         c.fovy = cam.fovy_deg
     wb.add_camera(name="overview", pos=list(look.overview_pos), xyaxes=list(look.overview_xyaxes))

@@ -255,6 +255,7 @@ def build_spec(
     tiles: Sequence[PhysicalTile] = (),
     slots: Sequence[SlotSpec] = (),
     variants: int = 1,
+    geometry: CellGeometry | None = None,
 ) -> mujoco.MjSpec:
     """The whole cell as an editable MjSpec (tiles parked on the floor far away).
 
@@ -265,6 +266,8 @@ def build_spec(
             a child body of its tile's free body.
         slots: Slots of the mesh (visual marks).
         variants: Variants per tile in ``tiles``.
+        geometry: Where the parts are, with the design's mesh (`cell_geometry`); None: the
+            configuration's largest mesh.
 
     Raises:
         CellError: A slot outside the mesh, or ``tiles`` not a multiple of ``variants``.
@@ -276,7 +279,7 @@ def build_spec(
         )
     spec = _robot_spec(cfg)
     _configure(spec, cfg)
-    add_fixtures(spec, cfg, slots)
+    add_fixtures(spec, cfg, slots, geometry or cell_geometry(cfg))
     if tiles:
         _add_tiles(spec, cfg, tiles, variants)
         eq = spec.add_equality(name="suction_weld", type=mujoco.mjtEq.mjEQ_WELD)
@@ -356,6 +359,7 @@ def build_scene(
     tiles: Sequence[PhysicalTile] = (),
     slots: Sequence[SlotSpec] = (),
     variants: int = 1,
+    geometry: CellGeometry | None = None,
 ) -> tuple[mujoco.MjModel, SceneIds]:
     """Compile the cell and resolve its ids (all ``len(tiles)`` bodies; see `build_spec`).
 
@@ -363,7 +367,7 @@ def build_scene(
         CellError: Bad slots or variants, or MuJoCo refused the composed model (message
             included).
     """
-    spec = build_spec(cfg, tiles, slots, variants)
+    spec = build_spec(cfg, tiles, slots, variants, geometry)
     try:
         model = spec.compile()
     except ValueError as exc:

@@ -103,7 +103,7 @@ class CellViews:
         Raises:
             CellError: Unknown camera (the message lists the allowed names).
         """
-        return render_calibration_views(self.cfg, camera, target, size)
+        return render_calibration_views(self.cfg, camera, target, size, self.geometry)
 
     def belt_blur(
         self, data: mujoco.MjData, height: int, width: int

@@ -36,18 +36,23 @@ def validate(design: DesignFields, source: str = "") -> None:
         default_limits().check_length(float(value), f"{pre}mesh {side}")
     margin = design.rules.mesh_margin_mm
     outlines = []
+    checked: dict[str, FloatArray] = {}  # per shape: its outline about the centroid, checked once
     for s in design.slots:
         try:
-            dense = s.path.outer.dense(design.rules.check_step_mm)
-            if geo.self_intersects(dense):
-                raise DesignError("its outline crosses itself")
-            s.figure()
+            local = checked.get(s.shape_key)
+            if local is None:
+                local = s.local_path.outer.dense(design.rules.check_step_mm)
+                if geo.self_intersects(local):
+                    raise DesignError("its outline crosses itself")
+                s.local_path.figure(s.color, design.rules.max_arc_deg)
+                checked[s.shape_key] = local
         except DesignLimitError as exc:
             raise DesignLimitError(f"{pre}{exc}") from exc
         except (DesignError, InvalidFigureError) as exc:
             text = str(exc)
             named = text if text.startswith(f"slot {s.name!r}") else f"slot {s.name!r}: {text}"
             raise DesignError(f"{pre}{named}") from exc
+        dense = geo.rotate(local, np.radians(s.angle)) + s.centroid
         lo, hi = dense.min(axis=0), dense.max(axis=0)
         if lo[0] < margin or lo[1] < margin or hi[0] > w - margin or hi[1] > h - margin:
             raise DesignError(
@@ -58,12 +63,7 @@ def validate(design: DesignFields, source: str = "") -> None:
     check_small_features(design.slots, design.rules, pre)
     check_turn_cues(design.slots, design.rules, pre)
     min_gap = design.rules.min_gap_fraction * design.joint
-    centres = np.array([d.mean(axis=0) for d in outlines])
-    radii = np.array(
-        [np.max(np.hypot(*(d - c).T)) for d, c in zip(outlines, centres, strict=False)]
-    )
-    dc = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
-    ii, jj = np.nonzero(np.triu(dc < radii[:, None] + radii[None, :] + min_gap, k=1))
+    ii, jj = _near_pairs(outlines, min_gap)
     for i, j in zip(ii.tolist(), jj.tolist(), strict=False):
         gap = _outline_gap(outlines[i], outlines[j])
         if gap < min_gap:
@@ -72,6 +72,24 @@ def validate(design: DesignFields, source: str = "") -> None:
                 f"{pre}slots {design.slots[i].name!r} and {design.slots[j].name!r} {what}; the "
                 f"joint is {design.joint} mm (at least {min_gap:.2f} mm required)"
             )
+
+
+def _near_pairs(outlines: list[FloatArray], gap: float) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs (i < j) of outlines closer than ``gap`` or overlapping, O(n log n).
+
+    Outlines are taken relative to the first one's first point (as `_outline_gap`).
+    """
+    if not outlines:
+        return np.zeros(0, int), np.zeros(0, int)
+    ref = outlines[0][0]
+    counts = np.array([len(d) for d in outlines])
+    coords = np.concatenate(outlines) - ref
+    rings = shapely.linearrings(coords, indices=np.repeat(np.arange(len(outlines)), counts))
+    polys = shapely.polygons(rings)
+    tree = shapely.STRtree(polys)
+    a, b = tree.query(polys, predicate="dwithin", distance=gap)
+    keep = a < b
+    return a[keep], b[keep]
 
 
 def _outline_gap(a: FloatArray, b: FloatArray) -> float:

@@ -12,7 +12,9 @@ is one of the `SHAPE_FAMILIES`:
   (negative), or straight;
 - ``rounded``: a convex polygon with corners rounded by arcs tangent to both edges;
 - ``bite``: a convex polygon with a concave arc bitten out of, or a bulge added to, part of
-  an edge.
+  an edge;
+- ``thin``: thin, concave tiles with sharp tips: an arrowhead (a dart: a tip of 18-32 deg, two
+  barbs and a notch), a four-pointed star with thin points, or a chevron.
 
 Any class may get holes (circle, square, rectangle, triangle, regular polygon), centred on the
 outline's area centroid or off it, of a symmetry other than the outline's. Every feature stays
@@ -340,6 +342,25 @@ class DesignGenerator:
             return {"kind": "polygon", "vertices": [[0, 0], [1, 0, bulge], [0, 1]]}
         w = rng.uniform(0.35, 0.55)
         return polygon_shape([[0, 0], [1, 0], [1, w], [w, w], [w, 1], [0, 1]])
+
+    def _draw_thin(self, rng: np.random.Generator, r: float) -> Shape:
+        """A thin, concave tile with sharp tips at unit size (`_fit` scales it)."""
+        del r
+        kind = int(rng.integers(3))
+        if kind == 0:  # arrowhead: tip at (1, 0), barbs at (0, +-w/2), notch at (n, 0)
+            w = 2.0 * math.tan(math.radians(rng.uniform(9.0, 16.0)))
+            n = rng.uniform(0.15, 0.4)
+            return polygon_shape([[0.0, -w / 2], [1.0, 0.0], [0.0, w / 2], [n, 0.0]])
+        if kind == 1:  # four-pointed star, the points thin, one pair longer
+            t = math.pi / 4 * np.arange(8)
+            long = rng.uniform(1.0, 1.6)
+            rad = np.array([long, 0.0, 1.0, 0.0, long, 0.0, 1.0, 0.0])
+            rad[1::2] = rng.uniform(0.22, 0.32)
+            return polygon_shape(np.stack([rad * np.cos(t), rad * np.sin(t)], axis=1))
+        w, d = rng.uniform(0.25, 0.4), rng.uniform(0.35, 0.6)  # chevron: a V of two thin arms
+        return polygon_shape(
+            [[0.0, 0.0], [1.0, d], [1.0, d + w], [0.0, w], [-1.0, d + w], [-1.0, d]]
+        )
 
     def _arc_bulge(self, rng: np.random.Generator, chord: float, sign: float) -> float:
         """A bulge of sagitta uniform in [min_sagitta_mm, max_sagitta_ratio x chord].

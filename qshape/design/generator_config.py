@@ -15,8 +15,10 @@ from configs.checks import check_fields, checked
 from qshape.design.values import parse_color
 from qshape.errors import DesignError, GeneratorError
 
-SHAPE_FAMILIES = ("regular", "convex", "concave", "named", "arcs", "rounded", "bite")
-"""Shape families a class is drawn from (see the module docstring)."""
+BASE_FAMILIES = ("regular", "convex", "concave", "named", "arcs", "rounded", "bite")
+"""The families drawn by default (a `GeneratorConfig` without ``families``)."""
+SHAPE_FAMILIES = (*BASE_FAMILIES, "thin")
+"""Shape families a class is drawn from (see `qshape.design.generator`'s docstring)."""
 HOLE_KINDS = ("circle", "square", "rectangle", "triangle", "pentagon", "hexagon")
 """Hole shapes."""
 NAMED = ("parallelogram", "trapezoid", "kite", "arrow", "star", "quarter_disc", "ell")
@@ -58,7 +60,8 @@ class GeneratorConfig:
         min_arc_chord_mm: Smallest chord of an arc, in [mm] (arcs turning less than 180 deg).
         max_sagitta_ratio: Largest arc sagitta / chord of the ``arcs`` and ``bite`` families
             (dimensionless; 0.5 is a half circle).
-        families: Weight of each of `SHAPE_FAMILIES` (missing: 0; at least one > 0).
+        families: Weight of each of `SHAPE_FAMILIES` (missing: 0; at least one > 0; the
+            default: 1 for each of `BASE_FAMILIES`).
         hole_probability: Chance that a class has holes.
         two_hole_probability: Chance that a holed class has a second hole.
         centred_hole_probability: Chance that a class's first hole is centred.
@@ -80,7 +83,7 @@ class GeneratorConfig:
     min_sagitta_mm: float = checked(5.0, gt=0)
     min_arc_chord_mm: float = checked(20.0, gt=0)
     max_sagitta_ratio: float = checked(0.3, gt=0, le=0.5)
-    families: dict[str, float] = field(default_factory=lambda: dict.fromkeys(SHAPE_FAMILIES, 1.0))
+    families: dict[str, float] = field(default_factory=lambda: dict.fromkeys(BASE_FAMILIES, 1.0))
     hole_probability: float = checked(0.3, ge=0, le=1)
     two_hole_probability: float = checked(0.2, ge=0, le=1)
     centred_hole_probability: float = checked(0.5, ge=0, le=1)
@@ -183,6 +186,7 @@ __all__ = [
     "DEFAULT_PALETTE",
     "HOLE_KINDS",
     "NAMED",
+    "BASE_FAMILIES",
     "SHAPE_FAMILIES",
     "GeneratorConfig",
 ]

@@ -16,11 +16,14 @@ from typing import Any
 import numpy as np
 
 from configs import CONFIG_DIR, ConfigError, parse_yaml, resolve_path
+from configs.files import write_text
 from qshape.design import checks, fileformat
+from qshape.design.dxf_file import read_dxf, write_dxf
 from qshape.design.from_image import design_mapping
 from qshape.design.memo import BoundedMemo
 from qshape.design.rules import DesignRules
 from qshape.design.slot import Slot
+from qshape.design.svg_file import read_svg, svg_text
 from qshape.errors import DesignError
 from qshape.theory.figure import Figure
 
@@ -29,6 +32,8 @@ DESIGN_SUBDIR = "designs"
 LOADED_DESIGNS = 64
 """Designs `Design.load` remembers (by file, text and rules; least recently used dropped
 first): a design and its slots' outlines, a few hundred kB at most each."""
+DRAWING_SUFFIXES = (".svg", ".dxf")
+"""File suffixes `Design.load` reads as drawings (any other: the YAML design format)."""
 
 
 @dataclass(frozen=True)
@@ -58,13 +63,23 @@ class Design:
 
     @classmethod
     def load(cls, name_or_path: str | Path, rules: DesignRules | None = None) -> Design:
-        """Load and validate a design: a bundled name (``"paper_mixed"``) or a YAML path.
+        """Load and validate a design: a bundled name (``"paper_mixed"``), a YAML, SVG or DXF path.
+
+        SVG and DXF drawings are read by `qshape.design.svg_file` and `qshape.design.dxf_file`
+        (format: ``configs/designs/README.md``); they may warn with
+        `qshape.errors.DesignFileWarning` (skipped text, a default joint).
 
         Raises:
             DesignError: Missing or unreadable file, duplicate or unknown keys, bad values,
-                degenerate or overlapping slots, slots outside the mesh; the message names the
-                slot.
+                degenerate or overlapping slots, slots outside the mesh; for drawings also an
+                open path, no mesh or unknown units; the message names the slot or element.
         """
+        suffix = Path(str(name_or_path)).suffix.lower()
+        if suffix in DRAWING_SUFFIXES:
+            if not Path(name_or_path).is_file():
+                raise DesignError(f"{name_or_path}: no such design file")
+            read = read_svg if suffix == ".svg" else read_dxf
+            return cls.from_dict(read(name_or_path, rules), rules=rules, source=str(name_or_path))
         try:
             path = resolve_path(name_or_path, DESIGN_SUBDIR)
         except ConfigError as exc:
@@ -103,6 +118,23 @@ class Design:
     def save(self, path: str | Path, header: str = "") -> None:
         """Write the design as YAML (``header`` lines become leading comments)."""
         fileformat.save(self, path, header)
+
+    def to_svg(self, path: str | Path | None = None) -> str:
+        """The design as an SVG drawing (millimetres), written to ``path`` when given.
+
+        `load` reads it back to the same slots (outlines within 0.01 mm).
+        """
+        text = svg_text(self)
+        if path is not None:
+            write_text(Path(path), text)
+        return text
+
+    def to_dxf(self, path: str | Path) -> None:
+        """Write the design as a DXF drawing (millimetres, ``$INSUNITS`` 4) to ``path``.
+
+        `load` reads it back to the same slots (outlines within 0.01 mm).
+        """
+        write_dxf(self, path)
 
     def validate(self, source: str = "") -> None:
         """Check every slot and the layout (see `qshape.design.checks.validate`).

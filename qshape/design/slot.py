@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import functools
 import hashlib
+import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -29,6 +31,15 @@ shape's canonical text, about 0.1-1 kB, and the rules) and an int: a few MB at m
 SYMMETRY_MEMO: BoundedMemo[int] = BoundedMemo(SYMMETRY_MEMO_SIZE)
 """`Slot.symmetry` by (shape text, rules): the order depends on nothing else, and the same
 shape is asked again by every slot of its class, every copy of a design and every check."""
+
+
+@functools.lru_cache(maxsize=4096)
+def _shape_text(shape_json: str) -> str:
+    """The canonical text of a shape mapping (given as sorted JSON): its sorted YAML.
+
+    A design of many copies of one shape (a mural) writes it once.
+    """
+    return yaml.safe_dump(json.loads(shape_json), sort_keys=True)
 
 
 @dataclass(frozen=True)
@@ -97,7 +108,7 @@ class Slot:
     @cached_property
     def shape_text(self) -> str:
         """The shape mapping's canonical text (YAML, sorted keys): equal for equal shapes."""
-        return yaml.safe_dump(plain(self.shape), sort_keys=True)
+        return _shape_text(json.dumps(plain(self.shape), sort_keys=True))
 
     @cached_property
     def shape_key(self) -> str:

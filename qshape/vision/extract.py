@@ -302,13 +302,19 @@ def _figures(
     return figures, outlines, rejected
 
 
-def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> ExtractResult:
+def extract_detailed(
+    image: np.ndarray, params: ExtractParams | None = None, height: np.ndarray | None = None
+) -> ExtractResult:
     """Tiles in an image: whole tiles as figures, border-touching ones as partial tiles.
 
     Args:
         image: RGB uint8, shape (H, W, 3): tiles on a roughly uniform background (belt or
             grout), possibly shaded.
         params: Parameters; None loads ``configs/vision.yaml``.
+        height: The tiles' height above the belt, in [mm], shape (H, W), aligned with
+            ``image`` (a 3D camera's picture), or None. A cue that does not depend on colour:
+            a tile whose glaze is the belt's colour (black on a dark belt) is found by its
+            height (`qshape.vision.segment.height_cue`); every other tile as without it.
 
     Returns:
         An `ExtractResult`; an image with no tiles gives empty lists, and so does a
@@ -320,6 +326,7 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     """
     p = default_params() if params is None else params
     raw = check_image(image, p)
+    levels = _height_levels(height, raw.shape[:2], p)
     img = raw
     if p.blur_sigma_px > 0.0:
         size = blur_size(p.blur_sigma_px)
@@ -327,7 +334,8 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     dominant, share, seen_span = dominant_color(img, p)
     # The blur keeps every level within the picture's range: a border sample spanning more
     # than uniform_range proves the picture is not one colour without reading all of it.
-    if seen_span <= p.uniform_range and channel_span(raw) <= p.uniform_range:
+    raised = levels is not None and float(levels.max()) >= p.threshold_min
+    if not raised and seen_span <= p.uniform_range and channel_span(raw) <= p.uniform_range:
         level = raw[0, 0].astype(np.float64) / 255.0
         return ExtractResult([], [], [], [], (level[0], level[1], level[2]), 0.0)
     background = (
@@ -344,7 +352,7 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
         return ExtractResult([], [], [], [why], background, 0.0)
     planes = cv2.split(img)
     model, mean_light, gain = illumination(planes, dominant, p)
-    seg = segment(img, planes, model, gain, p)
+    seg = segment(img, planes, model, gain, p, height=levels)
     contours, hierarchy = _trace(seg.pieces)
     if seg.count <= 1 or hierarchy is None:
         return ExtractResult([], [], [], [], background, seg.threshold)
@@ -352,6 +360,27 @@ def extract_detailed(image: np.ndarray, params: ExtractParams | None = None) -> 
     todo, partial = _outlines(contours, hierarchy[0], colors, seg, shape=img.shape[:2], p=p)
     figures, outlines, rejected = _figures(todo, p)
     return ExtractResult(figures, outlines, partial, rejected, background, seg.threshold)
+
+
+def _height_levels(
+    height: np.ndarray | None, shape: tuple[int, ...], p: ExtractParams
+) -> np.ndarray | None:
+    """A height picture [mm] as colour-distance levels, uint8 (H, W); None without one.
+
+    Raises:
+        ImageError: Not a finite (H, W) or (H, W, 1) array of the image's size.
+    """
+    if height is None:
+        return None
+    h = np.asarray(height, dtype=np.float32)
+    if h.ndim == 3 and h.shape[2] == 1:  # noqa: PLR2004
+        h = h[..., 0]
+    if h.shape != tuple(shape) or not np.all(np.isfinite(h)):
+        raise ImageError(
+            f"height picture must be finite, shape {tuple(shape)} (the image's), got {h.shape}"
+        )
+    levels = h * np.float32(p.height_levels_per_mm)
+    return np.asarray(np.clip(levels, 0.0, 255.0), dtype=np.uint8)
 
 
 def extract(image: np.ndarray, params: ExtractParams | None = None) -> list[Figure]:

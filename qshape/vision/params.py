@@ -107,6 +107,13 @@ class ExtractParams:
             through the centres of the outermost region pixels), in [px].
         color_erode_px: Erosion before taking the median colour, in [px].
         color_sample_step: Every n-th pixel (each axis) of a tile enters its median colour.
+        height_levels_per_mm: With a height picture (`extract_detailed`'s ``height``: the
+            tiles' height above the belt from a 3D camera, a cue that does not depend on
+            colour), a tile's height counts as this many colour-distance levels per mm where
+            its colour does not stand off the belt (a black tile on a dark belt, a glaze of the
+            belt's own colour), in [levels/mm].
+        height_grow_px: The height cue covers each such raised region grown by this many
+            pixels (its blurred edge), in [px].
         correct_illumination: Divide tile colours by the modelled relative illumination.
         resample_per_px: The picture's outlines are resampled to this many samples per
             traced pixel of its longest whole-tile outline, in [samples/px], and at most
@@ -158,6 +165,8 @@ class ExtractParams:
     boundary_offset_px: float = 0.5
     color_erode_px: int = checked(3, ge=0)
     color_sample_step: int = 2
+    height_levels_per_mm: float = checked(40.0, gt=0)
+    height_grow_px: int = checked(2, ge=0)
     correct_illumination: bool = True
     resample_per_px: float = checked(0.0, ge=0)
     outline: OutlineParams = field(default_factory=OutlineParams)

@@ -190,12 +190,20 @@ class Segmentation:
 
 
 def colour_distance(
-    planes: Sequence[np.ndarray], model: Sequence[np.ndarray], gain: np.ndarray, p: ExtractParams
+    planes: Sequence[np.ndarray],
+    model: Sequence[np.ndarray],
+    gain: np.ndarray,
+    p: ExtractParams,
+    height: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float, np.ndarray]:
     """Colour distance to the belt model (uint8), its threshold, and the opened foreground mask.
 
     ``planes`` and ``model``: the picture's and the model's channels, each (H, W) uint8 (plane
     by plane, the largest channel difference needs no split of a difference image).
+    ``height``: the tiles' height above the belt in distance levels, uint8 (H, W), or None;
+    raised regions whose colour nowhere reaches the threshold take it as their distance
+    (`height_cue`), so a tile of the belt's colour is found by its height alone and every
+    other tile exactly as without it.
     """
     # Two picture-sized buffers, each written several times (fewer fresh buffers to fault in).
     dist = cv2.absdiff(planes[0], model[0])
@@ -207,11 +215,42 @@ def colour_distance(
     sample = dist if st == 1 else np.ascontiguousarray(dist[::st, ::st])
     otsu, mask = cv2.threshold(sample, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
     thr = float(np.clip(otsu, p.threshold_min, p.threshold_max))
-    if st > 1 or thr != otsu:
+    redo = st > 1 or thr != otsu
+    if height is not None:
+        cue = height_cue(dist, height, thr, p)
+        if cue is not None:
+            cv2.max(dist, cue, dst=dist)
+            redo = True
+    if redo:
         _, mask = cv2.threshold(dist, thr, 255, cv2.THRESH_BINARY)
     if p.open_px > 1:
         mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, box_kernel(p.open_px))
     return dist, thr, mask
+
+
+def height_cue(
+    dist: np.ndarray, height: np.ndarray, thr: float, p: ExtractParams
+) -> np.ndarray | None:
+    """The height levels of the raised regions the colour distance misses, else 0 (uint8).
+
+    A raised region (height at least ``thr``) in which the colour distance nowhere reaches
+    ``thr`` is a tile the colour does not show; its height, over the region grown by
+    ``height_grow_px`` (its edge), becomes its distance. None when there is no such region.
+    """
+    raised = np.where(height >= thr, np.uint8(255), np.uint8(0))
+    count, lab = cv2.connectedComponents(raised, connectivity=8, ltype=cv2.CV_32S)
+    if count <= 1:
+        return None
+    seen = np.zeros(count, np.uint8)
+    np.maximum.at(seen, np.asarray(lab, dtype=np.intp).ravel(), dist.ravel())
+    hidden = seen < thr
+    hidden[0] = False
+    if not hidden.any():
+        return None
+    keep = hidden[lab].astype(np.uint8) * np.uint8(255)
+    if p.height_grow_px > 0:
+        keep = np.asarray(cv2.dilate(keep, box_kernel(2 * p.height_grow_px + 1)), dtype=np.uint8)
+    return np.asarray(cv2.bitwise_and(height, keep), dtype=np.uint8)
 
 
 def label_pieces(cut: np.ndarray) -> tuple[int, np.ndarray]:
@@ -289,12 +328,15 @@ def segment(
     model: Sequence[np.ndarray],
     gain: np.ndarray,
     p: ExtractParams,
+    *,
+    height: np.ndarray | None = None,
 ) -> Segmentation:
     """Image stages after the belt model: distance, threshold, regions, per-region edge level.
 
-    ``planes``: the picture's channels; ``model``: the belt model's.
+    ``planes``: the picture's channels; ``model``: the belt model's; ``height``: the tiles'
+    height in distance levels (`colour_distance`).
     """
-    dist, thr, mask = colour_distance(planes, model, gain, p)
+    dist, thr, mask = colour_distance(planes, model, gain, p, height)
     count, labels, present, pieces = split_regions(img, mask, p, planes)
     if p.edge_fraction > 0.0:
         pieces = _at_half_contrast(pieces, labels, dist, present, thr=thr, p=p)
@@ -308,6 +350,7 @@ __all__ = [
     "colour_distance",
     "compact_labels",
     "label_medians",
+    "height_cue",
     "label_pieces",
     "samples",
     "segment",

@@ -129,3 +129,21 @@ def test_documented_commands_run_headless_as_written(tmp_path, args):
     report = json.loads((tmp_path / "report.json").read_text())
     assert report["correct"] >= report["tiles_total"] - 1
     assert report["distractors_placed"] == 0
+
+
+@pytest.mark.slow
+def test_the_main_job_takes_a_drawing_and_another_cell(tmp_path):
+    """A DXF design on its own 300 mm mesh builds; a cell taking less names its largest mesh."""
+    from agents.scripted.config import RunConfig  # noqa: PLC0415
+    from apps.main import make_env  # noqa: PLC0415
+    from envs.errors import MeshSizeError  # noqa: PLC0415
+
+    env = make_env(RunConfig(design="configs/designs/catalogue.dxf"))
+    try:
+        assert env.unwrapped.cell.geometry.mesh_size == pytest.approx([0.3, 0.3])
+        assert "input_depth" in env.observation_space.spaces  # the height picture
+    finally:
+        env.close()
+    small = {"cell": {"output_belt": {"max_mesh_size": [0.25, 0.25]}}}
+    with pytest.raises(MeshSizeError, match="largest mesh it takes is 250 x 250 mm"):
+        make_env(RunConfig(design="catalogue"), env_over=small)

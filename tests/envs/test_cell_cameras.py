@@ -52,7 +52,7 @@ def test_projection_matches_rendered_marker(marker_scene, camera, offset) -> Non
 
 
 def test_matrices_and_inverse_projection() -> None:
-    cell = Cell(None, basic_shapes()[:1], seed=0)
+    cell = Cell(None, basic_shapes()[:1], seed=0, mesh_size=(0.23, 0.23))
     try:
         for name in ("input_camera", "output_camera"):
             cam = cell.camera_model(name)

@@ -58,7 +58,7 @@ def test_unknown_key_names_allowed_keys() -> None:
         (InputBeltConfig, {"width": -1.0}, "width must be > 0"),
         (InputBeltConfig, {"tile_area": (0.3, 0.5)}, "exceeds the belt width"),
         (InputBeltConfig, {"tile_area": (0.3,)}, "needs 2 values"),
-        (OutputBeltConfig, {"mesh_size": (0.7, 0.2)}, "does not fit the belt"),
+        (OutputBeltConfig, {"max_mesh_size": (0.7, 0.2)}, "does not fit the belt"),
         (TileConfig, {"thickness": 0.0}, r"thickness must be in \(0, 0.02\]"),
         (TileConfig, {"density": -2400.0}, "density must be > 0"),
         (TileConfig, {"distractor_rate": 1.5}, r"distractor_rate must be in \[0, 1\]"),
@@ -102,7 +102,7 @@ def test_too_large_tile_raises() -> None:
 def test_slot_outside_the_mesh_raises() -> None:
     sq = basic_shapes()[0]
     with pytest.raises(CellError, match="extends beyond the mesh"):
-        Cell(None, [sq], slots=[SlotSpec(sq, (0.12, 0.0, 0.0))])
+        Cell(None, [sq], slots=[SlotSpec(sq, (0.12, 0.0, 0.0))], mesh_size=(0.23, 0.23))
 
 
 @pytest.mark.parametrize(

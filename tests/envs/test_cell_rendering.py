@@ -47,8 +47,11 @@ MAX_MEAN_DIFF = 3.0
 
 @pytest.fixture(scope="module")
 def cell():
-    """The default cell with tiles on the input belt and a few on the mesh, arm over the mesh."""
-    c = Cell(load_cell_config(), seed=0)
+    """The default cell with tiles on the input belt and a few on the mesh, arm over the mesh.
+
+    A 230 mm mesh (the bundled designs'): the output camera at its configured height.
+    """
+    c = Cell(load_cell_config(), seed=0, mesh_size=(0.23, 0.23))
     moved = np.arange(3)
     qadr = c.ids.tile_qpos_index[moved]
     c.data.qpos[qadr[:, 0]] = c.geometry.output_centre[0] + 0.04 * (moved - 1)

@@ -56,7 +56,7 @@ def test_a_tile_stranded_beside_the_mesh_is_counted_and_ends_the_episode():
     cell = env.unwrapped.cell
     assert info["evaluation"]["placeable"] == 1
     geo = cell.geometry
-    half = np.asarray(cell.cfg.output_belt.mesh_size) / 2
+    half = geo.mesh_size / 2
     beside = geo.output_centre[:2] + [half[0] + 0.03, 0.0]  # on the output belt, off the mesh
     real = int(np.flatnonzero(~cell.is_distractor)[0])
     rest_z = geo.mesh_top + cell.cfg.tiles.thickness / 2  # a tile's centre lying on the mesh

@@ -183,7 +183,7 @@ def test_tile_area_and_mesh_reachable_pointing_down(cfg: CellConfig, arm_ik: Arm
     try:
         areas = [
             (geo.input_centre + [0, 0, t], np.asarray(cfg.input_belt.tile_area) / 2),
-            (geo.output_centre + [0, 0, t], np.asarray(cfg.output_belt.mesh_size) / 2),
+            (geo.output_centre + [0, 0, t], geo.mesh_size / 2),  # the largest mesh
         ]
         worst_sv = np.inf
         for centre, half in areas:

@@ -26,7 +26,7 @@ def test_bundled_mural_is_large_realistic_and_fits_the_cell(sunset):
     assert "sunset" in bundled_murals()
     assert sunset.tiles >= 1000 and len(sunset.meshes) >= 5
     cell = load_cell_config()
-    width, height = (v * 1000.0 for v in cell.output_belt.mesh_size)
+    width, height = (v * 1000.0 for v in cell.output_belt.max_mesh_size)
     sunset.check_fits(width, height)
     assert 2.0 <= sunset.joint <= 3.0
     colours = set()

@@ -60,6 +60,12 @@ def tile_shapes_from_design(
     return tuple(shapes), tuple(slots)
 
 
+def design_mesh_size(design: Any) -> tuple[float, float]:
+    """The (x, y) size of a `qshape.design.Design`'s mesh in metres: the cell's sheet."""
+    width, height = design.mesh_size
+    return (float(width) * M_PER_MM, float(height) * M_PER_MM)
+
+
 def _circle(r: float, n: int, start: float = 0.0, stop: float = 2 * np.pi) -> np.ndarray:
     t = np.linspace(start, stop, n, endpoint=False)
     return np.stack([r * np.cos(t), r * np.sin(t)], axis=1)
@@ -124,5 +130,6 @@ def basic_shapes(spec: BasicShapes | None = None) -> tuple[TileShape, ...]:
 __all__ = [
     "BasicShapes",
     "basic_shapes",
+    "design_mesh_size",
     "tile_shapes_from_design",
 ]
