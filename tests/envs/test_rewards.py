@@ -293,7 +293,7 @@ def test_staged_config_loads_overrides_and_refuses_non_positive_scales(tmp_path)
     path = tmp_path / "rewards.yaml"
     path.write_text("transport: 3.0\n", encoding="utf-8")
     assert load_staged_config(str(path)).transport == 3.0
-    with pytest.raises(CellError, match=r"reach_scale must be > 0 \[m\], got 0.0"):
+    with pytest.raises(CellError, match=r"reach_scale must be > 0, got 0.0"):
         StagedRewardConfig(reach_scale=0.0)
 
 
