@@ -115,6 +115,10 @@ def _area(area: Any, axis: int) -> str:
     return f"{area.lo[axis]:.3f} to {area.hi[axis]:.3f}"
 
 
+def _xy(area: Any) -> str:
+    return f"x {_area(area, 0)}, y {_area(area, 1)} m"
+
+
 def state_row_table(env: gym.Env[Any, Any], key: str) -> str:
     """A ``tiles`` or ``slots`` row of the ``state`` observation."""
     spec = env.get_wrapper_attr("task_spec")
@@ -192,9 +196,10 @@ def observation_section(env: gym.Env[Any, Any]) -> str:
             width = max(s.stop for s in fields.values())
             rows = sub.shape[0] // width
             out.append(
-                f"{rows} row{'s' if rows > 1 else ''} of {width}, flattened (row `i` is `{key}[i * {width}:(i + 1) * "
-                f"{width}]`, the {key[:-1]} the discrete action's index `i` names; rows past "
-                f"the episode's {key} are zeros):\n\n{state_row_table(env, key)}"
+                f"{rows} row{'s' if rows > 1 else ''} of {width}, flattened (row `i` is "
+                f"`{key}[i * {width}:(i + 1) * {width}]`, the {key[:-1]} the discrete action's "
+                f"index `i` names; rows past the episode's {key} are zeros):\n\n"
+                + state_row_table(env, key)
             )
         elif isinstance(sub, gym.spaces.Box) and sub.dtype == np.uint8:
             out.append("The camera's RGB picture, (height, width, 3), 0 to 255.")
@@ -213,7 +218,11 @@ def action_section(env: gym.Env[Any, Any]) -> str:
         c = spec.discrete
         step = math.degrees(c.rotation_step)
         rows = [
-            ("0", "tile index: the tile row of that index (envs.indexing order)", f"0 to {c.tiles - 1}"),
+            (
+                "0",
+                "tile index: the tile row of that index (`envs.indexing`)",
+                f"0 to {c.tiles - 1}",
+            ),
             ("1", "slot index: the slot row of that index", f"0 to {c.slots - 1}"),
             (
                 "2",
@@ -223,26 +232,32 @@ def action_section(env: gym.Env[Any, Any]) -> str:
             ),
         ]
         note = (
-            "`env.action_masks()` and `info[\"action_mask\"]` give the allowed indices "
+            '`env.action_masks()` and `info["action_mask"]` give the allowed indices '
             "(sb3-contrib's flat mask)."
         )
     elif spec.codec is not None:
         pick, place = spec.codec.pick, spec.codec.place
         rows = [
-            ("0, 1", f"pick x, y over the pick area (x {_area(pick, 0)}, y {_area(pick, 1)} m)", "-1 to 1"),
+            ("0, 1", f"pick x, y over the pick area ({_xy(pick)})", "-1 to 1"),
         ]
         if spec.codec.pick_yaw:
-            rows.append(("2", "the tile's yaw at the pick / pi (does nothing; gone at -v1)", "-1 to 1"))
+            rows.append(
+                ("2", "the tile's yaw at the pick / pi (does nothing; not at -v1)", "-1 to 1")
+            )
         k = 3 if spec.codec.pick_yaw else 2
         rows += [
-            (f"{k}, {k + 1}", f"place x, y over the mesh (x {_area(place, 0)}, y {_area(place, 1)} m)", "-1 to 1"),
+            (f"{k}, {k + 1}", f"place x, y over the mesh ({_xy(place)})", "-1 to 1"),
             (str(k + 2), "rotation of the tile / pi", "-1 to 1"),
         ]
         note = "One step is one whole pick-and-place cycle planned by the planners."
     elif spec.tool_step is not None:
         dx, dy, dz, dyaw = spec.tool_step
         rows = [
-            ("0-2", f"tool dx, dy, dz, x {dx * 1000:g}, {dy * 1000:g}, {dz * 1000:g} mm per step", "-1 to 1"),
+            (
+                "0-2",
+                f"tool dx, dy, dz, x {dx * 1e3:g}, {dy * 1e3:g}, {dz * 1e3:g} mm per step",
+                "-1 to 1",
+            ),
             ("3", f"tool dyaw, x {math.degrees(dyaw):.1f} deg per step", "-1 to 1"),
             ("4", "vacuum (> 0: on)", "-1 to 1"),
         ]

@@ -1,4 +1,4 @@
-"""Results at a glance: the one results file the task cards and the README quote.
+r"""Results at a glance: the one results file the task cards and the README quote.
 
 ``docs/results.json`` holds, per rung, the scripted, random and best learned policy on the
 rung's held-out seeds: slots filled, success, tiles/min, the command that measures the row, how
@@ -30,7 +30,6 @@ import time
 from dataclasses import asdict, dataclass, fields
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
 
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent

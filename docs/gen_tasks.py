@@ -177,7 +177,7 @@ def _version_section(env_id: str) -> str:
     table = "\n".join(["| id | what changed | status |", "|---|---|---|", *rows])
     return (
         f"{table}\n\nUse the newest version, `{name}-{versions[-1]}`: `gym.make` of an older "
-        "one prints Gymnasium's \"out of date\" notice. A version changes when the spaces or "
+        'one prints Gymnasium\'s "out of date" notice. A version changes when the spaces or '
         "the results of a fixed policy change (the rule and every change: the "
         "[changelog](../changelog.md))."
     )
@@ -230,7 +230,7 @@ def _reward_section(env: gym.Env[Any, Any]) -> str:
     }[cfg.reward_mode]
     return (
         f"`reward_mode={cfg.reward_mode!r}`: {terms}.{extra} Every term is in `info` as "
-        "`reward_<term>`; `info[\"is_success\"]` is true when every slot is filled correctly "
+        '`reward_<term>`; `info["is_success"]` is true when every slot is filled correctly '
         f"(within {cfg.position_tolerance * 1000:g} mm and {cfg.yaw_tolerance_deg:g} deg)."
     )
 
@@ -253,12 +253,12 @@ def task_page(env_id: str, env: gym.Env[Any, Any]) -> str:
     animation = ""
     if actor is not None:
         design = animation_design(pid)
+        moving = " (dynamic execution, so the arm moves)" if actor.env_kwargs else ""
         animation = (
             f"![{env_id}: one held-out episode](img/{pid}.gif)\n\n"
             f"*`{pid}`, held-out seed {ANIMATION_SEED}, design `{design}`: "
-            f"{actor.label} acting{' (dynamic execution, so the arm moves)' if actor.env_kwargs else ''}"
-            ". Left the overview camera, right the output camera over the mesh. Made by "
-            "`python docs/gen_animations.py`.*\n\n"
+            f"{actor.label} acting{moving}. Left the overview camera, right the output camera "
+            "over the mesh. Made by `python docs/gen_animations.py`.*\n\n"
         )
     picture = f"![{env_id} at its first observation](img/{pid}.png)"
     caption = (
