@@ -5,7 +5,8 @@ the id with its acting policy (`ACTORS`): the best learned checkpoint where one 
 scripted cell from its cameras, or the scripted low-level controller of the one-tile rungs.
 Frames are the env's overview camera beside its output camera (the mesh), rendered by the cell
 every `FRAME_PERIOD_S` of simulated time (inside a ``pick_place`` cycle too, through the env's
-frame listener), then thinned to at most `MAX_FRAMES` evenly spaced frames. A later version
+frame listener) until the arm is back home after the episode (``move_home``), then thinned to
+at most `MAX_FRAMES` evenly spaced frames; the last one, held longest, shows the finished work. A later version
 (``-v1``) starts like its ``-v0``, so only the ``-v0`` ids get animations.
 
 This is a separate command, not part of the docs build (it renders and runs policies: about a
@@ -150,6 +151,7 @@ def record(env_id: str, actor: Actor) -> tuple[list[np.ndarray], dict[str, Any]]
         while not done:
             obs, _, terminated, truncated, info = env.step(predict(obs, start))
             start, done = False, terminated or truncated
+        env.get_wrapper_attr("move_home")()  # the arm out of the output camera's view
         capture()
     finally:
         env.close()

@@ -181,6 +181,7 @@ def main(argv: list[str] | None = None) -> int:
     labels = list(args.labels) + [""] * (len(args.policies) - len(args.labels))
     for policy, label in zip(args.policies, labels, strict=True):
         new = evaluate(args.task, policy, label)
+        rows = load_results()  # as it is now: another run may have written it meanwhile
         key = (rung_name(new.task), new.kind, new.policy)
         at = [i for i, r in enumerate(rows) if (rung_name(r.task), r.kind, r.policy) == key]
         if at:

@@ -193,10 +193,9 @@ def _results_section(env_id: str) -> str:
         "|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
-        runs = f" ({r.runs} runs, IQM)" if r.runs > 1 else ""
         tpm = "-" if r.tiles_per_min is None else f"{r.tiles_per_min:g}"
         lines.append(
-            f"| {r.kind}: {r.policy}{runs} | `{r.task}` | {r.filled:.2f} | {r.success:.2f} | "
+            f"| {r.kind}: {r.policy} | `{r.task}` | {r.filled:.2f} | {r.success:.2f} | "
             f"{tpm} | `{r.command}` | {r.time} | {r.date}, {r.source} |"
         )
     return (
@@ -332,17 +331,27 @@ def _docstring_markdown(cls: type) -> str:
     )
 
 
+def _best(env_id: str, kind: str) -> str:
+    """The highest slots-filled figure of a kind of policy on the id's rung, or ``-``."""
+    figures = [r.filled for r in rows_for(env_id) if r.kind == kind]
+    return f"{max(figures):.2f}" if figures else "-"
+
+
 def index_page(ids: list[str]) -> str:
     """The gallery's index: the ladder's table, each id linked to its page."""
     tasks = bundled_tasks(all_versions=True)
     lines = [
-        f"{HEADER}# Task gallery\n",
-        "`import envs` registers these ids (`gymnasium.registry`); each page shows the id's "
-        "first observation and its live spaces. The rungs are frozen presets of "
-        "`MosaicAssembly-v0` (`configs/tasks/`), easiest first; the evaluation protocol is on "
-        "the [evaluation page](../evaluation.md).\n",
-        "| id | what it tests | action / observation mode | episode limit | held-out seeds |",
-        "|---|---|---|---|---|",
+        f"{HEADER}# Task cards\n",
+        "`import envs` registers these ids (`gymnasium.registry`); each card shows an episode, "
+        "the spaces entry by entry, the versions and results at a glance. Use the `-v1` ids. "
+        "The rungs are frozen presets of `MosaicAssembly-v0` (`configs/tasks/`), easiest "
+        "first; the evaluation protocol is on the [evaluation page](../evaluation.md).\n",
+        "Results: slots filled on the held-out seeds by the scripted policy / random actions / "
+        "the best learned policy (`docs/results.json`; each card says by which command and "
+        "when; - none recorded).\n",
+        "| id | what it tests | action / observation mode | episode limit | held-out seeds "
+        "| filled: scripted / random / learned |",
+        "|---|---|---|---|---|---|",
     ]
     default = load_env_config()  # configs/env.yaml: what a key not given takes
     for env_id in ids:
@@ -358,8 +367,10 @@ def index_page(ids: list[str]) -> str:
             modes = f"any (defaults `{default.action_mode}` / `{default.obs_mode}`)"
         if picture_id(env_id) != env_id:
             what = f"{what}; version {env_id.rpartition('-')[2]} (see its page)"
+        glance = " / ".join(_best(env_id, kind) for kind in ("scripted", "random", "learned"))
         lines.append(
-            f"| [{env_id}]({env_id}.md) | {what} | {modes} | {spec.max_episode_steps} | {seeds} |"
+            f"| [{env_id}]({env_id}.md) | {what} | {modes} | {spec.max_episode_steps} | {seeds} "
+            f"| {glance} |"
         )
     toc = "\n".join(["", "```{toctree}", ":hidden:", "", *ids, "```", ""])
     return "\n".join(lines) + "\n" + toc
