@@ -6,8 +6,8 @@ scripted cell from its cameras, or the scripted low-level controller of the one-
 Frames are the env's overview camera beside its output camera (the mesh), rendered by the cell
 every `FRAME_PERIOD_S` of simulated time (inside a ``pick_place`` cycle too, through the env's
 frame listener) until the arm is back home after the episode (``move_home``), then thinned to
-at most `MAX_FRAMES` evenly spaced frames; the last one, held longest, shows the finished work. A later version
-(``-v1``) starts like its ``-v0``, so only the ``-v0`` ids get animations.
+at most `MAX_FRAMES` evenly spaced frames; the last one, held longest, shows the finished work.
+A later version (``-v1``) starts like its ``-v0``, so only the ``-v0`` ids get animations.
 
 This is a separate command, not part of the docs build (it renders and runs policies: about a
 CPU-minute per id); its outputs are committed in ``docs/tasks/img/`` (under 1 MB each)::

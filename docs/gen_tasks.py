@@ -143,11 +143,17 @@ def _seeds(lo: int, hi: int) -> str:
 
 
 VERSION_CHANGES = {
-    "invalid_actions": "a forbidden discrete action (a tile not on the belt, a filled slot) "
-    "raises `ActionError` and no time passes, instead of costing time and a penalty",
-    "pick_yaw_entry": "`pick_place` is Box(5): the pick-yaw entry, which did nothing, is gone",
+    "invalid_actions": (
+        "pick_place_discrete",
+        "a forbidden discrete action (a tile not on the belt, a filled slot) raises "
+        "`ActionError` and no time passes, instead of costing time and a penalty",
+    ),
+    "pick_yaw_entry": (
+        "pick_place",
+        "`pick_place` is Box(5): the pick-yaw entry, which did nothing, is gone",
+    ),
 }
-"""What each env key a later version sets changes, in words (CHANGELOG.md has the details)."""
+"""Per env key a later version sets: the action mode it matters in, and what it changes."""
 
 
 def _version_section(env_id: str) -> str:
@@ -164,13 +170,14 @@ def _version_section(env_id: str) -> str:
     rows = []
     for v in versions:
         if v == "v0":
-            what = "first version (its results are the ones measured before 2026-11-28)"
+            what = "first version; every result measured before `-v1` existed is on it"
         else:
             keys = dict(base.versions[v]) if base else dict(gym.spec(f"{name}-{v}").kwargs)
-            parts = [VERSION_CHANGES.get(k, f"`{k}={val!r}`") for k, val in keys.items()]
+            parts = []
+            for k, val in keys.items():
+                applies, text = VERSION_CHANGES.get(k, (mode, f"`{k}={val!r}`"))
+                parts.append(text if applies == mode else f"{text} (no effect in `{mode}` mode)")
             what = "; ".join(parts)
-            if mode not in ("pick_place", "pick_place_discrete"):
-                what += f" (neither applies in `{mode}` mode: same behaviour as v0)"
         use = "**use this one**" if v == versions[-1] else "kept for quoted results"
         link = f"**{name}-{v}**" if v == version else f"[{name}-{v}]({name}-{v}.md)"
         rows.append(f"| {link} | {what} | {use} |")

@@ -135,3 +135,30 @@ def test_changelog_states_the_version_rule() -> None:
     for env_id in gen.registered_ids():
         assert env_id.rsplit("-", 1)[1] in ("v0", "v1")
         assert f"`{env_id}`" in text, f"{env_id} has no entry in the changelog"
+
+
+def test_results_file_is_sourced_and_covers_the_ladder() -> None:
+    """``docs/results.json``: every row names a command, a date and a source that exists; every
+    rung has a random row and a scripted or learned one (the cards' results at a glance)."""
+    results = _load("gen_results")
+    gen = _load("gen_tasks")
+    rows = results.load_results()
+    ids = set(gen.registered_ids())
+    for r in rows:
+        assert r.task in ids, f"{r.task} is not registered"
+        assert 0.0 <= r.success <= 1.0 and 0.0 <= r.filled <= 1.0
+        assert re.fullmatch(r"20\d\d-\d\d-\d\d", r.date), r.date
+        assert r.command.startswith(("python ", "bash ")) and r.time
+        page = r.source.split(" ")[0]
+        assert (ROOT / page).is_file(), f"{r.task} {r.policy}: no source {page}"
+    for task in yaml_tasks():
+        kinds = {r.kind for r in results.rows_for(task, rows)}
+        assert "random" in kinds and kinds & {"scripted", "learned"}, f"{task}: {kinds}"
+
+
+def yaml_tasks() -> list[str]:
+    """The ``-v0`` ids of the bundled rungs."""
+    return [
+        yaml.safe_load(p.read_text(encoding="utf-8"))["id"]
+        for p in ROOT.glob("configs/tasks/*.yaml")
+    ]
