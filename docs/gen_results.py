@@ -114,9 +114,19 @@ def save_results(rows: list[ResultRow], path: Path = RESULTS) -> None:
     path.write_text(text, encoding="utf-8")
 
 
+SCRIPTED = (
+    "scripted",
+    "agents.experts.cartesian:LowLevelExpert",
+    "agents.experts.joint:LowLevelJointExpert",
+)
+"""Policy names of the scripted kind: the scripted cell and the scripted low-level controllers."""
+
+
 def _kind(policy: str) -> str:
-    if policy in ("scripted", "random"):
-        return policy
+    if policy.partition("@")[0] in SCRIPTED:
+        return "scripted"
+    if policy.partition("@")[0] == "random":
+        return "random"
     return "learned" if policy.endswith((".pt", ".zip")) else "reference"
 
 
