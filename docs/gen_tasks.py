@@ -191,25 +191,31 @@ def _version_section(env_id: str) -> str:
 
 
 def _results_section(env_id: str) -> str:
-    """Results at a glance: the results file's rows of the id's rung."""
+    """Results at a glance: the results file's rows of the id's rung, then their commands."""
     rows = rows_for(env_id)
     if not rows:
         return "No result is recorded for this id in `docs/results.json` yet."
     lines = [
-        "| policy | id | filled | success | tiles/min | command | time | measured |",
-        "|---|---|---|---|---|---|---|---|",
+        "| policy (id measured) | filled | success | tiles/min | time | measured |",
+        "|---|---|---|---|---|---|",
     ]
+    commands = []
     for r in rows:
         tpm = "-" if r.tiles_per_min is None else f"{r.tiles_per_min:g}"
         lines.append(
-            f"| {r.kind}: {r.policy} | `{r.task}` | {r.filled:.2f} | {r.success:.2f} | "
-            f"{tpm} | `{r.command}` | {r.time} | {r.date}, {r.source} |"
+            f"| **{r.kind}**: {r.policy} (`{r.task}`) | {r.filled:.2f} | {r.success:.2f} | "
+            f"{tpm} | {r.time} | {r.date}, {r.source} |"
         )
+        commands += [f"# {r.kind}: {r.policy}", r.command]
     return (
-        f"Held-out seeds ({r.episodes} episodes per run), read from `docs/results.json` "
+        f"Held-out seeds ({rows[0].episodes} episodes per run), from `docs/results.json` "
         "(`python docs/gen_results.py show`; rows from `docs/gen_results.py` were measured by "
         "it, the others are copied from the dated page named). Filled: fraction of slots "
-        "filled correctly; success: every slot filled.\n\n" + "\n".join(lines)
+        "filled correctly; success: every slot filled.\n\n"
+        + "\n".join(lines)
+        + "\n\nThe commands of the rows, in order:\n\n```bash\n"
+        + "\n".join(commands)
+        + "\n```"
     )
 
 
