@@ -10,8 +10,10 @@ import tomllib
 from pathlib import Path
 from types import ModuleType
 
+import numpy as np
 import pytest
 import yaml
+from PIL import Image, ImageChops
 from sybil import Sybil
 from sybil.parsers.myst import PythonCodeBlockParser, SkipParser
 
@@ -162,3 +164,28 @@ def yaml_tasks() -> list[str]:
         yaml.safe_load(p.read_text(encoding="utf-8"))["id"]
         for p in ROOT.glob("configs/tasks/*.yaml")
     ]
+
+
+def test_committed_animations_move_and_are_small() -> None:
+    """Each card's GIF is an animation (many distinct frames), under the size limit."""
+    anim = _load("gen_animations")
+    for env_id in anim.ACTORS:
+        path = DOCS / "tasks" / "img" / f"{env_id}.gif"
+        assert path.stat().st_size <= anim.MAX_BYTES
+        with Image.open(path) as gif:
+            assert 10 <= gif.n_frames <= anim.MAX_FRAMES, (env_id, gif.n_frames)
+            gif.seek(0)
+            first = gif.convert("RGB")
+            gif.seek(gif.n_frames - 1)
+            last = gif.convert("RGB")
+        assert ImageChops.difference(first, last).getbbox() is not None, f"{env_id} is still"
+
+
+def test_animation_frames_are_thinned_evenly(tmp_path: Path) -> None:
+    anim = _load("gen_animations")
+    frames = [np.full((8, 16, 3), i, np.uint8) for i in range(100)]
+    kept = anim.thin(frames, 24)
+    assert len(kept) == 24 and kept[0][0, 0, 0] == 0 and kept[-1][0, 0, 0] == 99
+    assert len(anim.thin(frames[:5], 24)) == 5
+    size = anim.write_gif(kept, tmp_path / "a.gif")
+    assert 0 < size == (tmp_path / "a.gif").stat().st_size
