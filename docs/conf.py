@@ -78,8 +78,33 @@ def escape_bars(
         lines[i] = "".join(p if p.startswith("``") else p.replace("|", "\\|") for p in parts)
 
 
+_MARKDOWN_HEADING = re.compile(r"^(\s*)#{2,6} (\S.*)$")
+
+
+def markdown_headings(
+    _app: Sphinx, _what: str, _name: str, _obj: object, _options: object, lines: list[str]
+) -> None:
+    """Render a docstring's Markdown section heads (``## Rewards``) as rubrics.
+
+    Gymnasium's convention writes the env docstring's sections as ``## Name``; reStructuredText
+    would show them as text inside the paragraph that follows.
+    """
+    out: list[str] = []
+    for line in lines:
+        match = _MARKDOWN_HEADING.match(line)
+        if match:
+            indent, title = match.groups()
+            if out and out[-1].strip():
+                out.append("")
+            out += [f"{indent}.. rubric:: {title}", ""]
+        else:
+            out.append(line)
+    lines[:] = out
+
+
 def setup(app: Sphinx) -> None:
-    """Escape docstrings' bars; generate the benchmark table from ``docs/bench.json``."""
+    """Escape docstrings' bars and render their Markdown heads; generate the benchmark table."""
+    app.connect("autodoc-process-docstring", markdown_headings)
     app.connect("autodoc-process-docstring", escape_bars)
     if (Path(__file__).parent / "bench.json").is_file():
         app.connect("builder-inited", lambda _app: write_bench_table())

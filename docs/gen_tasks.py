@@ -1,12 +1,15 @@
-"""Generate the task gallery: one page per registered Gymnasium id of ``envs``, read live.
+"""Generate the task cards: one page per registered Gymnasium id of ``envs``, read live.
 
-Each page has the id's description, a picture of the cell at its first observation
-(``env.render()`` after ``reset(seed=0)``: the overview camera beside the input and output
-cameras), its registration (episode limit, preset keywords, held-out seeds and designs) and
-tables of its live action and observation spaces. ``MosaicAssembly-v0``'s page carries the
+Each card has the id's description, an animation of one held-out episode (made apart by
+``docs/gen_animations.py`` and committed), its ``gym.make`` line, results at a glance (the
+rows of ``docs/results.json`` for its rung, `gen_results`), its version history and which
+version to use, the action and observation spaces with a table of what each entry means and
+its real range (``card_tables.py``: the env's published field maps and codecs), reward,
+episode end, held-out seeds, its registration and a picture of the first observation
+(``env.render()`` after ``reset(seed=0)`` on the rung's first held-out design: the overview
+camera beside the input and output cameras). ``MosaicAssembly-v0``'s card carries the
 environment class's docstring. ``tasks/index.md`` is the ladder's table. A later version of an
-id (``-v1``) starts like its ``-v0`` (the same scene), so its page shows the ``-v0`` picture and
-says what the version changes.
+id (``-v1``) starts like its ``-v0`` (the same scene), so its card shows the ``-v0`` pictures.
 
 Run from the repository root (headless rendering through EGL)::
 
@@ -14,7 +17,7 @@ Run from the repository root (headless rendering through EGL)::
     MUJOCO_GL=egl python docs/gen_tasks.py --check    # exit 1 when the pages are stale
     python docs/gen_tasks.py --pages-only             # the pages, keeping the pictures
 
-``tests/test_docs_tasks.py`` fails when the committed pages and the registry disagree.
+``tests/test_docs.py`` fails when the committed pages and the registry disagree.
 """
 
 from __future__ import annotations
@@ -57,6 +60,18 @@ from envs.env_config import load_env_config  # noqa: E402
 from envs.mosaic_env import MosaicAssemblyEnv  # noqa: E402
 from envs.tasks import TASKS_DIR as PRESETS_DIR  # noqa: E402
 from envs.tasks import bundled_tasks, load_task  # noqa: E402
+
+if str(DOCS) not in sys.path:
+    sys.path.insert(0, str(DOCS))
+from card_tables import action_section, observation_section  # noqa: E402
+from gen_animations import (  # noqa: E402
+    ACTORS,
+    ANIMATION_SEED,
+    MAX_BYTES,
+    animation_design,
+    base_kwargs,
+)  # noqa: E402
+from gen_results import rows_for  # noqa: E402
 
 
 @dataclass(frozen=True)
@@ -127,31 +142,158 @@ def _seeds(lo: int, hi: int) -> str:
     return f"{lo}-{hi}" if hi > lo else str(lo)
 
 
+VERSION_CHANGES = {
+    "invalid_actions": (
+        "pick_place_discrete",
+        "a forbidden discrete action (a tile not on the belt, a filled slot) raises "
+        "`ActionError` and no time passes, instead of costing time and a penalty",
+    ),
+    "pick_yaw_entry": (
+        "pick_place",
+        "`pick_place` is Box(5): the pick-yaw entry, which did nothing, is gone",
+    ),
+}
+"""Per env key a later version sets: the action mode it matters in, and what it changes."""
+
+
+def _version_section(env_id: str) -> str:
+    """Every version of the id's rung, what it changed and which one to use."""
+    name, _, version = env_id.rpartition("-")
+    versions = sorted(
+        (i.rpartition("-")[2] for i in gym.registry if i.rpartition("-")[0] == name),
+        key=lambda v: int(v[1:]),
+    )
+    tasks = bundled_tasks(all_versions=True)
+    base = tasks.get(f"{name}-v0")
+    spec = gym.spec(f"{name}-v0")
+    mode = spec.kwargs.get("action_mode", load_env_config().action_mode)
+    rows = []
+    for v in versions:
+        if v == "v0":
+            what = "first version; every result measured before `-v1` existed is on it"
+        else:
+            keys = dict(base.versions[v]) if base else dict(gym.spec(f"{name}-{v}").kwargs)
+            parts = []
+            for k, val in keys.items():
+                applies, text = VERSION_CHANGES.get(k, (mode, f"`{k}={val!r}`"))
+                parts.append(text if applies == mode else f"{text} (no effect in `{mode}` mode)")
+            what = "; ".join(parts)
+        use = "**use this one**" if v == versions[-1] else "kept for quoted results"
+        link = f"**{name}-{v}**" if v == version else f"[{name}-{v}]({name}-{v}.md)"
+        rows.append(f"| {link} | {what} | {use} |")
+    table = "\n".join(["| id | what changed | status |", "|---|---|---|", *rows])
+    return (
+        f"{table}\n\nUse the newest version, `{name}-{versions[-1]}`: `gym.make` of an older "
+        'one prints Gymnasium\'s "out of date" notice. A version changes when the spaces or '
+        "the results of a fixed policy change (the rule and every change: the "
+        "[changelog](../changelog.md))."
+    )
+
+
+def _results_section(env_id: str) -> str:
+    """Results at a glance: the results file's rows of the id's rung, then their commands."""
+    rows = rows_for(env_id)
+    if not rows:
+        return "No result is recorded for this id in `docs/results.json` yet."
+    lines = [
+        "| policy (id measured) | filled | success | tiles/min | time | measured |",
+        "|---|---|---|---|---|---|",
+    ]
+    commands = []
+    for r in rows:
+        tpm = "-" if r.tiles_per_min is None else f"{r.tiles_per_min:g}"
+        lines.append(
+            f"| **{r.kind}**: {r.policy} (`{r.task}`) | {r.filled:.2f} | {r.success:.2f} | "
+            f"{tpm} | {r.time} | {r.date}, {r.source} |"
+        )
+        commands += [f"# {r.kind}: {r.policy}", r.command]
+    return (
+        f"Held-out seeds ({rows[0].episodes} episodes per run), from `docs/results.json` "
+        "(`python docs/gen_results.py show`; rows from `docs/gen_results.py` were measured by "
+        "it, the others are copied from the dated page named). Filled: fraction of slots "
+        "filled correctly; success: every slot filled.\n\n"
+        + "\n".join(lines)
+        + "\n\nThe commands of the rows, in order:\n\n```bash\n"
+        + "\n".join(commands)
+        + "\n```"
+    )
+
+
+def _reward_section(env: gym.Env[Any, Any]) -> str:
+    cfg = env.unwrapped.config  # type: ignore[attr-defined]
+    terms = (
+        f"+{cfg.reward_correct:g} per newly filled slot, +{cfg.reward_success:g} when every slot "
+        f"is filled; -{cfg.penalty_misplaced:g} per misplaced, -{cfg.penalty_dropped:g} per "
+        f"dropped and -{cfg.penalty_lost:g} per lost tile, -{cfg.penalty_distractor:g} per "
+        f"distractor placed, -{cfg.penalty_failed_action:g} per failed action"
+    )
+    extra = {
+        "sparse": "",
+        "dense": (
+            f" Dense shaping adds -{cfg.dense_reach:g} x the tool's distance to the nearest "
+            f"wanted tile [m], +{cfg.dense_grasp:g} per step holding one and "
+            f"-{cfg.dense_carry:g} x the held tile's distance to its nearest free slot [m]."
+        ),
+        "staged": (
+            " The staged terms add potential-based progress for reach, seal, lift, transport, "
+            "align and release (`configs/rewards.yaml`, `envs.rewards`): 16 in all for the "
+            "placed tile."
+        ),
+    }[cfg.reward_mode]
+    return (
+        f"`reward_mode={cfg.reward_mode!r}`: {terms}.{extra} Every term is in `info` as "
+        '`reward_<term>`; `info["is_success"]` is true when every slot is filled correctly '
+        f"(within {cfg.position_tolerance * 1000:g} mm and {cfg.yaw_tolerance_deg:g} deg)."
+    )
+
+
+def _end_section(env_id: str, env: gym.Env[Any, Any]) -> str:
+    spec = gym.spec(env_id)
+    return (
+        "`terminated` when every slot is filled correctly, or when no real tile left (on the "
+        "input belt, held or still to be fed) can fill an open slot. `truncated` by Gymnasium's "
+        f"`TimeLimit` after {spec.max_episode_steps} steps."
+    )
+
+
 def task_page(env_id: str, env: gym.Env[Any, Any]) -> str:
-    """The Markdown page of one id, from its registry entry and a live env."""
+    """The Markdown card of one id, from its registry entry, a live env and the results file."""
     spec = gym.spec(env_id)
     tasks = bundled_tasks(all_versions=True)
-    picture = f"![{env_id} at its first observation](img/{picture_id(env_id)}.png)"
+    pid = picture_id(env_id)
+    actor = ACTORS.get(pid)
+    animation = ""
+    if actor is not None:
+        design = animation_design(pid)
+        moving = " (dynamic execution, so the arm moves)" if actor.env_kwargs else ""
+        animation = (
+            f"![{env_id}: one held-out episode](img/{pid}.gif)\n\n"
+            f"*`{pid}`, held-out seed {ANIMATION_SEED}, design `{design}`: "
+            f"{actor.label} acting{moving}. Left the overview camera, right the output camera "
+            "over the mesh. Made by `python docs/gen_animations.py`.*\n\n"
+        )
+    picture = f"![{env_id} at its first observation](img/{pid}.png)"
     caption = (
-        f"*`env.render()` after `reset(seed={PICTURE_SEED})`: the overview camera, the input "
-        "camera (tiles on the input belt) and the output camera (the mesh with the design's "
-        "slots).*"
+        f"*`env.render()` after `reset(seed={PICTURE_SEED})` on design "
+        f"`{animation_design(pid)}`: the overview camera, the input camera (tiles on the input "
+        "belt) and the output camera (the mesh with the design's slots).*"
     )
     rows = [
         ("entry point", f"`{spec.entry_point}`"),
         ("episode limit (`TimeLimit`)", f"{spec.max_episode_steps} steps"),
         ("keyword arguments", _kwargs(dict(spec.kwargs))),
     ]
+    seeds = "the seeds of your choice (not a rung: no protocol of its own)"
     if env_id in tasks:
         task = tasks[env_id]
-        base = picture_id(env_id)
-        preset = {load_task(p).id: p.name for p in PRESETS_DIR.glob("*.yaml")}[base]
+        preset = {load_task(p).id: p.name for p in PRESETS_DIR.glob("*.yaml")}[pid]
         preset = f"`configs/tasks/{preset}`"
-        if base != env_id:
+        if pid != env_id:
             preset += f" with its `versions: {task.version}` changes"
+        seeds = _seeds(*task.eval_seeds)
         rows += [
             ("preset", preset),
-            ("held-out seeds", _seeds(*task.eval_seeds)),
+            ("held-out seeds", seeds),
             ("training designs", ", ".join(f"`{d}`" for d in task.designs("train"))),
             ("held-out designs", ", ".join(f"`{d}`" for d in task.designs("eval"))),
             ("throughput horizon", f"{task.horizon_s:g} s"),
@@ -162,21 +304,6 @@ def task_page(env_id: str, env: gym.Env[Any, Any]) -> str:
             "the environment's full description. Keyword arguments of `gym.make` override "
             "the preset."
         )
-        if base != env_id:
-            changes = ", ".join(
-                f"`{k}={v!r}`" for k, v in task.env.items() if k not in tasks[base].env
-            )
-            intro += (
-                f" This is [`{base}`]({base}.md) at version {task.version}, which changes "
-                f"{changes} (see the changelog)."
-            )
-        doc = ""
-    elif picture_id(env_id) != env_id:
-        changes = ", ".join(f"`{k}={v!r}`" for k, v in spec.kwargs.items())
-        intro = (
-            f"[`{picture_id(env_id)}`]({picture_id(env_id)}.md) at its next version: the "
-            f"fully configurable environment with {changes} (see the changelog)."
-        )
         doc = ""
     else:
         intro = (
@@ -184,13 +311,28 @@ def task_page(env_id: str, env: gym.Env[Any, Any]) -> str:
             "set through `gym.make`. The rungs of the [task ladder](index.md) are frozen "
             "presets of it."
         )
-        doc = "\n\n## The environment class\n\n" + _docstring_markdown(MosaicAssemblyEnv)
+        doc = (
+            ""
+            if pid != env_id
+            else "\n\n## The environment class\n\n" + _docstring_markdown(MosaicAssemblyEnv)
+        )
     table = "\n".join(["| | |", "|---|---|", *(f"| {k} | {v} |" for k, v in rows)])
+    first_seed = tasks[env_id].eval_seeds[0] if env_id in tasks else 0
+    make = (
+        "```python\nimport gymnasium as gym\n\nimport envs  # noqa: F401  registers the ids\n\n"
+        f'env = gym.make("{env_id}")\nobs, info = env.reset(seed={first_seed})\n```'
+    )
     return (
-        f"{HEADER}# {env_id}\n\n{intro}\n\n{picture}\n\n{caption}\n\n"
-        f"## Registration\n\n{table}\n\n"
-        f"## Action space\n\n`{env.action_space}`\n\n{space_table(env.action_space)}\n\n"
-        f"## Observation space\n\n{space_table(env.observation_space)}{doc}\n"
+        f"{HEADER}# {env_id}\n\n{intro}\n\n{animation}{make}\n\n"
+        f"## Results at a glance\n\n{_results_section(env_id)}\n\n"
+        f"## Versions\n\n{_version_section(env_id)}\n\n"
+        f"## Action space\n\n{action_section(env)}\n\n"
+        f"## Observation space\n\n{observation_section(env)}\n"
+        f"## Reward\n\n{_reward_section(env)}\n\n"
+        f"## Episode end\n\n{_end_section(env_id, env)}\n\n"
+        f"## Held-out seeds\n\n{seeds} (`python -m apps.evaluate --task {env_id}` plays them)."
+        f"\n\n## Registration\n\n{table}\n\n## First observation\n\n{picture}\n\n{caption}"
+        f"{doc}\n"
     )
 
 
@@ -202,17 +344,27 @@ def _docstring_markdown(cls: type) -> str:
     )
 
 
+def _best(env_id: str, kind: str) -> str:
+    """The highest slots-filled figure of a kind of policy on the id's rung, or ``-``."""
+    figures = [r.filled for r in rows_for(env_id) if r.kind == kind]
+    return f"{max(figures):.2f}" if figures else "-"
+
+
 def index_page(ids: list[str]) -> str:
     """The gallery's index: the ladder's table, each id linked to its page."""
     tasks = bundled_tasks(all_versions=True)
     lines = [
-        f"{HEADER}# Task gallery\n",
-        "`import envs` registers these ids (`gymnasium.registry`); each page shows the id's "
-        "first observation and its live spaces. The rungs are frozen presets of "
-        "`MosaicAssembly-v0` (`configs/tasks/`), easiest first; the evaluation protocol is on "
-        "the [evaluation page](../evaluation.md).\n",
-        "| id | what it tests | action / observation mode | episode limit | held-out seeds |",
-        "|---|---|---|---|---|",
+        f"{HEADER}# Task cards\n",
+        "`import envs` registers these ids (`gymnasium.registry`); each card shows an episode, "
+        "the spaces entry by entry, the versions and results at a glance. Use the `-v1` ids. "
+        "The rungs are frozen presets of `MosaicAssembly-v0` (`configs/tasks/`), easiest "
+        "first; the evaluation protocol is on the [evaluation page](../evaluation.md).\n",
+        "Results: slots filled on the held-out seeds by the scripted policy / random actions / "
+        "the best learned policy (`docs/results.json`; each card says by which command and "
+        "when; - none recorded).\n",
+        "| id | what it tests | action / observation mode | episode limit | held-out seeds "
+        "| filled: scripted / random / learned |",
+        "|---|---|---|---|---|---|",
     ]
     default = load_env_config()  # configs/env.yaml: what a key not given takes
     for env_id in ids:
@@ -228,15 +380,19 @@ def index_page(ids: list[str]) -> str:
             modes = f"any (defaults `{default.action_mode}` / `{default.obs_mode}`)"
         if picture_id(env_id) != env_id:
             what = f"{what}; version {env_id.rpartition('-')[2]} (see its page)"
+        glance = " / ".join(_best(env_id, kind) for kind in ("scripted", "random", "learned"))
         lines.append(
-            f"| [{env_id}]({env_id}.md) | {what} | {modes} | {spec.max_episode_steps} | {seeds} |"
+            f"| [{env_id}]({env_id}.md) | {what} | {modes} | {spec.max_episode_steps} | {seeds} "
+            f"| {glance} |"
         )
     toc = "\n".join(["", "```{toctree}", ":hidden:", "", *ids, "```", ""])
     return "\n".join(lines) + "\n" + toc
 
 
 def _make(env_id: str, render: bool) -> gym.Env[Any, Any]:
-    return gym.make(env_id, render_mode="rgb_array" if render else None)
+    """The id's env on the design its card shows (a rung's first held-out design)."""
+    kwargs = base_kwargs(picture_id(env_id))
+    return gym.make(env_id, render_mode="rgb_array" if render else None, **kwargs)
 
 
 def pages(render: bool = False) -> tuple[list[Page], dict[str, np.ndarray]]:
@@ -276,6 +432,12 @@ def stale(expected: list[Page]) -> list[str]:
     for png in sorted(IMG_DIR.glob("*.png")):
         if png.stem not in pictured:
             problems.append(f"unregistered picture {png.relative_to(ROOT)}")
+    for env_id in sorted(pictured):
+        gif = IMG_DIR / f"{env_id}.gif"
+        if env_id not in ACTORS or not gif.is_file():
+            problems.append(f"missing animation docs/tasks/img/{env_id}.gif (gen_animations.py)")
+        elif gif.stat().st_size > MAX_BYTES:
+            problems.append(f"animation {gif.relative_to(ROOT)} is over {MAX_BYTES} bytes")
     return problems
 
 

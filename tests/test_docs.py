@@ -10,8 +10,10 @@ import tomllib
 from pathlib import Path
 from types import ModuleType
 
+import numpy as np
 import pytest
 import yaml
+from PIL import Image, ImageChops
 from sybil import Sybil
 from sybil.parsers.myst import PythonCodeBlockParser, SkipParser
 
@@ -148,3 +150,55 @@ def test_changelog_states_the_version_rule() -> None:
     for env_id in gen.registered_ids():
         assert env_id.rsplit("-", 1)[1] in ("v0", "v1")
         assert f"`{env_id}`" in text, f"{env_id} has no entry in the changelog"
+
+
+def test_results_file_is_sourced_and_covers_the_ladder() -> None:
+    """``docs/results.json``: every row names a command, a date and a source that exists; every
+    rung has a random row and a scripted or learned one (the cards' results at a glance)."""
+    results = _load("gen_results")
+    gen = _load("gen_tasks")
+    rows = results.load_results()
+    ids = set(gen.registered_ids())
+    for r in rows:
+        assert r.task in ids, f"{r.task} is not registered"
+        assert 0.0 <= r.success <= 1.0 and 0.0 <= r.filled <= 1.0
+        assert re.fullmatch(r"20\d\d-\d\d-\d\d", r.date), r.date
+        assert r.command.startswith(("python ", "bash ")) and r.time
+        page = r.source.split(" ")[0]
+        assert (ROOT / page).is_file(), f"{r.task} {r.policy}: no source {page}"
+    for task in yaml_tasks():
+        kinds = {r.kind for r in results.rows_for(task, rows)}
+        assert "random" in kinds and kinds & {"scripted", "learned"}, f"{task}: {kinds}"
+
+
+def yaml_tasks() -> list[str]:
+    """The ``-v0`` ids of the bundled rungs."""
+    return [
+        yaml.safe_load(p.read_text(encoding="utf-8"))["id"]
+        for p in ROOT.glob("configs/tasks/*.yaml")
+    ]
+
+
+def test_committed_animations_move_and_are_small() -> None:
+    """Each card's GIF is an animation (many distinct frames), under the size limit."""
+    anim = _load("gen_animations")
+    for env_id in anim.ACTORS:
+        path = DOCS / "tasks" / "img" / f"{env_id}.gif"
+        assert path.stat().st_size <= anim.MAX_BYTES
+        with Image.open(path) as gif:
+            assert 10 <= gif.n_frames <= anim.MAX_FRAMES, (env_id, gif.n_frames)
+            gif.seek(0)
+            first = gif.convert("RGB")
+            gif.seek(gif.n_frames - 1)
+            last = gif.convert("RGB")
+        assert ImageChops.difference(first, last).getbbox() is not None, f"{env_id} is still"
+
+
+def test_animation_frames_are_thinned_evenly(tmp_path: Path) -> None:
+    anim = _load("gen_animations")
+    frames = [np.full((8, 16, 3), i, np.uint8) for i in range(100)]
+    kept = anim.thin(frames, 24)
+    assert len(kept) == 24 and kept[0][0, 0, 0] == 0 and kept[-1][0, 0, 0] == 99
+    assert len(anim.thin(frames[:5], 24)) == 5
+    size = anim.write_gif(kept, tmp_path / "a.gif")
+    assert 0 < size == (tmp_path / "a.gif").stat().st_size

@@ -127,17 +127,22 @@ def plot_curves(results: Sequence[dict[str, Any]], path: Path) -> None:
             learned.setdefault((r.get("ran", r["task"]), r["entry"]), []).append(r)
     if not learned:
         return
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
-    rng = np.random.default_rng(0)
-    for i, ((task, entry), rs) in enumerate(sorted(learned.items())):
+    series = []
+    for (task, entry), rs in sorted(learned.items()):
         top = max(r["timesteps"] for r in rs)
         edges = np.linspace(0, top, CURVE_BINS + 1)
         curves = [training_curve(Path(r["folder"]) / "monitor", edges) for r in rs]
         stack = np.array([c for c in curves if c is not None])
-        if not len(stack):
-            continue
-        x = (edges[1:] + edges[:-1]) / 2
-        for k, ax in enumerate(axes):
+        if len(stack):
+            series.append((task, entry, (edges[1:] + edges[:-1]) / 2, stack))
+    # An all-zero success panel shows nothing: then only the returns, and the title says so.
+    no_success = all(np.nan_to_num(s[3][:, 0, :]).max() == 0 for s in series)
+    panels = (1,) if no_success else (0, 1)
+    fig, ax_list = plt.subplots(1, len(panels), figsize=(6 * len(panels), 4.2), squeeze=False)
+    axes = dict(zip(panels, ax_list[0], strict=True))
+    rng = np.random.default_rng(0)
+    for i, (task, entry, x, stack) in enumerate(series):
+        for k, ax in axes.items():
             y = stack[:, k, :]
             mean = np.nanmean(y, axis=0)
             boot = y[rng.integers(len(y), size=(CURVE_BOOTSTRAP, len(y)))]
@@ -145,12 +150,15 @@ def plot_curves(results: Sequence[dict[str, Any]], path: Path) -> None:
             color = f"C{i % 10}"
             ax.plot(x, mean, color=color, label=f"{task.removesuffix('-v0')}: {entry} (n={len(y)})")
             ax.fill_between(x, lo, hi, color=color, alpha=0.2)
-    axes[0].set_title("training success rate (mean over seeds, 95% CI)")
-    axes[1].set_title("training episode return (mean over seeds, 95% CI)")
-    for ax in axes:
+    if no_success:
+        axes[1].set_title("training episode return (mean over seeds, 95% CI); success 0 in all")
+    else:
+        axes[0].set_title("training success rate (mean over seeds, 95% CI)")
+        axes[1].set_title("training episode return (mean over seeds, 95% CI)")
+    for ax in axes.values():
         ax.set_xlabel("env steps")
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7)
+    axes[panels[0]].legend(fontsize=7)
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=100)
