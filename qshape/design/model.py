@@ -91,9 +91,8 @@ class Design:
         source = str(name_or_path)
         key = (str(path.resolve()), text, rules, source)
         design, said = _LOADED.get(key, lambda: _load_recorded(cls, path, text, rules, source))
-        registry = globals().setdefault("__warningregistry__", {})
-        for w in said:  # what loading it said, said again at every load
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, None, registry)
+        for w in said:  # what loading it said, said again at every load (at the caller's line)
+            warnings.warn(w.message, stacklevel=2)
         return design
 
     @classmethod

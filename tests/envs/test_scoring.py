@@ -240,7 +240,7 @@ def test_mesh_edges_decide_on_mesh_and_beside_it_is_stranded(env: gym.Env, u: An
     mesh (misplaced); just outside, on the output belt, it is stranded."""
     cell = u.cell
     c = cell.geometry.output_centre[:2]
-    half = np.asarray(cell.cfg.output_belt.mesh_size) / 2
+    half = np.asarray(cell.geometry.mesh_size) / 2
     tile = 4
     for sign in (-1, 1):
         for axis in (0, 1):

@@ -3,12 +3,14 @@ a shape's symmetry order remembered across slots, copies and poses without chang
 
 from __future__ import annotations
 
+import warnings
+
 import pytest
 
 from qshape.design import Design
 from qshape.design.memo import BoundedMemo
 from qshape.design.slot import SYMMETRY_MEMO, SYMMETRY_MEMO_SIZE, Slot
-from qshape.errors import DesignError
+from qshape.errors import DesignError, SmallFeatureWarning
 
 
 def test_the_memo_holds_at_most_its_size_dropping_the_least_recently_used() -> None:
@@ -65,3 +67,22 @@ def test_parsed_configuration_text_is_a_fresh_copy_each_time() -> None:
     assert parse_yaml(text) == {"a": {"b": [1, 2]}}
     assert parse_yaml("a: {b: [1, 2, 4]}\n") == {"a": {"b": [1, 2, 4]}}
     assert PARSED_TEXTS >= 1
+
+
+def test_a_remembered_design_warns_at_every_load(tmp_path) -> None:
+    """A load answered from the memo says again what the first load said (a user loading a
+    design twice must see its small-feature warnings twice; a re-emission that a warnings
+    registry swallows fails here)."""
+    path = tmp_path / "bowed.yaml"
+    path.write_text(
+        "name: bowed\nmesh: {width: 230, height: 230}\njoint: 2.0\nslots:\n"
+        "  - name: bowed\n"
+        "    shape: {kind: polygon, vertices: [[0, 0, 0.1], [40, 0], [40, 40], [0, 40]]}\n"
+        "    color: '#27ae60'\n    pose: {x: 100, y: 100, angle: 0}\n"
+    )
+    for _ in range(2):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            Design.load(path)
+        assert caught and all(issubclass(w.category, SmallFeatureWarning) for w in caught)
+        assert all("bowed" in str(w.message) for w in caught)
