@@ -31,7 +31,7 @@ import numpy as np
 from qshape.design.arc_fit import fit_arcs
 from qshape.design.drawn import DrawnClasses, DrawnTile, loop_from_nodes, nest_loops
 from qshape.design.fields import DesignFields
-from qshape.design.file_params import DesignFileParams
+from qshape.design.file_params import DesignFileParams, drawing_joint
 from qshape.design.paths import Loop, TilePath
 from qshape.design.rules import DesignRules
 from qshape.design.values import color_hex, parse_color
@@ -208,7 +208,12 @@ def read_dxf(
     out: dict[str, Any] = {
         "name": str(custom.get("name") or Path(path).stem),
         "mesh": {"width": float(hi[0] - lo[0]), "height": float(hi[1] - lo[1])},
-        "joint": _joint(custom.get("joint"), source, params),
+        "joint": drawing_joint(
+            custom.get("joint"),
+            f"{source}: no 'joint' custom property",
+            f"{source}: custom property joint={custom.get('joint')!r}",
+            params,
+        ),
         "slots": [classes.slot(t) for t in tiles],
     }
     if custom.get("grout_color"):
@@ -230,23 +235,6 @@ def _rectangle(v: FloatArray, b: FloatArray, where: str) -> tuple[FloatArray, Fl
     if len(v) != 4 or np.any(b != 0.0) or float(on_edge.max()) > 1e-6 or np.any(hi - lo <= 0):
         raise DesignError(f"{where}: the mesh must be a closed axis-aligned rectangle")
     return lo, hi
-
-
-def _joint(raw: Any, source: str, params: DesignFileParams) -> float:
-    if raw is None:
-        warnings.warn(
-            f"{source}: no 'joint' custom property; the joint is {params.default_joint_mm} mm",
-            DesignFileWarning,
-            stacklevel=4,
-        )
-        return params.default_joint_mm
-    try:
-        joint = float(raw)
-    except ValueError:
-        joint = float("nan")
-    if not (math.isfinite(joint) and joint > 0.0):
-        raise DesignError(f"{source}: custom property joint={raw!r}: a positive number of mm")
-    return joint
 
 
 def write_dxf(

@@ -5,12 +5,14 @@ Bundled values: the ``design_files`` section of ``configs/vision.yaml``.
 
 from __future__ import annotations
 
+import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from qshape.config_sections import load_section
-from qshape.errors import DesignError
+from qshape.errors import DesignError, DesignFileWarning
 
 
 @dataclass(frozen=True)
@@ -65,3 +67,29 @@ class DesignFileParams:
 
 
 __all__ = ["DesignFileParams"]
+
+
+def drawing_joint(raw: Any, missing: str, bad: str, params: DesignFileParams) -> float:
+    """The joint a drawing states [mm], or the default with a `DesignFileWarning`.
+
+    Args:
+        raw: The drawing's value (None: not stated).
+        missing: What the warning says is missing (``"<source>: no data-joint on <svg>"``).
+        bad: What the error names for a value that is no positive number.
+        params: The default joint.
+
+    Raises:
+        DesignError: A joint that is not a positive number of millimetres.
+    """
+    if raw is None:
+        warnings.warn(
+            f"{missing}; the joint is {params.default_joint_mm} mm", DesignFileWarning, stacklevel=4
+        )
+        return params.default_joint_mm
+    try:
+        joint = float(raw)
+    except ValueError:
+        joint = float("nan")
+    if not (math.isfinite(joint) and joint > 0.0):
+        raise DesignError(f"{bad}: a positive number of mm")
+    return joint

@@ -28,7 +28,7 @@ import numpy as np
 from qshape.design.arc_fit import fit_arcs, three_point_bulge
 from qshape.design.drawn import DrawnClasses, DrawnTile, loop_from_nodes, nest_loops
 from qshape.design.fields import DesignFields
-from qshape.design.file_params import DesignFileParams
+from qshape.design.file_params import DesignFileParams, drawing_joint
 from qshape.design.paths import Loop, TilePath
 from qshape.design.rules import DesignRules
 from qshape.design.values import color_hex
@@ -161,7 +161,12 @@ def read_svg(
         p = np.asarray(p, dtype=np.float64).reshape(-1, 2) * mm
         return np.column_stack([p[:, 0] - x0, y1 - p[:, 1]])
 
-    joint = _joint(svg.values.get("data-joint"), source, params)
+    joint = drawing_joint(
+        svg.values.get("data-joint"),
+        f"{source}: no data-joint on <svg>",
+        f"{source}: <svg data-joint={svg.values.get('data-joint')!r}>",
+        params,
+    )
     grout = None
     if (
         isinstance(mesh_el, se.Shape)
@@ -198,23 +203,6 @@ def read_svg(
     if grout is not None:
         out["grout_color"] = grout
     return out
-
-
-def _joint(raw: Any, source: str, params: DesignFileParams) -> float:
-    if raw is None:
-        warnings.warn(
-            f"{source}: no data-joint on <svg>; the joint is {params.default_joint_mm} mm",
-            DesignFileWarning,
-            stacklevel=4,
-        )
-        return params.default_joint_mm
-    try:
-        joint = float(raw)
-    except ValueError:
-        joint = float("nan")
-    if not (math.isfinite(joint) and joint > 0.0):
-        raise DesignError(f"{source}: <svg data-joint={raw!r}>: a positive number of mm")
-    return joint
 
 
 def _rgb(color: Any) -> tuple[float, float, float]:
