@@ -82,17 +82,29 @@ def _columns(s: slice) -> str:
     return str(s.start) if s.stop - s.start == 1 else f"{s.start}-{s.stop - 1}"
 
 
-def _flag_rows(fields: Mapping[str, slice], meanings: Mapping[str, tuple[str, str]]) -> None:
+def _field_table(
+    fields: Mapping[str, slice],
+    meanings: Mapping[str, tuple[str, str]],
+    ranges: Mapping[str, str],
+) -> str:
+    """The table of a published field map: columns, field, meaning, unit, real range.
+
+    Raises:
+        KeyError: A published field without a documented meaning.
+    """
     missing = sorted(set(fields) - set(meanings))
     if missing:
         raise KeyError(f"fields without a documented meaning: {missing}; add them to card_tables")
+    return _table(
+        ("columns", "field", "meaning", "unit", "range"),
+        ((_columns(s), f"`{k}`", *meanings[k], ranges[k]) for k, s in fields.items()),
+    )
 
 
 def robot_table(env: gym.Env[Any, Any]) -> str:
     """The ``robot`` vector: columns, meaning, unit, real range."""
     spec = env.get_wrapper_attr("task_spec")
     fields = spec.state_fields.robot
-    _flag_rows(fields, ROBOT_MEANINGS)
     pos, vel = _arm_limits(env)
     ranges = {
         "joint_pos": "; ".join(f"{lo:.2f} to {hi:.2f}" for lo, hi in pos),
@@ -102,13 +114,7 @@ def robot_table(env: gym.Env[Any, Any]) -> str:
         "vacuum": "0 or 1",
         "held": "0 or 1",
     }
-    return _table(
-        ("columns", "field", "meaning", "unit", "range"),
-        (
-            (_columns(s), f"`{k}`", ROBOT_MEANINGS[k][0], ROBOT_MEANINGS[k][1], ranges[k])
-            for k, s in fields.items()
-        ),
-    )
+    return _field_table(fields, ROBOT_MEANINGS, ranges)
 
 
 def _area(area: Any, axis: int) -> str:
@@ -124,7 +130,6 @@ def state_row_table(env: gym.Env[Any, Any], key: str) -> str:
     spec = env.get_wrapper_attr("task_spec")
     fields = spec.state_fields.tile if key == "tiles" else spec.state_fields.slot
     meanings = TILE_MEANINGS if key == "tiles" else SLOT_MEANINGS
-    _flag_rows(fields, meanings)
     classes = len({s.class_name for s in spec.slots})
     pick, place = spec.pick, spec.place
     ranges = {
@@ -138,20 +143,13 @@ def state_row_table(env: gym.Env[Any, Any], key: str) -> str:
         "present": "0 or 1",
         "filled": "0 or 1",
     }
-    return _table(
-        ("columns", "field", "meaning", "unit", "range"),
-        (
-            (_columns(s), f"`{k}`", meanings[k][0], meanings[k][1], ranges[k])
-            for k, s in fields.items()
-        ),
-    )
+    return _field_table(fields, meanings, ranges)
 
 
 def objects_row_table(env: gym.Env[Any, Any]) -> str:
     """A ``tiles`` or ``slots`` row of the ``objects`` observation."""
     spec = env.get_wrapper_attr("task_spec")
     fields = spec.object_fields
-    _flag_rows(fields, OBJECT_MEANINGS)
     place, pick = spec.place, spec.pick
     ranges = {
         "rgb": "0 to 1",
@@ -164,13 +162,7 @@ def objects_row_table(env: gym.Env[Any, Any]) -> str:
         "valid": "0 or 1",
         "points": "within the tile's size about the centroid",
     }
-    return _table(
-        ("columns", "field", "meaning", "unit", "range"),
-        (
-            (_columns(s), f"`{k}`", OBJECT_MEANINGS[k][0], OBJECT_MEANINGS[k][1], ranges[k])
-            for k, s in fields.items()
-        ),
-    )
+    return _field_table(fields, OBJECT_MEANINGS, ranges)
 
 
 def observation_section(env: gym.Env[Any, Any]) -> str:
