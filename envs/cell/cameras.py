@@ -426,6 +426,23 @@ class CameraRig:
         self._closed = True
 
 
+class _OwnContextRenderer(mujoco.Renderer):
+    """A `mujoco.Renderer` that frees its GL objects in its own GL context.
+
+    MuJoCo's ``close`` (also run when a renderer is collected) frees the rendering context's
+    framebuffers and textures in whatever GL context is current, which is another renderer's
+    after that one drew last: the other renderer then reads a freed buffer, and its camera
+    returns a picture of another cell (seen with a fixed-design and a procedural-design env in
+    one process, whose resets rebuild the model and close the old renderers). Making its own
+    context current first frees the right objects.
+    """
+
+    def close(self) -> None:
+        if self._gl_context and self._mjr_context:
+            self._gl_context.make_current()
+        super().close()
+
+
 def _open_renderer(model: mujoco.MjModel, height: int, width: int, samples: int) -> mujoco.Renderer:
     """A ``height`` x ``width`` px renderer with ``samples`` and a buffer fitting its use.
 
@@ -441,7 +458,7 @@ def _open_renderer(model: mujoco.MjModel, height: int, width: int, samples: int)
     g.offheight, g.offwidth = probe if fits else (max(height, g.offheight), max(width, g.offwidth))
     q.offsamples = samples
     try:
-        return mujoco.Renderer(model, height, width)
+        return _OwnContextRenderer(model, height, width)
     finally:
         g.offwidth, g.offheight, q.offsamples = saved
 

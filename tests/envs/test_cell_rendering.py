@@ -134,3 +134,30 @@ def test_image_larger_than_the_model_buffer_is_refused(cell) -> None:
             rig.render(cell.data, CAMERAS[0], vis.offheight + 1, vis.offwidth)
     finally:
         rig.close()
+
+
+def test_closing_one_envs_renderers_leaves_another_envs_pictures() -> None:
+    """Two envs in one process: closing one (as a procedural reset does when it rebuilds its
+    model) must not free the other's GL buffers. MuJoCo's own ``Renderer.close`` freed them in
+    whatever context was current, and the other env's camera then showed the closed env's
+    scene; this test failed then (the kept env's second picture was not its first)."""
+    kwargs = {
+        "action_mode": "pick_place_discrete",
+        "obs_mode": "rgb",
+        "image_size": [48, 64],
+        "max_slots": 6,
+        "cell": {"render": {"reuse_unchanged": False}},  # draw every picture
+    }
+    kept = gym.make(envs.ENV_ID, design="square_grid", **kwargs)
+    other = gym.make(envs.ENV_ID, design="paper_mixed", **kwargs)
+    try:
+        first, _ = kept.reset(seed=3)
+        other.reset(seed=4)  # the other env draws last: its context is current
+        kept.unwrapped.cell.render("input_camera", 48, 64)  # now the kept env's is
+        other.close()
+        again, _ = kept.reset(seed=3)
+        np.testing.assert_array_equal(again["input_camera"], first["input_camera"])
+        np.testing.assert_array_equal(again["output_camera"], first["output_camera"])
+    finally:
+        kept.close()
+        other.close()
