@@ -12,8 +12,9 @@ its spaces need, an optional wrapper, and a factory that binds it to a built env
 - ``openloop``: the best open-loop sequence: the privileged expert's actions recorded on one
   training seed, replayed on every episode without looking (shows whether the encoding leaks).
 - ``identity``: the open-loop sequence ``(i, i, 0)`` (decision level).
-- a ``.pt`` path: a camera policy of `agents.camera.crop_scorer` (its file's ``kind`` says so;
-  played on ``rgb`` observations at its image size) or a behaviour clone of
+- a ``.pt`` path: a camera policy of `agents.camera.crop_scorer` or the equivariant pixel
+  policy of `agents.equivariant.policy` (its file's ``kind`` says so; played on ``rgb``
+  observations at its image size, the latter with the env's action masks) or a behaviour clone of
   `agents.learning.decision_bc`. A camera policy plays the env's action mode
   (`CAMERA_ACTION_MODES`): in
   ``pick_place_discrete`` its (tile, slot, turn), in ``pick_place`` that choice placed at the
@@ -290,17 +291,21 @@ def _trained(base: dict[str, Any], model_path: Path) -> Policy:
 def _clone(base: dict[str, Any], path: Path) -> Policy:
     """A ``.pt`` policy: a camera policy (by the file's ``kind``) or a behaviour clone."""
     from agents.camera.crop_scorer import KIND, read_policy_file  # noqa: PLC0415
+    from agents.equivariant.policy import KIND as EQUIVARIANT_KIND  # noqa: PLC0415
     from agents.errors import AgentError  # noqa: PLC0415
 
-    allowed = "a camera policy (apps.bc.camera) or a behaviour clone (apps.bc.decision) .pt file"
+    allowed = (
+        "a camera policy (apps.bc.camera), an equivariant pixel policy "
+        "(benchmarks.learned.equivariant) or a behaviour clone (apps.bc.decision) .pt file"
+    )
     if not path.is_file():
         raise PolicyError(f"unknown policy {str(path)!r}: no such file; a .pt policy is {allowed}")
     try:
         kind = read_policy_file(path).get("kind")
     except AgentError as exc:
         raise PolicyError(f"policy {str(path)!r}: {exc}; a .pt policy is {allowed}") from exc
-    if kind == KIND:
-        return _camera(base, path)
+    if kind in (KIND, EQUIVARIANT_KIND):
+        return _camera(base, path, kind)
     label = checkpoint_label(path)
     from agents.learning.decision_bc import BCPolicy  # noqa: PLC0415
 
@@ -319,16 +324,20 @@ def _clone(base: dict[str, Any], path: Path) -> Policy:
     return Policy(label, {**base, **overrides}, factory)
 
 
-def _camera(base: dict[str, Any], path: Path) -> Policy:
+def _camera(base: dict[str, Any], path: Path, kind: str) -> Policy:
     """A camera policy: ``rgb`` observations at its image size, in the env's action mode.
 
-    In ``pick_place`` the scorer's choice is placed at the poses of the figure fit
+    ``kind`` says which: the crop scorer (`agents.camera.crop_scorer`) or the equivariant
+    policy (`agents.equivariant.policy`, played with the env's action masks). In
+    ``pick_place`` the choice is placed at the poses of the figure fit
     (`agents.camera.continuous.ContinuousCameraPolicy`, bundled fit settings); its label says
     so when the base env asks for that mode, so its episodes never mix with the discrete ones.
     """
     from agents.camera.crop_scorer import CameraPolicy  # noqa: PLC0415
+    from agents.equivariant.policy import KIND as EQUIVARIANT_KIND  # noqa: PLC0415
+    from agents.equivariant.policy import EquivariantPolicy  # noqa: PLC0415
 
-    scorer = CameraPolicy.load(path)
+    scorer: Any = (EquivariantPolicy if kind == EQUIVARIANT_KIND else CameraPolicy).load(path)
     env_kwargs = {**base, "obs_mode": "rgb", "image_size": list(scorer.image_size)}
     label = checkpoint_label(path)
     label += "@pick_place" if base.get("action_mode") == "pick_place" else ""
@@ -337,6 +346,7 @@ def _camera(base: dict[str, Any], path: Path) -> Policy:
         spec = [env.get_wrapper_attr("task_spec")]
         mode = spec[0].action_mode
         player: Any = scorer
+        masked = False
         if mode == "pick_place":
             from agents.camera.continuous import ContinuousCameraPolicy, load_fit_config  # noqa: PLC0415
 
@@ -346,10 +356,15 @@ def _camera(base: dict[str, Any], path: Path) -> Policy:
                 f"policy {label!r} is a camera policy: it plays action_mode "
                 f"{' or '.join(repr(m) for m in CAMERA_ACTION_MODES)}, not {mode!r}"
             )
+        else:
+            masked = kind == EQUIVARIANT_KIND and _has_masks(env)
 
         def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
             if start:
                 spec[0] = env.get_wrapper_attr("task_spec")
+            if masked:
+                masks = env.get_wrapper_attr("action_masks")()
+                return np.asarray(player.predict(obs, spec[0], masks)[0])
             return np.asarray(player.predict(obs, spec[0])[0])
 
         return predict

@@ -37,7 +37,7 @@ Execution = Literal["dynamic", "kinematic"]
 RenderMode = Literal["rgb_array", "human"]
 TileOrder = Literal["belt", "shuffled", "design"]
 SlotOrder = Literal["mesh", "shuffled", "design"]
-RotationFrame = Literal["tile", "slot"]
+RotationFrame = Literal["tile", "slot", "shape"]
 InvalidActions = Literal["fail", "refuse"]
 DesignSource = Literal["fixed", "procedural"]
 DEFAULT_ROTATION_BINS = 4
@@ -142,7 +142,9 @@ class EnvConfig:
         slot_order: What a slot index names: one of `SLOT_ORDERS`; ``mesh``: raster order on
             the mesh.
         rotation_frame: What a rotation index counts from: one of `ROTATION_FRAMES`;
-            ``tile``: the slot-aligned pose nearest to how the tile lies.
+            ``tile``: the slot-aligned pose nearest to how the tile lies; ``shape``: the same,
+            the tile's offset from its slot counted modulo the figure's symmetry (so the
+            right index depends only on what a camera can see).
         invalid_actions: What a ``pick_place_discrete`` action its mask forbids does (one of
             `INVALID_ACTIONS`, `envs.masks`): ``fail`` charges ``failed_action_time`` and the
             failed-action penalty; ``refuse`` raises `ActionError` (no time passes).

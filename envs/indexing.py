@@ -16,7 +16,12 @@ episode without looking. The maps here remove that answer from the encoding:
 - ``rotation_frame``: ``tile`` (default): rotation ``r`` turns the tile by ``r`` steps of
   ``2 pi / rotation_bins`` from the slot-aligned pose nearest to how the tile lies now (r = 0:
   the smallest turn), so the right index depends on the tile's yaw as the camera sees it.
-  ``slot``: ``r`` steps from the slot's own yaw (0 always right).
+  ``shape``: as ``tile``, but the tile's offset from its slot is counted modulo the figure's
+  rotational symmetry before rounding (into half a period either side), so the right index
+  depends only on how the tile looks: under ``tile`` a hexagon lying 60 deg from its slot looks
+  the same as one lying 0 deg but rounds to another index, which no camera can tell (for
+  figures whose symmetry period is not a multiple of a rotation step). ``slot``: ``r`` steps
+  from the slot's own yaw (0 always right).
 
 All randomness comes from the generator passed to `IndexMaps.reset` (the env's
 ``np_random``).
@@ -31,6 +36,7 @@ import numpy as np
 from envs.cell.cell import Cell
 from envs.env_config import EnvConfig
 from envs.task_spec import rotation_step
+from spatial.angles import symmetry_period
 
 ROW_DECIMALS = 3
 """Slot rows: y positions rounded to this many decimals of a metre group slots into one row."""
@@ -93,7 +99,7 @@ class IndexMaps:
         tile = int(self.tiles[int(action[0])])
         slot = int(self.slots[int(action[1])])
         rot = int(action[2])
-        if self.cfg.rotation_frame == "tile":
+        if self.cfg.rotation_frame != "slot":
             rot = (rot + self._base(tile, slot)) % self.cfg.rotation_bins
         return np.array([tile, slot, rot], dtype=np.int64)
 
@@ -103,7 +109,7 @@ class IndexMaps:
         Inverse of `decode` for the current maps (the privileged expert's action).
         """
         rot = slot_steps
-        if self.cfg.rotation_frame == "tile":
+        if self.cfg.rotation_frame != "slot":
             rot = (slot_steps - self._base(tile, slot)) % self.cfg.rotation_bins
         return np.array(
             [
@@ -132,7 +138,12 @@ class IndexMaps:
         """Steps from the slot's yaw to the slot-aligned pose nearest the tile's yaw now."""
         tile_yaw = float(self.cell.tile_poses().yaw[tile])
         slot_yaw = float(self.cell.slot_poses_world()[slot, 2])
-        d = math.remainder(tile_yaw - slot_yaw, 2 * math.pi)
+        period = 2 * math.pi
+        if self.cfg.rotation_frame == "shape":
+            period = symmetry_period(self.cell.tiles[tile].shape.symmetry)
+            if period == 0:  # a round tile: every yaw is its slot's
+                return 0
+        d = math.remainder(tile_yaw - slot_yaw, period)
         return round(d / self._step) % self.cfg.rotation_bins
 
 

@@ -206,6 +206,21 @@ class Cell:
         self.on_stage[idx] = True
         self._wake[idx] = True
 
+    def put_tiles(self, idx: np.ndarray, poses: np.ndarray, surface_z: float) -> None:
+        """Put tiles at world (x, y, yaw) poses, lying flat on a surface at ``surface_z`` [m].
+
+        For a state no episode reaches by itself (a finished mosaic on the mesh, to take apart
+        into demonstrations); like `place_tiles`, at rest and on the stage.
+        """
+        qadr = self.ids.tile_qpos_index[idx]
+        self.data.qpos[qadr[:, 0]] = poses[:, 0]
+        self.data.qpos[qadr[:, 1]] = poses[:, 1]
+        self.data.qpos[qadr[:, 2]] = surface_z + self.cfg.tiles.thickness / 2
+        self.data.qpos[qadr[:, 3:]] = quat_from_yaw(poses[:, 2])
+        self.data.qvel[self.ids.tile_dof_index[idx]] = 0.0
+        self.on_stage[idx] = True
+        self._wake[idx] = True
+
     def park_tiles(self, idx: np.ndarray) -> None:
         """Tiles ``idx`` to their parking spots, at rest, off the stage."""
         qadr = self.ids.tile_qpos_index[idx]
