@@ -126,8 +126,20 @@ class ContinuousCameraPolicy:
 
     @classmethod
     def load(cls, path: str | Path, fit: FitConfig | None = None) -> ContinuousCameraPolicy:
-        """A saved camera policy (``kind: camera_crops``) with the bundled fit settings."""
-        return cls(CameraPolicy.load(path), fit if fit is not None else load_fit_config())
+        """A saved camera policy with the bundled fit settings.
+
+        The file's ``kind`` says which scorer: ``camera_crops`` (`CameraPolicy`) or
+        ``equivariant`` (`agents.equivariant.policy.EquivariantPolicy`).
+        """
+        from agents.camera.crop_scorer import read_policy_file  # noqa: PLC0415
+        from agents.equivariant.policy import KIND, EquivariantPolicy  # noqa: PLC0415
+
+        scorer: Any = (
+            EquivariantPolicy.load(path)
+            if read_policy_file(path).get("kind") == KIND
+            else CameraPolicy.load(path)
+        )
+        return cls(scorer, fit if fit is not None else load_fit_config())
 
     def decide(self, obs: dict[str, Any], spec: TaskSpec) -> Decision | None:
         """The step's choice, or None when no tile is seen.

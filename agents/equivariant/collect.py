@@ -213,21 +213,27 @@ def collect(
 
     task = get_task(task_id)
     designs = len(task.designs("train"))
-    envs_: list[gym.Env] = []
+    envs_: dict[int, gym.Env] = {}  # built when first used
+    rec: _Recorder | None = None
+    play = _expert_episode if source == "expert" else _disassembly_episode
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            envs_ = [_env_for(task_id, i, image_size, cell or {}) for i in range(designs)]
-            nvec = np.asarray(envs_[0].action_space.nvec)  # type: ignore[attr-defined]
-            rec = _Recorder(cfg, int(nvec[0]), int(nvec[1]))
-            play = _expert_episode if source == "expert" else _disassembly_episode
             for e in range(episodes):
-                play(envs_[e % designs], seed + e, e, rec)
+                d = e % designs
+                if d not in envs_:
+                    envs_[d] = _env_for(task_id, d, image_size, cell or {})
+                if rec is None:
+                    nvec = np.asarray(envs_[d].action_space.nvec)  # type: ignore[attr-defined]
+                    rec = _Recorder(cfg, int(nvec[0]), int(nvec[1]))
+                play(envs_[d], seed + e, e, rec)
                 if progress is not None:
                     progress(e + 1)
     finally:
-        for env in envs_:
+        for env in envs_.values():
             env.close()
+    if rec is None:
+        raise RecordsError(f"asked for {episodes} episodes; record at least one")
     header = Header(task_id, tuple(image_size), camera, source, crop_settings(cfg), episodes)  # type: ignore[arg-type]
     return rec.records(header)
 

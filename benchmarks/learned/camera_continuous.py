@@ -6,8 +6,9 @@ Run::
         --out runs/camera_continuous
 
 Plays `agents.camera.continuous.ContinuousCameraPolicy` (the shipped crop scorer plus the
-figure fit) on ``MosaicDecision6-v0`` with ``action_mode=pick_place``, ``obs_mode=rgb`` at each
-image size, over the rung's evaluation seeds (1000-1019). Per size: slots filled, success,
+figure fit; ``--checkpoint`` may also be the equivariant policy) on ``MosaicDecision6-v0``
+(``--task``: another rung, its evaluation designs in turn) with ``action_mode=pick_place``,
+``obs_mode=rgb`` at each image size, over the rung's evaluation seeds (1000-1019). Per size: slots filled, success,
 and the error of every tile the policy put on the mesh against the slot it aimed at (position
 of the tile's area centroid [mm], yaw modulo the tile's symmetry [deg]; median, 90th
 percentile, max, share within the tolerances), plus how far the picture put the tile before
@@ -159,6 +160,7 @@ def run_size(
     size: tuple[int, int],
     seeds: Sequence[int],
     env_overrides: dict[str, Any] | None = None,
+    task: str = TASK,
 ) -> dict[str, Any]:
     """Every episode at one image size; the row's figures and its placements.
 
@@ -167,25 +169,35 @@ def run_size(
         size: Image (height, width) [px].
         seeds: Episode seeds.
         env_overrides: Further env keys (e.g. ``execution``, ``camera_position_jitter``).
+        task: The rung whose held-out protocol is played (episodes alternate over its
+            evaluation designs, as `apps.evaluate` does).
     """
-    overrides, protocol = task_protocol(TASK)
+    overrides, protocol = task_protocol(task)
     overrides = {
         **overrides,
         "action_mode": "pick_place",
         "obs_mode": "rgb",
         **(env_overrides or {}),
     }
-    env = gym.make(ENV_ID, **{**overrides, "image_size": list(size)})
-    spec: TaskSpec = env.get_wrapper_attr("task_spec")
-    mode = str(env.get_wrapper_attr("config").execution)
+    designs: Sequence[str | None] = protocol.designs or (None,)
+    envs = [
+        gym.make(
+            ENV_ID,
+            **{**overrides, "image_size": list(size), **({"design": d} if d else {})},
+        )
+        for d in designs
+    ]
+    spec: TaskSpec = envs[0].get_wrapper_attr("task_spec")
+    mode = str(envs[0].get_wrapper_attr("config").execution)
     t0 = time.process_time()
     evals, placements = [], []
-    for seed in seeds:
-        ev, pl = play_episode(env, policy, seed, protocol.max_steps)
+    for i, seed in enumerate(seeds):
+        ev, pl = play_episode(envs[i % len(envs)], policy, seed, protocol.max_steps)
         evals.append(ev)
         placements += pl
     cpu = time.process_time() - t0
-    env.close()
+    for env in envs:
+        env.close()
     placed = [p for p in placements if p.on_mesh]
     right = [p for p in placed if p.same_class]  # errors against a slot of the tile's class
     pos = np.array([p.position_mm for p in right])
@@ -281,7 +293,7 @@ def table(rows: Sequence[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def plot(rows: Sequence[dict[str, Any]], path: Path) -> None:
+def plot(rows: Sequence[dict[str, Any]], path: Path, task: str = TASK) -> None:
     """Histograms of the position and yaw errors per image size, tolerances marked."""
     import matplotlib  # noqa: PLC0415
 
@@ -304,7 +316,7 @@ def plot(rows: Sequence[dict[str, Any]], path: Path) -> None:
         ax.set_xlabel(unit)
         ax.set_ylabel("tiles placed")
         ax.legend(fontsize=8)
-    fig.suptitle(f"{TASK}, pick_place from the cameras: every tile placed (last bin: beyond)")
+    fig.suptitle(f"{task}, pick_place from the cameras: every tile placed (last bin: beyond)")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
@@ -315,7 +327,10 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     """Play each size, print the table, write ``results.json`` and ``errors.png``."""
     assert __doc__ is not None
     ap = CommandParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--checkpoint", default=CHECKPOINT, help="crop scorer (camera.pt)")
+    ap.add_argument(
+        "--checkpoint", default=CHECKPOINT, help="camera policy (crop scorer or equivariant .pt)"
+    )
+    ap.add_argument("--task", default=TASK, help="rung whose held-out protocol is played")
     ap.add_argument("--sizes", nargs="+", default=list(SIZES), help="image sizes HxW [px]")
     ap.add_argument("--seeds", nargs="+", type=int, help="episode seeds (default: the rung's)")
     ap.add_argument(
@@ -323,12 +338,12 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     )
     ap.add_argument("--out", type=Path, default=Path("runs/camera_continuous"))
     args = ap.parse_args(argv)
-    _, protocol = task_protocol(TASK)
+    _, protocol = task_protocol(args.task)
     seeds = args.seeds or list(protocol.seeds)
     policy = ContinuousCameraPolicy.load(args.checkpoint)
     rows = []
     for text in args.sizes:
-        row = run_size(policy, parse_size(text), seeds, parse_pairs(args.env))
+        row = run_size(policy, parse_size(text), seeds, parse_pairs(args.env), args.task)
         row["env_check_mm"] = env_check_mm(row)
         rows.append(row)
         print(
@@ -338,9 +353,9 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     print(table(rows))
     write_json(
         args.out / "results.json",
-        {"task": TASK, "checkpoint": args.checkpoint, "seeds": seeds, "rows": rows},
+        {"task": args.task, "checkpoint": args.checkpoint, "seeds": seeds, "rows": rows},
     )
-    plot(rows, args.out / "errors.png")
+    plot(rows, args.out / "errors.png", args.task)
     print(f"wrote {args.out / 'results.json'} and {args.out / 'errors.png'}")
     return rows
 
