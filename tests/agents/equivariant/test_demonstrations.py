@@ -8,6 +8,7 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
+import torch
 
 from agents.equivariant.collect import collect
 from agents.equivariant.config import EquivariantConfig
@@ -26,9 +27,8 @@ CFG = EquivariantConfig(steps=40)
 @pytest.fixture(scope="module")
 def records() -> dict:
     """One episode of each source on the same seed (the training design paper_mixed)."""
-    return {
-        src: collect(TASK, src, 1, CFG, image_size=SIZE, seed=123) for src in ("disassembly", "expert")
-    }
+    sources = ("disassembly", "expert")
+    return {src: collect(TASK, src, 1, CFG, image_size=SIZE, seed=123) for src in sources}
 
 
 def test_disassembly_reversed_demonstrates_what_the_expert_does(records) -> None:
@@ -89,8 +89,15 @@ def test_one_disassembled_mosaic_teaches_it_to_fill_an_unseen_design(policy) -> 
     on a held-out seed, counting turns modulo the figure's symmetry."""
     pol, _ = policy
     task = get_task(TASK)
-    env = gym.make(TASK, **{**task.env_kwargs("eval", 1), "obs_mode": "rgb",
-                            "image_size": list(SIZE), "rotation_frame": "shape"})
+    env = gym.make(
+        TASK,
+        **{
+            **task.env_kwargs("eval", 1),
+            "obs_mode": "rgb",
+            "image_size": list(SIZE),
+            "rotation_frame": "shape",
+        },
+    )
     try:
         obs, _ = env.reset(seed=1001)
         u = env.unwrapped
@@ -110,12 +117,12 @@ def test_policy_refuses_other_pictures_and_files(policy, tmp_path) -> None:
     spec = None
     with pytest.raises(AgentError, match="obs_mode 'rgb'"):
         pol.turn_scores({"tiles": np.zeros(3)}, spec)
-    small = {"input_camera": np.zeros((72, 96, 3), np.uint8),
-             "output_camera": np.zeros((72, 96, 3), np.uint8)}
+    small = {
+        "input_camera": np.zeros((72, 96, 3), np.uint8),
+        "output_camera": np.zeros((72, 96, 3), np.uint8),
+    }
     with pytest.raises(AgentError, match=r"trained on 96x128 images, got 72x96"):
         pol.turn_scores(small, spec)
-    import torch
-
     other = tmp_path / "other.pt"
     torch.save({"kind": "camera_crops", "state_dict": {}}, other)
     with pytest.raises(AgentError, match="not an equivariant policy"):

@@ -1,4 +1,4 @@
-"""agents.equivariant: the network's scores turn with the picture; fine turns and rotation indices."""
+"""agents.equivariant: the scores turn with the picture; fine turns and rotation indices."""
 
 from __future__ import annotations
 
