@@ -9,14 +9,13 @@ Plays `agents.camera.continuous.ContinuousCameraPolicy` (the shipped crop scorer
 figure fit; ``--checkpoint`` may also be the equivariant policy) on ``MosaicDecision6-v0``
 (``--task``: another rung, its evaluation designs in turn) with ``action_mode=pick_place``,
 ``obs_mode=rgb`` at each image size, over the rung's evaluation seeds (1000-1019). Per size:
-slots filled, success, and the error of every tile the policy put on the mesh against the
-slot it aimed at (position of the tile's area centroid [mm], yaw modulo the tile's symmetry [deg]; median, 90th
-percentile, max, share within the tolerances), plus how far the picture put the tile before
-the pick (the fit's own error). The errors are scored from the env's privileged
+slots filled, success, and the error of every tile the policy put on the mesh against the slot
+it aimed at (position of the tile's area centroid [mm], yaw modulo the tile's symmetry [deg];
+median, 90th percentile, max, share within the tolerances), plus how far the picture put the
+tile before the pick (the fit's own error). The errors are scored from the env's privileged
 ``ground_truth()`` (scoring only; ``info["evaluation"]`` carries only their mean and max over
 the tiles on the mesh, checked against them). Writes ``results.json`` and ``errors.png``
-(histograms) to ``--out``.
-"""
+(histograms) to ``--out``."""
 
 from __future__ import annotations
 
