@@ -15,7 +15,8 @@ median, 90th percentile, max, share within the tolerances), plus how far the pic
 tile before the pick (the fit's own error). The errors are scored from the env's privileged
 ``ground_truth()`` (scoring only; ``info["evaluation"]`` carries only their mean and max over
 the tiles on the mesh, checked against them). Writes ``results.json`` and ``errors.png``
-(histograms) to ``--out``."""
+(histograms) to ``--out``.
+"""
 
 from __future__ import annotations
 
