@@ -108,6 +108,31 @@ def grid_points(centre: np.ndarray, z: float, cfg: CropConfig) -> np.ndarray:
     return np.stack([xs, ys, np.full_like(xs, z)], axis=-1)
 
 
+def crop_planes(image: np.ndarray, cfg: CropConfig) -> np.ndarray:
+    """The planes crops are sampled from: foreground mask, then RGB in [0, 1], (H, W, 4) float32."""
+    fg = foreground_mask(image, cfg).astype(np.float32)
+    return np.dstack([fg, np.asarray(image, np.float32) / 255.0])
+
+
+def world_crops(
+    planes: np.ndarray, camera: CameraModel, centres: np.ndarray, z: float, cfg: CropConfig
+) -> np.ndarray:
+    """World-aligned crops of one image's `crop_planes` around each centre on the plane at ``z``.
+
+    Returns:
+        Shape (m, CHANNELS, grid, grid) float32: the foreground mask, then RGB in [0, 1].
+    """
+    g = cfg.grid
+    if len(centres) == 0:
+        return np.zeros((0, CHANNELS, g, g), np.float32)
+    pts = np.concatenate([grid_points(c, z, cfg).reshape(-1, 3) for c in centres])
+    uv = camera.project(pts).astype(np.float32).reshape(len(centres) * g, g, 2)
+    out = cv2.remap(planes, uv[..., 0], uv[..., 1], cv2.INTER_LINEAR, borderValue=0.0)
+    return np.ascontiguousarray(
+        np.transpose(out.reshape(len(centres), g, g, CHANNELS), (0, 3, 1, 2)), np.float32
+    )
+
+
 def world_crop(
     image: np.ndarray, camera: CameraModel, centre: np.ndarray, z: float, cfg: CropConfig
 ) -> np.ndarray:
@@ -116,12 +141,7 @@ def world_crop(
     Returns:
         Shape (CHANNELS, grid, grid) float32: the foreground mask, then RGB in [0, 1].
     """
-    uv = camera.project(grid_points(centre, z, cfg).reshape(-1, 3)).astype(np.float32)
-    uv = uv.reshape(cfg.grid, cfg.grid, 2)
-    fg = foreground_mask(image, cfg).astype(np.float32)
-    planes = np.dstack([fg, np.asarray(image, np.float32) / 255.0])
-    out = cv2.remap(planes, uv[..., 0], uv[..., 1], cv2.INTER_LINEAR, borderValue=0.0)
-    return np.transpose(out, (2, 0, 1)).astype(np.float32)
+    return world_crops(crop_planes(image, cfg), camera, np.asarray([centre]), z, cfg)[0]
 
 
 def slot_template(slot: WorldSlot, cfg: CropConfig) -> np.ndarray:
@@ -184,18 +204,12 @@ def step_crops(
     """The tile and mesh crops of an observation (and the tiles it found)."""
     cam_in, cam_out = spec.camera("input_camera"), spec.camera("output_camera")
     found = belt_tiles(obs["input_camera"], cam_in, spec.pick.tile_top_z, cfg)
-    tiles = np.zeros((len(found.xy), CHANNELS, cfg.grid, cfg.grid), np.float32)
-    for i, xy in enumerate(found.xy):
-        tiles[i] = world_crop(obs["input_camera"], cam_in, xy, spec.pick.tile_top_z, cfg)
+    planes_in = crop_planes(obs["input_camera"], cfg)
+    tiles = world_crops(planes_in, cam_in, found.xy, spec.pick.tile_top_z, cfg)
     order = mesh_order(spec)
-    mesh = np.stack(
-        [
-            world_crop(
-                obs["output_camera"], cam_out, spec.slots[int(j)].xy, spec.place.tile_top_z, cfg
-            )
-            for j in order
-        ]
-    )
+    centres = np.array([spec.slots[int(j)].xy for j in order])
+    planes_out = crop_planes(obs["output_camera"], cfg)
+    mesh = world_crops(planes_out, cam_out, centres, spec.place.tile_top_z, cfg)
     return StepCrops(tiles, mesh), found
 
 

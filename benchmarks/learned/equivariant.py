@@ -29,7 +29,7 @@ import json
 import shutil
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -370,6 +370,49 @@ def run_all(
     return {"runs": runs, "table": table, "theory": theory_rows}
 
 
+def decision_timing(
+    model: Path, task_id: str = "MosaicDecision16-v1", decisions: int = 20
+) -> dict[str, Any]:
+    """CPU milliseconds per decision of a policy file on a 16-tile, 16-slot rung.
+
+    Per decision: cutting the observation into crops, and scoring every (tile, slot, turn),
+    once with the file's own fine turns and once with only the 4 quarter turns (the same
+    weights: the turn count sets how the maps are turned, not the weights). One thread.
+    """
+    import gymnasium as gym  # noqa: PLC0415
+    import torch  # noqa: PLC0415
+
+    from agents.equivariant.network import build_network  # noqa: PLC0415
+    from agents.equivariant.policy import EquivariantPolicy  # noqa: PLC0415
+
+    torch.set_num_threads(1)
+    pol = EquivariantPolicy.load(model)
+    env = gym.make(task_id, obs_mode="rgb", image_size=list(pol.image_size))
+    out: dict[str, Any] = {"task": task_id, "decisions": decisions}
+    try:
+        obs, _ = env.reset(seed=1000)
+        spec = env.get_wrapper_attr("task_spec")
+        n = len(pol._cut(obs, spec)[0])  # noqa: SLF001 - the tiles the policy sees
+        out["tiles_seen"], out["slots"] = n, len(spec.slots)
+        t0 = time.process_time()
+        for _ in range(decisions):
+            pol._cut(obs, spec)  # noqa: SLF001
+        out["crops_ms"] = (time.process_time() - t0) / decisions * 1e3
+        for turns in sorted({pol.cfg.turns, 4}):
+            cfg = replace(pol.cfg, turns=turns)
+            net = build_network(cfg)
+            net.load_state_dict(pol.net.state_dict())
+            p = EquivariantPolicy(net, cfg, pol.image_size)
+            p.logits(obs, spec)  # warm up
+            t0 = time.process_time()
+            for _ in range(decisions):
+                p.logits(obs, spec)
+            out[f"decision_ms_{turns}_turns"] = (time.process_time() - t0) / decisions * 1e3
+    finally:
+        env.close()
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Command line (see the module docstring)."""
     ap = CommandParser(description=__doc__.splitlines()[0])
@@ -380,6 +423,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "--runs", nargs="+", metavar="SOURCE:CAMERA", help="curves (default: the config's)"
     )
     ap.add_argument("--no-theory", action="store_true", help="skip the theory rows")
+    ap.add_argument(
+        "--timing", type=Path, metavar="MODEL", help="only time a policy file's decisions"
+    )
     ap.add_argument(
         "--ship",
         nargs="?",
@@ -402,6 +448,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     }
     cc = load_config(CurvesConfig, args.curves, **over)
     use_headless_rendering()
+    if args.timing is not None:
+        timing = decision_timing(args.timing)
+        print(json.dumps(timing))
+        return timing
     import torch  # noqa: PLC0415
 
     torch.set_num_threads(1)  # CPU-minutes of one core; two runs side by side on two cores
