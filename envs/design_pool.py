@@ -176,6 +176,8 @@ def _prepare(source: tuple[EnvConfig, ProceduralDesigns, bool], state: dict[str,
             design = designs.draw(rng)
             seed = int(rng.integers(SEED_BOUND))
             after = rng.bit_generator.state
+            for slot in design.slots:
+                slot.figure()  # made here, pickled with the design (the task's slots read them)
             cell = build_design_cell(config, design, seed)[1] if build else None
             blob: bytes | None = pickle.dumps(
                 (design, seed, after, cell), protocol=pickle.HIGHEST_PROTOCOL
@@ -261,7 +263,10 @@ class DesignPool:
         self._digest = ""
         self._ready: OrderedDict[str, Prepared] = OrderedDict()
         self._plan: list[str] = []
+        self._states: dict[str, dict[str, Any]] = {}
+        self._delivered: set[str] = set()
         self._started = ""
+        self._seeds: OrderedDict[int, tuple[str, dict[str, Any]]] = OrderedDict()
         self.hits = 0
         self.misses = 0
         self.dropped = 0
@@ -303,7 +308,7 @@ class DesignPool:
             self._digest = digest
             self.dropped += len(self._ready)
             self._ready.clear()
-            self._plan, self._started = [], ""
+            self._plan, self._started, self._delivered = [], "", set()
             self._requests.put(("source", digest, payload))
         return digest
 
@@ -318,13 +323,8 @@ class DesignPool:
         self.source(config, designs)
         key = state_key(rng.bit_generator.state)
         self._collect(0.0)
-        if key not in self._ready and self._started == key:
-            deadline = time.monotonic() + self.config.wait_s
-            while key not in self._ready and self._started == key:
-                left = deadline - time.monotonic()
-                if left <= 0.0 or not self.alive:
-                    break
-                self._collect(left)
+        if key not in self._ready and key in self._plan and key not in self._delivered:
+            self._wait(key)
         prepared = self._ready.pop(key, None)
         if prepared is None or prepared.blob is None:
             self.misses += 1
@@ -340,17 +340,43 @@ class DesignPool:
     def plan(self, rng: np.random.Generator, seed: int | None) -> None:
         """Ask for the states the next reset likely starts from (see the module docstring)."""
         if seed is not None:
-            states = [
-                seeding.np_random(seed + k)[0].bit_generator.state
-                for k in range(1, self.config.ahead + 1)
-            ]
+            keyed = [self._seed_state(seed + k) for k in range(1, self.config.ahead + 1)]
         else:
-            states = [rng.bit_generator.state]
-        keyed = [(state_key(s), s) for s in states]
-        self._plan = [k for k, _ in keyed]
-        for k in [k for k in self._ready if k not in self._plan]:
+            state = rng.bit_generator.state
+            keyed = [(state_key(state), state)]
+        plan = [k for k, _ in keyed]
+        for k in [k for k in self._ready if k not in plan]:
             del self._ready[k]
             self.dropped += 1
+        if plan != self._plan:
+            self._send_plan(keyed)
+
+    def _seed_state(self, seed: int) -> tuple[str, dict[str, Any]]:
+        """(key, state) of ``np_random`` right after ``reset(seed=seed)`` (remembered)."""
+        if seed not in self._seeds:
+            state = seeding.np_random(seed)[0].bit_generator.state
+            self._seeds[seed] = (state_key(state), state)
+            while len(self._seeds) > 2 * self.config.ahead:
+                self._seeds.popitem(last=False)
+        return self._seeds[seed]
+
+    def _wait(self, key: str) -> None:
+        """Wait (up to ``wait_s``) for the planned entry ``key``, asked for first."""
+        if self._started != key and self._plan[0] != key:
+            keyed = [(k, self._states[k]) for k in (key, *(k for k in self._plan if k != key))]
+            self._send_plan(keyed)
+        deadline = time.monotonic() + self.config.wait_s
+        while key in self._plan and key not in self._delivered and self.alive:
+            left = deadline - time.monotonic()
+            if left <= 0.0:
+                return
+            self._collect(left)
+
+    def _send_plan(self, keyed: list[tuple[str, dict[str, Any]]]) -> None:
+        """Make ``keyed`` ((key, state), in order) the worker's plan."""
+        self._plan = [k for k, _ in keyed]
+        self._states = dict(keyed)
+        self._delivered &= set(self._plan)  # as the worker forgets what left its plan
         self._requests.put(("plan", self._digest, keyed))
 
     def _collect(self, wait_s: float) -> None:
@@ -367,6 +393,8 @@ class DesignPool:
                 continue
             _, digest, key, prepared = msg
             self._started = ""
+            if digest == self._digest:
+                self._delivered.add(key)  # the worker will not make it again
             self.worker_cpu_s += prepared.cpu_s
             size = len(prepared.blob or b"") / MB
             if digest != self._digest or key not in self._plan or size > self.config.max_entry_mb:

@@ -66,6 +66,7 @@ def build_parts(
     seed: int,
     ik: IKSolver,
     pcfg: PlannerConfig,
+    *,
     cell: Cell | None = None,
 ) -> EnvParts:
     """The cell of ``design`` (None: ``cfg.design``) built with ``seed``, and its parts.

@@ -219,7 +219,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     def _build(self, drawn: Design | None, seed: int, cell: Cell | None = None) -> None:
         """Build the cell of a design (None: ``design``) and its parts (`envs.env_parts`)."""
-        p = build_parts(self.config, drawn, seed, self.ik, self._pcfg, cell)
+        p = build_parts(self.config, drawn, seed, self.ik, self._pcfg, cell=cell)
         self.cell, self.task, self.observer, self.index = p.cell, p.task, p.observer, p.index
         self.pick_area, self.place_area, self.codec = p.pick_area, p.place_area, p.codec
         self.executor, self.actions = p.executor, p.actions

@@ -99,7 +99,14 @@ class Slot:
         return [h.dense(self.rules.outline_step_mm) for h in self.path.holes]
 
     def figure(self) -> Figure:
-        """The slot as a `qshape.Figure` in mesh millimetres (y up), with its colour."""
+        """The slot as a `qshape.Figure` in mesh millimetres (y up), with its colour.
+
+        Made once per slot (a figure is read-only).
+        """
+        return self._figure
+
+    @cached_property
+    def _figure(self) -> Figure:
         return self.path.figure(self.color, self.rules.max_arc_deg)
 
     @property
