@@ -32,6 +32,7 @@ processes, the pool is not started (a warning says so) and designs are drawn in 
 from __future__ import annotations
 
 import copy
+import gc
 import hashlib
 import multiprocessing as mp
 import pickle
@@ -189,6 +190,21 @@ def _prepare(source: tuple[EnvConfig, ProceduralDesigns, bool], state: dict[str,
     return Prepared(blob, said, time.process_time() - cpu, error)
 
 
+def _loads(blob: bytes) -> Any:
+    """Unpickle ``blob`` with the cyclic garbage collector paused.
+
+    A cell is thousands of small objects: unpickled in a process that holds many more, the
+    collector would otherwise walk them all several times over (three times the unpickling).
+    """
+    paused = gc.isenabled()
+    gc.disable()
+    try:
+        return pickle.loads(blob)
+    finally:
+        if paused:
+            gc.enable()
+
+
 def _work(requests: Any, results: Any) -> None:
     """The worker: prepare the states of the latest plan, in order, until told to stop."""
     source: Any = None
@@ -261,6 +277,7 @@ class DesignPool:
         self._process.start()
         self._stop = weakref.finalize(self, _stop, self._process, self._requests, self._results)
         self._digest = ""
+        self._what: tuple[Any, ...] | None = None
         self._ready: OrderedDict[str, Prepared] = OrderedDict()
         self._plan: list[str] = []
         self._states: dict[str, dict[str, Any]] = {}
@@ -300,6 +317,9 @@ class DesignPool:
         built from another configuration).
         """
         what = (config, designs.generator.config, designs.generator.rules, designs.tries)
+        if self._what is not None and all(a is b for a, b in zip(what, self._what, strict=True)):
+            return self._digest  # the very same (frozen) objects: nothing changed
+        self._what = what
         digest = hashlib.sha256(pickle.dumps(what)).hexdigest()
         if digest != self._digest:
             bare = copy.copy(designs)
@@ -329,7 +349,7 @@ class DesignPool:
         if prepared is None or prepared.blob is None:
             self.misses += 1
             return None
-        design, seed, after, cell = pickle.loads(prepared.blob)
+        design, seed, after, cell = _loads(prepared.blob)
         for category, message in prepared.warnings:
             warnings.warn(message, category, stacklevel=4)
         rng.bit_generator.state = after
