@@ -9,7 +9,7 @@ machines and loads:
   drawn and its cell built) over a reset of the same rung on its fixed design (6 slots both,
   the rung's state observation). Target <= `TARGET_RESET`.
 - ``reset_pool``: the same with the design pool (``design_pool: design_pool``,
-  `envs.design_pool`), seeds in order: this process's CPU time (the worker process draws
+  `envs.pool`), seeds in order: this process's CPU time (the worker process draws
   and builds), with the wall time, the wall ratio and the worker's CPU time per design beside
   it. Target <= `TARGET_RESET`.
 - ``step``: a kinematic ``pick_place`` step (state observation, `DESIGN`, the privileged
@@ -116,7 +116,7 @@ def measure_reset_ratio(seconds: float, queue: mp.Queue) -> None:
 def measure_reset_pool_ratio(seconds: float, queue: mp.Queue) -> None:
     """Child process: procedural reset with the design pool over a fixed reset, interleaved.
 
-    The pool (``design_pool``, `envs.design_pool`) draws the designs and builds their cells in
+    The pool (``design_pool``, `envs.pool`) draws the designs and builds their cells in
     its worker process: this process's CPU time is the figure of the ratio; the wall time
     (which includes waiting for the worker when resets come faster than it prepares them) and
     the worker's CPU time per design are given beside it.

@@ -87,8 +87,8 @@ class EnvConfig:
         design_tries: ``procedural``: draws per reset before a design free of excluded
             classes is given up (`envs.design_source.DesignSourceError`).
         design_pool: ``procedural``: prepare the next designs and their cells ahead in a
-            worker process (`envs.design_pool`): a bundled name (``design_pool``) or path of
-            a `envs.design_pool.DesignPoolConfig` file; None (default): off. Same episodes
+            worker process (`envs.pool`): a bundled name (``design_pool``) or path of
+            a `envs.pool.DesignPoolConfig` file; None (default): off. Same episodes
             for the same seed either way; a ``fixed`` source ignores it.
         cell: The cell (`envs.cell.config.CellConfig`), nested: in YAML a bundled name or
             path, or a mapping ``{config: <name or path>, <section>: {<key>: value}}`` that

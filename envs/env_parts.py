@@ -72,7 +72,7 @@ def build_parts(
     """The cell of ``design`` (None: ``cfg.design``) built with ``seed``, and its parts.
 
     ``cell``: that cell built already (`build_design_cell` of the same arguments, in a design
-    pool's worker: `envs.design_pool`); ``design`` must then be given.
+    pool's worker: `envs.pool`); ``design`` must then be given.
 
     Raises:
         CellError: The tiles do not fit (`envs.episode_setup.build_cell`).

@@ -18,14 +18,14 @@ from envs.actions import transfer_poses
 from envs.cell.cameras import CameraModel
 from envs.cell.cell import CAMERAS, Cell
 from envs.cell.scene import build_arm_model
-from envs.design_pool import design_pool
 from envs.design_source import FIRST_DRAW_SEED, design_source, source_config
 from envs.env_config import EnvConfig, load_env_config
 from envs.env_parts import build_parts
 from envs.errors import EnvError
 from envs.frames import FrameSchedule
 from envs.masks import action_mask, check_allowed
-from envs.task import REWARD_TERMS, SEED_BOUND, Evaluation, GroundTruth
+from envs.pool import design_pool, draw_design
+from envs.task import REWARD_TERMS, Evaluation, GroundTruth
 from envs.task_spec import (
     ActionError,
     PickPlaceCommand,
@@ -234,19 +234,12 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def _draw_design(self, rng: np.random.Generator) -> None:
         """Procedural source: replace the cell by one of a design drawn from ``rng``."""
         assert self.designs is not None
-        taken = None
-        if self.pool is not None:
-            taken = self.pool.take(self.config, self.designs, rng)
-        if taken is None:
-            design = self.designs.draw(rng)
-            seed, cell = int(rng.integers(SEED_BOUND)), None
-        else:
-            design, seed, cell = taken.design, taken.seed, taken.cell
+        drawn = draw_design(self.pool, self.config, self.designs, rng)  # `envs.pool`
         if self._viewer is not None:
             self._viewer.close()
             self._viewer = None
         self.cell.close()
-        self._build(design, seed, cell)
+        self._build(drawn.design, drawn.seed, drawn.cell)
 
     # ------------------------------------------------------------------ Gymnasium API
     def reset(

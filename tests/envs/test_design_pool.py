@@ -1,4 +1,4 @@
-"""The design pool (`envs.design_pool`): designs and cells prepared in a worker process give the
+"""The design pool (`envs.pool`): designs and cells prepared in a worker process give the
 same episodes as drawn in place, are keyed by the configuration (a changed design or cell
 configuration never takes a stale model), stay within their memory bound, and the worker stops
 with the env (and at interpreter exit)."""
@@ -18,7 +18,7 @@ from typing import Any
 import gymnasium as gym
 import pytest
 
-from envs.design_pool import (
+from envs.pool import (
     DesignPool,
     DesignPoolConfig,
     DesignPoolError,
