@@ -6,7 +6,7 @@ What it makes of a generator state (`prepare`), its loop (`work`) and how it is 
 
 from __future__ import annotations
 
-import gc
+import io
 import pickle
 import queue
 import time
@@ -15,14 +15,18 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+import mujoco
 import numpy as np
 
 if TYPE_CHECKING:
+    from envs.cell.cell import Cell
     from envs.design_source import ProceduralDesigns
     from envs.env_config import EnvConfig
 
 State = Mapping[str, Any]
 """A bit generator's state (``np.random.Generator.bit_generator.state``)."""
+STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+"""The part of a cell's MuJoCo data a prepared entry carries (`dumps`)."""
 STOP_WAIT_S = 5.0
 """Longest wait [s] for the worker to stop on its own at ``close`` before it is terminated."""
 
@@ -32,7 +36,7 @@ class Prepared:
     """What the worker made of one generator state.
 
     Attributes:
-        blob: Pickled (design, build seed, generator state after the draw, cell or None);
+        blob: (design, build seed, generator state after the draw, cell or None), `dumps`;
             None when the draw failed.
         warnings: (category, message) of each warning the draw and build gave.
         cpu_s: CPU time the worker spent on it [s].
@@ -75,9 +79,7 @@ def prepare(source: tuple[EnvConfig, ProceduralDesigns, bool], state: State) -> 
             for slot in design.slots:
                 slot.figure()  # made here, pickled with the design (the task's slots read them)
             cell = build_design_cell(config, design, seed)[1] if build else None
-            blob: bytes | None = pickle.dumps(
-                (design, seed, after, cell), protocol=pickle.HIGHEST_PROTOCOL
-            )
+            blob: bytes | None = dumps((design, seed, after, cell), cell)
             error = ""
         except Exception as exc:  # noqa: BLE001 - any failure: the env draws in place
             blob, error = None, f"{type(exc).__name__}: {exc}"
@@ -85,19 +87,59 @@ def prepare(source: tuple[EnvConfig, ProceduralDesigns, bool], state: State) -> 
     return Prepared(blob, said, time.process_time() - cpu, error)
 
 
-def loads(blob: bytes) -> Any:
-    """Unpickle ``blob`` with the cyclic garbage collector paused.
+class _Pickler(pickle.Pickler):
+    """Pickles a prepared entry with its cell's model and data left out (`dumps`)."""
 
-    A cell is thousands of small objects: unpickled in a process that holds many more, the
-    collector would otherwise walk them all several times over (three times the unpickling).
+    def __init__(self, file: io.BytesIO, model: Any, data: Any) -> None:
+        super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
+        self._ids = {id(model): "model", id(data): "data"}
+
+    def persistent_id(self, obj: Any) -> str | None:
+        return self._ids.get(id(obj))
+
+
+class _Unpickler(pickle.Unpickler):
+    def __init__(self, file: io.BytesIO, model: Any, data: Any) -> None:
+        super().__init__(file)
+        self._objects = {"model": model, "data": data}
+
+    def persistent_load(self, pid: Any) -> Any:
+        return self._objects[pid]
+
+
+def dumps(entry: tuple[Any, ...], cell: Cell | None) -> bytes:
+    """Pickle ``entry`` (it holds ``cell``, or no cell: None).
+
+    The cell's MuJoCo data goes as its physics state (`STATE`): at `loads` a new data of the
+    model is set to it and forwarded, which costs a third of unpickling the data. Everything
+    else of the cell is pickled as it is.
     """
-    paused = gc.isenabled()
-    gc.disable()
-    try:
-        return pickle.loads(blob)
-    finally:
-        if paused:
-            gc.enable()
+    if cell is None:
+        return pickle.dumps((None, None, entry), protocol=pickle.HIGHEST_PROTOCOL)
+    model, data = cell.model, cell.data
+    state = np.empty(mujoco.mj_stateSize(model, STATE))
+    mujoco.mj_getState(model, data, state, STATE)
+    buf = io.BytesIO()
+    _Pickler(buf, model, data).dump(entry)
+    model_blob = pickle.dumps(model, protocol=pickle.HIGHEST_PROTOCOL)
+    return pickle.dumps((model_blob, state, buf.getvalue()), protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def loads(blob: bytes) -> Any:
+    """The entry `dumps` pickled, its cell with a new data at the pickled physics state.
+
+    The data's kinematics are forwarded (`mujoco.mj_forward`), as the cell's were when built:
+    what its env reads before the episode's reset (camera and tool poses, tile poses) is the
+    same; the reset then clears the data (`mujoco.mj_resetData`) as for any cell.
+    """
+    model_blob, state, rest = pickle.loads(blob)
+    if model_blob is None:
+        return rest
+    model = pickle.loads(model_blob)
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, state, STATE)
+    mujoco.mj_forward(model, data)
+    return _Unpickler(io.BytesIO(rest), model, data).load()
 
 
 def work(requests: Any, results: Any) -> None:
@@ -144,4 +186,15 @@ def stop(process: Any, requests: Any, results: Any) -> None:
         q.close()
 
 
-__all__ = ["STOP_WAIT_S", "Prepared", "State", "loads", "prepare", "state_key", "stop", "work"]
+__all__ = [
+    "STATE",
+    "STOP_WAIT_S",
+    "Prepared",
+    "State",
+    "dumps",
+    "loads",
+    "prepare",
+    "state_key",
+    "stop",
+    "work",
+]
