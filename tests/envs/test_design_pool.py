@@ -193,3 +193,19 @@ def test_an_unclosed_pool_ends_with_the_interpreter() -> None:
     )
     assert done.returncode == 0, done.stderr
     assert _gone(int(done.stdout.split()[-1]))
+
+
+@pytest.mark.slow
+def test_a_pool_of_designs_alone_gives_the_same_episodes(tmp_path: Path) -> None:
+    """``build_cells: false``: the worker draws, the env builds the cell."""
+    path = tmp_path / "designs_only.yaml"
+    path.write_text("build_cells: false\nahead: 1\n", encoding="utf-8")
+    pooled = gym.make(HELD_OUT, design_pool=str(path), **PROCEDURAL)
+    plain = gym.make(HELD_OUT, **PROCEDURAL)
+    try:
+        for seed in (0, 1):
+            assert digest(pooled.reset(seed=seed)[0]) == digest(plain.reset(seed=seed)[0])
+        assert pooled.unwrapped.pool.hits == 1  # type: ignore[attr-defined]
+    finally:
+        pooled.close()
+        plain.close()
