@@ -130,17 +130,22 @@ def _reset_rows() -> tuple[dict[int, Any], list[dict[str, Any]]]:
 
 
 def _ratio_rows(seconds: float) -> dict[str, Any]:
-    """Measure and print the three ratios of `benchmarks.env_ratios` (one child each)."""
+    """Measure and print the ratios of `benchmarks.env_ratios` (one child each)."""
     rows = {}
     for name, target in RATIOS.items():
         r = _child(target, seconds)
         rows[name] = r
-        parts = ", ".join(f"{k} {v:.2f}" for k, v in r.items() if k.endswith("_ms"))
-        load = r["load_average"][1][0]
+        skip = ("what", "ratio", "target", "load_average")
+        parts = ", ".join(
+            f"{k} {v:.2f}" if isinstance(v, float) else f"{k} {v}"
+            for k, v in r.items()
+            if k not in skip
+        )
+        (before, _, _), (after, _, _) = r["load_average"]
         print(
             f"ratio {name}: {r['ratio']:.2f} (target <= {r['target']:g}) "
             f"{'MET' if r['ratio'] <= r['target'] else 'NOT MET'}  [{r['what']}: {parts} "
-            f"CPU ms; load average {load:.1f}]",
+            f"(ms: CPU unless named wall); 1-min load average {before:.1f} -> {after:.1f}]",
             flush=True,
         )
     return rows
@@ -241,7 +246,7 @@ def main() -> None:
         "--resets", action="store_true", help=f"the reset rows only (writes {OUT_RESETS.name})"
     )
     parser.add_argument(
-        "--ratios", action="store_true", help=f"the three ratios only (writes {OUT_RATIOS.name})"
+        "--ratios", action="store_true", help=f"the ratios only (writes {OUT_RATIOS.name})"
     )
     args = parser.parse_args()
     seconds = 1.0 if args.quick else args.seconds

@@ -1,6 +1,6 @@
 """Where training spends its time, as ratios measured in one process (`benchmarks.env`).
 
-Three ratios of CPU time [s of the process, every thread: the software renderer's included],
+Four ratios of CPU time [s of the process, every thread: the software renderer's included],
 each between two things timed in the same process, interleaved (an episode of one, then of
 the other), so that a shared machine's load slows both alike and the ratio holds across
 machines and loads:
@@ -8,6 +8,10 @@ machines and loads:
 - ``reset``: a reset of ``MosaicHeldOutDesigns-v1``'s procedural training entry (a new design
   drawn and its cell built) over a reset of the same rung on its fixed design (6 slots both,
   the rung's state observation). Target <= `TARGET_RESET`.
+- ``reset_pool``: the same with the design pool (``design_pool: design_pool``,
+  `envs.pool`), seeds in order: this process's CPU time (the worker process draws
+  and builds), with the wall time, the wall ratio and the worker's CPU time per design beside
+  it. Target <= `TARGET_RESET`.
 - ``step``: a kinematic ``pick_place`` step (state observation, `DESIGN`, the privileged
   correct action) over its physics (`Cell.step`, the calls timed inside the same steps).
   Target <= `TARGET_STEP`.
@@ -44,6 +48,8 @@ PROCEDURAL: dict[str, Any] = {
     "exclude_designs": ["hexagon", "trencadis"],
 }
 """Its procedural training entry (`envs.tasks.BenchmarkTask.design_kwargs`)."""
+POOL = "design_pool"
+"""The design pool configuration of the ``reset_pool`` ratio (``configs/design_pool.yaml``)."""
 
 
 def _pin() -> None:
@@ -99,6 +105,64 @@ def measure_reset_ratio(seconds: float, queue: mp.Queue) -> None:
             "what": f"{RUNG} reset: procedural design / fixed design (6 slots)",
             "procedural_ms": 1e3 * a / seed,
             "fixed_ms": 1e3 * b / seed,
+            "ratio": a / b,
+            "target": TARGET_RESET,
+            "resets": seed,
+            "load_average": [load0, os.getloadavg()],
+        }
+    )
+
+
+def measure_reset_pool_ratio(seconds: float, queue: mp.Queue) -> None:
+    """Child process: procedural reset with the design pool over a fixed reset, interleaved.
+
+    The pool (``design_pool``, `envs.pool`) draws the designs and builds their cells in
+    its worker process: this process's CPU time is the figure of the ratio; the wall time
+    (which includes waiting for the worker when resets come faster than it prepares them) and
+    the worker's CPU time per design are given beside it.
+    """
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: F401, PLC0415
+
+    load0 = os.getloadavg()
+    proc: Any = gym.make(RUNG, design_pool=POOL, **PROCEDURAL)
+    _pin()  # this process on one core, the pool's worker (started unpinned) on any
+    fixed: Any = gym.make(RUNG)
+    proc.reset(seed=10_000)
+    fixed.reset(seed=10_000)
+    pool = proc.unwrapped.pool
+    a = b = wa = wb = 0.0
+    seed = 0
+    proc.reset(seed=seed)  # the pool plans from the seeds after this one
+    fixed.reset(seed=seed)
+    hits0, misses0 = pool.hits, pool.misses
+    while a + b < seconds or seed < 3:
+        seed += 1
+        w = time.perf_counter()
+        a += _cpu(functools.partial(proc.reset, seed=seed))
+        wa += time.perf_counter() - w
+        w = time.perf_counter()
+        b += _cpu(functools.partial(fixed.reset, seed=seed))
+        wb += time.perf_counter() - w
+    worker = pool.worker_cpu_s / max(1, pool.hits + pool.dropped)
+    hits, misses = pool.hits - hits0, pool.misses - misses0
+    proc.close()
+    fixed.close()
+    queue.put(
+        {
+            "what": (
+                f"{RUNG} reset: procedural design with the design pool / fixed design "
+                "(6 slots; this process's CPU)"
+            ),
+            "procedural_ms": 1e3 * a / seed,
+            "fixed_ms": 1e3 * b / seed,
+            "procedural_wall_ms": 1e3 * wa / seed,
+            "fixed_wall_ms": 1e3 * wb / seed,
+            "worker_cpu_ms_per_design": 1e3 * worker,
+            "wall_ratio": wa / wb,
+            "pool_hits": hits,
+            "pool_misses": misses,
             "ratio": a / b,
             "target": TARGET_RESET,
             "resets": seed,
@@ -199,6 +263,7 @@ def measure_camera_ratio(seconds: float, queue: mp.Queue) -> None:
 
 RATIOS = {
     "reset": measure_reset_ratio,
+    "reset_pool": measure_reset_pool_ratio,
     "step": measure_step_ratio,
     "camera": measure_camera_ratio,
 }
@@ -211,6 +276,7 @@ __all__ = [
     "TARGET_RESET",
     "TARGET_STEP",
     "measure_camera_ratio",
+    "measure_reset_pool_ratio",
     "measure_reset_ratio",
     "measure_step_ratio",
 ]

@@ -86,6 +86,10 @@ class EnvConfig:
             drawn design never holds (`qshape.design.exclusion`).
         design_tries: ``procedural``: draws per reset before a design free of excluded
             classes is given up (`envs.design_source.DesignSourceError`).
+        design_pool: ``procedural``: prepare the next designs and their cells ahead in a
+            worker process (`envs.pool`): a bundled name (``design_pool``) or path of
+            a `envs.pool.DesignPoolConfig` file; None (default): off. Same episodes
+            for the same seed either way; a ``fixed`` source ignores it.
         cell: The cell (`envs.cell.config.CellConfig`), nested: in YAML a bundled name or
             path, or a mapping ``{config: <name or path>, <section>: {<key>: value}}`` that
             changes sections of that cell file key by key. The input belt's speed, the tile
@@ -180,6 +184,7 @@ class EnvConfig:
     design_generator: str = "design_generator_train"
     exclude_designs: tuple[str, ...] = ()
     design_tries: int = checked(50, ge=1, integer=True)
+    design_pool: str | None = None
     cell: CellConfig = field(default_factory=lambda: env_cell("cell", ENV_CELL_CHANGES))
     planner: str = "planner"
     action_mode: ActionMode = checked("pick_place", choices=ACTION_MODES)

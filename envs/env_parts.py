@@ -48,18 +48,38 @@ class EnvParts:
     actions: ActionAdapter
 
 
+def build_design_cell(cfg: EnvConfig, design: Design | None, seed: int) -> tuple[Design, Cell]:
+    """The design (None: ``cfg.design``, loaded) and its cell built with ``seed``.
+
+    Raises:
+        CellError: The tiles do not fit (`envs.episode_setup.build_cell`).
+    """
+    design, shapes, slots = design_cell_parts(cfg, design)
+    mesh = design_mesh_size(design)
+    cell = build_cell(cfg.cell, shapes, slots, seed=seed, tries=cfg.layout_tries, mesh_size=mesh)
+    return design, cell
+
+
 def build_parts(
-    cfg: EnvConfig, design: Design | None, seed: int, ik: IKSolver, pcfg: PlannerConfig
+    cfg: EnvConfig,
+    design: Design | None,
+    seed: int,
+    ik: IKSolver,
+    pcfg: PlannerConfig,
+    *,
+    cell: Cell | None = None,
 ) -> EnvParts:
     """The cell of ``design`` (None: ``cfg.design``) built with ``seed``, and its parts.
+
+    ``cell``: that cell built already (`build_design_cell` of the same arguments, in a design
+    pool's worker: `envs.pool`); ``design`` must then be given.
 
     Raises:
         CellError: The tiles do not fit (`envs.episode_setup.build_cell`).
         EnvConfigError: An observation image larger than the render buffer.
     """
-    design, shapes, slots = design_cell_parts(cfg, design)
-    mesh = design_mesh_size(design)
-    cell = build_cell(cfg.cell, shapes, slots, seed=seed, tries=cfg.layout_tries, mesh_size=mesh)
+    if cell is None or design is None:
+        design, cell = build_design_cell(cfg, design, seed)
     check_image_size(cfg, cell)
     task = MosaicTask(cell, cfg)
     pick, place = work_areas(cell, cfg)
@@ -107,4 +127,4 @@ def check_image_size(cfg: EnvConfig, cell: Cell) -> None:
         )
 
 
-__all__ = ["EnvParts", "build_parts", "check_image_size"]
+__all__ = ["EnvParts", "build_design_cell", "build_parts", "check_image_size"]

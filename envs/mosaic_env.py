@@ -16,7 +16,7 @@ import numpy as np
 
 from envs.actions import transfer_poses
 from envs.cell.cameras import CameraModel
-from envs.cell.cell import CAMERAS
+from envs.cell.cell import CAMERAS, Cell
 from envs.cell.scene import build_arm_model
 from envs.design_source import FIRST_DRAW_SEED, design_source, source_config
 from envs.env_config import EnvConfig, load_env_config
@@ -24,7 +24,8 @@ from envs.env_parts import build_parts
 from envs.errors import EnvError
 from envs.frames import FrameSchedule
 from envs.masks import action_mask, check_allowed
-from envs.task import REWARD_TERMS, SEED_BOUND, Evaluation, GroundTruth
+from envs.pool import design_pool, draw_design
+from envs.task import REWARD_TERMS, Evaluation, GroundTruth
 from envs.task_spec import (
     ActionError,
     PickPlaceCommand,
@@ -200,6 +201,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         first = None
         if self.designs is not None:
             first = self.designs.draw(np.random.default_rng(FIRST_DRAW_SEED))
+        self.pool = design_pool(cfg, self.designs)
+        """Designs prepared ahead (``design_pool`` set, procedural source), else None."""
         self._pcfg = load_planner_config(cfg.planner)
         self.ik = IKSolver(
             build_arm_model(cfg.cell, with_cell=False), self._pcfg.ik, self._pcfg.limits
@@ -214,9 +217,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._closed = False
         self._mask: np.ndarray | None = None
 
-    def _build(self, drawn: Design | None, seed: int) -> None:
+    def _build(self, drawn: Design | None, seed: int, cell: Cell | None = None) -> None:
         """Build the cell of a design (None: ``design``) and its parts (`envs.env_parts`)."""
-        p = build_parts(self.config, drawn, seed, self.ik, self._pcfg)
+        p = build_parts(self.config, drawn, seed, self.ik, self._pcfg, cell=cell)
         self.cell, self.task, self.observer, self.index = p.cell, p.task, p.observer, p.index
         self.pick_area, self.place_area, self.codec = p.pick_area, p.place_area, p.codec
         self.executor, self.actions = p.executor, p.actions
@@ -231,13 +234,12 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     def _draw_design(self, rng: np.random.Generator) -> None:
         """Procedural source: replace the cell by one of a design drawn from ``rng``."""
         assert self.designs is not None
-        design = self.designs.draw(rng)
-        seed = int(rng.integers(SEED_BOUND))
+        drawn = draw_design(self.pool, self.config, self.designs, rng)  # `envs.pool`
         if self._viewer is not None:
             self._viewer.close()
             self._viewer = None
         self.cell.close()
-        self._build(design, seed)
+        self._build(drawn.design, drawn.seed, drawn.cell)
 
     # ------------------------------------------------------------------ Gymnasium API
     def reset(
@@ -257,6 +259,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         self._needs_reset = False
         evaluation = self.task.last_evaluation  # taken at the episode's set-up; nothing moved
         obs = self._observe(evaluation)
+        if self.pool is not None:
+            self.pool.plan(rng, seed)
         return obs, self._info(evaluation, dict.fromkeys(REWARD_TERMS, 0.0), False, "")
 
     def step(self, action: np.ndarray) -> tuple[dict[str, Any], float, bool, bool, dict[str, Any]]:
@@ -324,6 +328,8 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
         if self._viewer is not None:
             self._viewer.close()
             self._viewer = None
+        if self.pool is not None:
+            self.pool.close()
         self.cell.close()
         self._closed = True
 

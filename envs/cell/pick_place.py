@@ -14,6 +14,7 @@ dwells (tiles on a moving belt do not move during that jump).
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -31,6 +32,34 @@ from planners.joints import JointState
 from planners.pick_place import PickPlacePlanner
 from planners.trajectory import chain
 from spatial.rotations import yaw_from_matrix
+
+ARM_PLANNERS = 8
+"""(IK solver, planner settings, timestep) whose planner and tracker are kept (`arm_planners`):
+a procedural env builds an executor at every reset for the same arm. An entry holds the
+references and two small planner objects (kB)."""
+_PLANNERS: OrderedDict[
+    tuple[int, int, float], tuple[IKSolver, PlannerConfig, PickPlacePlanner, TrajectoryExecutor]
+] = OrderedDict()
+
+
+def arm_planners(
+    ik: IKSolver, config: PlannerConfig, dt: float
+) -> tuple[PickPlacePlanner, TrajectoryExecutor]:
+    """The cycle planner and the servo tracker of an arm (IK solver), settings and timestep [s].
+
+    Both keep no state between cycles (settings and a scratch MuJoCo data), so the executors of
+    one arm share them: the last `ARM_PLANNERS` are kept, least recently used dropped first.
+    """
+    key = (id(ik), id(config), dt)
+    kept = _PLANNERS.get(key)
+    if kept is None or kept[0] is not ik or kept[1] is not config:
+        kept = (ik, config, PickPlacePlanner(ik, config), TrajectoryExecutor(ik.model, dt))
+        _PLANNERS[key] = kept
+        while len(_PLANNERS) > ARM_PLANNERS:
+            _PLANNERS.popitem(last=False)
+    _PLANNERS.move_to_end(key)
+    return kept[2], kept[3]
+
 
 AT_TARGET = 1e-6
 """Joint distance [rad] below which `PickPlaceExecutor.move_to` has nothing to move."""
@@ -77,9 +106,8 @@ class PickPlaceExecutor:
         self.cfg = config
         self.pcfg = planner_config
         self.ik = ik
-        self.planner = PickPlacePlanner(ik, planner_config)
         self.dt = float(cell.model.opt.timestep)
-        self.tracker = TrajectoryExecutor(ik.model, self.dt)
+        self.planner, self.tracker = arm_planners(ik, planner_config, self.dt)
         self.pick_z = pick.tile_top_z
         self.place_z = place.tile_top_z
         self._settle = max(1, round(config.kinematic_settle / self.dt))
@@ -227,4 +255,4 @@ class PickPlaceExecutor:
         d.ctrl[ids.vel_actuators] = 0.0
 
 
-__all__ = ["ActionResult", "PickPlaceExecutor"]
+__all__ = ["ARM_PLANNERS", "ActionResult", "PickPlaceExecutor", "arm_planners"]

@@ -38,6 +38,7 @@ from scipy.spatial import cKDTree
 
 from qshape import geometry as geo
 from qshape.design.made_turn import made_turn_sd
+from qshape.design.memo import BoundedMemo
 from qshape.design.rules import DesignRules
 from qshape.design.slot import Slot
 from qshape.errors import DesignError, QShapeError, SmallFeatureWarning
@@ -82,6 +83,14 @@ class TurnCues:
         if self.made_turn_sd_deg <= 0.0:
             return math.inf
         return tolerance_deg / (3.0 * self.made_turn_sd_deg)
+
+
+CUES_MEMO_SIZE = 4096
+"""Shapes whose rule cues are remembered (`CUES_MEMO`); an entry is a key (the shape's
+canonical text, about 0.1-1 kB, and the rules) and four floats: a few MB at most."""
+CUES_MEMO: BoundedMemo[TurnCues] = BoundedMemo(CUES_MEMO_SIZE)
+"""`rule_cues` by (shape text, rules): the design generator measures a drawn shape's cues
+and the design loader measures them again when the drawn design is loaded."""
 
 
 def _samples(slot: Slot, spacing_mm: float) -> list[np.ndarray]:
@@ -160,15 +169,22 @@ def turn_cues(
 
 
 def rule_cues(slot: Slot, rules: DesignRules) -> TurnCues:
-    """`turn_cues` of ``slot`` with the settings and tile deviation of ``rules``."""
-    return turn_cues(
-        slot,
-        tolerance_deg=rules.turn_tolerance_deg,
-        window_deg=rules.turn_window_deg,
-        step_deg=rules.turn_step_deg,
-        spacing_mm=rules.check_step_mm,
-        deviation_mm=rules.tile_deviation_mm,
-        arc_step_mm=rules.made_arc_step_mm,
+    """`turn_cues` of ``slot`` with the settings and tile deviation of ``rules``.
+
+    Remembered by shape and rules (`CUES_MEMO`): the cues depend on nothing else (not the
+    slot's pose, name or colour).
+    """
+    return CUES_MEMO.get(
+        (slot.shape_text, rules),
+        lambda: turn_cues(
+            slot,
+            tolerance_deg=rules.turn_tolerance_deg,
+            window_deg=rules.turn_window_deg,
+            step_deg=rules.turn_step_deg,
+            spacing_mm=rules.check_step_mm,
+            deviation_mm=rules.tile_deviation_mm,
+            arc_step_mm=rules.made_arc_step_mm,
+        ),
     )
 
 
@@ -268,4 +284,13 @@ def check_turn_cues(slots: Sequence[Slot], rules: DesignRules, pre: str = "") ->
         warnings.warn(text, SmallFeatureWarning, stacklevel=4)
 
 
-__all__ = ["TurnCues", "check_turn_cues", "hole_turn_gap", "rule_cues", "turn_cues", "weak_cues"]
+__all__ = [
+    "CUES_MEMO",
+    "CUES_MEMO_SIZE",
+    "TurnCues",
+    "check_turn_cues",
+    "hole_turn_gap",
+    "rule_cues",
+    "turn_cues",
+    "weak_cues",
+]

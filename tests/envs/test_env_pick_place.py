@@ -271,3 +271,19 @@ def test_frame_listener_rejects_bad_rates(fps: float) -> None:
             env.unwrapped.add_frame_listener(lambda: None, fps)
     finally:
         env.close()
+
+
+def test_executors_of_one_arm_share_its_planners_within_a_bound(kinematic_env: gym.Env) -> None:
+    """A procedural env builds an executor per reset: the planner and tracker of its arm are
+    made once (`arm_planners`), the last `ARM_PLANNERS` (arm, settings, timestep) kept."""
+    from envs.cell.pick_place import ARM_PLANNERS, arm_planners  # noqa: PLC0415
+    from planners.config import load_planner_config  # noqa: PLC0415
+
+    ik = kinematic_env.unwrapped.ik  # type: ignore[attr-defined]
+    cfg = load_planner_config("planner")
+    first = arm_planners(ik, cfg, 0.002)
+    assert arm_planners(ik, cfg, 0.002) == first
+    assert arm_planners(ik, load_planner_config("planner"), 0.002)[0] is not first[0]
+    for k in range(ARM_PLANNERS):
+        arm_planners(ik, cfg, 0.001 * (k + 3))
+    assert arm_planners(ik, cfg, 0.002)[0] is not first[0]  # dropped, made anew

@@ -86,3 +86,33 @@ def test_a_remembered_design_warns_at_every_load(tmp_path) -> None:
             Design.load(path)
         assert caught and all(issubclass(w.category, SmallFeatureWarning) for w in caught)
         assert all("bowed" in str(w.message) for w in caught)
+
+
+def test_turn_cues_are_remembered_by_shape_and_equal_the_measured_ones() -> None:
+    from qshape.design.turn_cues import CUES_MEMO, CUES_MEMO_SIZE, rule_cues, turn_cues  # noqa: PLC0415
+
+    design = Design.load("paper_mixed")
+    slot = next(s for s in design.slots if s.shape.get("holes"))
+    r = slot.rules
+    measured = turn_cues(
+        slot,
+        tolerance_deg=r.turn_tolerance_deg,
+        window_deg=r.turn_window_deg,
+        step_deg=r.turn_step_deg,
+        spacing_mm=r.check_step_mm,
+        deviation_mm=r.tile_deviation_mm,
+        arc_step_mm=r.made_arc_step_mm,
+    )
+    CUES_MEMO.clear()
+    assert rule_cues(slot, r) == measured and len(CUES_MEMO) == 1
+    hits = CUES_MEMO.hits
+    moved = Slot("b", dict(slot.shape), (0.0, 1.0, 0.0), -5.0, 2.0, 71.0, r)
+    assert rule_cues(moved, r) == measured and CUES_MEMO.hits == hits + 1
+    assert CUES_MEMO.maxsize == CUES_MEMO_SIZE
+
+
+def test_a_slot_makes_its_figure_once() -> None:
+    slot = Design.load("paper_mixed").slots[0]
+    figure = slot.figure()
+    assert slot.figure() is figure
+    assert figure == slot.path.figure(slot.color, slot.rules.max_arc_deg)
