@@ -231,24 +231,25 @@ def play_design(job: Job) -> dict[str, Any]:
 
 
 def slot_outcomes(design: Any, placement: Any) -> list[dict[str, Any]]:
-    """Per slot of ``design``: name, family, filled, misplaced tile on it, filling tile's errors.
+    """Per slot of ``design``: name, family, filled, misplaced tile on it, that tile's errors.
 
     ``placement`` is the task's `envs.task.Placement` at the episode's end. ``misplaced_here``:
     a tile on the mesh that is not correct lies nearest this slot. Errors are those of the tile
-    filling the slot: position [mm] and yaw modulo its symmetry [deg] (None: open).
+    filling the slot, else of the misplaced tile nearest it: position [mm] and yaw modulo its
+    symmetry [deg] (None: no tile on the slot).
     """
     correct = np.asarray(placement.correct, dtype=bool)
-    by_slot = {int(placement.slot[i]): int(i) for i in np.flatnonzero(correct)}
     wrong = np.asarray(placement.on_mesh, dtype=bool) & ~correct
-    misplaced = {int(placement.slot[i]) for i in np.flatnonzero(wrong)}
+    misplaced = {int(placement.slot[i]): int(i) for i in np.flatnonzero(wrong)}
+    filling = {int(placement.slot[i]): int(i) for i in np.flatnonzero(correct)}
     rows = []
     for k, slot in enumerate(design.slots):
-        tile = by_slot.get(k)
+        tile = filling.get(k, misplaced.get(k))
         rows.append(
             {
                 "name": slot.name,
                 "family": slot.name.split("_")[1],
-                "filled": tile is not None,
+                "filled": k in filling,
                 "misplaced_here": k in misplaced,
                 "position_error_mm": None
                 if tile is None

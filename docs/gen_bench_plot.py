@@ -37,7 +37,7 @@ RUN_RATIOS = (
     ("vision", "extract 656x492 / cv2.Canny", "extraction / cv2.Canny"),
 )
 """Ratios of the benchmark's table shown beside the env ratios: (group, figure, label)."""
-LABEL_CHARS = 42
+LABEL_CHARS = 62
 """Longest figure name on the axis [characters]."""
 MAX_BYTES = 1_000_000
 """Size limit of the committed plot [bytes]."""
@@ -85,7 +85,7 @@ def plot(report: dict[str, Any], ratios: dict[str, Any], path: Path) -> Path:
     rows = [(f, h) for f in figs if (h := headroom(f)) is not None]
     exact = [f for f in figs if f.passed is not None and headroom(f) is None]
     fig, (ax, bx) = plt.subplots(
-        1, 2, figsize=(12.5, 0.26 * len(rows) + 2.2), gridspec_kw={"width_ratios": [1.5, 1]}
+        1, 2, figsize=(13.5, 0.24 * len(rows) + 2.2), gridspec_kw={"width_ratios": [1.6, 1]}
     )
     y = range(len(rows))
     for i, (f, h) in enumerate(rows):
@@ -97,7 +97,7 @@ def plot(report: dict[str, Any], ratios: dict[str, Any], path: Path) -> Path:
             edgecolor=color,
             hatch=None if portable(f) else "////",
         )
-    ax.set_yticks(list(y), [_label(f) for f, _ in rows], fontsize=7)
+    ax.set_yticks(list(y), [_label(f) for f, _ in rows], fontsize=6.5)
     ax.invert_yaxis()
     ax.set_xscale("log")
     ax.axvline(1.0, color="black", lw=1)
@@ -123,7 +123,7 @@ def plot(report: dict[str, Any], ratios: dict[str, Any], path: Path) -> Path:
         f"{load_text(report['machine'])}; env ratios {ratios.get('date', '?')}",
         fontsize=9,
     )
-    fig.tight_layout(rect=(0, 0, 1, 0.97))
+    fig.subplots_adjust(left=0.3, right=0.98, bottom=0.06, top=0.93, wspace=0.75)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=90)
     plt.close(fig)
