@@ -194,7 +194,7 @@ def play_design(job: Job) -> dict[str, Any]:
         episode, info = run_episode(
             level.name, env, agent, index, cfg.steps_per_slot, observer=observe
         )
-        slot_rows = slot_outcomes(design, env.unwrapped.task.placement())
+        slot_rows = slot_outcomes(design, env.get_wrapper_attr("task").placement())
     finally:
         env.close()
     e = info["evaluation"]

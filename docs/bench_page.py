@@ -132,7 +132,7 @@ def glance_markdown(report: dict[str, Any], ratios: dict[str, Any]) -> str:
     Rows of ``report`` (the benchmark's table) whose figure is `portable`, then the three
     ratios of ``ratios``; each row names its run (date, mode), whose load the lines above give.
     """
-    run = f"{report['mode']} run {report['date'][:16].replace('T', ' ')}"
+    run = f"{report['mode']} run {report['date'][:16].replace('T', ' ')} UTC"
     rrun = f"ratios run {ratios.get('date', '?')}"
     lines = [
         f"- **{run}** (`python -m benchmarks"

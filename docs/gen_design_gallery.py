@@ -240,8 +240,9 @@ def tile_image(design: Design, slot_name: str, params: RenderParams) -> np.ndarr
 
     fill_tiles(image, [(px(slot.outline_mm()), [px(h) for h in slot.holes_mm()])], [slot.color])
     fig = slot.figure()
-    for b in (fig, *fig.holes):
-        draw_points(image, px(b.points), b.curve_mask, params)
+    boundaries = [(fig.points, fig.curve_mask)] + [(h.points, h.curve_mask) for h in fig.holes]
+    for points, curve_mask in boundaries:
+        draw_points(image, px(points), curve_mask, params)
     return image
 
 
