@@ -36,6 +36,7 @@ from configs.checks import check_fields, checked
 from configs.files import write_text
 from envs import ENV_ID
 from envs.cell.rendering import use_headless_rendering
+from spatial.units import MM_PER_M
 
 OUT = Path("out/bench_random_designs.json")
 """Default output file (pictures go to the folder of the same stem)."""
@@ -193,6 +194,7 @@ def play_design(job: Job) -> dict[str, Any]:
         episode, info = run_episode(
             level.name, env, agent, index, cfg.steps_per_slot, observer=observe
         )
+        slot_rows = slot_outcomes(design, env.get_wrapper_attr("task").placement())
     finally:
         env.close()
     e = info["evaluation"]
@@ -224,7 +226,40 @@ def play_design(job: Job) -> dict[str, Any]:
         "_input": obs.get("input_camera"),
         "_output": obs.get("output_camera"),
         "_outlines": unplaced_px,
+        "_slots": slot_rows,
     }
+
+
+def slot_outcomes(design: Any, placement: Any) -> list[dict[str, Any]]:
+    """Per slot of ``design``: name, family, filled, misplaced tile on it, that tile's errors.
+
+    ``placement`` is the task's `envs.task.Placement` at the episode's end. ``misplaced_here``:
+    a tile on the mesh that is not correct lies nearest this slot. Errors are those of the tile
+    filling the slot, else of the misplaced tile nearest it: position [mm] and yaw modulo its
+    symmetry [deg] (None: no tile on the slot).
+    """
+    correct = np.asarray(placement.correct, dtype=bool)
+    wrong = np.asarray(placement.on_mesh, dtype=bool) & ~correct
+    misplaced = {int(placement.slot[i]): int(i) for i in np.flatnonzero(wrong)}
+    filling = {int(placement.slot[i]): int(i) for i in np.flatnonzero(correct)}
+    rows = []
+    for k, slot in enumerate(design.slots):
+        tile = filling.get(k, misplaced.get(k))
+        rows.append(
+            {
+                "name": slot.name,
+                "family": slot.name.split("_")[1],
+                "filled": k in filling,
+                "misplaced_here": k in misplaced,
+                "position_error_mm": None
+                if tile is None
+                else float(placement.position_error[tile]) * MM_PER_M,
+                "yaw_error_deg": None
+                if tile is None
+                else float(np.degrees(placement.yaw_error[tile])),
+            }
+        )
+    return rows
 
 
 def summarise(level: Level, rows: list[dict[str, Any]]) -> dict[str, Any]:

@@ -176,7 +176,12 @@ def run_benches(
             rc, tail = proc.returncode, (proc.stderr or proc.stdout)[-600:]
         except subprocess.TimeoutExpired:
             rc, tail = -1, f"timed out after {timeout:.0f} s"
-        status[b.name] = {"rc": rc, "wall_s": time.perf_counter() - t0, "error": tail if rc else ""}
+        status[b.name] = {
+            "rc": rc,
+            "wall_s": time.perf_counter() - t0,
+            "error": tail if rc else "",
+            "load_end": load(),
+        }
         fixed, wanted = OUT_DIR / b.json_name, out_dir / b.json_name
         if not rc and not b.takes_out and fixed.resolve() != wanted.resolve():
             shutil.copyfile(fixed, wanted)
@@ -222,19 +227,33 @@ def table(figures: Sequence[Figure]) -> str:
     return "\n".join(lines)
 
 
-def machine() -> dict[str, Any]:
-    """Where the figures were measured."""
+def load() -> dict[str, Any]:
+    """The machine's load now: load average (1, 5, 15 min) and the CPUs this process may use."""
+    info: dict[str, Any] = {"cpus_usable": len(os.sched_getaffinity(0))}
+    try:
+        info["load_average"] = list(os.getloadavg())
+    except OSError:
+        pass
+    return info
+
+
+def machine(start: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Where the figures were measured; ``start`` is `load` taken when the run began.
+
+    ``load_average`` is the load at the end (kept for older readers); ``load`` holds the load
+    at the ``start`` and ``end`` of the run, each with the CPUs the run could use.
+    """
+    end = load()
     info: dict[str, Any] = {
         "node": platform.node(),
         "platform": platform.platform(),
         "processor": platform.processor() or platform.machine(),
         "cpus": os.cpu_count(),
         "python": platform.python_version(),
+        "load": {"start": start if start is not None else end, "end": end},
     }
-    try:
-        info["load_average"] = os.getloadavg()
-    except OSError:
-        pass
+    if "load_average" in end:
+        info["load_average"] = end["load_average"]
     for mod in ("mujoco", "torch", "stable_baselines3", "gymnasium", "numpy"):
         try:
             info[mod] = __import__(mod).__version__
@@ -270,6 +289,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     if unknown:
         ap.error(f"unknown group(s) {sorted(unknown)}; allowed: {[b.name for b in BENCHES]}")
     args.out_dir.mkdir(parents=True, exist_ok=True)
+    start = load()
     status: dict[str, Any] = {}
     if not args.from_json:
         model = args.model or _latest_model()
@@ -278,7 +298,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     for name, st in status.items():
         sources.setdefault(name, {})["run"] = st
     checked = [f for f in figures if f.passed is not None]
-    mach = machine()
+    mach = machine(start)
     summary: dict[str, Any] = {
         "figures": len(figures),
         "with_target": len(checked),

@@ -8,6 +8,11 @@ cannot run every benchmark. The docs build writes ``docs/_generated/bench_table.
 Likewise ``python -m benchmarks.env --ratios`` writes ``out/bench_env_ratios.json`` (the three
 ratios of where training spends its time, `benchmarks.env_ratios`); its committed copy
 ``docs/bench_env_ratios.json`` becomes ``docs/_generated/bench_ratios.md``.
+
+The page opens on ``docs/_generated/bench_glance.md``: the figures of both files that do not
+depend on the machine's speed (accuracies, simulated-time rates, ratios measured within one run;
+`portable`), each with its run and that run's load; and on the plot ``docs/img/bench_overview.png``
+(``python docs/gen_bench_plot.py``).
 """
 
 from __future__ import annotations
@@ -28,6 +33,12 @@ RATIOS_JSON = DOCS / "bench_env_ratios.json"
 """The committed copy of the latest ``out/bench_env_ratios.json``."""
 RATIOS_MD = DOCS / "_generated" / "bench_ratios.md"
 """Generated include of the benchmarks page's ratio table."""
+GLANCE_MD = DOCS / "_generated" / "bench_glance.md"
+"""Generated include: the figures that hold across machines, first on the page."""
+MACHINE_UNITS = ("s", "ms", "frames/s", "x real time")
+"""Units of figures that scale with the machine's speed and load."""
+MACHINE_WORDS = ("steps per", "rss", " ms", "wall", "workers", "per cycle", "per image")
+"""Words naming such figures among the unitless ones (env steps per second, memory, times)."""
 RATIO_FIGURES = {
     "reset": ("procedural reset", "fixed reset"),
     "step": ("kinematic pick_place step", "its physics"),
@@ -38,11 +49,35 @@ MACHINE_KEYS = ("mujoco", "torch", "stable_baselines3", "gymnasium", "numpy")
 """Library versions named on the machine line."""
 
 
+def portable(f: Figure) -> bool:
+    """Whether a figure holds across machines: not a time, rate or memory of this machine."""
+    if f.unit in MACHINE_UNITS:
+        return False
+    return not any(w in f" {f.name}" for w in MACHINE_WORDS)
+
+
+def load_text(machine: dict[str, Any]) -> str:
+    """The run's load: load average (1, 5, 15 min) at its start and end, and the CPUs it used."""
+    load = machine.get("load")
+    if not load:  # a report written before the start was recorded
+        end = machine.get("load_average")
+        return f"load average {end[0]:.1f} at the end" if end else "load not recorded"
+
+    def avg(x: dict[str, Any]) -> str:
+        a = x.get("load_average")
+        return "/".join(f"{v:.1f}" for v in a) if a else "?"
+
+    used = load["start"].get("cpus_usable", machine.get("cpus"))
+    return (
+        f"load average (1/5/15 min) {avg(load['start'])} at the start and {avg(load['end'])} "
+        f"at the end, {used} of {machine.get('cpus')} CPUs used"
+    )
+
+
 def machine_line(report: dict[str, Any]) -> str:
     """One sentence saying when, where and how the figures were measured."""
     m = report["machine"]
-    load = m.get("load_average")
-    load_txt = f", load average {load[0]:.1f} at the end" if load else ""
+    load_txt = f", {load_text(m)}"
     libs = ", ".join(f"{k} {m[k]}" for k in MACHINE_KEYS if m.get(k))
     s = report["summary"]
     return (
@@ -89,6 +124,55 @@ def ratios_markdown(report: dict[str, Any]) -> str:
             f"| <= {r['target']:g} | {met} | {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} |"
         )
     return "\n".join(lines) + "\n"
+
+
+def glance_markdown(report: dict[str, Any], ratios: dict[str, Any]) -> str:
+    """The page's first table: every figure with a target that holds across machines.
+
+    Rows of ``report`` (the benchmark's table) whose figure is `portable`, then the three
+    ratios of ``ratios``; each row names its run (date, mode), whose load the lines above give.
+    """
+    run = f"{report['mode']} run {report['date'][:16].replace('T', ' ')} UTC"
+    rrun = f"ratios run {ratios.get('date', '?')}"
+    lines = [
+        f"- **{run}** (`python -m benchmarks"
+        + ("" if report["mode"] == "full" else f" --{report['mode']}")
+        + f"`): {load_text(report['machine'])}.",
+        f"- **{rrun}** (`python -m benchmarks.env --ratios`, each ratio in one process pinned "
+        f"to one core, its two sides interleaved): load average (1/5/15 min) at each ratio's "
+        f"start and end in the table.",
+        "",
+        "| group | figure | value | target | met | run |",
+        "|---|---|---|---|---|---|",
+    ]
+    for f in (Figure(**x) for x in report["figures"]):
+        if f.passed is None or not portable(f):
+            continue
+        unit = f" {f.unit}" if f.unit else ""
+        met = "yes" if f.passed else "**no**"
+        lines.append(f"| {f.group} | {f.name} | {f.value:.4g}{unit} | {f.target} | {met} | {run} |")
+    for name, r in ratios["ratios"].items():
+        top, bottom = RATIO_FIGURES.get(name, (name, "baseline"))
+        start, end = r["load_average"]
+        met = "yes" if r["ratio"] <= r["target"] else "**no**"
+        lines.append(
+            f"| env ratio | {top} / {bottom} (CPU time) | {r['ratio']:.2f} | <= {r['target']:g} "
+            f"| {met} | {rrun}, load {start[0]:.1f} -> {end[0]:.1f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def write_glance_table(
+    src: Path = BENCH_JSON, ratios: Path = RATIOS_JSON, dst: Path = GLANCE_MD
+) -> Path:
+    """Write the page's first include from the committed run and ratios; returns its path."""
+    text = glance_markdown(
+        json.loads(src.read_text(encoding="utf-8")), json.loads(ratios.read_text(encoding="utf-8"))
+    )
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    if not dst.is_file() or dst.read_text(encoding="utf-8") != text:
+        dst.write_text(text, encoding="utf-8")
+    return dst
 
 
 def write_ratio_table(src: Path = RATIOS_JSON, dst: Path = RATIOS_MD) -> Path:

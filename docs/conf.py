@@ -23,7 +23,11 @@ from envs.cell.rendering import use_headless_rendering  # noqa: E402 - the root 
 use_headless_rendering()
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
-from bench_page import write_bench_table, write_ratio_table  # noqa: E402 - docs/ on sys.path
+from bench_page import (  # noqa: E402 - docs/ on sys.path
+    write_bench_table,
+    write_glance_table,
+    write_ratio_table,
+)
 
 project = "Mosaic assembly cell"
 author = "The mosaic-cell authors"
@@ -110,3 +114,5 @@ def setup(app: Sphinx) -> None:
         app.connect("builder-inited", lambda _app: write_bench_table())
     if (Path(__file__).parent / "bench_env_ratios.json").is_file():
         app.connect("builder-inited", lambda _app: write_ratio_table())
+    if all((Path(__file__).parent / f).is_file() for f in ("bench.json", "bench_env_ratios.json")):
+        app.connect("builder-inited", lambda _app: write_glance_table())

@@ -143,6 +143,7 @@ def evaluate(task: str, policy: str, label: str = "") -> ResultRow:
         wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     row = report["rows"][0]
     load = os.getloadavg()[0]
+    cores = len(os.sched_getaffinity(0))
     return ResultRow(
         task=task,
         kind=_kind(policy),
@@ -153,7 +154,8 @@ def evaluate(task: str, policy: str, label: str = "") -> ResultRow:
         success=round(float(row["success_rate"]), 3),
         tiles_per_min=round(float(row["tiles_per_min"]), 1),
         command=command,
-        time=f"{cpu:.0f} CPU s ({wall:.0f} s wall at load {load:.1f}, 2 cores)",
+        time=f"{cpu:.0f} CPU s ({wall:.0f} s wall at load {load:.1f}, {cores} of "
+        f"{os.cpu_count()} cores)",
         date=datetime.now(UTC).date().isoformat(),
         source=MEASURED_HERE,
     )

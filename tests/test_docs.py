@@ -104,6 +104,42 @@ def test_benchmark_page_renders_the_committed_ratios(tmp_path: Path) -> None:
         assert f"| {r['ratio']:.2f} |" in row and f"<= {r['target']:g}" in row
 
 
+def test_benchmark_page_opens_on_figures_that_hold_across_machines(tmp_path: Path) -> None:
+    """The glance table: targets of portable figures only, the ratios, each run's load."""
+    bench = _load("bench_page")
+    report = json.loads((DOCS / "bench.json").read_text(encoding="utf-8"))
+    ratios = json.loads((DOCS / "bench_env_ratios.json").read_text(encoding="utf-8"))
+    text = bench.write_glance_table(dst=tmp_path / "g.md").read_text(encoding="utf-8")
+    assert "at the start" in text.splitlines()[0] and "at the end" in text.splitlines()[0]
+    rows = [line for line in text.splitlines() if line.startswith("| ") and "---" not in line]
+    names = [row.split(" | ")[1] for row in rows[1:]]
+    figures = [bench.Figure(**f) for f in report["figures"]]
+    portable = [f.name for f in figures if f.passed is not None and bench.portable(f)]
+    assert names[: len(portable)] == portable and len(names) == len(portable) + len(
+        ratios["ratios"]
+    )
+    assert not any("steps per" in n or "ms" in n.split() for n in names)
+    assert any(f.passed is not None and not bench.portable(f) for f in figures)
+    assert (DOCS / "img" / "bench_overview.png").stat().st_size < 1_000_000
+
+
+def test_design_gallery_covers_every_family_and_the_named_failures() -> None:
+    """The random-designs page's pictures: outcomes per family, the page's failing designs."""
+    gallery = _load("gen_design_gallery")
+    data = json.loads(gallery.RESULTS.read_text(encoding="utf-8"))
+    played = {(d["level"], d["design"]) for d in data["designs"]}
+    assert {(c.level, c.design) for c in gallery.NAMED} <= played
+    families = {s["family"] for d in data["designs"] for s in d["slot_outcomes"] if s["filled"]}
+    assert families == set(gallery.SHAPE_FAMILIES)
+    for d in data["designs"]:
+        assert d["correct"] == sum(s["filled"] for s in d["slot_outcomes"]) <= d["slots"]
+    text = (DOCS / "random_designs.md").read_text(encoding="utf-8")
+    for png in (gallery.FAMILIES_PNG, gallery.DESIGNS_PNG):
+        assert f"img/{png.name}" in text and png.stat().st_size < gallery.MAX_BYTES
+        with Image.open(png) as im:
+            assert im.format == "PNG" and min(im.size) > 300
+
+
 def test_lock_pins_every_dependency() -> None:
     """``requirements.lock`` pins every dependency of pyproject.toml (with the extras)."""
     project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]

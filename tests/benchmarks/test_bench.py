@@ -90,6 +90,10 @@ def test_main_from_json_writes_report(tmp_path, capsys):
     report = main(["--from-json", "--out-dir", str(tmp_path)])
     saved = json.loads((tmp_path / "bench.json").read_text())
     assert saved["date"] and saved["machine"]["cpus"] and saved["mode"] == "from-json"
+    load = saved["machine"]["load"]
+    for moment in ("start", "end"):
+        assert 1 <= load[moment]["cpus_usable"] <= saved["machine"]["cpus"]
+        assert len(load[moment]["load_average"]) == 3
     assert saved["summary"] == report["summary"]
     assert "qshape: assign 100 x 100 optimal" in saved["summary"]["failed"]
     assert (tmp_path / "bench.md").is_file()
