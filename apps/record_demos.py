@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
@@ -95,6 +96,10 @@ _LOWLEVEL_ACTIONS = {"cartesian": "cartesian tool moves", "joint": "joint target
 """What a low-level dataset's actions are, by action mode (its description)."""
 STAGING_NAME = "recording"
 """Stem of the staging folder a dataset is recorded in (``<root>/.recording.partial-<pid>``)."""
+
+
+DATASET_ID = re.compile(r"(?:[\w.-]+/)*[\w.]+(?:-[\w.]+)*-v\d+")
+"""A Minari dataset id: ``[namespace/]name-vN`` (Minari reads the version from it)."""
 
 
 class DemoError(AgentError, RuntimeError):
@@ -203,6 +208,11 @@ def record(
 
         env_id = f"envs:{get_task(task or LOWLEVEL_TASK).id}"
         kwargs = dict(env_kwargs or {})
+    if not DATASET_ID.fullmatch(dataset_id):
+        raise DemoError(
+            f"dataset id {dataset_id!r} is not Minari's form: [namespace/]name-vN "
+            "(e.g. mosaic/my-decision6-v0)"
+        )
     with datasets_root(root):
         top = Path(os.environ["MINARI_DATASETS_PATH"])
     path = top / dataset_id

@@ -57,3 +57,11 @@ def test_discrete_expert_demos_at_training_size_lossless(tmp_path):
     assert np.array_equal(ep.observations["input_camera"][0], obs["input_camera"])
     rep = replay(ds)
     assert rep.matching_episodes == 2 and rep.replayed_success == 2
+
+
+@pytest.mark.parametrize("bad", ["mosaic/no-version", "mosaic/name-vx", "v0"])
+def test_a_dataset_id_without_a_version_is_refused_before_recording(tmp_path, bad):
+    """Minari reads the version off the id and failed with a bare TypeError after recording."""
+    with pytest.raises(DemoError, match=r"not Minari's form: \[namespace/\]name-vN"):
+        record(1, root=tmp_path, dataset_id=bad, env_kwargs=ENV, calibrate=False)
+    assert not any(tmp_path.rglob("*.hdf5"))
