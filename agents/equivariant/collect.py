@@ -27,6 +27,7 @@ import numpy as np
 
 from agents.equivariant.config import EquivariantConfig
 from agents.equivariant.records import (
+    ARRAYS,
     SOURCES,
     CropCutter,
     Header,
@@ -58,8 +59,7 @@ class _Recorder:
     def __init__(self, cfg: EquivariantConfig, n: int, k: int) -> None:
         self.cut = CropCutter(cfg)
         self.n, self.k, self.g = n, k, cfg.grid
-        self.c = cfg.slot_channels
-        self.rows: dict[str, list[Any]] = {f: [] for f in _FIELDS}
+        self.rows: dict[str, list[Any]] = {f: [] for f in ARRAYS}
         self.skipped = 0
 
     def add(
@@ -100,17 +100,7 @@ class _Recorder:
     def records(self, header: Header) -> StepRecords:
         if not self.rows["tile"]:
             raise RecordsError("no usable demonstrated step was recorded")
-        return StepRecords(
-            header,
-            *(
-                np.asarray(np.stack(self.rows[f])) if f in _STACKED else np.asarray(self.rows[f])
-                for f in _FIELDS
-            ),
-        )
-
-
-_FIELDS = ("tiles", "tile_ok", "slots", "slot_ok", "symmetry", "tile", "slot", "turn", "episode")
-_STACKED = ("tiles", "tile_ok", "slots", "slot_ok", "symmetry")
+        return StepRecords(header, *(np.stack(self.rows[f]) for f in ARRAYS))
 
 
 def _open_slot(u: Any, tile: int) -> int | None:
