@@ -328,6 +328,18 @@ def ship(runs: Sequence[dict[str, Any]], cc: CurvesConfig, source: str, camera: 
     return done
 
 
+def theory_rows(out: Path, cc: CurvesConfig) -> dict[str, Any]:
+    """The theory's rows at the camera levels of the curves (kept if already measured)."""
+    rows: dict[str, Any] = {}
+    for camera in sorted({p.partition(":")[2] for p in cc.runs}):
+        for h, w in cc.theory_image_sizes:
+            path = out / f"theory_{camera}_{h}x{w}.json"
+            if not path.is_file():
+                write_json(path, evaluate_theory(camera, cc, (h, w)))
+            rows[f"{camera}, {h}x{w}"] = json.loads(path.read_text(encoding="utf-8"))
+    return rows
+
+
 def run_all(
     out: Path, cfg: EquivariantConfig, cc: CurvesConfig, *, theory: bool = True
 ) -> dict[str, Any]:
@@ -356,18 +368,11 @@ def run_all(
                     )
                 )
                 write_json(out / "results.json", {"runs": runs})
-    theory_rows: dict[str, Any] = {}
-    if theory:
-        for camera in sorted({p.partition(":")[2] for p in cc.runs}):
-            for h, w in cc.theory_image_sizes:
-                path = out / f"theory_{camera}_{h}x{w}.json"
-                if not path.is_file():
-                    write_json(path, evaluate_theory(camera, cc, (h, w)))
-                theory_rows[f"{camera}, {h}x{w}"] = json.loads(path.read_text(encoding="utf-8"))
+    rows = theory_rows(out, cc) if theory else {}
     table = aggregate(runs, cc)
-    write_json(out / "results.json", {"runs": runs, "table": table, "theory": theory_rows})
-    plot(out / "curves.png", table, theory_rows, cc)
-    return {"runs": runs, "table": table, "theory": theory_rows}
+    write_json(out / "results.json", {"runs": runs, "table": table, "theory": rows})
+    plot(out / "curves.png", table, rows, cc)
+    return {"runs": runs, "table": table, "theory": rows}
 
 
 def decision_timing(
@@ -423,6 +428,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "--runs", nargs="+", metavar="SOURCE:CAMERA", help="curves (default: the config's)"
     )
     ap.add_argument("--no-theory", action="store_true", help="skip the theory rows")
+    ap.add_argument("--theory-only", action="store_true", help="only the theory rows (no training)")
     ap.add_argument(
         "--timing", type=Path, metavar="MODEL", help="only time a policy file's decisions"
     )
@@ -448,6 +454,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     }
     cc = load_config(CurvesConfig, args.curves, **over)
     use_headless_rendering()
+    if args.theory_only:
+        rows = theory_rows(args.out, cc)
+        print(json.dumps(rows))
+        return rows
     if args.timing is not None:
         timing = decision_timing(args.timing)
         print(json.dumps(timing))
