@@ -26,6 +26,7 @@ horizon, the mean of the episodes' figures) and wall seconds per correct tile.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import re
 import time
@@ -52,6 +53,7 @@ from apps.evaluate_results import (
     PolicyRow,
     Protocol,
     aggregate,
+    env_key,
     markdown_table,
     plot,
     write_outputs,
@@ -249,7 +251,12 @@ def evaluate_policy_set(
             envs.append(bind(pol, proto.designs))
         per: dict[str, list[EpisodeResult]] = {}
         for pol, bound in zip(policies, envs, strict=True):
-            eps = [e for e in done if e.policy == pol.label and e.seed in proto.seeds]
+            key = env_key(pol.env_kwargs)
+            eps = [
+                e
+                for e in done
+                if e.policy == pol.label and e.seed in proto.seeds and e.env == key
+            ]
             have = {e.seed for e in eps}
             for i, seed in enumerate(proto.seeds):
                 if seed in have:
@@ -259,6 +266,7 @@ def evaluate_policy_set(
                 limit = proto.max_steps or STEPS_PER_SLOT * slots
                 horizon = proto.horizon_s or HORIZON_S_PER_SLOT * slots
                 ep = run_episode(env, predict, seed, limit, horizon, label=pol.label)
+                ep = dataclasses.replace(ep, env=key)
                 eps.append(ep)
                 if log is not None:
                     append_line(log, json.dumps(asdict(ep)))

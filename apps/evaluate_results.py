@@ -8,6 +8,7 @@ Markdown table (`COLUMNS`), ``eval.json``, ``eval.md`` and the bar chart ``eval.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import platform
@@ -38,6 +39,11 @@ COLUMNS = (
 """(key, header, format) of the printed table."""
 
 
+def env_key(env_kwargs: dict[str, Any]) -> str:
+    """The env overrides as one canonical string (sorted keys): what an episode ran with."""
+    return json.dumps(env_kwargs, sort_keys=True, default=str)
+
+
 @dataclass(frozen=True)
 class EpisodeResult:
     """One episode of one policy.
@@ -60,6 +66,8 @@ class EpisodeResult:
         wall_s: Wall time of the policy and the env steps (reset excluded) [s].
         episode_return: Sum of rewards.
         left: Real tiles never placed (on the input belt, held or waiting at the end).
+        env: The env overrides the episode ran with (`env_key`); a resumed evaluation takes
+            an episode from its log only when they are the same ("": unknown, never taken).
     """
 
     policy: str
@@ -78,6 +86,7 @@ class EpisodeResult:
     wall_s: float
     episode_return: float
     left: int = 0
+    env: str = ""
 
     @property
     def tiles_per_min(self) -> float:

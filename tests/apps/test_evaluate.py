@@ -120,6 +120,20 @@ def test_a_rerun_never_takes_another_policys_episodes(tmp_path):
     assert [e.policy for e in again["random"]] == ["random", "random"]
 
 
+def test_a_rerun_with_other_env_keys_never_takes_the_logged_episodes(tmp_path):
+    """The same policy and seeds under other env overrides (another task, rotation frame,
+    camera) are other episodes: this test failed when a log matched on label and seed only,
+    and a second evaluation into the same folder quietly reported the first one's figures."""
+    log = tmp_path / EPISODES_FILE
+    evaluate_policy_set(make_policies(["random"], BASE), [1000, 1001], log=log)
+    other = {**BASE, "rotation_frame": "slot"}
+    _, episodes = evaluate_policy_set(make_policies(["random"], other), [1000, 1001], log=log)
+    assert len(log.read_text().splitlines()) == 4  # both played again, not taken from the log
+    envs_logged = {e["env"] for e in map(json.loads, log.read_text().splitlines())}
+    assert len(envs_logged) == 2
+    assert [e.seed for e in episodes["random"]] == [1000, 1001]
+
+
 def test_seeds_given_with_a_task_keep_its_protocol(tmp_path):
     from apps.evaluate import main, task_protocol  # noqa: PLC0415
 
