@@ -253,9 +253,7 @@ def evaluate_policy_set(
         for pol, bound in zip(policies, envs, strict=True):
             key = env_key(pol.env_kwargs)
             eps = [
-                e
-                for e in done
-                if e.policy == pol.label and e.seed in proto.seeds and e.env == key
+                e for e in done if e.policy == pol.label and e.seed in proto.seeds and e.env == key
             ]
             have = {e.seed for e in eps}
             for i, seed in enumerate(proto.seeds):
