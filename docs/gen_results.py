@@ -127,7 +127,7 @@ def _kind(policy: str) -> str:
         return "scripted"
     if policy.partition("@")[0] == "random":
         return "random"
-    return "learned" if policy.endswith((".pt", ".zip")) else "reference"
+    return "learned" if policy.partition("@")[0].endswith((".pt", ".zip")) else "reference"
 
 
 def evaluate(task: str, policy: str, label: str = "") -> ResultRow:
