@@ -362,6 +362,8 @@ def _camera(base: dict[str, Any], path: Path, kind: str) -> Policy:
         def predict(obs: dict[str, Any], start: bool) -> np.ndarray:
             if start:
                 spec[0] = env.get_wrapper_attr("task_spec")
+                if hasattr(player, "reset"):
+                    player.reset()
             if masked:
                 masks = env.get_wrapper_attr("action_masks")()
                 return np.asarray(player.predict(obs, spec[0], masks)[0])

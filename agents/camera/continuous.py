@@ -6,6 +6,9 @@ It answers with the world points and the turn, not indices. Each step:
    best-scored ``(tile i, slot j, quarter turn r)``. The scorer reads images at the size it was
    trained on; a larger observation is averaged down to it (``INTER_AREA``) with the camera
    models scaled to match.
+   ``pick_place`` has no action mask: a scorer that takes one (the equivariant policy,
+   `agents.equivariant.policy`) is not offered the slots this policy placed into earlier in
+   the episode (`reset` at each episode start); the crop scorer plays as it always did.
 2. **Where the tile is and how it lies** (`agents.camera.tile_fit.fit_tile`): slot ``j``'s published
    figure fitted to tile ``i``'s pixels in the full-size input image, through the input camera
    model: the tile's area centroid (x, y) on the tiles' top plane and its yaw relative to the
@@ -23,6 +26,7 @@ Only the observation's images and the public `TaskSpec` are read; the env's stat
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,6 +50,8 @@ CAMERAS: tuple[CameraName, ...] = ("input_camera", "output_camera")
 """The observation's images the policy reads."""
 QUARTER = math.pi / 2
 """The scorer's turn step [rad]."""
+QUARTER_TURNS = 4
+"""Rotation indices of the scorer's logits in ``pick_place`` (quarter turns)."""
 
 
 def load_fit_config(name_or_path: str | Path = TILE_FIT_CONFIG, **overrides: Any) -> FitConfig:
@@ -123,6 +129,12 @@ class ContinuousCameraPolicy:
     def __init__(self, scorer: CameraPolicy, fit: FitConfig) -> None:
         self.scorer = scorer
         self.fit = fit
+        self._placed: set[int] = set()
+        self._masked = "masks" in inspect.signature(scorer.logits).parameters
+
+    def reset(self) -> None:
+        """Episode start: forget the slots placed into (see `decide`)."""
+        self._placed.clear()
 
     @classmethod
     def load(cls, path: str | Path, fit: FitConfig | None = None) -> ContinuousCameraPolicy:
@@ -153,7 +165,22 @@ class ContinuousCameraPolicy:
                 f"not {spec.action_mode!r}"
             )
         small_obs, small_spec = at_size(obs, spec, self.scorer.image_size)
-        scores = self.scorer.logits(small_obs, small_spec)
+        if self._masked:  # a scorer that takes masks: not the slots it placed into already
+            order = mesh_order(spec)
+            n = len(
+                belt_tiles(
+                    small_obs["input_camera"],
+                    small_spec.camera("input_camera"),
+                    spec.pick.tile_top_z,
+                    self.scorer.crop,
+                ).xy
+            )
+            open_slots = np.array([int(j) not in self._placed for j in order])
+            masks = np.concatenate([np.ones(n, bool), open_slots, np.ones(QUARTER_TURNS, bool)])
+            scorer: Any = self.scorer  # an `EquivariantPolicy`
+            scores = scorer.logits(small_obs, small_spec, masks)
+        else:
+            scores = self.scorer.logits(small_obs, small_spec)
         if scores.size == 0:
             return None
         i, j, r = (int(v) for v in np.unravel_index(int(scores.argmax()), scores.shape))
@@ -180,6 +207,7 @@ class ContinuousCameraPolicy:
             (float(slot.xy[0]), float(slot.xy[1])),
             rotation,
         )
+        self._placed.add(slot.index)
         return Decision(i, slot.index, r, fit, command, spec.codec.encode(command))
 
     def predict(self, obs: dict[str, Any], spec: TaskSpec) -> tuple[np.ndarray, None]:

@@ -103,6 +103,7 @@ def play_episode(
 ) -> tuple[dict[str, Any], list[Placement]]:
     """One episode; its final evaluation and every placement scored."""
     obs, info = env.reset(seed=seed)
+    policy.reset()
     base: Any = env.unwrapped
     spec: TaskSpec = env.get_wrapper_attr("task_spec")
     out: list[Placement] = []
