@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from agents.camera.crop_scorer import read_policy_file
+from agents.camera.crops import mesh_order
 from agents.equivariant.config import EquivariantConfig
 from agents.equivariant.network import build_network
 from agents.equivariant.records import CropCutter
@@ -137,7 +138,7 @@ class EquivariantPolicy:
         frame = codec.rotation_frame if codec is not None else "tile"
         n, k = scores.shape[:2]
         out = np.full((n, k, bins), NEG, np.float32)
-        order = _mesh_order(spec)
+        order = mesh_order(spec)
         for j in range(k):
             sym = int(spec.slots[int(order[j])].symmetry)
             r_of = rotation_of_turns(self.cfg.turns, bins, frame, sym)
@@ -148,7 +149,8 @@ class EquivariantPolicy:
         if masks is not None and n:
             m = np.asarray(masks, bool)
             nt = codec.tiles if codec is not None else n
-            tile_ok = m[:nt][:n]
+            tile_ok = np.zeros(n, bool)  # blobs past the env's tile indices: not actions
+            tile_ok[: min(n, nt)] = m[: min(n, nt)]
             slot_ok = m[nt : nt + k]
             rot_ok = m[nt + k : nt + k + bins]
             out[~tile_ok] = NEG
@@ -164,12 +166,6 @@ class EquivariantPolicy:
         if scores.size == 0:
             return np.zeros(3, np.int64), None
         return np.array(np.unravel_index(int(scores.argmax()), scores.shape), np.int64), None
-
-
-def _mesh_order(spec: Any) -> np.ndarray:
-    from agents.camera.crops import mesh_order  # noqa: PLC0415
-
-    return mesh_order(spec)
 
 
 __all__ = ["KIND", "EquivariantPolicy", "save_policy"]

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.errors import AgentError
 from spatial.angles import TWO_PI, symmetry_period
 
 FRAMES = ("tile", "shape", "slot")
@@ -49,8 +50,8 @@ def turn_maps(x: Any, turns: int) -> Any:
     for k in range(1, quarter):
         a = TWO_PI * k / turns
         c, s = math.cos(a), math.sin(a)
-        # output pixel p samples the input at R(-a) p (x right, y down on the page: a
-        # counter-clockwise turn on the page is clockwise in these coordinates)
+        # theta maps each output pixel to the input point it samples; with y down on the
+        # page this one turns the content counter-clockwise (the tests check it against rot90)
         theta = torch.tensor([[c, -s, 0.0], [s, c, 0.0]], dtype=x.dtype).expand(n, 2, 3)
         grid = F.affine_grid(theta, list(x.shape), align_corners=False)
         base.append(
@@ -79,7 +80,7 @@ def rotation_of_turns(turns: int, bins: int, frame: str, symmetry: int) -> np.nd
         symmetry: The slot figure's rotational symmetry order (0: round).
     """
     if frame not in FRAMES:
-        raise ValueError(f"unknown rotation frame {frame!r}; allowed: {list(FRAMES)}")
+        raise AgentError(f"unknown rotation frame {frame!r}; allowed: {list(FRAMES)}")
     period = period_of(frame, symmetry)
     if frame == "slot" or period == 0:
         return np.zeros(turns, int)
