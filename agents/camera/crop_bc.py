@@ -11,7 +11,6 @@ where every turn the slot's symmetry makes equivalent to the demonstrated one co
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -21,6 +20,7 @@ import numpy as np
 from agents.camera.crop_scorer import TURNS, CameraBCConfig, build_scorer
 from agents.camera.crops import CHANNELS, mesh_order, slot_templates, step_crops
 from agents.errors import AgentError
+from agents.learning.step_fit import fit_steps
 
 
 @dataclass(frozen=True)
@@ -226,34 +226,21 @@ def train_camera_bc(
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     net = build_scorer(cfg)
-    opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
-    curve: list[dict[str, float]] = []
-    cpu0 = time.process_time()
-    losses: list[float] = []
-    hits: list[float] = []
-    for step in range(1, cfg.steps + 1):
+
+    def batch() -> tuple[Any, Any]:
         idx = rng.choice(len(data.tiles), size=min(cfg.batch_size, len(data.tiles)), replace=False)
         turn = int(rng.integers(TURNS)) if cfg.augment else 0
-        net.train()
-        loss, hit = batch_loss(net, data, idx, turn)
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-        losses.append(float(loss.detach()))
-        hits.append(float(hit.float().mean()))
-        if step == cfg.steps or (cfg.eval_every and step % cfg.eval_every == 0):
-            net.eval()
-            point = {
-                "step": float(step),
-                "loss": float(np.mean(losses)),
-                "train_hit": float(np.mean(hits)),
-                "cpu_s": time.process_time() - cpu0,
-            }
-            if on_point is not None:
-                point.update(on_point(step, net))
-            curve.append(point)
-            losses, hits = [], []
-    net.eval()
+        return batch_loss(net, data, idx, turn)
+
+    curve = fit_steps(
+        net,
+        batch,
+        steps=cfg.steps,
+        learning_rate=cfg.learning_rate,
+        weight_decay=cfg.weight_decay,
+        every=cfg.eval_every,
+        on_point=on_point,
+    )
     return net, curve
 
 

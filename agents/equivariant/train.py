@@ -11,7 +11,6 @@ another (the right turn moves back by as much).
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -21,6 +20,7 @@ from agents.equivariant.config import EquivariantConfig
 from agents.equivariant.network import build_network
 from agents.equivariant.records import StepRecords, from_bytes
 from agents.equivariant.turns import right_turns
+from agents.learning.step_fit import fit_steps
 
 
 def targets(
@@ -102,34 +102,21 @@ def train(
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     net = build_network(cfg)
-    opt = torch.optim.Adam(net.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
-    curve: list[dict[str, float]] = []
-    cpu0 = time.process_time()
-    losses: list[float] = []
-    hits: list[float] = []
     n = len(rec.tile)
-    for step in range(1, cfg.steps + 1):
+
+    def batch() -> tuple[Any, Any]:
         idx = rng.choice(n, size=min(cfg.batch_size, n), replace=False)
-        net.train()
-        loss, hit = batch_loss(net, rec, idx, cfg, rng)
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-        losses.append(float(loss.detach()))
-        hits.append(float(hit.float().mean()))
-        if step == cfg.steps or (every and step % every == 0):
-            net.eval()
-            point = {
-                "step": float(step),
-                "loss": float(np.mean(losses)),
-                "train_hit": float(np.mean(hits)),
-                "cpu_s": time.process_time() - cpu0,
-            }
-            if on_point is not None:
-                point.update(on_point(step, net))
-            curve.append(point)
-            losses, hits = [], []
-    net.eval()
+        return batch_loss(net, rec, idx, cfg, rng)
+
+    curve = fit_steps(
+        net,
+        batch,
+        steps=cfg.steps,
+        learning_rate=cfg.learning_rate,
+        weight_decay=cfg.weight_decay,
+        every=every,
+        on_point=on_point,
+    )
     return net, curve
 
 
