@@ -165,17 +165,13 @@ class ContinuousCameraPolicy:
                 f"not {spec.action_mode!r}"
             )
         small_obs, small_spec = at_size(obs, spec, self.scorer.image_size)
+        crop = self.scorer.crop
+        z = spec.pick.tile_top_z
+        seen = belt_tiles(small_obs["input_camera"], small_spec.camera("input_camera"), z, crop)
+        order = mesh_order(spec)
         if self._masked:  # a scorer that takes masks: not the slots it placed into already
-            order = mesh_order(spec)
-            n = len(
-                belt_tiles(
-                    small_obs["input_camera"],
-                    small_spec.camera("input_camera"),
-                    spec.pick.tile_top_z,
-                    self.scorer.crop,
-                ).xy
-            )
             open_slots = np.array([int(j) not in self._placed for j in order])
+            n = len(seen.xy)
             masks = np.concatenate([np.ones(n, bool), open_slots, np.ones(QUARTER_TURNS, bool)])
             scorer: Any = self.scorer  # an `EquivariantPolicy`
             scores = scorer.logits(small_obs, small_spec, masks)
@@ -184,13 +180,10 @@ class ContinuousCameraPolicy:
         if scores.size == 0:
             return None
         i, j, r = (int(v) for v in np.unravel_index(int(scores.argmax()), scores.shape))
-        crop = self.scorer.crop
-        z = spec.pick.tile_top_z
-        seen = belt_tiles(small_obs["input_camera"], small_spec.camera("input_camera"), z, crop)
         camera = spec.camera("input_camera")
         full = belt_tiles(obs["input_camera"], camera, z, crop)
         label = int(np.linalg.norm(full.xy - seen.xy[i], axis=1).argmin()) + 1
-        slot = spec.slots[int(mesh_order(spec)[j])]
+        slot = spec.slots[int(order[j])]
         fit = fit_tile(
             obs["input_camera"],
             full.labels,

@@ -177,11 +177,16 @@ def save_policy(path: Path, net: Any, cfg: CameraBCConfig, meta: dict[str, Any])
         )
 
 
-def read_policy_file(path: str | Path) -> dict[str, Any]:
-    """The contents of a saved ``.pt`` policy (any kind).
+def read_policy_file(path: str | Path, kind: str | None = None, what: str = "") -> dict[str, Any]:
+    """The contents of a saved ``.pt`` policy (any kind, or only ``kind``).
+
+    Args:
+        path: The file.
+        kind: The ``kind`` entry the file must have (None: any).
+        what: The kind in words, for the error (``a camera policy``).
 
     Raises:
-        AgentError: Not a readable torch file.
+        AgentError: Not a readable torch file, or of another kind.
     """
     import torch  # noqa: PLC0415
 
@@ -200,6 +205,8 @@ def read_policy_file(path: str | Path) -> dict[str, Any]:
         raise AgentError(f"{path} is not a saved policy ({what}: {type(exc).__name__})") from exc
     if not isinstance(blob, dict):
         raise AgentError(f"{path} is not a saved policy (holds a {type(blob).__name__})")
+    if kind is not None and blob.get("kind") != kind:
+        raise AgentError(f"{path} is not {what or kind} (kind {blob.get('kind')!r})")
     return blob
 
 
@@ -226,9 +233,7 @@ class CameraPolicy:
         Raises:
             AgentError: Not a camera policy file, or a wrong entry in it.
         """
-        blob = read_policy_file(path)
-        if blob.get("kind") != KIND:
-            raise AgentError(f"{path} is not a camera policy (kind {blob.get('kind')!r})")
+        blob = read_policy_file(path, KIND, "a camera policy")
         try:
             cfg = CameraBCConfig(**blob["config"])
             net = build_scorer(cfg)

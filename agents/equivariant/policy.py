@@ -82,9 +82,7 @@ class EquivariantPolicy:
         Raises:
             AgentError: Not an equivariant policy file, or a wrong entry in it.
         """
-        blob = read_policy_file(path)
-        if blob.get("kind") != KIND:
-            raise AgentError(f"{path} is not an equivariant policy (kind {blob.get('kind')!r})")
+        blob = read_policy_file(path, KIND, "an equivariant policy")
         try:
             cfg = EquivariantConfig(**blob["config"])
             net = build_network(cfg)
