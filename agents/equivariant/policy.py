@@ -73,7 +73,8 @@ class EquivariantPolicy:
         self.image_size = image_size
         self.meta = dict(meta or {})
         self.crop = cfg.crop()
-        self._cut = CropCutter(cfg)
+        self.cut = CropCutter(cfg)
+        """Cuts an observation into the network's inputs (`CropCutter`)."""
 
     @classmethod
     def load(cls, path: str | Path) -> EquivariantPolicy:
@@ -115,7 +116,7 @@ class EquivariantPolicy:
                 f"images, got {size[0]}x{size[1]}; set the env's image_size to "
                 f"{list(self.image_size)}"
             )
-        tiles, slots, found = self._cut(obs, spec)
+        tiles, slots, found = self.cut(obs, spec)
         if len(tiles) == 0:
             return np.zeros((0, len(slots), self.cfg.turns), np.float32), found
         with torch.no_grad():

@@ -397,11 +397,11 @@ def decision_timing(
     try:
         obs, _ = env.reset(seed=1000)
         spec = env.get_wrapper_attr("task_spec")
-        n = len(pol._cut(obs, spec)[0])  # noqa: SLF001 - the tiles the policy sees
+        n = len(pol.cut(obs, spec)[0])  # the tiles the policy sees
         out["tiles_seen"], out["slots"] = n, len(spec.slots)
         t0 = time.process_time()
         for _ in range(decisions):
-            pol._cut(obs, spec)  # noqa: SLF001
+            pol.cut(obs, spec)
         out["crops_ms"] = (time.process_time() - t0) / decisions * 1e3
         for turns in sorted({pol.cfg.turns, 4}):
             cfg = replace(pol.cfg, turns=turns)
