@@ -23,8 +23,8 @@ from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
 
 from agents.errors import AgentError
+from agents.pair.adapters import ADAPTERS, FEATURE_DIMS, row_adapter
 from agents.pair.scorer import PairScorer, PairScorerConfig
-from agents.pair.state_rows import ADAPTERS, FEATURE_DIMS
 from envs.env_config import DEFAULT_ROTATION_BINS
 from envs.observations.fields import SLOT_DIM, TILE_DIM
 
@@ -37,7 +37,9 @@ class PairFeatures(BaseFeaturesExtractor):
         hidden: Width of the pair network's hidden layers [units].
         layers: Its hidden layers.
         rotation_bins: Logits per pair (the action space's rotation bins).
-        adapter: Row adapter (`agents.pair.state_rows.ADAPTERS`).
+        adapter: Row adapter (`agents.pair.adapters.ADAPTERS`).
+        adapter_args: The adapter's settings (a ``stream`` adapter's belt timing,
+            `agents.pair.stream_rows.BeltTiming` as a dict).
 
     Raises:
         AgentError: No ``tiles``/``slots`` observations, or an unknown adapter.
@@ -50,6 +52,8 @@ class PairFeatures(BaseFeaturesExtractor):
         layers: int = 2,
         rotation_bins: int = DEFAULT_ROTATION_BINS,
         adapter: str = "state",
+        *,
+        adapter_args: dict[str, Any] | None = None,
     ) -> None:
         keys = getattr(observation_space, "spaces", {})
         if "tiles" not in keys or "slots" not in keys or adapter not in ADAPTERS:
@@ -62,7 +66,7 @@ class PairFeatures(BaseFeaturesExtractor):
         super().__init__(observation_space, n * k * rotation_bins + hidden)
         self.action_dim = n * k * rotation_bins
         self.hidden = hidden
-        self.adapter = ADAPTERS[adapter]
+        self.adapter = row_adapter(adapter, adapter_args)
         self.scorer = PairScorer(
             PairScorerConfig(*FEATURE_DIMS[adapter], rotation_bins, hidden, layers)
         )

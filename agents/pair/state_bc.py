@@ -19,8 +19,8 @@ import torch
 
 from agents.errors import AgentError
 from agents.learning.classifier_fit import FitResult, fit_classifier
+from agents.pair.adapters import FEATURE_DIMS, row_adapter
 from agents.pair.scorer import PairScorer, PairScorerConfig
-from agents.pair.state_rows import ADAPTERS, FEATURE_DIMS
 from configs.files import atomic_path, write_json
 from envs.observations.fields import SLOT_DIM, TILE_DIM
 
@@ -62,6 +62,7 @@ def fit_scorer(
     seed: int,
     out: Path,
     accuracy: bool = False,
+    adapter_args: dict[str, Any] | None = None,
 ) -> tuple[PairScorer, FitResult, Path]:
     """Fit a pair scorer to the demonstrated flat actions and write it to ``out/bc.pt``.
 
@@ -70,10 +71,12 @@ def fit_scorer(
         y: Flat action index per step.
         nvec: The ``pick_place_discrete`` action space's sizes (tile, slot, rotation).
         cfg: `agents.learning.decision_bc.BCConfig`.
-        adapter: Name of the row adapter (`agents.pair.state_rows.ADAPTERS`).
+        adapter: Name of the row adapter (`agents.pair.adapters.ADAPTERS`).
         seed: Seed of the initial weights and the minibatch order.
         out: Run folder (made).
         accuracy: Record the training accuracy after each epoch (`fit_classifier`).
+        adapter_args: The adapter's settings, saved in the file (a ``stream`` adapter's belt
+            timing).
 
     Returns:
         The fitted scorer, the fit's record and the path of the written clone.
@@ -92,6 +95,8 @@ def fit_scorer(
     out.mkdir(parents=True, exist_ok=True)
     path = out / "bc.pt"
     blob = {"arch": ARCH, "adapter": adapter, "scorer": asdict(shape), "nvec": nvec.tolist()}
+    if adapter_args:
+        blob["adapter_args"] = adapter_args
     with atomic_path(path) as tmp:
         torch.save({**blob, "state_dict": net.state_dict(), "config": asdict(cfg)}, tmp)
     return net, fit, path
@@ -108,11 +113,11 @@ def train_pair_bc(
         seed: Seed of the initial weights and the minibatch order.
         cfg: `agents.learning.decision_bc.BCConfig` (hidden, layers, epochs, batch_size, learning
             rate, decay).
-        adapter: Name of the row adapter (`agents.pair.state_rows.ADAPTERS`).
+        adapter: Name of the row adapter (`agents.pair.adapters.ADAPTERS`).
     """
     cpu0 = time.process_time()
     tiles, slots, flat, nvec = demo_arrays(dataset)
-    rows = ADAPTERS[adapter](torch.as_tensor(tiles), torch.as_tensor(slots))
+    rows = row_adapter(adapter)(torch.as_tensor(tiles), torch.as_tensor(slots))
     y = torch.as_tensor(flat)
     net, fit, path = fit_scorer(rows, y, nvec, cfg, adapter=adapter, seed=seed, out=out)
     with torch.no_grad():
@@ -146,7 +151,7 @@ class PairBCPolicy:
         from gymnasium import spaces  # noqa: PLC0415
 
         self.adapter_name = str(blob["adapter"])
-        self.adapter = ADAPTERS[self.adapter_name]
+        self.adapter = row_adapter(self.adapter_name, blob.get("adapter_args"))
         self.nvec = np.asarray(blob["nvec"], np.int64)
         self.net = PairScorer(PairScorerConfig(**blob["scorer"]))
         self.net.load_state_dict(blob["state_dict"])

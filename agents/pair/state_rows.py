@@ -24,12 +24,6 @@ from __future__ import annotations
 
 import torch
 
-from agents.pair.objects_rows import (
-    OBJECTS_PAIR_FEATURES,
-    OBJECTS_SLOT_FEATURES,
-    OBJECTS_TILE_FEATURES,
-    objects_rows,
-)
 from agents.pair.scorer import PairRows
 from envs.observations.fields import SLOT_DIM, SLOT_FIELDS, TILE_DIM, TILE_FIELDS, column
 
@@ -77,18 +71,7 @@ def state_rows(tiles: torch.Tensor, slots: torch.Tensor) -> PairRows:
     )
 
 
-ADAPTERS = {"state": state_rows, "objects": objects_rows}
-"""Adapters by observation mode: (tiles, slots) tensors -> `PairRows`."""
-FEATURE_DIMS = {
-    "state": (STATE_TILE_FEATURES, STATE_SLOT_FEATURES, STATE_PAIR_FEATURES),
-    "objects": (OBJECTS_TILE_FEATURES, OBJECTS_SLOT_FEATURES, OBJECTS_PAIR_FEATURES),
-}
-"""(tile_dim, slot_dim, pair_dim) of each adapter's rows."""
-
-
 __all__ = [
-    "ADAPTERS",
-    "FEATURE_DIMS",
     "ON_SLOT_M",
     "STATE_PAIR_FEATURES",
     "STATE_SLOT_FEATURES",

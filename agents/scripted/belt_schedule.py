@@ -25,10 +25,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from agents.perception import PartialRegion, PerceivedTile
-from agents.placement import PickPlace
 from agents.scripted.belt_config import BeltScheduleConfig, load_belt_schedule_config
 from agents.scripted.belt_tracks import BeltTracker, Track, View, shifted
+from agents.scripted.perception import PartialRegion, PerceivedTile
+from agents.scripted.placement import PickPlace
 from envs.cell.cameras import CameraModel
 from envs.task_spec import TaskSpec
 

@@ -25,9 +25,9 @@ import numpy as np
 from shapely.affinity import translate
 from shapely.geometry import Polygon, box
 
-from agents.perception import PartialRegion, PerceivedTile
-from agents.placement import PickPlace
 from agents.scripted.belt_config import BeltScheduleConfig
+from agents.scripted.perception import PartialRegion, PerceivedTile
+from agents.scripted.placement import PickPlace
 from spatial.units import MM_PER_M
 
 BISECTIONS = 30

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
-from agents.config import PlacementConfig
+from agents.scripted.config import PlacementConfig
 from qshape import Figure
 from qshape.geometry import rotate
 from spatial.units import MM_PER_M

@@ -1,0 +1,37 @@
+"""The shipped clones of the dynamic rungs play their rung by file name and do what it asks."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from agents.learning.decision_bc import BCPolicy
+from agents.policies import make_policies
+from apps.evaluate import Protocol, evaluate_policy_set, task_protocol
+
+ROOT = Path(__file__).resolve().parents[3]
+DISTRACTORS = "MosaicDistractors-v1"
+DISTRACTOR_CLONE = ROOT / "checkpoints" / DISTRACTORS / "PairBC_objects" / "seed_0" / "bc.pt"
+
+
+def test_the_distractor_clone_plays_on_objects_rows_by_its_file() -> None:
+    """The file names its rows: ``apps.evaluate`` needs no ``@obs_mode=objects``."""
+    assert BCPolicy(DISTRACTOR_CLONE).env_overrides == {"obs_mode": "objects"}
+
+
+def test_the_distractor_clone_fills_every_slot_and_never_places_a_distractor(
+    tmp_path: Path,
+) -> None:
+    """Held-out seeds with distractors on the belt: one step per slot, none spent on a tile the
+    design lacks (a clone on ``state`` rows, where a distractor carries its shape's class, placed
+    them: 0.72 filled)."""
+    base, proto = task_protocol(DISTRACTORS)
+    seeds = (1000, 1001, 1002, 1003)
+    short = Protocol(seeds, proto.designs, proto.max_steps, proto.horizon_s)
+    rows, episodes = evaluate_policy_set(make_policies([str(DISTRACTOR_CLONE)], base), short)
+    assert rows[0].filled == 1.0 and rows[0].success_rate == 1.0, rows[0]
+    eps = episodes[rows[0].policy]
+    assert [e.steps for e in eps] == [e.slots for e in eps]
+    assert json.loads(eps[0].env)["distractor_rate"] == pytest.approx(0.5)
