@@ -9,6 +9,12 @@ speed and ``last_x`` are the adapter's settings (`BeltTiming`), saved in the clo
 the clone reads the same deadline the scheduler it imitates computes
 (`agents.scripted.belt_schedule`).
 
+Each pair also carries the rotation index the env's ``tile`` frame defines for it
+(`envs.indexing`: ``-round(d / (2 pi / bins)) mod bins`` for the tile's yaw relative to the slot,
+d), one-hot over the bins: a clone that has to learn where that index flips, at odd multiples of
+45 deg, turned a tile lying 43.9 deg off by the wrong quarter (held-out seed 1000), and one wrong
+tile of 16 fails a stream episode.
+
 The tile mask keeps the tiles lying on the input belt: present, not lying on a slot, and inside
 the pick area across the belt (``pick_y``). While none does (the stream between arrivals) every
 tile index is allowed, as the env's own mask allows it (any index waits, `envs.masks`).
@@ -24,6 +30,7 @@ import torch
 from agents.errors import AgentError
 from agents.pair.scorer import PairRows
 from agents.pair.state_rows import STATE_PAIR_FEATURES, STATE_SLOT_FEATURES, state_rows
+from envs.env_config import DEFAULT_ROTATION_BINS
 from envs.observations.fields import TILE_DIM
 
 TIME_SCALE_S = 10.0
@@ -32,8 +39,12 @@ TIME_CLIP = (-1.0, 3.0)
 """Range of the scaled time left (a tile far upstream or long gone reads as its end)."""
 STREAM_TILE_FEATURES = 4
 """Tile row features given to the scorer: x, y [m], present, scaled time left."""
+ROTATION_BINS = DEFAULT_ROTATION_BINS
+"""Rotation bins of the ``pick_place_discrete`` action this adapter serves."""
 STREAM_SLOT_FEATURES = STATE_SLOT_FEATURES
-STREAM_PAIR_FEATURES = STATE_PAIR_FEATURES
+"""Slot row features: as the ``state`` adapter's."""
+STREAM_PAIR_FEATURES = STATE_PAIR_FEATURES + ROTATION_BINS
+"""Pair features: the ``state`` adapter's and the tile frame's rotation index, one-hot."""
 
 
 @dataclass(frozen=True)
@@ -90,16 +101,20 @@ def stream_rows(tiles: torch.Tensor, slots: torch.Tensor, *, timing: BeltTiming)
     lo, hi = timing.pick_y
     on_belt = base.tile_mask & (y >= lo) & (y <= hi)
     waiting = ~on_belt.any(-1, keepdim=True)
+    d = torch.atan2(base.pairs[..., 2], base.pairs[..., 1])  # tile yaw - slot yaw
+    index = torch.remainder(-torch.round(d / (2 * torch.pi / ROTATION_BINS)), ROTATION_BINS)
+    one_hot = torch.nn.functional.one_hot(index.long(), ROTATION_BINS).to(base.pairs.dtype)
     return PairRows(
         tiles=torch.cat([base.tiles, left.clamp(*TIME_CLIP)[..., None]], dim=-1),
         slots=base.slots,
-        pairs=base.pairs,
+        pairs=torch.cat([base.pairs, one_hot], dim=-1),
         tile_mask=torch.where(waiting, torch.ones_like(on_belt), on_belt),
         slot_mask=base.slot_mask,
     )
 
 
 __all__ = [
+    "ROTATION_BINS",
     "STREAM_PAIR_FEATURES",
     "STREAM_SLOT_FEATURES",
     "STREAM_TILE_FEATURES",

@@ -12,12 +12,14 @@ disjoint from the held-out seeds; its picks (not its waits, whose index does not
 cloned into the pair scorer on ``stream`` rows (`agents.pair.stream_rows`: the ``state`` rows and
 each tile's time left before the belt's end), with ``configs/bc_pair.yaml``'s settings. The run
 folder gets ``bc.pt``, ``bc_summary.json`` (samples, gradient steps, CPU seconds of recording and
-of training, the teacher's own figures on its training episodes) and, unless ``--no-eval``,
+of training, the teacher's own figures on its training episodes), ``demos.npz`` (the recording,
+reused by a later run into the same folder) and, unless ``--no-eval``,
 ``eval1000/`` (``apps.evaluate`` on the task's held-out seeds).
 """
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 from typing import Any
@@ -88,17 +90,40 @@ def record(
         env.close()
 
 
+def recorded(
+    task: str, episodes: int, seed: int, out: Path
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any], dict[str, float], float]:
+    """`record`'s output and its CPU seconds, kept in ``out/demos.npz`` (reused when there)."""
+    path = out / "demos.npz"
+    if path.is_file():
+        z = np.load(path)
+        meta = json.loads(str(z["meta"]))
+        if (meta["task"], meta["episodes"], meta["seed"]) == (task, episodes, seed):
+            return (
+                z["tiles"], z["slots"], z["flat"], z["nvec"],
+                meta["timing"], meta["teacher"], meta["record_cpu_s"],
+            )  # fmt: skip
+    cpu0 = time.process_time()
+    tiles, slots, flat, nvec, timing, teacher = record(task, episodes, seed)
+    cpu = time.process_time() - cpu0
+    meta = {"task": task, "episodes": episodes, "seed": seed, "timing": timing,
+            "teacher": teacher, "record_cpu_s": cpu}  # fmt: skip
+    out.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(
+        path, tiles=tiles, slots=slots, flat=flat, nvec=nvec, meta=np.array(json.dumps(meta))
+    )
+    return tiles, slots, flat, nvec, timing, teacher, cpu
+
+
 def train(task: str, episodes: int, seed: int, out: Path) -> dict[str, Any]:
-    """Record, clone and write ``out/bc.pt`` and ``out/bc_summary.json``."""
+    """Record (or reuse the run's recording), clone, write ``bc.pt`` and ``bc_summary.json``."""
     import torch  # noqa: PLC0415
 
     from agents.pair.adapters import row_adapter  # noqa: PLC0415
     from agents.pair.state_bc import ARCH, fit_scorer  # noqa: PLC0415
 
     torch.set_num_threads(1)
-    cpu0 = time.process_time()
-    tiles, slots, flat, nvec, timing, teacher = record(task, episodes, seed)
-    record_cpu = time.process_time() - cpu0
+    tiles, slots, flat, nvec, timing, teacher, record_cpu = recorded(task, episodes, seed, out)
     cpu1 = time.process_time()
     rows = row_adapter("stream", timing)(torch.as_tensor(tiles), torch.as_tensor(slots))
     y = torch.as_tensor(flat)
@@ -158,7 +183,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     return summary
 
 
-__all__ = ["SEED_STRIDE", "TASK", "main", "record", "train"]
+__all__ = ["SEED_STRIDE", "TASK", "main", "record", "recorded", "train"]
 
 if __name__ == "__main__":
     run_cli(main)

@@ -118,3 +118,13 @@ def test_the_deadline_expert_refuses_a_still_belt() -> None:
             DeadlineExpert(env)
     finally:
         env.close()
+
+
+@pytest.mark.parametrize(("yaw_deg", "index"), [(43.9, 0), (46.1, 3), (-46.1, 1), (180.0, 2)])
+def test_each_pair_carries_the_tile_frame_s_rotation_index(yaw_deg: float, index: int) -> None:
+    """-round(d / 90 deg) mod 4 for a tile d off its slot: the flip at 45 deg is given, not
+    learned (a clone turned a tile lying 43.9 deg off by the wrong quarter)."""
+    tiles = _tiles([(0.1, 0.5, 1)]).reshape(1, TILE_DIM)
+    tiles[0, 3], tiles[0, 4] = np.cos(np.radians(yaw_deg)), np.sin(np.radians(yaw_deg))
+    rows = stream_rows(tiles.reshape(-1), _slots(1), timing=TIMING)
+    assert rows.pairs[0, 0, 0, -4:].tolist() == [float(i == index) for i in range(4)]
