@@ -119,33 +119,6 @@ class ToolStepIK:
             q = np.clip(q + jac.T @ np.linalg.solve(jac @ jac.T + eye, err), self.lower, self.upper)
         return q
 
-    def servo_steps(self, q: npt.ArrayLike, errors: npt.ArrayLike, yaw: float) -> Array:
-        """One damped least-squares step per tool error at ``q``, and the step that levels it.
-
-        The joint-space image of what a tool-space servo acts on: for each error row (dx, dy,
-        dz [m], dyaw [rad]) the joint change ``J^T (J J^T + damping^2 I)^-1 e`` at ``q`` (6,)
-        [rad] (one Jacobian, no iteration, no joint-range clip), where ``e`` is the position
-        error and a turn about the vertical (weighted by ``orientation_weight``). The last row
-        is the step that turns the tool from its orientation at ``q`` to pointing straight
-        down at ``yaw`` [rad].
-
-        Returns:
-            Joint changes, shape (len(errors) + 1, 6) [rad].
-        """
-        self._set(q)
-        w = self.cfg.orientation_weight
-        mujoco.mj_jacSite(self.model, self.data, self._jac[:3], self._jac[3:], self.site)
-        jac = self._jac.copy()
-        jac[3:] *= w
-        e = np.zeros((6, len(np.atleast_2d(errors)) + 1))
-        err = np.atleast_2d(np.asarray(errors, float))
-        e[:3, :-1] = err[:, :3].T
-        e[5, :-1] = w * err[:, 3]
-        rot = self.data.site_xmat[self.site].reshape(3, 3)
-        e[3:, -1] = w * _rotation_vector(tool_down_rotation(float(yaw)) @ rot.T)
-        eye = self.cfg.damping**2 * np.eye(6)
-        return np.asarray((jac.T @ np.linalg.solve(jac @ jac.T + eye, e)).T)
-
     def _set(self, q: npt.ArrayLike) -> None:
         self.data.qpos[:] = q
         mujoco.mj_kinematics(self.model, self.data)

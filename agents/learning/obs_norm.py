@@ -32,7 +32,6 @@ import torch
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 
 from agents.errors import AgentError
-from agents.learning.joint_features import JOINT_FEATURES_DIM, JointServoFeatures
 from envs.observations.fields import ROBOT_FIELDS, SLOT_DIM, SLOT_FIELDS, TILE_DIM, TILE_FIELDS
 
 TOOL_POS = ROBOT_FIELDS["tool_pos"]
@@ -64,8 +63,6 @@ class NormalizedStateExtractor(BaseFeaturesExtractor):
         relative: Append the first tile's position minus the tool's, the first slot's
             (x, y) minus the first tile's [m], their fine copies (`FINE_SCALES`) and the
             harmonics of their yaw difference.
-        joint_space: Append the joint-space images of those vectors and of the turn that
-            levels the tool (`agents.learning.joint_features`), for joint-action policies.
 
     Raises:
         AgentError: Not a Dict space, missing keys for ``relative``, or statistics of the
@@ -78,24 +75,20 @@ class NormalizedStateExtractor(BaseFeaturesExtractor):
         mean: Sequence[float] | None = None,
         std: Sequence[float] | None = None,
         relative: bool = False,
-        joint_space: bool = False,
     ) -> None:
         if not isinstance(observation_space, gym.spaces.Dict):
             raise AgentError(
                 f"NormalizedStateExtractor needs a Dict space, got {observation_space}"
             )
-        needs = relative or joint_space
-        if needs and not {"robot", "tiles", "slots"} <= set(observation_space.spaces):
+        if relative and not {"robot", "tiles", "slots"} <= set(observation_space.spaces):
             raise AgentError(
-                "relative and joint-space features need the robot, tiles and slots rows, the "
-                f"space has {list(observation_space.spaces)}"
+                "relative features need the robot, tiles and slots rows, the space has "
+                f"{list(observation_space.spaces)}"
             )
         dim = _flat_dim(observation_space) + (RELATIVE_DIM if relative else 0)
-        dim += JOINT_FEATURES_DIM if joint_space else 0
         super().__init__(observation_space, features_dim=dim)
         self.keys = list(observation_space.spaces)
         self.relative = bool(relative)
-        self.joint_space = JointServoFeatures() if joint_space else None
         for name, values, default in (("mean", mean, 0.0), ("std", std, 1.0)):
             arr = np.full(dim, default) if values is None else np.asarray(values, float)
             if arr.shape != (dim,):
@@ -119,8 +112,6 @@ class NormalizedStateExtractor(BaseFeaturesExtractor):
             rel = torch.cat([tile[:, :3] - tool, slot[:, :2] - tile[:, :2]], 1)
             fine = [torch.tanh(rel / scale) for scale in FINE_SCALES]
             parts += [rel, *fine, torch.stack(turns, 1)]
-        if self.joint_space is not None:
-            parts.append(self.joint_space(observations).to(parts[0].device))
         return torch.cat(parts, dim=1)
 
     def forward(self, observations: dict[str, torch.Tensor]) -> torch.Tensor:
@@ -130,10 +121,7 @@ class NormalizedStateExtractor(BaseFeaturesExtractor):
 
 
 def feature_stats(
-    observations: dict[str, np.ndarray],
-    space: gym.spaces.Dict,
-    relative: bool = False,
-    joint_space: bool = False,
+    observations: dict[str, np.ndarray], space: gym.spaces.Dict, relative: bool = False
 ) -> dict[str, list[float]]:
     """Mean and standard deviation of `NormalizedStateExtractor`'s features over the data.
 
@@ -142,12 +130,11 @@ def feature_stats(
             `agents.learning.demos.Transitions.observations`).
         space: The observation space.
         relative: As the extractor's.
-        joint_space: As the extractor's.
 
     Returns:
         ``{"mean": [...], "std": [...]}``, ready for ``features_extractor_kwargs``.
     """
-    ext = NormalizedStateExtractor(space, relative=relative, joint_space=joint_space)
+    ext = NormalizedStateExtractor(space, relative=relative)
     with torch.no_grad():
         raw = ext.raw_features({k: torch.as_tensor(np.asarray(v)) for k, v in observations.items()})
     x = raw.double().numpy()
@@ -159,15 +146,10 @@ def normalized_policy_kwargs(
 ) -> dict[str, Any]:
     """``policy_kwargs`` with `NormalizedStateExtractor` and the data's statistics filled in.
 
-    Keeps any ``features_extractor_kwargs`` given (``relative``, ``joint_space``).
+    Keeps any ``features_extractor_kwargs`` given (``relative``).
     """
     extra = dict(policy_kwargs.get("features_extractor_kwargs") or {})
-    stats = feature_stats(
-        observations,
-        space,
-        bool(extra.get("relative", False)),
-        bool(extra.get("joint_space", False)),
-    )
+    stats = feature_stats(observations, space, bool(extra.get("relative", False)))
     return {
         **policy_kwargs,
         "features_extractor_class": NormalizedStateExtractor,
