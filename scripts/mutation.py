@@ -24,6 +24,7 @@ import argparse
 import fnmatch
 import json
 import os
+import random
 import shutil
 import subprocess
 import sys
@@ -53,33 +54,6 @@ from mutmut.__main__ import cli
 cli(["run", "--max-children", sys.argv[2], *sys.argv[3:]])
 """
 """Runs mutmut with some of pyproject's [tool.mutmut] settings replaced (the CI sample)."""
-SAMPLE_BOOT = """
-import dataclasses, json, random, sys
-from pathlib import Path
-from mutmut import configuration
-import mutmut.__main__ as mm
-overrides, workers, plan = json.loads(sys.argv[1]), int(sys.argv[2]), json.loads(sys.argv[3])
-configuration._config = dataclasses.replace(configuration.config(), **overrides)
-chosen = []
-generate = mm.create_mutants
-def generate_then_draw(max_children):
-    made = generate(max_children)
-    pool = []
-    for path in plan["files"]:
-        meta = json.loads(Path("mutants", path + ".meta").read_text(encoding="utf-8"))
-        pool += [n for n in meta["exit_code_by_key"] if n not in plan["equivalent"]]
-    k = min(plan["mutants"], len(pool))
-    chosen.extend(sorted(random.Random(plan["seed"]).sample(pool, k)))
-    Path(plan["drawn"]).write_text(json.dumps({"pool": len(pool), "chosen": chosen}))
-    return made
-mm.create_mutants = generate_then_draw
-mm._run(chosen, workers)
-"""
-"""The CI sample's mutmut run: the mutants are drawn from the ones mutmut itself generated (one
-generation, not a second one of the sample's own), then run. ``chosen`` is filled in place
-before mutmut reads it (after generating). The pool is every mutant of ``plan["files"]`` in that
-order, each file's in mutmut's order, less the reviewed equivalents: the draw of a seed is the
-one the sample made when it generated the names itself (24 of 1,988 with seed 0, the same)."""
 
 
 class MutationError(Exception):
@@ -246,6 +220,24 @@ def _env() -> dict[str, str]:
     return env
 
 
+def mutant_names(root: Path, patterns: list[str]) -> list[str]:
+    """Every mutant mutmut makes of the files matching ``patterns`` (its own generator)."""
+    from mutmut.mutation.file_mutation import mutate_file_contents  # noqa: PLC0415
+    from mutmut.utils.format_utils import get_mutant_name  # noqa: PLC0415
+
+    cwd = os.getcwd()
+    os.chdir(root)  # mutmut reads its settings (pragmas, patterns) from the working directory
+    try:
+        names = []
+        for pattern in patterns:
+            for path in sorted(Path().glob(pattern)):
+                made = mutate_file_contents(str(path), path.read_text(encoding="utf-8"))
+                names += [get_mutant_name(path, n) for n in made.mutant_names]
+        return names
+    finally:
+        os.chdir(cwd)
+
+
 def sample(args: argparse.Namespace) -> int:
     """Run a seeded sample of the scoring group's mutants against the contract tests."""
     _, ours = settings()
@@ -254,33 +246,20 @@ def sample(args: argparse.Namespace) -> int:
     with tempfile.TemporaryDirectory(prefix="mutation-sample-") as tmp:
         work = Path(tmp) / "tree"
         shutil.copytree(ROOT, work, ignore=COPY_IGNORE)
+        pool = [n for n in mutant_names(work, ours["scoring"]) if n not in eq]
+        chosen = sorted(random.Random(args.seed).sample(pool, min(args.mutants, len(pool))))
         overrides = {
             "only_mutate": ours["scoring"],
             "pytest_add_cli_args_test_selection": ours["sample_tests"],
         }
-        drawn = Path(tmp) / "drawn.json"
-        plan = {
-            "files": [
-                str(p.relative_to(work)) for pat in ours["scoring"] for p in sorted(work.glob(pat))
-            ],
-            "equivalent": sorted(eq),
-            "seed": args.seed,
-            "mutants": args.mutants,
-            "drawn": str(drawn),
-        }
+        print(f"sample: {len(chosen)} of {len(pool)} scoring mutants (seed {args.seed})")
+        sys.stdout.flush()
         code = subprocess.call(
-            [sys.executable, "-c", SAMPLE_BOOT, json.dumps(overrides), str(args.workers)]
-            + [json.dumps(plan)],
+            [sys.executable, "-c", BOOT, json.dumps(overrides), str(args.workers), *chosen],
             cwd=work,
             env=_env(),
             stdout=subprocess.DEVNULL if args.quiet else None,
         )
-        if not drawn.is_file():
-            print(f"sample: mutmut stopped before drawing the mutants (exit {code})")
-            return 1
-        draw = json.loads(drawn.read_text(encoding="utf-8"))
-        chosen = draw["chosen"]
-        print(f"sample: {len(chosen)} of {draw['pool']} scoring mutants (seed {args.seed})")
         status = results(work)
     missed = [n for n in chosen if status.get(n) == "survived"]
     unknown = [n for n in chosen if status.get(n) in (None, "not checked", "no tests")]
