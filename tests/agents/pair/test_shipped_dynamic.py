@@ -5,8 +5,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import gymnasium as gym
 import pytest
 
+from agents.experts.deadline import DeadlineExpert
 from agents.learning.decision_bc import BCPolicy
 from agents.policies import make_policies
 from apps.evaluate import Protocol, evaluate_policy_set, task_protocol
@@ -35,3 +37,28 @@ def test_the_distractor_clone_fills_every_slot_and_never_places_a_distractor(
     eps = episodes[rows[0].policy]
     assert [e.steps for e in eps] == [e.slots for e in eps]
     assert json.loads(eps[0].env)["distractor_rate"] == pytest.approx(0.5)
+
+
+STREAM = "MosaicStream-v1"
+STREAM_CLONE = ROOT / "checkpoints" / STREAM / "PairBC_stream" / "seed_0" / "bc.pt"
+
+
+@pytest.mark.parametrize("seed", [1003, 1010])
+def test_the_stream_clone_picks_first_the_tile_its_teacher_picks_at_the_right_turn(
+    seed: int,
+) -> None:
+    """On the stream's first picture the clone names the tile nearest the belt's end, an open
+    slot of its class and the rotation index that places it (the teacher's choice)."""
+    env = gym.make(STREAM)
+    try:
+        obs, _ = env.reset(seed=seed)
+        u = env.unwrapped
+        tile, slot = DeadlineExpert(env).choose()  # type: ignore[misc]
+        action, _ = BCPolicy(STREAM_CLONE).predict(obs)
+        picked = int(u.index.tiles[action[0]])  # type: ignore[attr-defined]
+        chosen = int(u.index.slots[action[1]])  # type: ignore[attr-defined]
+        assert picked == tile
+        assert u.task.slot_class[chosen] == u.task.tile_class[tile]  # type: ignore[attr-defined]
+        assert action[2] == u.expert_action(picked, chosen)[2]  # type: ignore[attr-defined]
+    finally:
+        env.close()
