@@ -287,13 +287,14 @@ def test_staged_release_is_the_fraction_of_slots_filled(dense: gym.Env) -> None:
 
 
 def test_staged_config_loads_overrides_and_refuses_non_positive_scales(tmp_path) -> None:
-    """Guards against the overrides or the file name dropped by `load_staged_config`, and a
-    zero scale accepted (every scale must be > 0 m)."""
+    """Guards against the overrides or the file name dropped by `load_staged_config`, a zero
+    scale accepted (every scale must be > 0 m), and the refusal not saying it is the staged
+    reward's setting."""
     assert load_staged_config(reach_scale=0.5).reach_scale == 0.5
     path = tmp_path / "rewards.yaml"
     path.write_text("transport: 3.0\n", encoding="utf-8")
     assert load_staged_config(str(path)).transport == 3.0
-    with pytest.raises(CellError, match=r"reach_scale must be > 0, got 0.0"):
+    with pytest.raises(CellError, match=r"^staged reward: reach_scale must be > 0, got 0.0$"):
         StagedRewardConfig(reach_scale=0.0)
 
 

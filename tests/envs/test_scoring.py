@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 
 import envs
+from envs.errors import EnvError
 from envs.task import Evaluation
 from spatial.rotations import quat_from_yaw
 
@@ -310,6 +311,21 @@ def test_evaluation_round_trips_through_info(u: Any) -> None:
     e = u.evaluate()
     assert Evaluation.from_info({"evaluation": e.as_dict()}) == e
     assert isinstance(e.as_dict()["slot_filled"], list)
+
+
+@pytest.mark.parametrize("drop", ["slot_filled", "correct", None])
+def test_an_info_without_a_complete_evaluation_is_refused_by_name(u: Any, drop: str | None) -> None:
+    """Guards against `from_info` accepting an evaluation with a field missing (a record read
+    from another step's info, or the mapping test turned into `and`: it then fails later with a
+    bare KeyError), and its one-line message losing what it names."""
+    d = u.evaluate().as_dict()
+    info: dict[str, Any] = {"sim_time": 1.0}
+    if drop is not None:
+        info["evaluation"] = {k: v for k, v in d.items() if k != drop}
+    message = "info has no complete 'evaluation' (a MosaicAssembly step's info)"
+    with pytest.raises(EnvError) as caught:
+        Evaluation.from_info(info)
+    assert str(caught.value) == message
 
 
 def test_ground_truth_holds_the_poses_and_finds_the_nearest_fed_tile(u: Any) -> None:
