@@ -22,8 +22,9 @@ import numpy as np
 import pytest
 
 import envs
+from envs.actions import transfer_poses
 from envs.errors import EnvError
-from envs.task import Evaluation
+from envs.task import Evaluation, MosaicTask
 from spatial.rotations import quat_from_yaw
 
 MM = 1e-3
@@ -347,3 +348,102 @@ def test_ground_truth_holds_the_poses_and_finds_the_nearest_fed_tile(u: Any) -> 
     parked = dataclasses.replace(gt, on_stage=on)
     i, d = parked.nearest(target)
     assert i != 5 and d > 0.005
+
+
+def test_a_tile_exactly_on_a_mesh_edge_is_on_the_mesh(env: gym.Env, u: Any) -> None:
+    """Guards against the mesh's edges excluded (a tile counts as placed over the mesh, its
+    edges included): a tile whose centre lies exactly on any of the sheet's four edges is on the
+    mesh (misplaced, not stranded)."""
+    cell = u.cell
+    lo, hi = cell.geometry.mesh_lo, cell.geometry.mesh_hi
+    centre = (lo + hi) / 2
+    tile = 4
+    for axis in (0, 1):
+        for edge in (lo[axis], hi[axis]):
+            xy = centre.copy()
+            xy[axis] = edge
+            env.reset(seed=0)
+            lay(u, tile, xy, 0.3)
+            assert cell.data.qpos[cell.ids.tile_qpos_index[tile][axis]] == edge  # exactly
+            assert u.task.placement().on_mesh[tile], (axis, edge)
+            assert u.evaluate().misplaced == 1
+
+
+@pytest.mark.parametrize("sign", [1, -1])
+def test_height_tolerance_includes_its_edges(u: Any, sign: int) -> None:
+    """Guards against the height tolerance's edges excluded (a tile lies flat *within*
+    ``mesh_height_tolerance`` of resting on the sheet, and a tile that far below rest is still
+    over it): with a tolerance of 2^-9 m (exact in binary), a tile exactly that far above or
+    below rest on its slot fills it."""
+    tol = 2.0**-9
+    task = MosaicTask(u.cell, dataclasses.replace(u.config, mesh_height_tolerance=tol))
+    tile = 4
+    slot = slot_of(u, tile)
+    on_slot(u, tile, slot, dz=sign * tol)
+    cell = u.cell
+    rest = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2
+    assert cell.data.qpos[cell.ids.tile_qpos_index[tile][2]] - rest == sign * tol  # exactly
+    p = task.placement()
+    assert p.on_mesh[tile] and p.flat[tile] and p.slot_filled[slot]
+
+
+def _tilted(u: Any, tile: int, slot: int, quat: np.ndarray) -> None:
+    """Lay ``tile`` on ``slot`` at rest with the orientation ``quat`` (w, x, y, z)."""
+    on_slot(u, tile, slot)
+    cell = u.cell
+    cell.data.qpos[cell.ids.tile_qpos_index[tile][3:]] = quat
+    mujoco.mj_forward(cell.model, cell.data)
+
+
+def test_a_tile_tilted_exactly_the_limit_is_not_flat(u: Any) -> None:
+    """Guards against the tilt limit included (a tile is flat when tilted *less* than
+    ``max_tilt_deg``): a tile tilted exactly 8 deg over its slot does not fill it."""
+    tile = 4
+    slot = slot_of(u, tile)
+    limit = math.cos(math.radians(u.config.max_tilt_deg))
+    qx = math.sqrt((1 - limit) / 2)
+    assert 1 - 2 * (qx * qx + 0.0) == limit  # exactly the limit
+    _tilted(u, tile, slot, np.array([math.sqrt(1 - qx * qx), qx, 0.0, 0.0]))
+    p = u.task.placement()
+    assert p.on_mesh[tile] and not p.flat[tile] and not p.slot_filled[slot]
+
+
+@pytest.mark.parametrize(("deg", "flat"), [(7.5, True), (8.5, False)])
+def test_a_tilt_about_the_y_axis_counts_like_one_about_x(u: Any, deg: float, flat: bool) -> None:
+    """Guards against the tile's tilt read from its x rotation only (a sign slip in the z
+    component of its z axis): tilted about the world y axis, 7.5 deg is flat, 8.5 deg is not."""
+    tile = 4
+    slot = slot_of(u, tile)
+    t = math.radians(deg)
+    _tilted(u, tile, slot, np.array([math.cos(t / 2), 0.0, math.sin(t / 2), 0.0]))
+    p = u.task.placement()
+    assert p.on_mesh[tile] and p.flat[tile] is np.bool_(flat)
+
+
+def test_a_held_tile_over_its_slot_is_not_placed(u: Any) -> None:
+    """Guards against the held tile counted over the mesh (tile 0 included: a test of the held
+    index against 0 or 1 that skips it): tile 0 held by the pad right on its slot neither fills
+    it nor counts as placed; it is held."""
+    tile = 0
+    slot = slot_of(u, tile)
+    cell = u.cell
+    cmd = transfer_poses(cell, tile, slot)
+    cell.set_qpos(u.ik.solve(np.array([*cmd.pick_xy, u.pick_area.tile_top_z]), cmd.pick_yaw).q)
+    cell.vacuum(True)
+    assert cell.held_tile == tile
+    on_slot(u, tile, slot)
+    assert cell.held_tile == tile
+    p = u.task.placement()
+    assert not p.on_mesh[tile] and not p.correct[tile] and not p.slot_filled[slot]
+    e = u.evaluate()
+    assert (e.held, e.correct, e.misplaced) == (1, 0, 0)
+
+
+def test_tiles_off_the_mesh_have_no_slot_and_no_errors(u: Any) -> None:
+    """Guards against the placement's fill values for tiles off the mesh changed (slot -1, an
+    int; position and yaw errors NaN): at a fresh episode every tile is on the input belt."""
+    p = u.task.placement()
+    assert not p.on_mesh.any()
+    assert p.slot.dtype.kind == "i" and p.slot.tolist() == [-1] * len(p.slot)
+    assert p.position_error.dtype == np.float64 and np.isnan(p.position_error).all()
+    assert p.yaw_error.dtype == np.float64 and np.isnan(p.yaw_error).all()
