@@ -25,7 +25,8 @@ import envs
 from envs.actions import transfer_poses
 from envs.errors import EnvError
 from envs.task import Evaluation, MosaicTask
-from spatial.rotations import quat_from_yaw
+from spatial.angles import yaw_error
+from spatial.rotations import quat_from_yaw, yaw_from_quat
 
 MM = 1e-3
 """Metres per millimetre (offsets below are written in mm)."""
@@ -178,14 +179,19 @@ def test_yaw_is_compared_modulo_the_tiles_symmetry(
     assert u.evaluate().slot_filled[slot] is ok
 
 
-def test_two_tiles_in_one_slot_fill_it_once_the_closer_one_counts(env: gym.Env, u: Any) -> None:
+@pytest.mark.parametrize("nth", [0, 1])
+def test_two_tiles_in_one_slot_fill_it_once_the_closer_one_counts(
+    env: gym.Env, u: Any, nth: int
+) -> None:
     """Guards against ranking the candidates by error before slot (a one-line change of the
     sort keys): with a tile of another slot ranked between them, both tiles of one slot
-    counted as correct and none as misplaced."""
+    counted as correct and none as misplaced; and against each candidate's slot compared with
+    the first candidate's instead of the one before it (the shared slot, 0 or 12, ranked
+    before or after the other tile's slot 4)."""
     same = np.flatnonzero(u.task.tile_class == u.task.tile_class[0])
     assert len(same) == 2  # two tiles of one class, two slots of it
     a, b = (int(i) for i in same)
-    slot = slot_of(u, a)
+    slot = slot_of(u, a, nth)
     other = 4
     for first, second in ((a, b), (b, a)):  # index order must not matter
         env.reset(seed=0)
@@ -447,3 +453,40 @@ def test_tiles_off_the_mesh_have_no_slot_and_no_errors(u: Any) -> None:
     assert p.slot.dtype.kind == "i" and p.slot.tolist() == [-1] * len(p.slot)
     assert p.position_error.dtype == np.float64 and np.isnan(p.position_error).all()
     assert p.yaw_error.dtype == np.float64 and np.isnan(p.yaw_error).all()
+
+
+def test_position_tolerance_includes_its_edge(u: Any) -> None:
+    """Guards against the position tolerance's edge excluded (a tile fills its slot *within*
+    ``position_tolerance``): with a tolerance of 2^-9 m (exact in binary), a tile exactly that
+    far from its slot fills it."""
+    tol = 2.0**-9
+    task = MosaicTask(u.cell, dataclasses.replace(u.config, position_tolerance=tol))
+    tile = 4
+    slot = slot_of(u, tile)
+    x, y, yaw = task.slot_xyyaw[slot]
+    lay(u, tile, (x + tol, y), yaw)
+    p = task.placement()
+    assert p.position_error[tile] == tol  # exactly on the edge
+    assert p.correct[tile] and p.slot_filled[slot]
+
+
+def test_yaw_tolerance_includes_its_edge(u: Any) -> None:
+    """Guards against the yaw tolerance's edge excluded (a tile fills its slot *within*
+    ``yaw_tolerance_deg``): a tile turned about 2 deg, with the tolerance set to exactly its
+    yaw error (the nearest float to it in degrees), fills its slot."""
+    tile = 4  # no symmetry
+    slot = slot_of(u, tile)
+    on_slot(u, tile, slot, dyaw_deg=2.0)
+    cell = u.cell
+    quat = cell.data.qpos[cell.ids.tile_qpos_index[tile][3:]]
+    err = float(yaw_error(yaw_from_quat(quat), u.task.slot_xyyaw[slot, 2], 1))
+    deg = 2.0
+    for _ in range(100):  # the degrees whose radians are exactly that error
+        if math.radians(deg) == err:
+            break
+        deg = float(np.nextafter(deg, 3.0 if math.radians(deg) < err else 1.0))
+    assert math.radians(deg) == err
+    task = MosaicTask(cell, dataclasses.replace(u.config, yaw_tolerance_deg=deg))
+    p = task.placement()
+    assert p.yaw_error[tile] == err  # exactly on the edge
+    assert p.correct[tile] and p.slot_filled[slot]
