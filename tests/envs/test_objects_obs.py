@@ -357,3 +357,23 @@ def test_outline_noise_adds_the_generator_s_normal_draws_and_only_when_asked(
     draws = np.random.default_rng(7).normal(0.0, 0.5, (n, 2 * noisy_rows.points))
     expected = clean[:n, F["points"]].astype(float) + draws
     np.testing.assert_allclose(noisy[:n, F["points"]], expected, atol=1e-4)
+
+
+def test_the_start_point_is_the_smallest_polar_angle_at_every_yaw_of_a_turn() -> None:
+    """Guards against the sorted body angles' wrap-around entry off (not the smallest angle
+    plus a full turn, another entry shifted, or the wrong sample appended): at 4096 yaws over a
+    turn (steps of 0.09 deg, finer than the 0.7 deg between samples, so the world +x ray also
+    falls between the body's last and first sample) the first point is the sample of smallest
+    world polar angle, for a rectangle and a disc."""
+    rect = np.array([[-20.0, -10.0], [20.0, -10.0], [20.0, 10.0], [-20.0, 10.0]]) / 1000
+    k = np.arange(40) + 0.3  # no vertex on the body's +x axis
+    disc = 0.021 * np.column_stack([np.cos(2 * np.pi * k / 40), np.sin(2 * np.pi * k / 40)])
+    geometry = entity_geometry([rect, disc], [[], []], [(0.5, 0.5, 0.5)] * 2, 32)
+    count = OVERSAMPLE * 32
+    samples = geometry.fine[:, :count]
+    for yaw in np.linspace(0.0, 2 * math.pi, 4096, endpoint=False) + 1e-4:  # no sample on the ray
+        yaws = np.array([yaw, -yaw])
+        turn = np.exp(1j * yaws)
+        first = oriented_points(geometry, turn, yaws, 32)[:, 0]
+        smallest = np.argmin(np.angle(samples * turn[:, None]) % (2 * math.pi), axis=1)
+        np.testing.assert_allclose(first, samples[[0, 1], smallest] * turn, atol=1e-12)
