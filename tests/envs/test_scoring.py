@@ -427,9 +427,10 @@ def test_a_tilt_about_the_y_axis_counts_like_one_about_x(u: Any, deg: float, fla
 
 
 def test_a_held_tile_over_its_slot_is_not_placed(u: Any) -> None:
-    """Guards against the held tile counted over the mesh (tile 0 included: a test of the held
-    index against 0 or 1 that skips it): tile 0 held by the pad right on its slot neither fills
-    it nor counts as placed; it is held."""
+    """Guards against the held tile counted over the mesh, or not counted as available for
+    its class's open slots (tile 0 included: a test of the held index against 0 or 1 that
+    skips it): tile 0 held by the pad right on its slot neither fills it nor counts as placed;
+    it is held, and all 16 slots stay placeable."""
     tile = 0
     slot = slot_of(u, tile)
     cell = u.cell
@@ -443,6 +444,7 @@ def test_a_held_tile_over_its_slot_is_not_placed(u: Any) -> None:
     assert not p.on_mesh[tile] and not p.correct[tile] and not p.slot_filled[slot]
     e = u.evaluate()
     assert (e.held, e.correct, e.misplaced) == (1, 0, 0)
+    assert e.placeable == 16  # the held tile is still available for its class's slots
 
 
 def test_tiles_off_the_mesh_have_no_slot_and_no_errors(u: Any) -> None:
