@@ -377,3 +377,18 @@ def test_the_start_point_is_the_smallest_polar_angle_at_every_yaw_of_a_turn() ->
         first = oriented_points(geometry, turn, yaws, 32)[:, 0]
         smallest = np.argmin(np.angle(samples * turn[:, None]) % (2 * math.pi), axis=1)
         np.testing.assert_allclose(first, samples[[0, 1], smallest] * turn, atol=1e-12)
+
+
+def test_exactly_as_many_rows_as_the_episode_needs_are_accepted(env: gym.Env) -> None:
+    """Guards against ``objects_rows`` equal to the episode's larger count refused (the allowed
+    values are None or an int >= max(tiles, slots)): 6 rows for 6 tiles and 6 slots build rows
+    with no padding, 5 are refused."""
+    env.reset(seed=SEED)
+    u = env.unwrapped
+    assert len(u.cell.tiles) == len(u.cell.slots) == 6
+    rows = ObjectRows(u.cell, u.task, dataclasses.replace(u.config, objects_rows=6))
+    tiles, slots = rows.observe(np.random.default_rng(0), u.task.evaluate())
+    assert tiles.shape == slots.shape == (6, OBJECT_DIM)
+    assert np.all(tiles[:, F["valid"]] == 1) and np.all(slots[:, F["valid"]] == 1)
+    with pytest.raises(EnvConfigError, match=r"objects_rows 5 .*>= 6"):
+        ObjectRows(u.cell, u.task, dataclasses.replace(u.config, objects_rows=5))
