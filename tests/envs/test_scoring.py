@@ -492,3 +492,19 @@ def test_yaw_tolerance_includes_its_edge(u: Any) -> None:
     p = task.placement()
     assert p.yaw_error[tile] == err  # exactly on the edge
     assert p.correct[tile] and p.slot_filled[slot]
+
+
+def test_a_one_slot_design_filled_is_a_success() -> None:
+    """Guards against success requiring more than one slot (the one-tile task has one): its
+    tile laid on its slot is a success."""
+    env = gym.make("MosaicOneTile-v0", disable_env_checker=True)
+    try:
+        env.reset(seed=1)
+        one = env.unwrapped
+        assert len(one.task.slot_class) == 1
+        assert not one.evaluate().success
+        on_slot(one, 0, 0)
+        e = one.evaluate()
+        assert e.slots == 1 and e.correct == 1 and e.success and not e.failure
+    finally:
+        env.close()
