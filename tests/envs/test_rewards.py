@@ -92,15 +92,18 @@ def test_sparse_terms_are_weights_times_changes(
 
 
 def test_sparse_terms_pay_only_the_change_since_the_last_call(sparse: gym.Env) -> None:
-    """Guards against terms paid on the totals instead of the change, a success paid at every
-    step, or a misplaced tile set right being paid back (the penalty counts increases only)."""
+    """Guards against terms paid on the totals (or the sum of the last and the new count)
+    instead of the change, a success paid at every step, or a misplaced tile set right being
+    paid back (the penalty counts increases only)."""
     sparse.reset(seed=0)
     u = sparse.unwrapped
     base = u.task.last_evaluation
-    first = dataclasses.replace(base, correct=3, misplaced=2, success=True, distractors_placed=1)
+    first = dataclasses.replace(
+        base, correct=3, misplaced=2, success=True, distractors_placed=1, dropped=1, lost=1
+    )
     assert u.task.rewards(first, False)["success"] == 5.0
     again = u.task.rewards(first, False)
-    assert all(v == 0.0 for v in again.values())
+    assert all(v == 0.0 for v in again.values())  # dropped and lost too: counted once
     better = dataclasses.replace(first, misplaced=0, distractors_placed=0, correct=4)
     terms = u.task.rewards(better, False)
     assert terms["misplaced"] == 0.0 and terms["distractor"] == 0.0 and terms["correct"] == 1.0

@@ -508,3 +508,18 @@ def test_a_one_slot_design_filled_is_a_success() -> None:
         assert e.slots == 1 and e.correct == 1 and e.success and not e.failure
     finally:
         env.close()
+
+
+def test_tiles_not_yet_fed_are_counted_as_waiting() -> None:
+    """Guards against the ``waiting`` count lost (tiles of a ``stream`` feed not yet on the
+    belt): at a stream episode's start the tiles not fed are waiting, the others fed."""
+    env = gym.make("MosaicDecision6-v0", feed="stream", disable_env_checker=True)
+    try:
+        env.reset(seed=1000)
+        cell = env.unwrapped.cell
+        fed = int(np.count_nonzero(cell.on_stage))
+        assert 0 < fed < len(cell.tiles)
+        e = env.unwrapped.evaluate()
+        assert (e.fed, e.waiting) == (fed, len(cell.tiles) - fed)
+    finally:
+        env.close()
