@@ -410,3 +410,21 @@ def test_staged_lift_stays_at_zero_below_the_resting_height(one_tile: gym.Env) -
     assert pot["seal"] == 1.0
     assert pot["lift"] == 0.0 and pot["transport"] == 0.0
     assert all(0.0 <= v <= 1.0 for v in pot.values())
+
+
+def test_staged_mode_pays_the_stage_terms_in_the_task_s_rewards(one_tile: gym.Env) -> None:
+    """Guards against the staged terms left out of the task's rewards in ``staged`` mode (or
+    computed from another evaluation than the step's): filling the one slot pays
+    ``stage_release`` 4 x (1 - 0) and the other stages their rest up to 1."""
+    one_tile.reset(seed=1)
+    u = one_tile.unwrapped
+    task = u.task
+    task.reset()
+    before = task.staged.potentials(task.last_evaluation)
+    done = dataclasses.replace(task.last_evaluation, correct=1, slot_filled=(True,))
+    terms = task.rewards(done, False)
+    assert set(terms) == set(REWARD_TERMS)
+    assert terms["stage_release"] == pytest.approx(4.0)
+    weights = {"reach": 1, "seal": 1, "lift": 1, "transport": 2, "align": 1, "release": 4}
+    for s in STAGES:
+        assert terms[f"stage_{s}"] == pytest.approx(weights[s] * (1.0 - before[s])), s
