@@ -113,3 +113,18 @@ def test_depth_images_are_metres_under_the_far_bound() -> None:
         assert 0.05 < centre < 2.0  # metres from the camera to the belt
     finally:
         e.close()
+
+
+def test_present_is_zero_for_tiles_not_yet_fed() -> None:
+    """Guards against the ``present`` flag true for a tile not on the belts (fed and not lost,
+    both required): at a ``stream`` episode's start the tiles not fed yet are absent."""
+    env = gym.make("MosaicDecision6-v0", feed="stream", obs_mode="state", disable_env_checker=True)
+    try:
+        obs, _ = env.reset(seed=1000)
+        u: Any = env.unwrapped
+        tiles = obs["tiles"].reshape(-1, TILE_DIM).astype(float)
+        fed = u.cell.on_stage[u.index.tiles]
+        assert 0 < fed.sum() < len(fed)
+        np.testing.assert_array_equal(tiles[:, 6], fed.astype(float))
+    finally:
+        env.close()
