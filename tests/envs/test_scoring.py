@@ -24,7 +24,7 @@ import pytest
 import envs
 from envs.actions import transfer_poses
 from envs.errors import EnvError
-from envs.task import Evaluation, MosaicTask
+from envs.task import Evaluation, MosaicTask, tiles_per_minute
 from spatial.angles import yaw_error
 from spatial.rotations import quat_from_yaw, yaw_from_quat
 
@@ -523,3 +523,20 @@ def test_tiles_not_yet_fed_are_counted_as_waiting() -> None:
         assert (e.fed, e.waiting) == (fed, len(cell.tiles) - fed)
     finally:
         env.close()
+
+
+def test_throughput_is_correct_tiles_per_minute_over_the_episode_s_span(u: Any) -> None:
+    """Guards against the throughput's span or its edge cases changed: a success is measured over
+    its own time, a failure over the longer of its time and the horizon (no horizon: its own
+    time, however short), no time gives 0 (not a division by zero), and 60 s make a minute."""
+    on_slot(u, 4, slot_of(u, 4))
+    on_slot(u, 3, slot_of(u, 3))
+    e = u.evaluate()
+    assert e.correct == 2 and not e.success
+    assert e.throughput_span(0.5) == 0.5 and e.tiles_per_min(0.5) == pytest.approx(240.0)
+    assert e.throughput_span(20.0, 30.0) == 30.0 and e.tiles_per_min(20.0, 30.0) == 4.0
+    assert e.throughput_span(40.0, 30.0) == 40.0
+    assert e.tiles_per_min(0.0) == 0.0
+    won = dataclasses.replace(e, success=True)
+    assert won.throughput_span(20.0, 30.0) == 20.0 and won.tiles_per_min(20.0, 30.0) == 6.0
+    assert tiles_per_minute(3, 0.5) == 360.0 and tiles_per_minute(3, 0.0) == 0.0
