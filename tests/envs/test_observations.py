@@ -35,11 +35,18 @@ def env() -> Iterator[gym.Env]:
 
 def test_state_rows_in_world_metres_and_agent_order(env: gym.Env) -> None:
     """Guards against a column moved, cos and sin swapped, the slot yaw's angle misread, the
-    class or present flags wrong, or rows left in the cell's order instead of the agent's."""
+    class or present flags wrong, rows left in the cell's order instead of the agent's, or the
+    rows not flattened into the documented 1-D vectors."""
     obs, _ = env.reset(seed=11)
     u: Any = env.unwrapped
     cell, task, index = u.cell, u.task, u.index
     assert (TILE_DIM, SLOT_DIM, ROBOT_DIM) == (7, 6, 19)
+    n, k = len(cell.tiles), len(cell.slots)  # flat vectors, as the Dict space has them
+    assert obs["tiles"].shape == (n * TILE_DIM,) and obs["tiles"].dtype == np.float32
+    assert obs["slots"].shape == (k * SLOT_DIM,) and obs["slots"].dtype == np.float32
+    assert env.observation_space.contains(obs)
+    raw = u.observer.observe(np.random.default_rng(0), task.evaluate())  # before the agent order
+    assert raw["slots"].shape == (k * SLOT_DIM,) and u.observer.space.contains(raw)
     tiles = obs["tiles"].reshape(-1, TILE_DIM).astype(float)
     slots = obs["slots"].reshape(-1, SLOT_DIM).astype(float)
     poses = cell.tile_poses()
