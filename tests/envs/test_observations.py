@@ -7,6 +7,7 @@ World frame, agent index order.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 from typing import Any
 
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 
 import envs  # noqa: F401 - registers the ids
-from envs.observations.spaces import DEPTH_MAX, ROBOT_DIM, SLOT_DIM, TILE_DIM
+from envs.observations.spaces import DEPTH_MAX, ROBOT_DIM, SLOT_DIM, TILE_DIM, Observer
 from spatial.rotations import yaw_from_matrix
 
 
@@ -135,3 +136,24 @@ def test_present_is_zero_for_tiles_not_yet_fed() -> None:
         np.testing.assert_array_equal(tiles[:, 6], fed.astype(float))
     finally:
         env.close()
+
+
+def test_joint_noise_is_the_generator_s_normal_draws_on_the_joint_positions(
+    env: gym.Env,
+) -> None:
+    """Guards against ``obs_noise`` [rad] drawn from another generator than the one given, added
+    with another scale or sign, or put on other fields than the joint positions: the robot
+    vector's first 6 entries are the joints plus ``normal(0, obs_noise, 6)`` from the same seed,
+    the rest as without noise; without noise the generator (the env's) is not drawn from."""
+    env.reset(seed=11)
+    u: Any = env.unwrapped
+    ev = u.task.evaluate()
+    rng = np.random.default_rng(5)
+    clean = Observer(u.cell, u.task, u.config).observe(rng, ev)["robot"]
+    assert rng.random() == np.random.default_rng(5).random()  # nothing drawn without noise
+    noisy_observer = Observer(u.cell, u.task, dataclasses.replace(u.config, obs_noise=0.01))
+    noisy = noisy_observer.observe(np.random.default_rng(5), ev)["robot"]
+    draws = np.random.default_rng(5).normal(0.0, 0.01, 6)
+    np.testing.assert_allclose(noisy[:6], u.cell.qpos + draws, atol=1e-6)
+    np.testing.assert_array_equal(noisy[6:], clean[6:])
+    np.testing.assert_allclose(clean[:6], u.cell.qpos, atol=1e-6)
