@@ -144,12 +144,15 @@ def test_joint_noise_is_the_generator_s_normal_draws_on_the_joint_positions(
     """Guards against ``obs_noise`` [rad] drawn from another generator than the one given, added
     with another scale or sign, or put on other fields than the joint positions: the robot
     vector's first 6 entries are the joints plus ``normal(0, obs_noise, 6)`` from the same seed,
-    the rest as without noise; without noise the generator (the env's) is not drawn from."""
+    the rest as without noise; without noise the generator (the env's) is not drawn from. An
+    ``rgb+state`` observer built afresh gives the pictures and the state vectors."""
     env.reset(seed=11)
     u: Any = env.unwrapped
     ev = u.task.evaluate()
     rng = np.random.default_rng(5)
-    clean = Observer(u.cell, u.task, u.config).observe(rng, ev)["robot"]
+    full = Observer(u.cell, u.task, u.config).observe(rng, ev)
+    assert set(full) == {"input_camera", "output_camera", "robot", "tiles", "slots"}  # rgb+state
+    clean = full["robot"]
     assert rng.random() == np.random.default_rng(5).random()  # nothing drawn without noise
     noisy_observer = Observer(u.cell, u.task, dataclasses.replace(u.config, obs_noise=0.01))
     noisy = noisy_observer.observe(np.random.default_rng(5), ev)["robot"]

@@ -540,3 +540,29 @@ def test_throughput_is_correct_tiles_per_minute_over_the_episode_s_span(u: Any) 
     won = dataclasses.replace(e, success=True)
     assert won.throughput_span(20.0, 30.0) == 20.0 and won.tiles_per_min(20.0, 30.0) == 6.0
     assert tiles_per_minute(3, 0.5) == 360.0 and tiles_per_minute(3, 0.0) == 0.0
+
+
+def test_episode_setup_randomises_lights_and_cameras_and_settles_as_configured() -> None:
+    """Guards against the episode set-up's per-task state lost (the lights' base brightness,
+    the camera jitter, the settling step count): a task built with light randomisation, camera
+    jitter and 0.05 s of settling changes the lights within [0, 1], moves a camera and runs the
+    physics 0.05 s at an episode start."""
+    env = gym.make("MosaicDecision6-v0", disable_env_checker=True)
+    try:
+        env.reset(seed=0)
+        one = env.unwrapped
+        cell = one.cell
+        cfg = dataclasses.replace(
+            one.config, light_randomization=0.2, camera_position_jitter=0.01, reset_settle=0.05
+        )
+        task = MosaicTask(cell, cfg)
+        base = cell.model.light_diffuse.copy()
+        cams = cell.data.cam_xpos.copy()
+        task.initialize_episode(np.random.default_rng(3))
+        light = cell.model.light_diffuse
+        assert not np.allclose(light, base) and light.min() >= 0.0 and light.max() <= 1.0
+        mujoco.mj_forward(cell.model, cell.data)
+        assert not np.allclose(cell.data.cam_xpos, cams)
+        assert cell.data.time == pytest.approx(0.05, abs=cell.model.opt.timestep)
+    finally:
+        env.close()
