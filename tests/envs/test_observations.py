@@ -150,8 +150,12 @@ def test_joint_noise_is_the_generator_s_normal_draws_on_the_joint_positions(
     u: Any = env.unwrapped
     ev = u.task.evaluate()
     rng = np.random.default_rng(5)
-    full = Observer(u.cell, u.task, u.config).observe(rng, ev)
+    observer = Observer(u.cell, u.task, u.config)
+    full = observer.observe(rng, ev)
     assert set(full) == {"input_camera", "output_camera", "robot", "tiles", "slots"}  # rgb+state
+    picture = observer.space["input_camera"]
+    assert picture.dtype == np.uint8 and picture.low.min() == 0 and picture.high.max() == 255
+    assert observer.space.contains(full)
     clean = full["robot"]
     assert rng.random() == np.random.default_rng(5).random()  # nothing drawn without noise
     noisy_observer = Observer(u.cell, u.task, dataclasses.replace(u.config, obs_noise=0.01))
