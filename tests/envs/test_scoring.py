@@ -546,23 +546,31 @@ def test_episode_setup_randomises_lights_and_cameras_and_settles_as_configured()
     """Guards against the episode set-up's per-task state lost (the lights' base brightness,
     the camera jitter, the settling step count): a task built with light randomisation, camera
     jitter and 0.05 s of settling changes the lights within [0, 1], moves a camera and runs the
-    physics 0.05 s at an episode start."""
+    physics 0.05 s at an episode start; and against an episode not drawn from the generator
+    given (the same seed, the same layout and lights)."""
     env = gym.make("MosaicDecision6-v0", disable_env_checker=True)
     try:
         env.reset(seed=0)
         one = env.unwrapped
         cell = one.cell
         cfg = dataclasses.replace(
-            one.config, light_randomization=0.2, camera_position_jitter=0.01, reset_settle=0.05
+            one.config,
+            light_randomization=0.2,
+            camera_position_jitter=0.01,
+            reset_settle=0.05,
         )
         task = MosaicTask(cell, cfg)
         base = cell.model.light_diffuse.copy()
         cams = cell.data.cam_xpos.copy()
         task.initialize_episode(np.random.default_rng(3))
-        light = cell.model.light_diffuse
+        light = cell.model.light_diffuse.copy()
         assert not np.allclose(light, base) and light.min() >= 0.0 and light.max() <= 1.0
         mujoco.mj_forward(cell.model, cell.data)
         assert not np.allclose(cell.data.cam_xpos, cams)
         assert cell.data.time == pytest.approx(0.05, abs=cell.model.opt.timestep)
+        poses = cell.tile_poses().pos.copy()
+        task.initialize_episode(np.random.default_rng(3))  # the same seed: the same episode
+        np.testing.assert_array_equal(cell.tile_poses().pos, poses)
+        np.testing.assert_array_equal(cell.model.light_diffuse, light)
     finally:
         env.close()
