@@ -24,7 +24,7 @@ import pytest
 import envs
 from envs.actions import transfer_poses
 from envs.errors import EnvError
-from envs.task import Evaluation, MosaicTask, tiles_per_minute
+from envs.task import SEED_BOUND, Evaluation, MosaicTask, tiles_per_minute
 from spatial.angles import yaw_error
 from spatial.rotations import quat_from_yaw, yaw_from_quat
 
@@ -572,5 +572,40 @@ def test_episode_setup_randomises_lights_and_cameras_and_settles_as_configured()
         task.initialize_episode(np.random.default_rng(3))  # the same seed: the same episode
         np.testing.assert_array_equal(cell.tile_poses().pos, poses)
         np.testing.assert_array_equal(cell.model.light_diffuse, light)
+    finally:
+        env.close()
+
+
+def test_colour_randomisation_multiplies_each_tile_colour_by_one_plus_a_normal_draw() -> None:
+    """Guards against the colour change off its documented form (each visible tile geom's RGB
+    times ``1 + normal(0, color_randomization)``, clipped to [0, 1], drawn after the layout's
+    seed from the episode's generator): the colours of an episode with 0.1 are those of the
+    same episode without, times the factors drawn from the same seed; and nothing is drawn for
+    the colours when they are off (the lights' draws come first then)."""
+    env = gym.make("MosaicDecision6-v0", disable_env_checker=True)
+    try:
+        env.reset(seed=0)
+        one = env.unwrapped
+        cell = one.cell
+        MosaicTask(cell, one.config).initialize_episode(np.random.default_rng(3))
+        visual = cell.ids.tile_visual.ravel()
+        nominal = cell.model.geom_rgba[visual, :3].copy()
+        cfg = dataclasses.replace(one.config, color_randomization=0.1)
+        MosaicTask(cell, cfg).initialize_episode(np.random.default_rng(3))
+        np.testing.assert_array_equal(cell.ids.tile_visual.ravel(), visual)  # the same episode
+        rng = np.random.default_rng(3)
+        rng.integers(SEED_BOUND)  # the layout's seed comes first
+        f = 1 + rng.normal(0.0, 0.1, (len(visual), 3))
+        expected = np.clip(nominal * f, 0.0, 1.0)
+        np.testing.assert_allclose(cell.model.geom_rgba[visual, :3], expected, atol=1e-6)
+        assert not np.allclose(expected, nominal)
+        # colours off, lights on: the lights' factors are the first draws after the layout's
+        base = cell.model.light_diffuse.copy()
+        lights = MosaicTask(cell, dataclasses.replace(one.config, light_randomization=0.2))
+        lights.initialize_episode(np.random.default_rng(3))
+        rng = np.random.default_rng(3)
+        rng.integers(SEED_BOUND)
+        g = 1 + rng.normal(0.0, 0.2, (cell.model.nlight, 1))
+        np.testing.assert_allclose(cell.model.light_diffuse, np.clip(base * g, 0.0, 1.0), atol=1e-6)
     finally:
         env.close()
