@@ -49,7 +49,11 @@ def masks(env: gym.Env) -> np.ndarray:
 
 
 def test_the_mask_opens_every_belt_tile_and_slot_at_reset_and_closes_what_is_used(failing):
+    """Guards against a mask that is not the documented bool vector (a float tile, slot or
+    rotation part makes the whole mask float), or entries closed or left open wrongly."""
     _, info = failing.reset(seed=1000)
+    raw = failing.get_wrapper_attr("action_masks")()
+    assert raw.dtype == bool and info["action_mask"].dtype == bool  # as returned, not cast
     mask = masks(failing)
     assert mask.shape == (SLOTS + SLOTS + BINS,) and mask.dtype == bool
     assert mask.all()

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterator
 
 import gymnasium as gym
 import numpy as np
 import pytest
-from shapely.geometry import LinearRing, Point
+from shapely.geometry import LinearRing, Point, Polygon
 
 import envs  # noqa: F401 - registers the ids
 from envs.cell.cell import Cell
@@ -18,6 +19,7 @@ from envs.observations.objects import (
     OBJECT_DIM,
     OBJECT_FIELDS,
     OVERSAMPLE,
+    ObjectRows,
     as_xy,
     entity_geometry,
     object_fields,
@@ -315,3 +317,78 @@ def test_slot_rows_hold_the_slot_pose_and_filled_flag(env: gym.Env) -> None:
         obs["tiles"][:, F["flag"]].ravel(), u.cell.input_half()[u.index.tiles]
     )
     assert obs["tiles"][:, F["flag"]].sum() == 5
+
+
+def test_fresh_slot_rows_hold_the_slot_yaw_and_its_turned_outline(env: gym.Env) -> None:
+    """Guards against the slot rows' (cos, sin) or points turned by another angle than the slot's
+    yaw (e.g. twice it) when the rows are built for a design: rows built afresh from the cell
+    and task hold (cos, sin) of each slot's yaw and its outline turned by that yaw."""
+    env.reset(seed=SEED)
+    u = env.unwrapped
+    rows = ObjectRows(u.cell, u.task, u.config)
+    _, slots = rows.observe(np.random.default_rng(0), u.task.evaluate())  # cell order
+    yaw = u.task.slot_xyyaw[:, 2]
+    assert len(set(np.round(np.mod(yaw, 2 * np.pi), 3))) > 1  # not all one yaw
+    np.testing.assert_allclose(
+        slots[:, F["yaw"]], np.column_stack([np.cos(yaw), np.sin(yaw)]), atol=1e-6
+    )
+    for j, slot in enumerate(u.cell.slots):
+        outline = slot.shape.outline - np.asarray(Polygon(slot.shape.outline).centroid.coords[0])
+        ring = LinearRing(_turn(outline * 1000.0, yaw[j]))  # world-oriented, about the centroid
+        assert max(ring.distance(Point(p)) for p in _points(slots[j])) < ON_OUTLINE_MM
+
+
+def test_outline_noise_adds_the_generator_s_normal_draws_and_only_when_asked(
+    env: gym.Env,
+) -> None:
+    """Guards against the noise subtracted, drawn with a non-zero mean, or drawn at all when
+    ``objects_noise_mm`` is 0 (the env's generator must not move then): the noisy points are the
+    clean ones plus ``normal(0, noise, shape)`` from the same seed."""
+    env.reset(seed=SEED)
+    u = env.unwrapped
+    ev = u.task.evaluate()
+    clean_rows = ObjectRows(u.cell, u.task, u.config)
+    rng = np.random.default_rng(7)
+    clean, _ = clean_rows.observe(rng, ev)
+    assert rng.random() == np.random.default_rng(7).random()  # nothing drawn at 0 mm
+    noisy_rows = ObjectRows(u.cell, u.task, dataclasses.replace(u.config, objects_noise_mm=0.5))
+    noisy, _ = noisy_rows.observe(np.random.default_rng(7), ev)
+    n = len(u.cell.tiles)
+    draws = np.random.default_rng(7).normal(0.0, 0.5, (n, 2 * noisy_rows.points))
+    expected = clean[:n, F["points"]].astype(float) + draws
+    np.testing.assert_allclose(noisy[:n, F["points"]], expected, atol=1e-4)
+
+
+def test_the_start_point_is_the_smallest_polar_angle_at_every_yaw_of_a_turn() -> None:
+    """Guards against the sorted body angles' wrap-around entry off (not the smallest angle
+    plus a full turn, another entry shifted, or the wrong sample appended): at 4096 yaws over a
+    turn (steps of 0.09 deg, finer than the 0.7 deg between samples, so the world +x ray also
+    falls between the body's last and first sample) the first point is the sample of smallest
+    world polar angle, for a rectangle and a disc."""
+    rect = np.array([[-20.0, -10.0], [20.0, -10.0], [20.0, 10.0], [-20.0, 10.0]]) / 1000
+    k = np.arange(40) + 0.3  # no vertex on the body's +x axis
+    disc = 0.021 * np.column_stack([np.cos(2 * np.pi * k / 40), np.sin(2 * np.pi * k / 40)])
+    geometry = entity_geometry([rect, disc], [[], []], [(0.5, 0.5, 0.5)] * 2, 32)
+    count = OVERSAMPLE * 32
+    samples = geometry.fine[:, :count]
+    for yaw in np.linspace(0.0, 2 * math.pi, 4096, endpoint=False) + 1e-4:  # no sample on the ray
+        yaws = np.array([yaw, -yaw])
+        turn = np.exp(1j * yaws)
+        first = oriented_points(geometry, turn, yaws, 32)[:, 0]
+        smallest = np.argmin(np.angle(samples * turn[:, None]) % (2 * math.pi), axis=1)
+        np.testing.assert_allclose(first, samples[[0, 1], smallest] * turn, atol=1e-12)
+
+
+def test_exactly_as_many_rows_as_the_episode_needs_are_accepted(env: gym.Env) -> None:
+    """Guards against ``objects_rows`` equal to the episode's larger count refused (the allowed
+    values are None or an int >= max(tiles, slots)): 6 rows for 6 tiles and 6 slots build rows
+    with no padding, 5 are refused."""
+    env.reset(seed=SEED)
+    u = env.unwrapped
+    assert len(u.cell.tiles) == len(u.cell.slots) == 6
+    rows = ObjectRows(u.cell, u.task, dataclasses.replace(u.config, objects_rows=6))
+    tiles, slots = rows.observe(np.random.default_rng(0), u.task.evaluate())
+    assert tiles.shape == slots.shape == (6, OBJECT_DIM)
+    assert np.all(tiles[:, F["valid"]] == 1) and np.all(slots[:, F["valid"]] == 1)
+    with pytest.raises(EnvConfigError, match=r"objects_rows 5 .*>= 6"):
+        ObjectRows(u.cell, u.task, dataclasses.replace(u.config, objects_rows=5))

@@ -7,6 +7,7 @@ World frame, agent index order.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 from typing import Any
 
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 
 import envs  # noqa: F401 - registers the ids
-from envs.observations.spaces import DEPTH_MAX, ROBOT_DIM, SLOT_DIM, TILE_DIM
+from envs.observations.spaces import DEPTH_MAX, ROBOT_DIM, SLOT_DIM, TILE_DIM, Observer
 from spatial.rotations import yaw_from_matrix
 
 
@@ -35,11 +36,18 @@ def env() -> Iterator[gym.Env]:
 
 def test_state_rows_in_world_metres_and_agent_order(env: gym.Env) -> None:
     """Guards against a column moved, cos and sin swapped, the slot yaw's angle misread, the
-    class or present flags wrong, or rows left in the cell's order instead of the agent's."""
+    class or present flags wrong, rows left in the cell's order instead of the agent's, or the
+    rows not flattened into the documented 1-D vectors."""
     obs, _ = env.reset(seed=11)
     u: Any = env.unwrapped
     cell, task, index = u.cell, u.task, u.index
     assert (TILE_DIM, SLOT_DIM, ROBOT_DIM) == (7, 6, 19)
+    n, k = len(cell.tiles), len(cell.slots)  # flat vectors, as the Dict space has them
+    assert obs["tiles"].shape == (n * TILE_DIM,) and obs["tiles"].dtype == np.float32
+    assert obs["slots"].shape == (k * SLOT_DIM,) and obs["slots"].dtype == np.float32
+    assert env.observation_space.contains(obs)
+    raw = u.observer.observe(np.random.default_rng(0), task.evaluate())  # before the agent order
+    assert raw["slots"].shape == (k * SLOT_DIM,) and u.observer.space.contains(raw)
     tiles = obs["tiles"].reshape(-1, TILE_DIM).astype(float)
     slots = obs["slots"].reshape(-1, SLOT_DIM).astype(float)
     poses = cell.tile_poses()
@@ -113,3 +121,46 @@ def test_depth_images_are_metres_under_the_far_bound() -> None:
         assert 0.05 < centre < 2.0  # metres from the camera to the belt
     finally:
         e.close()
+
+
+def test_present_is_zero_for_tiles_not_yet_fed() -> None:
+    """Guards against the ``present`` flag true for a tile not on the belts (fed and not lost,
+    both required): at a ``stream`` episode's start the tiles not fed yet are absent."""
+    env = gym.make("MosaicDecision6-v0", feed="stream", obs_mode="state", disable_env_checker=True)
+    try:
+        obs, _ = env.reset(seed=1000)
+        u: Any = env.unwrapped
+        tiles = obs["tiles"].reshape(-1, TILE_DIM).astype(float)
+        fed = u.cell.on_stage[u.index.tiles]
+        assert 0 < fed.sum() < len(fed)
+        np.testing.assert_array_equal(tiles[:, 6], fed.astype(float))
+    finally:
+        env.close()
+
+
+def test_joint_noise_is_the_generator_s_normal_draws_on_the_joint_positions(
+    env: gym.Env,
+) -> None:
+    """Guards against ``obs_noise`` [rad] drawn from another generator than the one given, added
+    with another scale or sign, or put on other fields than the joint positions: the robot
+    vector's first 6 entries are the joints plus ``normal(0, obs_noise, 6)`` from the same seed,
+    the rest as without noise; without noise the generator (the env's) is not drawn from. An
+    ``rgb+state`` observer built afresh gives the pictures and the state vectors."""
+    env.reset(seed=11)
+    u: Any = env.unwrapped
+    ev = u.task.evaluate()
+    rng = np.random.default_rng(5)
+    observer = Observer(u.cell, u.task, u.config)
+    full = observer.observe(rng, ev)
+    assert set(full) == {"input_camera", "output_camera", "robot", "tiles", "slots"}  # rgb+state
+    picture = observer.space["input_camera"]
+    assert picture.dtype == np.uint8 and picture.low.min() == 0 and picture.high.max() == 255
+    assert observer.space.contains(full)
+    clean = full["robot"]
+    assert rng.random() == np.random.default_rng(5).random()  # nothing drawn without noise
+    noisy_observer = Observer(u.cell, u.task, dataclasses.replace(u.config, obs_noise=0.01))
+    noisy = noisy_observer.observe(np.random.default_rng(5), ev)["robot"]
+    draws = np.random.default_rng(5).normal(0.0, 0.01, 6)
+    np.testing.assert_allclose(noisy[:6], u.cell.qpos + draws, atol=1e-6)
+    np.testing.assert_array_equal(noisy[6:], clean[6:])
+    np.testing.assert_allclose(clean[:6], u.cell.qpos, atol=1e-6)

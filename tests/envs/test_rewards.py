@@ -92,15 +92,18 @@ def test_sparse_terms_are_weights_times_changes(
 
 
 def test_sparse_terms_pay_only_the_change_since_the_last_call(sparse: gym.Env) -> None:
-    """Guards against terms paid on the totals instead of the change, a success paid at every
-    step, or a misplaced tile set right being paid back (the penalty counts increases only)."""
+    """Guards against terms paid on the totals (or the sum of the last and the new count)
+    instead of the change, a success paid at every step, or a misplaced tile set right being
+    paid back (the penalty counts increases only)."""
     sparse.reset(seed=0)
     u = sparse.unwrapped
     base = u.task.last_evaluation
-    first = dataclasses.replace(base, correct=3, misplaced=2, success=True, distractors_placed=1)
+    first = dataclasses.replace(
+        base, correct=3, misplaced=2, success=True, distractors_placed=1, dropped=1, lost=1
+    )
     assert u.task.rewards(first, False)["success"] == 5.0
     again = u.task.rewards(first, False)
-    assert all(v == 0.0 for v in again.values())
+    assert all(v == 0.0 for v in again.values())  # dropped and lost too: counted once
     better = dataclasses.replace(first, misplaced=0, distractors_placed=0, correct=4)
     terms = u.task.rewards(better, False)
     assert terms["misplaced"] == 0.0 and terms["distractor"] == 0.0 and terms["correct"] == 1.0
@@ -287,13 +290,14 @@ def test_staged_release_is_the_fraction_of_slots_filled(dense: gym.Env) -> None:
 
 
 def test_staged_config_loads_overrides_and_refuses_non_positive_scales(tmp_path) -> None:
-    """Guards against the overrides or the file name dropped by `load_staged_config`, and a
-    zero scale accepted (every scale must be > 0 m)."""
+    """Guards against the overrides or the file name dropped by `load_staged_config`, a zero
+    scale accepted (every scale must be > 0 m), and the refusal not saying it is the staged
+    reward's setting."""
     assert load_staged_config(reach_scale=0.5).reach_scale == 0.5
     path = tmp_path / "rewards.yaml"
     path.write_text("transport: 3.0\n", encoding="utf-8")
     assert load_staged_config(str(path)).transport == 3.0
-    with pytest.raises(CellError, match=r"reach_scale must be > 0, got 0.0"):
+    with pytest.raises(CellError, match=r"^staged reward: reach_scale must be > 0, got 0.0$"):
         StagedRewardConfig(reach_scale=0.0)
 
 
@@ -315,3 +319,112 @@ def test_staged_progress_stops_when_the_held_tiles_slots_are_filled(dense: gym.E
         assert pot[stage] == pytest.approx(done), stage
     open_ = dataclasses.replace(e, correct=0, slot_filled=(False,) * 16)
     assert staged.potentials(open_)["seal"] == 1.0
+
+
+@pytest.fixture(scope="module")
+def procedural() -> Iterator[gym.Env]:
+    """A procedural 6-slot design (seed 1): two slots of one asymmetric class at 10 and 119 deg."""
+    e = gym.make(
+        envs.ENV_ID,
+        action_mode="pick_place",
+        execution="kinematic",
+        obs_mode="state",
+        design_source="procedural",
+        max_slots=6,
+        reward_mode="staged",
+        tile_variants=1,
+        disable_env_checker=True,
+    )
+    yield e
+    e.close()
+
+
+def test_staged_transport_and_align_aim_at_the_nearest_open_slot_of_the_class(
+    procedural: gym.Env,
+) -> None:
+    """Guards against the target slot of a held tile taken as the first open slot of its class
+    instead of the nearest (its yaw then decides the align), or the distance to it taken as a
+    norm over all the class's open slots: a tile held 10 mm off the second of two slots,
+    turned pi / 8 from it, transports 1 - tanh(0.01 / 0.3) and aligns 0.5 x (1 - 1 / 8)."""
+    procedural.reset(seed=1)
+    u = procedural.unwrapped
+    task, cell = u.task, u.cell
+    cls = int(np.flatnonzero(np.bincount(task.slot_class) == 2)[0])
+    first, second = np.flatnonzero(task.slot_class == cls)
+    tile = int(np.flatnonzero(task.tile_class == cls)[0])
+    assert int(task.symmetry[tile]) == 1  # asymmetric: the two slots' yaws differ for it
+    assert abs(task.slot_xyyaw[first, 2] - task.slot_xyyaw[second, 2]) > 1.5
+    _hold(u, tile, int(second))
+    staged = StagedReward(task, load_staged_config())
+    q = cell.ids.tile_qpos_index[tile]
+    x, y, yaw = task.slot_xyyaw[second]
+    cell.data.qpos[q[2]] += 0.03  # a full lift height: lift 1
+    cell.data.qpos[q[:2]] = [x + 0.01, y]
+    cell.data.qpos[q[3:]] = quat_from_yaw(yaw + math.pi / 8)
+    mujoco.mj_forward(cell.model, cell.data)
+    open_ = dataclasses.replace(u.evaluate(), slot_filled=(False,) * 6, correct=0)
+    pot = staged.potentials(open_)
+    assert pot["lift"] == 1.0
+    assert pot["transport"] == pytest.approx(1 - math.tanh(0.01 / 0.3), abs=1e-6)
+    assert pot["align"] == pytest.approx(0.5 * (1 - 1 / 8), abs=1e-6)
+
+
+def test_staged_reach_is_to_the_nearest_grasp_point_of_the_wanted_tiles(dense: gym.Env) -> None:
+    """Guards against the grasp point's offset from the tile's centroid subtracted instead of
+    added (turned by the tile's yaw), or the reach distance taken as a norm over all the wanted
+    tiles instead of the nearest one: the pad 5 cm above the grasp point of a tile whose grasp
+    point is 18 mm off its centroid reaches 1 - tanh(0.05 / 0.3)."""
+    dense.reset(seed=0)
+    u = dense.unwrapped
+    cell = u.cell
+    offsets = [float(np.linalg.norm(t.grasp)) for t in cell.tiles]
+    tile = int(np.argmax(offsets))
+    assert offsets[tile] > 0.015
+    pose = cell.tile_poses()
+    grasp = pose.pos[tile].copy()
+    c, s = math.cos(pose.yaw[tile]), math.sin(pose.yaw[tile])
+    g = cell.tiles[tile].grasp
+    grasp[:2] += [c * g[0] - s * g[1], s * g[0] + c * g[1]]
+    above = grasp + [0.0, 0.0, 0.05]
+    cell.set_qpos(u.ik.solve(above, 0.0).q)
+    assert cell.held_tile < 0
+    tool = cell.tcp_pose()[0]
+    assert np.linalg.norm(tool - above) < 1e-4
+    staged = StagedReward(u.task, load_staged_config())
+    pot = staged.potentials(u.evaluate())
+    d = np.linalg.norm(grasp - tool)
+    assert pot["reach"] == pytest.approx(1 - math.tanh(d / 0.3), abs=1e-9)
+
+
+def test_staged_lift_stays_at_zero_below_the_resting_height(one_tile: gym.Env) -> None:
+    """Guards against the lift potential's lower clip dropped (every potential is in [0, 1]): a
+    held tile pressed 5 mm below its resting height has lift 0 and transport 0, not negative."""
+    one_tile.reset(seed=1)
+    u = one_tile.unwrapped
+    cell = u.cell
+    _hold(u, 0, 0)
+    q = cell.ids.tile_qpos_index[0]
+    cell.data.qpos[q[2]] -= 0.005
+    mujoco.mj_forward(cell.model, cell.data)
+    pot = u.task.staged.potentials(u.evaluate())
+    assert pot["seal"] == 1.0
+    assert pot["lift"] == 0.0 and pot["transport"] == 0.0
+    assert all(0.0 <= v <= 1.0 for v in pot.values())
+
+
+def test_staged_mode_pays_the_stage_terms_in_the_task_s_rewards(one_tile: gym.Env) -> None:
+    """Guards against the staged terms left out of the task's rewards in ``staged`` mode (or
+    computed from another evaluation than the step's): filling the one slot pays
+    ``stage_release`` 4 x (1 - 0) and the other stages their rest up to 1."""
+    one_tile.reset(seed=1)
+    u = one_tile.unwrapped
+    task = u.task
+    task.reset()
+    before = task.staged.potentials(task.last_evaluation)
+    done = dataclasses.replace(task.last_evaluation, correct=1, slot_filled=(True,))
+    terms = task.rewards(done, False)
+    assert set(terms) == set(REWARD_TERMS)
+    assert terms["stage_release"] == pytest.approx(4.0)
+    weights = {"reach": 1, "seal": 1, "lift": 1, "transport": 2, "align": 1, "release": 4}
+    for s in STAGES:
+        assert terms[f"stage_{s}"] == pytest.approx(weights[s] * (1.0 - before[s])), s

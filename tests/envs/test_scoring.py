@@ -22,8 +22,11 @@ import numpy as np
 import pytest
 
 import envs
-from envs.task import Evaluation
-from spatial.rotations import quat_from_yaw
+from envs.actions import transfer_poses
+from envs.errors import EnvError
+from envs.task import SEED_BOUND, Evaluation, MosaicTask, tiles_per_minute
+from spatial.angles import yaw_error
+from spatial.rotations import quat_from_yaw, yaw_from_quat
 
 MM = 1e-3
 """Metres per millimetre (offsets below are written in mm)."""
@@ -176,14 +179,19 @@ def test_yaw_is_compared_modulo_the_tiles_symmetry(
     assert u.evaluate().slot_filled[slot] is ok
 
 
-def test_two_tiles_in_one_slot_fill_it_once_the_closer_one_counts(env: gym.Env, u: Any) -> None:
+@pytest.mark.parametrize("nth", [0, 1])
+def test_two_tiles_in_one_slot_fill_it_once_the_closer_one_counts(
+    env: gym.Env, u: Any, nth: int
+) -> None:
     """Guards against ranking the candidates by error before slot (a one-line change of the
     sort keys): with a tile of another slot ranked between them, both tiles of one slot
-    counted as correct and none as misplaced."""
+    counted as correct and none as misplaced; and against each candidate's slot compared with
+    the first candidate's instead of the one before it (the shared slot, 0 or 12, ranked
+    before or after the other tile's slot 4)."""
     same = np.flatnonzero(u.task.tile_class == u.task.tile_class[0])
     assert len(same) == 2  # two tiles of one class, two slots of it
     a, b = (int(i) for i in same)
-    slot = slot_of(u, a)
+    slot = slot_of(u, a, nth)
     other = 4
     for first, second in ((a, b), (b, a)):  # index order must not matter
         env.reset(seed=0)
@@ -312,6 +320,21 @@ def test_evaluation_round_trips_through_info(u: Any) -> None:
     assert isinstance(e.as_dict()["slot_filled"], list)
 
 
+@pytest.mark.parametrize("drop", ["slot_filled", "correct", None])
+def test_an_info_without_a_complete_evaluation_is_refused_by_name(u: Any, drop: str | None) -> None:
+    """Guards against `from_info` accepting an evaluation with a field missing (a record read
+    from another step's info, or the mapping test turned into `and`: it then fails later with a
+    bare KeyError), and its one-line message losing what it names."""
+    d = u.evaluate().as_dict()
+    info: dict[str, Any] = {"sim_time": 1.0}
+    if drop is not None:
+        info["evaluation"] = {k: v for k, v in d.items() if k != drop}
+    message = "info has no complete 'evaluation' (a MosaicAssembly step's info)"
+    with pytest.raises(EnvError) as caught:
+        Evaluation.from_info(info)
+    assert str(caught.value) == message
+
+
 def test_ground_truth_holds_the_poses_and_finds_the_nearest_fed_tile(u: Any) -> None:
     """Guards against the privileged poses or classes read wrong, or `nearest` returning a
     tile not fed (parked tiles are never the nearest) or a distance in another unit."""
@@ -331,3 +354,258 @@ def test_ground_truth_holds_the_poses_and_finds_the_nearest_fed_tile(u: Any) -> 
     parked = dataclasses.replace(gt, on_stage=on)
     i, d = parked.nearest(target)
     assert i != 5 and d > 0.005
+
+
+def test_a_tile_exactly_on_a_mesh_edge_is_on_the_mesh(env: gym.Env, u: Any) -> None:
+    """Guards against the mesh's edges excluded (a tile counts as placed over the mesh, its
+    edges included): a tile whose centre lies exactly on any of the sheet's four edges is on the
+    mesh (misplaced, not stranded)."""
+    cell = u.cell
+    lo, hi = cell.geometry.mesh_lo, cell.geometry.mesh_hi
+    centre = (lo + hi) / 2
+    tile = 4
+    for axis in (0, 1):
+        for edge in (lo[axis], hi[axis]):
+            xy = centre.copy()
+            xy[axis] = edge
+            env.reset(seed=0)
+            lay(u, tile, xy, 0.3)
+            assert cell.data.qpos[cell.ids.tile_qpos_index[tile][axis]] == edge  # exactly
+            assert u.task.placement().on_mesh[tile], (axis, edge)
+            assert u.evaluate().misplaced == 1
+
+
+@pytest.mark.parametrize("sign", [1, -1])
+def test_height_tolerance_includes_its_edges(u: Any, sign: int) -> None:
+    """Guards against the height tolerance's edges excluded (a tile lies flat *within*
+    ``mesh_height_tolerance`` of resting on the sheet, and a tile that far below rest is still
+    over it): with a tolerance of 2^-9 m (exact in binary), a tile exactly that far above or
+    below rest on its slot fills it."""
+    tol = 2.0**-9
+    task = MosaicTask(u.cell, dataclasses.replace(u.config, mesh_height_tolerance=tol))
+    tile = 4
+    slot = slot_of(u, tile)
+    on_slot(u, tile, slot, dz=sign * tol)
+    cell = u.cell
+    rest = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2
+    assert cell.data.qpos[cell.ids.tile_qpos_index[tile][2]] - rest == sign * tol  # exactly
+    p = task.placement()
+    assert p.on_mesh[tile] and p.flat[tile] and p.slot_filled[slot]
+
+
+def _tilted(u: Any, tile: int, slot: int, quat: np.ndarray) -> None:
+    """Lay ``tile`` on ``slot`` at rest with the orientation ``quat`` (w, x, y, z)."""
+    on_slot(u, tile, slot)
+    cell = u.cell
+    cell.data.qpos[cell.ids.tile_qpos_index[tile][3:]] = quat
+    mujoco.mj_forward(cell.model, cell.data)
+
+
+def test_a_tile_tilted_exactly_the_limit_is_not_flat(u: Any) -> None:
+    """Guards against the tilt limit included (a tile is flat when tilted *less* than
+    ``max_tilt_deg``): a tile tilted exactly 8 deg over its slot does not fill it."""
+    tile = 4
+    slot = slot_of(u, tile)
+    limit = math.cos(math.radians(u.config.max_tilt_deg))
+    qx = math.sqrt((1 - limit) / 2)
+    assert 1 - 2 * (qx * qx + 0.0) == limit  # exactly the limit
+    _tilted(u, tile, slot, np.array([math.sqrt(1 - qx * qx), qx, 0.0, 0.0]))
+    p = u.task.placement()
+    assert p.on_mesh[tile] and not p.flat[tile] and not p.slot_filled[slot]
+
+
+@pytest.mark.parametrize(("deg", "flat"), [(7.5, True), (8.5, False)])
+def test_a_tilt_about_the_y_axis_counts_like_one_about_x(u: Any, deg: float, flat: bool) -> None:
+    """Guards against the tile's tilt read from its x rotation only (a sign slip in the z
+    component of its z axis): tilted about the world y axis, 7.5 deg is flat, 8.5 deg is not."""
+    tile = 4
+    slot = slot_of(u, tile)
+    t = math.radians(deg)
+    _tilted(u, tile, slot, np.array([math.cos(t / 2), 0.0, math.sin(t / 2), 0.0]))
+    p = u.task.placement()
+    assert p.on_mesh[tile] and p.flat[tile] is np.bool_(flat)
+
+
+def test_a_held_tile_over_its_slot_is_not_placed(u: Any) -> None:
+    """Guards against the held tile counted over the mesh, or not counted as available for
+    its class's open slots (tile 0 included: a test of the held index against 0 or 1 that
+    skips it): tile 0 held by the pad right on its slot neither fills it nor counts as placed;
+    it is held, and all 16 slots stay placeable."""
+    tile = 0
+    slot = slot_of(u, tile)
+    cell = u.cell
+    cmd = transfer_poses(cell, tile, slot)
+    cell.set_qpos(u.ik.solve(np.array([*cmd.pick_xy, u.pick_area.tile_top_z]), cmd.pick_yaw).q)
+    cell.vacuum(True)
+    assert cell.held_tile == tile
+    on_slot(u, tile, slot)
+    assert cell.held_tile == tile
+    p = u.task.placement()
+    assert not p.on_mesh[tile] and not p.correct[tile] and not p.slot_filled[slot]
+    e = u.evaluate()
+    assert (e.held, e.correct, e.misplaced) == (1, 0, 0)
+    assert e.placeable == 16  # the held tile is still available for its class's slots
+
+
+def test_tiles_off_the_mesh_have_no_slot_and_no_errors(u: Any) -> None:
+    """Guards against the placement's fill values for tiles off the mesh changed (slot -1, an
+    int; position and yaw errors NaN): at a fresh episode every tile is on the input belt."""
+    p = u.task.placement()
+    assert not p.on_mesh.any()
+    assert p.slot.dtype.kind == "i" and p.slot.tolist() == [-1] * len(p.slot)
+    assert p.position_error.dtype == np.float64 and np.isnan(p.position_error).all()
+    assert p.yaw_error.dtype == np.float64 and np.isnan(p.yaw_error).all()
+
+
+def test_position_tolerance_includes_its_edge(u: Any) -> None:
+    """Guards against the position tolerance's edge excluded (a tile fills its slot *within*
+    ``position_tolerance``): with a tolerance of 2^-9 m (exact in binary), a tile exactly that
+    far from its slot fills it."""
+    tol = 2.0**-9
+    task = MosaicTask(u.cell, dataclasses.replace(u.config, position_tolerance=tol))
+    tile = 4
+    slot = slot_of(u, tile)
+    x, y, yaw = task.slot_xyyaw[slot]
+    lay(u, tile, (x + tol, y), yaw)
+    p = task.placement()
+    assert p.position_error[tile] == tol  # exactly on the edge
+    assert p.correct[tile] and p.slot_filled[slot]
+
+
+def test_yaw_tolerance_includes_its_edge(u: Any) -> None:
+    """Guards against the yaw tolerance's edge excluded (a tile fills its slot *within*
+    ``yaw_tolerance_deg``): a tile turned about 2 deg, with the tolerance set to exactly its
+    yaw error (the nearest float to it in degrees), fills its slot."""
+    tile = 4  # no symmetry
+    slot = slot_of(u, tile)
+    on_slot(u, tile, slot, dyaw_deg=2.0)
+    cell = u.cell
+    quat = cell.data.qpos[cell.ids.tile_qpos_index[tile][3:]]
+    err = float(yaw_error(yaw_from_quat(quat), u.task.slot_xyyaw[slot, 2], 1))
+    deg = 2.0
+    for _ in range(100):  # the degrees whose radians are exactly that error
+        if math.radians(deg) == err:
+            break
+        deg = float(np.nextafter(deg, 3.0 if math.radians(deg) < err else 1.0))
+    assert math.radians(deg) == err
+    task = MosaicTask(cell, dataclasses.replace(u.config, yaw_tolerance_deg=deg))
+    p = task.placement()
+    assert p.yaw_error[tile] == err  # exactly on the edge
+    assert p.correct[tile] and p.slot_filled[slot]
+
+
+def test_a_one_slot_design_filled_is_a_success() -> None:
+    """Guards against success requiring more than one slot (the one-tile task has one): its
+    tile laid on its slot is a success."""
+    env = gym.make("MosaicOneTile-v0", disable_env_checker=True)
+    try:
+        env.reset(seed=1)
+        one = env.unwrapped
+        assert len(one.task.slot_class) == 1
+        assert not one.evaluate().success
+        on_slot(one, 0, 0)
+        e = one.evaluate()
+        assert e.slots == 1 and e.correct == 1 and e.success and not e.failure
+    finally:
+        env.close()
+
+
+def test_tiles_not_yet_fed_are_counted_as_waiting() -> None:
+    """Guards against the ``waiting`` count lost (tiles of a ``stream`` feed not yet on the
+    belt): at a stream episode's start the tiles not fed are waiting, the others fed."""
+    env = gym.make("MosaicDecision6-v0", feed="stream", disable_env_checker=True)
+    try:
+        env.reset(seed=1000)
+        cell = env.unwrapped.cell
+        fed = int(np.count_nonzero(cell.on_stage))
+        assert 0 < fed < len(cell.tiles)
+        e = env.unwrapped.evaluate()
+        assert (e.fed, e.waiting) == (fed, len(cell.tiles) - fed)
+    finally:
+        env.close()
+
+
+def test_throughput_is_correct_tiles_per_minute_over_the_episode_s_span(u: Any) -> None:
+    """Guards against the throughput's span or its edge cases changed: a success is measured over
+    its own time, a failure over the longer of its time and the horizon (no horizon: its own
+    time, however short), no time gives 0 (not a division by zero), and 60 s make a minute."""
+    on_slot(u, 4, slot_of(u, 4))
+    on_slot(u, 3, slot_of(u, 3))
+    e = u.evaluate()
+    assert e.correct == 2 and not e.success
+    assert e.throughput_span(0.5) == 0.5 and e.tiles_per_min(0.5) == pytest.approx(240.0)
+    assert e.throughput_span(20.0, 30.0) == 30.0 and e.tiles_per_min(20.0, 30.0) == 4.0
+    assert e.throughput_span(40.0, 30.0) == 40.0
+    assert e.tiles_per_min(0.0) == 0.0
+    won = dataclasses.replace(e, success=True)
+    assert won.throughput_span(20.0, 30.0) == 20.0 and won.tiles_per_min(20.0, 30.0) == 6.0
+    assert tiles_per_minute(3, 0.5) == 360.0 and tiles_per_minute(3, 0.0) == 0.0
+
+
+def test_episode_setup_randomises_lights_and_cameras_and_settles_as_configured() -> None:
+    """Guards against the episode set-up's per-task state lost (the lights' base brightness,
+    the camera jitter, the settling step count): a task built with light randomisation, camera
+    jitter and 0.05 s of settling changes the lights within [0, 1], moves a camera and runs the
+    physics 0.05 s at an episode start; and against an episode not drawn from the generator
+    given (the same seed, the same layout and lights)."""
+    env = gym.make("MosaicDecision6-v0", disable_env_checker=True)
+    try:
+        env.reset(seed=0)
+        one = env.unwrapped
+        cell = one.cell
+        cfg = dataclasses.replace(
+            one.config,
+            light_randomization=0.2,
+            camera_position_jitter=0.01,
+            reset_settle=0.05,
+        )
+        task = MosaicTask(cell, cfg)
+        base = cell.model.light_diffuse.copy()
+        cams = cell.data.cam_xpos.copy()
+        task.initialize_episode(np.random.default_rng(3))
+        light = cell.model.light_diffuse.copy()
+        assert not np.allclose(light, base) and light.min() >= 0.0 and light.max() <= 1.0
+        mujoco.mj_forward(cell.model, cell.data)
+        assert not np.allclose(cell.data.cam_xpos, cams)
+        assert cell.data.time == pytest.approx(0.05, abs=cell.model.opt.timestep)
+        poses = cell.tile_poses().pos.copy()
+        task.initialize_episode(np.random.default_rng(3))  # the same seed: the same episode
+        np.testing.assert_array_equal(cell.tile_poses().pos, poses)
+        np.testing.assert_array_equal(cell.model.light_diffuse, light)
+    finally:
+        env.close()
+
+
+def test_colour_randomisation_multiplies_each_tile_colour_by_one_plus_a_normal_draw() -> None:
+    """Guards against the colour change off its documented form (each visible tile geom's RGB
+    times ``1 + normal(0, color_randomization)``, clipped to [0, 1], drawn after the layout's
+    seed from the episode's generator): the colours of an episode with 0.1 are those of the
+    same episode without, times the factors drawn from the same seed; and nothing is drawn for
+    the colours when they are off (the lights' draws come first then)."""
+    env = gym.make("MosaicDecision6-v0", disable_env_checker=True)
+    try:
+        env.reset(seed=0)
+        one = env.unwrapped
+        cell = one.cell
+        MosaicTask(cell, one.config).initialize_episode(np.random.default_rng(3))
+        visual = cell.ids.tile_visual.ravel()
+        nominal = cell.model.geom_rgba[visual, :3].copy()
+        cfg = dataclasses.replace(one.config, color_randomization=0.1)
+        MosaicTask(cell, cfg).initialize_episode(np.random.default_rng(3))
+        np.testing.assert_array_equal(cell.ids.tile_visual.ravel(), visual)  # the same episode
+        rng = np.random.default_rng(3)
+        rng.integers(SEED_BOUND)  # the layout's seed comes first
+        f = 1 + rng.normal(0.0, 0.1, (len(visual), 3))
+        expected = np.clip(nominal * f, 0.0, 1.0)
+        np.testing.assert_allclose(cell.model.geom_rgba[visual, :3], expected, atol=1e-6)
+        assert not np.allclose(expected, nominal)
+        # colours off, lights on: the lights' factors are the first draws after the layout's
+        base = cell.model.light_diffuse.copy()
+        lights = MosaicTask(cell, dataclasses.replace(one.config, light_randomization=0.2))
+        lights.initialize_episode(np.random.default_rng(3))
+        rng = np.random.default_rng(3)
+        rng.integers(SEED_BOUND)
+        g = 1 + rng.normal(0.0, 0.2, (cell.model.nlight, 1))
+        np.testing.assert_allclose(cell.model.light_diffuse, np.clip(base * g, 0.0, 1.0), atol=1e-6)
+    finally:
+        env.close()
