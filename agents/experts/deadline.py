@@ -92,8 +92,15 @@ class DeadlineExpert:
         return tile, slot
 
     def action(self) -> np.ndarray:
-        """The next ``pick_place_discrete`` action (agent indices)."""
-        choice = self.choose()
+        """The next ``pick_place_discrete`` action (agent indices): `encode` of `choose`."""
+        return self.encode(self.choose())
+
+    def encode(self, choice: tuple[int, int] | None) -> np.ndarray:
+        """The action of a `choose` result (a wait when None); the next pick is not the first.
+
+        For a caller that reads the choice itself (`benchmarks.learned.stream` counts waits):
+        the choice is computed once.
+        """
         self._first = False
         if choice is not None:
             return self.env.expert_action(*choice)

@@ -110,14 +110,11 @@ def figure(table: dict[str, Any], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(5.2, 3.4))
     counts = sorted(int(c) for c in table)
     for key, colour in (("success", "C0"), ("filled", "C1")):
+        means = []
         for c in counts:
             ys = table[str(c)]["eval1000"][f"{key}_per_seed"]
             ax.scatter([c] * len(ys), ys, color=colour, s=12, alpha=0.6)
-        means = [
-            sum(table[str(c)]["eval1000"][f"{key}_per_seed"])
-            / len(table[str(c)]["eval1000"][f"{key}_per_seed"])
-            for c in counts
-        ]
+            means.append(sum(ys) / len(ys))
         ax.plot(counts, means, color=colour, label=f"{key} (mean over seeds)")
     ax.axhline(0.9, color="grey", ls="--", lw=1, label="target: success 0.90")
     ax.set(

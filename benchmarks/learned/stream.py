@@ -60,9 +60,9 @@ def record(
             expert.reset()
             done = False
             while not done:
-                picks = expert.choose() is not None
-                action = expert.action()
-                if picks:
+                choice = expert.choose()
+                action = expert.encode(choice)
+                if choice is not None:
                     tiles.append(np.asarray(obs["tiles"], np.float32))
                     slots.append(np.asarray(obs["slots"], np.float32))
                     acts.append(int(np.ravel_multi_index(tuple(action), tuple(nvec))))
