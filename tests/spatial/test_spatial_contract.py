@@ -97,6 +97,12 @@ def test_wrap_angle_returns_a_float_for_scalars_and_an_array_of_the_same_shape()
         assert isinstance(w, np.ndarray) and w.shape == (3, 4) and w.dtype == np.float64
         np.testing.assert_allclose(np.cos(w), np.cos(grid), atol=1e-12)
     assert wrap_angles([PI], include_pi=True)[0] == PI and wrap_angles([PI])[0] == -PI
+    edges = np.array([[PI, -PI], [3 * PI, 0.5]])
+    np.testing.assert_array_equal(wrap_angle(edges, include_pi=True), [[PI, PI], [PI, 0.5]])
+    np.testing.assert_array_equal(wrap_angle(edges), [[-PI, -PI], [-PI, 0.5]])
+    single = wrap_angles(np.array([0.25, 7.0], dtype=np.float32))  # computed in float64
+    assert single.dtype == np.float64 and single[0] == 0.25
+    assert single[1] == np.remainder(7.0 + PI, TWO_PI) - PI
     assert wrap_angles(-PI, include_pi=True).shape == ()
 
 
