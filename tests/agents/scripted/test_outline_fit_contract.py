@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -159,3 +160,60 @@ def test_tiles_go_to_slots_of_one_class_by_least_residual() -> None:
     # A fit over the residual allowed is refused.
     tight = PlacementConfig(fit_max_residual=1e-6)
     assert fit_unmatched(tiles, slots, tight, 0.2, 1.0) == []
+
+
+def test_a_tile_on_a_tried_turn_is_fitted_exactly_and_quietly() -> None:
+    """Guards against the refinement's answer taken although the tried turn fits better, and
+    against a misspelt solver option (scipy warns of it): an L turned by exactly 20 deg, one
+    of the 2 deg turns tried, gets exactly 20 deg, with no warning."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        f = fit_outline(_outline(_turned(ELL, -20.0)), _slot(ELL, 1, "l"), CFG, 1.0)
+    assert f.rotation == pytest.approx(math.radians(20.0), abs=1e-12)
+
+
+def test_a_colour_at_exactly_the_distance_allowed_is_the_same_colour() -> None:
+    """Guards against the colour bound made strict, and against a slot of another colour
+    ending the search over the slots: the red L skips the blue slot and fits the red one; a
+    grey tile 0.25 from a slot's colour fits it at a colour distance of exactly 0.25."""
+    tile = _outline(_turned(ELL, 33.0), RED)
+    slots = [_slot(ELL, 1, "l", BLUE, index=0), _slot(ELL, 1, "l", RED, index=1)]
+    assert [(i, j) for i, j, _ in fit_unmatched([tile], slots, CFG, 0.2, 1.0)] == [(0, 1)]
+    grey = _outline(_turned(ELL, 33.0), (0.5, 0.5, 0.5))
+    slot = [_slot(ELL, 1, "l", (0.5, 0.5, 0.75))]
+    assert [(i, j) for i, j, _ in fit_unmatched([grey], slot, CFG, 0.25, 1.0)] == [(0, 0)]
+    assert fit_unmatched([grey], slot, CFG, 0.2499, 1.0) == []
+
+
+def test_a_tile_that_fits_nothing_leaves_the_next_tile_fitted() -> None:
+    """Guards against a tile no slot fits ending the search over the tiles."""
+    triangle = np.array([[0, 0], [40, 0], [20, 30]], float)
+    tiles = [_outline(_turned(triangle, 10.0)), _outline(_turned(ELL, 33.0))]
+    found = fit_unmatched(tiles, [_slot(ELL, 1, "l")], CFG, 0.2, 1.0)
+    assert [(i, j) for i, j, _ in found] == [(1, 0)]
+
+
+def test_the_fit_bounds_admit_a_fit_at_their_edges() -> None:
+    """Guards against ``fit_max_residual`` or ``fit_margin`` made strict: a fit whose residual
+    is exactly the largest allowed and whose runner-up is exactly the margin is kept."""
+    tile = _outline(_turned(ELL, 33.0))
+    slot = _slot(ELL, 1, "l")
+    f = fit_outline(tile, slot, CFG, 1.0)
+    edge = PlacementConfig(fit_max_residual=f.residual, fit_margin=f.runner_up)
+    assert [(i, j) for i, j, _ in fit_unmatched([tile], [slot], edge, 0.2, 1.0)] == [(0, 0)]
+    below = PlacementConfig(fit_max_residual=f.residual * 0.999, fit_margin=f.runner_up)
+    assert fit_unmatched([tile], [slot], below, 0.2, 1.0) == []
+    above = PlacementConfig(fit_max_residual=f.residual, fit_margin=f.runner_up * 1.001)
+    assert fit_unmatched([tile], [slot], above, 0.2, 1.0) == []
+
+
+def test_the_best_slot_is_the_least_residual_one_and_rivals_are_measured_against_it() -> None:
+    """Guards against the best slot taken by position instead of residual, or the rival bound
+    divided instead of multiplied: a 40 mm square fits a 41.5 mm square slot (class a, first)
+    loosely and a 40 mm one (class b) tightly, more than ``fit_margin`` times better; it goes
+    to the 40 mm slot, with no rival."""
+    slots = [_slot(SQUARE * 41.5 / 40, 4, "a", index=0), _slot(SQUARE, 4, "b", index=1)]
+    tile = _outline(_turned(SQUARE, 12.0))
+    loose, tight = (fit_outline(tile, s, CFG, 1.0).residual for s in slots)
+    assert tight * CFG.fit_margin < loose < CFG.fit_max_residual
+    assert [(i, j) for i, j, _ in fit_unmatched([tile], slots, CFG, 0.2, 1.0)] == [(0, 1)]

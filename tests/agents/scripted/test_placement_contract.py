@@ -31,7 +31,7 @@ from agents.scripted.seen_slots import SeenSlot
 from envs.task_spec import PickPlaceCommand
 from qshape import Figure, describe
 from qshape.theory.tolerances import default_tolerances
-from spatial.angles import rotate_xy
+from spatial.angles import rotate_xy, symmetry_period
 from spatial.units import MM_PER_M
 
 RED = (0.8, 0.2, 0.2)
@@ -243,6 +243,9 @@ def test_feasible_pairs_name_slot_indices_per_tile_and_colour_mode() -> None:
     assert [pairs.slots_of(k, True) for k in range(3)] == [{6}, set(), set()]
     assert [pairs.slots_of(k, False) for k in range(3)] == [{6}, {6}, set()]
     assert FeasiblePairs([], slots).slots_of(0, True) == set()
+    assert FeasiblePairs(tiles, []).slots_of(0, False) == set()
+    plan = plan_placements(tiles, [])
+    assert [u.reason for u in plan.unplaced] == ["shape_absent"] * 3
 
 
 # --- seen outlines ----------------------------------------------------------------------------
@@ -403,3 +406,158 @@ def test_a_pick_place_command_is_in_the_codec_s_terms() -> None:
         1, 2, "s", (0.1, 0.2, 0.3), (0.4, 0.5, 0.6), (0.11, 0.21), (0.41, 0.51), 0.3, (0.6,), 1, 0.0
     )
     assert p.command == PickPlaceCommand((0.11, 0.21), 0.3, (0.41, 0.51), 0.3)
+
+
+# --- the caller's settings reach every step ---------------------------------------------------
+
+
+def test_the_caller_s_tolerances_and_colour_mode_decide_the_assignment() -> None:
+    """Guards against the first assignment run with the bundled tolerances or with colour
+    always matched: a blue square and a red square slot pair up only when the caller's colour
+    distance spans both colours, or colour is not matched."""
+    tiles, slots = [_tile(0, SQUARE, BLUE)], [_slot(0, SQUARE, (0.5, 0.2, 0.0), 4)]
+    assert plan_placements(tiles, slots).commands == ()
+    wide = dataclasses.replace(default_tolerances(), color_distance=1.5)
+    assert [c.slot for c in plan_placements(tiles, slots, tolerances=wide).commands] == [0]
+    shape_only = PlacementConfig(use_color=False)
+    assert [c.slot for c in plan_placements(tiles, slots, shape_only).commands] == [0]
+
+
+def test_the_seen_assignment_uses_the_caller_s_tolerances_and_colour_mode() -> None:
+    """Guards against the second assignment (on the seen descriptions) run with the bundled
+    tolerances or with colour always matched: a blue L reaches the red cut-corner L slot."""
+    tiles = [_tile(0, _turned(ELL, -70.0, (300.0, -120.0)), BLUE)]
+    slots = [_slot(0, CUT_ELL, (0.5, 0.2, 0.3), seen=ELL)]
+    assert [u.reason for u in plan_placements(tiles, slots).unplaced] == ["color_absent"]
+    wide = dataclasses.replace(default_tolerances(), color_distance=1.5)
+    for plan in (
+        plan_placements(tiles, slots, tolerances=wide),
+        plan_placements(tiles, slots, PlacementConfig(use_color=False)),
+    ):
+        assert [(c.tile, c.slot) for c in plan.commands] == [(0, 0)]
+        assert math.degrees(plan.commands[0].rotation) == pytest.approx(70.0, abs=1e-3)
+
+
+def test_a_slot_taken_by_its_design_description_takes_no_second_tile_by_its_seen_one() -> None:
+    """Guards against the seen assignment offered slots the first one filled, and against a
+    design match moved as if seen: a cut-corner L tile fills the cut-corner slot (picked at its
+    own centre); the plain L, which only the seen outline matches, is left as slots_taken."""
+    cut = _tile(0, _turned(CUT_ELL, -40.0, (100.0, 50.0)))
+    plain = _tile(1, _turned(ELL, -70.0, (300.0, -120.0)))
+    slots = [_slot(0, CUT_ELL, (0.5, 0.2, 0.3), seen=ELL)]
+    plan = plan_placements([cut, plain], slots)
+    assert [(c.tile, c.slot) for c in plan.commands] == [(0, 0)]
+    assert [(u.tile, u.reason) for u in plan.unplaced] == [(1, "slots_taken")]
+    c = plan.commands[0]
+    assert c.pick[:2] == pytest.approx(tuple(cut.centre), abs=1e-12)
+    assert math.degrees(c.rotation) == pytest.approx(40.0, abs=1e-3)
+
+
+COARSE = PlacementConfig(
+    refine_span_deg=6.0, refine_tolerance_deg=0.5, refine_scan_deg=2.5, refine_spacing_mm=3.0
+)
+"""Refinement settings far from `refine_rotation`'s defaults (each changes its result)."""
+
+
+def _refined(t: PerceivedTile, s: SlotTarget, turn: float, cfg: PlacementConfig) -> float:
+    """`refine_rotation` of the pair with ``cfg``'s refinement settings, wrapped."""
+    return wrap(
+        refine_rotation(
+            t.figure,
+            s.figure,
+            turn,
+            math.radians(cfg.refine_span_deg),
+            math.radians(cfg.refine_tolerance_deg),
+            points=t.outline_mm,
+            spacing=cfg.refine_spacing_mm,
+            scan=math.radians(cfg.refine_scan_deg),
+        )
+    )
+
+
+@pytest.mark.parametrize("traced", [False, True])
+def test_every_refinement_setting_reaches_the_refinement(traced: bool) -> None:
+    """Guards against a refinement setting (tolerance, spacing, scan) dropped on the way to
+    `refine_rotation`, with and without a traced outline, and the pair's score not kept: an L
+    with one inner corner 1.5 mm off (its figure, or its traced outline beside a plain L
+    figure) is refined with coarse settings, which give another turn than the defaults."""
+    bent = ELL.copy()
+    bent[3] = [15.5, 14.0]
+    if traced:
+        t = _tile(0, _turned(ELL, -70.0, (300, -120)), outline=_turned(bent, -70.0, (300, -120)))
+    else:
+        t = _tile(0, _turned(bent, -70.0, (300.0, -120.0)))
+    s = _slot(0, ELL, (0.5, 0.2, 0.3))
+    (a,) = qshape.assign([t.description], [s.description])
+    (c,) = plan_placements([t], [s], COARSE).commands
+    assert c.rotation == _refined(t, s, a.rotation, COARSE)
+    assert c.score == a.score
+    for change in ("refine_tolerance_deg", "refine_spacing_mm", "refine_scan_deg"):
+        default = getattr(PlacementConfig(), change)
+        other = _refined(t, s, a.rotation, dataclasses.replace(COARSE, **{change: default}))
+        assert other != c.rotation, change
+
+
+def test_a_sharp_tipped_tile_is_centred_by_its_traced_outline() -> None:
+    """Guards against the centre fit of a sharp-tipped slot (`centre_fit_below_deg`) not given
+    the traced outline or the turn: a 20 deg tip's tile whose relevant points put its centre
+    1 mm off is picked at its traced outline's true centroid."""
+    tip = np.array([[0.0, 0.0], [60.0, 0.0], [60.0, 60.0 * math.tan(math.radians(20.0))]])
+    traced = _turned(tip, -30.0, (200.0, 40.0))
+    t = dataclasses.replace(_tile(0, traced, outline=traced), centre=np.array([0.201, 0.040]))
+    s = _slot(0, tip, (0.5, 0.2, 0.0))
+    (c,) = plan_placements([t], [s]).commands
+    assert math.degrees(c.rotation) == pytest.approx(30.0, abs=0.05)
+    assert c.pick[:2] == pytest.approx((0.2, 0.04), abs=2e-5)
+
+
+@pytest.mark.parametrize("edge", ["fit_max_residual", "fit_margin", "fit_turn_window_deg"])
+def test_the_outline_check_s_thresholds_admit_the_fit_at_their_edges(edge: str) -> None:
+    """Guards against an outline-check bound made strict: a fit whose residual equals
+    ``fit_max_residual``, whose runner-up equals ``fit_margin``, or whose turn lies exactly
+    is taken; a fit exactly ``fit_turn_window_deg`` from the match's turn is not farther than
+    the window, and the match's turn is kept."""
+    t, s, cfg = _checked_scene()
+    outline = TileOutline.of(t)
+    assert outline is not None
+    fit = fit_outline(outline, s, cfg, cfg.fit_spacing_mm)
+    if edge == "fit_turn_window_deg":
+        assert s.seen is not None
+        (a,) = qshape.assign([t.description], [s.seen.description])
+        off = abs(math.remainder(fit.rotation - a.rotation, symmetry_period(s.symmetry)))
+        window = math.degrees(off)
+        assert math.radians(window) == off  # exactly at the edge
+        cfg = dataclasses.replace(cfg, fit_turn_window_deg=window)
+        (c,) = plan_placements([t], [s], cfg).commands
+        assert math.degrees(c.rotation) == pytest.approx(60.0, abs=1e-6)
+        return
+    value = fit.residual if edge == "fit_max_residual" else fit.runner_up
+    cfg = dataclasses.replace(cfg, **{edge: value})
+    (c,) = plan_placements([t], [s], cfg).commands
+    assert c.rotation == pytest.approx(wrap(fit.rotation), abs=1e-12)
+
+
+def test_refine_rotation_defaults_are_the_documented_ones() -> None:
+    """Guards against a default of `refine_rotation` changed (tolerance 1e-4 rad, spacing
+    0.5, scan 1 deg): the defaults give what those values given explicitly give."""
+    bent = ELL.copy()
+    bent[3] = [15.5, 14.0]
+    t = _tile(0, _turned(bent, -70.0, (0, 0))).figure
+    s = _slot(0, ELL, (0, 0, 0)).figure
+    start, span = math.radians(66.37), math.radians(6.0)
+    explicit = refine_rotation(t, s, start, span, 1e-4, spacing=0.5, scan=math.radians(1.0))
+    assert refine_rotation(t, s, start, span) == explicit
+    assert abs(explicit - start) > math.radians(3.0)
+
+
+def test_refine_rotation_returns_the_given_turn_when_nothing_fits_better() -> None:
+    """Guards against the refined turn returned although it fits worse than the one given, or
+    the refinement kept over an exactly scanned turn: the exact turn of an L, scanned past
+    (0.7 deg steps), comes back bit for bit; scanned onto (1 deg steps from 3 deg off), the
+    scanned turn is returned."""
+    t = _tile(0, _turned(ELL, -70.0, (0, 0))).figure
+    s = _slot(0, ELL, (0, 0, 0)).figure
+    exact = math.radians(70.0)
+    assert refine_rotation(t, s, exact, math.radians(5.0), scan=math.radians(0.7)) == exact
+    found = refine_rotation(t, s, exact - math.radians(3.0), math.radians(5.0))
+    assert found == pytest.approx(exact, abs=1e-12)
