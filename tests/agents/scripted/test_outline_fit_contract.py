@@ -217,3 +217,19 @@ def test_the_best_slot_is_the_least_residual_one_and_rivals_are_measured_against
     loose, tight = (fit_outline(tile, s, CFG, 1.0).residual for s in slots)
     assert tight * CFG.fit_margin < loose < CFG.fit_max_residual
     assert [(i, j) for i, j, _ in fit_unmatched([tile], slots, CFG, 0.2, 1.0)] == [(0, 1)]
+
+
+def test_a_slot_of_another_class_exactly_margin_times_worse_is_no_rival() -> None:
+    """Guards against the rival bound made inclusive: another class's slot fitting exactly
+    ``fit_margin`` times worse than the best is no rival ("at least fit_margin times worse"),
+    one fitting a hair better than that is."""
+    slots = [_slot(SQUARE * 40.6 / 40, 4, "a", index=0), _slot(SQUARE, 4, "b", index=1)]
+    tile = _outline(_turned(SQUARE, 12.0))
+    fits = [fit_outline(tile, s, CFG, 1.0) for s in slots]
+    margin = fits[0].residual / fits[1].residual
+    assert margin * fits[1].residual == fits[0].residual  # exactly at the edge
+    assert min(f.runner_up for f in fits) > margin
+    edge = PlacementConfig(fit_max_residual=0.03, fit_margin=margin)
+    assert [(i, j) for i, j, _ in fit_unmatched([tile], slots, edge, 0.2, 1.0)] == [(0, 1)]
+    past = PlacementConfig(fit_max_residual=0.03, fit_margin=float(np.nextafter(margin, 10.0)))
+    assert fit_unmatched([tile], slots, past, 0.2, 1.0) == []
