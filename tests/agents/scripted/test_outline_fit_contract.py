@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
@@ -233,3 +234,21 @@ def test_a_slot_of_another_class_exactly_margin_times_worse_is_no_rival() -> Non
     assert [(i, j) for i, j, _ in fit_unmatched([tile], slots, edge, 0.2, 1.0)] == [(0, 1)]
     past = PlacementConfig(fit_max_residual=0.03, fit_margin=float(np.nextafter(margin, 10.0)))
     assert fit_unmatched([tile], slots, past, 0.2, 1.0) == []
+
+
+def test_a_turn_exactly_the_window_away_is_no_rival_turn() -> None:
+    """Guards against the window bound made inclusive: the rival turns are those *farther* than
+    ``fit_turn_window_deg`` from the fit's; an L fitted at exactly 0 deg, whose tried turn 5 x
+    2 deg lies exactly 10 deg away, has the same runner-up with a 10 deg window as with an 11
+    deg one (its nearest rivals at +-12 deg), and a lower one with a 9 deg window."""
+    tile, slot = _outline(_turned(ELL, 0.0)), _slot(ELL, 1, "l")
+    tried = 5 * math.radians(CFG.fit_step_deg)
+    window = math.degrees(tried)
+    assert math.radians(window) == tried  # exactly the tried turn
+    ups = {
+        w: fit_outline(tile, slot, dataclasses.replace(CFG, fit_turn_window_deg=w), 1.0)
+        for w in (window, window + 1.0, window - 1.0)
+    }
+    assert ups[window].rotation == 0.0
+    assert ups[window].runner_up == ups[window + 1.0].runner_up
+    assert ups[window - 1.0].runner_up < ups[window].runner_up
