@@ -129,10 +129,12 @@ def _reset_rows() -> tuple[dict[int, Any], list[dict[str, Any]]]:
     return resets, task_resets
 
 
-def _ratio_rows(seconds: float) -> dict[str, Any]:
-    """Measure and print the ratios of `benchmarks.env_ratios` (one child each)."""
+def _ratio_rows(seconds: float, names: list[str] | None = None) -> dict[str, Any]:
+    """Measure and print the ratios of `benchmarks.env_ratios` (one child each; ``names`` only)."""
     rows = {}
     for name, target in RATIOS.items():
+        if names and name not in names:
+            continue
         r = _child(target, seconds)
         rows[name] = r
         skip = ("what", "ratio", "target", "load_average")
@@ -248,6 +250,12 @@ def main() -> None:
     parser.add_argument(
         "--ratios", action="store_true", help=f"the ratios only (writes {OUT_RATIOS.name})"
     )
+    parser.add_argument(
+        "--ratio",
+        action="append",
+        choices=sorted(RATIOS),
+        help="with --ratios: measure only this ratio (repeatable); prints, writes nothing",
+    )
     args = parser.parse_args()
     seconds = 1.0 if args.quick else args.seconds
     use_headless_rendering()
@@ -255,6 +263,9 @@ def main() -> None:
         os.environ[var] = "1"
     if args.resets:
         _reset_rows()
+        return
+    if args.ratios and args.ratio:
+        _ratio_rows(2 * seconds, args.ratio)
         return
     if args.ratios:
         ratios = _ratio_rows(2 * seconds)
