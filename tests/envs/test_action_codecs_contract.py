@@ -176,6 +176,22 @@ def test_encode_allows_float_rounding_past_an_edge_and_clips_it() -> None:
     assert np.all(np.abs(a) <= 1.0)
 
 
+def test_encode_accepts_a_point_exactly_at_the_slack() -> None:
+    """A point whose unit coordinate is exactly -(1 + RANGE_SLACK) is still inside (the check is
+    strict), in either area.
+
+    Guards against ``>=`` for ``>`` in the pick or the place check.
+    """
+    edge = -(1 + RANGE_SLACK)
+    x = float(PICK.from_unit([edge, 0.0])[0])
+    y = float(PLACE.from_unit([0.0, edge])[1])
+    assert PICK.to_unit([x, 0.0])[0] == edge  # exactly on the edge in float64
+    assert PLACE.to_unit([-0.5, y])[1] == edge
+    codec = PickPlaceCodec(PICK, PLACE)
+    a = codec.encode(PickPlaceCommand((x, 0.0), 0.0, (-0.5, y), 0.0))
+    assert a.tolist() == [-1.0, 0.0, 0.0, 0.0, -1.0, 0.0]
+
+
 @pytest.mark.parametrize(
     ("pick", "place"),
     [
