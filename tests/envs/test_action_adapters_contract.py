@@ -23,10 +23,12 @@ from envs.actions import (
     CartesianActions,
     DiscretePickPlaceActions,
     JointActions,
+    PickPlaceActions,
     PickPlaceExecutor,
+    transfer_poses,
 )
 from envs.mosaic_env import MosaicAssemblyEnv
-from envs.task_spec import RANGE_SLACK
+from envs.task_spec import RANGE_SLACK, PickPlaceCodec
 from planners.config import load_planner_config
 from planners.robot import joint_ranges
 from spatial.angles import wrap_angle
@@ -384,3 +386,140 @@ def test_cartesian_apply_reports_the_grasp_once_for_tile_zero(u) -> None:
     assert ad.apply(on).grasped == -1
     assert ad.apply(np.array([0.0, 0.0, 1.0, 0.0, 1.0])).grasped == -1  # lifted, still held
     assert u.cell.held_tile == 0
+
+
+def test_cartesian_reset_takes_the_current_tool_pose_and_joints(u) -> None:
+    """After the arm moved, reset makes the tool target the tool's pose (x, y, z, yaw) now.
+
+    Guards against a stale target (the next action would jump back to it).
+    """
+    ad = _cartesian(u)
+    _pad_on_tile(u)
+    ad.reset()
+    pos, rot = u.cell.tcp_pose()
+    np.testing.assert_array_equal(ad.pose[:3], pos)
+    assert ad.pose[3] == pytest.approx(math.atan2(rot[1, 0], rot[0, 0]), abs=1e-12)
+    np.testing.assert_array_equal(ad.q, u.cell.qpos)
+
+
+@pytest.mark.parametrize(("control_dt", "substeps"), [(0.04, 20), (0.0413, 21), (0.0005, 1)])
+def test_an_adapter_steps_a_whole_number_of_physics_steps(
+    u, control_dt: float, substeps: int
+) -> None:
+    """The control period is control_dt rounded to whole physics steps, at least one; a joint
+    action's full step is the speed limit times that period.
+
+    Guards against the rounding or the floor of one step lost, or the timestep misread.
+    """
+    ad = JointActions(u.cell, dataclasses.replace(u.config, control_dt=control_dt))
+    assert ad.dt == float(u.cell.model.opt.timestep) == 0.002  # noqa: PLR2004
+    assert ad.substeps == substeps
+    np.testing.assert_allclose(ad.max_step, u.cell.max_joint_speed * substeps * 0.002)
+    t0 = u.cell.time
+    ad.apply(np.zeros(7))
+    assert u.cell.time == pytest.approx(t0 + substeps * 0.002, abs=1e-12)
+
+
+# ------------------------------------------------------------------------------ pick and place
+
+GRASPED = 4
+"""The Decision6 tile whose grasp point is off its origin (about 4.2 mm along -x)."""
+
+
+def _lay(cell, yaw: float) -> None:
+    """Tiles of the Decision6 cell on a grid on the belt, tile GRASPED turned by ``yaw``."""
+    xy = np.array([[-0.1, 0.05], [0.1, -0.05], [0.1, 0.05], [0.0, 0.0], [-0.1, -0.05], [0, 0.05]])
+    yaws = np.zeros(6)
+    yaws[GRASPED] = yaw
+    cell.place_tiles(np.arange(6), np.column_stack([xy, yaws]))
+
+
+def test_transfer_poses_put_the_pad_on_the_grasp_point_at_both_ends(decision6_env) -> None:
+    """Pick: the tile's centre plus its grasp point turned by the tile's yaw; place: the slot's
+    centre plus the grasp point turned by the slot's yaw plus the extra turn; the rotation is
+    the wrapped difference of the two yaws.
+
+    Guards against the grasp offset dropped, turned by the wrong yaw or the extra turn lost.
+    """
+    decision6_env.reset(seed=0)
+    cell = decision6_env.unwrapped.cell
+    _lay(cell, 0.7)
+    g = cell.tiles[GRASPED].grasp
+    assert np.linalg.norm(g) > 0.004  # noqa: PLR2004 - a real offset
+    poses = cell.tile_poses()
+    yaw = float(poses.yaw[GRASPED])
+    assert yaw == pytest.approx(0.7, abs=1e-12)
+
+    def turned(a: float) -> np.ndarray:
+        return np.array(
+            [g[0] * math.cos(a) - g[1] * math.sin(a), g[0] * math.sin(a) + g[1] * math.cos(a)]
+        )
+
+    sx, sy, syaw = cell.slot_poses_world()[2]
+    cmd = transfer_poses(cell, GRASPED, 2, 2.5)
+    np.testing.assert_allclose(cmd.pick_xy, poses.pos[GRASPED, :2] + turned(yaw), atol=1e-12)
+    np.testing.assert_allclose(cmd.place_xy, np.array([sx, sy]) + turned(syaw + 2.5), atol=1e-12)
+    assert cmd.pick_yaw == yaw
+    assert cmd.rotation == pytest.approx(float(wrap_angle(syaw + 2.5 - yaw)), abs=1e-12)
+    plain = transfer_poses(cell, 0, 1)  # no grasp offset, no extra turn
+    np.testing.assert_allclose(plain.pick_xy, poses.pos[0, :2], atol=1e-15)
+    np.testing.assert_allclose(plain.place_xy, cell.slot_poses_world()[1, :2], atol=1e-15)
+    assert plain.rotation == pytest.approx(float(wrap_angle(cell.slot_poses_world()[1, 2])))
+    assert all(type(v) is float for v in (*cmd.pick_xy, *cmd.place_xy))
+
+
+def test_discrete_actions_move_the_chosen_tile_into_the_chosen_slot(decision6_env) -> None:
+    """MultiDiscrete((tiles, slots, bins)); rotation r turns r steps from the slot's yaw; the
+    cycle puts the tile in the slot and reports its grasp; a tile no longer on the input belt
+    is a failed action that costs the executor's failure time.
+
+    Guards against the space's sizes, the rotation's turn, the tile and slot swapped, or the
+    off-belt check lost.
+    """
+    env = decision6_env
+    env.reset(seed=0)
+    u = env.unwrapped
+    cell = u.cell
+    ad = _discrete(u, rotation_bins=8)
+    assert ad.space.nvec.tolist() == [6, 6, 8]
+    assert ad.codec.nvec == (6, 6, 8)
+    want = transfer_poses(cell, GRASPED, 3, 3 * math.pi / 4)
+    got = ad.poses(GRASPED, 3, 3)
+    assert got.pick_xy == want.pick_xy and got.place_xy == want.place_xy
+    assert got.rotation == pytest.approx(want.rotation, abs=1e-12)
+    res = ad.apply(np.array([GRASPED, GRASPED, 0]))
+    assert (res.failed, res.reason, res.grasped) == (False, "", GRASPED)
+    pose = cell.tile_poses()
+    np.testing.assert_allclose(
+        pose.pos[GRASPED, :2], cell.slot_poses_world()[GRASPED, :2], atol=1e-3
+    )
+    assert not cell.input_half()[GRASPED]
+    t0 = cell.time
+    res = ad.apply(np.array([GRASPED, 0, 0]))
+    assert (res.failed, res.reason) == (True, f"tile {GRASPED} is not on the input belt")
+    assert cell.time == pytest.approx(t0 + ad.executor.fail_steps * ad.dt, abs=1e-12)
+
+
+@pytest.mark.parametrize("pick_yaw", [True, False])
+def test_pick_place_actions_decode_with_their_codec_and_run_the_cycle(
+    decision6_env, pick_yaw: bool
+) -> None:
+    """Box(codec.size) in [-1, 1]; an action is decoded by the codec and run as one cycle.
+
+    Guards against a space of the wrong layout or an action run undecoded.
+    """
+    env = decision6_env
+    env.reset(seed=0)
+    u = env.unwrapped
+    cell = u.cell
+    codec = PickPlaceCodec(u.pick_area, u.place_area, pick_yaw)
+    pcfg = load_planner_config(u.config.planner)
+    ex = PickPlaceExecutor(cell, u.config, pcfg, u.ik, pick=u.pick_area, place=u.place_area)
+    ad = PickPlaceActions(cell, u.config, ex, codec)
+    assert ad.space == spaces.Box(-1.0, 1.0, (6 if pick_yaw else 5,), np.float32)
+    ad.reset()
+    res = ad.apply(codec.encode(transfer_poses(cell, GRASPED, 1)))
+    assert (res.failed, res.grasped) == (False, GRASPED)
+    np.testing.assert_allclose(
+        cell.tile_poses().pos[GRASPED, :2], cell.slot_poses_world()[1, :2], atol=1e-3
+    )
