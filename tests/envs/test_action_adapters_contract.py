@@ -307,6 +307,10 @@ def test_cartesian_space_steps_and_box(u) -> None:
     assert hi[2] == max(z0 + cfg.tool_z_range[1], home[2])
     lo[:] = 0.0  # box returns copies
     assert ad.box[0][2] != 0.0
+    tall = _cartesian(u, tool_z_range=(0.125, 0.5))  # its top above the home height
+    lo, hi = tall.box
+    assert (lo[2], hi[2]) == (z0 + 0.125, z0 + 0.5)
+    assert hi[2] > home[2]
 
 
 def test_cartesian_full_action_moves_the_target_and_servos_over_the_period(u) -> None:
