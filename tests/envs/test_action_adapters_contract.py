@@ -478,7 +478,7 @@ def test_discrete_actions_move_the_chosen_tile_into_the_chosen_slot(decision6_en
     is a failed action that costs the executor's failure time.
 
     Guards against the space's sizes, the rotation's turn, the tile and slot swapped, or the
-    off-belt check lost.
+    off-belt or slot-range check lost (a slot past the cell's is a failed action too).
     """
     env = decision6_env
     env.reset(seed=0)
@@ -501,6 +501,11 @@ def test_discrete_actions_move_the_chosen_tile_into_the_chosen_slot(decision6_en
     t0 = cell.time
     res = ad.apply(np.array([GRASPED, 0, 0]))
     assert (res.failed, res.reason) == (True, f"tile {GRASPED} is not on the input belt")
+    assert cell.time == pytest.approx(t0 + ad.executor.fail_steps * ad.dt, abs=1e-12)
+    t0 = cell.time
+    res = ad.apply(np.array([0, 6, 0]))  # no slot 6: a failed action, not a crash
+    assert res.failed and res.grasped == -1
+    assert cell.input_half()[0]  # tile 0 stays on the belt
     assert cell.time == pytest.approx(t0 + ad.executor.fail_steps * ad.dt, abs=1e-12)
 
 
