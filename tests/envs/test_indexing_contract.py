@@ -11,11 +11,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Iterator
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
+import envs
 from envs.indexing import IndexMaps, raster_order
+from tests.presets import FAST_DISCRETE
 
 N = 6
 """Tiles and slots of the cell."""
@@ -99,16 +103,47 @@ def test_design_orders_are_the_identity_after_a_reset(decision6_env, cell) -> No
     assert maps.tiles.tolist() == list(range(N))
 
 
-def test_mesh_slot_order_is_the_raster_order_of_the_slots(decision6_env, cell) -> None:
-    """slot_order ``mesh``: the raster order of the slots' world (x, y), the same every reset.
+@pytest.fixture(scope="module")
+def grid_env() -> Iterator[gym.Env]:
+    """The first 6 slots of square_grid: its design order is not the raster order on the mesh."""
+    env = gym.make(envs.ENV_ID, **{**FAST_DISCRETE, "design": "square_grid", "max_slots": N})
+    env.reset(seed=0)
+    try:
+        yield env
+    finally:
+        env.close()
 
-    Guards against the mesh order replaced by a draw.
+
+def test_mesh_slot_order_is_the_raster_order_of_the_slots(grid_env) -> None:
+    """slot_order ``mesh``: the raster order of the slots' world (x, y), the same every reset,
+    on a design whose own slot order is another.
+
+    Guards against the mesh order replaced by the design order or a draw.
     """
-    maps = _maps(decision6_env, cell, slot_order="mesh")
+    cell = grid_env.unwrapped.cell
+    maps = IndexMaps(cell, dataclasses.replace(grid_env.unwrapped.config, slot_order="mesh"))
     want = raster_order(cell.slot_poses_world()[:, :2]).tolist()
+    assert want != list(range(N))
     for seed in (0, 1):
         maps.reset(np.random.default_rng(seed))
         assert maps.slots.tolist() == want
+    design = IndexMaps(cell, dataclasses.replace(grid_env.unwrapped.config, slot_order="design"))
+    design.reset(np.random.default_rng(0))
+    assert design.slots.tolist() == list(range(N))
+
+
+def test_belt_order_before_the_first_reset_keeps_the_rest_in_design_order(
+    decision6_env, cell
+) -> None:
+    """update before any reset: tiles on the belt in belt order, the others after them in
+    design order (no draw yet).
+
+    Guards against a first map that cannot be updated before a reset.
+    """
+    maps = _maps(decision6_env, cell, tile_order="belt")
+    cell.park_tiles(np.array([3, 0]))
+    maps.update()
+    assert maps.tiles.tolist() == [1, 2, 5, 4, 0, 3]
 
 
 def test_belt_order_counts_from_the_downstream_end_then_the_rest_shuffled(
