@@ -64,3 +64,18 @@ def kinematic_env() -> Iterator[gym.Env]:
         yield env
     finally:
         env.close()
+
+
+@pytest.fixture(scope="module")
+def decision6_env() -> Iterator[gym.Env]:
+    """``MosaicDecision6-v1``: 6 tiles and slots of paper_mixed (symmetries 4, 4, 2, round, 1,
+    1), ``pick_place_discrete`` actions, kinematic execution, state observations.
+
+    Reset with seed 0; tests that need another start reset it themselves.
+    """
+    env = gym.make("MosaicDecision6-v1")
+    env.reset(seed=0)
+    try:
+        yield env
+    finally:
+        env.close()
