@@ -258,3 +258,38 @@ def test_assign_with_classes_skips_a_group_without_pairs_and_goes_on() -> None:
         got = assign(tiles, slots)
         ell = 1 if tiles[1] is not moved else 0
         assert [(a.tile, a.slot) for a in got] == [(ell, 2)]
+
+
+def test_figures_are_described_with_the_caller_s_tolerances() -> None:
+    """A figure is described under the tolerances given, not the bundled ones: with a right
+    angle band of 70-110 deg a 76 deg rhombus is a square, by figure or by description."""
+    wide = Tolerances.load(right_angle_deg=(70.0, 110.0))
+    rhombus, square = _rhombus(76.0), _rhombus(90.0, 0.4)
+    assert match(square, rhombus) is None
+    by_fig = match(square, rhombus, wide)
+    assert by_fig is not None
+    assert by_fig == match(describe(square, wide), describe(rhombus, wide), wide)
+    found = match_best({"square": square}, rhombus, wide)
+    assert found is not None and found[1] == by_fig
+
+
+def test_match_best_defaults_ties_and_messages() -> None:
+    """Colours are compared unless told otherwise; of equal scores the first listed wins; a
+    non-mapping is refused by its type's name; with ``neighbour_residual`` 0 no neighbour is
+    tried, even one that would fit exactly."""
+    red = Figure.rectangle(20, 10, (0.9, 0.1, 0.1))
+    blue = Figure.rectangle(20, 10, (0.1, 0.1, 0.9), angle=0.5)
+    assert match_best({"red": red}, blue) is None
+    assert match_best({"red": red}, blue, use_color=False) is not None
+    twin = Figure.rectangle(20, 10, (0.1, 0.1, 0.9))
+    for first, second in (("a", "b"), ("b", "a")):
+        found = match_best({first: twin, second: twin}, blue)
+        assert found is not None and found[0] == first
+    with pytest.raises(MatchError, match=r"got list$"):
+        match_best([red], blue)  # type: ignore[arg-type]
+    exact_bent = Figure.from_polygon([[0, 0], [0, 30], [20, 31], [40, 30], [40, 0]])
+    rect = Figure.rectangle(40.0, 30.0)
+    found = match_best({"rect": rect}, exact_bent)
+    assert found is not None and found[1].score == 0.0  # its neighbour is the rectangle
+    off = Tolerances.load(neighbour_residual=0.0)
+    assert match_best({"rect": rect}, exact_bent, off) is None
