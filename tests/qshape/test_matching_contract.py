@@ -271,6 +271,10 @@ def test_figures_are_described_with_the_caller_s_tolerances() -> None:
     assert by_fig == match(describe(square, wide), describe(rhombus, wide), wide)
     found = match_best({"square": square}, rhombus, wide)
     assert found is not None and found[1] == by_fig
+    for method in ("optimal", "greedy"):  # the rhombus as the tile
+        assert assign([rhombus], [square], method=method) == []
+        got = assign([rhombus], [square], wide, method)
+        assert [(a.tile, a.slot) for a in got] == [(0, 0)]
 
 
 def test_match_best_defaults_ties_and_messages() -> None:
@@ -293,3 +297,81 @@ def test_match_best_defaults_ties_and_messages() -> None:
     assert found is not None and found[1].score == 0.0  # its neighbour is the rectangle
     off = Tolerances.load(neighbour_residual=0.0)
     assert match_best({"rect": rect}, exact_bent, off) is None
+
+
+def test_references_and_tiles_are_described_with_the_caller_s_tolerances_too() -> None:
+    """The same as above with the roles turned: the 76 deg rhombus as the reference (and as
+    the slot), the square as the candidate (and the tile), through `match`, `match_best` and
+    `assign` with figures on both sides."""
+    wide = Tolerances.load(right_angle_deg=(70.0, 110.0))
+    rhombus, square = _rhombus(76.0), _rhombus(90.0, 0.4)
+    assert match(rhombus, square) is None
+    assert match(rhombus, square, wide) is not None
+    found = match_best({"rhombus": rhombus}, square, wide)
+    assert found is not None and found[1] == match(rhombus, square, wide)
+    for method in ("optimal", "greedy"):
+        assert assign([square], [rhombus], method=method) == []
+        got = assign([square], [rhombus], wide, method)
+        assert [(a.tile, a.slot) for a in got] == [(0, 0)]
+        got = assign([square, square], [rhombus, rhombus], wide, method)  # one slot class
+        assert [(a.tile, a.slot) for a in got] == [(0, 0), (1, 1)]
+
+
+def test_match_best_evaluates_under_the_caller_s_tolerances() -> None:
+    """A wide symmetry residual lists the near-symmetric turns of a 20 x 17 rectangle: the
+    match `match_best` returns carries exactly the rotations `match` gives under those
+    tolerances, directly and through a neighbour; the neighbours honour ``use_color``."""
+    loose = Tolerances.load(symmetry_residual=0.2)
+    ref = Figure.rectangle(20.0, 17.0)
+    cand = Figure.rectangle(20.0, 17.0, angle=0.3)
+    direct = match(ref, cand, loose)
+    assert direct is not None and len(direct.rotations) == 4
+    assert len(match(ref, cand).rotations) == 2  # type: ignore[union-attr]
+    found = match_best({"r": ref}, cand, loose)
+    assert found is not None and found[1].rotations == direct.rotations
+    bent = Figure.from_polygon(BENT, color=(0.9, 0.1, 0.1))
+    rect = Figure.rectangle(40.0, 30.0, (0.1, 0.1, 0.9))
+    assert match_best({"rect": rect}, bent, loose) is None  # colours differ
+    via = match_best({"rect": rect}, bent, loose, use_color=False)
+    assert via is not None and via[1].neighbour is not None
+    assert via[1].rotations == match(rect, via[1].neighbour, loose, use_color=False).rotations  # type: ignore[union-attr]
+
+
+def test_symmetric_rotations_are_listed_by_magnitude() -> None:
+    """After the chosen turn, the equivalent ones come smallest magnitude first (documented
+    order; listing them by offset instead puts a larger turn before a smaller one)."""
+    for n, angle in ((4, 2.0), (6, -2.5), (3, 2.9)):
+        m = match(Figure.regular_polygon(n, 10.0), Figure.regular_polygon(n, 10.0, angle=angle))
+        assert m is not None and len(m.rotations) == n
+        rest = [abs(r) for r in m.rotations[1:]]
+        assert rest == sorted(rest)
+        assert abs(m.rotation) == min(abs(r) for r in m.rotations)
+
+
+@pytest.mark.parametrize("method", ["optimal", "greedy"])
+def test_colour_decides_among_slots_of_one_shape(method: str) -> None:
+    """Colours are compared on every path (``use_color`` left at its default): blue tiles go
+    to the blue slots, whether the slots are all different (pairwise path) or copies (slot
+    classes); with ``use_color=False`` the first slots of the shape are taken instead."""
+    red, blue = (0.9, 0.1, 0.1), (0.1, 0.1, 0.9)
+    tiles = [Figure.rectangle(20, 10, blue, angle=0.4), Figure.rectangle(20, 10, blue, angle=1.3)]
+    distinct = [Figure.rectangle(20, 10, red), Figure.rectangle(20, 10, blue)]
+    got = assign(tiles[:1], distinct, method=method)
+    assert [(a.tile, a.slot) for a in got] == [(0, 1)]
+    copies = [Figure.rectangle(20, 10, red), Figure.rectangle(20, 10, red, angle=0.7)]
+    copies += [Figure.rectangle(20, 10, blue, angle=1.1), Figure.rectangle(20, 10, blue)]
+    got = assign(tiles, copies, method=method)
+    assert sorted(a.slot for a in got) == [2, 3]
+    got = assign(tiles, copies, method=method, slot_classes=False)
+    assert sorted(a.slot for a in got) == [2, 3]
+    blind = assign(tiles, copies, method=method, use_color=False)
+    assert len(blind) == 2
+
+
+def test_bad_items_are_reported_by_their_type_names() -> None:
+    """The refusal names the type given: the list itself, or the entry at fault."""
+    ok = [Figure.rectangle(2, 2)]
+    with pytest.raises(MatchError, match=r"^slots must be .* got str$"):
+        assign(ok, "square")  # type: ignore[arg-type]
+    with pytest.raises(MatchError, match=r"^tiles\[1\] must be .* got int$"):
+        assign([ok[0], 3], ok)  # type: ignore[list-item]
