@@ -279,7 +279,10 @@ def sample(args: argparse.Namespace) -> int:
         f"in {wall:.0f} s (mutmut exit {code})"
     )
     if args.group == "rest":
-        return _sample_figure(chosen, status, float(ours["targets"]["rest"]), missed + unknown)
+        whole = len(chosen) == len(pool)
+        return _sample_figure(
+            chosen, status, float(ours["targets"]["rest"]), missed + unknown, whole
+        )
     for n in missed:
         print(
             f"  SURVIVED {n}: write a test that kills it, or review it as equivalent "
@@ -291,7 +294,7 @@ def sample(args: argparse.Namespace) -> int:
 
 
 def _sample_figure(
-    chosen: list[str], status: dict[str, str], target: float, lost: list[str]
+    chosen: list[str], status: dict[str, str], target: float, lost: list[str], whole: bool
 ) -> int:
     """Per-module and overall killed share of a sample, a 95 % interval; exit 1 below target.
 
@@ -318,10 +321,14 @@ def _sample_figure(
     p = total["killed"] / live
     half = 1.96 * math.sqrt(p * (1.0 - p) / live)
     ok = p >= target
+    spread = (
+        "the whole group"
+        if whole
+        else f"95 % interval {100 * max(0.0, p - half):.1f}-{100 * min(1.0, p + half):.1f} %"
+    )
     print(
         f"rest sample: {total['killed']}/{live} killed = {100 * p:.1f} % "
-        f"(95 % interval {100 * max(0.0, p - half):.1f}-{100 * min(1.0, p + half):.1f} %; "
-        f"target {100 * target:.0f} %: {'met' if ok else 'MISSED'})"
+        f"({spread}; target {100 * target:.0f} %: {'met' if ok else 'MISSED'})"
     )
     for n in sorted(lost):
         if status.get(n, "not checked") != "not checked":
