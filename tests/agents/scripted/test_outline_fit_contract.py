@@ -19,18 +19,10 @@ from agents.scripted.outline_fit import (
 )
 from agents.scripted.perception import PerceivedTile, SlotTarget
 from qshape import Figure, describe
-from spatial.angles import rotate_xy, yaw_error
+from spatial.angles import yaw_error
+from tests.agents.scripted.polygons import BLUE, ELL, RED, SQUARE, turned
 
-RED = (0.8, 0.2, 0.2)
-BLUE = (0.2, 0.3, 0.8)
-SQUARE = np.array([[0, 0], [40, 0], [40, 40], [0, 40]], float)
-ELL = np.array([[0, 0], [40, 0], [40, 14], [14, 14], [14, 40], [0, 40]], float)
 CFG = PlacementConfig(fit_max_residual=0.03, fit_margin=1.3)
-
-
-def _turned(points: np.ndarray, deg: float, at: tuple[float, float] = (250.0, -80.0)) -> np.ndarray:
-    c = np.asarray(Figure.from_polygon(points).centroid)
-    return rotate_xy(points - c, math.radians(deg)) + np.asarray(at)
 
 
 def _slot(
@@ -91,7 +83,7 @@ def test_a_tile_outline_is_its_traced_one_with_the_figure_s_holes() -> None:
 def test_the_fit_finds_every_turn_of_an_asymmetric_tile(turn_deg: float) -> None:
     """Guards against turns of the circle left untried (the scan starting past 0) or the turn
     taken with the wrong sign: an L turned by -t needs +t, wherever t lies."""
-    f = fit_outline(_outline(_turned(ELL, -turn_deg)), _slot(ELL, 1, "l"), CFG, 1.0)
+    f = fit_outline(_outline(turned(ELL, -turn_deg)), _slot(ELL, 1, "l"), CFG, 1.0)
     assert yaw_error(f.rotation, math.radians(turn_deg), 1) < math.radians(0.1)
     assert -math.pi <= f.rotation < math.pi
     np.testing.assert_allclose(f.centre, [250.0, -80.0], atol=1e-9)
@@ -111,10 +103,10 @@ def test_a_round_slot_has_no_runner_up_and_a_wide_window_neither() -> None:
     f = fit_outline(_outline(circle + 100.0), _slot(circle, 0, "o"), CFG, 1.0)
     assert math.isinf(f.runner_up) and f.residual < CFG.fit_max_residual
     wide = PlacementConfig(fit_max_residual=0.03, fit_turn_window_deg=180.0)
-    f = fit_outline(_outline(_turned(ELL, 30.0)), _slot(ELL, 1, "l"), wide, 1.0)
+    f = fit_outline(_outline(turned(ELL, 30.0)), _slot(ELL, 1, "l"), wide, 1.0)
     assert math.isinf(f.runner_up)
     # A square's quarter turns are its own: its runner-up is the turns between them.
-    f = fit_outline(_outline(_turned(SQUARE, 30.0)), _slot(SQUARE, 4, "q"), CFG, 1.0)
+    f = fit_outline(_outline(turned(SQUARE, 30.0)), _slot(SQUARE, 4, "q"), CFG, 1.0)
     assert yaw_error(f.rotation, math.radians(-30.0), 4) < math.radians(0.1)
     assert 1.3 < f.runner_up < math.inf
 
@@ -122,14 +114,14 @@ def test_a_round_slot_has_no_runner_up_and_a_wide_window_neither() -> None:
 def test_unmatched_tiles_nothing_to_fit_gives_nothing() -> None:
     """Guards against an empty input reaching the assignment."""
     assert fit_unmatched([], [_slot(ELL, 1, "l")], CFG, 0.2, 1.0) == []
-    assert fit_unmatched([_outline(_turned(ELL, 10.0))], [], CFG, 0.2, 1.0) == []
+    assert fit_unmatched([_outline(turned(ELL, 10.0))], [], CFG, 0.2, 1.0) == []
 
 
 def test_a_tile_fitting_two_classes_is_left_and_the_next_tile_still_fitted() -> None:
     """Guards against an ambiguous tile ending the search: a 40.5 mm square fits the 40 and
     41 mm square slots (two classes) alike and is left; the L after it still gets its slot."""
     slots = [_slot(SQUARE, 4, "a"), _slot(SQUARE * 41 / 40, 4, "b"), _slot(ELL, 1, "l")]
-    tiles = [_outline(_turned(SQUARE * 40.5 / 40, 12.0)), _outline(_turned(ELL, 33.0))]
+    tiles = [_outline(turned(SQUARE * 40.5 / 40, 12.0)), _outline(turned(ELL, 33.0))]
     found = fit_unmatched(tiles, slots, CFG, 0.2, 1.0)
     assert [(i, j) for i, j, _ in found] == [(1, 2)]
     assert math.degrees(found[0][2].rotation) == pytest.approx(-33.0, abs=0.1)
@@ -140,7 +132,7 @@ def test_a_tile_fitting_two_classes_is_left_and_the_next_tile_still_fitted() -> 
 
 def test_colour_is_matched_only_when_asked() -> None:
     """Guards against the colour check inverted or applied without ``use_color``."""
-    tile = _outline(_turned(ELL, 33.0), RED)
+    tile = _outline(turned(ELL, 33.0), RED)
     blue = [_slot(ELL, 1, "l", BLUE)]
     assert fit_unmatched([tile], blue, CFG, 0.2, 1.0) == []
     assert [(i, j) for i, j, _ in fit_unmatched([tile], blue, CFG, 1.0, 1.0)] == [(0, 0)]
@@ -153,7 +145,7 @@ def test_tiles_go_to_slots_of_one_class_by_least_residual() -> None:
     class, 40 and 44 mm; each tile goes to the slot of its size, in tile order."""
     big = ELL * 1.1
     slots = [_slot(big, 1, "l", index=0), _slot(ELL, 1, "l", index=1)]
-    tiles = [_outline(_turned(ELL, 15.0)), _outline(_turned(big, -25.0))]
+    tiles = [_outline(turned(ELL, 15.0)), _outline(turned(big, -25.0))]
     loose = PlacementConfig(fit_max_residual=0.2, fit_margin=1.3)
     found = fit_unmatched(tiles, slots, loose, 0.2, 1.0)
     assert [(i, j) for i, j, _ in found] == [(0, 1), (1, 0)]
@@ -169,7 +161,7 @@ def test_a_tile_on_a_tried_turn_is_fitted_exactly_and_quietly() -> None:
     of the 2 deg turns tried, gets exactly 20 deg, with no warning."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        f = fit_outline(_outline(_turned(ELL, -20.0)), _slot(ELL, 1, "l"), CFG, 1.0)
+        f = fit_outline(_outline(turned(ELL, -20.0)), _slot(ELL, 1, "l"), CFG, 1.0)
     assert f.rotation == pytest.approx(math.radians(20.0), abs=1e-12)
 
 
@@ -177,10 +169,10 @@ def test_a_colour_at_exactly_the_distance_allowed_is_the_same_colour() -> None:
     """Guards against the colour bound made strict, and against a slot of another colour
     ending the search over the slots: the red L skips the blue slot and fits the red one; a
     grey tile 0.25 from a slot's colour fits it at a colour distance of exactly 0.25."""
-    tile = _outline(_turned(ELL, 33.0), RED)
+    tile = _outline(turned(ELL, 33.0), RED)
     slots = [_slot(ELL, 1, "l", BLUE, index=0), _slot(ELL, 1, "l", RED, index=1)]
     assert [(i, j) for i, j, _ in fit_unmatched([tile], slots, CFG, 0.2, 1.0)] == [(0, 1)]
-    grey = _outline(_turned(ELL, 33.0), (0.5, 0.5, 0.5))
+    grey = _outline(turned(ELL, 33.0), (0.5, 0.5, 0.5))
     slot = [_slot(ELL, 1, "l", (0.5, 0.5, 0.75))]
     assert [(i, j) for i, j, _ in fit_unmatched([grey], slot, CFG, 0.25, 1.0)] == [(0, 0)]
     assert fit_unmatched([grey], slot, CFG, 0.2499, 1.0) == []
@@ -189,7 +181,7 @@ def test_a_colour_at_exactly_the_distance_allowed_is_the_same_colour() -> None:
 def test_a_tile_that_fits_nothing_leaves_the_next_tile_fitted() -> None:
     """Guards against a tile no slot fits ending the search over the tiles."""
     triangle = np.array([[0, 0], [40, 0], [20, 30]], float)
-    tiles = [_outline(_turned(triangle, 10.0)), _outline(_turned(ELL, 33.0))]
+    tiles = [_outline(turned(triangle, 10.0)), _outline(turned(ELL, 33.0))]
     found = fit_unmatched(tiles, [_slot(ELL, 1, "l")], CFG, 0.2, 1.0)
     assert [(i, j) for i, j, _ in found] == [(1, 0)]
 
@@ -197,7 +189,7 @@ def test_a_tile_that_fits_nothing_leaves_the_next_tile_fitted() -> None:
 def test_the_fit_bounds_admit_a_fit_at_their_edges() -> None:
     """Guards against ``fit_max_residual`` or ``fit_margin`` made strict: a fit whose residual
     is exactly the largest allowed and whose runner-up is exactly the margin is kept."""
-    tile = _outline(_turned(ELL, 33.0))
+    tile = _outline(turned(ELL, 33.0))
     slot = _slot(ELL, 1, "l")
     f = fit_outline(tile, slot, CFG, 1.0)
     edge = PlacementConfig(fit_max_residual=f.residual, fit_margin=f.runner_up)
@@ -214,7 +206,7 @@ def test_the_best_slot_is_the_least_residual_one_and_rivals_are_measured_against
     loosely and a 40 mm one (class b) tightly, more than ``fit_margin`` times better; it goes
     to the 40 mm slot, with no rival."""
     slots = [_slot(SQUARE * 41.5 / 40, 4, "a", index=0), _slot(SQUARE, 4, "b", index=1)]
-    tile = _outline(_turned(SQUARE, 12.0))
+    tile = _outline(turned(SQUARE, 12.0))
     loose, tight = (fit_outline(tile, s, CFG, 1.0).residual for s in slots)
     assert tight * CFG.fit_margin < loose < CFG.fit_max_residual
     assert [(i, j) for i, j, _ in fit_unmatched([tile], slots, CFG, 0.2, 1.0)] == [(0, 1)]
@@ -225,7 +217,7 @@ def test_a_slot_of_another_class_exactly_margin_times_worse_is_no_rival() -> Non
     ``fit_margin`` times worse than the best is no rival ("at least fit_margin times worse"),
     one fitting a hair better than that is."""
     slots = [_slot(SQUARE * 40.6 / 40, 4, "a", index=0), _slot(SQUARE, 4, "b", index=1)]
-    tile = _outline(_turned(SQUARE, 12.0))
+    tile = _outline(turned(SQUARE, 12.0))
     fits = [fit_outline(tile, s, CFG, 1.0) for s in slots]
     margin = fits[0].residual / fits[1].residual
     assert margin * fits[1].residual == fits[0].residual  # exactly at the edge
@@ -241,7 +233,7 @@ def test_a_turn_exactly_the_window_away_is_no_rival_turn() -> None:
     ``fit_turn_window_deg`` from the fit's; an L fitted at exactly 0 deg, whose tried turn 5 x
     2 deg lies exactly 10 deg away, has the same runner-up with a 10 deg window as with an 11
     deg one (its nearest rivals at +-12 deg), and a lower one with a 9 deg window."""
-    tile, slot = _outline(_turned(ELL, 0.0)), _slot(ELL, 1, "l")
+    tile, slot = _outline(turned(ELL, 0.0)), _slot(ELL, 1, "l")
     tried = 5 * math.radians(CFG.fit_step_deg)
     window = math.degrees(tried)
     assert math.radians(window) == tried  # exactly the tried turn

@@ -33,20 +33,11 @@ from qshape import Figure, describe
 from qshape.theory.tolerances import default_tolerances
 from spatial.angles import rotate_xy, symmetry_period
 from spatial.units import MM_PER_M
+from tests.agents.scripted.polygons import BLUE, ELL, RED, SQUARE, turned
 
-RED = (0.8, 0.2, 0.2)
-BLUE = (0.2, 0.3, 0.8)
-SQUARE = np.array([[0, 0], [40, 0], [40, 40], [0, 40]], float)
-ELL = np.array([[0, 0], [40, 0], [40, 14], [14, 14], [14, 40], [0, 40]], float)
 # The L with its outer corner cut 8 mm back: a design corner a picture would not show.
 CUT_ELL = np.array([[8, 0], [40, 0], [40, 14], [14, 14], [14, 40], [0, 40], [0, 8]], float)
 TRIANGLE = np.array([[0, 0], [40, 0], [20, 30]], float)
-
-
-def _turned(points: np.ndarray, deg: float, at: tuple[float, float]) -> np.ndarray:
-    """``points`` turned by ``deg`` about their area centroid, the centroid moved to ``at``."""
-    c = np.asarray(Figure.from_polygon(points).centroid)
-    return rotate_xy(points - c, math.radians(deg)) + np.asarray(at)
 
 
 def _tile(
@@ -125,7 +116,7 @@ def test_a_fitted_command_wraps_its_turn_and_lists_continuous_yaws() -> None:
 def test_a_turned_tile_gets_the_turn_onto_its_slot() -> None:
     """Guards against the plan's command built for the wrong pair or its turn mirrored: an L
     tile turned by -70 deg turns +70 deg onto its slot, picked at its own centroid."""
-    t = _tile(0, _turned(ELL, -70.0, (300.0, -120.0)))
+    t = _tile(0, turned(ELL, -70.0, (300.0, -120.0)))
     s = _slot(0, ELL, (0.5, 0.2, 0.3))
     plan = plan_placements([t], [s])
     (c,) = plan.commands
@@ -146,7 +137,7 @@ def test_the_turn_without_a_traced_outline_is_refined_on_the_figures() -> None:
     and the dense outlines then fit best some 0.4 deg away; the command takes that fit."""
     bent = ELL.copy()
     bent[3] = [15.5, 14.0]
-    t = _tile(0, _turned(bent, -70.0, (300.0, -120.0)))
+    t = _tile(0, turned(bent, -70.0, (300.0, -120.0)))
     s = _slot(0, ELL, (0.5, 0.2, 0.3))
     cfg = PlacementConfig()
     (a,) = qshape.assign([t.description], [s.description])
@@ -171,7 +162,7 @@ def test_a_traced_outline_decides_the_turn_within_the_scanned_span() -> None:
     best scanned turn is 64 deg and the refinement within one scan of it ends at 67 deg
     (scanned every 1 deg it would end at 66 deg; on the figure, at 60 deg)."""
     s = _slot(0, ELL, (0.5, 0.2, 0.3))
-    t = _tile(0, _turned(ELL, -60.0, (300.0, -120.0)), outline=_turned(ELL, -70.0, (300, -120)))
+    t = _tile(0, turned(ELL, -60.0, (300.0, -120.0)), outline=turned(ELL, -70.0, (300, -120)))
     cfg = PlacementConfig(refine_span_deg=5.0, refine_scan_deg=3.0)
     (c,) = plan_placements([t], [s], cfg).commands
     assert math.degrees(c.rotation) == pytest.approx(67.0, abs=0.05)
@@ -184,10 +175,10 @@ def test_every_reason_a_tile_is_left_out() -> None:
     """Guards against a reason misnamed or misjudged: a triangle (no such slot), a blue square
     (only a red square slot), a second red square (its slot taken) - with their details."""
     tiles = [
-        _tile(0, _turned(SQUARE, 0.0, (0, 0))),
-        _tile(1, _turned(TRIANGLE, 0.0, (100, 0))),
-        _tile(2, _turned(SQUARE, 0.0, (200, 0)), BLUE),
-        _tile(3, _turned(SQUARE, 0.0, (300, 0))),
+        _tile(0, turned(SQUARE, 0.0, (0, 0))),
+        _tile(1, turned(TRIANGLE, 0.0, (100, 0))),
+        _tile(2, turned(SQUARE, 0.0, (200, 0)), BLUE),
+        _tile(3, turned(SQUARE, 0.0, (300, 0))),
     ]
     slots = [_slot(5, SQUARE, (0.5, 0.2, 0.0), 4)]
     plan = plan_placements(tiles, slots)
@@ -228,7 +219,7 @@ def test_a_filled_slot_makes_its_tile_a_taken_one_by_the_tolerances_given() -> N
 
 def test_open_slots_are_the_slots_no_tile_went_to_by_design_index() -> None:
     """Guards against open slots reported by position or including assigned ones."""
-    tiles = [_tile(0, _turned(ELL, 20.0, (0, 0)))]
+    tiles = [_tile(0, turned(ELL, 20.0, (0, 0)))]
     slots = [_slot(4, SQUARE, (0.1, 0.1, 0.0), 4), _slot(9, ELL, (0.3, 0.1, 0.2))]
     plan = plan_placements(tiles, slots, PlacementConfig(method="greedy"))
     assert [c.slot for c in plan.commands] == [9]
@@ -253,9 +244,9 @@ def test_feasible_pairs_name_slot_indices_per_tile_and_colour_mode() -> None:
 
 def _seen_scene(outline: bool) -> tuple[list[PerceivedTile], list[SlotTarget]]:
     """A square and an L tile; a square slot and a cut-corner L slot seen as a plain L."""
-    ell = _turned(ELL, -70.0, (300.0, -120.0))
+    ell = turned(ELL, -70.0, (300.0, -120.0))
     tiles = [
-        _tile(0, _turned(SQUARE, 10.0, (100.0, 0.0))),
+        _tile(0, turned(SQUARE, 10.0, (100.0, 0.0))),
         _tile(1, ell, outline=ell if outline else None),
     ]
     slots = [_slot(0, SQUARE, (0.1, 0.2, 0.0), 4), _slot(1, CUT_ELL, (0.5, 0.2, 0.3), seen=ELL)]
@@ -299,7 +290,7 @@ def _checked_scene(
     **cfg: float,
 ) -> tuple[PerceivedTile, SlotTarget, PlacementConfig]:
     """An L tile whose figure says 60 deg and traced outline 70 deg, on a seen cut-corner L."""
-    t = _tile(0, _turned(ELL, -60.0, (300.0, -120.0)), outline=_turned(ELL, -70.0, (300, -120)))
+    t = _tile(0, turned(ELL, -60.0, (300.0, -120.0)), outline=turned(ELL, -70.0, (300, -120)))
     s = _slot(0, CUT_ELL, (0.5, 0.2, 0.3), seen=ELL)
     base = PlacementConfig(
         refine_span_deg=0.0, fit_max_residual=0.03, fit_margin=1.5, fit_turn_window_deg=5.0
@@ -344,7 +335,7 @@ def test_a_symmetric_seen_slot_compares_turns_modulo_its_symmetry() -> None:
     """Guards against the window compared over a full turn on a symmetric slot: a square's fit
     a quarter turn from the match's turn is the same turn, and the match's is kept."""
     cut = np.array([[6, 0], [40, 0], [40, 40], [0, 40], [0, 6]], float)
-    t = _tile(0, _turned(SQUARE, -20.0, (0, 0)), outline=_turned(SQUARE, -20.0, (0, 0)))
+    t = _tile(0, turned(SQUARE, -20.0, (0, 0)), outline=turned(SQUARE, -20.0, (0, 0)))
     s = _slot(0, cut, (0.5, 0.2, 0.0), symmetry=4, seen=SQUARE)
     cfg = PlacementConfig(refine_span_deg=0.0, fit_max_residual=0.05, fit_margin=1.0)
     (c,) = plan_placements([t], [s], cfg).commands
@@ -358,7 +349,7 @@ def test_a_symmetric_seen_slot_compares_turns_modulo_its_symmetry() -> None:
 def test_refine_rotation_keeps_the_rotation_with_no_span_or_no_better_fit() -> None:
     """Guards against a zero span refined anyway, or a worse turn returned: the exact turn of
     an L comes back as it is, bit for bit."""
-    t = _tile(0, _turned(ELL, -70.0, (0, 0))).figure
+    t = _tile(0, turned(ELL, -70.0, (0, 0))).figure
     s = _slot(0, ELL, (0, 0, 0)).figure
     exact = math.radians(70.0)
     assert refine_rotation(t, s, exact + 0.05, 0.0) == exact + 0.05
@@ -372,7 +363,7 @@ def test_refine_rotation_fits_the_traced_points_given() -> None:
     of an L turned -40 deg refines to 40 deg within the 45 deg span."""
     fig = Figure.from_polygon(SQUARE)
     s = _slot(0, ELL, (0, 0, 0)).figure
-    points = _turned(ELL, -40.0, (20.0, 20.0))
+    points = turned(ELL, -40.0, (20.0, 20.0))
     got = refine_rotation(fig, s, 0.0, math.radians(45.0), points=points)
     assert math.degrees(got) == pytest.approx(40.0, abs=0.3)
 
@@ -380,7 +371,7 @@ def test_refine_rotation_fits_the_traced_points_given() -> None:
 def test_the_refinement_precision_is_the_tolerance_given() -> None:
     """Guards against the tolerance not handed to the refinement: a coarse tolerance stops
     within it, a fine one lands on the exact turn."""
-    t = _tile(0, _turned(ELL, -70.0, (0, 0))).figure
+    t = _tile(0, turned(ELL, -70.0, (0, 0))).figure
     s = _slot(0, ELL, (0, 0, 0)).figure
     start, span = math.radians(66.3), math.radians(5.0)
     fine = refine_rotation(t, s, start, span, 1e-6, scan=math.radians(2.0))
@@ -392,7 +383,7 @@ def test_the_refinement_precision_is_the_tolerance_given() -> None:
 def test_outline_residual_is_the_mean_distance_to_the_slot_outline() -> None:
     """Guards against the residual read from the neighbour indices instead of the distances:
     an L on itself leaves 0, and the residual grows with the turn off it."""
-    t = _tile(0, _turned(ELL, -70.0, (300, -120))).figure
+    t = _tile(0, turned(ELL, -70.0, (300, -120))).figure
     s = _slot(0, ELL, (0, 0, 0)).figure
     assert outline_residual(t, s, math.radians(70.0)) == pytest.approx(0.0, abs=1e-9)
     near = outline_residual(t, s, math.radians(72.0))
@@ -426,7 +417,7 @@ def test_the_caller_s_tolerances_and_colour_mode_decide_the_assignment() -> None
 def test_the_seen_assignment_uses_the_caller_s_tolerances_and_colour_mode() -> None:
     """Guards against the second assignment (on the seen descriptions) run with the bundled
     tolerances or with colour always matched: a blue L reaches the red cut-corner L slot."""
-    tiles = [_tile(0, _turned(ELL, -70.0, (300.0, -120.0)), BLUE)]
+    tiles = [_tile(0, turned(ELL, -70.0, (300.0, -120.0)), BLUE)]
     slots = [_slot(0, CUT_ELL, (0.5, 0.2, 0.3), seen=ELL)]
     assert [u.reason for u in plan_placements(tiles, slots).unplaced] == ["color_absent"]
     wide = dataclasses.replace(default_tolerances(), color_distance=1.5)
@@ -442,8 +433,8 @@ def test_a_slot_taken_by_its_design_description_takes_no_second_tile_by_its_seen
     """Guards against the seen assignment offered slots the first one filled, and against a
     design match moved as if seen: a cut-corner L tile fills the cut-corner slot (picked at its
     own centre); the plain L, which only the seen outline matches, is left as slots_taken."""
-    cut = _tile(0, _turned(CUT_ELL, -40.0, (100.0, 50.0)))
-    plain = _tile(1, _turned(ELL, -70.0, (300.0, -120.0)))
+    cut = _tile(0, turned(CUT_ELL, -40.0, (100.0, 50.0)))
+    plain = _tile(1, turned(ELL, -70.0, (300.0, -120.0)))
     slots = [_slot(0, CUT_ELL, (0.5, 0.2, 0.3), seen=ELL)]
     plan = plan_placements([cut, plain], slots)
     assert [(c.tile, c.slot) for c in plan.commands] == [(0, 0)]
@@ -484,9 +475,9 @@ def test_every_refinement_setting_reaches_the_refinement(traced: bool) -> None:
     bent = ELL.copy()
     bent[3] = [15.5, 14.0]
     if traced:
-        t = _tile(0, _turned(ELL, -70.0, (300, -120)), outline=_turned(bent, -70.0, (300, -120)))
+        t = _tile(0, turned(ELL, -70.0, (300, -120)), outline=turned(bent, -70.0, (300, -120)))
     else:
-        t = _tile(0, _turned(bent, -70.0, (300.0, -120.0)))
+        t = _tile(0, turned(bent, -70.0, (300.0, -120.0)))
     s = _slot(0, ELL, (0.5, 0.2, 0.3))
     (a,) = qshape.assign([t.description], [s.description])
     (c,) = plan_placements([t], [s], COARSE).commands
@@ -503,7 +494,7 @@ def test_a_sharp_tipped_tile_is_centred_by_its_traced_outline() -> None:
     the traced outline or the turn: a 20 deg tip's tile whose relevant points put its centre
     1 mm off is picked at its traced outline's true centroid."""
     tip = np.array([[0.0, 0.0], [60.0, 0.0], [60.0, 60.0 * math.tan(math.radians(20.0))]])
-    traced = _turned(tip, -30.0, (200.0, 40.0))
+    traced = turned(tip, -30.0, (200.0, 40.0))
     t = dataclasses.replace(_tile(0, traced, outline=traced), centre=np.array([0.201, 0.040]))
     s = _slot(0, tip, (0.5, 0.2, 0.0))
     (c,) = plan_placements([t], [s]).commands
@@ -542,7 +533,7 @@ def test_refine_rotation_defaults_are_the_documented_ones() -> None:
     0.5, scan 1 deg): the defaults give what those values given explicitly give."""
     bent = ELL.copy()
     bent[3] = [15.5, 14.0]
-    t = _tile(0, _turned(bent, -70.0, (0, 0))).figure
+    t = _tile(0, turned(bent, -70.0, (0, 0))).figure
     s = _slot(0, ELL, (0, 0, 0)).figure
     start, span = math.radians(66.37), math.radians(6.0)
     explicit = refine_rotation(t, s, start, span, 1e-4, spacing=0.5, scan=math.radians(1.0))
@@ -555,7 +546,7 @@ def test_refine_rotation_returns_the_given_turn_when_nothing_fits_better() -> No
     the refinement kept over an exactly scanned turn: the exact turn of an L, scanned past
     (0.7 deg steps), comes back bit for bit; scanned onto (1 deg steps from 3 deg off), the
     scanned turn is returned."""
-    t = _tile(0, _turned(ELL, -70.0, (0, 0))).figure
+    t = _tile(0, turned(ELL, -70.0, (0, 0))).figure
     s = _slot(0, ELL, (0, 0, 0)).figure
     exact = math.radians(70.0)
     assert refine_rotation(t, s, exact, math.radians(5.0), scan=math.radians(0.7)) == exact
