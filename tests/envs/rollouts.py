@@ -93,22 +93,32 @@ def rollout(name: str) -> list[dict[str, Any]]:
     return records
 
 
+def read_fingerprints(path: Path) -> dict[str, list[dict[str, Any]]]:
+    """Recorded fingerprints by case name, from a JSON file under ``tests/data``."""
+    return json.loads(path.read_text())
+
+
+def record_or_compare(argv: list[str], path: Path, found: dict[str, list[dict[str, Any]]]) -> None:
+    """``--write`` in ``argv``: record ``found`` to ``path``; otherwise compare with it, print
+    the cases that differ and exit 1 if any does."""
+    if "--write" in argv:
+        path.write_text(json.dumps(found, indent=1) + "\n")
+        print(f"wrote {path}")
+        return
+    want = read_fingerprints(path)
+    bad = [name for name in found if found[name] != want.get(name)]
+    print("identical" if not bad else f"DIFFERENT: {bad}")
+    sys.exit(1 if bad else 0)
+
+
 def load() -> dict[str, list[dict[str, Any]]]:
     """The recorded fingerprints (``tests/data/rollout_fingerprints.json``)."""
-    return json.loads(DATA.read_text())
+    return read_fingerprints(DATA)
 
 
 def main(argv: list[str]) -> None:
     """``--write``: record every case; otherwise compare and print the cases that differ."""
-    found = {name: rollout(name) for name in CASES}
-    if "--write" in argv:
-        DATA.write_text(json.dumps(found, indent=1) + "\n")
-        print(f"wrote {DATA}")
-        return
-    want = load()
-    bad = [name for name in CASES if found[name] != want.get(name)]
-    print("identical" if not bad else f"DIFFERENT: {bad}")
-    sys.exit(1 if bad else 0)
+    record_or_compare(argv, DATA, {name: rollout(name) for name in CASES})
 
 
 if __name__ == "__main__":

@@ -26,7 +26,7 @@ import numpy as np
 
 import envs  # noqa: F401 - registers the ids
 from envs.task_spec import ActionError
-from tests.envs.rollouts import digest
+from tests.envs.rollouts import digest, read_fingerprints, record_or_compare
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "step_fingerprints.json"
 KINEMATIC = {"action_mode": "pick_place", "execution": "kinematic", "max_slots": 6}
@@ -134,20 +134,12 @@ def rollout(name: str) -> list[dict[str, Any]]:
 
 def load() -> dict[str, list[dict[str, Any]]]:
     """The recorded fingerprints (``tests/data/step_fingerprints.json``)."""
-    return json.loads(DATA.read_text())
+    return read_fingerprints(DATA)
 
 
 def main(argv: list[str]) -> None:
     """``--write``: record every case; otherwise compare and print the cases that differ."""
-    found = {name: rollout(name) for name in CASES}
-    if "--write" in argv:
-        DATA.write_text(json.dumps(found, indent=1) + "\n")
-        print(f"wrote {DATA}")
-        return
-    want = load()
-    bad = [name for name in CASES if found[name] != want.get(name)]
-    print("identical" if not bad else f"DIFFERENT: {bad}")
-    sys.exit(1 if bad else 0)
+    record_or_compare(argv, DATA, {name: rollout(name) for name in CASES})
 
 
 if __name__ == "__main__":
