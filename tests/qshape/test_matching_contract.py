@@ -16,17 +16,13 @@ import pytest
 
 from qshape import Boundary, Figure, MatchError, Tolerances, assign, describe, match, match_best
 from qshape.theory.matching import check_match_inputs, is_continuous
+from spatial.angles import rotate_xy
 
 GREY = (0.5, 0.5, 0.5)
 L_TILE = np.array([[0, 0], [20, 0], [20, 8], [8, 8], [8, 20], [0, 20]], float)
 # A rectangle whose long top edge is bent by one shallow corner: it matches no rectangle as
 # measured, and the rectangle through its structural neighbour (the weak corner removed).
 BENT = [[0, 0], [0, 30], [20, 31], [40, 30.6], [40, 0]]
-
-
-def _turned(pts: np.ndarray, angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.asarray(pts, float) @ np.array([[c, s], [-s, c]])
 
 
 def _circle_with_hole(hole: Figure) -> Figure:
@@ -109,7 +105,7 @@ def test_match_best_with_figures_and_descriptions_alike() -> None:
     tolerances, changes it)."""
     tol = Tolerances(symmetry_residual=0.02)
     refs = {"L": Figure.from_polygon(L_TILE), "square": Figure.rectangle(20, 20)}
-    cand = Figure.from_polygon(_turned(L_TILE, 0.7) + 3.0)
+    cand = Figure.from_polygon(rotate_xy(L_TILE, 0.7) + 3.0)
     by_fig = match_best(refs, cand, tol)
     by_desc = match_best({k: describe(v, tol) for k, v in refs.items()}, describe(cand, tol), tol)
     assert by_fig is not None and by_desc is not None
@@ -181,7 +177,7 @@ def test_assign_mixed_figures_and_descriptions(method: str) -> None:
     slots = [Figure.rectangle(20, 10, GREY), Figure.from_polygon(L_TILE), Figure.circle(6.0)]
     tiles = [
         Figure.circle(6.0, angle=0.3),
-        Figure.from_polygon(_turned(L_TILE, 1.1)),
+        Figure.from_polygon(rotate_xy(L_TILE, 1.1)),
         Figure.rectangle(20, 10, GREY, angle=-0.5),
     ]
     mixed_tiles = [describe(tiles[0], tol), tiles[1], describe(tiles[2], tol)]
@@ -200,7 +196,7 @@ def _rhombus(corner_deg: float, angle: float = 0.0) -> Figure:
         [20 + 20 * math.cos(t), 20 * math.sin(t)],
         [20 * math.cos(t), 20 * math.sin(t)],
     ]
-    return Figure.from_polygon(_turned(np.array(pts, float), angle))
+    return Figure.from_polygon(rotate_xy(np.array(pts, float), angle))
 
 
 def _blocks_design(n_tiles: int) -> tuple[list[Figure], list[Figure]]:
@@ -252,8 +248,8 @@ def test_assign_with_classes_skips_a_group_without_pairs_and_goes_on() -> None:
     assert match(holed, moved) is None
     slots = [holed, holed, Figure.from_polygon(L_TILE), Figure.from_polygon(L_TILE)]
     for tiles in (
-        [moved, Figure.from_polygon(_turned(L_TILE, 0.5))],
-        [Figure.from_polygon(_turned(L_TILE, 0.5)), moved],
+        [moved, Figure.from_polygon(rotate_xy(L_TILE, 0.5))],
+        [Figure.from_polygon(rotate_xy(L_TILE, 0.5)), moved],
     ):
         got = assign(tiles, slots)
         ell = 1 if tiles[1] is not moved else 0
