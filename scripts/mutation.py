@@ -91,6 +91,11 @@ def group_of(name: str, ours: dict[str, Any]) -> str:
     return "scoring" if scoring else "rest"
 
 
+def group_files(mm: dict[str, Any], ours: dict[str, Any], group: str) -> list[str]:
+    """The only_mutate file globs of group ``scoring`` or ``rest``."""
+    return [p for p in mm["only_mutate"] if (p in ours["scoring"]) == (group == "scoring")]
+
+
 def equivalent() -> dict[str, str]:
     """Reviewed equivalent mutants: name -> reason."""
     data = yaml.safe_load(EQUIVALENT.read_text(encoding="utf-8")) or {}
@@ -198,10 +203,7 @@ def run(args: argparse.Namespace) -> int:
     mm, ours = settings()
     patterns: list[str] = []
     if args.group:
-        chosen = [
-            p for p in mm["only_mutate"] if (p in ours["scoring"]) == (args.group == "scoring")
-        ]
-        patterns = [module_of(p) for p in chosen]
+        patterns = [module_of(p) for p in group_files(mm, ours, args.group)]
     t0 = time.monotonic()
     code = subprocess.call(
         [str(MUTMUT), "run", "--max-children", str(args.workers), *patterns],
@@ -251,7 +253,7 @@ def sample(args: argparse.Namespace) -> int:
     """
     mm, ours = settings()
     eq = equivalent()
-    patterns = [p for p in mm["only_mutate"] if (p in ours["scoring"]) == (args.group == "scoring")]
+    patterns = group_files(mm, ours, args.group)
     overrides: dict[str, Any] = {"only_mutate": patterns}
     if args.group == "scoring":
         overrides["pytest_add_cli_args_test_selection"] = ours["sample_tests"]
