@@ -7,17 +7,17 @@ tests in ``[tool.mosaic-mutation]``; the equivalent mutants, each with its reaso
 
 Usage, from the repository root:
 
-    python scripts/mutation.py run [--group scoring|rest] [--workers 2]   # then the report
+    python scripts/mutation.py run [--group scoring|rest] [--workers 2] [--resume]   # + report
     python scripts/mutation.py report [--json out/mutation.json]
     python scripts/mutation.py sample [--group scoring|rest] [--mutants 24] [--seed 0]
 
-``run`` without ``--group`` resumes (mutants with a result are kept); with one it re-runs that
-group's mutants. ``report`` prints killed / non-equivalent per module and group against its
-target (exit 1 below a target) and the survivors. ``sample`` draws mutants of a group with a
-fixed seed and runs them in a throw-away copy of the tree: the scoring group (default, CI)
-against the scoring contract tests only, exit 1 when one survives that is not a reviewed
-equivalent; the rest against the whole selection, its killed share per module with a 95 %
-interval, exit 1 below the group's target.
+``run`` runs every non-equivalent mutant of both groups (or of ``--group``) afresh;
+``--resume`` skips those with a result. ``report`` prints killed / non-equivalent per module
+and group against its target (exit 1 below a target) and the survivors. ``sample`` draws
+mutants of a group with a fixed seed and runs them in a throw-away copy of the tree: the
+scoring group (default, CI) against the scoring contract tests only, exit 1 when one survives
+that is not a reviewed equivalent; the rest against the whole selection, its killed share per
+module with a 95 % interval, exit 1 below the group's target.
 """
 
 from __future__ import annotations
@@ -144,13 +144,15 @@ def report(args: argparse.Namespace) -> int:
     survivors = []
     for name, st in status.items():
         module = name.split(".x")[0]
+        if name in eq:  # reviewed: counted whether or not it was run
+            per[module]["mutants"] += 1
+            per[module]["equivalent"] += 1
+            continue
         if st == "not checked":
             per[module]["not run"] += 1
             continue
         per[module]["mutants"] += 1
-        if name in eq:
-            per[module]["equivalent"] += 1
-        elif st in KILLED:
+        if st in KILLED:
             per[module]["killed"] += 1
         elif st == "survived":
             per[module]["survived"] += 1
@@ -199,17 +201,31 @@ def report(args: argparse.Namespace) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Mutmut run (all, resuming; or one group's modules, re-run), timed, then the report."""
+    """Mutmut run of every non-equivalent mutant (both groups, or one), timed, then the report.
+
+    The mutants are named to mutmut one by one, so each is run afresh and the reviewed
+    equivalents (``scripts/mutation_equivalent.yaml``) are not run at all: none of their tests
+    can fail, so each would cost every test that calls its function. ``--resume`` keeps the
+    mutants that already have a result (a run stopped half-way goes on).
+    """
     mm, ours = settings()
-    patterns: list[str] = []
-    if args.group:
-        patterns = [module_of(p) for p in group_files(mm, ours, args.group)]
+    eq = equivalent()
+    groups = [args.group] if args.group else ["scoring", "rest"]
+    patterns = [p for g in groups for p in group_files(mm, ours, g)]
+    names = [n for n in mutant_names(ROOT, patterns) if n not in eq]
+    if args.resume:
+        done = {n for n, st in results().items() if st != "not checked"}
+        names = [n for n in names if n not in done]
+    print(f"run: {len(names)} mutants of {' and '.join(groups)} ({len(eq)} reviewed equivalents)")
+    sys.stdout.flush()
     t0 = time.monotonic()
-    code = subprocess.call(
-        [str(MUTMUT), "run", "--max-children", str(args.workers), *patterns],
-        cwd=ROOT,
-        env=_env(),
-    )
+    code = 0
+    if names:
+        code = subprocess.call(
+            [str(MUTMUT), "run", "--max-children", str(args.workers), *names],
+            cwd=ROOT,
+            env=_env(),
+        )
     print(f"mutmut run: {time.monotonic() - t0:.0f} s wall, {args.workers} workers")
     if code:
         return code
@@ -345,6 +361,7 @@ def main(argv: list[str] | None = None) -> int:
     r = sub.add_parser("run", help="mutmut run, then the report")
     r.add_argument("--group", choices=("scoring", "rest"))
     r.add_argument("--workers", type=int, default=2)
+    r.add_argument("--resume", action="store_true", help="skip mutants that have a result")
     for p in (r, sub.add_parser("report", help="figures against the targets, survivors")):
         p.add_argument("--json", type=Path, default=ROOT / "out" / "mutation.json")
         p.add_argument("--no-diffs", dest="diffs", action="store_false")
