@@ -1,0 +1,223 @@
+r"""The moving belt's soak row: a policy on thousands of held-out stream episodes, losses counted.
+
+Run::
+
+    python -m benchmarks.learned.stream_soak                  # at least 10,000 tiles, 2 workers
+    python -m benchmarks.learned.stream_soak --tiles 320      # a short run
+    python -m benchmarks.learned.stream_soak --policy scripted --out out/soak_scripted
+
+The policy (default: the shipped stream clone,
+``checkpoints/MosaicStream-v1/PairBC_stream/seed_0/bc.pt``; any `apps.evaluate` policy name)
+plays ``MosaicStream-v1`` under the rung's own protocol (dynamic execution, its step limit and
+throughput horizon) on consecutive seeds from ``--first-seed`` until at least ``--tiles`` tiles
+have been supplied. The default first seed, 10000, is disjoint from the clone's training seeds
+(0-59) and from the rung's held-out seeds (1000-1019, 2000-2019). The seeds are dealt out to
+``--workers`` processes, each an `apps.evaluate` run in its own folder under ``--out`` that
+appends every episode to its log as it finishes: a soak that was stopped resumes where it
+stopped, and no finished episode is played again.
+
+The tally (printed, and written to ``<out>/soak.json``): tiles supplied, placed correctly,
+misplaced, dropped in transit, lost off the belt's end, stranded beside the mesh and left
+unplaced; the share placed correctly with its 95 % Wilson interval; the share of episodes
+completed; tiles per simulated minute against the supply rate; the wall time.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import multiprocessing
+import time
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from apps.cli import CommandParser, run_cli, write_result
+from apps.evaluate_results import EpisodeResult
+
+TASK = "MosaicStream-v1"
+"""The rung soaked."""
+POLICY = "checkpoints/MosaicStream-v1/PairBC_stream/seed_0/bc.pt"
+"""The shipped stream clone."""
+FIRST_SEED = 10_000
+"""First soak seed: disjoint from the clone's training seeds and the rung's held-out seeds."""
+LOG = "episodes.jsonl"
+"""`apps.evaluate`'s per-episode log in each worker's folder."""
+Z95 = 1.959964
+"""Standard normal quantile of a two-sided 95 % interval."""
+
+
+@dataclass(frozen=True)
+class SoakTally:
+    """The soak's totals over its episodes.
+
+    Attributes:
+        episodes: Episodes played.
+        tiles: Tiles supplied (the design's slots, one tile each).
+        correct: Tiles placed in their slot within tolerance.
+        misplaced: Tiles on the mesh filling no slot.
+        dropped: Drop events (the pad lost a tile in transit).
+        lost: Tiles carried off the input belt's end.
+        stranded: Tiles beside the mesh or tilted.
+        left: Tiles never placed (still on the belt or held at the episode's end).
+        correct_share: ``correct / tiles``.
+        correct_low: Lower end of the share's 95 % Wilson interval.
+        correct_high: Upper end of the share's 95 % Wilson interval.
+        episodes_complete: Share of the episodes with every slot filled correctly.
+        tiles_per_min: Mean over the episodes of correct tiles per simulated minute.
+        supply_per_min: The stream's supply rate [tiles/min].
+        wall_s: Wall seconds of the policy and the env steps, summed over the episodes.
+    """
+
+    episodes: int
+    tiles: int
+    correct: int
+    misplaced: int
+    dropped: int
+    lost: int
+    stranded: int
+    left: int
+    correct_share: float
+    correct_low: float
+    correct_high: float
+    episodes_complete: float
+    tiles_per_min: float
+    supply_per_min: float
+    wall_s: float
+
+
+def wilson(successes: int, trials: int, z: float = Z95) -> tuple[float, float]:
+    """Wilson score interval of a binomial share (``(0, 1)`` without trials)."""
+    if trials <= 0:
+        return 0.0, 1.0
+    p = successes / trials
+    denom = 1.0 + z * z / trials
+    centre = (p + z * z / (2 * trials)) / denom
+    half = z * math.sqrt(p * (1.0 - p) / trials + z * z / (4 * trials * trials)) / denom
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def tally(episodes: Sequence[EpisodeResult], supply_per_min: float) -> SoakTally:
+    """The totals of ``episodes`` (see `SoakTally`)."""
+    n = len(episodes)
+    tiles = sum(e.slots for e in episodes)
+    correct = sum(e.correct for e in episodes)
+    low, high = wilson(correct, tiles)
+    return SoakTally(
+        episodes=n,
+        tiles=tiles,
+        correct=correct,
+        misplaced=sum(e.misplaced for e in episodes),
+        dropped=sum(e.dropped for e in episodes),
+        lost=sum(e.lost for e in episodes),
+        stranded=sum(e.stranded for e in episodes),
+        left=sum(e.left for e in episodes),
+        correct_share=correct / tiles if tiles else 0.0,
+        correct_low=low,
+        correct_high=high,
+        episodes_complete=sum(e.success for e in episodes) / n if n else 0.0,
+        tiles_per_min=sum(e.tiles_per_min for e in episodes) / n if n else 0.0,
+        supply_per_min=supply_per_min,
+        wall_s=sum(e.wall_s for e in episodes),
+    )
+
+
+def deal(seeds: Sequence[int], workers: int) -> list[list[int]]:
+    """``seeds`` dealt round-robin to ``workers`` lists (equal shares, each in order)."""
+    return [list(seeds[i::workers]) for i in range(workers) if seeds[i::workers]]
+
+
+def _play(task: str, policy: str, seeds: list[int], out: str) -> None:
+    """One worker: `apps.evaluate` on ``seeds`` into ``out`` (resuming its log)."""
+    from apps import evaluate  # noqa: PLC0415 - imported in the worker process
+
+    spec = ",".join(str(s) for s in seeds)
+    evaluate.main(["--task", task, "--policies", policy, "--seeds", spec, "--out", out, "--quiet"])
+
+
+def read_episodes(out: Path) -> list[EpisodeResult]:
+    """Every episode in the worker folders' logs under ``out``."""
+    from configs.files import complete_lines  # noqa: PLC0415
+
+    found = []
+    for log in sorted(out.glob(f"worker_*/{LOG}")):
+        found += [EpisodeResult(**json.loads(line)) for line in complete_lines(log)]
+    return found
+
+
+def stream_facts(task: str) -> tuple[int, float]:
+    """(slots of the rung's design, its stream's supply rate [tiles/min]), from one env."""
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: F401, PLC0415 - registers the ladder
+
+    env = gym.make(task)
+    try:
+        u = env.unwrapped
+        return len(u.task.slot_class), 60.0 / float(u.cell.cfg.tiles.stream_period)  # type: ignore[attr-defined]
+    finally:
+        env.close()
+
+
+def soak(
+    task: str, policy: str, tiles: int, *, first_seed: int, workers: int, out: Path
+) -> dict[str, Any]:
+    """Play until ``tiles`` tiles were supplied (resuming ``out``); the tally as a dict."""
+    slots, supply = stream_facts(task)
+    seeds = list(range(first_seed, first_seed + math.ceil(tiles / slots)))
+    t0 = time.monotonic()
+    spawn = multiprocessing.get_context("spawn")  # fresh workers: no GL or torch state copied
+    with ProcessPoolExecutor(max_workers=workers, mp_context=spawn) as pool:
+        jobs = [
+            pool.submit(_play, task, policy, part, str(out / f"worker_{i}"))
+            for i, part in enumerate(deal(seeds, workers))
+        ]
+        for job in jobs:
+            job.result()
+    wanted = set(seeds)
+    result = asdict(tally([e for e in read_episodes(out) if e.seed in wanted], supply))
+    result.update(
+        task=task, policy=policy, seeds=[seeds[0], seeds[-1]], workers=workers,
+        soak_wall_s=time.monotonic() - t0,
+    )  # fmt: skip
+    return result
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    """Command line (see the module docstring)."""
+    ap = CommandParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--task", default=TASK)
+    ap.add_argument("--policy", default=POLICY, help="an apps.evaluate policy name or path")
+    ap.add_argument("--tiles", type=int, default=10_000, help="tiles supplied, at least")
+    ap.add_argument("--first-seed", type=int, default=FIRST_SEED)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", type=Path, default=Path("out/stream_soak"))
+    args = ap.parse_args(argv)
+    if args.tiles < 1 or args.workers < 1:
+        ap.error(f"--tiles {args.tiles}, --workers {args.workers}: each at least 1")
+    result = soak(
+        args.task,
+        args.policy,
+        args.tiles,
+        first_seed=args.first_seed,
+        workers=args.workers,
+        out=args.out,
+    )
+    print(
+        f"{result['episodes']} episodes, {result['tiles']} tiles: {result['correct']} correct "
+        f"({100 * result['correct_share']:.2f} %, 95 % interval "
+        f"{100 * result['correct_low']:.2f}-{100 * result['correct_high']:.2f} %), "
+        f"{result['misplaced']} misplaced, {result['dropped']} dropped, {result['lost']} lost, "
+        f"{result['stranded']} stranded, {result['left']} left; "
+        f"{100 * result['episodes_complete']:.1f} % of episodes complete; "
+        f"{result['tiles_per_min']:.1f} tiles/min (supply {result['supply_per_min']:.1f})"
+    )
+    return write_result(args.out / "soak.json", result, f" ({result['soak_wall_s']:.0f} s wall)")
+
+
+__all__ = ["FIRST_SEED", "POLICY", "TASK", "SoakTally", "deal", "main", "soak", "tally", "wilson"]
+
+if __name__ == "__main__":
+    run_cli(main)

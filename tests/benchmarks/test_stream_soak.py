@@ -1,0 +1,59 @@
+"""The stream's soak row: losses counted tile by tile, its interval, resuming a stopped soak."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from apps.evaluate_results import EpisodeResult
+from benchmarks.learned.stream_soak import deal, soak, tally, wilson
+
+
+def _episode(seed: int, correct: int, *, misplaced: int = 0, lost: int = 0) -> EpisodeResult:
+    return EpisodeResult(
+        policy="p", seed=seed, design="paper_mixed", success=correct == 16, correct=correct,
+        slots=16, misplaced=misplaced, dropped=0, lost=lost, stranded=0, steps=20, sim_s=40.0,
+        span_s=40.0, wall_s=5.0, episode_return=0.0, left=16 - correct - misplaced - lost,
+    )  # fmt: skip
+
+
+def test_tally_counts_every_tile_and_a_lost_one_is_not_correct():
+    eps = [_episode(0, 16), _episode(1, 14, misplaced=1, lost=1)]
+    t = tally(eps, supply_per_min=24.0)
+    assert (t.episodes, t.tiles, t.correct, t.misplaced, t.lost) == (2, 32, 30, 1, 1)
+    assert t.correct_share == pytest.approx(30 / 32)
+    assert t.correct_low < t.correct_share < t.correct_high
+    assert t.episodes_complete == 0.5
+    assert t.tiles_per_min == pytest.approx((16 + 14) / 2 * 60 / 40)  # the episodes' mean
+    assert t.wall_s == 10.0 and t.supply_per_min == 24.0
+
+
+def test_wilson_interval_at_known_values():
+    assert wilson(0, 10) == pytest.approx((0.0, 0.2775), abs=1e-4)
+    assert wilson(10, 10) == pytest.approx((0.7225, 1.0), abs=1e-4)
+    low, high = wilson(9_800, 10_000)
+    assert low == pytest.approx(0.97707, abs=1e-4) and high == pytest.approx(0.98257, abs=1e-4)
+    assert wilson(0, 0) == (0.0, 1.0)
+
+
+def test_seeds_are_dealt_once_each_in_equal_shares():
+    parts = deal(list(range(10, 21)), 2)
+    assert parts == [[10, 12, 14, 16, 18, 20], [11, 13, 15, 17, 19]]
+    assert deal([5], 3) == [[5]]
+
+
+@pytest.mark.slow
+def test_a_soak_resumes_without_playing_an_episode_again(tmp_path):
+    """One episode of the shipped clone; the second call finds it in the log and plays none."""
+    first = soak("MosaicStream-v1", "checkpoints/MosaicStream-v1/PairBC_stream/seed_0/bc.pt",
+                 16, first_seed=10_000, workers=1, out=tmp_path)  # fmt: skip
+    log = tmp_path / "worker_0" / "episodes.jsonl"
+    lines = log.read_text().splitlines()
+    assert len(lines) == 1 and json.loads(lines[0])["seed"] == 10_000
+    assert first["episodes"] == 1 and first["tiles"] == 16
+    assert first["correct"] + first["misplaced"] + first["lost"] + first["left"] <= 16
+    again = soak("MosaicStream-v1", "checkpoints/MosaicStream-v1/PairBC_stream/seed_0/bc.pt",
+                 16, first_seed=10_000, workers=1, out=tmp_path)  # fmt: skip
+    assert log.read_text().splitlines() == lines
+    assert again["correct"] == first["correct"]
