@@ -65,7 +65,6 @@ class EpisodeResult:
         span_s: Time the throughput is measured over [s] (to completion, or the horizon).
         wall_s: Wall time of the policy and the env steps (reset excluded) [s].
         episode_return: Sum of rewards.
-        left: Real tiles never placed (on the input belt, held or waiting at the end).
         env: The env overrides the episode ran with (`env_key`); a resumed evaluation takes
             an episode from its log only when they are the same ("": unknown, never taken).
     """
