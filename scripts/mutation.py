@@ -212,11 +212,16 @@ def run(args: argparse.Namespace) -> int:
     eq = equivalent()
     groups = [args.group] if args.group else ["scoring", "rest"]
     patterns = [p for g in groups for p in group_files(mm, ours, g)]
-    names = [n for n in mutant_names(ROOT, patterns) if n not in eq]
+    made = mutant_names(ROOT, patterns)
+    names = [n for n in made if n not in eq]
+    skipped = len(made) - len(names)
     if args.resume:
         done = {n for n, st in results().items() if st != "not checked"}
         names = [n for n in names if n not in done]
-    print(f"run: {len(names)} mutants of {' and '.join(groups)} ({len(eq)} reviewed equivalents)")
+    print(
+        f"run: {len(names)} mutants of {' and '.join(groups)} "
+        f"({skipped} reviewed equivalents not run)"
+    )
     sys.stdout.flush()
     t0 = time.monotonic()
     code = 0
