@@ -2,7 +2,7 @@ r"""The moving belt's soak row: a policy on thousands of held-out stream episode
 
 Run::
 
-    python -m benchmarks.learned.stream_soak                  # at least 10,000 tiles, 2 workers
+    python -m benchmarks.learned.stream_soak --teacher        # at least 10,000 tiles, 2 workers
     python -m benchmarks.learned.stream_soak --tiles 320      # a short run
     python -m benchmarks.learned.stream_soak --policy scripted --out out/soak_scripted
 
@@ -19,7 +19,11 @@ stopped, and no finished episode is played again.
 The tally (printed, and written to ``<out>/soak.json``): tiles supplied, placed correctly,
 misplaced, dropped in transit, lost off the belt's end, stranded beside the mesh and left
 unplaced; the share placed correctly with its 95 % Wilson interval; the share of episodes
-completed; tiles per simulated minute against the supply rate; the wall time.
+completed; tiles per simulated minute against the supply rate; the wall time. With
+``--teacher``, the teacher the clone was cloned from (`agents.experts.deadline.DeadlineExpert`:
+the scheduler's rule on the env's ground truth) then plays every seed the policy failed, to
+tell the losses no order avoids from the policy's own (its episodes are kept in
+``<out>/teacher_*.jsonl`` and resumed the same way).
 """
 
 from __future__ import annotations
@@ -147,6 +151,66 @@ def read_episodes(out: Path) -> list[EpisodeResult]:
     return found
 
 
+def _teacher(task: str, seeds: list[int], log: str) -> None:
+    """One worker: the teacher on ``seeds``, each episode appended to ``log`` (resuming it)."""
+    import gymnasium as gym  # noqa: PLC0415
+
+    import envs  # noqa: F401, PLC0415 - registers the ladder
+    from agents.experts.deadline import DeadlineExpert  # noqa: PLC0415
+    from configs.files import append_line, complete_lines  # noqa: PLC0415
+    from envs.task import Evaluation  # noqa: PLC0415
+
+    path = Path(log)
+    done = {json.loads(line)["seed"] for line in complete_lines(path)} if path.is_file() else set()
+    env = gym.make(task)
+    try:
+        expert = DeadlineExpert(env)
+        for seed in seeds:
+            if seed in done:
+                continue
+            env.reset(seed=seed)
+            expert.reset()
+            over = False
+            while not over:
+                _, _, term, trunc, info = env.step(expert.action())
+                over = bool(term or trunc)
+            ev = Evaluation.from_info(info)
+            row = {"seed": seed, "correct": ev.correct, "lost": ev.lost, "success": ev.success}
+            append_line(path, json.dumps(row))
+    finally:
+        env.close()
+
+
+def compare_teacher(task: str, failed: Sequence[int], *, workers: int, out: Path) -> dict[str, Any]:
+    """The teacher (the scheduler's rule on ground truth) on the seeds the policy failed.
+
+    Returns:
+        ``teacher_episodes`` (the seeds replayed), ``teacher_failed_too`` (of those, the
+        episodes the teacher fails as well) and ``teacher_lost`` (the tiles it loses on them).
+    """
+    from configs.files import complete_lines  # noqa: PLC0415
+
+    spawn = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=spawn) as pool:
+        jobs = [
+            pool.submit(_teacher, task, part, str(out / f"teacher_{i}.jsonl"))
+            for i, part in enumerate(deal(list(failed), workers))
+        ]
+        for job in jobs:
+            job.result()
+    rows = {
+        r["seed"]: r
+        for log in sorted(out.glob("teacher_*.jsonl"))
+        for r in (json.loads(line) for line in complete_lines(log))
+    }
+    mine = [rows[s] for s in failed if s in rows]
+    return {
+        "teacher_episodes": len(mine),
+        "teacher_failed_too": sum(not r["success"] for r in mine),
+        "teacher_lost": sum(r["lost"] for r in mine),
+    }
+
+
 def stream_facts(task: str) -> tuple[int, float]:
     """(slots of the rung's design, its stream's supply rate [tiles/min]), from one env."""
     import gymnasium as gym  # noqa: PLC0415
@@ -162,9 +226,19 @@ def stream_facts(task: str) -> tuple[int, float]:
 
 
 def soak(
-    task: str, policy: str, tiles: int, *, first_seed: int, workers: int, out: Path
+    task: str,
+    policy: str,
+    tiles: int,
+    *,
+    first_seed: int,
+    workers: int,
+    out: Path,
+    teacher: bool = False,
 ) -> dict[str, Any]:
-    """Play until ``tiles`` tiles were supplied (resuming ``out``); the tally as a dict."""
+    """Play until ``tiles`` tiles were supplied (resuming ``out``); the tally as a dict.
+
+    With ``teacher``, the teacher also plays every seed the policy failed (`compare_teacher`).
+    """
     slots, supply = stream_facts(task)
     seeds = list(range(first_seed, first_seed + math.ceil(tiles / slots)))
     t0 = time.monotonic()
@@ -177,7 +251,11 @@ def soak(
         for job in jobs:
             job.result()
     wanted = set(seeds)
-    result = asdict(tally([e for e in read_episodes(out) if e.seed in wanted], supply))
+    played = [e for e in read_episodes(out) if e.seed in wanted]
+    result = asdict(tally(played, supply))
+    if teacher:
+        failed = sorted(e.seed for e in played if not e.success)
+        result.update(compare_teacher(task, failed, workers=workers, out=out))
     result.update(
         task=task, policy=policy, seeds=[seeds[0], seeds[-1]], workers=workers,
         soak_wall_s=time.monotonic() - t0,
@@ -194,6 +272,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--first-seed", type=int, default=FIRST_SEED)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", type=Path, default=Path("out/stream_soak"))
+    ap.add_argument(
+        "--teacher",
+        action="store_true",
+        help="also play the teacher (the scheduler's rule on ground truth) on the failed seeds",
+    )
     args = ap.parse_args(argv)
     if args.tiles < 1 or args.workers < 1:
         ap.error(f"--tiles {args.tiles}, --workers {args.workers}: each at least 1")
@@ -204,6 +287,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         first_seed=args.first_seed,
         workers=args.workers,
         out=args.out,
+        teacher=args.teacher,
     )
     print(
         f"{result['episodes']} episodes, {result['tiles']} tiles: {result['correct']} correct "
@@ -214,6 +298,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         f"{100 * result['episodes_complete']:.1f} % of episodes complete; "
         f"{result['tiles_per_min']:.1f} tiles/min (supply {result['supply_per_min']:.1f})"
     )
+    if "teacher_episodes" in result:
+        print(
+            f"teacher on the {result['teacher_episodes']} failed seeds: fails "
+            f"{result['teacher_failed_too']} of them too, losing {result['teacher_lost']} tiles"
+        )
     return write_result(args.out / "soak.json", result, f" ({result['soak_wall_s']:.0f} s wall)")
 
 

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from apps.evaluate_results import EpisodeResult
-from benchmarks.learned.stream_soak import deal, soak, tally, wilson
+from benchmarks.learned.stream_soak import compare_teacher, deal, soak, tally, wilson
 
 
 def _episode(seed: int, correct: int, *, misplaced: int = 0, lost: int = 0) -> EpisodeResult:
@@ -57,3 +57,10 @@ def test_a_soak_resumes_without_playing_an_episode_again(tmp_path):
                  16, first_seed=10_000, workers=1, out=tmp_path)  # fmt: skip
     assert log.read_text().splitlines() == lines
     assert again["correct"] == first["correct"]
+
+
+@pytest.mark.slow
+def test_the_teacher_replays_a_failed_seed_and_fails_where_no_order_saves_every_tile(tmp_path):
+    """Seed 1017: both tiles given at reset start too far downstream for any order to save."""
+    got = compare_teacher("MosaicStream-v1", [1017], workers=1, out=tmp_path)
+    assert got == {"teacher_episodes": 1, "teacher_failed_too": 1, "teacher_lost": 1}
