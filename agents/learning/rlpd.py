@@ -269,9 +269,11 @@ def clone_actor(
 def hold_actor(steps: int) -> Any:
     """An SB3 callback keeping a SAC model's actor as it was at the start of ``learn``.
 
-    For ``steps`` env steps the actor's weights are put back after every step, so a cloned
-    actor (`clone_actor`) keeps acting as the clone while the critics learn from its episodes
-    and the demonstrations; a random critic would otherwise drag it off at once.
+    For ``steps`` env steps the actor's weights are put back before every action (SB3 trains
+    between an env step and the next action, so putting them back after the step alone would
+    let every action come from the clone plus one update) and after every step, so a cloned
+    actor (`clone_actor`) acts as the clone while the critics learn from its episodes and the
+    demonstrations; a random critic would otherwise drag it off at once.
     """
     from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
 
@@ -279,6 +281,10 @@ def hold_actor(steps: int) -> Any:
         def _on_training_start(self) -> None:
             actor: nn.Module = getattr(self.model, "actor")  # noqa: B009 - SAC-style models
             self.saved = {k: v.clone() for k, v in actor.state_dict().items()}
+
+        def _on_rollout_start(self) -> None:  # before the next action, after SAC's update
+            if self.model.num_timesteps < steps:
+                getattr(self.model, "actor").load_state_dict(self.saved)  # noqa: B009
 
         def _on_step(self) -> bool:
             if self.model.num_timesteps <= steps:

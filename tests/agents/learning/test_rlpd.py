@@ -18,6 +18,7 @@ from agents.learning.rlpd import (  # noqa: E402
     DemoMixReplayBuffer,
     LayerNormSACPolicy,
     clone_actor,
+    hold_actor,
     portable_checkpoint,
 )
 from apps.record_demos import record  # noqa: E402
@@ -170,6 +171,38 @@ def test_clone_actor_refuses_an_unknown_std_fit(demo_root):
     model = _model(env, demo_root)
     with pytest.raises(ValueError, match=r"std_fit must be one of \['mean', 'clipped'\]"):
         clone_actor(model, model.replay_buffer.demos, epochs=1, std_fit="median")
+    env.close()
+
+
+def test_held_actor_is_the_clone_at_every_action(demo_root):
+    from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
+
+    class Acting(BaseCallback):
+        """The actor's largest parameter change from the start, seen before each action."""
+
+        def _on_training_start(self) -> None:
+            self.start = [p.detach().clone() for p in self.model.actor.parameters()]
+            self.drift: list[float] = []
+
+        def _on_rollout_start(self) -> None:
+            now = list(self.model.actor.parameters())
+            self.drift.append(
+                max(
+                    float((a.detach() - b).abs().max())
+                    for a, b in zip(now, self.start, strict=True)
+                )
+            )
+
+        def _on_step(self) -> bool:
+            return True
+
+    torch.manual_seed(0)
+    env = gym.make(TASK)
+    model = _model(env, demo_root, learning_starts=0, gradient_steps=1)
+    acting = Acting()
+    model.learn(40, callback=[hold_actor(40), acting])
+    # SAC updates the actor after every step; the held actor still takes every action
+    assert len(acting.drift) == 40 and max(acting.drift) == 0.0, acting.drift
     env.close()
 
 
