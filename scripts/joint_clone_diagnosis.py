@@ -30,7 +30,10 @@ Run::
     nice -n 19 .venv/bin/python scripts/joint_clone_diagnosis.py --std-fit clipped \
         --model runs/joint_clone/clone_clipped.zip --seeds 1000 1001 1002 1003 1004
 
-``--sweep-seeds`` adds the placed count over more seeds for every policy (no table).
+``--sweep-seeds`` adds, for every policy, one line over more seeds: placed, sealed, and how
+the sealed but unplaced episodes ended (let go in the carry, dropped, still held at the time
+limit). ``--model`` may also name an ``apps.train`` run's ``model.zip``: a run stopped during
+its ``hold_actor_steps`` saves the actor that took the hold's actions.
 """
 
 from __future__ import annotations
