@@ -32,8 +32,9 @@ Run::
 
 ``--sweep-seeds`` adds, for every policy, one line over more seeds: placed, sealed, and how
 the sealed but unplaced episodes ended (let go in the carry, dropped, still held at the time
-limit). ``--model`` may also name an ``apps.train`` run's ``model.zip``: a run stopped during
-its ``hold_actor_steps`` saves the actor that took the hold's actions.
+limit). ``--model`` may also name an ``apps.train`` run's ``model.zip`` (a run stopped during
+its ``hold_actor_steps`` saves the clone plus one SAC update: before `hold_actor` put the
+actor back before every action, that is what acted in the hold).
 """
 
 from __future__ import annotations
