@@ -116,6 +116,10 @@ class TrainConfig:
             (SAC; `agents.learning.rlpd.clone_actor`); 0: none. ``algo_kwargs`` keys ending in
             ``_class`` may name a class as ``module:attr`` (`apps.train_extras`), e.g.
             ``replay_buffer_class: agents.learning.rlpd:DemoMixReplayBuffer``.
+        bc_std_fit: Where the cloned actor's standard deviation is fitted around: ``mean``
+            (the Gaussian's mean) or ``clipped`` (the mean clipped to the demonstrated
+            actions' range, so saturated actions such as the vacuum do not read as spread;
+            `agents.learning.rlpd.clone_actor`).
         task: A rung of the task ladder (``MosaicDecision6-v0``, `envs.tasks`): the envs are
             made from its id (its preset and episode limit; env i trains on its training
             design i mod count) and ``env`` overrides on top; "" uses `MosaicAssembly-v0`.
@@ -164,6 +168,7 @@ class TrainConfig:
     reach_shaping: float = checked(0.0, ge=0)  # [1/m]
     demos: str = ""
     bc_epochs: int = 0
+    bc_std_fit: str = "mean"
     normalize_obs: bool = False
     residual_scale: float = checked(0.0, ge=0)
     hold_actor_steps: int = checked(0, ge=0)
@@ -178,6 +183,13 @@ class TrainConfig:
             )
         if (self.bc_epochs or self.normalize_obs) and not self.demos:
             raise TrainError("bc_epochs and normalize_obs need demos (a dataset id)")
+        if self.bc_std_fit != "mean":
+            from agents.learning.rlpd import STD_FITS  # noqa: PLC0415 - torch, only when set
+
+            if self.bc_std_fit not in STD_FITS:
+                raise TrainError(
+                    f"bc_std_fit must be one of {list(STD_FITS)}, got {self.bc_std_fit!r}"
+                )
         from envs.env_config import load_env_config  # noqa: PLC0415 - validates env keys
 
         load_env_config(**dict(self.env))
@@ -519,7 +531,9 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
         t0, c0 = time.perf_counter(), cpu_seconds()
         bc_steps = 0
         if cfg.bc_epochs:
-            bc_steps = clone_before_learning(model, cfg.demos, DEMO_ROOT, cfg.bc_epochs, cfg.seed)
+            bc_steps = clone_before_learning(
+                model, cfg.demos, DEMO_ROOT, cfg.bc_epochs, cfg.seed, std_fit=cfg.bc_std_fit
+            )
         model.learn(
             total_timesteps=cfg.total_timesteps,
             callback=callbacks,

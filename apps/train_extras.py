@@ -45,9 +45,11 @@ def resolve_algo_kwargs(kwargs: dict[str, Any]) -> dict[str, Any]:
 
 
 def clone_before_learning(
-    model: Any, dataset_id: str, root: str | Path, epochs: int, seed: int
+    model: Any, dataset_id: str, root: str | Path, epochs: int, seed: int, *, std_fit: str = "mean"
 ) -> int:
     """Fit ``model``'s actor to the dataset's demonstrations (`agents.learning.rlpd.clone_actor`).
+
+    ``std_fit``: where the actor's standard deviation is fitted around (`clone_actor`).
 
     Returns:
         The gradient steps taken.
@@ -62,7 +64,7 @@ def clone_before_learning(
     if not hasattr(model, "actor"):
         raise ConfigError(f"bc_epochs needs an actor-critic with an actor (SAC), got {model}")
     demos = load_demos(dataset_id, model.observation_space, model.action_space, Path(root))
-    clone_actor(model, demos, epochs=epochs, batch_size=BC_BATCH, seed=seed)
+    clone_actor(model, demos, epochs=epochs, batch_size=BC_BATCH, seed=seed, std_fit=std_fit)
     return epochs * math.ceil(len(demos) / BC_BATCH)
 
 

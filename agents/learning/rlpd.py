@@ -40,6 +40,16 @@ from agents.learning.demos import DEFAULT_ROOT, DemoDatasetError, Transitions, l
 
 DEMO_FRACTION = 0.5
 """RLPD's share of demonstrations in each batch."""
+LABEL_CLIP = 1e-3
+"""Demonstrated actions are cloned clipped this far inside [-1, 1] (where tanh is invertible)."""
+STD_FITS = ("mean", "clipped")
+"""Allowed ``std_fit`` values of `clone_actor`."""
+STD_WEIGHT = 1e-2
+"""Weight of the standard deviation's likelihood term in `clone_actor`'s ``mse`` loss."""
+STD_FLOOR = 1e-3
+"""``std_fit: clipped``: the likelihood sees the standard deviation (before the tanh) floored
+here, so that on exactly matched labels (the vacuum) it stops there instead of falling without
+end while its gradient drags the layers the mean shares."""
 
 
 class DemoMixReplayBuffer(DictReplayBuffer):
@@ -173,6 +183,7 @@ def clone_actor(
     learning_rate: float = 1e-3,
     seed: int = 0,
     loss: str = "mse",
+    std_fit: str = "mean",
 ) -> list[float]:
     """Behaviour cloning: fit a SAC model's actor to the demonstrations.
 
@@ -187,6 +198,18 @@ def clone_actor(
       mean far into tanh's flat tails, and the clone turns round late (it overshoots its
       targets by centimetres on `MosaicOneTile-v0`).
 
+    ``std_fit`` (``mse`` only): where the log standard deviation is fitted around:
+
+    - ``mean``: the Gaussian's mean. On a saturated label (+-1: the vacuum, a full move) the
+      squared error leaves the mean anywhere past the label's pre-image (tanh is flat there),
+      and the fit reads that distance as spread: on `MosaicOneTileJoint-v1` the vacuum's
+      standard deviation ends at SB3's upper clip (e^2) and a sampled vacuum switches off
+      mid-carry (``scripts/joint_clone_diagnosis.py``).
+    - ``clipped``: the mean clipped to the labels' pre-image range (``atanh(1 -``
+      `LABEL_CLIP` ``)``): a mean past a saturated label acts as the label and counts as no
+      error, so the standard deviation measures the demonstrations' real spread (floored at
+      `STD_FLOOR` in the likelihood).
+
     Args:
         model: An SB3 SAC model (its ``actor`` and ``policy.obs_to_tensor``).
         demos: The demonstrations.
@@ -195,19 +218,24 @@ def clone_actor(
         learning_rate: Adam step size.
         seed: Seed of the batch order.
         loss: ``mse`` or ``nll`` (above).
+        std_fit: ``mean`` or ``clipped`` (above).
 
     Returns:
         The mean loss of each epoch.
 
     Raises:
-        ValueError: An unknown ``loss``.
+        ValueError: An unknown ``loss`` or ``std_fit``.
     """
     if loss not in ("mse", "nll"):
         raise ValueError(f"clone_actor loss must be 'mse' or 'nll', got {loss!r}")
+    if std_fit not in STD_FITS:
+        raise ValueError(f"clone_actor std_fit must be one of {list(STD_FITS)}, got {std_fit!r}")
     actor = model.actor
     optim = torch.optim.Adam(actor.parameters(), lr=learning_rate)
     rng = np.random.default_rng(seed)
-    actions = np.clip(demos.actions, -1 + 1e-3, 1 - 1e-3).astype(np.float32)
+    edge = 1 - LABEL_CLIP
+    actions = np.clip(demos.actions, -edge, edge).astype(np.float32)
+    reach, floor = float(np.arctanh(edge)), float(np.log(STD_FLOOR))
     losses = []
     for _ in range(epochs):
         order = rng.permutation(len(demos))
@@ -218,9 +246,15 @@ def clone_actor(
             target = torch.as_tensor(actions[idx], device=model.device)
             mean, log_std, kwargs = actor.get_action_dist_params(obs)
             if loss == "mse":
-                dist = actor.action_dist.proba_distribution(mean.detach(), log_std, **kwargs)
                 value = ((torch.tanh(mean) - target) ** 2).sum(1).mean()
-                value = value - 1e-2 * dist.log_prob(target).mean()
+                if std_fit == "clipped":
+                    centre = mean.detach().clamp(-reach, reach)
+                    log_sd = log_std.clamp(min=floor)
+                    nll = 0.5 * ((torch.atanh(target) - centre) / log_sd.exp()) ** 2 + log_sd
+                    value = value + STD_WEIGHT * nll.sum(1).mean()
+                else:
+                    dist = actor.action_dist.proba_distribution(mean.detach(), log_std, **kwargs)
+                    value = value - STD_WEIGHT * dist.log_prob(target).mean()
             else:
                 dist = actor.action_dist.proba_distribution(mean, log_std, **kwargs)
                 value = -dist.log_prob(target).mean()
@@ -235,9 +269,11 @@ def clone_actor(
 def hold_actor(steps: int) -> Any:
     """An SB3 callback keeping a SAC model's actor as it was at the start of ``learn``.
 
-    For ``steps`` env steps the actor's weights are put back after every step, so a cloned
-    actor (`clone_actor`) keeps acting as the clone while the critics learn from its episodes
-    and the demonstrations; a random critic would otherwise drag it off at once.
+    For ``steps`` env steps the actor's weights are put back before every action (SB3 trains
+    between an env step and the next action, so putting them back after the step alone would
+    let every action come from the clone plus one update) and after every step, so a cloned
+    actor (`clone_actor`) acts as the clone while the critics learn from its episodes and the
+    demonstrations; a random critic would otherwise drag it off at once.
     """
     from stable_baselines3.common.callbacks import BaseCallback  # noqa: PLC0415
 
@@ -245,6 +281,10 @@ def hold_actor(steps: int) -> Any:
         def _on_training_start(self) -> None:
             actor: nn.Module = getattr(self.model, "actor")  # noqa: B009 - SAC-style models
             self.saved = {k: v.clone() for k, v in actor.state_dict().items()}
+
+        def _on_rollout_start(self) -> None:  # before the next action, after SAC's update
+            if self.model.num_timesteps < steps:
+                getattr(self.model, "actor").load_state_dict(self.saved)  # noqa: B009
 
         def _on_step(self) -> bool:
             if self.model.num_timesteps <= steps:
@@ -278,6 +318,10 @@ def portable_checkpoint(src: str | Path, dst: str | Path) -> None:
 
 __all__ = [
     "DEMO_FRACTION",
+    "LABEL_CLIP",
+    "STD_FITS",
+    "STD_FLOOR",
+    "STD_WEIGHT",
     "DemoMixReplayBuffer",
     "LayerNormCritic",
     "LayerNormSACPolicy",

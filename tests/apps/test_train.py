@@ -79,6 +79,9 @@ def test_config_is_strict(yaml_file):
         load_train_config(TINY, actor_bc_weight=-1.0)
     rlpd = load_train_config("rlpd_one_tile")
     assert rlpd.actor_bc_weight > 0 and rlpd.actor_bc_decay_steps == 0
+    with pytest.raises(TrainError, match=r"bc_std_fit must be one of \['mean', 'clipped'\]"):
+        load_train_config(TINY, bc_std_fit="median")
+    assert load_train_config(TINY, bc_std_fit="clipped").bc_std_fit == "clipped"
 
 
 def test_policy_choice():
