@@ -14,7 +14,8 @@ have been supplied. The default first seed, 10000, is disjoint from the clone's 
 (0-59) and from the rung's held-out seeds (1000-1019, 2000-2019). The seeds are dealt out to
 ``--workers`` processes, each an `apps.evaluate` run in its own folder under ``--out`` that
 appends every episode to its log as it finishes: a soak that was stopped resumes where it
-stopped, and no finished episode is played again.
+stopped (with any number of workers), and no finished episode is played again. A folder keeps
+one soak: another task or policy there is refused.
 
 The tally (printed, and written to ``<out>/soak.json``): tiles supplied, placed correctly,
 misplaced, dropped in transit, lost off the belt's end, stranded beside the mesh and left
@@ -49,6 +50,8 @@ FIRST_SEED = 10_000
 """First soak seed: disjoint from the clone's training seeds and the rung's held-out seeds."""
 LOG = "episodes.jsonl"
 """`apps.evaluate`'s per-episode log in each worker's folder."""
+SETTINGS = "soak_settings.json"
+"""The task and policy a soak folder belongs to."""
 Z95 = 1.959964
 """Standard normal quantile of a two-sided 95 % interval."""
 
@@ -225,6 +228,28 @@ def stream_facts(task: str) -> tuple[int, float]:
         env.close()
 
 
+def _same_soak(out: Path, task: str, policy: str) -> None:
+    """Record the soak's task and policy in ``out``; refuse a folder of another soak.
+
+    Raises:
+        ConfigError: ``out`` holds the episodes of another task or policy.
+    """
+    from configs import ConfigError  # noqa: PLC0415
+
+    path = out / SETTINGS
+    mine = {"task": task, "policy": policy}
+    if path.is_file():
+        theirs = json.loads(path.read_text(encoding="utf-8"))
+        if theirs != mine:
+            raise ConfigError(
+                f"{out} holds the soak of {theirs['policy']} on {theirs['task']}, not of "
+                f"{policy} on {task}: give another --out"
+            )
+        return
+    out.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(mine) + "\n", encoding="utf-8")
+
+
 def soak(
     task: str,
     policy: str,
@@ -239,14 +264,16 @@ def soak(
 
     With ``teacher``, the teacher also plays every seed the policy failed (`compare_teacher`).
     """
+    _same_soak(out, task, policy)
     slots, supply = stream_facts(task)
     seeds = list(range(first_seed, first_seed + math.ceil(tiles / slots)))
+    have = {e.seed for e in read_episodes(out)}
     t0 = time.monotonic()
     spawn = multiprocessing.get_context("spawn")  # fresh workers: no GL or torch state copied
     with ProcessPoolExecutor(max_workers=workers, mp_context=spawn) as pool:
         jobs = [
             pool.submit(_play, task, policy, part, str(out / f"worker_{i}"))
-            for i, part in enumerate(deal(seeds, workers))
+            for i, part in enumerate(deal([s for s in seeds if s not in have], workers))
         ]
         for job in jobs:
             job.result()

@@ -7,6 +7,7 @@ import json
 import pytest
 
 from apps.evaluate_results import EpisodeResult
+from configs import ConfigError
 from benchmarks.learned.stream_soak import compare_teacher, deal, soak, tally, wilson
 
 
@@ -41,6 +42,12 @@ def test_seeds_are_dealt_once_each_in_equal_shares():
     parts = deal(list(range(10, 21)), 2)
     assert parts == [[10, 12, 14, 16, 18, 20], [11, 13, 15, 17, 19]]
     assert deal([5], 3) == [[5]]
+
+
+def test_a_folder_of_another_soak_is_refused(tmp_path):
+    (tmp_path / "soak_settings.json").write_text('{"task": "MosaicStream-v1", "policy": "a.pt"}')
+    with pytest.raises(ConfigError, match="holds the soak of a.pt on MosaicStream-v1"):
+        soak("MosaicStream-v1", "b.pt", 16, first_seed=10_000, workers=1, out=tmp_path)
 
 
 @pytest.mark.slow
