@@ -7,8 +7,8 @@ import json
 import pytest
 
 from apps.evaluate_results import EpisodeResult
-from configs import ConfigError
 from benchmarks.learned.stream_soak import compare_teacher, deal, soak, tally, wilson
+from configs import ConfigError
 
 
 def _episode(seed: int, correct: int, *, misplaced: int = 0, lost: int = 0) -> EpisodeResult:
