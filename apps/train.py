@@ -340,6 +340,22 @@ class TrainResult:
     """Gradient steps of behaviour cloning and ``learn`` (``_n_updates``; 0 if not kept)."""
 
 
+def build_model(cfg: TrainConfig, venv: Any, tensorboard_log: str | None = None) -> Any:
+    """The config's SB3 model on ``venv``, untrained (algorithm, policy, settings, seed)."""
+    kwargs: dict[str, Any] = resolve_algo_kwargs(dict(cfg.algo_kwargs))
+    if cfg.policy_kwargs or cfg.normalize_obs:
+        kwargs["policy_kwargs"] = policy_kwargs_for(cfg, venv, DEMO_ROOT)
+    return algorithm_class(cfg.algo)(
+        pick_policy(cfg.policy, venv.observation_space),
+        venv,
+        seed=cfg.seed,
+        device=cfg.device,
+        verbose=cfg.verbose,
+        tensorboard_log=tensorboard_log,
+        **kwargs,
+    )
+
+
 def finished_run(out: Path) -> TrainResult | None:
     """The result of the run folder ``out`` if its training finished, else None.
 
@@ -498,19 +514,7 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
     monitor_dir = out / "monitor"
     venv = make_vec(cfg, monitor_dir)
     try:
-        algo = algorithm_class(cfg.algo)
-        kwargs: dict[str, Any] = resolve_algo_kwargs(dict(cfg.algo_kwargs))
-        if cfg.policy_kwargs or cfg.normalize_obs:
-            kwargs["policy_kwargs"] = policy_kwargs_for(cfg, venv, DEMO_ROOT)
-        model = algo(
-            pick_policy(cfg.policy, venv.observation_space),
-            venv,
-            seed=cfg.seed,
-            device=cfg.device,
-            verbose=cfg.verbose,
-            tensorboard_log=str(out / "tb") if cfg.tensorboard else None,
-            **kwargs,
-        )
+        model = build_model(cfg, venv, tensorboard_log=str(out / "tb") if cfg.tensorboard else None)
         terms = TermsLog(out / TERMS_FILE)
         callbacks = [_log_terms(terms), *demo_callbacks(cfg)]
         show_bar = cfg.progress_bar and sys.stdout.isatty()

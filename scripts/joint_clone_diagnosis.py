@@ -56,14 +56,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import envs  # noqa: E402, F401  registers the ladder
 from agents.experts.joint import LowLevelJointExpert, load_joint_expert_config  # noqa: E402
-from agents.learning.algorithms import algorithm_class  # noqa: E402
 from agents.learning.demos import DEFAULT_ROOT, load_dataset, transitions  # noqa: E402
-from apps.train import load_train_config, make_vec, pick_policy  # noqa: E402
-from apps.train_extras import (  # noqa: E402
-    clone_before_learning,
-    policy_kwargs_for,
-    resolve_algo_kwargs,
-)
+from apps.train import build_model, load_train_config, make_vec  # noqa: E402
+from apps.train_extras import clone_before_learning  # noqa: E402
 from envs.observations.fields import ROBOT_FIELDS, SLOT_FIELDS, TILE_FIELDS  # noqa: E402
 from planners.robot import ROBOT_XML  # noqa: E402
 
@@ -404,15 +399,7 @@ def clone(model_path: Path, std_fit: str) -> Any:
     cfg = load_train_config(TRAIN_CONFIG, bc_std_fit=std_fit)
     torch.set_num_threads(cfg.torch_threads)
     venv = make_vec(cfg, None)
-    kwargs = resolve_algo_kwargs(dict(cfg.algo_kwargs))
-    kwargs["policy_kwargs"] = policy_kwargs_for(cfg, venv, DEFAULT_ROOT)
-    model = algorithm_class(cfg.algo)(
-        pick_policy(cfg.policy, venv.observation_space),
-        venv,
-        seed=cfg.seed,
-        device=cfg.device,
-        **kwargs,
-    )
+    model = build_model(cfg, venv)
     c0 = time.process_time()
     clone_before_learning(model, cfg.demos, DEFAULT_ROOT, cfg.bc_epochs, cfg.seed, std_fit=std_fit)
     print(
