@@ -389,13 +389,12 @@ def vacuum_keep_odds(model: Any, env: gym.Env, seed: int) -> tuple[float, float,
 def clone(model_path: Path, std_fit: str) -> Any:
     """The config's cloned actor (built and cloned as ``apps.train`` does), saved, reloaded."""
     import torch  # noqa: PLC0415
-    from stable_baselines3 import SAC  # noqa: PLC0415
-    from stable_baselines3.common.buffers import DictReplayBuffer  # noqa: PLC0415
 
-    plain = {"replay_buffer_class": DictReplayBuffer, "replay_buffer_kwargs": {}, "buffer_size": 1}
+    from agents.learning.rlpd import load_without_demos  # noqa: PLC0415
+
     if model_path.exists():
         print(f"- clone: {model_path} (reused)")
-        return SAC.load(str(model_path), device="cpu", custom_objects=plain)
+        return load_without_demos(model_path)
     cfg = load_train_config(TRAIN_CONFIG, bc_std_fit=std_fit)
     torch.set_num_threads(cfg.torch_threads)
     venv = make_vec(cfg, None)
@@ -409,7 +408,7 @@ def clone(model_path: Path, std_fit: str) -> Any:
     model_path.parent.mkdir(parents=True, exist_ok=True)
     model.save(str(model_path))
     venv.close()
-    return SAC.load(str(model_path), device="cpu", custom_objects=plain)
+    return load_without_demos(model_path)
 
 
 def policies(model: Any, teacher: LowLevelJointExpert) -> dict[str, Callable[[int], Policy]]:

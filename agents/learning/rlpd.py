@@ -302,18 +302,19 @@ def portable_checkpoint(src: str | Path, dst: str | Path) -> None:
     SB3's plain `DictReplayBuffer` of one transition instead (policy, critics and optimisers
     unchanged): it plays, and trains on, without the demonstrations.
     """
+    load_without_demos(src).save(str(dst))
+
+
+def load_without_demos(path: str | Path) -> Any:
+    """A SAC model file loaded on the CPU without the replay buffer it records.
+
+    SB3's plain `DictReplayBuffer` of one transition takes its place: a `DemoMixReplayBuffer`
+    would read its dataset again.
+    """
     from stable_baselines3 import SAC  # noqa: PLC0415
 
-    model = SAC.load(
-        str(src),
-        device="cpu",
-        custom_objects={
-            "replay_buffer_class": DictReplayBuffer,
-            "replay_buffer_kwargs": {},
-            "buffer_size": 1,
-        },
-    )
-    model.save(str(dst))
+    plain = {"replay_buffer_class": DictReplayBuffer, "replay_buffer_kwargs": {}, "buffer_size": 1}
+    return SAC.load(str(path), device="cpu", custom_objects=plain)
 
 
 __all__ = [
@@ -327,6 +328,7 @@ __all__ = [
     "LayerNormSACPolicy",
     "clone_actor",
     "hold_actor",
+    "load_without_demos",
     "layer_norm_mlp",
     "portable_checkpoint",
 ]
