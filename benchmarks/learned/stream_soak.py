@@ -23,8 +23,8 @@ unplaced; the share placed correctly with its 95 % Wilson interval; the share of
 completed; tiles per simulated minute against the supply rate; the wall time. With
 ``--teacher``, the teacher the clone was cloned from (`agents.experts.deadline.DeadlineExpert`:
 the scheduler's rule on the env's ground truth) then plays every seed the policy failed, to
-tell the losses no order avoids from the policy's own (its episodes are kept in
-``<out>/teacher_*.jsonl`` and resumed the same way).
+tell the losses its rule cannot avoid from the policy's own (its episodes are kept in
+``<out>/teacher_*.jsonl``; a seed in any of them is not played again).
 """
 
 from __future__ import annotations
@@ -33,9 +33,10 @@ import json
 import math
 import multiprocessing
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -136,6 +137,24 @@ def deal(seeds: Sequence[int], workers: int) -> list[list[int]]:
     return [list(seeds[i::workers]) for i in range(workers) if seeds[i::workers]]
 
 
+def in_workers(
+    job: Callable[[list[int], str], None], seeds: Sequence[int], workers: int, out: Path, name: str
+) -> None:
+    """Run ``job`` on each part of ``deal(seeds, workers)``, each in a fresh (spawned) process.
+
+    Part ``i`` gets ``out / name.format(i)`` as its output path. Spawned workers copy no GL or
+    torch state.
+    """
+    spawn = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=spawn) as pool:
+        jobs = [
+            pool.submit(job, part, str(out / name.format(i)))
+            for i, part in enumerate(deal(seeds, workers))
+        ]
+        for done in jobs:
+            done.result()
+
+
 def _play(task: str, policy: str, seeds: list[int], out: str) -> None:
     """One worker: `apps.evaluate` on ``seeds`` into ``out`` (resuming its log)."""
     from apps import evaluate  # noqa: PLC0415 - imported in the worker process
@@ -155,22 +174,18 @@ def read_episodes(out: Path) -> list[EpisodeResult]:
 
 
 def _teacher(task: str, seeds: list[int], log: str) -> None:
-    """One worker: the teacher on ``seeds``, each episode appended to ``log`` (resuming it)."""
+    """One worker: the teacher on ``seeds``, each episode appended to ``log``."""
     import gymnasium as gym  # noqa: PLC0415
 
     import envs  # noqa: F401, PLC0415 - registers the ladder
     from agents.experts.deadline import DeadlineExpert  # noqa: PLC0415
-    from configs.files import append_line, complete_lines  # noqa: PLC0415
+    from configs.files import append_line  # noqa: PLC0415
     from envs.task import Evaluation  # noqa: PLC0415
 
-    path = Path(log)
-    done = {json.loads(line)["seed"] for line in complete_lines(path)} if path.is_file() else set()
     env = gym.make(task)
     try:
         expert = DeadlineExpert(env)
         for seed in seeds:
-            if seed in done:
-                continue
             env.reset(seed=seed)
             expert.reset()
             over = False
@@ -179,9 +194,20 @@ def _teacher(task: str, seeds: list[int], log: str) -> None:
                 over = bool(term or trunc)
             ev = Evaluation.from_info(info)
             row = {"seed": seed, "correct": ev.correct, "lost": ev.lost, "success": ev.success}
-            append_line(path, json.dumps(row))
+            append_line(Path(log), json.dumps(row))
     finally:
         env.close()
+
+
+def _teacher_rows(out: Path) -> dict[int, dict[str, Any]]:
+    """The teacher's episodes already in the logs under ``out``, by seed."""
+    from configs.files import complete_lines  # noqa: PLC0415
+
+    return {
+        r["seed"]: r
+        for log in sorted(out.glob("teacher_*.jsonl"))
+        for r in (json.loads(line) for line in complete_lines(log))
+    }
 
 
 def compare_teacher(task: str, failed: Sequence[int], *, workers: int, out: Path) -> dict[str, Any]:
@@ -191,21 +217,10 @@ def compare_teacher(task: str, failed: Sequence[int], *, workers: int, out: Path
         ``teacher_episodes`` (the seeds replayed), ``teacher_failed_too`` (of those, the
         episodes the teacher fails as well) and ``teacher_lost`` (the tiles it loses on them).
     """
-    from configs.files import complete_lines  # noqa: PLC0415
-
-    spawn = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=spawn) as pool:
-        jobs = [
-            pool.submit(_teacher, task, part, str(out / f"teacher_{i}.jsonl"))
-            for i, part in enumerate(deal(list(failed), workers))
-        ]
-        for job in jobs:
-            job.result()
-    rows = {
-        r["seed"]: r
-        for log in sorted(out.glob("teacher_*.jsonl"))
-        for r in (json.loads(line) for line in complete_lines(log))
-    }
+    have = _teacher_rows(out)
+    missing = [s for s in failed if s not in have]
+    in_workers(partial(_teacher, task), missing, workers, out, "teacher_{}.jsonl")
+    rows = _teacher_rows(out)
     mine = [rows[s] for s in failed if s in rows]
     return {
         "teacher_episodes": len(mine),
@@ -269,14 +284,8 @@ def soak(
     seeds = list(range(first_seed, first_seed + math.ceil(tiles / slots)))
     have = {e.seed for e in read_episodes(out)}
     t0 = time.monotonic()
-    spawn = multiprocessing.get_context("spawn")  # fresh workers: no GL or torch state copied
-    with ProcessPoolExecutor(max_workers=workers, mp_context=spawn) as pool:
-        jobs = [
-            pool.submit(_play, task, policy, part, str(out / f"worker_{i}"))
-            for i, part in enumerate(deal([s for s in seeds if s not in have], workers))
-        ]
-        for job in jobs:
-            job.result()
+    missing = [s for s in seeds if s not in have]
+    in_workers(partial(_play, task, policy), missing, workers, out, "worker_{}")
     wanted = set(seeds)
     played = [e for e in read_episodes(out) if e.seed in wanted]
     result = asdict(tally(played, supply))
@@ -333,7 +342,19 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     return write_result(args.out / "soak.json", result, f" ({result['soak_wall_s']:.0f} s wall)")
 
 
-__all__ = ["FIRST_SEED", "POLICY", "TASK", "SoakTally", "deal", "main", "soak", "tally", "wilson"]
+__all__ = [
+    "FIRST_SEED",
+    "POLICY",
+    "TASK",
+    "SoakTally",
+    "compare_teacher",
+    "deal",
+    "in_workers",
+    "main",
+    "soak",
+    "tally",
+    "wilson",
+]
 
 if __name__ == "__main__":
     run_cli(main)

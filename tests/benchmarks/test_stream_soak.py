@@ -68,6 +68,13 @@ def test_a_soak_resumes_without_playing_an_episode_again(tmp_path):
 
 @pytest.mark.slow
 def test_the_teacher_replays_a_failed_seed_and_fails_where_no_order_saves_every_tile(tmp_path):
-    """Seed 1017: both tiles given at reset start too far downstream for any order to save."""
+    """Seeds 1017 and 1019: both tiles given at reset start too far downstream for any order to
+    save; a seed already replayed is not played again, whatever the number of workers."""
     got = compare_teacher("MosaicStream-v1", [1017], workers=1, out=tmp_path)
     assert got == {"teacher_episodes": 1, "teacher_failed_too": 1, "teacher_lost": 1}
+    # 1017 again with 1019 on two workers: 1017 is in worker 0's log and is not played again,
+    # so 1019 alone is dealt (to worker 0)
+    both = compare_teacher("MosaicStream-v1", [1017, 1019], workers=2, out=tmp_path)
+    assert both["teacher_episodes"] == 2 and both["teacher_failed_too"] == 2, both
+    assert [p.name for p in tmp_path.glob("teacher_*.jsonl")] == ["teacher_0.jsonl"]
+    assert len((tmp_path / "teacher_0.jsonl").read_text().splitlines()) == 2
