@@ -25,6 +25,7 @@ CELL_KEYS: dict[str, tuple[str, str]] = {
     "feed": ("tiles", "feed"),
     "stream_period": ("tiles", "stream_period"),
     "stream_initial": ("tiles", "stream_initial"),
+    "stream_start": ("tiles", "stream_start"),
     "batch_size": ("tiles", "batch_size"),
     "batch_index_time": ("tiles", "batch_index_time"),
     "distractor_rate": ("tiles", "distractor_rate"),

@@ -121,7 +121,9 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
     ## Starting State
     Arm at home, vacuum off, tiles laid out at random (non-overlapping, each placed against
     the ones before it or the tile area's edge, `envs.cell.layout`) on the input belt
-    (``feed="all"``), the first ``stream_initial`` of them (``feed="stream"``) or the first
+    (``feed="all"``), the first ``stream_initial`` of them (``feed="stream"``; with
+    ``stream_start="spaced"`` one supply period's belt travel apart from the upstream edge
+    instead of at random) or the first
     ``batch_size`` (``feed="batch"``), lying at rest on the belt (``reset_settle`` > 0
     simulates that long after the reset; 0 by default: the tiles are put at their contact
     height). Manufacturing noise is re-drawn at every reset: each tile gets one of

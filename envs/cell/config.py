@@ -22,6 +22,10 @@ FeedMode = Literal["all", "stream", "batch"]
 """How tiles arrive on the input belt (`TileConfig.feed`, `envs.cell.feed`)."""
 FEED_MODES: tuple[str, ...] = get_args(FeedMode)
 """Allowed ``feed`` values."""
+StreamStart = Literal["random", "spaced"]
+"""Where a stream's tiles given at reset lie (`TileConfig.stream_start`, `envs.cell.feed`)."""
+STREAM_STARTS: tuple[str, ...] = get_args(StreamStart)
+"""Allowed ``stream_start`` values."""
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 """Repository root (assets are resolved relative to it)."""
@@ -213,6 +217,11 @@ class TileConfig:
             does: leftovers (distractors) leave with the old batch into the reject bin.
         stream_period: Time between spawned tiles in "stream" mode [s].
         stream_initial: Tiles laid out at reset in "stream" mode (the rest are spawned).
+        stream_start: Where those tiles lie at reset: "random" anywhere over the tile area
+            (two may start so far downstream that no order of picks saves both); "spaced" as
+            a running stream would have fed them, the newest at the upstream edge and each
+            older one a supply period's belt travel (``stream_period`` x the belt's speed)
+            further downstream, each at a random place across the belt and a random yaw.
         batch_size: Tiles per batch in "batch" mode [count].
         batch_index_time: Time from the input side holding no real tile to the next batch
             lying at rest in the tile area, in "batch" mode [s] (the arm lifts the last
@@ -235,6 +244,7 @@ class TileConfig:
     feed: FeedMode = checked("all", choices=FEED_MODES)
     stream_period: float = checked(2.0, gt=0)
     stream_initial: int = checked(0, ge=0)
+    stream_start: StreamStart = checked("random", choices=STREAM_STARTS)
     batch_size: int = checked(16, ge=1, integer=True)
     batch_index_time: float = checked(0.5, gt=0)
 
@@ -316,6 +326,17 @@ class CellConfig:
                 self.output_belt.width,
             ),
         }
+        tiles, belt = self.tiles, self.input_belt
+        if tiles.feed == "stream" and tiles.stream_start == "spaced" and tiles.stream_initial > 1:
+            travel = (tiles.stream_initial - 1) * tiles.stream_period * belt.speed
+            if not 0 < travel < belt.tile_area[0]:
+                raise CellError(
+                    f"TileConfig.stream_start 'spaced' lays {tiles.stream_initial} tiles "
+                    f"{tiles.stream_period * belt.speed:.3f} m apart (stream_period x "
+                    f"input_belt.speed): {travel:.3f} m must be > 0 and < the tile area's "
+                    f"length {belt.tile_area[0]} m; use fewer tiles, a moving belt, or "
+                    "stream_start 'random'"
+                )
         for name, (x0, x1, width) in belts.items():
             dx = max(x0, 0.0, -x1)
             dy = max(lay.belt_separation / 2 - width / 2, 0.0)
@@ -354,6 +375,7 @@ def section_names() -> list[str]:
 
 __all__ = [
     "FEED_MODES",
+    "STREAM_STARTS",
     "REPO_ROOT",
     "CameraConfig",
     "CellConfig",
@@ -366,6 +388,7 @@ __all__ = [
     "SceneryConfig",
     "SuctionConfig",
     "FeedMode",
+    "StreamStart",
     "TileConfig",
     "load_cell_config",
     "section_names",

@@ -5,8 +5,10 @@ time, the retired tiles) and decides; the `Cell` does the physics (`Cell.place_t
 `Cell.park_tiles`) and calls `TileFeed.update` after its physics steps.
 
 - ``all``: every tile is laid out at random over the tile area at reset.
-- ``stream``: ``stream_initial`` tiles at reset, then one every ``stream_period`` at the
-  upstream edge of the tile area, as soon as there is room.
+- ``stream``: ``stream_initial`` tiles at reset (``stream_start``: at random over the tile
+  area, or ``spaced`` one supply period's belt travel apart from its upstream edge, as a running
+  stream leaves them), then one every ``stream_period`` at the upstream edge of the tile area,
+  as soon as there is room.
 - ``batch``: up to ``batch_size`` tiles over the whole tile area (fewer when it would be too
   full); the next batch is indexed in ``batch_index_time`` after the input side last held a
   real tile, and leftover tiles (distractors rightly left) leave with their batch (`retired`).
@@ -105,7 +107,9 @@ class TileFeed:
             self.retired[:] = False
             k = self.initial_count()
             self.order = rng.permutation(n) if k < n else np.arange(n)
-            if k:
+            if k and self.cfg.feed == "stream" and self.cfg.stream_start == "spaced":
+                self.lay_out_spaced(self.order[:k], rng)
+            elif k:
                 self.lay_out(self.order[:k], rng)
         self._batch_due = np.inf
         self.next_time = {"stream": self.cfg.stream_period, "batch": 0.0}.get(self.cfg.feed, np.inf)
@@ -143,9 +147,56 @@ class TileFeed:
         )
         cell.place_tiles(order, poses)
 
+    def lay_out_spaced(self, order: np.ndarray, rng: np.random.Generator) -> None:
+        """Lay tiles ``order`` out as a running stream leaves them, at rest.
+
+        ``order[-1]`` lies where a spawn puts it (the upstream edge), each earlier one a supply
+        period's belt travel further downstream, in feed order: ``order[0]`` is the oldest.
+        Across the belt and in yaw each is drawn as a spawn draws it.
+        """
+        cell = self.cell
+        step = self.cfg.stream_period * cell.cfg.input_belt.speed
+        poses = np.concatenate([self._spawn_pose(int(i), rng) for i in order])
+        poses[:, 0] += step * np.arange(len(order))[::-1]
+        cell.place_tiles(order, poses)
+
+    def _spawn_pose(
+        self,
+        i: int,
+        rng: np.random.Generator,
+        busy_xy: np.ndarray | None = None,
+        busy_radii: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Pose (1, 3) of tile ``i`` spawned at the tile area's upstream edge.
+
+        Relative to the tile area's centre: x at the spawn strip's middle, y and yaw drawn at
+        random clear of the tiles at world ``busy_xy`` (rows x, y [m]) with ``busy_radii``.
+
+        Raises:
+            CellError: No room in the strip.
+        """
+        cell, cfg = self.cell, self.cfg
+        ta = cell.cfg.input_belt.tile_area
+        c = cell.geometry.input_centre
+        strip = (2 * cell.radii[i] + 2 * cfg.min_gap, ta[1])
+        edge = c[0] - ta[0] / 2
+        if busy_xy is None or busy_radii is None:
+            busy_xy, busy_radii = np.empty((0, 2)), np.empty(0)
+        pose = sample_layout(
+            cell.radii[[i]],
+            strip,
+            cfg.min_gap,
+            cfg.placement_attempts,
+            rng,
+            occupied=busy_xy - [edge + strip[0] / 2, c[1]],
+            occupied_radii=busy_radii,
+        )
+        pose[:, 0] += -ta[0] / 2 + strip[0] / 2
+        return pose
+
     def _feed_stream(self, rng: np.random.Generator) -> None:
         """Spawn the next waiting tile at the upstream edge of the tile area, if there is room."""
-        cell, cfg = self.cell, self.cfg
+        cell = self.cell
         waiting = self.order[~cell.on_stage[self.order]]  # the per-reset order, not the design's
         if len(waiting) == 0:
             self.next_time = np.inf
@@ -157,22 +208,12 @@ class TileFeed:
         pos = cell.data.xpos[cell.ids.tile_body]
         edge = c[0] - ta[0] / 2
         near = cell.on_stage & (pos[:, 0] < edge + STREAM_LOOKAHEAD_RADII * r + STREAM_LOOKAHEAD)
-        strip = (2 * r + 2 * cfg.min_gap, ta[1])
         try:
-            pose = sample_layout(
-                cell.radii[[i]],
-                strip,
-                cfg.min_gap,
-                cfg.placement_attempts,
-                rng,
-                occupied=pos[near, :2] - [edge + strip[0] / 2, c[1]],
-                occupied_radii=cell.radii[near],
-            )
+            pose = self._spawn_pose(i, rng, pos[near, :2], cell.radii[near])
         except CellError:
             return  # no room yet; try again next step
-        pose[:, 0] += -ta[0] / 2 + strip[0] / 2
         cell.place_tiles(np.array([i]), pose)
-        self.next_time += cfg.stream_period
+        self.next_time += self.cfg.stream_period
 
     def _feed_batch(self, rng: np.random.Generator) -> None:
         """Index the next batch in once the input side has held no real tile long enough."""
