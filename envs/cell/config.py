@@ -221,7 +221,9 @@ class TileConfig:
             (two may start so far downstream that no order of picks saves both); "spaced" as
             a running stream would have fed them, the newest at the upstream edge and each
             older one a supply period's belt travel (``stream_period`` x the belt's speed)
-            further downstream, each at a random place across the belt and a random yaw.
+            further downstream (shortened alike where the oldest would reach past the tile
+            area: it lies inside, seen whole), each at a random place across the belt and a
+            random yaw.
         batch_size: Tiles per batch in "batch" mode [count].
         batch_index_time: Time from the input side holding no real tile to the next batch
             lying at rest in the tile area, in "batch" mode [s] (the arm lifts the last

@@ -7,7 +7,8 @@ time, the retired tiles) and decides; the `Cell` does the physics (`Cell.place_t
 - ``all``: every tile is laid out at random over the tile area at reset.
 - ``stream``: ``stream_initial`` tiles at reset (``stream_start``: at random over the tile
   area, or ``spaced`` one supply period's belt travel apart from its upstream edge, as a running
-  stream leaves them), then one every ``stream_period`` at the upstream edge of the tile area,
+  stream leaves them, the travel shortened where the oldest would reach past the tile area),
+  then one every ``stream_period`` at the upstream edge of the tile area,
   as soon as there is room.
 - ``batch``: up to ``batch_size`` tiles over the whole tile area (fewer when it would be too
   full); the next batch is indexed in ``batch_index_time`` after the input side last held a
@@ -152,12 +153,30 @@ class TileFeed:
 
         ``order[-1]`` lies where a spawn puts it (the upstream edge), each earlier one a supply
         period's belt travel further downstream, in feed order: ``order[0]`` is the oldest.
-        Across the belt and in yaw each is drawn as a spawn draws it.
+        Where the oldest would then reach past the tile area (partly out of the camera's view,
+        never seen whole), the travel is shortened alike for all so that it lies inside. Across
+        the belt and in yaw each is drawn as a spawn draws it.
+
+        Raises:
+            CellError: Shortened, two neighbours would overlap (the tile area is too short for
+                these tiles).
         """
-        cell = self.cell
-        step = self.cfg.stream_period * cell.cfg.input_belt.speed
+        cell, cfg = self.cell, self.cfg
+        step = cfg.stream_period * cell.cfg.input_belt.speed
         poses = np.concatenate([self._spawn_pose(int(i), rng) for i in order])
-        poses[:, 0] += step * np.arange(len(order))[::-1]
+        travel = step * np.arange(len(order))[::-1]
+        room = cell.cfg.input_belt.tile_area[0] / 2 - cell.radii[order] - cfg.min_gap - poses[:, 0]
+        moved = travel > 0
+        scale = min(1.0, float(np.min(room[moved] / travel[moved]))) if moved.any() else 1.0
+        poses[:, 0] += scale * travel
+        gaps = -np.diff(poses[:, 0]) - cell.radii[order[:-1]] - cell.radii[order[1:]]
+        if np.any(gaps < cfg.min_gap):
+            raise CellError(
+                f"stream_start 'spaced': {len(order)} tiles of radii up to "
+                f"{cell.radii[order].max():.3f} m do not fit one behind the other on the "
+                f"{cell.cfg.input_belt.tile_area[0]} m tile area; lay fewer out at reset "
+                "(stream_initial) or use stream_start 'random'"
+            )
         cell.place_tiles(order, poses)
 
     def _spawn_pose(
