@@ -30,7 +30,7 @@ OUT = Path("out/bench_scripted.json")
 """Default output file."""
 
 
-STREAM_KEYS = ("belt_speed", "feed", "stream_period", "stream_initial")
+STREAM_KEYS = ("belt_speed", "feed", "stream_period", "stream_initial", "stream_start")
 """The env keys a scenario's ``task`` gives it: the rung's belt and stream."""
 
 
