@@ -3,11 +3,11 @@ r"""The moving belt's learned row: clone the scheduler's rule into a pair scorer
 Run::
 
     python -m benchmarks.learned.stream --episodes 60 --seed 0 --out runs/stream/seed_0
-    python -m apps.evaluate --task MosaicStream-v1 --policies runs/stream/seed_0/bc.pt
+    python -m apps.evaluate --task MosaicStream-v2 --policies runs/stream/seed_0/bc.pt
 
 The teacher is `agents.experts.deadline.DeadlineExpert`: the scripted cell's scheduler rule
 (earliest deadline first) on the env's ground truth. It plays ``episodes`` episodes of
-``MosaicStream-v1`` (dynamic execution) on training seeds ``seed * SEED_STRIDE + episode``,
+``--task`` (default ``MosaicStream-v2``; dynamic execution) on training seeds ``seed * SEED_STRIDE + episode``,
 disjoint from the held-out seeds; its picks (not its waits, whose index does not matter) are
 cloned into the pair scorer on ``stream`` rows (`agents.pair.stream_rows`: the ``state`` rows and
 each tile's time left before the belt's end), with ``configs/bc_pair.yaml``'s settings. The run
@@ -33,7 +33,7 @@ from agents.learning.decision_bc import load_bc_config
 from apps.cli import CommandParser, run_cli
 from configs.files import write_json
 
-TASK = "MosaicStream-v1"
+TASK = "MosaicStream-v2"
 """The rung this clone is for."""
 SEED_STRIDE = 100_000
 """Reset seeds of training seed s start at s * SEED_STRIDE (never 1000-1019 or 2000-2019)."""

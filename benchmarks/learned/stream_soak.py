@@ -7,8 +7,8 @@ Run::
     python -m benchmarks.learned.stream_soak --policy scripted --out out/soak_scripted
 
 The policy (default: the shipped stream clone,
-``checkpoints/MosaicStream-v1/PairBC_stream/seed_0/bc.pt``; any `apps.evaluate` policy name)
-plays ``MosaicStream-v1`` under the rung's own protocol (dynamic execution, its step limit and
+``checkpoints/MosaicStream-v2/PairBC_stream/seed_0/bc.pt``; any `apps.evaluate` policy name)
+plays ``--task`` (default ``MosaicStream-v2``) under the rung's own protocol (dynamic execution, its step limit and
 throughput horizon) on consecutive seeds from ``--first-seed`` until at least ``--tiles`` tiles
 have been supplied. The default first seed, 10000, is disjoint from the clone's training seeds
 (0-59) and from the rung's held-out seeds (1000-1019, 2000-2019). The seeds are dealt out to
@@ -43,9 +43,9 @@ from typing import Any
 from apps.cli import CommandParser, run_cli, write_result
 from apps.evaluate_results import EpisodeResult
 
-TASK = "MosaicStream-v1"
+TASK = "MosaicStream-v2"
 """The rung soaked."""
-POLICY = "checkpoints/MosaicStream-v1/PairBC_stream/seed_0/bc.pt"
+POLICY = "checkpoints/MosaicStream-v2/PairBC_stream/seed_0/bc.pt"
 """The shipped stream clone."""
 FIRST_SEED = 10_000
 """First soak seed: disjoint from the clone's training seeds and the rung's held-out seeds."""

@@ -39,22 +39,25 @@ def test_the_distractor_clone_fills_every_slot_and_never_places_a_distractor(
     assert json.loads(eps[0].env)["distractor_rate"] == pytest.approx(0.5)
 
 
-STREAM = "MosaicStream-v1"
-STREAM_CLONE = ROOT / "checkpoints" / STREAM / "PairBC_stream" / "seed_0" / "bc.pt"
+def _stream_clone(task: str) -> Path:
+    return ROOT / "checkpoints" / task / "PairBC_stream" / "seed_0" / "bc.pt"
 
 
-@pytest.mark.parametrize("seed", [1003, 1010])
+@pytest.mark.parametrize(
+    ("task", "seed"),
+    [("MosaicStream-v1", 1003), ("MosaicStream-v1", 1010), ("MosaicStream-v2", 1004)],
+)
 def test_the_stream_clone_picks_first_the_tile_its_teacher_picks_at_the_right_turn(
-    seed: int,
+    task: str, seed: int
 ) -> None:
     """On the stream's first picture the clone names the tile nearest the belt's end, an open
     slot of its class and the rotation index that places it (the teacher's choice)."""
-    env = gym.make(STREAM)
+    env = gym.make(task)
     try:
         obs, _ = env.reset(seed=seed)
         u = env.unwrapped
         tile, slot = DeadlineExpert(env).choose()  # type: ignore[misc]
-        action, _ = BCPolicy(STREAM_CLONE).predict(obs)
+        action, _ = BCPolicy(_stream_clone(task)).predict(obs)
         picked = int(u.index.tiles[action[0]])  # type: ignore[attr-defined]
         chosen = int(u.index.slots[action[1]])  # type: ignore[attr-defined]
         assert picked == tile
@@ -62,3 +65,16 @@ def test_the_stream_clone_picks_first_the_tile_its_teacher_picks_at_the_right_tu
         assert action[2] == u.expert_action(picked, chosen)[2]  # type: ignore[attr-defined]
     finally:
         env.close()
+
+
+@pytest.mark.slow
+def test_the_v2_stream_clone_places_every_tile_of_a_held_out_episode() -> None:
+    """A whole episode of the stream (dynamic execution): 16 tiles streamed, 16 placed in their
+    slots, none lost off the belt's end."""
+    task = "MosaicStream-v2"
+    base, proto = task_protocol(task)
+    one = Protocol((1007,), proto.designs, proto.max_steps, proto.horizon_s)
+    rows, episodes = evaluate_policy_set(make_policies([str(_stream_clone(task))], base), one)
+    (episode,) = episodes[rows[0].policy]
+    assert episode.success and episode.correct == 16, episode
+    assert episode.lost == episode.misplaced == 0
