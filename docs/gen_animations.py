@@ -95,6 +95,7 @@ ACTORS: dict[str, Actor] = {
         _DYNAMIC,
     ),
     "MosaicStream-v0": Actor("scripted", "the scripted cell from its cameras", {}),
+    "MosaicStream-v2": Actor("scripted", "the scripted cell from its cameras", {}),
     "MosaicDistractors-v0": Actor("scripted", "the scripted cell from its cameras", _DYNAMIC),
     "MosaicHeldOutDesigns-v0": Actor(
         "checkpoints/MosaicHeldOutDesigns-v0/PairBC_objects/seed_0/bc.pt",
@@ -107,7 +108,7 @@ ACTORS: dict[str, Actor] = {
 
 def base_kwargs(env_id: str) -> dict[str, Any]:
     """The env keys of the animated episode before the actor's: the first held-out design."""
-    tasks = bundled_tasks()
+    tasks = bundled_tasks(all_versions=True)
     if env_id in tasks:
         return tasks[env_id].env_kwargs("eval", 0)
     return {}

@@ -9,7 +9,8 @@ episode end, held-out seeds, its registration and a picture of the first observa
 (``env.render()`` after ``reset(seed=0)`` on the rung's first held-out design: the overview
 camera beside the input and output cameras). ``MosaicAssembly-v0``'s card carries the
 environment class's docstring. ``tasks/index.md`` is the ladder's table. A later version of an
-id (``-v1``) starts like its ``-v0`` (the same scene), so its card shows the ``-v0`` pictures.
+id (``-v1``) starts like its ``-v0`` (the same scene), so its card shows the ``-v0`` pictures;
+one that changes more (``MosaicStream-v2``: where the stream's first tiles lie) has its own.
 
 Run from the repository root (headless rendering through EGL)::
 
@@ -92,10 +93,18 @@ def registered_ids() -> list[str]:
 
 
 def picture_id(env_id: str) -> str:
-    """The id whose picture a page shows: a later version's ``-v0`` when registered."""
+    """The id whose picture a page shows: a later version's ``-v0`` when registered, unless the
+    version changes more than ``-v1``'s keys (``MosaicStream-v2`` starts its stream otherwise)."""
+    import envs  # noqa: PLC0415 - the registry and what v1 changed
+
     name, _, version = env_id.rpartition("-")
     base = f"{name}-v0"
-    return base if version != "v0" and base in gym.registry else env_id
+    if version == "v0" or base not in gym.registry:
+        return env_id
+    changed = {
+        k for k, v in gym.spec(env_id).kwargs.items() if gym.spec(base).kwargs.get(k, None) != v
+    }
+    return env_id if changed - set(envs.V1_CHANGES) else base
 
 
 def _bounds(values: np.ndarray) -> str:
@@ -152,8 +161,15 @@ VERSION_CHANGES = {
         "pick_place",
         "`pick_place` is Box(5): the pick-yaw entry, which did nothing, is gone",
     ),
+    "stream_start": (
+        "",
+        "the two tiles given at reset lie as a running stream leaves them (`stream_start="
+        "'spaced'`), not anywhere over the tile area, where about one start in five left both "
+        "too far downstream for any order of picks to save both",
+    ),
 }
-"""Per env key a later version sets: the action mode it matters in, and what it changes."""
+"""Per env key a later version sets: the action mode it matters in ("": every mode), and what
+it changes."""
 
 
 def _version_section(env_id: str) -> str:
@@ -168,16 +184,24 @@ def _version_section(env_id: str) -> str:
     spec = gym.spec(f"{name}-v0")
     mode = spec.kwargs.get("action_mode", load_env_config().action_mode)
     rows = []
+    previous = "v0"
     for v in versions:
         if v == "v0":
             what = "first version; every result measured before `-v1` existed is on it"
         else:
             keys = dict(base.versions[v]) if base else dict(gym.spec(f"{name}-{v}").kwargs)
+            before = dict(base.versions.get(previous, {})) if base else {}
             parts = []
             for k, val in keys.items():
+                if k in before and before[k] == val:
+                    continue  # kept from the version before (each version lists every change)
                 applies, text = VERSION_CHANGES.get(k, (mode, f"`{k}={val!r}`"))
-                parts.append(text if applies == mode else f"{text} (no effect in `{mode}` mode)")
+                plain = applies in ("", mode)
+                parts.append(text if plain else f"{text} (no effect in `{mode}` mode)")
             what = "; ".join(parts)
+            if before:
+                what = f"`-{previous}`'s changes, and: {what}"
+        previous = v
         use = "**use this one**" if v == versions[-1] else "kept for quoted results"
         link = f"**{name}-{v}**" if v == version else f"[{name}-{v}]({name}-{v}.md)"
         rows.append(f"| {link} | {what} | {use} |")
@@ -286,9 +310,10 @@ def task_page(env_id: str, env: gym.Env[Any, Any]) -> str:
     seeds = "the seeds of your choice (not a rung: no protocol of its own)"
     if env_id in tasks:
         task = tasks[env_id]
-        preset = {load_task(p).id: p.name for p in PRESETS_DIR.glob("*.yaml")}[pid]
+        base = f"{env_id.rpartition('-')[0]}-v0"
+        preset = {load_task(p).id: p.name for p in PRESETS_DIR.glob("*.yaml")}[base]
         preset = f"`configs/tasks/{preset}`"
-        if pid != env_id:
+        if base != env_id:
             preset += f" with its `versions: {task.version}` changes"
         seeds = _seeds(*task.eval_seeds)
         rows += [
