@@ -1,4 +1,4 @@
-"""Which starts of the stream can be saved at all: the tiles given at reset against the fastest cycle.
+"""Which starts of the stream can be saved at all: the tiles given at reset, the fastest cycle.
 
 Run ``python -m benchmarks.stream_starts``. For every rung of ``configs/bench_stream_starts.yaml``
 it resets the env on each seed (no episode is played) and asks whether any order of the first

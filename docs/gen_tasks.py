@@ -93,10 +93,11 @@ def registered_ids() -> list[str]:
 
 
 def picture_id(env_id: str) -> str:
-    """The id whose picture a page shows: a later version's ``-v0`` when registered, unless the
-    version changes more than ``-v1``'s keys (``MosaicStream-v2`` starts its stream otherwise)."""
-    import envs  # noqa: PLC0415 - the registry and what v1 changed
+    """The id whose picture a page shows: a later version's ``-v0`` when registered.
 
+    Unless the version changes more than ``-v1``'s keys: ``MosaicStream-v2`` starts its stream
+    otherwise, so it shows its own.
+    """
     name, _, version = env_id.rpartition("-")
     base = f"{name}-v0"
     if version == "v0" or base not in gym.registry:

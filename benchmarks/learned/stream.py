@@ -7,10 +7,11 @@ Run::
 
 The teacher is `agents.experts.deadline.DeadlineExpert`: the scripted cell's scheduler rule
 (earliest deadline first) on the env's ground truth. It plays ``episodes`` episodes of
-``--task`` (default ``MosaicStream-v2``; dynamic execution) on training seeds ``seed * SEED_STRIDE + episode``,
-disjoint from the held-out seeds; its picks (not its waits, whose index does not matter) are
-cloned into the pair scorer on ``stream`` rows (`agents.pair.stream_rows`: the ``state`` rows and
-each tile's time left before the belt's end), with ``configs/bc_pair.yaml``'s settings. The run
+``--task`` (default ``MosaicStream-v2``; dynamic execution) on training seeds
+``seed * SEED_STRIDE + episode``, disjoint from the held-out seeds; its picks (not its waits,
+whose index does not matter) are cloned into the pair scorer on ``stream`` rows
+(`agents.pair.stream_rows`: the ``state`` rows and each tile's time left before the belt's end),
+with ``configs/bc_pair.yaml``'s settings. The run
 folder gets ``bc.pt``, ``bc_summary.json`` (samples, gradient steps, CPU seconds of recording and
 of training, the teacher's own figures on its training episodes), ``demos.npz`` (the recording,
 reused by a later run into the same folder) and, unless ``--no-eval``,

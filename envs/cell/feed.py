@@ -8,8 +8,8 @@ time, the retired tiles) and decides; the `Cell` does the physics (`Cell.place_t
 - ``stream``: ``stream_initial`` tiles at reset (``stream_start``: at random over the tile
   area, or ``spaced`` one supply period's belt travel apart from its upstream edge, as a running
   stream leaves them, the travel shortened where the oldest would reach past the tile area),
-  then one every ``stream_period`` at the upstream edge of the tile area,
-  as soon as there is room.
+  then one every ``stream_period`` at the upstream edge of the tile area, as soon as there is
+  room.
 - ``batch``: up to ``batch_size`` tiles over the whole tile area (fewer when it would be too
   full); the next batch is indexed in ``batch_index_time`` after the input side last held a
   real tile, and leftover tiles (distractors rightly left) leave with their batch (`retired`).

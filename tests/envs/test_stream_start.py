@@ -87,8 +87,9 @@ def _saved_by_the_schedule(task_id: str) -> list[bool]:
         timing = belt_timing(env, cfg)
     finally:
         env.close()
+    speed, last_x = timing.belt_speed, timing.last_x
     return [
-        deadline_order(x, timing.belt_speed, timing.last_x, cfg.first_reach_s, cfg.cycle_s).saves_all
+        deadline_order(x, speed, last_x, cfg.first_reach_s, cfg.cycle_s).saves_all
         for x, _ in _starts(task_id)
     ]
 
@@ -101,14 +102,18 @@ def test_every_v2_start_can_be_saved_where_v1_starts_cannot() -> None:
 
 def test_spaced_start_needs_a_moving_belt_and_room() -> None:
     tiles = {"feed": "stream", "stream_start": "spaced", "stream_period": 2.5}
+
+    def cell_config(speed: float, initial: int) -> CellConfig:
+        belt = InputBeltConfig(speed=speed)
+        return CellConfig(input_belt=belt, tiles=TileConfig(stream_initial=initial, **tiles))
+
     with pytest.raises(CellError, match=r"stream_start 'spaced'.*> 0 and < the tile area"):
-        CellConfig(input_belt=InputBeltConfig(speed=0.0), tiles=TileConfig(stream_initial=2, **tiles))
+        cell_config(0.0, 2)
     with pytest.raises(CellError, match=r"lays 3 tiles 0\.250 m apart"):
-        CellConfig(input_belt=InputBeltConfig(speed=0.1), tiles=TileConfig(stream_initial=3, **tiles))
+        cell_config(0.1, 3)
     with pytest.raises(CellError, match=r"stream_start.*allowed"):
         TileConfig(stream_start="bunched")  # type: ignore[arg-type]
-    one = CellConfig(input_belt=InputBeltConfig(speed=0.0), tiles=TileConfig(stream_initial=1, **tiles))
-    cell = Cell(one, basic_shapes(), seed=2)  # a single tile needs no travel
+    cell = Cell(cell_config(0.0, 1), basic_shapes(), seed=2)  # a single tile needs no travel
     try:
         assert cell.on_stage.sum() == 1
     finally:
