@@ -10,9 +10,9 @@ The policy (default: the shipped stream clone,
 ``checkpoints/MosaicStream-v2/PairBC_stream/seed_0/bc.pt``; any `apps.evaluate` policy name)
 plays ``--task`` (default ``MosaicStream-v2``) under the rung's own protocol (dynamic execution,
 its step limit and throughput horizon) on consecutive seeds from ``--first-seed`` until at least
-``--tiles`` tiles have been supplied. The default first seed, 10000, is disjoint from the clone's training seeds
-(0-59) and from the rung's held-out seeds (1000-1019, 2000-2019). The seeds are dealt out to
-``--workers`` processes, each an `apps.evaluate` run in its own folder under ``--out`` that
+``--tiles`` tiles have been supplied. The default first seed, 10000, is disjoint from the
+clone's training seeds (0-59) and from the rung's held-out seeds (1000-1019, 2000-2019). The
+seeds are dealt out to ``--workers`` processes, each an `apps.evaluate` run in its own folder under ``--out`` that
 appends every episode to its log as it finishes: a soak that was stopped resumes where it
 stopped (with any number of workers), and no finished episode is played again. A folder keeps
 one soak: another task or policy there is refused.
