@@ -12,10 +12,10 @@ plays ``--task`` (default ``MosaicStream-v2``) under the rung's own protocol (dy
 its step limit and throughput horizon) on consecutive seeds from ``--first-seed`` until at least
 ``--tiles`` tiles have been supplied. The default first seed, 10000, is disjoint from the
 clone's training seeds (0-59) and from the rung's held-out seeds (1000-1019, 2000-2019). The
-seeds are dealt out to ``--workers`` processes, each an `apps.evaluate` run in its own folder under ``--out`` that
-appends every episode to its log as it finishes: a soak that was stopped resumes where it
-stopped (with any number of workers), and no finished episode is played again. A folder keeps
-one soak: another task or policy there is refused.
+seeds are dealt out to ``--workers`` processes, each an `apps.evaluate` run in its own folder
+under ``--out`` that appends every episode to its log as it finishes: a soak that was stopped
+resumes where it stopped (with any number of workers), and no finished episode is played again.
+A folder keeps one soak: another task or policy there is refused.
 
 The tally (printed, and written to ``<out>/soak.json``): tiles supplied, placed correctly,
 misplaced, dropped in transit, lost off the belt's end, stranded beside the mesh and left
