@@ -6,7 +6,8 @@ random value function and can undo the clone in a few updates. `critic_warmup` i
 callback for PPO / MaskablePPO that, for the first ``steps`` env steps, keeps every actor
 parameter out of the gradient (``requires_grad`` off), so each update fits only the critic on
 the rollouts the unchanged actor collects, at its own learning rate; the update of the first
-rollout that ends past ``steps`` env steps trains the actor too at the algorithm's own (small) learning rate.
+rollout that ends past ``steps`` env steps trains the actor too, at the algorithm's own (small)
+learning rate.
 
 Which parameters are the critic's: an unshared value features extractor
 (``vf_features_extractor`` when ``share_features_extractor=False``), the value branch of the

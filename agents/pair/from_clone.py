@@ -91,7 +91,14 @@ def read_clone(path: str | Path) -> CloneFile:
     )
     try:
         blob = torch.load(str(path), map_location="cpu", weights_only=True)
-    except (OSError, RuntimeError, EOFError, pickle.UnpicklingError, LookupError, ValueError) as exc:
+    except (
+        OSError,
+        RuntimeError,
+        EOFError,
+        pickle.UnpicklingError,
+        LookupError,
+        ValueError,
+    ) as exc:  # a file that is not a torch archive can fail anywhere in the unpickler
         what = "no such file" if isinstance(exc, FileNotFoundError) else "unreadable"
         raise AgentError(f"{path}: {what} ({type(exc).__name__}); expected {expected}") from exc
     if not isinstance(blob, dict) or blob.get("arch") != ARCH:

@@ -150,9 +150,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     summary: dict[str, Any] = {
         "task": cfg.task,
         "config": dataclasses.asdict(cfg),
-        "training": {
-            k: (str(v) if isinstance(v, Path) else v) for k, v in vars(result).items()
-        },
+        "training": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(result).items()},
         "cpu_min": result.cpu_s / 60,
     }
     files = {"clone": str(clone_path(cfg.init_clone)), "finetuned": str(result.model_path)}
