@@ -19,8 +19,7 @@ from agents.pair.from_clone import clone_policy_kwargs, load_clone, read_clone
 from apps.train import build_model, load_train_config, make_vec
 
 ROOT = Path(__file__).resolve().parents[3]
-STREAM = "MosaicStream-v1"
-CLONE = ROOT / "checkpoints" / STREAM / "PairBC_stream" / "seed_0" / "bc.pt"
+CLONE = ROOT / "checkpoints" / "MosaicStream-v1" / "PairBC_stream" / "seed_0" / "bc.pt"
 MLP_CLONE = ROOT / "checkpoints" / "MosaicDecision6-v0" / "BC_state_200_expert_demos"
 PRESET = "maskable_ppo_stream_finetune"
 STEPS = 12
@@ -30,7 +29,7 @@ STEPS = 12
 @pytest.fixture(scope="module")
 def model() -> Any:
     """The preset's MaskablePPO model on one stream env, started from the shipped clone."""
-    cfg = load_train_config(PRESET, n_envs=1, task=STREAM)
+    cfg = load_train_config(PRESET, n_envs=1)
     venv = make_vec(cfg, None)
     yield build_model(cfg, venv)
     venv.close()
@@ -40,7 +39,7 @@ def test_the_policy_started_from_the_clone_picks_what_the_clone_picks(model: Any
     """On the observations of a real episode (seed 1003, the clone playing), the policy's
     greedy action under the env's joint mask is the clone's, and its logits are the clone's."""
     clone = BCPolicy(CLONE)
-    env = FlatDiscreteActions(gym.make(STREAM))
+    env = FlatDiscreteActions(gym.make(load_train_config(PRESET).task))
     scorer = read_clone(CLONE)
     try:
         obs, _ = env.reset(seed=1003)
