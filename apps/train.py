@@ -51,7 +51,7 @@ from apps.train_extras import (
     policy_kwargs_for,
     resolve_algo_kwargs,
 )
-from configs import ConfigError, from_dict, load_yaml
+from configs import CONFIG_DIR, ConfigError, from_dict, load_yaml
 from configs.checks import check_fields, checked
 from configs.files import atomic_path, write_json, write_text
 from envs import ENV_ID
@@ -142,6 +142,14 @@ class TrainConfig:
             ``replay_buffer_class: agents.learning.rlpd:DemoMixReplayBuffer``.
         actor_bc_decay_steps: Env steps over which ``actor_bc_weight`` falls linearly to 0;
             0: constant.
+        init_clone: A pair-scorer clone ``.pt`` the ``PairScorerPolicy`` starts from
+            (`agents.pair.from_clone`): its scorer shape, rows and belt timing fill
+            ``policy_kwargs.features_extractor_kwargs`` and its weights are loaded into the
+            actor (and an unshared critic's scorer), so the first actions are the clone's; a
+            relative path is taken from the repository root; "": none.
+        critic_warmup_steps: Env steps whose updates fit the critic only, the actor frozen
+            (`agents.learning.critic_warmup`; PPO / MaskablePPO); 0: off.
+        critic_warmup_lr: Learning rate of those updates; 0: the algorithm's.
     """
 
     algo: str = "PPO"
@@ -174,6 +182,9 @@ class TrainConfig:
     hold_actor_steps: int = checked(0, ge=0)
     actor_bc_weight: float = checked(0.0, ge=0)
     actor_bc_decay_steps: int = checked(0, ge=0)
+    init_clone: str = ""
+    critic_warmup_steps: int = checked(0, ge=0)
+    critic_warmup_lr: float = checked(0.0, ge=0)
 
     def __post_init__(self) -> None:
         check_fields(self, TrainError)
@@ -345,7 +356,12 @@ def build_model(cfg: TrainConfig, venv: Any, tensorboard_log: str | None = None)
     kwargs: dict[str, Any] = resolve_algo_kwargs(dict(cfg.algo_kwargs))
     if cfg.policy_kwargs or cfg.normalize_obs:
         kwargs["policy_kwargs"] = policy_kwargs_for(cfg, venv, DEMO_ROOT)
-    return algorithm_class(cfg.algo)(
+    if cfg.init_clone:
+        from agents.pair.from_clone import clone_policy_kwargs, read_clone  # noqa: PLC0415
+
+        clone = read_clone(clone_path(cfg.init_clone))
+        kwargs["policy_kwargs"] = clone_policy_kwargs(clone, kwargs.get("policy_kwargs") or {})
+    model = algorithm_class(cfg.algo)(
         pick_policy(cfg.policy, venv.observation_space),
         venv,
         seed=cfg.seed,
@@ -354,6 +370,17 @@ def build_model(cfg: TrainConfig, venv: Any, tensorboard_log: str | None = None)
         tensorboard_log=tensorboard_log,
         **kwargs,
     )
+    if cfg.init_clone:
+        from agents.pair.from_clone import load_clone  # noqa: PLC0415
+
+        load_clone(model.policy, clone)
+    return model
+
+
+def clone_path(path: str) -> Path:
+    """``init_clone`` as a path: a relative one from the repository root."""
+    p = Path(path)
+    return p if p.is_absolute() else CONFIG_DIR.parent / p
 
 
 def finished_run(out: Path) -> TrainResult | None:
@@ -517,6 +544,10 @@ def train(cfg: TrainConfig, out: Path) -> TrainResult:
         model = build_model(cfg, venv, tensorboard_log=str(out / "tb") if cfg.tensorboard else None)
         terms = TermsLog(out / TERMS_FILE)
         callbacks = [_log_terms(terms), *demo_callbacks(cfg)]
+        if cfg.critic_warmup_steps:
+            from agents.learning.critic_warmup import critic_warmup  # noqa: PLC0415
+
+            callbacks.append(critic_warmup(cfg.critic_warmup_steps, cfg.critic_warmup_lr))
         show_bar = cfg.progress_bar and sys.stdout.isatty()
         if not show_bar and cfg.log_every_s > 0:
             callbacks.append(_log_progress(cfg.log_every_s, cfg.total_timesteps, terms))
