@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from benchmarks.stream_starts import StreamStartsConfig, main
+from benchmarks.stream.starts import StreamStartsConfig, main
 from configs import ConfigError
 
 

@@ -7,7 +7,7 @@ from dataclasses import replace
 import pytest
 
 from apps.evaluate import task_protocol
-from benchmarks.stream_stress import (
+from benchmarks.stream.stress import (
     StreamStressConfig,
     StressRun,
     highest_kept_up,

@@ -1,6 +1,6 @@
 """Which starts of the stream can be saved at all: the tiles given at reset, the fastest cycle.
 
-Run ``python -m benchmarks.stream_starts``. For every rung of ``configs/bench_stream_starts.yaml``
+Run ``python -m benchmarks.stream.starts``. For every rung of ``configs/bench_stream_starts.yaml``
 it resets the env on each seed (no episode is played) and asks whether any order of the first
 two picks saves every tile given at reset: a pick saves a tile when its contact comes before the
 belt carries the tile past the pick area's downstream edge, and even the fastest pick cycle the

@@ -1,6 +1,6 @@
 """Stress curve of the stream: the highest supply rate the scripted cell sustains, no tile lost.
 
-Run ``python -m benchmarks.stream_stress`` (``--figure`` also writes the figure,
+Run ``python -m benchmarks.stream.stress`` (``--figure`` also writes the figure,
 ``--tiles 20`` for a quick look, ``--from-json out/bench_stream_stress.json --figure`` to print
 and plot an earlier run again). For every belt speed and supply period of
 ``configs/bench_stream_stress.yaml``, the scripted cell (`agents.scripted.agent.ScriptedAgent`,
