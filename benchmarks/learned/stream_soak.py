@@ -32,6 +32,8 @@ from __future__ import annotations
 import json
 import math
 import multiprocessing
+import signal
+import threading
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -143,16 +145,35 @@ def in_workers(
     """Run ``job`` on each part of ``deal(seeds, workers)``, each in a fresh (spawned) process.
 
     Part ``i`` gets ``out / name.format(i)`` as its output path. Spawned workers copy no GL or
-    torch state.
+    torch state. A stopped soak stops its workers too: on an exception, Ctrl-C or SIGTERM the
+    workers are terminated (a worker left running would go on appending to a log the next
+    soak resumes from, so its episodes would be counted twice).
     """
     spawn = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=spawn) as pool:
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=spawn)
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _exit_on_term) if main else None
+    try:
         jobs = [
             pool.submit(job, part, str(out / name.format(i)))
             for i, part in enumerate(deal(seeds, workers))
         ]
         for done in jobs:
             done.result()
+    except BaseException:
+        for child in multiprocessing.active_children():
+            child.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    finally:
+        if main:
+            signal.signal(signal.SIGTERM, previous)
+    pool.shutdown()
+
+
+def _exit_on_term(signum: int, _frame: Any) -> None:
+    """SIGTERM as an exit that unwinds (so `in_workers` stops its workers)."""
+    raise SystemExit(128 + signum)
 
 
 def _play(task: str, policy: str, seeds: list[int], out: str) -> None:

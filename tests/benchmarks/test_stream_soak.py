@@ -3,12 +3,20 @@
 from __future__ import annotations
 
 import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import pytest
 
 from apps.evaluate_results import EpisodeResult
 from benchmarks.learned.stream_soak import compare_teacher, deal, soak, tally, wilson
 from configs import ConfigError
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _episode(seed: int, correct: int, *, misplaced: int = 0, lost: int = 0) -> EpisodeResult:
@@ -78,3 +86,47 @@ def test_the_teacher_replays_a_failed_seed_and_fails_where_no_order_saves_every_
     assert both["teacher_episodes"] == 2 and both["teacher_failed_too"] == 2, both
     assert [p.name for p in tmp_path.glob("teacher_*.jsonl")] == ["teacher_0.jsonl"]
     assert len((tmp_path / "teacher_0.jsonl").read_text().splitlines()) == 2
+
+
+def _wait_forever(seeds: list[int], path: str) -> None:
+    """A worker that writes its pid and then waits (module level: spawned workers import it)."""
+    Path(path).write_text(str(os.getpid()))
+    time.sleep(600)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def test_a_stopped_soak_stops_its_workers(tmp_path):
+    """SIGTERM to the soak's process takes its workers down with it: none is left running to
+    append to a log a resumed soak reads (that once counted 237 episodes twice)."""
+    script = (
+        "import sys\n"
+        "from pathlib import Path\n"
+        "from benchmarks.learned.stream_soak import in_workers\n"
+        "from tests.benchmarks.test_stream_soak import _wait_forever\n"
+        "in_workers(_wait_forever, [1, 2], 2, Path(sys.argv[1]), 'pid_{}')\n"
+    )
+    proc = subprocess.Popen([sys.executable, "-c", script, str(tmp_path)], cwd=ROOT)
+    pids: list[int] = []
+    try:
+        deadline = time.monotonic() + 60
+        while len(list(tmp_path.glob("pid_*"))) < 2 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        pids = [int(p.read_text()) for p in sorted(tmp_path.glob("pid_*"))]
+        assert len(pids) == 2 and all(_alive(p) for p in pids)
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=30) != 0
+        deadline = time.monotonic() + 10
+        while any(_alive(p) for p in pids) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not any(_alive(p) for p in pids)
+    finally:
+        proc.kill()
+        for pid in filter(_alive, pids):  # a worker the soak failed to stop
+            os.kill(pid, signal.SIGKILL)
