@@ -19,7 +19,6 @@ maskable_ppo_stream_finetune.yaml``).
 
 from __future__ import annotations
 
-import pickle
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -28,6 +27,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from agents.camera.crop_scorer import read_policy_file
 from agents.errors import AgentError
 from agents.pair.adapters import ADAPTERS, FEATURE_DIMS
 from agents.pair.scorer import PairScorerConfig
@@ -90,19 +90,11 @@ def read_clone(path: str | Path) -> CloneFile:
         "apps.bc.objects or benchmarks.learned.stream)"
     )
     try:
-        blob = torch.load(str(path), map_location="cpu", weights_only=True)
-    except (
-        OSError,
-        RuntimeError,
-        EOFError,
-        pickle.UnpicklingError,
-        LookupError,
-        ValueError,
-    ) as exc:  # a file that is not a torch archive can fail anywhere in the unpickler
-        what = "no such file" if isinstance(exc, FileNotFoundError) else "unreadable"
-        raise AgentError(f"{path}: {what} ({type(exc).__name__}); expected {expected}") from exc
-    if not isinstance(blob, dict) or blob.get("arch") != ARCH:
-        arch = blob.get("arch") if isinstance(blob, dict) else type(blob).__name__
+        blob = read_policy_file(path)
+    except AgentError as exc:  # unreadable, missing, or no dict inside
+        raise AgentError(f"{exc}; expected {expected}") from exc
+    if blob.get("arch") != ARCH:
+        arch = blob.get("arch")
         raise AgentError(f"{path} is not a pair-scorer clone (arch {arch!r}); expected {expected}")
     try:
         adapter = str(blob["adapter"])
