@@ -15,7 +15,7 @@ the mean over its runs, each run also drawn thin. A ``--target`` draws a horizon
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -33,19 +33,34 @@ CPU_COLUMN = "cpu_s"
 """Monitor column of the training process's CPU seconds at an episode's end."""
 
 
+def episode_table(run: Path, *values: Callable[[dict[str, str]], float]) -> np.ndarray:
+    """(env steps at the end, CPU minutes at the end, each of ``values``) per training episode.
+
+    Episodes of all the run's envs, ordered by their end (wall time), read from the run's
+    ``monitor/`` logs; each of ``values`` maps an episode's monitor row to a number. Env steps
+    are summed over the episodes. Shape (m, 2 + len(values)).
+    """
+    rows = [
+        (
+            float(ep["t"]),
+            float(ep["l"]),
+            float(ep[CPU_COLUMN]) / 60,
+            *(float(v(ep)) for v in values),
+        )
+        for ep in monitor_episodes(run / "monitor")
+    ]
+    if not rows:
+        return np.zeros((0, 2 + len(values)))
+    arr = np.array(sorted(rows))
+    return np.column_stack([np.cumsum(arr[:, 1]), arr[:, 2:]])
+
+
 def episodes(run: Path) -> np.ndarray:
     """(env steps at the end, CPU minutes at the end, filled fraction) per training episode.
 
     Episodes of all the run's envs, ordered by their end (wall time); shape (m, 3).
     """
-    rows = [
-        (float(ep["t"]), float(ep["l"]), float(ep[CPU_COLUMN]) / 60, float(ep[FILLED_COLUMN]))
-        for ep in monitor_episodes(run / "monitor")
-    ]
-    if not rows:
-        return np.zeros((0, 3))
-    arr = np.array(sorted(rows))
-    return np.column_stack([np.cumsum(arr[:, 1]), arr[:, 2], arr[:, 3]])
+    return episode_table(run, lambda ep: float(ep[FILLED_COLUMN]))
 
 
 def binned(x: np.ndarray, y: np.ndarray, edges: np.ndarray) -> np.ndarray:

@@ -4,7 +4,7 @@ Run::
 
     python -m benchmarks.learned.stream_finetune --seed 0 --out runs/stream_ft \
         --figure docs/img/stream_finetune_curve.png
-    python -m apps.evaluate --task MosaicStream-v1 --policies runs/stream_ft/seed_0/model.zip
+    python -m apps.evaluate --task MosaicStream-v2 --policies runs/stream_ft/seed_0/model.zip
 
 Trains ``configs/train/maskable_ppo_stream_finetune.yaml`` (``apps.train``: the pair-scorer
 MaskablePPO policy started from the clone named by its ``init_clone``, the critic warmed up with
@@ -26,7 +26,8 @@ from typing import Any
 import numpy as np
 
 from apps.cli import CommandParser, run_cli
-from apps.results.monitor_log import monitor_episodes, succeeded
+from apps.results.monitor_log import succeeded
+from apps.results.plot_curves import episode_table
 from apps.train import (
     TrainConfig,
     clone_path,
@@ -50,14 +51,7 @@ def training_curve(run: Path) -> np.ndarray:
     Episodes of all the run's envs in the order they ended; env steps are summed over them.
     Shape (m, 4).
     """
-    rows = sorted(
-        (float(ep["t"]), float(ep["l"]), float(ep["cpu_s"]) / 60, succeeded(ep), float(ep["r"]))
-        for ep in monitor_episodes(run / "monitor")
-    )
-    if not rows:
-        return np.zeros((0, 4))
-    arr = np.array(rows)
-    return np.column_stack([np.cumsum(arr[:, 1]), arr[:, 2], arr[:, 3], arr[:, 4]])
+    return episode_table(run, succeeded, lambda ep: float(ep["r"]))
 
 
 def running_mean(y: np.ndarray, window: int = WINDOW) -> np.ndarray:
