@@ -51,10 +51,11 @@ from apps.train_extras import (
     policy_kwargs_for,
     resolve_algo_kwargs,
 )
-from configs import CONFIG_DIR, ConfigError, from_dict, load_yaml
+from configs import ConfigError, from_dict, load_yaml
 from configs.checks import check_fields, checked
 from configs.files import atomic_path, write_json, write_text
 from envs import ENV_ID
+from envs.cell.config import REPO_ROOT
 from envs.cell.rendering import use_headless_rendering
 
 """Gymnasium id of the environment (the ``envs:`` prefix imports and registers it)."""
@@ -380,7 +381,7 @@ def build_model(cfg: TrainConfig, venv: Any, tensorboard_log: str | None = None)
 def clone_path(path: str) -> Path:
     """``init_clone`` as a path: a relative one from the repository root."""
     p = Path(path)
-    return p if p.is_absolute() else CONFIG_DIR.parent / p
+    return p if p.is_absolute() else REPO_ROOT / p
 
 
 def finished_run(out: Path) -> TrainResult | None:
