@@ -5,8 +5,10 @@ from __future__ import annotations
 import copy
 import hashlib
 import multiprocessing as mp
+import os
 import pickle
-import queue
+import shutil
+import tempfile
 import time
 import warnings
 import weakref
@@ -18,7 +20,16 @@ import numpy as np
 from gymnasium.utils import seeding
 
 from envs.pool.config import DesignPoolConfig, load_pool_config
-from envs.pool.worker import Prepared, State, loads, state_key, stop, work
+from envs.pool.worker import (
+    Prepared,
+    State,
+    discard,
+    loads,
+    state_key,
+    stop,
+    take_over,
+    work,
+)
 from envs.task import SEED_BOUND
 
 if TYPE_CHECKING:
@@ -29,6 +40,9 @@ if TYPE_CHECKING:
 
 MB = 2**20
 """Bytes per MB."""
+MEMORY_FOLDER = "/dev/shm"
+"""Where the pool's folder of handed-over entries is made when it exists (a file system in
+memory); else in the system's temporary folder."""
 
 
 @dataclass(frozen=True)
@@ -63,16 +77,22 @@ class DesignPool:
     def __init__(self, config: DesignPoolConfig) -> None:
         self.config = config
         ctx: Any = mp.get_context(config.start_method)
-        self._requests: Any = ctx.Queue()
-        self._results: Any = ctx.Queue()
+        worker_requests, self._requests = ctx.Pipe(duplex=False)
+        self._results, worker_results = ctx.Pipe(duplex=False)
+        here = MEMORY_FOLDER if os.path.isdir(MEMORY_FOLDER) else None
+        self.folder = tempfile.mkdtemp(prefix="mosaic-design-pool-", dir=here)
         self._process: Any = ctx.Process(
             target=work,
-            args=(self._requests, self._results),
+            args=(worker_requests, worker_results, self.folder),
             name="mosaic-design-pool",
             daemon=True,
         )
         self._process.start()
-        self._stop = weakref.finalize(self, stop, self._process, self._requests, self._results)
+        worker_requests.close()  # the worker's ends: its own copies live in its process
+        worker_results.close()
+        self._stop = weakref.finalize(
+            self, _shut_down, self._process, self._requests, self._results, self.folder
+        )
         self._digest = ""
         self._what: tuple[Any, ...] | None = None
         self._ready: OrderedDict[str, Prepared] = OrderedDict()
@@ -103,8 +123,8 @@ class DesignPool:
 
     @property
     def held_mb(self) -> float:
-        """Memory of the prepared entries held now [MB] (their pickled size)."""
-        return sum(len(p.blob or b"") for p in self._ready.values()) / MB
+        """Memory of the prepared entries held now [MB] (their pickled size, in files)."""
+        return sum(p.size for p in self._ready.values()) / MB
 
     # ------------------------------------------------------------------ use
     def source(self, config: EnvConfig, designs: ProceduralDesigns) -> str:
@@ -124,9 +144,9 @@ class DesignPool:
             payload = pickle.dumps((config, bare, self.config.build_cells))
             self._digest = digest
             self.dropped += len(self._ready)
-            self._ready.clear()
+            self._drop_all()
             self._plan, self._started, self._delivered = [], "", set()
-            self._requests.put(("source", digest, payload))
+            self._requests.send(("source", digest, payload))
         return digest
 
     def take(
@@ -143,10 +163,11 @@ class DesignPool:
         if key not in self._ready and key in self._plan and key not in self._delivered:
             self._wait(key)
         prepared = self._ready.pop(key, None)
-        if prepared is None or prepared.blob is None:
+        blob = None if prepared is None else take_over(prepared)
+        if prepared is None or blob is None:
             self.misses += 1
             return None
-        design, seed, after, cell = loads(prepared.blob)
+        design, seed, after, cell = loads(blob)
         for category, message in prepared.warnings:
             warnings.warn(message, category, stacklevel=4)
         rng.bit_generator.state = after
@@ -163,7 +184,7 @@ class DesignPool:
             keyed = [(state_key(state), state)]
         plan = [k for k, _ in keyed]
         for k in [k for k in self._ready if k not in plan]:
-            del self._ready[k]
+            discard(self._ready.pop(k))
             self.dropped += 1
         if plan != self._plan:
             self._send_plan(keyed)
@@ -194,17 +215,19 @@ class DesignPool:
         self._plan = [k for k, _ in keyed]
         self._states = dict(keyed)
         self._delivered &= set(self._plan)  # as the worker forgets what left its plan
-        self._requests.put(("plan", self._digest, keyed))
+        self._requests.send(("plan", self._digest, keyed))
 
     def _collect(self, wait_s: float) -> None:
         """Receive what the worker sent (waiting up to ``wait_s`` for the first message)."""
-        block = wait_s > 0.0
+        wait: float | None = wait_s
         while True:
             try:
-                msg = self._results.get(block=block, timeout=wait_s if block else None)
-            except queue.Empty:
-                return
-            block = False
+                if not self._results.poll(wait):
+                    return
+                msg = self._results.recv()
+            except (EOFError, OSError):
+                return  # the worker is gone: the env draws in place from now on
+            wait = 0.0
             if msg[0] == "started":
                 self._started = msg[2] if msg[1] == self._digest else ""
                 continue
@@ -213,19 +236,32 @@ class DesignPool:
             if digest == self._digest:
                 self._delivered.add(key)  # the worker will not make it again
             self.worker_cpu_s += prepared.cpu_s
-            size = len(prepared.blob or b"") / MB
+            size = prepared.size / MB
             if digest != self._digest or key not in self._plan or size > self.config.max_entry_mb:
+                discard(prepared)
                 self.dropped += 1
                 continue
             self._ready[key] = prepared
             while len(self._ready) > self.config.ahead:
-                self._ready.popitem(last=False)
+                discard(self._ready.popitem(last=False)[1])
                 self.dropped += 1
 
-    def close(self) -> None:
-        """Stop the worker and drop every entry (safe to call twice)."""
+    def _drop_all(self) -> None:
+        """Drop every prepared entry held (their files removed)."""
+        for prepared in self._ready.values():
+            discard(prepared)
         self._ready.clear()
+
+    def close(self) -> None:
+        """Stop the worker, drop every entry and remove the pool's folder (safe twice)."""
+        self._drop_all()
         self._stop()
+
+
+def _shut_down(process: Any, requests: Any, results: Any, folder: str) -> None:
+    """Stop the worker (`stop`), then remove the folder of handed-over entries."""
+    stop(process, requests, results)
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 def draw_design(
@@ -271,4 +307,4 @@ def design_pool(config: EnvConfig, designs: ProceduralDesigns | None) -> DesignP
     return DesignPool(pool_config)
 
 
-__all__ = ["MB", "DesignPool", "Taken", "design_pool", "draw_design"]
+__all__ = ["MB", "MEMORY_FOLDER", "DesignPool", "Taken", "design_pool", "draw_design"]

@@ -6,13 +6,15 @@ What it makes of a generator state (`prepare`), its loop (`work`) and how it is 
 
 from __future__ import annotations
 
+import dataclasses
 import io
+import os
 import pickle
-import queue
 import time
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
+from multiprocessing.connection import Connection
 from typing import TYPE_CHECKING, Any
 
 import mujoco
@@ -37,17 +39,55 @@ class Prepared:
 
     Attributes:
         blob: (design, build seed, generator state after the draw, cell or None), `dumps`;
-            None when the draw failed.
+            None when the draw failed, and once handed over in a file (`hand_over`).
         warnings: (category, message) of each warning the draw and build gave.
         cpu_s: CPU time the worker spent on it [s].
         error: Why the draw failed ("" when it did not); the env then draws in place (and
             raises the same error).
+        path: The file holding the blob once handed over ("" before, or without a blob).
+        size: The blob's size [bytes].
     """
 
     blob: bytes | None
     warnings: tuple[tuple[type[Warning], str], ...] = ()
     cpu_s: float = 0.0
     error: str = ""
+    path: str = ""
+    size: int = 0
+
+
+def hand_over(prepared: Prepared, path: str) -> Prepared:
+    """``prepared`` with its blob written to the file ``path`` (nothing without a blob).
+
+    A file in memory (the pool's folder is on ``/dev/shm`` where there is one) is read at
+    once by the env at its reset: a megabyte through a pipe costs both processes many
+    small reads and writes and their wake-ups.
+    """
+    if prepared.blob is None:
+        return prepared
+    with open(path, "wb") as f:
+        f.write(prepared.blob)
+    return dataclasses.replace(prepared, blob=None, path=path, size=len(prepared.blob))
+
+
+def take_over(prepared: Prepared) -> bytes | None:
+    """The blob of a handed-over entry (its file removed); None without a blob."""
+    if not prepared.path:
+        return prepared.blob
+    try:
+        with open(prepared.path, "rb") as f:
+            return f.read()
+    finally:
+        discard(prepared)
+
+
+def discard(prepared: Prepared) -> None:
+    """Remove a handed-over entry's file (if still there)."""
+    if prepared.path:
+        try:
+            os.remove(prepared.path)
+        except FileNotFoundError:
+            pass
 
 
 def state_key(state: State) -> str:
@@ -142,21 +182,27 @@ def loads(blob: bytes) -> Any:
     return _Unpickler(io.BytesIO(rest), model, data).load()
 
 
-def work(requests: Any, results: Any) -> None:
-    """The worker: prepare the states of the latest plan, in order, until told to stop."""
+def work(requests: Connection, results: Connection, folder: str) -> None:
+    """The worker: prepare the states of the latest plan, in order, until told to stop.
+
+    Messages come and go through pipes (sent in the calling thread: no feeder thread and its
+    wake-ups, as a queue has); each prepared blob is handed over as a file in ``folder``
+    (`hand_over`). The worker ends when told to stop or when the env's end of the pipe is
+    gone.
+    """
     source: Any = None
+    count = 0
     digest = ""
     plan: list[tuple[str, State]] = []
     done: set[str] = set()
     while True:
         todo = [(k, s) for k, s in plan if k not in done]
         try:
-            msg = requests.get(block=not todo)
-        except queue.Empty:
-            msg = None
+            msg = requests.recv() if not todo or requests.poll() else None
+        except EOFError:
+            return  # the env's end is closed
         if msg is not None:  # take every message before working on the newest plan
             if msg[0] == "stop":
-                results.cancel_join_thread()
                 return
             if msg[0] == "source":
                 digest, source, plan, done = msg[1], pickle.loads(msg[2]), [], set()
@@ -165,25 +211,29 @@ def work(requests: Any, results: Any) -> None:
                 done &= {k for k, _ in plan}
             continue
         key, state = todo[0]
-        results.put(("started", digest, key))
-        results.put(("ready", digest, key, prepare(source, state)))
+        count += 1
+        try:
+            results.send(("started", digest, key))
+            prepared = hand_over(prepare(source, state), os.path.join(folder, f"{count}.entry"))
+            results.send(("ready", digest, key, prepared))
+        except (BrokenPipeError, OSError):
+            return  # the env's end is closed (or its folder gone): nobody to prepare for
         done.add(key)
 
 
-def stop(process: Any, requests: Any, results: Any) -> None:
+def stop(process: Any, requests: Connection, results: Connection) -> None:
     """Stop the worker: ask, wait `STOP_WAIT_S`, then terminate; never block at exit."""
     if process.is_alive():
         try:
-            requests.put(("stop",))
+            requests.send(("stop",))
         except (OSError, ValueError):
             pass
         process.join(STOP_WAIT_S)
         if process.is_alive():
             process.terminate()
             process.join(STOP_WAIT_S)
-    for q in (requests, results):
-        q.cancel_join_thread()
-        q.close()
+    requests.close()
+    results.close()
 
 
 __all__ = [
@@ -191,10 +241,13 @@ __all__ = [
     "STOP_WAIT_S",
     "Prepared",
     "State",
+    "discard",
     "dumps",
+    "hand_over",
     "loads",
     "prepare",
     "state_key",
     "stop",
+    "take_over",
     "work",
 ]

@@ -129,6 +129,8 @@ def test_the_pool_stays_within_its_memory_bound() -> None:
         for seed in range(2, 4):
             env.reset(seed=seed)
             assert len(u.pool) <= 2 and u.pool.held_mb <= 2 * 16.0
+            # the entries' files: those held, and at most the one being written
+            assert len(os.listdir(u.pool.folder)) <= len(u.pool) + 1
         assert u.pool.hits >= 1
     finally:
         env.close()
@@ -159,10 +161,12 @@ def test_close_stops_the_worker_and_a_fixed_design_starts_none() -> None:
     env = gym.make(HELD_OUT, design_pool="design_pool", **PROCEDURAL)
     pool: DesignPool = env.unwrapped.pool  # type: ignore[attr-defined]
     pid = pool.pid
-    assert pool.alive
+    assert pool.alive and os.path.isdir(pool.folder)
+    env.reset(seed=0)
     env.close()
     env.close()  # twice is fine
     assert _gone(pid) and not pool.alive
+    assert not os.path.exists(pool.folder)  # the handed-over entries' folder is removed
     fixed = gym.make(HELD_OUT, design_pool="design_pool")
     assert fixed.unwrapped.pool is None  # type: ignore[attr-defined]
     fixed.close()
@@ -179,7 +183,7 @@ def test_an_unclosed_pool_ends_with_the_interpreter() -> None:
         if __name__ == "__main__":
             env = gym.make({HELD_OUT!r}, design_pool="design_pool", **{PROCEDURAL!r})
             env.reset(seed=0)
-            print(env.unwrapped.pool.pid, flush=True)
+            print(env.unwrapped.pool.folder, env.unwrapped.pool.pid, flush=True)
         """
     )
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -192,7 +196,8 @@ def test_an_unclosed_pool_ends_with_the_interpreter() -> None:
         env=env,
     )
     assert done.returncode == 0, done.stderr
-    assert _gone(int(done.stdout.split()[-1]))
+    folder, pid = done.stdout.split()[-2:]
+    assert _gone(int(pid)) and not os.path.exists(folder)
 
 
 @pytest.mark.slow
