@@ -17,7 +17,10 @@ machines and loads:
   Target <= `TARGET_STEP`.
 - ``camera``: a decision step (``pick_place_discrete``, kinematic, the scripted correct
   decision) with both 72 x 96 camera images over the same step without images
-  (``obs_mode="state"``). Target <= `TARGET_CAMERA`.
+  (``obs_mode="state"``). Target <= `TARGET_CAMERA`. Beside it, ``floor_ratio``: the same
+  step with both images at `FLOOR_IMAGE` (3 x 4 px) over the step without, the least any
+  picture size costs with this renderer (its per-picture cost apart from pixels: the scene,
+  the draw calls, the vertices, the read-back).
 
 Each row also gives the absolute figures [ms] and the machine's load average (1, 5, 15 min)
 before and after it (`os.getloadavg`).
@@ -48,6 +51,9 @@ PROCEDURAL: dict[str, Any] = {
     "exclude_designs": ["hexagon", "trencadis"],
 }
 """Its procedural training entry (`envs.tasks.BenchmarkTask.design_kwargs`)."""
+FLOOR_IMAGE = (3, 4)
+"""The smallest image of the cameras' 4:3 shape [px] (height, width): the ``camera`` ratio's
+floor, what the pictures cost with next to no pixels."""
 POOL = "design_pool"
 """The design pool configuration of the ``reset_pool`` ratio (``configs/design_pool.yaml``)."""
 
@@ -233,18 +239,21 @@ def measure_camera_ratio(seconds: float, queue: mp.Queue) -> None:
     }
     rgb: Any = gym.make(envs.ENV_ID, obs_mode="rgb", **kw)
     state: Any = gym.make(envs.ENV_ID, obs_mode="state", **kw)
-    a = b = 0.0
-    na = nb = seed = 0
+    floor: Any = gym.make(envs.ENV_ID, obs_mode="rgb", **{**kw, "image_size": FLOOR_IMAGE})
+    a = b = f = 0.0
+    na = nb = nf = seed = 0
     while a + b < seconds:
-        for env in (rgb, state):
+        for env in (rgb, state, floor):
             env.reset(seed=seed)
         spent, n = _episode(rgb, len(rgb.unwrapped.cell.slots))
         a, na = a + spent, na + n
         spent, n = _episode(state, len(state.unwrapped.cell.slots))
         b, nb = b + spent, nb + n
+        spent, n = _episode(floor, len(floor.unwrapped.cell.slots))
+        f, nf = f + spent, nf + n
         seed += 1
-    rgb.close()
-    state.close()
+    for env in (rgb, state, floor):
+        env.close()
     queue.put(
         {
             "what": (
@@ -253,6 +262,8 @@ def measure_camera_ratio(seconds: float, queue: mp.Queue) -> None:
             ),
             "with_images_ms": 1e3 * a / na,
             "without_images_ms": 1e3 * b / nb,
+            "floor_images_ms": 1e3 * f / nf,
+            "floor_ratio": (f / nf) / (b / nb),
             "ratio": (a / na) / (b / nb),
             "target": TARGET_CAMERA,
             "steps": na + nb,
@@ -272,6 +283,7 @@ RATIOS = {
 
 __all__ = [
     "RATIOS",
+    "FLOOR_IMAGE",
     "TARGET_CAMERA",
     "TARGET_RESET",
     "TARGET_STEP",
