@@ -214,10 +214,17 @@ def work(requests: Connection, results: Connection, folder: str) -> None:
         count += 1
         try:
             results.send(("started", digest, key))
-            prepared = hand_over(prepare(source, state), os.path.join(folder, f"{count}.entry"))
+        except OSError:
+            return  # the env's end is closed: nobody to prepare for
+        prepared = prepare(source, state)
+        try:
+            prepared = hand_over(prepared, os.path.join(folder, f"{count}.entry"))
+        except OSError as exc:  # e.g. a full /dev/shm: this entry is drawn in place
+            prepared = Prepared(None, prepared.warnings, prepared.cpu_s, f"hand-over: {exc}")
+        try:
             results.send(("ready", digest, key, prepared))
-        except (BrokenPipeError, OSError):
-            return  # the env's end is closed (or its folder gone): nobody to prepare for
+        except OSError:
+            return
         done.add(key)
 
 

@@ -214,3 +214,28 @@ def test_a_pool_of_designs_alone_gives_the_same_episodes(tmp_path: Path) -> None
     finally:
         pooled.close()
         plain.close()
+
+
+def test_a_failed_hand_over_is_drawn_in_place_and_the_worker_lives_on() -> None:
+    """A hand-over file that cannot be written (its folder gone here; a full ``/dev/shm``
+    alike) costs a miss, not the pool: the same episode, and later entries are taken again."""
+    env = gym.make(HELD_OUT, design_pool="design_pool", **PROCEDURAL)
+    plain = gym.make(HELD_OUT, **PROCEDURAL)
+    pool: DesignPool = env.unwrapped.pool  # type: ignore[attr-defined]
+    try:
+        env.reset(seed=30)
+        os.rename(pool.folder, pool.folder + ".away")  # the worker's next writes fail
+        time.sleep(1.0)  # let it try (and fail) its planned entries
+        misses = pool.misses
+        assert _episodes(env, [31], 1) == _episodes(plain, [31], 1)
+        assert pool.misses == misses + 1 and pool.alive
+        os.rename(pool.folder + ".away", pool.folder)
+        env.reset(seed=40)  # a new plan, written again
+        hits = pool.hits
+        assert _episodes(env, [41], 1) == _episodes(plain, [41], 1)
+        assert pool.hits == hits + 1
+    finally:
+        if os.path.isdir(pool.folder + ".away"):
+            os.rename(pool.folder + ".away", pool.folder)
+        env.close()
+        plain.close()
