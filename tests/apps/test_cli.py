@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from apps.cli import DEBUG_ENV, EXIT_ERROR, EXIT_USAGE, run_cli
+from apps.cli import DEBUG_ENV, EXIT_ERROR, EXIT_USAGE, project_errors, run_cli
 
 ROOT = Path(__file__).resolve().parents[2]
 PROGRAM_PACKAGES = ("agents", "apps", "benchmarks")
@@ -163,20 +163,36 @@ def _command(args: list[str], **env: str) -> subprocess.CompletedProcess[str]:
     )
 
 
-def test_command_line_usage_error_and_debug_traceback(tmp_path) -> None:
+def test_command_line_project_error_and_debug_traceback(tmp_path) -> None:
+    """A real process: one line and status 1; with ``--debug`` Python's traceback, status 1."""
     bad = ["--policies", "random", "--env", "max_slots=-3", "--out", str(tmp_path)]
     plain = _command(bad)
     assert plain.returncode == EXIT_ERROR
     assert plain.stderr.strip().splitlines() == ["error: max_slots must be >= 0, got -3"]
-    for shown in (_command([*bad, "--debug"]), _command(bad, **{DEBUG_ENV: "1"})):
-        assert shown.returncode == 1
-        assert "Traceback (most recent call last)" in shown.stderr
-        assert shown.stderr.strip().splitlines()[-1].endswith("max_slots must be >= 0, got -3")
-    usage = _command(["--policies", "random", "--seeds", "abc"])
-    assert usage.returncode == EXIT_USAGE
-    assert usage.stderr.strip().splitlines() == [
-        "error: argument --seeds: bad seed 'abc': use 1000-1019 or 1,2,3"
-    ]
+    shown = _command([*bad, "--debug"])
+    assert shown.returncode == 1
+    assert "Traceback (most recent call last)" in shown.stderr
+    assert shown.stderr.strip().splitlines()[-1].endswith("max_slots must be >= 0, got -3")
+
+
+def test_debug_variable_lets_the_error_out_and_a_usage_error_is_one_line(
+    monkeypatch, capsys, tmp_path
+) -> None:
+    """``MOSAIC_DEBUG=1`` acts as ``--debug``; a bad ``--seeds`` is one line with status 2.
+
+    In this process (a new one costs seconds of imports): with the variable the error leaves
+    `run_cli`, so Python prints its traceback and exits 1, as the real process above shows.
+    """
+    module = _module("evaluate")
+    main = importlib.import_module(module).main
+    bad = ["--policies", "random", "--env", "max_slots=-3", "--out", str(tmp_path)]
+    monkeypatch.setattr(sys, "argv", [module, *bad])
+    monkeypatch.setenv(DEBUG_ENV, "1")
+    with pytest.raises(project_errors(), match="max_slots must be >= 0, got -3"):
+        run_cli(main)
+    code, lines = _run(monkeypatch, capsys, module, ["--policies", "random", "--seeds", "abc"])
+    assert code == EXIT_USAGE
+    assert lines == ["error: argument --seeds: bad seed 'abc': use 1000-1019 or 1,2,3"]
 
 
 def test_an_unexpected_exception_keeps_its_traceback(tmp_path) -> None:
