@@ -87,10 +87,10 @@ class IndexMaps:
         if self.cfg.tile_order != "belt" or not len(self.cell.tiles):
             return
         cell = self.cell
-        pos = cell.tile_poses().pos
+        xy = cell.tile_xy()
         on_input = cell.input_half()
         idx = np.flatnonzero(on_input)
-        first = idx[np.lexsort((pos[idx, 1], -pos[idx, 0]))]
+        first = idx[np.lexsort((xy[idx, 1], -xy[idx, 0]))]
         rest = self._rest[~on_input[self._rest]]
         self.tiles = np.concatenate([first, rest]).astype(int)
 

@@ -381,6 +381,10 @@ class Cell:
         s = self.ids.tcp_site
         return self.data.site_xpos[s].copy(), self.data.site_xmat[s].reshape(3, 3).copy()
 
+    def tile_xy(self) -> np.ndarray:
+        """Tile positions x, y (parked ones included), shape (n, 2) [m] (copy; no yaw computed)."""
+        return self.data.qpos[self.ids.tile_qpos_index[:, :2]]
+
     def tile_poses(self) -> TilePoses:
         """Poses of all tiles (parked ones included; see `on_stage`)."""
         q = self.data.qpos[self.ids.tile_qpos_index]
