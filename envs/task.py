@@ -29,7 +29,7 @@ from envs.env_config import EnvConfig
 from envs.episode_setup import retry_layout
 from envs.errors import CellError, EnvError
 from envs.rewards import STAGES, SlotProgress, StagedReward, load_staged_config
-from spatial.angles import yaw_error
+from spatial.angles import yaw_error, yaw_periods
 from spatial.rotations import yaw_from_quat
 from spatial.units import MM_PER_M
 
@@ -221,6 +221,7 @@ class MosaicTask:
         self.tile_class = np.array([index[t.shape.name] for t in cell.tiles], dtype=int)
         self.distractor = cell.is_distractor.copy()
         self.symmetry = np.array([t.shape.symmetry for t in cell.tiles], dtype=int)
+        self._yaw_period = yaw_periods(self.symmetry)  # fixed with the tiles: never stale
         self.slot_xyyaw = cell.slot_poses_world()
         self._mesh_lo, self._mesh_hi = cell.geometry.mesh_lo, cell.geometry.mesh_hi
         self._rest_z = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2
@@ -321,8 +322,10 @@ class MosaicTask:
             dy = qi[:, 1:2] - self._slot_y
             dist = np.sqrt(dx * dx + dy * dy)
             nearest = dist.argmin(axis=1)
-            err = dist[np.arange(len(idx)), nearest]
-            yerr_i = yaw_error(yaw, self.slot_xyyaw[nearest, 2], self.symmetry[idx])
+            err = dist.min(axis=1)  # the distance at ``nearest``
+            yerr_i = yaw_error(
+                yaw, self.slot_xyyaw[nearest, 2], self.symmetry[idx], self._yaw_period[idx]
+            )
             slot[idx], perr[idx], yerr[idx] = nearest, err, yerr_i
             ok = (
                 flat[idx]
@@ -402,7 +405,7 @@ class MosaicTask:
         rejected = cell.lost_tracker.rejected
         return tile_states(
             TileFlags(
-                real=~self.distractor,
+                real=self._real,
                 fed=cell.on_stage | retired,
                 held=held,
                 rejected=rejected | retired,

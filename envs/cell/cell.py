@@ -316,7 +316,7 @@ class Cell:
             CellError: Wrong shape, non-finite, or outside the joint ranges.
         """
         q = self._vec6(q, "q")
-        if np.any(q < self._q_lo - 1e-9) or np.any(q > self._q_hi + 1e-9):
+        if (q < self._q_lo - 1e-9).any() or (q > self._q_hi + 1e-9).any():
             raise CellError(
                 f"q {np.round(q, 4).tolist()} is outside the joint ranges "
                 f"{np.round(np.column_stack([self._q_lo, self._q_hi]), 4).tolist()} [rad]"
@@ -356,7 +356,7 @@ class Cell:
     @staticmethod
     def _vec6(v: np.ndarray, name: str) -> np.ndarray:
         a = np.asarray(v, dtype=float)
-        if a.shape != (6,) or not np.all(np.isfinite(a)):
+        if a.shape != (6,) or not np.isfinite(a).all():
             raise CellError(f"{name} must be 6 finite joint values, got {np.asarray(v)!r}")
         return a
 
