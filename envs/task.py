@@ -22,15 +22,21 @@ from typing import Any
 
 import numpy as np
 
-from envs.cell.accounting import ON_INPUT, WAITING, TileFlags, state_counts, tile_states
+from envs.cell.accounting import (
+    NOT_COUNTED,
+    ON_INPUT,
+    TILE_STATES,
+    WAITING,
+    TileFlags,
+    tile_states,
+)
 from envs.cell.camera_effects import CameraJitter
 from envs.cell.cell import Cell
 from envs.env_config import EnvConfig
 from envs.episode_setup import retry_layout
 from envs.errors import CellError, EnvError
 from envs.rewards import STAGES, SlotProgress, StagedReward, load_staged_config
-from spatial.angles import yaw_error, yaw_periods
-from spatial.rotations import yaw_from_quat
+from spatial.angles import yaw_periods
 from spatial.units import MM_PER_M
 
 REWARD_TERMS = (
@@ -228,7 +234,16 @@ class MosaicTask:
         self._yaw_tol = math.radians(config.yaw_tolerance_deg)
         self._flat = math.cos(math.radians(config.max_tilt_deg))
         self._real = ~self.distractor
-        self._slot_x, self._slot_y = self.slot_xyyaw[None, :, 0], self.slot_xyyaw[None, :, 1]
+        # Plain-float copies for `_lie` (fixed with the cell's tiles and slots, never stale).
+        self._slot_xy = self.slot_xyyaw[:, :2].tolist()
+        self._slot_yaw = self.slot_xyyaw[:, 2].tolist()
+        self._slot_classes = self.slot_class.tolist()
+        self._classes = self.tile_class.tolist()
+        self._reals = self._real.tolist()
+        self._orders = self.symmetry.tolist()
+        self._periods = self._yaw_period.tolist()
+        self._lies: list[tuple[list[float], tuple[bool, int, float, float, bool] | None] | None]
+        self._lies = [None] * len(cell.tiles)
         self._base_light = cell.model.light_diffuse.copy()
         self._camera_jitter = CameraJitter(
             cell.model, [cell.ids.input_camera, cell.ids.output_camera]
@@ -295,78 +310,127 @@ class MosaicTask:
             self.staged.reset(self._prev)
 
     def placement(self) -> Placement:
-        """Where every tile lies relative to the slots now."""
+        """Where every tile lies relative to the slots now.
+
+        One read of the tiles' poses; each tile on the stage and off the pad is looked up in
+        `_lie` (remembered per tile while its pose stays the same), then the slots are shared
+        out: the closest correct tile fills a slot, the others in it are misplaced.
+        """
         cell = self.cell
-        q = cell.data.qpos[cell.ids.tile_qpos_index]  # (n, 7): position, quaternion (w, x, y, z)
-        n, k = len(q), len(self.slot_class)
-        x, y, dz = q[:, 0], q[:, 1], q[:, 2] - self._rest_z
-        tol = self.cfg.mesh_height_tolerance
-        lo, hi = self._mesh_lo, self._mesh_hi
-        on_mesh = (x >= lo[0]) & (x <= hi[0]) & (y >= lo[1]) & (y <= hi[1]) & (dz >= -tol)
-        on_mesh &= cell.on_stage
-        if cell.held_tile >= 0:
-            on_mesh[cell.held_tile] = False
-        qx, qy = q[:, 4], q[:, 5]
-        up = 1 - 2 * (qx * qx + qy * qy)  # z component of the tile's z axis
-        flat = on_mesh & (dz <= tol) & (up > self._flat)
-        slot = np.full(n, -1)
-        perr = np.full(n, np.nan)
-        yerr = np.full(n, np.nan)
+        rows = cell.data.qpos[
+            cell.ids.tile_qpos_index
+        ].tolist()  # position, quaternion (w, x, y, z)
+        n, k = len(rows), len(self.slot_class)
+        on_stage = cell.on_stage.tolist()
+        held = cell.held_tile
+        on_mesh = [False] * n
+        flat = [False] * n
+        slot = [-1] * n
+        perr = [math.nan] * n
+        yerr = [math.nan] * n
+        fills: list[int] = []
+        for i in range(n):
+            lie = self._lie(i, rows[i]) if on_stage[i] and i != held else None
+            if lie is None:
+                continue
+            on_mesh[i], flat[i] = True, lie[0]
+            if k:
+                slot[i], perr[i], yerr[i] = lie[1], lie[2], lie[3]
+                if lie[4]:
+                    fills.append(i)
         correct = np.zeros(n, bool)
         filled = np.zeros(k, bool)
-        idx = np.flatnonzero(on_mesh)
-        if k and len(idx):
-            qi = q[idx]
-            yaw = yaw_from_quat(qi[:, 3:])
-            dx = qi[:, :1] - self._slot_x
-            dy = qi[:, 1:2] - self._slot_y
-            dist = np.sqrt(dx * dx + dy * dy)
-            nearest = dist.argmin(axis=1)
-            err = dist.min(axis=1)  # the distance at ``nearest``
-            yerr_i = yaw_error(
-                yaw, self.slot_xyyaw[nearest, 2], self.symmetry[idx], self._yaw_period[idx]
-            )
-            slot[idx], perr[idx], yerr[idx] = nearest, err, yerr_i
-            ok = (
-                flat[idx]
-                & (self.tile_class[idx] == self.slot_class[nearest])
-                & self._real[idx]
-                & (err <= self.cfg.position_tolerance)
-                & (yerr_i <= self._yaw_tol)
-            )
-            cand = np.flatnonzero(ok)
-            if len(cand):
-                # One tile per slot: the closest correct tile fills it, others are misplaced.
-                cand = cand[np.lexsort((err[cand], nearest[cand]))]
-                s = nearest[cand]
-                first = np.ones(len(cand), bool)
-                first[1:] = s[1:] != s[:-1]
-                filled[s[first]] = True
-                correct[idx[cand[first]]] = True
-        return Placement(on_mesh, flat, slot, perr, yerr, correct, filled)
+        # One tile per slot: the closest correct tile fills it, others are misplaced.
+        for i in sorted(fills, key=lambda t: (slot[t], perr[t])):
+            if not filled[slot[i]]:
+                filled[slot[i]] = correct[i] = True
+        return Placement(
+            np.array(on_mesh),
+            np.array(flat),
+            np.array(slot),
+            np.array(perr),
+            np.array(yerr),
+            correct,
+            filled,
+        )
+
+    def _lie(self, i: int, row: list[float]) -> tuple[bool, int, float, float, bool] | None:
+        """How tile ``i`` lies at qpos ``row`` (position, quaternion), None when not over the mesh.
+
+        Over the mesh: (flat on the sheet, nearest slot, its centroid distance [m], the yaw
+        error modulo the tile's symmetry [rad], fills that slot correctly), on plain floats
+        (the same arithmetic, bit for bit, as the arrays it replaced; the yaw by
+        `numpy.arctan2`, whose last bit differs from `math.atan2`'s). Remembered per tile:
+        what it is computed from besides ``row`` (slots, classes, tolerances, the mesh) is
+        fixed for the task, so a tile whose pose did not change since the last call (the
+        tiles resting while another one is moved) is looked up; a new pose replaces the
+        tile's entry (at most one entry per tile).
+        """
+        kept = self._lies[i]
+        if kept is not None and kept[0] == row:
+            return kept[1]
+        x, y, z, w, qx, qy, qz = row
+        dz = z - self._rest_z
+        tol = self.cfg.mesh_height_tolerance
+        lo, hi = self._mesh_lo, self._mesh_hi
+        lie: tuple[bool, int, float, float, bool] | None = None
+        if lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1] and dz >= -tol:
+            up = 1 - 2 * (qx * qx + qy * qy)  # z component of the tile's z axis
+            flat = dz <= tol and up > self._flat
+            nearest, err = -1, math.inf
+            for j, (sx, sy) in enumerate(self._slot_xy):
+                dx, dy = x - sx, y - sy
+                d = math.sqrt(dx * dx + dy * dy)
+                if d < err:
+                    nearest, err = j, d
+            yaw_err = math.nan
+            fills = False
+            if nearest >= 0:
+                yaw = float(np.arctan2(2 * (w * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz)))
+                period = self._periods[i]
+                yaw_err = 0.0
+                if self._orders[i] > 0:
+                    d = yaw - self._slot_yaw[nearest]
+                    yaw_err = abs((d + period / 2) % period - period / 2)
+                fills = (
+                    flat
+                    and self._classes[i] == self._slot_classes[nearest]
+                    and self._reals[i]
+                    and err <= self.cfg.position_tolerance
+                    and yaw_err <= self._yaw_tol
+                )
+            lie = (flat, nearest, err, yaw_err, fills)
+        self._lies[i] = (row, lie)
+        return lie
 
     def evaluate(self) -> Evaluation:
         """The task's state now (also ``info["evaluation"]``, as a dict)."""
         p = self.placement()
         cell = self.cell
         states = self.tile_states(p)
-        counts_by_state = state_counts(states)
+        # Codes from NOT_COUNTED (-2) up: [distractors, waiting, *TILE_STATES].
+        by_code = np.bincount(states - NOT_COUNTED, minlength=len(TILE_STATES) + 2).tolist()
+        counts_by_state = dict(zip(TILE_STATES, by_code[2:], strict=True))
         distractors = int(np.count_nonzero(p.on_mesh & self.distractor))
         # Tiles still available: real tiles on the input belt, held or waiting to be fed
         # (pick areas cover the input belt only).
-        avail = (states == ON_INPUT) | (states == WAITING)
+        avail = [s in (ON_INPUT, WAITING) for s in states.tolist()]
         held = cell.held_tile
-        if held >= 0 and self._real[held]:
+        if held >= 0 and self._reals[held]:
             avail[held] = True
-        filled = p.slot_filled
-        counts = np.bincount(self.tile_class[avail], minlength=len(self.class_names))
-        need = np.bincount(self.slot_class[~filled], minlength=len(self.class_names))
-        placeable = int(np.minimum(counts, need).sum())
+        filled = p.slot_filled.tolist()
+        counts = [0] * len(self.class_names)
+        for c, a in zip(self._classes, avail, strict=True):
+            counts[c] += a
+        need = [0] * len(self.class_names)
+        for c, f in zip(self._slot_classes, filled, strict=True):
+            need[c] += not f
+        placeable = sum(map(min, counts, need))
         on = p.on_mesh
-        n_on = int(np.count_nonzero(on))
         pe = p.position_error[on] * MM_PER_M
         ye = np.degrees(p.yaw_error[on])
-        n_filled = int(np.count_nonzero(filled))
+        n_on = len(pe)
+        n_filled = sum(filled)
         success = n_filled == len(filled) and len(filled) > 0
         return Evaluation(
             success=success,
@@ -376,8 +440,8 @@ class MosaicTask:
             dropped=int(cell.n_dropped),
             stranded=counts_by_state["stranded"],
             lost=int(cell.n_lost),
-            fed=int(np.count_nonzero(states >= 0)),
-            waiting=int(np.count_nonzero(states == WAITING)),
+            fed=sum(by_code[2:]),
+            waiting=by_code[1],
             on_input=counts_by_state["on_input"],
             held=counts_by_state["held"],
             dropped_tiles=counts_by_state["dropped_tiles"],
@@ -385,7 +449,7 @@ class MosaicTask:
             rejected=counts_by_state["rejected"],
             distractors_placed=distractors,
             slots=len(filled),
-            slot_filled=tuple(filled.tolist()),
+            slot_filled=tuple(filled),
             placeable=placeable,
             position_error_mm=float(pe.sum()) / n_on if n_on else None,
             position_error_mm_max=float(pe.max()) if n_on else None,
