@@ -33,7 +33,7 @@ from envs.observations.fields import ROBOT_DIM, SLOT_DIM, TILE_DIM
 from envs.observations.objects import ObjectRows
 from envs.observations.objects_perception import PerceivedTiles
 from envs.task import Evaluation, MosaicTask
-from spatial.rotations import yaw_from_matrix
+from spatial.rotations import yaw_from_matrix, yaw_from_quat
 
 DEPTH_MAX = 10.0
 """Upper bound of depth values [m] (the far plane is well below)."""
@@ -111,24 +111,25 @@ class Observer:
 
     def _robot(self, rng: np.random.Generator) -> np.ndarray:
         cell = self.cell
+        d, ids = cell.data, cell.ids
         v = np.empty(ROBOT_DIM)
-        v[:6] = cell.qpos
+        v[:6] = d.qpos[ids.arm_qpos]
         if self.cfg.obs_noise > 0:
             v[:6] += rng.normal(0.0, self.cfg.obs_noise, 6)
-        v[6:12] = cell.qvel
-        pos, rot = cell.tcp_pose()
-        v[12:15] = pos
-        yaw = yaw_from_matrix(rot)
+        v[6:12] = d.qvel[ids.arm_dof]
+        v[12:15] = d.site_xpos[ids.tcp_site]
+        yaw = yaw_from_matrix(d.site_xmat[ids.tcp_site].reshape(3, 3))
         v[15], v[16] = np.cos(yaw), np.sin(yaw)
         v[17], v[18] = cell.vacuum_on, cell.tile_held
         return np.minimum(np.maximum(v, -BIG), BIG).astype(np.float32)
 
     def _state(self, evaluation: Evaluation) -> tuple[np.ndarray, np.ndarray]:
         cell, task = self.cell, self.task
-        poses = cell.tile_poses()
-        tiles = np.empty((len(poses.yaw), TILE_DIM))
-        tiles[:, :3] = poses.pos
-        tiles[:, 3], tiles[:, 4] = np.cos(poses.yaw), np.sin(poses.yaw)
+        q = cell.data.qpos[cell.ids.tile_qpos_index]  # position, quaternion (w, x, y, z)
+        yaw = yaw_from_quat(q[:, 3:])
+        tiles = np.empty((len(q), TILE_DIM))
+        tiles[:, :3] = q[:, :3]
+        tiles[:, 3], tiles[:, 4] = np.cos(yaw), np.sin(yaw)
         tiles[:, 5] = task.tile_class
         tiles[:, 6] = cell.on_stage & ~cell.lost_tracker.lost
         slots = self._slot_rows.copy()  # type: ignore[union-attr] # set in state modes
