@@ -329,8 +329,12 @@ class MosaicTask:
         perr = [math.nan] * n
         yerr = [math.nan] * n
         fills: list[int] = []
-        for i in range(n):
-            lie = self._lie(i, rows[i]) if on_stage[i] and i != held else None
+        lies = self._lies
+        for i, row in enumerate(rows):
+            if not on_stage[i] or i == held:
+                continue
+            kept = lies[i]
+            lie = kept[1] if kept is not None and kept[0] == row else self._lie(i, row)
             if lie is None:
                 continue
             on_mesh[i], flat[i] = True, lie[0]
@@ -360,15 +364,12 @@ class MosaicTask:
         Over the mesh: (flat on the sheet, nearest slot, its centroid distance [m], the yaw
         error modulo the tile's symmetry [rad], fills that slot correctly), on plain floats
         (the same arithmetic, bit for bit, as the arrays it replaced; the yaw by
-        `numpy.arctan2`, whose last bit differs from `math.atan2`'s). Remembered per tile:
-        what it is computed from besides ``row`` (slots, classes, tolerances, the mesh) is
-        fixed for the task, so a tile whose pose did not change since the last call (the
-        tiles resting while another one is moved) is looked up; a new pose replaces the
-        tile's entry (at most one entry per tile).
+        `numpy.arctan2`, whose last bit differs from `math.atan2`'s). Kept in ``_lies[i]`` with
+        its ``row``, which `placement` looks up first: what it is computed from besides
+        ``row`` (slots, classes, tolerances, the mesh) is fixed for the task, so only a new
+        pose of the tile invalidates it (the tiles resting while another one is moved are
+        looked up); it replaces the tile's entry (one entry per tile).
         """
-        kept = self._lies[i]
-        if kept is not None and kept[0] == row:
-            return kept[1]
         x, y, z, w, qx, qy, qz = row
         dz = z - self._rest_z
         tol = self.cfg.mesh_height_tolerance
