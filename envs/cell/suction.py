@@ -169,7 +169,11 @@ class Suction:
                 and float(np.hypot(lx, ly)) <= self._radii[i]
             ):
                 found.append((gap, i, lx, ly))
-        for _, i, lx, ly in sorted(found):
+        # Smallest gap first, ties as `numpy.argsort` orders them (its order, not the index's).
+        for k in (
+            np.argsort([f[0] for f in found]).tolist() if len(found) > 1 else (0,) * len(found)
+        ):
+            _, i, lx, ly = found[k]
             if shapely.contains_xy(self._polys[i], lx, ly):
                 return i
         return -1
