@@ -68,7 +68,8 @@ class Placement:
             sheet: a tile stacked on another one is on the mesh too).
         flat: Tiles on the mesh lying flat on the sheet (height and tilt within tolerance),
             shape (n,) bool.
-        slot: Nearest slot of each tile on the mesh (-1 otherwise), shape (n,).
+        slot: Nearest slot of each tile on the mesh (of two at the same distance the first;
+            -1 off the mesh), shape (n,).
         position_error: Distance of each tile's centroid to that slot's [m], NaN off the mesh.
         yaw_error: Yaw error modulo the tile's symmetry [rad], NaN off the mesh.
         correct: Tiles filling their nearest slot correctly, shape (n,) bool.
@@ -317,9 +318,8 @@ class MosaicTask:
         out: the closest correct tile fills a slot, the others in it are misplaced.
         """
         cell = self.cell
-        rows = cell.data.qpos[
-            cell.ids.tile_qpos_index
-        ].tolist()  # position, quaternion (w, x, y, z)
+        # Per tile: position, quaternion (w, x, y, z).
+        rows = cell.data.qpos[cell.ids.tile_qpos_index].tolist()
         n, k = len(rows), len(self.slot_class)
         on_stage = cell.on_stage.tolist()
         held = cell.held_tile
@@ -411,7 +411,7 @@ class MosaicTask:
         states = self.tile_states(p)
         # Codes from NOT_COUNTED (-2) up: [distractors, waiting, *TILE_STATES].
         by_code = np.bincount(states - NOT_COUNTED, minlength=len(TILE_STATES) + 2).tolist()
-        counts_by_state = dict(zip(TILE_STATES, by_code[2:], strict=True))
+        counts_by_state = {name: by_code[2 + k] for k, name in enumerate(TILE_STATES)}
         distractors = int(np.count_nonzero(p.on_mesh & self.distractor))
         # Tiles still available: real tiles on the input belt, held or waiting to be fed
         # (pick areas cover the input belt only).
@@ -421,11 +421,11 @@ class MosaicTask:
             avail[held] = True
         filled = p.slot_filled.tolist()
         counts = [0] * len(self.class_names)
-        for c, a in zip(self._classes, avail, strict=True):
-            counts[c] += a
+        for i, c in enumerate(self._classes):
+            counts[c] += avail[i]
         need = [0] * len(self.class_names)
-        for c, f in zip(self._slot_classes, filled, strict=True):
-            need[c] += not f
+        for j, c in enumerate(self._slot_classes):
+            need[c] += not filled[j]
         placeable = sum(map(min, counts, need))
         on = p.on_mesh
         pe = p.position_error[on] * MM_PER_M
@@ -462,10 +462,7 @@ class MosaicTask:
         """State code of every tile now (`envs.cell.accounting.tile_states`), shape (n,) int8."""
         p = placement if placement is not None else self.placement()
         cell = self.cell
-        n = len(cell.tiles)
-        held = np.zeros(n, bool)
-        if cell.held_tile >= 0:
-            held[cell.held_tile] = True
+        held = np.arange(len(cell.tiles)) == cell.held_tile  # none for -1
         retired = cell.retired
         rejected = cell.lost_tracker.rejected
         return tile_states(

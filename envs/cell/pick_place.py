@@ -240,7 +240,7 @@ class PickPlaceExecutor:
         twist = np.array([0.0, 0.0, height, 0.0, 0.0, 0.0])
         up = q + np.linalg.solve(self.ik.jacobian(q), twist)
         lo, hi = self.ik.limits.lower, self.ik.limits.upper
-        if (up >= lo).all() and (up <= hi).all():
+        if all(lo[i] <= v <= hi[i] for i, v in enumerate(up.tolist())):
             return up
         pos, rot = self.ik.fk(q)
         return self.ik.solve(pos + twist[:3], yaw_from_matrix(rot), seed=q).q
