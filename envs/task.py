@@ -22,14 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from envs.cell.accounting import (
-    NOT_COUNTED,
-    ON_INPUT,
-    TILE_STATES,
-    WAITING,
-    TileFlags,
-    tile_states,
-)
+from envs.cell.accounting import ON_INPUT, WAITING, TileFlags, state_counts, tile_states
 from envs.cell.camera_effects import CameraJitter
 from envs.cell.cell import Cell
 from envs.env_config import EnvConfig
@@ -409,9 +402,7 @@ class MosaicTask:
         p = self.placement()
         cell = self.cell
         states = self.tile_states(p)
-        # Codes from NOT_COUNTED (-2) up: [distractors, waiting, *TILE_STATES].
-        by_code = np.bincount(states - NOT_COUNTED, minlength=len(TILE_STATES) + 2).tolist()
-        counts_by_state = {name: by_code[2 + k] for k, name in enumerate(TILE_STATES)}
+        counts_by_state = state_counts(states)
         distractors = int(np.count_nonzero(p.on_mesh & self.distractor))
         # Tiles still available: real tiles on the input belt, held or waiting to be fed
         # (pick areas cover the input belt only).
@@ -441,8 +432,8 @@ class MosaicTask:
             dropped=int(cell.n_dropped),
             stranded=counts_by_state["stranded"],
             lost=int(cell.n_lost),
-            fed=sum(by_code[2:]),
-            waiting=by_code[1],
+            fed=sum(counts_by_state.values()),
+            waiting=int(np.count_nonzero(states == WAITING)),
             on_input=counts_by_state["on_input"],
             held=counts_by_state["held"],
             dropped_tiles=counts_by_state["dropped_tiles"],
