@@ -145,19 +145,15 @@ class Suction:
         ids = self._ids
         if len(ids.tile_body) == 0:
             return -1
-        p = data.site_xpos[ids.tcp_site]
-        offset = data.xpos[ids.tile_body] - p
-        near = np.flatnonzero(np.einsum("ij,ij->i", offset, offset) <= self._seal_reach)
-        if not len(near):
-            return -1
-        px, py, pz = p.tolist()
+        px, py, pz = data.site_xpos[ids.tcp_site].tolist()
         ax, ay, az = data.site_xmat[ids.tcp_site, 2::3].tolist()  # the pad's axis (z column)
+        reach = self._seal_reach
         found: list[tuple[float, int, float, float]] = []
-        for i in near.tolist():
-            b = int(ids.tile_body[i])
-            r00, r01, r02, r10, r11, r12, r20, r21, r22 = data.xmat[b].tolist()
-            tx, ty, tz = data.xpos[b].tolist()
+        for i, (tx, ty, tz) in enumerate(data.xpos[ids.tile_body].tolist()):
             dx, dy, dz = px - tx, py - ty, pz - tz
+            if dx * dx + dy * dy + dz * dz > reach:
+                continue
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = data.xmat[ids.tile_body[i]].tolist()
             lx = r00 * dx + r10 * dy + r20 * dz  # the pad face in the tile's frame
             ly = r01 * dx + r11 * dy + r21 * dz
             lz = r02 * dx + r12 * dy + r22 * dz
