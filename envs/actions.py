@@ -39,6 +39,8 @@ from spatial.angles import rotate_xy, wrap_angle
 from spatial.rotations import yaw_from_matrix
 
 N_JOINTS = 6
+REAL_KINDS = "iuf"
+"""`numpy.dtype.kind` of an action's allowed dtypes: real numbers (signed, unsigned, float)."""
 
 
 class ActionAdapter(ABC):
@@ -67,16 +69,17 @@ class ActionAdapter(ABC):
             raise ActionError(
                 f"action has shape {a.shape}; {type(self).__name__} expects {space.shape} ({space})"
             )
-        if not np.issubdtype(a.dtype, np.number) or np.iscomplexobj(a):
+        if a.dtype.kind not in REAL_KINDS:
             raise ActionError(
                 f"action must be real numeric values (not complex), got dtype {a.dtype}"
             )
-        if not np.all(np.isfinite(a)):
+        if not np.isfinite(a).all():
             raise ActionError(f"action must be finite (no NaN/inf), got {a.tolist()}")
         if isinstance(space, spaces.Box):
-            if np.any(a < space.low - RANGE_SLACK) or np.any(a > space.high + RANGE_SLACK):
+            if (a < space.low - RANGE_SLACK).any() or (a > space.high + RANGE_SLACK).any():
                 raise ActionError(f"action {a.tolist()} outside [-1, 1] ({space})")
-            return np.clip(a.astype(np.float64), space.low, space.high)
+            # `np.clip`'s values without its dispatch (~3x the cost on 6 values); all finite here.
+            return np.minimum(np.maximum(a.astype(np.float64), space.low), space.high)
         if isinstance(space, spaces.MultiDiscrete):
             if np.any(a != np.round(a)) or np.any(a < 0) or np.any(a >= space.nvec):
                 raise ActionError(

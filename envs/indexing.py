@@ -87,12 +87,12 @@ class IndexMaps:
         if self.cfg.tile_order != "belt" or not len(self.cell.tiles):
             return
         cell = self.cell
-        pos = cell.tile_poses().pos
-        on_input = cell.input_half()
-        idx = np.flatnonzero(on_input)
-        first = idx[np.lexsort((pos[idx, 1], -pos[idx, 0]))]
-        rest = self._rest[~on_input[self._rest]]
-        self.tiles = np.concatenate([first, rest]).astype(int)
+        x, y = cell.tile_xy().T.tolist()
+        on_input = cell.input_half().tolist()
+        # Downstream first (x descending), then across (y ascending); a stable sort.
+        first = sorted((i for i, on in enumerate(on_input) if on), key=lambda i: (-x[i], y[i]))
+        rest = [i for i in self._rest.tolist() if not on_input[i]]
+        self.tiles = np.array(first + rest, dtype=int)
 
     def decode(self, action: np.ndarray) -> np.ndarray:
         """Agent ``(tile, slot, rotation)`` -> the cell's ``(tile, slot, steps from slot yaw)``."""

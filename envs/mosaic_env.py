@@ -41,6 +41,8 @@ DEFAULT_CONTROL_DT = 0.04
 """Default control period [s] (``configs/env.yaml``); the class's ``render_fps`` is 1 / it."""
 CAMERA_PANEL_DIVISOR = 2
 """Each camera panel of the ``rgb_array`` frame is the overview's height / this."""
+_INFO_KEYS = {k: f"reward_{k}" for k in REWARD_TERMS}
+"""The ``info`` key of each reward term (formatted once)."""
 
 
 class MosaicEnvError(EnvError, RuntimeError):
@@ -491,7 +493,7 @@ class MosaicAssemblyEnv(gym.Env[dict[str, Any], np.ndarray]):
             "action_failed": failed,
             "action_error": reason,
         }
-        info.update({f"reward_{k}": float(v) for k, v in terms.items()})
+        info.update({_INFO_KEYS.get(k) or f"reward_{k}": float(v) for k, v in terms.items()})
         if self._mask is not None:
             info["action_mask"] = self._mask.copy()
         return info

@@ -29,8 +29,7 @@ from envs.env_config import EnvConfig
 from envs.episode_setup import retry_layout
 from envs.errors import CellError, EnvError
 from envs.rewards import STAGES, SlotProgress, StagedReward, load_staged_config
-from spatial.angles import yaw_error
-from spatial.rotations import yaw_from_quat
+from spatial.angles import yaw_periods
 from spatial.units import MM_PER_M
 
 REWARD_TERMS = (
@@ -62,7 +61,8 @@ class Placement:
             sheet: a tile stacked on another one is on the mesh too).
         flat: Tiles on the mesh lying flat on the sheet (height and tilt within tolerance),
             shape (n,) bool.
-        slot: Nearest slot of each tile on the mesh (-1 otherwise), shape (n,).
+        slot: Nearest slot of each tile on the mesh (of two at the same distance the first;
+            -1 off the mesh), shape (n,).
         position_error: Distance of each tile's centroid to that slot's [m], NaN off the mesh.
         yaw_error: Yaw error modulo the tile's symmetry [rad], NaN off the mesh.
         correct: Tiles filling their nearest slot correctly, shape (n,) bool.
@@ -221,13 +221,23 @@ class MosaicTask:
         self.tile_class = np.array([index[t.shape.name] for t in cell.tiles], dtype=int)
         self.distractor = cell.is_distractor.copy()
         self.symmetry = np.array([t.shape.symmetry for t in cell.tiles], dtype=int)
+        self._yaw_period = yaw_periods(self.symmetry)  # fixed with the tiles: never stale
         self.slot_xyyaw = cell.slot_poses_world()
         self._mesh_lo, self._mesh_hi = cell.geometry.mesh_lo, cell.geometry.mesh_hi
         self._rest_z = cell.geometry.mesh_top + cell.cfg.tiles.thickness / 2
         self._yaw_tol = math.radians(config.yaw_tolerance_deg)
         self._flat = math.cos(math.radians(config.max_tilt_deg))
         self._real = ~self.distractor
-        self._slot_x, self._slot_y = self.slot_xyyaw[None, :, 0], self.slot_xyyaw[None, :, 1]
+        # Plain-float copies for `_lie` (fixed with the cell's tiles and slots, never stale).
+        self._slot_xy = self.slot_xyyaw[:, :2].tolist()
+        self._slot_yaw = self.slot_xyyaw[:, 2].tolist()
+        self._slot_classes = self.slot_class.tolist()
+        self._classes = self.tile_class.tolist()
+        self._reals = self._real.tolist()
+        self._orders = self.symmetry.tolist()
+        self._periods = self._yaw_period.tolist()
+        self._lies: list[tuple[list[float], tuple[bool, int, float, float, bool] | None] | None]
+        self._lies = [None] * len(cell.tiles)
         self._base_light = cell.model.light_diffuse.copy()
         self._camera_jitter = CameraJitter(
             cell.model, [cell.ids.input_camera, cell.ids.output_camera]
@@ -294,53 +304,98 @@ class MosaicTask:
             self.staged.reset(self._prev)
 
     def placement(self) -> Placement:
-        """Where every tile lies relative to the slots now."""
+        """Where every tile lies relative to the slots now.
+
+        One read of the tiles' poses; each tile on the stage and off the pad is looked up in
+        `_lie` (remembered per tile while its pose stays the same), then the slots are shared
+        out: the closest correct tile fills a slot, the others in it are misplaced.
+        """
         cell = self.cell
-        q = cell.data.qpos[cell.ids.tile_qpos_index]  # (n, 7): position, quaternion (w, x, y, z)
-        n, k = len(q), len(self.slot_class)
-        x, y, dz = q[:, 0], q[:, 1], q[:, 2] - self._rest_z
-        tol = self.cfg.mesh_height_tolerance
-        lo, hi = self._mesh_lo, self._mesh_hi
-        on_mesh = (x >= lo[0]) & (x <= hi[0]) & (y >= lo[1]) & (y <= hi[1]) & (dz >= -tol)
-        on_mesh &= cell.on_stage
-        if cell.held_tile >= 0:
-            on_mesh[cell.held_tile] = False
-        qx, qy = q[:, 4], q[:, 5]
-        up = 1 - 2 * (qx * qx + qy * qy)  # z component of the tile's z axis
-        flat = on_mesh & (dz <= tol) & (up > self._flat)
-        slot = np.full(n, -1)
-        perr = np.full(n, np.nan)
-        yerr = np.full(n, np.nan)
+        # Per tile: position, quaternion (w, x, y, z).
+        rows = cell.data.qpos[cell.ids.tile_qpos_index].tolist()
+        n, k = len(rows), len(self.slot_class)
+        on_stage = cell.on_stage.tolist()
+        held = cell.held_tile
+        on_mesh = [False] * n
+        flat = [False] * n
+        slot = [-1] * n
+        perr = [math.nan] * n
+        yerr = [math.nan] * n
+        fills: list[int] = []
+        lies = self._lies
+        for i, row in enumerate(rows):
+            if not on_stage[i] or i == held:
+                continue
+            kept = lies[i]
+            lie = kept[1] if kept is not None and kept[0] == row else self._lie(i, row)
+            if lie is None:
+                continue
+            on_mesh[i], flat[i] = True, lie[0]
+            if k:
+                slot[i], perr[i], yerr[i] = lie[1], lie[2], lie[3]
+                if lie[4]:
+                    fills.append(i)
         correct = np.zeros(n, bool)
         filled = np.zeros(k, bool)
-        idx = np.flatnonzero(on_mesh)
-        if k and len(idx):
-            qi = q[idx]
-            yaw = yaw_from_quat(qi[:, 3:])
-            dx = qi[:, :1] - self._slot_x
-            dy = qi[:, 1:2] - self._slot_y
-            dist = np.sqrt(dx * dx + dy * dy)
-            nearest = dist.argmin(axis=1)
-            err = dist[np.arange(len(idx)), nearest]
-            yerr_i = yaw_error(yaw, self.slot_xyyaw[nearest, 2], self.symmetry[idx])
-            slot[idx], perr[idx], yerr[idx] = nearest, err, yerr_i
-            ok = (
-                flat[idx]
-                & (self.tile_class[idx] == self.slot_class[nearest])
-                & self._real[idx]
-                & (err <= self.cfg.position_tolerance)
-                & (yerr_i <= self._yaw_tol)
-            )
-            cand = np.flatnonzero(ok)
-            if len(cand):
-                # One tile per slot: the closest correct tile fills it, others are misplaced.
-                cand = cand[np.lexsort((err[cand], nearest[cand]))]
-                s = nearest[cand]
-                first = np.ones(len(cand), bool)
-                first[1:] = s[1:] != s[:-1]
-                filled[s[first]] = True
-                correct[idx[cand[first]]] = True
-        return Placement(on_mesh, flat, slot, perr, yerr, correct, filled)
+        # One tile per slot: the closest correct tile fills it, others are misplaced.
+        for i in sorted(fills, key=lambda t: (slot[t], perr[t])):
+            if not filled[slot[i]]:
+                filled[slot[i]] = correct[i] = True
+        return Placement(
+            np.array(on_mesh),
+            np.array(flat),
+            np.array(slot),
+            np.array(perr),
+            np.array(yerr),
+            correct,
+            filled,
+        )
+
+    def _lie(self, i: int, row: list[float]) -> tuple[bool, int, float, float, bool] | None:
+        """How tile ``i`` lies at qpos ``row`` (position, quaternion), None when not over the mesh.
+
+        Over the mesh: (flat on the sheet, nearest slot, its centroid distance [m], the yaw
+        error modulo the tile's symmetry [rad], fills that slot correctly), on plain floats
+        (the same arithmetic, bit for bit, as the arrays it replaced; the yaw by
+        `numpy.arctan2`, whose last bit differs from `math.atan2`'s). Kept in ``_lies[i]`` with
+        its ``row``, which `placement` looks up first: what it is computed from besides
+        ``row`` (slots, classes, tolerances, the mesh) is fixed for the task, so only a new
+        pose of the tile invalidates it (the tiles resting while another one is moved are
+        looked up); it replaces the tile's entry (one entry per tile).
+        """
+        x, y, z, w, qx, qy, qz = row
+        dz = z - self._rest_z
+        tol = self.cfg.mesh_height_tolerance
+        lo, hi = self._mesh_lo, self._mesh_hi
+        lie: tuple[bool, int, float, float, bool] | None = None
+        if lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1] and dz >= -tol:
+            up = 1 - 2 * (qx * qx + qy * qy)  # z component of the tile's z axis
+            flat = dz <= tol and up > self._flat
+            nearest, err = -1, math.inf
+            for j, (sx, sy) in enumerate(self._slot_xy):
+                dx, dy = x - sx, y - sy
+                d = math.sqrt(dx * dx + dy * dy)
+                if d < err:
+                    nearest, err = j, d
+            yaw_err = math.nan
+            fills = False
+            if nearest >= 0:
+                yaw = float(np.arctan2(2 * (w * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz)))
+                period = self._periods[i]
+                yaw_err = 0.0
+                if self._orders[i] > 0:
+                    d = yaw - self._slot_yaw[nearest]
+                    yaw_err = abs((d + period / 2) % period - period / 2)
+                fills = (
+                    flat
+                    and self._classes[i] == self._slot_classes[nearest]
+                    and self._reals[i]
+                    and err <= self.cfg.position_tolerance
+                    and yaw_err <= self._yaw_tol
+                )
+            lie = (flat, nearest, err, yaw_err, fills)
+        self._lies[i] = (row, lie)
+        return lie
 
     def evaluate(self) -> Evaluation:
         """The task's state now (also ``info["evaluation"]``, as a dict)."""
@@ -351,19 +406,23 @@ class MosaicTask:
         distractors = int(np.count_nonzero(p.on_mesh & self.distractor))
         # Tiles still available: real tiles on the input belt, held or waiting to be fed
         # (pick areas cover the input belt only).
-        avail = (states == ON_INPUT) | (states == WAITING)
+        avail = [s in (ON_INPUT, WAITING) for s in states.tolist()]
         held = cell.held_tile
-        if held >= 0 and self._real[held]:
+        if held >= 0 and self._reals[held]:
             avail[held] = True
-        filled = p.slot_filled
-        counts = np.bincount(self.tile_class[avail], minlength=len(self.class_names))
-        need = np.bincount(self.slot_class[~filled], minlength=len(self.class_names))
-        placeable = int(np.minimum(counts, need).sum())
+        filled = p.slot_filled.tolist()
+        counts = [0] * len(self.class_names)
+        for i, c in enumerate(self._classes):
+            counts[c] += avail[i]
+        need = [0] * len(self.class_names)
+        for j, c in enumerate(self._slot_classes):
+            need[c] += not filled[j]
+        placeable = sum(map(min, counts, need))
         on = p.on_mesh
-        n_on = int(np.count_nonzero(on))
         pe = p.position_error[on] * MM_PER_M
         ye = np.degrees(p.yaw_error[on])
-        n_filled = int(np.count_nonzero(filled))
+        n_on = len(pe)
+        n_filled = sum(filled)
         success = n_filled == len(filled) and len(filled) > 0
         return Evaluation(
             success=success,
@@ -373,7 +432,7 @@ class MosaicTask:
             dropped=int(cell.n_dropped),
             stranded=counts_by_state["stranded"],
             lost=int(cell.n_lost),
-            fed=int(np.count_nonzero(states >= 0)),
+            fed=sum(counts_by_state.values()),
             waiting=int(np.count_nonzero(states == WAITING)),
             on_input=counts_by_state["on_input"],
             held=counts_by_state["held"],
@@ -382,7 +441,7 @@ class MosaicTask:
             rejected=counts_by_state["rejected"],
             distractors_placed=distractors,
             slots=len(filled),
-            slot_filled=tuple(filled.tolist()),
+            slot_filled=tuple(filled),
             placeable=placeable,
             position_error_mm=float(pe.sum()) / n_on if n_on else None,
             position_error_mm_max=float(pe.max()) if n_on else None,
@@ -394,15 +453,12 @@ class MosaicTask:
         """State code of every tile now (`envs.cell.accounting.tile_states`), shape (n,) int8."""
         p = placement if placement is not None else self.placement()
         cell = self.cell
-        n = len(cell.tiles)
-        held = np.zeros(n, bool)
-        if cell.held_tile >= 0:
-            held[cell.held_tile] = True
+        held = np.arange(len(cell.tiles)) == cell.held_tile  # none for -1
         retired = cell.retired
         rejected = cell.lost_tracker.rejected
         return tile_states(
             TileFlags(
-                real=~self.distractor,
+                real=self._real,
                 fed=cell.on_stage | retired,
                 held=held,
                 rejected=rejected | retired,

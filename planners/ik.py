@@ -380,7 +380,7 @@ class IKSolver:
             raise InvalidTargetError(f"yaw must be finite, got {yaw!r}")
         seed_q = None if seed is None else as_joint_vector(seed, "seed")
         self.check_reach(pos)
-        feature = np.array([pos[0], pos[1], pos[2], yaw])
+        feature = np.array([*pos.tolist(), yaw])
         cfg = self.config
         # The geometric guess first: inside the joint ranges it is usually exact (no QP).
         up = self._default_seed(feature)

@@ -30,7 +30,7 @@ def as_joint_vector(value: npt.ArrayLike, name: str) -> Array:
     arr = np.asarray(value, dtype=np.float64)
     if arr.shape != (N_JOINTS,):
         raise InvalidTargetError(f"{name} must have shape ({N_JOINTS},), got {arr.shape}")
-    if not np.isfinite(arr).all():
+    if not all(map(math.isfinite, arr.tolist())):
         raise InvalidTargetError(f"{name} must be finite, got {arr.tolist()}")
     return arr
 

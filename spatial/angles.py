@@ -86,7 +86,24 @@ def equivalent_yaws(yaw: float, symmetry: int, continuous_steps: int = 1) -> Arr
     return out
 
 
-def yaw_error(yaw: float | Array, target: float | Array, symmetry: int | Array) -> float | Array:
+def yaw_periods(symmetry: int | Array) -> Array:
+    """Period [rad] of the yaw error of each symmetry order: 2 pi / k, 1 for continuous (k = 0).
+
+    The array form of `symmetry_period`, with 1 in place of its 0 (a continuous shape's error
+    is 0 whatever the period); `yaw_error` takes these precomputed
+    for shapes whose orders do not change (a task's tiles)).
+    """
+    sym = np.asarray(symmetry)
+    out: Array = np.where(sym > 0, TWO_PI / np.maximum(sym, 1), 1.0)
+    return out
+
+
+def yaw_error(
+    yaw: float | Array,
+    target: float | Array,
+    symmetry: int | Array,
+    period: Array | None = None,
+) -> float | Array:
     """|yaw - target| modulo the shape's rotational symmetry [rad].
 
     Args:
@@ -94,12 +111,14 @@ def yaw_error(yaw: float | Array, target: float | Array, symmetry: int | Array) 
         target: Wanted yaw(s) [rad].
         symmetry: Rotational symmetry order(s): 1 none, k a k-fold symmetry, 0 continuous
             (error 0).
+        period: ``yaw_periods(symmetry)`` if already known (the same values, computed once).
 
     Returns:
         The error in [0, pi / symmetry]; a float for scalar inputs, else an array.
     """
     sym = np.asarray(symmetry)
-    period = np.where(sym > 0, TWO_PI / np.maximum(sym, 1), 1.0)
+    if period is None:
+        period = yaw_periods(sym)
     d = np.asarray(yaw, dtype=float) - np.asarray(target, dtype=float)
     err = np.where(sym > 0, np.abs((d + period / 2) % period - period / 2), 0.0)
     return float(err) if np.ndim(err) == 0 else np.asarray(err, dtype=np.float64)
@@ -113,4 +132,5 @@ __all__ = [
     "wrap_angle",
     "wrap_angles",
     "yaw_error",
+    "yaw_periods",
 ]

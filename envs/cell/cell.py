@@ -15,6 +15,7 @@ Typical use::
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import mujoco
@@ -39,6 +40,9 @@ from envs.cell.views import CAMERAS, CellViews
 from envs.errors import CellError
 from planners.robot import joint_ranges, joint_speed_limits
 from spatial.rotations import quat_from_yaw, yaw_from_quat
+
+JOINT_RANGE_SLACK = 1e-9
+"""Rounding [rad] `Cell.set_qpos` allows beyond a joint's range."""
 
 
 class Cell:
@@ -102,6 +106,8 @@ class Cell:
         """Axis speed limits [rad/s], shape (6,), from the robot model's velocity actuators."""
         self._speed_lo, self._speed_hi = -self.max_joint_speed, self.max_joint_speed
         self._q_lo, self._q_hi = joint_ranges(self.model)
+        self._q_lo_list = (self._q_lo - JOINT_RANGE_SLACK).tolist()
+        self._q_hi_list = (self._q_hi + JOINT_RANGE_SLACK).tolist()
         home = np.asarray(self.cfg.robot.home, float)
         outside = np.flatnonzero((home < self._q_lo) | (home > self._q_hi))
         if len(outside):
@@ -316,7 +322,8 @@ class Cell:
             CellError: Wrong shape, non-finite, or outside the joint ranges.
         """
         q = self._vec6(q, "q")
-        if np.any(q < self._q_lo - 1e-9) or np.any(q > self._q_hi + 1e-9):
+        lo, hi = self._q_lo_list, self._q_hi_list
+        if any(not lo[i] <= v <= hi[i] for i, v in enumerate(q.tolist())):
             raise CellError(
                 f"q {np.round(q, 4).tolist()} is outside the joint ranges "
                 f"{np.round(np.column_stack([self._q_lo, self._q_hi]), 4).tolist()} [rad]"
@@ -356,7 +363,7 @@ class Cell:
     @staticmethod
     def _vec6(v: np.ndarray, name: str) -> np.ndarray:
         a = np.asarray(v, dtype=float)
-        if a.shape != (6,) or not np.all(np.isfinite(a)):
+        if a.shape != (6,) or not all(map(math.isfinite, a.tolist())):
             raise CellError(f"{name} must be 6 finite joint values, got {np.asarray(v)!r}")
         return a
 
@@ -380,6 +387,10 @@ class Cell:
         """Pad-face position (3,) [m] and rotation matrix (3, 3) (z out of the pad)."""
         s = self.ids.tcp_site
         return self.data.site_xpos[s].copy(), self.data.site_xmat[s].reshape(3, 3).copy()
+
+    def tile_xy(self) -> np.ndarray:
+        """Tile positions x, y (parked ones included), shape (n, 2) [m] (copy; no yaw computed)."""
+        return self.data.qpos[self.ids.tile_qpos_index[:, :2]]
 
     def tile_poses(self) -> TilePoses:
         """Poses of all tiles (parked ones included; see `on_stage`)."""

@@ -111,6 +111,8 @@ class PickPlaceExecutor:
         self.pick_z = pick.tile_top_z
         self.place_z = place.tile_top_z
         self._settle = max(1, round(config.kinematic_settle / self.dt))
+        self._press = np.array([0.0, 0.0, planner_config.cycle.pick_press])
+        """The pad's press below a contact height [m], as an offset (3,)."""
         self.fail_steps = max(1, round(config.failed_action_time / self.dt))
         """Physics steps charged for an action that cannot execute."""
         self.at_contact = False
@@ -183,11 +185,11 @@ class PickPlaceExecutor:
     def _kinematic(self, pick: np.ndarray, place: np.ndarray, rotation: float) -> ActionResult:
         cell, c = self.cell, self.pcfg.cycle
         q0 = cell.qpos
-        tool_yaw = yaw_from_matrix(cell.tcp_pose()[1])
-        q_pick = self.ik.solve(pick - [0.0, 0.0, c.pick_press], tool_yaw, seed=q0).q
+        tool_yaw = yaw_from_matrix(cell.data.site_xmat[cell.ids.tcp_site].reshape(3, 3))
+        q_pick = self.ik.solve(pick - self._press, tool_yaw, seed=q0).q
         place_yaw = tool_yaw + rotation
         # Set down, not dropped: the tile's bottom on the surface (it hangs pick_press lower).
-        q_place = self.ik.solve(place - [0.0, 0.0, c.pick_press], place_yaw, seed=q_pick).q
+        q_place = self.ik.solve(place - self._press, place_yaw, seed=q_pick).q
         q_up = self._lift(q_place, c.approach_height)
         duration = self.planner.lower_bound(q0, q_pick, q_place) + c.pick_dwell + c.place_dwell
         self._put_arm(q_pick)  # `vacuum` updates the kinematics before its seal check
@@ -238,7 +240,7 @@ class PickPlaceExecutor:
         twist = np.array([0.0, 0.0, height, 0.0, 0.0, 0.0])
         up = q + np.linalg.solve(self.ik.jacobian(q), twist)
         lo, hi = self.ik.limits.lower, self.ik.limits.upper
-        if np.all(up >= np.asarray(lo)) and np.all(up <= np.asarray(hi)):
+        if all(lo[i] <= v <= hi[i] for i, v in enumerate(up.tolist())):
             return up
         pos, rot = self.ik.fk(q)
         return self.ik.solve(pos + twist[:3], yaw_from_matrix(rot), seed=q).q

@@ -34,6 +34,8 @@ from envs.cell.tiles.tile import PhysicalTile
 WELD_ANCHOR = slice(0, 3)
 WELD_RELPOS = slice(3, 6)
 WELD_RELQUAT = slice(6, 10)
+SEAL_REACH_SLACK = 1e-6
+"""Relative margin of the seal check's reach (`Suction.seal_candidate`): far above rounding."""
 
 
 @dataclass(frozen=True)
@@ -79,6 +81,14 @@ class Suction:
         self.cfg = cfg
         self._half_t = thickness / 2
         self._radius = np.array([t.radius for t in tiles])
+        self._radii = self._radius.tolist()
+        self._seal_reach = float(
+            (1 + SEAL_REACH_SLACK)
+            * (self._radius.max(initial=0.0) ** 2 + (cfg.seal_max_gap + self._half_t) ** 2)
+        )
+        """Squared distance [m^2] from the pad face beyond which no tile centroid can pass the
+        seal check (its in-plane offset within the tile's radius, its height within the gap
+        plus half the thickness), with `SEAL_REACH_SLACK`; fixed with the tiles."""
         self._polys = [Polygon(t.outline, t.holes) for t in tiles]
         for p in self._polys:
             shapely.prepare(p)
@@ -128,23 +138,40 @@ class Suction:
 
         The pad face (``tcp`` site) must be within ``seal_max_gap`` of a tile's face, its axis
         within ``seal_max_tilt_deg`` of the face normal, and its centre over tile material.
+        Only the tiles whose centroid lies within `_seal_reach` of the pad face can pass (a
+        tile's frame turns the pad's offset without changing its length), so those few are
+        tested, on plain floats.
         """
         ids = self._ids
         if len(ids.tile_body) == 0:
             return -1
-        p = data.site_xpos[ids.tcp_site]
-        axis = data.site_xmat[ids.tcp_site].reshape(3, 3)[:, 2]
-        rot = data.xmat[ids.tile_body].reshape(-1, 3, 3)
-        local = np.einsum("nji,nj->ni", rot, p[None, :] - data.xpos[ids.tile_body])
-        gap = np.abs(local[:, 2]) - self._half_t
-        cos = np.abs(rot[:, :, 2] @ axis)
-        near = np.hypot(local[:, 0], local[:, 1]) <= self._radius
-        ok = (
-            (gap <= self.cfg.seal_max_gap) & (gap >= -self._half_t) & (cos >= self._cos_tilt) & near
-        )
-        for i in np.flatnonzero(ok)[np.argsort(gap[ok])]:
-            if shapely.contains_xy(self._polys[i], local[i, 0], local[i, 1]):
-                return int(i)
+        px, py, pz = data.site_xpos[ids.tcp_site].tolist()
+        ax, ay, az = data.site_xmat[ids.tcp_site, 2::3].tolist()  # the pad's axis (z column)
+        reach = self._seal_reach
+        found: list[tuple[float, int, float, float]] = []
+        for i, (tx, ty, tz) in enumerate(data.xpos[ids.tile_body].tolist()):
+            dx, dy, dz = px - tx, py - ty, pz - tz
+            if dx * dx + dy * dy + dz * dz > reach:
+                continue
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = data.xmat[ids.tile_body[i]].tolist()
+            lx = r00 * dx + r10 * dy + r20 * dz  # the pad face in the tile's frame
+            ly = r01 * dx + r11 * dy + r21 * dz
+            lz = r02 * dx + r12 * dy + r22 * dz
+            gap = abs(lz) - self._half_t
+            cos = abs(r02 * ax + r12 * ay + r22 * az)
+            if (
+                -self._half_t <= gap <= self.cfg.seal_max_gap
+                and cos >= self._cos_tilt
+                and float(np.hypot(lx, ly)) <= self._radii[i]
+            ):
+                found.append((gap, i, lx, ly))
+        # Smallest gap first, ties as `numpy.argsort` orders them (its order, not the index's).
+        for k in (
+            np.argsort([f[0] for f in found]).tolist() if len(found) > 1 else (0,) * len(found)
+        ):
+            _, i, lx, ly = found[k]
+            if shapely.contains_xy(self._polys[i], lx, ly):
+                return i
         return -1
 
     def try_seal(self, data: mujoco.MjData) -> int:

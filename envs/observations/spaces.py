@@ -33,7 +33,7 @@ from envs.observations.fields import ROBOT_DIM, SLOT_DIM, TILE_DIM
 from envs.observations.objects import ObjectRows
 from envs.observations.objects_perception import PerceivedTiles
 from envs.task import Evaluation, MosaicTask
-from spatial.rotations import yaw_from_matrix
+from spatial.rotations import yaw_from_matrix, yaw_from_quat
 
 DEPTH_MAX = 10.0
 """Upper bound of depth values [m] (the far plane is well below)."""
@@ -78,6 +78,10 @@ class Observer:
         if self.objects is not None:
             d.update(self.objects.spaces())
         self.space = spaces.Dict(d)
+        self._slot_rows = self._slot_constants() if self.state else None
+        """The ``slots`` rows without the filled flag (x, y, cos yaw, sin yaw, class), shape
+        (k, 6) float32: the slots and their classes are fixed for the cell and task this
+        observer is built with (a new design builds a new observer), so nothing invalidates it."""
 
     def observe(self, rng: np.random.Generator, evaluation: Evaluation) -> dict[str, Any]:
         """The current observation (fresh arrays).
@@ -107,37 +111,42 @@ class Observer:
 
     def _robot(self, rng: np.random.Generator) -> np.ndarray:
         cell = self.cell
-        q = cell.qpos
+        d, ids = cell.data, cell.ids
+        v = np.empty(ROBOT_DIM)
+        v[:6] = d.qpos[ids.arm_qpos]
         if self.cfg.obs_noise > 0:
-            q = q + rng.normal(0.0, self.cfg.obs_noise, q.shape)
-        pos, rot = cell.tcp_pose()
-        yaw = yaw_from_matrix(rot)
-        v = np.concatenate(
-            [q, cell.qvel, pos, [np.cos(yaw), np.sin(yaw)], [cell.vacuum_on, cell.tile_held]]
-        )
-        return np.clip(v, -BIG, BIG).astype(np.float32)
+            v[:6] += rng.normal(0.0, self.cfg.obs_noise, 6)
+        v[6:12] = d.qvel[ids.arm_dof]
+        v[12:15] = d.site_xpos[ids.tcp_site]
+        yaw = yaw_from_matrix(d.site_xmat[ids.tcp_site].reshape(3, 3))
+        v[15], v[16] = np.cos(yaw), np.sin(yaw)
+        v[17], v[18] = cell.vacuum_on, cell.tile_held
+        return np.minimum(np.maximum(v, -BIG), BIG).astype(np.float32)
 
     def _state(self, evaluation: Evaluation) -> tuple[np.ndarray, np.ndarray]:
         cell, task = self.cell, self.task
-        poses = cell.tile_poses()
-        present = cell.on_stage & ~cell.lost
-        tiles = np.column_stack(
-            [poses.pos, np.cos(poses.yaw), np.sin(poses.yaw), task.tile_class, present]
-        )
-        s = task.slot_xyyaw
-        slots = np.column_stack(
-            [
-                s[:, :2],
-                np.cos(s[:, 2]),
-                np.sin(s[:, 2]),
-                task.slot_class,
-                np.asarray(evaluation.slot_filled, float),
-            ]
-        ).reshape(len(cell.slots), SLOT_DIM)
+        q = cell.data.qpos[cell.ids.tile_qpos_index]  # position, quaternion (w, x, y, z)
+        yaw = yaw_from_quat(q[:, 3:])
+        tiles = np.empty((len(q), TILE_DIM))
+        tiles[:, :3] = q[:, :3]
+        tiles[:, 3], tiles[:, 4] = np.cos(yaw), np.sin(yaw)
+        tiles[:, 5] = task.tile_class
+        tiles[:, 6] = cell.on_stage & ~cell.lost_tracker.lost
+        slots = self._slot_rows.copy()  # type: ignore[union-attr] # set in state modes
+        slots[:, 5] = evaluation.slot_filled
         return (
-            np.clip(tiles, -BIG, BIG).astype(np.float32).reshape(-1),
-            slots.astype(np.float32).reshape(-1),
+            np.minimum(np.maximum(tiles, -BIG), BIG).astype(np.float32).reshape(-1),
+            slots.reshape(-1),
         )
+
+    def _slot_constants(self) -> np.ndarray:
+        """The ``slots`` rows with the filled flag 0, shape (k, 6) float32."""
+        s = self.task.slot_xyyaw
+        rows = np.zeros((len(s), SLOT_DIM))
+        rows[:, :2] = s[:, :2]
+        rows[:, 2], rows[:, 3] = np.cos(s[:, 2]), np.sin(s[:, 2])
+        rows[:, 4] = self.task.slot_class
+        return rows.astype(np.float32)
 
 
 def _depth_key(camera: str) -> str:

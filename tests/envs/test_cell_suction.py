@@ -117,3 +117,31 @@ def test_default_vacuum_holds_through_full_speed(rig: tuple[Cell, ArmIK]) -> Non
     move(cell, target, speed_scale=1.0)
     assert cell.held_tile == 0 and cell.n_dropped == 0
     assert 0 < cell.suction.pull + cell.suction.shear < cell.suction.holding_force
+
+
+def test_the_seal_check_reaches_a_tile_s_corner_at_the_largest_gap(
+    rig: tuple[Cell, ArmIK],
+) -> None:
+    """Guards against a seal check that leaves out a tile it must test (it looks only at the
+    tiles within reach of the pad): the pad over the material farthest from the tile's centroid
+    (a corner, at the tile's bounding radius) at the largest allowed gap seals; a little beyond
+    the corner or higher, it does not."""
+    cell, _ = rig
+    d, i, site = cell.data, 0, cell.ids.tcp_site
+    outline = np.asarray(cell.tiles[i].outline)
+    corner = outline[np.argmax(np.hypot(outline[:, 0], outline[:, 1]))]
+    assert np.hypot(*corner) == pytest.approx(cell.tiles[i].radius)
+    centre = d.xpos[cell.ids.tile_body[i]].copy()
+    rot = d.xmat[cell.ids.tile_body[i]].reshape(3, 3).copy()
+    gap = cell.cfg.suction.seal_max_gap
+    top = cell.cfg.tiles.thickness / 2
+
+    def candidate(scale: float, height: float) -> int:
+        d.site_xpos[site] = centre + rot @ [*(corner * scale), top + height]
+        d.site_xmat[site] = np.diag([1.0, -1.0, -1.0]).ravel()  # pad axis down the face normal
+        return cell.suction.seal_candidate(d)
+
+    assert candidate(0.999, 0.999 * gap) == i
+    assert candidate(0.999, 0.0) == i
+    assert candidate(1.01, 0.5 * gap) == -1
+    assert candidate(0.999, 1.01 * gap) == -1

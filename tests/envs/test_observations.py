@@ -91,6 +91,20 @@ def test_robot_vector_fields(env: gym.Env) -> None:
     assert 0.1 < np.linalg.norm(pos[:2]) < 1.0  # metres: the tool within the arm's reach
 
 
+def test_robot_vacuum_and_held_flags_follow_the_pad(env: gym.Env) -> None:
+    """Guards against the vacuum flag written into the held flag's place (or left unwritten):
+    vacuum on over nothing reads (1, 0), then off (0, 0), each read afresh."""
+    env.reset(seed=12)
+    u: Any = env.unwrapped
+    rng = np.random.default_rng(0)
+    flags = []
+    for on in (True, False, True, False):
+        u.cell.vacuum(on)
+        assert not u.cell.tile_held  # the pad is at home, above nothing
+        flags.append(u.observer.observe(rng, u.evaluate())["robot"][17:].tolist())
+    assert flags == [[1.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 0.0]]
+
+
 def test_images_are_the_cameras_at_the_configured_size(env: gym.Env) -> None:
     """Guards against the camera keys swapped or the image size ignored."""
     obs, _ = env.reset(seed=11)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Iterator
+from types import SimpleNamespace
 from typing import Any
 
 import gymnasium as gym
@@ -23,6 +24,9 @@ import pytest
 
 import envs
 from envs.actions import transfer_poses
+from envs.cell.cell import Cell
+from envs.cell.tiles.tile import SlotSpec, TileShape
+from envs.env_config import load_env_config
 from envs.errors import EnvError
 from envs.task import SEED_BOUND, Evaluation, MosaicTask, tiles_per_minute
 from spatial.angles import yaw_error
@@ -452,6 +456,9 @@ def test_tiles_off_the_mesh_have_no_slot_and_no_errors(u: Any) -> None:
     int; position and yaw errors NaN): at a fresh episode every tile is on the input belt."""
     p = u.task.placement()
     assert not p.on_mesh.any()
+    assert p.flat.dtype == bool and not p.flat.any()
+    assert p.correct.dtype == bool and not p.correct.any()
+    assert p.slot_filled.dtype == bool and not p.slot_filled.any()
     assert p.slot.dtype.kind == "i" and p.slot.tolist() == [-1] * len(p.slot)
     assert p.position_error.dtype == np.float64 and np.isnan(p.position_error).all()
     assert p.yaw_error.dtype == np.float64 and np.isnan(p.yaw_error).all()
@@ -609,3 +616,99 @@ def test_colour_randomisation_multiplies_each_tile_colour_by_one_plus_a_normal_d
         np.testing.assert_allclose(cell.model.light_diffuse, np.clip(base * g, 0.0, 1.0), atol=1e-6)
     finally:
         env.close()
+
+
+def test_a_tile_moved_after_an_evaluation_is_scored_where_it_lies_now(u: Any) -> None:
+    """Guards against a stale remembered placement: `MosaicTask` keeps each tile's lie while its
+    pose is unchanged, so every move (onto its slot, a little off it, turned, back to the belt,
+    or only its height or tilt) must be scored afresh, as a task built now scores it."""
+    tile = 3
+    slot = slot_of(u, tile)
+    home = u.cell.data.qpos[u.cell.ids.tile_qpos_index[tile]].copy()
+    rng = np.random.default_rng(5)
+    moves = [
+        {},
+        {"dx_mm": 1.2},
+        {"dx_mm": 1.6},
+        {"dyaw_deg": 2.5},
+        {"dz": 4 * MM},
+        {"tilt_deg": 5.0},
+        {},
+    ]
+    seen = set()
+    for kw in moves + [{"dx_mm": float(rng.normal(0, 1.5))} for _ in range(6)]:
+        u.task.evaluate()  # remembers the tile's lie at its last pose
+        on_slot(u, tile, slot, **kw)
+        now = u.task.evaluate()
+        assert now == MosaicTask(u.cell, u.config).evaluate(), kw
+        seen.add(now.correct)
+    u.cell.data.qpos[u.cell.ids.tile_qpos_index[tile]] = home
+    assert u.task.evaluate() == MosaicTask(u.cell, u.config).evaluate()
+    assert u.task.evaluate().correct == 0
+    assert seen == {0, 1}
+
+
+def test_a_tile_exactly_between_two_slots_takes_the_first_of_them(u: Any) -> None:
+    """Guards against a tie between two slots settled by the last one seen: a tile whose
+    centroid is at exactly the same distance from two slots takes the first of them (design
+    order), with that distance as its error."""
+    xy = u.task.slot_xyyaw[:, :2]
+    pairs = [
+        (a, b)
+        for a in range(len(xy))
+        for b in range(a + 1, len(xy))
+        if xy[a, 1] == xy[b, 1] and xy[a, 0] != xy[b, 0]
+    ]
+    found = None
+    for a, b in pairs:  # the first pair with a point at exactly equal distances, no slot nearer
+        xa, xb, y = float(xy[a, 0]), float(xy[b, 0]), float(xy[a, 1])
+        lo = hi = (xa + xb) / 2
+        for _ in range(200):
+            for x in (lo, hi):
+                others = np.hypot(xy[:, 0] - x, xy[:, 1] - y)
+                others[[a, b]] = np.inf
+                if found is None and abs(x - xa) == abs(xb - x) < others.min():
+                    found = (a, b, x, y, abs(x - xa))
+            lo, hi = math.nextafter(lo, -math.inf), math.nextafter(hi, math.inf)
+        if found:
+            break
+    assert found is not None, "the design has two slots in a row"
+    a, b, x, y, dist = found
+    lay(u, 3, (x, y), 0.0)
+    p = u.task.placement()
+    assert p.on_mesh[3] and p.slot[3] == min(a, b)
+    assert p.position_error[3] == dist
+
+
+def test_tiles_before_an_unfed_or_held_one_do_not_hide_the_ones_after_it(u: Any) -> None:
+    """Guards against the placement stopping at the first tile it leaves out (not fed, or on
+    the pad): with tile 0 taken off the stage, the tiles after it laid on their slots are
+    still scored."""
+    u.cell.on_stage[0] = False
+    for tile in (3, 5):
+        on_slot(u, tile, slot_of(u, tile))
+    p = u.task.placement()
+    assert not p.on_mesh[0]
+    assert np.flatnonzero(p.correct).tolist() == [3, 5]
+    assert u.evaluate().correct == 2
+
+
+def test_placeable_counts_open_slots_not_spare_tiles() -> None:
+    """Guards against `placeable` counting tiles instead of the open slots they can fill: a
+    cell fed three tiles of one class for its two slots has two placeable slots; with one slot
+    filled, one; with both, none (the spare tile on the belt fills nothing) and success."""
+    cfg = load_env_config(vertex_jitter=0.0, tile_color_jitter=0.0, tile_variants=1)
+    sq = TileShape(np.array([[0.0, 0.0], [0.03, 0.0], [0.03, 0.03], [0.0, 0.03]]), name="sq")
+    slots = (SlotSpec(sq, (-0.05, 0.0, 0.0)), SlotSpec(sq, (0.05, 0.0, 0.0)))
+    cell = Cell(cfg.cell, (sq, sq, sq), slots, seed=3)
+    try:
+        task = MosaicTask(cell, cfg)
+        one = SimpleNamespace(cell=cell, task=task)
+        assert task.evaluate().placeable == 2
+        on_slot(one, 0, 0)
+        assert (task.evaluate().placeable, task.evaluate().correct) == (1, 1)
+        on_slot(one, 1, 1)
+        e = task.evaluate()
+        assert (e.placeable, e.correct, e.on_input, e.success, e.failure) == (0, 2, 1, True, False)
+    finally:
+        cell.close()
