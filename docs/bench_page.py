@@ -41,6 +41,7 @@ MACHINE_WORDS = ("steps per", "rss", " ms", "wall", "workers", "per cycle", "per
 """Words naming such figures among the unitless ones (env steps per second, memory, times)."""
 RATIO_FIGURES = {
     "reset": ("procedural reset", "fixed reset"),
+    "reset_pool": ("procedural reset, design pool (env's process)", "fixed reset"),
     "step": ("kinematic pick_place step", "its physics"),
     "camera": ("decision step with both images", "without images"),
 }
