@@ -62,11 +62,18 @@ def hand_over(prepared: Prepared, path: str) -> Prepared:
     A file in memory (the pool's folder is on ``/dev/shm`` where there is one) is read at
     once by the env at its reset: a megabyte through a pipe costs both processes many
     small reads and writes and their wake-ups.
+
+    Raises:
+        OSError: The file could not be written (a partly written one is removed).
     """
     if prepared.blob is None:
         return prepared
-    with open(path, "wb") as f:
-        f.write(prepared.blob)
+    try:
+        with open(path, "wb") as f:
+            f.write(prepared.blob)
+    except OSError:  # e.g. a full /dev/shm: no partly written file stays behind
+        discard(dataclasses.replace(prepared, path=path))
+        raise
     return dataclasses.replace(prepared, blob=None, path=path, size=len(prepared.blob))
 
 

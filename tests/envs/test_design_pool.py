@@ -5,6 +5,7 @@ with the env (and at interpreter exit)."""
 
 from __future__ import annotations
 
+import errno
 import os
 import subprocess
 import sys
@@ -24,6 +25,7 @@ from envs.pool import (
     DesignPoolError,
     load_pool_config,
 )
+from envs.pool.worker import Prepared, hand_over
 from tests.envs.rollouts import digest
 
 HELD_OUT = "MosaicHeldOutDesigns-v1"
@@ -239,3 +241,29 @@ def test_a_failed_hand_over_is_drawn_in_place_and_the_worker_lives_on() -> None:
             os.rename(pool.folder + ".away", pool.folder)
         env.close()
         plain.close()
+
+
+def test_a_hand_over_that_fails_midway_leaves_no_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A write that fails (a full ``/dev/shm``) raises and leaves no partly written entry."""
+    real_open = open
+
+    class Full:
+        def __init__(self, path: str, mode: str) -> None:
+            self._f = real_open(path, mode)  # the file exists from here on
+
+        def __enter__(self) -> Full:
+            return self
+
+        def __exit__(self, *exc: object) -> None:
+            self._f.close()
+
+        def write(self, data: bytes) -> int:
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr("builtins.open", Full)
+    with pytest.raises(OSError, match="No space left"):
+        hand_over(Prepared(b"entry" * 100), str(tmp_path / "1.entry"))
+    monkeypatch.undo()
+    assert list(tmp_path.iterdir()) == []
